@@ -1,0 +1,191 @@
+"""Mechanisms as data, and the orienting platform's kinematics from its geometry.
+
+A mechanism on SO(3) is a driftless system in spatial form ``dR/dt = [L(R) u] R``:
+``ω = L(R) u`` is the spatial angular velocity, ``u`` the inputs. A :class:`Mechanism`
+holds ``L(R)`` as a SymPy matrix in the symbols ``r_ij`` (see :mod:`derivations.so3`)
+and, where ``L`` blows up, the singularity function ``Δ(R)``. Everything downstream
+(Q, A, B, the generated numeric code, the planner) takes a mechanism as input.
+
+The parallel orienting platform is built, not typed in: two extensible legs and a disk
+rolling on the sphere give three linear equations ``C(R) ω = (u_1, u_2, 0)``; solving
+them gives ``L(R)`` and ``det C(R)`` gives ``Δ(R)``.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import sympy as sp
+
+from .so3 import e1, e2, e3, hat, r
+
+
+@dataclass(frozen=True)
+class Mechanism:
+    """A driftless system ``dR/dt = [L(R) u] R`` on SO(3).
+
+    Attributes:
+        name: identifier used by the CLI and the generated module's file name.
+        description: one line for listings.
+        L: 3×m SymPy matrix in the symbols ``r_ij``; column k is the spatial angular
+            velocity produced by a unit input ``u_k``.
+        delta: the singularity function ``Δ(R)`` (``L`` is finite where ``Δ ≠ 0``), or
+            ``None`` when ``L`` is polynomial (no singular set).
+        inputs: names of the inputs, with their physical meaning.
+        derivation: named intermediate results (leg rows, constraint matrix, ...).
+    """
+
+    name: str
+    description: str
+    L: sp.Matrix
+    delta: sp.Expr | None
+    inputs: tuple[str, ...]
+    derivation: dict = field(default_factory=dict, compare=False, repr=False)
+
+    @property
+    def n_inputs(self) -> int:
+        return self.L.shape[1]
+
+
+# --------------------------------------------------------------------------------------
+# Geometry of the orienting platform
+# --------------------------------------------------------------------------------------
+
+a, b, rho = sp.symbols("a b rho", positive=True)
+
+
+@dataclass(frozen=True)
+class PlatformGeometry:
+    """Geometry of a two-leg orienting platform with one rolling disk.
+
+    All vectors are 3-tuples (numbers or SymPy expressions). The sphere's centre O is
+    the origin; the platform's orientation is R.
+
+    Attributes:
+        base1, base2: base joints ``A_i`` of the legs, in the world frame.
+        tip1, tip2: platform joints of the legs, in the platform frame (world position
+            ``R tip_i``).
+        contact: the disk's contact point on the sphere, world frame.
+        axle: direction of the disk's axle, world frame (tangent to the sphere at the
+            contact point).
+    """
+
+    base1: tuple
+    tip1: tuple
+    base2: tuple
+    tip2: tuple
+    contact: tuple
+    axle: tuple
+
+
+#: The paper's platform (reconstruction, ``../shared/design/MODEL.md``): leg 1 from
+#: ``a e_2`` to ``R(b e_2)``, leg 2 from ``a e_1`` to ``R(b e_1)``, the disk touching the
+#: pole ``ρ e_3`` with its axle along ``(e_1 - e_2)/√2``.
+PAPER_GEOMETRY = PlatformGeometry(
+    base1=tuple(a * e2), tip1=tuple(b * e2),
+    base2=tuple(a * e1), tip2=tuple(b * e1),
+    contact=tuple(rho * e3), axle=tuple((e1 - e2) / sp.sqrt(2)),
+)
+
+
+def leg_length_squared(base, tip, R: sp.Matrix = r) -> sp.Expr:
+    """``l² = |R tip - base|² = |base|² + |tip|² - 2 baseᵀ R tip`` (uses ``RᵀR = I``).
+
+    For the paper's leg 1 this is ``a² + b² - 2ab r_22``.
+    """
+    A, P = sp.Matrix(base), sp.Matrix(tip)
+    return sp.expand((A.T * A)[0] + (P.T * P)[0] - 2 * (A.T * R * P)[0])
+
+
+def leg_rate_row(base, tip, R: sp.Matrix = r) -> sp.Matrix:
+    """Row ``c`` with ``d(l²)/dt = c ω`` along ``dR/dt = [ω] R``.
+
+    Differentiates ``|R tip - base|²`` along the motion (no orthogonality needed: the
+    term ``(R tip)ᵀ [ω] R tip`` vanishes identically); equals ``-2 (R tip × base)ᵀ``.
+    """
+    w = sp.Matrix(sp.symbols("omega1:4", real=True))
+    A, P = sp.Matrix(base), sp.Matrix(tip)
+    d = R * P - A
+    rate = sp.expand(2 * (d.T * hat(w) * R * P)[0])
+    return sp.Matrix([[rate.coeff(w[k]) for k in range(3)]])
+
+
+def leg_input_scale(base, tip) -> sp.Expr:
+    """The paper's control scaling: ``u_i = d(l_i²)/dt / (4 |base_i| |tip_i|)``."""
+    A, P = sp.Matrix(base), sp.Matrix(tip)
+    return 1 / (4 * sp.sqrt((A.T * A)[0]) * sp.sqrt((P.T * P)[0]))
+
+
+def rolling_constraint_row(contact, axle) -> sp.Matrix:
+    """Row ``n`` with ``n ω = 0``: no side slip of the disk on the sphere.
+
+    The sphere's point at the contact moves with ``ω × c``; a disk rolls along
+    ``axle × normal`` and cannot slide along its axle, so ``(ω × c) · axle = 0``, i.e.
+    ``ω · (c × axle) = 0``. The row is normalised to unit length.
+    """
+    n = sp.Matrix(contact).cross(sp.Matrix(axle))
+    n = sp.simplify(n / sp.sqrt((n.T * n)[0]))
+    return n.T
+
+
+def constraint_matrix(geometry: PlatformGeometry, R: sp.Matrix = r) -> sp.Matrix:
+    """``C(R)`` with ``C(R) ω = (u_1, u_2, 0)``: two scaled leg-rate rows, the disk row."""
+    g = geometry
+    row1 = leg_rate_row(g.base1, g.tip1, R) * leg_input_scale(g.base1, g.tip1)
+    row2 = leg_rate_row(g.base2, g.tip2, R) * leg_input_scale(g.base2, g.tip2)
+    return sp.simplify(sp.Matrix.vstack(row1, row2, rolling_constraint_row(g.contact, g.axle)))
+
+
+def normalized_determinant(C: sp.Matrix) -> tuple[sp.Expr, sp.Expr]:
+    """``det C = κ Δ`` with ``Δ`` a polynomial in ``r_ij`` whose leading coefficient
+    (lexicographic order r11 > r12 > … > r33) is 1. Returns ``(Δ, κ)``."""
+    det = sp.expand(C.det())
+    poly = sp.Poly(det, *r)
+    kappa = sp.simplify(poly.LC())
+    return sp.expand(sp.simplify(det / kappa)), kappa
+
+
+def platform_mechanism(name: str, geometry: PlatformGeometry, description: str) -> Mechanism:
+    """Derive ``Δ(R)`` and ``L(R)`` of a two-leg/one-disk platform from its geometry.
+
+    ``ω = C(R)^{-1} (u_1, u_2, 0)``, so ``L`` is the first two columns of
+    ``C^{-1} = adj(C) / det C`` and ``det C = κ Δ``.
+    """
+    C = constraint_matrix(geometry)
+    delta, kappa = normalized_determinant(C)
+    adj = C.adjugate()[:, :2]
+    numerator = (adj / kappa).applyfunc(lambda x: sp.factor(sp.expand(x)))
+    L = numerator / delta
+    return Mechanism(
+        name=name,
+        description=description,
+        L=L,
+        delta=delta,
+        inputs=("u1 = d(l1^2)/dt / (4 |A1| |B1|)", "u2 = d(l2^2)/dt / (4 |A2| |B2|)"),
+        derivation={
+            "geometry": geometry,
+            "leg_length_squared": (leg_length_squared(geometry.base1, geometry.tip1),
+                                   leg_length_squared(geometry.base2, geometry.tip2)),
+            "constraint_matrix": C,
+            "kappa": kappa,
+            "L_numerator": numerator,
+        },
+    )
+
+
+def paper_platform() -> Mechanism:
+    """The non-holonomic orienting platform of the paper (``PAPER_GEOMETRY``)."""
+    return platform_mechanism(
+        "platform", PAPER_GEOMETRY,
+        "orienting platform of Tchon & Jakubiak (2014): two legs, a disk rolling at the pole",
+    )
+
+
+def body_rate_mechanism(name: str, b_1, b_2, description: str) -> Mechanism:
+    """A rigid body steered by two body-fixed angular-velocity inputs.
+
+    ``dR/dt = R [u_1 b_1 + u_2 b_2]``, i.e. spatial ``ω = R (u_1 b_1 + u_2 b_2)``, so
+    ``L(R) = R [b_1 b_2]``: polynomial, no singular set.
+    """
+    B = sp.Matrix.hstack(sp.Matrix(b_1), sp.Matrix(b_2))
+    return Mechanism(name=name, description=description, L=r * B, delta=None,
+                     inputs=("u1 = body rate about b1", "u2 = body rate about b2"))

@@ -1,0 +1,66 @@
+"""Numeric mechanisms: the generated ``delta``, ``L`` and ``Q`` of each mechanism, by name.
+
+A mechanism is data: its generated module (``nonholo/generated/<name>.py``) provides
+``L(R)``, ``Q(R, u)`` and, when it has a singular set, ``delta(R)``. Nothing downstream
+depends on which mechanism it is.
+"""
+from __future__ import annotations
+
+import importlib
+from dataclasses import dataclass
+from functools import cache
+from types import ModuleType
+
+from .generated import MECHANISMS as NAMES
+
+
+@dataclass(frozen=True)
+class NumericMechanism:
+    """Numeric kinematics of one mechanism, backed by its generated module."""
+
+    name: str
+    module: ModuleType
+
+    @property
+    def description(self) -> str:
+        return self.module.DESCRIPTION
+
+    @property
+    def inputs(self) -> tuple[str, ...]:
+        return self.module.INPUTS
+
+    @property
+    def n_inputs(self) -> int:
+        return self.module.N_INPUTS
+
+    @property
+    def has_singular_set(self) -> bool:
+        return self.module.HAS_SINGULAR_SET
+
+    @property
+    def delta(self):
+        """``delta(R) -> float``, or ``None`` for mechanisms without a singular set."""
+        return getattr(self.module, "delta", None)
+
+    @property
+    def L(self):
+        """``L(R) -> (3, m)``: spatial angular velocity per unit input."""
+        return self.module.L
+
+    @property
+    def Q(self):
+        """``Q(R, u) -> (3, 3)`` with ``(∂L/∂θ) u = Q s``."""
+        return self.module.Q
+
+    def __repr__(self) -> str:
+        return f"NumericMechanism({self.name!r}: {self.description})"
+
+
+@cache
+def get(name: str = "platform") -> NumericMechanism:
+    """The numeric mechanism called ``name`` (``ValueError`` lists the known names)."""
+    if isinstance(name, NumericMechanism):
+        return name
+    if name not in NAMES:
+        raise ValueError(f"unknown mechanism {name!r}; known: {', '.join(NAMES)}")
+    return NumericMechanism(name, importlib.import_module(f"nonholo.generated.{name}"))

@@ -1,0 +1,108 @@
+"""Numeric SO(3): hat/vee, exp, log, the left Jacobian (dexp), RPY, input validation.
+
+Conventions:
+- ``hat(v) = [v]`` with ``[v] x = v × x``; ``vee`` is its inverse.
+- ``exp(w)`` is the rotation by angle ``|w|`` about ``w/|w|``; ``log(R)`` its inverse
+  with angle in ``[0, π]``.
+- ``dexp(l)`` is the left Jacobian ``I + (1 - cos α)/α² [l] + (α - sin α)/α³ [l]²``
+  (``α = |l|``): ``d exp([l(θ)])/dθ · exp(-[l]) = [dexp(l) dl/dθ]`` — the matrix the
+  appendix calls ``P`` (printed there with the label ``exp([l_T])``, see the audit).
+- ``from_rpy(φ, ϑ, ψ) = R(Z, φ) R(Y, ϑ) R(X, ψ)`` (radians); ``as_rpy`` its inverse.
+"""
+from __future__ import annotations
+
+import numpy as np
+from scipy.spatial.transform import Rotation
+
+#: Below this angle the closed forms lose digits to cancellation; Taylor series are used.
+SMALL_ANGLE = 1e-4
+
+
+def hat(v) -> np.ndarray:
+    """Skew matrix ``[v]``."""
+    x, y, z = v
+    return np.array([[0.0, -z, y], [z, 0.0, -x], [-y, x, 0.0]])
+
+
+def vee(S) -> np.ndarray:
+    """Vector of the skew part of ``S`` (inverse of :func:`hat`)."""
+    S = np.asarray(S)
+    return 0.5 * np.array([S[2, 1] - S[1, 2], S[0, 2] - S[2, 0], S[1, 0] - S[0, 1]])
+
+
+def exp(w) -> np.ndarray:
+    """Rotation matrix ``exp([w])`` (Rodrigues)."""
+    w = np.asarray(w, dtype=float)
+    a2 = w @ w
+    a = np.sqrt(a2)
+    if a < SMALL_ANGLE:
+        # sin a/a and (1 - cos a)/a² by their Taylor series: the closed forms cancel.
+        c1 = 1.0 - a2 / 6.0 + a2 * a2 / 120.0
+        c2 = 0.5 - a2 / 24.0 + a2 * a2 / 720.0
+    else:
+        c1 = np.sin(a) / a
+        c2 = (1.0 - np.cos(a)) / a2
+    W = hat(w)
+    return np.eye(3) + c1 * W + c2 * (W @ W)
+
+
+def log(R) -> np.ndarray:
+    """Rotation vector ``l`` with ``exp([l]) = R`` and ``|l| ≤ π`` (robust near π)."""
+    return Rotation.from_matrix(np.asarray(R, dtype=float)).as_rotvec()
+
+
+def angle(R) -> float:
+    """Rotation angle of ``R`` in ``[0, π]``."""
+    return float(np.linalg.norm(log(R)))
+
+
+def distance(R1, R2) -> float:
+    """Geodesic distance ``|log(R1 R2ᵀ)|`` on SO(3), in radians."""
+    return angle(np.asarray(R1) @ np.asarray(R2).T)
+
+
+def dexp(l) -> np.ndarray:
+    """Left Jacobian of SO(3) (the appendix's ``P``); ``dexp(l) @ l == l``."""
+    l = np.asarray(l, dtype=float)
+    a2 = l @ l
+    a = np.sqrt(a2)
+    if a < SMALL_ANGLE:
+        # (1 - cos a)/a² and (a - sin a)/a³ by Taylor series (cancellation near 0).
+        c1 = 0.5 - a2 / 24.0 + a2 * a2 / 720.0
+        c2 = 1.0 / 6.0 - a2 / 120.0 + a2 * a2 / 5040.0
+    else:
+        c1 = (1.0 - np.cos(a)) / a2
+        c2 = (a - np.sin(a)) / (a2 * a)
+    Lh = hat(l)
+    return np.eye(3) + c1 * Lh + c2 * (Lh @ Lh)
+
+
+def from_rpy(phi: float, theta: float, psi: float) -> np.ndarray:
+    """``RPY(φ, ϑ, ψ) = R(Z, φ) R(Y, ϑ) R(X, ψ)`` as a matrix (radians)."""
+    return Rotation.from_euler("ZYX", [phi, theta, psi]).as_matrix()
+
+
+def as_rpy(R) -> np.ndarray:
+    """``(φ, ϑ, ψ)`` with ``from_rpy(φ, ϑ, ψ) = R``; ``ϑ ∈ [-π/2, π/2]``."""
+    return Rotation.from_matrix(np.asarray(R, dtype=float)).as_euler("ZYX")
+
+
+def check_rotation(R, name: str = "R", tol: float = 1e-9) -> np.ndarray:
+    """``R`` as a float (3, 3) array, or ``ValueError`` saying what is wrong with it.
+
+    Checks the shape, finiteness, orthonormality (``|RᵀR - I| ≤ tol``) and ``det R = +1``.
+    """
+    try:
+        A = np.asarray(R, dtype=float)
+    except (TypeError, ValueError) as exc:
+        raise ValueError(f"{name} must be a 3x3 array of numbers: {exc}") from None
+    if A.shape != (3, 3):
+        raise ValueError(f"{name} must have shape (3, 3), got {A.shape}")
+    if not np.all(np.isfinite(A)):
+        raise ValueError(f"{name} has non-finite entries (NaN or inf)")
+    err = np.max(np.abs(A.T @ A - np.eye(3)))
+    if err > tol:
+        raise ValueError(f"{name} is not orthonormal: max |RᵀR - I| = {err:.3g} > {tol:g}")
+    if np.linalg.det(A) < 0:
+        raise ValueError(f"{name} is a reflection (det = -1), not a rotation")
+    return A
