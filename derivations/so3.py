@@ -53,13 +53,15 @@ def rpy(phi, theta, psi) -> sp.Matrix:
 
 
 def cayley(c) -> sp.Matrix:
-    """Rational, exactly orthogonal rotation ``(I - [c])^{-1} (I + [c])``.
+    """Rational, exactly orthogonal rotation ``(I - [c])^{-1} (I + [c])
+    = I + 2([c] + [c]²)/(1 + cᵀc)``.
 
     Symbolic identities that need ``RᵀR = I`` are checked on this parametrisation: it
     covers every rotation but the half turns and needs no trigonometric simplification.
     """
-    I = sp.eye(3)
-    return sp.simplify((I - hat(c)).inv() * (I + hat(c)))
+    c = sp.Matrix(c)
+    C = hat(c)
+    return sp.eye(3) + 2 * (C + C * C) / (1 + (c.T * c)[0])
 
 
 def substitute_rotation(expr, R: sp.Matrix):

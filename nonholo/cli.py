@@ -1,0 +1,90 @@
+"""Command line: ``nonholo derive | audit | mechanisms | plan | reproduce``."""
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import time
+from pathlib import Path
+
+
+def _derive(args) -> int:
+    from derivations import codegen
+
+    t0 = time.perf_counter()
+    outdir = Path(args.dir) if args.dir else codegen.GENERATED_DIR
+    if args.check:
+        stale = codegen.check(outdir)
+        for path, diff in stale:
+            print(f"stale: {path}", file=sys.stderr)
+            if args.verbose:
+                print(diff, file=sys.stderr)
+        if stale:
+            print("generated code differs from a fresh derivation: run `nonholo derive`",
+                  file=sys.stderr)
+            return 1
+        print(f"generated modules are up to date ({time.perf_counter() - t0:.1f} s)")
+        return 0
+    for path in codegen.write(outdir):
+        print(f"wrote {path}")
+    print(f"done in {time.perf_counter() - t0:.1f} s")
+    return 0
+
+
+def _audit(args) -> int:
+    from derivations import audit
+
+    findings = audit.run()
+    if args.json:
+        print(json.dumps([{"equation": f.equation, "verdict": f.verdict, "note": f.note}
+                          for f in findings], indent=2, ensure_ascii=False))
+    else:
+        print(audit.format_table(findings))
+    return 0
+
+
+def _mechanisms(args) -> int:
+    from . import mechanisms
+
+    for name in mechanisms.NAMES:
+        m = mechanisms.get(name)
+        singular = "singular set Δ = 0" if m.has_singular_set else "no singular set"
+        print(f"{name:<12} {m.description} ({m.n_inputs} inputs, {singular})")
+    return 0
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="nonholo", description="Motion planning of non-holonomic systems on SO(3).")
+    sub = parser.add_subparsers(dest="command", required=True)
+
+    p = sub.add_parser("derive", help="derive the kinematics symbolically and write nonholo/generated")
+    p.add_argument("--check", action="store_true",
+                   help="only compare the committed modules with a fresh derivation (exit 1 if stale)")
+    p.add_argument("-v", "--verbose", action="store_true", help="print the diff of stale files")
+    p.add_argument("--dir", help="generated-modules directory (default: nonholo/generated)")
+    p.set_defaults(func=_derive)
+
+    p = sub.add_parser("audit", help="hold the appendix formulas against the derivation")
+    p.add_argument("--json", action="store_true", help="print a JSON list instead of a table")
+    p.set_defaults(func=_audit)
+
+    p = sub.add_parser("mechanisms", help="list the mechanisms")
+    p.set_defaults(func=_mechanisms)
+
+    for optional in ("cli_plan", "cli_reproduce"):
+        try:
+            module = __import__(f"nonholo.{optional}", fromlist=["add_parser"])
+        except ModuleNotFoundError:
+            continue
+        module.add_parser(sub)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = build_parser().parse_args(argv)
+    return args.func(args)
+
+
+if __name__ == "__main__":
+    sys.exit(main())

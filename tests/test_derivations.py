@@ -1,0 +1,131 @@
+"""Generated numeric modules against their symbolic source, and the derivations' claims."""
+import shutil
+
+import numpy as np
+import pytest
+import sympy as sp
+from scipy.spatial.transform import Rotation
+
+from derivations import catalog, codegen, singularity
+from derivations.mechanism import constraint_matrix, PAPER_GEOMETRY, paper_platform
+from derivations.so3 import r
+from derivations.variational import Q_matrix, inputs
+from nonholo import mechanisms, so3
+from nonholo.generated import platform_singularity as gen_sing
+
+RNG = np.random.default_rng(2014)
+N_POINTS = 120
+
+
+def random_rotations(n, min_abs_delta=0.05):
+    """Random rotations away from Δ = 0 (where L and Q are undefined)."""
+    out = []
+    while len(out) < n:
+        R = Rotation.random(random_state=RNG.integers(1 << 31)).as_matrix()
+        if abs(R[0, 1] * R[2, 0] + R[1, 0] * R[2, 1]) > min_abs_delta:
+            out.append(R)
+    return out
+
+
+def _mp(expr_list, args):
+    """mpmath evaluation of SymPy expressions: independent of the generated printer."""
+    return sp.lambdify(args, expr_list, modules="mpmath")
+
+
+@pytest.mark.parametrize("name", list(catalog.MECHANISMS))
+def test_generated_matches_symbolic(name):
+    sym = catalog.get(name)
+    num = mechanisms.get(name)
+    u = inputs(sym.n_inputs)
+    f_L = _mp(list(sym.L), list(r))
+    f_Q = _mp(list(Q_matrix(sym.L, u)), list(r) + list(u))
+    f_d = _mp(sym.delta, list(r)) if sym.delta is not None else None
+    worst = 0.0
+    for R in random_rotations(N_POINTS):
+        uu = RNG.normal(size=sym.n_inputs)
+        pairs = [(num.L(R).ravel(), np.array(f_L(*R.ravel()), dtype=float)),
+                 (num.Q(R, uu).ravel(), np.array(f_Q(*R.ravel(), *uu), dtype=float))]
+        if f_d is not None:
+            pairs.append((np.array([num.delta(R)]), np.array([float(f_d(*R.ravel()))])))
+        for got, want in pairs:
+            worst = max(worst, np.max(np.abs(got - want)) / max(1.0, np.max(np.abs(want))))
+    assert worst < 1e-12
+
+
+@pytest.mark.parametrize("name", list(catalog.MECHANISMS))
+def test_Q_is_derivative_of_L_along_left_variations(name):
+    num = mechanisms.get(name)
+    eps = 1e-6
+    for R in random_rotations(20, min_abs_delta=0.2):
+        u = RNG.normal(size=num.n_inputs)
+        s = RNG.normal(size=3)
+        fd = (num.L(so3.exp(eps * s) @ R) @ u - num.L(so3.exp(-eps * s) @ R) @ u) / (2 * eps)
+        np.testing.assert_allclose(num.Q(R, u) @ s, fd, rtol=1e-7, atol=1e-7 * np.abs(fd).max())
+
+
+def test_delta_is_constraint_determinant_up_to_derived_constant():
+    m = paper_platform()
+    kappa = float(m.derivation["kappa"])
+    C = sp.lambdify(list(r), constraint_matrix(PAPER_GEOMETRY).subs({}), "numpy")
+    num = mechanisms.get("platform")
+    for R in random_rotations(50):
+        assert np.linalg.det(np.array(C(*R.ravel()), dtype=float)) == pytest.approx(
+            kappa * num.delta(R), rel=1e-12, abs=1e-15)
+    assert m.delta == r[0, 1] * r[2, 0] + r[1, 0] * r[2, 1]
+
+
+def test_L_solves_the_constraint_equations():
+    C = sp.lambdify(list(r), constraint_matrix(PAPER_GEOMETRY), "numpy")
+    num = mechanisms.get("platform")
+    for R in random_rotations(30):
+        CR = np.array(C(*R.ravel()), dtype=float)
+        np.testing.assert_allclose(CR @ num.L(R), [[1, 0], [0, 1], [0, 0]], atol=1e-12)
+
+
+def test_normal_form_identity_at_small_angles():
+    for _ in range(200):
+        phi, theta, psi = RNG.uniform(-0.3, 0.3, size=3)
+        x, y, z = gen_sing.normal_form(phi, theta, psi)
+        d = gen_sing.delta_rpy(phi, theta, psi)
+        assert z**3 + x * y == pytest.approx(d, rel=1e-10, abs=1e-15)
+        assert d == pytest.approx(mechanisms.get("platform").delta(so3.from_rpy(phi, theta, psi)),
+                                  rel=1e-10, abs=1e-15)
+
+
+def test_normal_form_coordinates_are_local_coordinates():
+    # numerical Jacobian at 0 against the symbolic one (determinant ±1)
+    h = 1e-6
+    J = np.column_stack([(np.array(gen_sing.normal_form(*(h * e))) -
+                          np.array(gen_sing.normal_form(*(-h * e)))) / (2 * h) for e in np.eye(3)])
+    J_sym = np.array(singularity.coordinate_jacobian_at_zero(), dtype=float)
+    np.testing.assert_allclose(J, J_sym, atol=1e-8)
+    assert abs(np.linalg.det(J_sym)) == 1.0
+
+
+def test_attitude_A_vanishes():
+    """For dR/dt = R[u1 e1 + u2 e2], A = Q + [Lu] = 0 identically (issue 6)."""
+    from derivations.variational import variational_system
+    V = variational_system(catalog.get("attitude"))
+    assert V["A"].applyfunc(sp.expand).is_zero_matrix
+
+
+def test_derive_check_passes_on_committed_tree(capsys):
+    from nonholo.cli import main
+    assert main(["derive", "--check"]) == 0
+
+
+def test_derive_check_fails_on_altered_copy(tmp_path, capsys):
+    from nonholo.cli import main
+    copy = tmp_path / "generated"
+    shutil.copytree(codegen.GENERATED_DIR, copy)
+    target = copy / "platform.py"
+    target.write_text(target.read_text().replace("2/(", "2.0000001/(", 1))
+    assert main(["derive", "--check", "--dir", str(copy)]) == 1
+    assert "platform.py" in capsys.readouterr().err
+    (copy / "platform.py").unlink()
+    shutil.copy(codegen.GENERATED_DIR / "platform.py", copy / "platform.py")
+    assert main(["derive", "--check", "--dir", str(copy)]) == 0
+
+
+def test_codegen_is_deterministic():
+    assert codegen.generated_files() == codegen.generated_files()
