@@ -7,10 +7,29 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
-from .mechanism import Mechanism, body_rate_mechanism, paper_platform
+import sympy as sp
+
+from .mechanism import (Mechanism, PlatformGeometry, a, b, body_rate_mechanism, paper_platform,
+                        platform_mechanism, rho)
+from .so3 import e1, e2, e3
+
+#: A second placement of the platform's legs and disk. The paper's legs are radial at
+#: the identity (base and platform joints on one line through O), which makes the
+#: identity the singular point of Δ = 0. Here the base joints are raised 45° above the
+#: platform joints' plane and the disk rolls on the equator between the legs with a
+#: horizontal axle: the identity becomes a regular home pose (Δ(I) = 1, the leg rows and
+#: the disk row orthonormal there), while Δ = 0 still splits SO(3) into two regions.
+RAISED_GEOMETRY = PlatformGeometry(
+    base1=tuple(a * (e1 + e3) / sp.sqrt(2)), tip1=tuple(b * e1),
+    base2=tuple(a * (e2 + e3) / sp.sqrt(2)), tip2=tuple(b * e2),
+    contact=tuple(rho * (e1 + e2) / sp.sqrt(2)), axle=tuple((e1 - e2) / sp.sqrt(2)),
+)
 
 MECHANISMS: dict[str, Callable[[], Mechanism]] = {
     "platform": paper_platform,
+    "platform_raised": lambda: platform_mechanism(
+        "platform_raised", RAISED_GEOMETRY,
+        "orienting platform with raised leg bases and the disk on the equator; identity regular"),
     "attitude": lambda: body_rate_mechanism(
         "attitude", (1, 0, 0), (0, 1, 0),
         "rigid body steered by two body-fixed angular rates about e1 and e2"),

@@ -14,7 +14,7 @@ import sympy as sp
 from sympy.printing.numpy import NumPyPrinter
 
 from . import catalog, singularity
-from .mechanism import Mechanism
+from .mechanism import Mechanism, a, b, rho
 from .so3 import r
 from .variational import Q_matrix, inputs
 
@@ -117,6 +117,24 @@ def codegen_normal_form() -> str:
                      "Normal-form coordinates (x, y, z) of App. 1.1: Δ = z**3 + x*y near RPY = 0.")
 
 
+#: Dimensions used to place the platform's joints in drawings (sphere radius ρ = 1,
+#: platform joints on the sphere, base joints at distance a from O). The kinematics do
+#: not depend on them: the control scaling 1/(4 |A_i| |B_i|) cancels a and b.
+DRAWING_DIMENSIONS = {a: sp.Rational(8, 5), b: 1, rho: 1}
+
+
+def geometry_data(geometry) -> str:
+    """``GEOMETRY``: the platform's joint points, contact point and axle as floats."""
+    lines = ["#: Joint points (world: base, platform frame: tip), disk contact and axle, with",
+             f"#: {', '.join(f'{k} = {v}' for k, v in DRAWING_DIMENSIONS.items())} (for drawings).",
+             "GEOMETRY = {"]
+    for key in ("base1", "tip1", "base2", "tip2", "contact", "axle"):
+        vec = [float(sp.sympify(c).subs(DRAWING_DIMENSIONS)) for c in getattr(geometry, key)]
+        lines.append(f"    {key!r}: ({', '.join(repr(v) for v in vec)}),")
+    lines.append("}\n")
+    return "\n".join(lines)
+
+
 def mechanism_module(mechanism: Mechanism) -> str:
     """The generated module of one mechanism: ``delta`` (if any), ``L``, ``Q``."""
     doc = f"Numeric kinematics of the mechanism {mechanism.name!r}: {mechanism.description}."
@@ -127,6 +145,9 @@ def mechanism_module(mechanism: Mechanism) -> str:
                  f"INPUTS = {mechanism.inputs!r}\n"
                  f"N_INPUTS = {mechanism.n_inputs}\n"
                  f"HAS_SINGULAR_SET = {mechanism.delta is not None}\n")
+    geometry = mechanism.derivation.get("geometry")
+    if geometry is not None:
+        parts.append(geometry_data(geometry))
     if mechanism.delta is not None:
         parts.append(codegen_delta(mechanism))
     parts.append(codegen_L(mechanism))

@@ -49,7 +49,7 @@ def _mechanisms(args) -> int:
     for name in mechanisms.NAMES:
         m = mechanisms.get(name)
         singular = "singular set Δ = 0" if m.has_singular_set else "no singular set"
-        print(f"{name:<12} {m.description} ({m.n_inputs} inputs, {singular})")
+        print(f"{name:<16} {m.description} ({m.n_inputs} inputs, {singular})")
     return 0
 
 

@@ -38,6 +38,11 @@ class NumericMechanism:
         return self.module.HAS_SINGULAR_SET
 
     @property
+    def geometry(self) -> dict | None:
+        """Joint points, disk contact and axle of a platform (for drawings), else ``None``."""
+        return getattr(self.module, "GEOMETRY", None)
+
+    @property
     def delta(self):
         """``delta(R) -> float``, or ``None`` for mechanisms without a singular set."""
         return getattr(self.module, "delta", None)

@@ -129,3 +129,23 @@ def test_derive_check_fails_on_altered_copy(tmp_path, capsys):
 
 def test_codegen_is_deterministic():
     assert codegen.generated_files() == codegen.generated_files()
+
+
+def test_paper_instance_gives_the_papers_L():
+    """The general platform derivation at the paper's geometry gives MODEL.md's L(R)."""
+    m = catalog.get("platform")
+    D = r[0, 1] * r[2, 0] + r[1, 0] * r[2, 1]
+    L_paper = 2 / D * sp.Matrix([[r[1, 0], r[0, 1]], [-r[1, 0], -r[0, 1]], [-r[2, 0], r[2, 1]]])
+    assert (m.L - L_paper).applyfunc(sp.cancel).is_zero_matrix
+    f = sp.lambdify(list(r), L_paper, "numpy")
+    num = mechanisms.get("platform")
+    for R in random_rotations(50):
+        np.testing.assert_allclose(num.L(R), np.array(f(*R.ravel()), dtype=float),
+                                   rtol=1e-14, atol=1e-14 * np.abs(num.L(R)).max())
+
+
+def test_raised_platform_is_regular_at_identity_and_splits_SO3():
+    num = mechanisms.get("platform_raised")
+    assert num.delta(np.eye(3)) == pytest.approx(1.0)
+    values = np.array([num.delta(R) for R in random_rotations(400, min_abs_delta=0.0)])
+    assert (values > 0.05).any() and (values < -0.05).any()

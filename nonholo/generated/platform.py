@@ -14,6 +14,18 @@ N_INPUTS = 2
 HAS_SINGULAR_SET = True
 
 
+#: Joint points (world: base, platform frame: tip), disk contact and axle, with
+#: a = 8/5, b = 1, rho = 1 (for drawings).
+GEOMETRY = {
+    'base1': (0.0, 1.6, 0.0),
+    'tip1': (0.0, 1.0, 0.0),
+    'base2': (1.6, 0.0, 0.0),
+    'tip2': (1.0, 0.0, 0.0),
+    'contact': (0.0, 0.0, 1.0),
+    'axle': (0.7071067811865476, -0.7071067811865476, 0.0),
+}
+
+
 def delta(R):
     """Δ(R) = r12*r31 + r21*r32; L(R) is singular where Δ = 0."""
     r12 = R[0, 1]
