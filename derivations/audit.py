@@ -325,8 +325,9 @@ def run() -> list[Finding]:
 
 
 def format_table(findings: list[Finding]) -> str:
-    """A Markdown table: equation | verdict | note."""
-    lines = ["| equation | verdict | note |", "|---|---|---|"]
+    """A Markdown table: equation | printed | derived | verdict | note."""
+    lines = ["| equation | printed | derived | verdict | note |", "|---|---|---|---|---|"]
     for f in findings:
-        lines.append(f"| {f.equation} | {f.verdict} | {f.note} |")
+        cells = (f.equation, f.printed, f.derived, f.verdict, f.note)
+        lines.append("| " + " | ".join(c.replace("|", "\\|") for c in cells) + " |")
     return "\n".join(lines)
