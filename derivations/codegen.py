@@ -14,7 +14,7 @@ import sympy as sp
 from sympy.printing.numpy import NumPyPrinter
 
 from . import catalog, singularity
-from .mechanism import Mechanism, a, b, rho
+from .mechanism import Mechanism, a, b, input_map, rho
 from .so3 import r
 from .variational import Q_matrix, inputs
 
@@ -100,6 +100,31 @@ def codegen_Q(mechanism: Mechanism) -> str:
                      "Q(R, u) with d/de L(exp(e[s]) R) u = Q(R, u) s at e = 0 (eq. (12)).")
 
 
+def codegen_N(mechanism: Mechanism) -> str:
+    """``N(R) -> (3, m)``: orthonormal desingularised input frame, ``ω = N(R) w``."""
+    return _function("N", "R", _rotation_unpack(), list(mechanism.frame),
+                     (3, mechanism.n_inputs),
+                     "N(R): orthonormal frame of the admissible angular velocities, ω = N(R) w.")
+
+
+def codegen_QN(mechanism: Mechanism) -> str:
+    """``QN(R, w) -> (3, 3)``: the ``Q`` of eq. (12) for the system ``ω = N(R) w``."""
+    m = mechanism.n_inputs
+    w = sp.Matrix(sp.symbols(f"w1:{m + 1}", real=True))
+    unpack = _rotation_unpack() | {w[k]: f"w[{k}]" for k in range(m)}
+    return _function("QN", "R, w", unpack, list(Q_matrix(mechanism.frame, w)), (3, 3),
+                     "QN(R, w) with d/de N(exp(e[s]) R) w = QN(R, w) s at e = 0.")
+
+
+def codegen_W(mechanism: Mechanism) -> str:
+    """``W(R) -> (m, m)``: physical inputs ``u = W(R) w`` giving ``ω = N(R) w``."""
+    W = mechanism.frame_inputs
+    if W is None:
+        W = input_map(mechanism.L, mechanism.frame)
+    return _function("W", "R", _rotation_unpack(), list(W), (mechanism.n_inputs,) * 2,
+                     "W(R) = (N(R)^T L(R))^-1: physical inputs u = W(R) w for ω = N(R) w.")
+
+
 def codegen_delta_rpy() -> str:
     """``delta_rpy(phi, theta, psi) -> float``: Δ in RPY coordinates (App. 1.1)."""
     phi, theta, psi = singularity.angles
@@ -152,6 +177,9 @@ def mechanism_module(mechanism: Mechanism) -> str:
         parts.append(codegen_delta(mechanism))
     parts.append(codegen_L(mechanism))
     parts.append(codegen_Q(mechanism))
+    parts.append(f"HAS_FRAME = {mechanism.frame is not None}\n")
+    if mechanism.frame is not None:
+        parts += [codegen_N(mechanism), codegen_QN(mechanism), codegen_W(mechanism)]
     return "\n\n".join(parts)
 
 

@@ -31,6 +31,12 @@ class Mechanism:
         delta: the singularity function ``Δ(R)`` (``L`` is finite where ``Δ ≠ 0``), or
             ``None`` when ``L`` is polynomial (no singular set).
         inputs: names of the inputs, with their physical meaning.
+        frame: ``N(R)``, 3×m with orthonormal columns spanning the range of ``L(R)`` and
+            finite everywhere: the desingularised input coordinates ``ω = N(R) w`` (the
+            physical inputs are ``u = W(R) w``, see :func:`input_map`); ``None`` if the
+            mechanism has none.
+        frame_inputs: ``W(R)`` when it is known in closed form (otherwise derived from
+            ``L`` and ``N`` by :func:`input_map`).
         derivation: named intermediate results (leg rows, constraint matrix, ...).
     """
 
@@ -39,6 +45,8 @@ class Mechanism:
     L: sp.Matrix
     delta: sp.Expr | None
     inputs: tuple[str, ...]
+    frame: sp.Matrix | None = None
+    frame_inputs: sp.Matrix | None = None
     derivation: dict = field(default_factory=dict, compare=False, repr=False)
 
     @property
@@ -144,6 +152,20 @@ def normalized_determinant(C: sp.Matrix) -> tuple[sp.Expr, sp.Expr]:
     return sp.expand(sp.simplify(det / kappa)), kappa
 
 
+def input_map(L: sp.Matrix, N: sp.Matrix) -> sp.Matrix:
+    """``W(R) = (Nᵀ L)^{-1}``: the physical inputs ``u = W w`` that produce ``ω = N w``.
+
+    Valid when the columns of ``N`` span the range of ``L`` (then ``L W = N``).
+    """
+    return (N.T * L).applyfunc(sp.cancel).inv().applyfunc(sp.factor)
+
+
+def constraint_plane_frame(row: sp.Matrix) -> sp.Matrix:
+    """Orthonormal basis (3×2) of the plane ``{ω : row ω = 0}``."""
+    basis = sp.GramSchmidt(sp.Matrix(row).nullspace(), True)
+    return sp.Matrix.hstack(*basis)
+
+
 def platform_mechanism(name: str, geometry: PlatformGeometry, description: str) -> Mechanism:
     """Derive ``Δ(R)`` and ``L(R)`` of a two-leg/one-disk platform from its geometry.
 
@@ -161,6 +183,8 @@ def platform_mechanism(name: str, geometry: PlatformGeometry, description: str) 
         L=L,
         delta=delta,
         inputs=("u1 = d(l1^2)/dt / (4 |A1| |B1|)", "u2 = d(l2^2)/dt / (4 |A2| |B2|)"),
+        # every admissible ω lies in the plane the disk allows: a constant frame
+        frame=constraint_plane_frame(C.row(2)),
         derivation={
             "geometry": geometry,
             "leg_length_squared": (leg_length_squared(geometry.base1, geometry.tip1),
@@ -187,5 +211,8 @@ def body_rate_mechanism(name: str, b_1, b_2, description: str) -> Mechanism:
     ``L(R) = R [b_1 b_2]``: polynomial, no singular set.
     """
     B = sp.Matrix.hstack(sp.Matrix(b_1), sp.Matrix(b_2))
+    Bo = sp.Matrix.hstack(*sp.GramSchmidt([B.col(0), B.col(1)], True))
+    # N = R Bo, and Nᵀ L = Boᵀ RᵀR B = Boᵀ B on SO(3): W is constant
     return Mechanism(name=name, description=description, L=r * B, delta=None,
-                     inputs=("u1 = body rate about b1", "u2 = body rate about b2"))
+                     inputs=("u1 = body rate about b1", "u2 = body rate about b2"),
+                     frame=r * Bo, frame_inputs=(Bo.T * B).inv())

@@ -149,3 +149,24 @@ def test_raised_platform_is_regular_at_identity_and_splits_SO3():
     assert num.delta(np.eye(3)) == pytest.approx(1.0)
     values = np.array([num.delta(R) for R in random_rotations(400, min_abs_delta=0.0)])
     assert (values > 0.05).any() and (values < -0.05).any()
+
+
+@pytest.mark.parametrize("name", list(catalog.MECHANISMS))
+def test_desingularised_frame(name):
+    """ω = N(R) w with N orthonormal; u = W(R) w reproduces it (L W = N); W is finite
+    everywhere (polynomial in r_ij); QN is the derivative of N along left variations."""
+    sym = catalog.get(name)
+    gen = mechanisms.get(name).module
+    W_sym = sym.frame_inputs if sym.frame_inputs is not None else \
+        __import__("derivations.mechanism", fromlist=["input_map"]).input_map(sym.L, sym.frame)
+    assert all(sp.denom(sp.cancel(w)).free_symbols == set() for w in W_sym)
+    f_N = _mp(list(sym.frame), list(r))
+    eps = 1e-6
+    for R in random_rotations(30):
+        N = gen.N(R)
+        np.testing.assert_allclose(N.T @ N, np.eye(2), atol=1e-14)
+        np.testing.assert_allclose(N, np.array(f_N(*R.ravel()), dtype=float).reshape(3, 2), atol=1e-14)
+        np.testing.assert_allclose(gen.L(R) @ gen.W(R), N, atol=1e-11)
+        w, s = RNG.normal(size=2), RNG.normal(size=3)
+        fd = (gen.N(so3.exp(eps * s) @ R) @ w - gen.N(so3.exp(-eps * s) @ R) @ w) / (2 * eps)
+        np.testing.assert_allclose(gen.QN(R, w) @ s, fd, atol=1e-8)

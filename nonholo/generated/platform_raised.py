@@ -108,3 +108,50 @@ def Q(R, u):
     out[2, 1] = 0
     out[2, 2] = 0
     return out
+
+
+HAS_FRAME = True
+
+
+def N(R):
+    """N(R): orthonormal frame of the admissible angular velocities, ω = N(R) w."""
+    out = numpy.empty((3, 2))
+    out[0, 0] = 1
+    out[0, 1] = 0
+    out[1, 0] = 0
+    out[1, 1] = 1
+    out[2, 0] = 0
+    out[2, 1] = 0
+    return out
+
+
+def QN(R, w):
+    """QN(R, w) with d/de N(exp(e[s]) R) w = QN(R, w) s at e = 0."""
+    out = numpy.empty((3, 3))
+    out[0, 0] = 0
+    out[0, 1] = 0
+    out[0, 2] = 0
+    out[1, 0] = 0
+    out[1, 1] = 0
+    out[1, 2] = 0
+    out[2, 0] = 0
+    out[2, 1] = 0
+    out[2, 2] = 0
+    return out
+
+
+def W(R):
+    """W(R) = (N(R)^T L(R))^-1: physical inputs u = W(R) w for ω = N(R) w."""
+    r11 = R[0, 0]
+    r12 = R[0, 1]
+    r21 = R[1, 0]
+    r22 = R[1, 1]
+    r31 = R[2, 0]
+    r32 = R[2, 1]
+    x0 = (1/4)*numpy.sqrt(2)
+    out = numpy.empty((2, 2))
+    out[0, 0] = -r21*x0
+    out[0, 1] = x0*(r11 - r31)
+    out[1, 0] = -x0*(r22 - r32)
+    out[1, 1] = r12*x0
+    return out
