@@ -1,0 +1,83 @@
+"""Tests for the CasADi/IPOPT multiple-shooting baseline (benchmarks/casadi_ms.py)."""
+
+import importlib.util
+import pathlib
+import sys
+import time
+
+import numpy as np
+import pytest
+
+pytest.importorskip("casadi")
+from scipy.spatial.transform import Rotation  # noqa: E402
+
+
+def _load_module():
+    try:
+        from benchmarks import casadi_ms
+
+        return casadi_ms
+    except ImportError:
+        path = pathlib.Path(__file__).resolve().parents[1] / "benchmarks" / "casadi_ms.py"
+        spec = importlib.util.spec_from_file_location("casadi_ms", path)
+        mod = importlib.util.module_from_spec(spec)
+        sys.modules[spec.name] = mod  # needed by dataclasses
+        spec.loader.exec_module(mod)
+        return mod
+
+
+cms = _load_module()
+
+
+def RPY(phi, theta, psi):
+    """Rz(phi) Ry(theta) Rx(psi)."""
+    return Rotation.from_euler("ZYX", [phi, theta, psi]).as_matrix()
+
+
+def Delta(R):
+    return R[0, 1] * R[2, 0] + R[1, 0] * R[2, 1]
+
+
+R0 = RPY(0.5, 1.2, -0.5)
+RD = RPY(1.0, 0.9, -0.5)
+DELTA_MIN = 0.01
+
+
+@pytest.fixture(scope="module")
+def result():
+    return cms.solve(R0, RD, T=1.0, delta_min=DELTA_MIN)
+
+
+def test_solves_reference_example(result):
+    assert result.success, result.status
+    assert result.u.shape == (40, 2)
+    assert result.t_grid.shape == (41,)
+    assert result.seconds > 0 and result.iterations > 0
+
+    RT, _, R_path = cms.resimulate(
+        R0, result.controls, 1.0, breakpoints=result.t_grid, return_path=True
+    )
+    err = cms.terminal_error(RT, RD)
+    print(f"re-simulated terminal error: {err:.3e}")
+    assert err <= 1e-8
+    sgn = np.sign(Delta(R0))
+    assert min(sgn * Delta(R) for R in R_path) >= DELTA_MIN - 1e-9
+
+
+def test_controls_are_piecewise_constant(result):
+    t = result.t_grid
+    u = result.controls(np.array([0.0, 0.5 * (t[0] + t[1]), t[1], t[-1]]))
+    assert u.shape == (4, 2)
+    np.testing.assert_array_equal(u[0], result.u[0])
+    np.testing.assert_array_equal(u[1], result.u[0])
+    np.testing.assert_array_equal(u[2], result.u[1])  # right-continuous
+    np.testing.assert_array_equal(u[3], result.u[-1])  # last interval closed
+
+
+def test_goal_across_singular_surface_is_rejected():
+    Rd_bad = RPY(-1.0, 0.9, -0.5)
+    assert np.sign(Delta(Rd_bad)) != np.sign(Delta(R0))
+    t0 = time.perf_counter()
+    with pytest.raises(ValueError, match="unreachable"):
+        cms.solve(R0, Rd_bad)
+    assert time.perf_counter() - t0 < 0.5
