@@ -7,6 +7,8 @@ import sys
 import time
 from pathlib import Path
 
+from . import cli_plan, cli_reproduce
+
 
 def _derive(args) -> int:
     from derivations import codegen
@@ -72,12 +74,8 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("mechanisms", help="list the mechanisms")
     p.set_defaults(func=_mechanisms)
 
-    for optional in ("cli_plan", "cli_reproduce"):
-        try:
-            module = __import__(f"nonholo.{optional}", fromlist=["add_parser"])
-        except ModuleNotFoundError:
-            continue
-        module.add_parser(sub)
+    cli_plan.add_parser(sub)
+    cli_reproduce.add_parser(sub)
     return parser
 
 

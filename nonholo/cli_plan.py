@@ -1,0 +1,123 @@
+"""``nonholo plan``: plan a motion from the command line.
+
+Example::
+
+    nonholo plan --from 0.5 1.2 -0.5 --to 1.0 0.9 -0.5 --T 1 --harmonics 2 --out plan.json --plot plan.png
+
+Orientations are given as RPY angles ``φ ϑ ψ`` in radians, ``RPY(φ, ϑ, ψ) =
+R(Z, φ) R(Y, ϑ) R(X, ψ)``. One line is printed per accepted iteration (iteration, error
+``|l_T|`` in rad, the step ``γh``, least ``|Δ|`` along the trajectory), then a summary.
+Exit status: 0 on success, 1 if the planner failed, 2 on bad input.
+"""
+from __future__ import annotations
+
+import argparse
+import sys
+
+import numpy as np
+
+from . import mechanisms, planner, so3
+from .generated import MECHANISMS
+
+
+def add_parser(subparsers) -> argparse.ArgumentParser:
+    """Add the ``plan`` sub-command to an ``argparse`` sub-parsers object."""
+    p = subparsers.add_parser(
+        "plan", help="plan a motion R0 -> Rd (Jacobian algorithm of Tchoń & Jakubiak)",
+        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("--from", dest="start", nargs=3, type=float, required=True,
+                   metavar=("PHI", "THETA", "PSI"), help="initial orientation, RPY angles (rad)")
+    p.add_argument("--to", dest="goal", nargs=3, type=float, required=True,
+                   metavar=("PHI", "THETA", "PSI"), help="goal orientation, RPY angles (rad)")
+    p.add_argument("--T", type=float, default=1.0, help="time horizon in s (default 1)")
+    p.add_argument("--method", choices=planner.METHODS, default="parametric",
+                   help="Fourier controls (parametric) or piecewise constant (nonparametric)")
+    p.add_argument("--harmonics", type=int, default=2, help="Fourier harmonics K (default 2)")
+    p.add_argument("--grid", type=int, default=100, help="intervals of the nonparametric grid (default 100)")
+    p.add_argument("--strategy", default="paper", help="planning strategy (default: paper)")
+    p.add_argument("--mechanism", default="platform", help=f"mechanism ({', '.join(MECHANISMS)})")
+    p.add_argument("--gamma", type=float, default=0.5, help="decay rate γ of the θ-flow (default 0.5)")
+    p.add_argument("--tol", type=float, default=1e-10, help="stop when |l_T| <= tol (rad)")
+    p.add_argument("--max-iter", type=int, default=200, help="maximum number of iterations")
+    p.add_argument("--delta-min", type=float, default=1e-2, help="keep |Δ| >= this along the motion")
+    p.add_argument("--steps", type=int, default=None, help="integrator steps on [0, T]")
+    p.add_argument("--out", default=None, help="write the result as JSON to this file")
+    p.add_argument("--plot", default=None, help="write a figure (u, RPY, Δ against t) to this file")
+    p.add_argument("--quiet", action="store_true", help="print the summary only")
+    p.set_defaults(func=run)
+    return p
+
+
+def _fmt(x, spec: str) -> str:
+    return "n/a" if x is None else format(x, spec)
+
+
+def _print_record(rec: dict) -> None:
+    print(f"iter {rec['iteration']:4d}  |l_T| = {_fmt(rec['error'], '.3e')}  "
+          f"step = {rec['step']:<8.4g} min|Δ| = {_fmt(rec['min_delta'], '.4f')}  {rec['phase']}",
+          flush=True)
+
+
+def run(args) -> int:
+    """Run the ``plan`` sub-command for parsed ``args``; returns the exit status."""
+    try:
+        R0 = so3.from_rpy(*args.start)
+        Rd = so3.from_rpy(*args.goal)
+        res = planner.plan(
+            R0, Rd, T=args.T, method=args.method, harmonics=args.harmonics, grid=args.grid,
+            strategy=args.strategy, mechanism=args.mechanism, gamma=args.gamma, tol=args.tol,
+            max_iter=args.max_iter, delta_min=args.delta_min, steps=args.steps,
+            callback=None if args.quiet else _print_record)
+    except ValueError as exc:
+        print(f"nonholo plan: error: {exc}", file=sys.stderr)
+        return 2
+    print(f"{'success' if res.success else 'FAILED'}: {res.reason}")
+    print(f"terminal error |l_T| = {_fmt(res.terminal_error, '.3e')} rad, min |Δ| = "
+          f"{_fmt(res.min_delta, '.4f')}, {res.iterations} iterations, {res.seconds * 1e3:.1f} ms "
+          f"({res.mechanism}, {res.method}/{res.strategy}, T = {res.T:g} s, {res.steps} steps)")
+    if args.out:
+        res.save(args.out)
+        print(f"wrote {args.out}")
+    if args.plot:
+        plot(res, args.plot)
+        print(f"wrote {args.plot}")
+    return 0 if res.success else 1
+
+
+def plot(res, path) -> None:
+    """Figure of a :class:`~nonholo.result.PlanResult`: ``u(t)``, ``RPY(t)``, ``Δ(t)``."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    mech = mechanisms.get(res.mechanism)
+    has_delta = res.delta is not None
+    fig, axes = plt.subplots(3 if has_delta else 2, 1, sharex=True, figsize=(7, 7 if has_delta else 5))
+    tt = np.linspace(0.0, res.T, 1001)
+    u = res.controls(tt)
+    for i in range(u.shape[1]):
+        axes[0].plot(tt, u[:, i], label=mech.inputs[i])
+    axes[0].set_ylabel("input u [1/s]")
+    axes[0].legend(fontsize="small")
+    axes[0].set_title(f"{res.mechanism}, {res.method}/{res.strategy}: |l_T| = "
+                      f"{_fmt(res.terminal_error, '.2e')} rad")
+    if len(res.R):
+        rpy = np.array([so3.as_rpy(R) for R in res.R])
+        for k, name in enumerate(("φ (Z)", "ϑ (Y)", "ψ (X)")):
+            line, = axes[1].plot(res.t, rpy[:, k], label=name)
+            axes[1].axhline(so3.as_rpy(res.Rd)[k], color=line.get_color(), ls=":", lw=0.8)
+        axes[1].legend(fontsize="small", title="dotted: goal", title_fontsize="small")
+    axes[1].set_ylabel("RPY angles [rad]")
+    if has_delta:
+        axes[2].plot(res.t, res.delta, label="Δ(R(t)) at the integrator's steps")
+        dmin = res.options.get("delta_min", 0.0)
+        sgn = np.sign(res.delta[0]) if len(res.delta) else 1.0
+        axes[2].axhline(sgn * dmin, color="r", ls="--", label=f"threshold {sgn * dmin:+g}")
+        axes[2].axhline(0.0, color="k", lw=0.5)
+        axes[2].set_ylabel("Δ [-]")
+        axes[2].legend(fontsize="small")
+    axes[-1].set_xlabel("t [s]")
+    fig.tight_layout()
+    fig.savefig(path, dpi=100)
+    plt.close(fig)

@@ -1,0 +1,406 @@
+"""Jacobian motion planning on SO(3) (Tchoń & Jakubiak, appendix eqs. (4)–(11)).
+
+Problem: steer ``dR/dt = [L(R) u] R`` (spatial form) from ``R(0) = R0`` to ``R(T) = R_d``.
+
+The θ-flow. Along a family of controls ``u_θ`` the error ``e = log(R_T R_dᵀ) = [l_T]``
+is required to decay as ``dl_T/dθ = −γ l_T`` (4)–(5). With ``s_T = P(l_T) dl_T/dθ`` (7),
+``P`` the left Jacobian of SO(3) (:func:`nonholo.so3.dexp`) and ``P(l) l = l``, this asks
+for ``s_T = −γ l_T``; ``s_T = J ∂u/∂θ`` with the Jacobian operator
+``J u' = ∫ Φ(T,t) B(t) u'(t) dt`` of the variational system (9)–(10). Its Moore–Penrose
+inverse gives the update (11):
+
+- parametric form (Fourier coefficients ``λ``, :class:`~nonholo.controls.Fourier`):
+  ``dλ/dθ = −γ J^# l_T`` with ``J = ∫ Φ(T,t) B(t) P(t) dt`` (3 × m(2K+1)) and ``J^#`` the
+  Euclidean Moore–Penrose pseudo-inverse;
+- nonparametric form (values ``v_j`` on a grid, :class:`~nonholo.controls.PiecewiseConstant`):
+  the pseudo-inverse in the L2 metric of the controls, ``∫|u'|² dt = Σ h_j |u'_j|²``:
+  ``u'_j = −γ G_jᵀ M_d^{-1} l_T / h_j`` with ``G_j = ∫_{I_j} Φ(T,t) B(t) dt`` and
+  ``M_d = Σ_j G_j G_jᵀ / h_j`` — the grid version of
+  ``u'(t) = −γ Bᵀ(t) Φᵀ(T,t) M(T)^{-1} l_T`` (11), to which it converges as the grid is
+  refined (``M_d → M(T)``).
+
+Both are ``Δλ = −γh W^{-1/2} (J W^{-1/2})^# l_T`` for the diagonal metric ``W`` (identity,
+resp. ``h_j``), computed as ``X^# = Xᵀ (X Xᵀ)^#`` with a 3×3 eigen decomposition, which
+also copes with a rank-deficient ``J`` (:func:`min_norm_step`). (For the platform the
+Euclidean and the L2 metric give the same Fourier steps: the mean inputs alone fix
+``r11(T)``, ``r22(T)`` — ``u1 = −ṙ22/2``, ``u2 = −ṙ11/2`` — so the oscillating columns of
+``J`` have rank 1, and both metrics weigh all oscillating coefficients alike.)
+
+Step control (strategy ``"paper"``). The θ-flow is integrated by explicit Euler steps
+``θ → θ + h``: ``λ ← λ − γh W^{-1/2}(J W^{-1/2})^# l_T``. A step is accepted only if the
+new trajectory reaches ``T`` with ``|Δ| ≥ delta_min`` at every point where the integrator
+evaluates ``L`` (checked by the kernel, which stops at once otherwise) and ``|l_T|``
+decreases; otherwise ``h`` is halved, and the run gives up, with the reason, once
+``γh < min_step``. After a step accepted at the first try ``h`` doubles again, up to its
+initial value.
+Once ``|l_T| < newton_below`` the steps are full Newton steps, ``γh = 1`` (halved if
+rejected). That is exact Newton for the discrete map ``λ ↦ l_T``: its derivative is
+``P(l_T)^{-1} J`` and, since ``P^{-1} l = l``, the equations ``P^{-1} J Δλ = −l`` and
+``J Δλ = −l`` have the same solutions, hence the same minimum-norm one; the convergence
+is quadratic (the computed ``J`` is that of the continuous variational system, within
+the integrator's ``O(h⁴)`` of the discrete one).
+
+Strategies are classes registered in :data:`STRATEGIES`; a new one (e.g. a different
+input metric, a barrier on ``Δ``, restarts) subclasses :class:`Strategy` and implements
+:meth:`Strategy.solve` on top of :class:`Problem`, without touching :class:`PaperStrategy`.
+"""
+from __future__ import annotations
+
+import math
+import time
+from abc import ABC, abstractmethod
+from dataclasses import asdict, dataclass, field
+from typing import Callable, ClassVar
+
+import numpy as np
+
+from . import kernels as _kernels
+from . import mechanisms, so3
+from .controls import Controls, Fourier, PiecewiseConstant, _check_count, _check_T, paper_initial
+from .result import PlanResult
+from .simulation import DEFAULT_STEPS, DELTA_STOP, delta_samples
+
+METHODS = ("parametric", "nonparametric")
+
+
+@dataclass(frozen=True)
+class Options:
+    """Numerical settings of a planning run (see :func:`plan`)."""
+
+    gamma: float = 0.5
+    step: float = 1.0
+    tol: float = 1e-10
+    max_iter: int = 200
+    newton_below: float = 1e-3
+    min_step: float = 1e-6
+    delta_min: float = 1e-2
+
+    def __post_init__(self):
+        for name in ("gamma", "step", "tol", "min_step"):
+            v = getattr(self, name)
+            if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
+                raise ValueError(f"{name} must be a positive number, got {v!r}")
+        for name in ("newton_below", "delta_min"):
+            v = getattr(self, name)
+            if not (isinstance(v, (int, float)) and math.isfinite(v) and v >= 0):
+                raise ValueError(f"{name} must be a non-negative number, got {v!r}")
+        if isinstance(self.max_iter, bool) or int(self.max_iter) != self.max_iter or self.max_iter < 0:
+            raise ValueError(f"max_iter must be a non-negative integer, got {self.max_iter!r}")
+
+
+@dataclass
+class Evaluation:
+    """One simulation of the planning problem for a control (with the Jacobian).
+
+    ``complete``: the trajectory reached ``T`` (the kernel stops early where
+    ``sgnΔ < delta_stop`` or ``ω`` is not finite). ``min_delta``: least ``sgn(Δ(R0))·Δ``
+    over the integrator's evaluation points (= least ``|Δ|`` unless the motion crossed
+    ``Δ = 0``; ``None`` without a singular set). ``l``, ``error``, ``J`` only when complete.
+    """
+
+    controls: Controls
+    complete: bool
+    steps_done: int
+    t_stop: float | None
+    min_delta: float | None
+    R: np.ndarray
+    l: np.ndarray | None = None
+    error: float | None = None
+    J: np.ndarray | None = None
+
+    @property
+    def R_T(self) -> np.ndarray | None:
+        return self.R[-1] if self.complete else None
+
+
+class Problem:
+    """``R0 → R_d`` in time ``T`` for one mechanism, with the integrator's buffers.
+
+    :meth:`evaluate` simulates a control with the variational system and returns the
+    error ``l_T`` and the Jacobian ``J = ∂s_T/∂λ``.
+    """
+
+    def __init__(self, R0, Rd, T: float, mechanism: str, method: str, steps: int,
+                 delta_min: float):
+        self.mechanism = mechanisms.get(mechanism)
+        self.kernels = _kernels.get(self.mechanism.name)
+        self.R0 = np.ascontiguousarray(R0, dtype=float)
+        self.Rd = np.ascontiguousarray(Rd, dtype=float)
+        self.T = T
+        self.method = method
+        self.steps = steps
+        self.h = T / steps
+        self.delta_min = delta_min
+        self.has_delta = self.mechanism.has_singular_set
+        self.delta0 = float(self.mechanism.delta(self.R0)) if self.has_delta else None
+        self.deltad = float(self.mechanism.delta(self.Rd)) if self.has_delta else None
+        self.sign = float(np.sign(self.delta0)) if self.has_delta else 1.0
+        self._Rs = np.empty((steps + 1, 3, 3))
+        self._Zs = np.empty((steps + 1, 3, 3))
+        self._M = np.empty((3, 3))
+        self.evaluations = 0
+
+    def evaluate(self, controls: Controls, delta_stop: float | None = None) -> Evaluation:
+        """Simulate ``controls``; stop early where ``sgnΔ < delta_stop`` (default ``delta_min``)."""
+        stop = self.delta_min if delta_stop is None else delta_stop
+        U = controls.stage_table(self.steps)
+        Bidx, Bval, stride_b, stride_i = controls.sparse_basis(self.steps)
+        J = np.empty((3, controls.params.size))
+        n, dmin, t_stop = self.kernels.forward_variational(
+            self.R0, U, self.h, self.sign, stop, Bidx, Bval, stride_b, stride_i,
+            self._Rs, self._Zs, J, self._M, False)
+        self.evaluations += 1
+        complete = n == self.steps
+        ev = Evaluation(controls=controls, complete=complete, steps_done=int(n),
+                        t_stop=None if complete else float(t_stop),
+                        min_delta=float(dmin) if self.has_delta else None,
+                        R=self._Rs[:n + 1].copy())
+        if complete:
+            ev.l = _kernels.log_rotation(ev.R[-1] @ self.Rd.T)
+            ev.error = float(np.linalg.norm(ev.l))
+            ev.J = J
+        return ev
+
+    def admissible(self, ev: Evaluation) -> bool:
+        """Complete and ``|Δ| ≥ delta_min`` along the whole trajectory."""
+        return ev.complete and (not self.has_delta or ev.min_delta >= self.delta_min)
+
+    def why_not(self, ev: Evaluation) -> str:
+        """Why ``ev`` is not admissible."""
+        if self.has_delta and (ev.min_delta is None or ev.min_delta < self.delta_min):
+            where = f" at t ≈ {ev.t_stop:.4g} s" if ev.t_stop is not None else ""
+            if ev.min_delta <= 0.0:
+                return (f"the trajectory ran into the singular surface Δ = 0{where} (|ω| ~ 1/|Δ| "
+                        "blows up there; the fixed-step integrator stepped across it)")
+            return f"|Δ| fell to {ev.min_delta:.6g} < delta_min = {self.delta_min:g}{where}"
+        if not ev.complete:
+            return f"the angular velocity became non-finite at t ≈ {ev.t_stop:.4g} s"
+        return "admissible"
+
+
+@dataclass
+class Outcome:
+    """What a strategy returns to :func:`plan`."""
+
+    evaluation: Evaluation
+    success: bool
+    reason: str
+    history: list = field(default_factory=list)
+    iterations: int = 0
+
+
+class Strategy(ABC):
+    """A way of following the θ-flow; subclasses are registered in :data:`STRATEGIES`."""
+
+    name: ClassVar[str] = ""
+
+    def __init__(self, options: Options):
+        self.options = options
+
+    @abstractmethod
+    def solve(self, problem: Problem, controls: Controls,
+              callback: Callable[[dict], object] | None = None) -> Outcome:
+        """Plan from the initial ``controls``; call ``callback(record)`` per accepted step."""
+
+
+STRATEGIES: dict[str, type[Strategy]] = {}
+
+
+def register_strategy(cls: type[Strategy]) -> type[Strategy]:
+    """Class decorator: make ``cls`` available as ``plan(..., strategy=cls.name)``."""
+    STRATEGIES[cls.name] = cls
+    return cls
+
+
+def min_norm_step(J: np.ndarray, l: np.ndarray, metric: np.ndarray | None = None) -> np.ndarray:
+    """``x = W^{-1/2} (J W^{-1/2})^# l``: the least-W-norm ``x`` minimising ``|J x − l|``.
+
+    ``metric`` is the diagonal of ``W`` (``None``: Euclidean, ``x = J^# l``).
+    """
+    scale = np.ones(J.shape[1]) if metric is None else 1.0 / np.sqrt(metric)
+    return _kernels.min_norm_step(np.ascontiguousarray(J, dtype=float),
+                                  np.ascontiguousarray(l, dtype=float), scale)
+
+
+def _record(iteration: int, ev: Evaluation, step: float, phase: str, rejected: int) -> dict:
+    return {"iteration": iteration, "error": ev.error, "step": step,
+            "min_delta": ev.min_delta, "phase": phase, "rejected": rejected}
+
+
+@register_strategy
+class PaperStrategy(Strategy):
+    """The appendix's algorithm: Euler steps of the θ-flow (11), then Newton steps.
+
+    Metric: Euclidean in the Fourier coefficients (parametric form, ``J^#``), L2 in time
+    for grid controls (nonparametric form, eq. (11)). See the module docstring for the
+    step control.
+    """
+
+    name = "paper"
+
+    def metric(self, problem: Problem, controls: Controls) -> np.ndarray | None:
+        return controls.metric() if problem.method == "nonparametric" else None
+
+    def solve(self, problem, controls, callback=None):
+        opt = self.options
+        ev = problem.evaluate(controls, delta_stop=DELTA_STOP)
+        if not problem.admissible(ev):
+            return Outcome(ev, False, f"the initial control is not admissible: {problem.why_not(ev)}; "
+                           "choose another initial control (u0)")
+        history = [_record(0, ev, 0.0, "initial", 0)]
+        if callback is not None and callback(history[-1]):
+            return Outcome(ev, False, "stopped by callback", history, 0)
+        h = opt.step
+        it = 0
+        while True:
+            if ev.error <= opt.tol:
+                return Outcome(ev, True, f"converged: |l_T| = {ev.error:.3g} <= tol = {opt.tol:g}",
+                               history, it)
+            if it >= opt.max_iter:
+                return Outcome(ev, False, f"max_iter = {opt.max_iter} reached with |l_T| = {ev.error:.3g}",
+                               history, it)
+            newton = ev.error < opt.newton_below
+            scale = 1.0 if newton else opt.gamma * h
+            direction = min_norm_step(ev.J, ev.l, self.metric(problem, ev.controls))
+            params = ev.controls.params
+            rejected = 0
+            while True:
+                trial = problem.evaluate(ev.controls.with_params(params - scale * direction))
+                if problem.admissible(trial) and trial.error < ev.error:
+                    break
+                last = (problem.why_not(trial) if not problem.admissible(trial) else
+                        f"|l_T| did not decrease ({trial.error:.3g} >= {ev.error:.3g})")
+                rejected += 1
+                scale *= 0.5
+                if not newton:
+                    h *= 0.5
+                if scale < opt.min_step:
+                    return Outcome(ev, False, f"step size fell below min_step = {opt.min_step:g} at "
+                                   f"|l_T| = {ev.error:.3g}; last rejected step: {last}", history, it)
+            it += 1
+            ev = trial
+            if not newton and rejected == 0:
+                h = min(2.0 * h, opt.step)
+            history.append(_record(it, ev, scale, "newton" if newton else "flow", rejected))
+            if callback is not None and callback(history[-1]):
+                return Outcome(ev, False, "stopped by callback", history, it)
+
+
+def initial_controls(method: str, T: float, n_inputs: int, harmonics: int, grid: int, u0=None) -> Controls:
+    """The initial control in the parametrisation of ``method``.
+
+    ``u0``: ``None`` (the examples' ``u_1 = 0.3 sin 2πt/T``, ``u_2 = 0.3 cos 2πt/T``), a
+    :class:`~nonholo.controls.Controls` of the right kind and size, or a vectorised
+    function ``u(t)`` (projected: least squares on the Fourier basis, interval means on
+    the grid).
+    """
+    cls, size = (Fourier, harmonics) if method == "parametric" else (PiecewiseConstant, grid)
+    if isinstance(u0, Controls):
+        if not isinstance(u0, cls):
+            raise ValueError(f"u0 is a {type(u0).__name__}, method {method!r} needs a {cls.__name__}")
+        if u0.T != T or u0.n_inputs != n_inputs:
+            raise ValueError(f"u0 is defined for T = {u0.T:g}, m = {u0.n_inputs}; the problem has "
+                             f"T = {T:g}, m = {n_inputs}")
+        got = u0.harmonics if cls is Fourier else u0.grid
+        if got != size:
+            what = "harmonics" if cls is Fourier else "grid"
+            raise ValueError(f"u0 has {what} = {got}, the planner was asked for {what} = {size}")
+        return u0
+    func = paper_initial(T, n_inputs) if u0 is None else u0
+    if not callable(func):
+        raise ValueError("u0 must be None, a nonholo.controls.Controls or a function u(t)")
+    c = cls.fit(func, T, size, n_inputs)
+    return c
+
+
+def default_steps(method: str, grid: int) -> int:
+    """:data:`~nonholo.simulation.DEFAULT_STEPS`, rounded up to a multiple of ``grid`` for grid controls."""
+    if method == "nonparametric":
+        return -(-DEFAULT_STEPS // grid) * grid
+    return DEFAULT_STEPS
+
+
+def plan(R0, Rd, *, T: float = 1.0, method: str = "parametric", harmonics: int = 2,
+         grid: int = 100, u0=None, gamma: float = 0.5, step: float = 1.0, tol: float = 1e-10,
+         max_iter: int = 200, strategy: str = "paper", mechanism: str = "platform",
+         delta_min: float = 1e-2, steps: int | None = None, newton_below: float = 1e-3,
+         min_step: float = 1e-6, callback: Callable[[dict], object] | None = None) -> PlanResult:
+    """Plan a control steering ``R0`` to ``Rd`` in time ``T`` (seconds).
+
+    - ``method``: ``"parametric"`` (Fourier series with ``harmonics`` = K) or
+      ``"nonparametric"`` (piecewise constant on ``grid`` equal intervals).
+    - ``u0``: initial control (see :func:`initial_controls`; default: the examples').
+    - ``gamma`` (γ), ``step`` (initial θ-step h): each flow step asks the error to shrink
+      by ``γh``; ``newton_below``: below this ``|l_T|`` take full Newton steps (``γh = 1``);
+      ``min_step``: give up when a step halved below this ``γh``; ``tol``: stop when
+      ``|l_T| ≤ tol`` (rad); ``max_iter``: accepted steps at most.
+    - ``delta_min``: every trajectory accepted keeps ``|Δ| ≥ delta_min`` (ignored for
+      mechanisms without a singular set).
+    - ``steps``: CF4 steps on ``[0, T]`` (default :func:`default_steps`).
+    - ``callback(record)``: called after each accepted iteration with the history record;
+      returning a true value stops the run.
+
+    Raises ``ValueError`` for bad input (``R0``/``Rd`` not rotations, ``Δ(R0) = 0``,
+    ``T ≤ 0``, ``harmonics``/``grid``/``steps`` < 1, unknown method/strategy/mechanism, bad
+    numerical options). A goal on or across the singular surface ``Δ = 0`` (or within
+    ``delta_min`` of it) returns at once a failed :class:`~nonholo.result.PlanResult`
+    with the reason.
+    """
+    t_start = time.perf_counter()
+    mech = mechanisms.get(mechanism)
+    if method not in METHODS:
+        raise ValueError(f"unknown method {method!r}; known: {', '.join(METHODS)}")
+    if strategy not in STRATEGIES:
+        raise ValueError(f"unknown strategy {strategy!r}; known: {', '.join(STRATEGIES)}")
+    T = _check_T(T)
+    harmonics = _check_count(harmonics, "harmonics")
+    grid = _check_count(grid, "grid")
+    R0 = so3.check_rotation(R0, "R0")
+    Rd = so3.check_rotation(Rd, "Rd")
+    options = Options(gamma=gamma, step=step, tol=tol, max_iter=max_iter,
+                      newton_below=newton_below, min_step=min_step, delta_min=delta_min)
+    if mech.has_singular_set and float(mech.delta(R0)) == 0.0:
+        raise ValueError("R0 lies on the singular surface Δ(R) = 0, where L(R) is undefined "
+                         "(e.g. the identity); start from an orientation with Δ(R0) ≠ 0")
+    controls = initial_controls(method, T, mech.n_inputs, harmonics, grid, u0)
+    steps = default_steps(method, grid) if steps is None else _check_count(steps, "steps")
+    controls.check_steps(steps)
+
+    def result(outcome: Outcome | None, success: bool, reason: str) -> PlanResult:
+        ev = outcome.evaluation if outcome is not None else None
+        n = 0 if ev is None else ev.steps_done + 1
+        t = np.arange(n) * (T / steps)
+        if ev is not None and ev.complete:
+            t[-1] = T
+        par = ev.controls if ev is not None else controls
+        R = ev.R if ev is not None else np.empty((0, 3, 3))
+        return PlanResult(
+            success=success, reason=reason,
+            terminal_error=None if ev is None else ev.error,
+            min_delta=None if ev is None else ev.min_delta,
+            iterations=0 if outcome is None else outcome.iterations,
+            history=[] if outcome is None else outcome.history,
+            t=t, R=R, u=par(t).reshape(n, mech.n_inputs), delta=delta_samples(mech, R),
+            parametrisation=par, mechanism=mech.name, method=method, strategy=strategy,
+            T=T, R0=R0, Rd=Rd, steps=steps, seconds=time.perf_counter() - t_start,
+            options={**asdict(options), "harmonics": harmonics, "grid": grid})
+
+    # goals that cannot be reached: decided before anything is simulated (or compiled)
+    if mech.has_singular_set:
+        d0, dd = float(mech.delta(R0)), float(mech.delta(Rd))
+        if dd == 0.0:
+            return result(None, False, "the goal lies on the singular surface Δ = 0 "
+                          "(Δ(Rd) = 0): unreachable with bounded inputs")
+        if np.sign(dd) != np.sign(d0):
+            return result(None, False, f"the goal lies across the singular surface Δ = 0 "
+                          f"(Δ(R0) = {d0:.4g}, Δ(Rd) = {dd:.4g}): no motion can cross it, unreachable")
+        if abs(dd) < options.delta_min:
+            return result(None, False, f"the goal lies within delta_min = {options.delta_min:g} of "
+                          f"the singular surface (|Δ(Rd)| = {abs(dd):.3g})")
+        if abs(d0) < options.delta_min:
+            return result(None, False, f"the start lies within delta_min = {options.delta_min:g} of "
+                          f"the singular surface (|Δ(R0)| = {abs(d0):.3g})")
+
+    problem = Problem(R0, Rd, T, mech.name, method, steps, options.delta_min)
+    outcome = STRATEGIES[strategy](options).solve(problem, controls, callback)
+    return result(outcome, outcome.success, outcome.reason)

@@ -1,0 +1,182 @@
+"""The main job: check the generated code, audit the appendix, solve the examples, draw.
+
+``nonholo reproduce`` (see :func:`run`) writes into ``paper_figures/``:
+
+- the figures of the mechanism, its singular set and of every example (PNG and PDF);
+- an animation of the platform through Example 3 (GIF);
+- ``plans/example<k>_<method>.json``: every planned result (reload with
+  :meth:`nonholo.result.PlanResult.load`);
+- ``summary.json``: one object per (example, method) with ``example``, ``method``,
+  ``strategy``, ``success``, ``iterations``, ``terminal_error`` (after independent
+  re-simulation with DOP853), ``planner_error`` (the planner's own ``|l_T|``),
+  ``min_delta``, ``seconds``, ``reason``; and ``summary.md``, the same as a table.
+
+The run fails (exit status 1) when the generated code is stale or Example 1 or 2 fails.
+"""
+from __future__ import annotations
+
+import json
+import sys
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+from . import examples as _examples
+from . import figures, verify
+from .planner import STRATEGIES, plan
+
+DEFAULT_OUTDIR = Path("paper_figures")
+#: Re-simulated terminal error required of Examples 1 and 2 (rad).
+RESIM_TOL = 1e-8
+
+
+def strongest_strategy() -> str:
+    """``"robust"`` when the project has it, else ``"paper"``."""
+    return "robust" if "robust" in STRATEGIES else "paper"
+
+
+@dataclass
+class Solved:
+    example: _examples.Example
+    result: object  # PlanResult
+    resim_error: float | None
+
+    @property
+    def ok(self) -> bool:
+        return bool(self.result.success and self.resim_error is not None
+                    and self.resim_error <= RESIM_TOL)
+
+    def summary(self) -> dict:
+        r = self.result
+        return {"example": self.example.number, "method": r.method, "strategy": r.strategy,
+                "success": self.ok, "iterations": r.iterations,
+                "terminal_error": self.resim_error, "planner_error": r.terminal_error,
+                "min_delta": r.min_delta, "seconds": round(r.seconds, 4), "reason": r.reason}
+
+
+def _log(msg: str) -> None:
+    print(msg, file=sys.stderr, flush=True)
+
+
+def solve(example: _examples.Example, method: str, strategy: str) -> Solved:
+    """Plan one example with one method and re-simulate the plan independently."""
+    result = plan(example.R_start, example.R_goal, T=example.T, method=method,
+                  harmonics=example.harmonics, strategy=strategy)
+    resim = None
+    if len(result.R):
+        R_T = verify.resimulate(example.R_start, result.controls, example.T,
+                                mechanism=result.mechanism, breakpoints=result.breakpoints)
+        resim = verify.terminal_error(R_T, example.R_goal)
+    return Solved(example, result, resim)
+
+
+def solve_all(progress=_log) -> list[Solved]:
+    """Every example with each of its methods (Example 3: the strongest strategy)."""
+    jobs = [(ex, m, "paper" if ex.must_succeed else strongest_strategy())
+            for ex in _examples.examples() for m in ex.methods]
+    solved = []
+    for k, (ex, method, strategy) in enumerate(jobs, 1):
+        progress(f"[{k}/{len(jobs)}] {ex.title}: {method}, strategy {strategy} ...")
+        s = solve(ex, method, strategy)
+        r = s.result
+        err = "n/a" if s.resim_error is None else f"{s.resim_error:.2e}"
+        md = "n/a" if r.min_delta is None else f"{r.min_delta:.3f}"
+        progress(f"      {'ok' if s.ok else 'FAILED'}: {r.iterations} iterations, "
+                 f"re-simulated |l_T| = {err}, min |Δ| = {md}, {r.seconds:.3f} s"
+                 + ("" if s.ok else f" ({r.reason})"))
+        solved.append(s)
+    return solved
+
+
+def write_figures(solved: list[Solved], outdir: Path, progress=_log) -> list[Path]:
+    """All figures of the mechanism, the singular set and the examples."""
+    written: list[Path] = []
+
+    def save(fig, stem):
+        written.extend(figures.save_figure(fig, stem, outdir))
+        progress(f"      wrote {stem}.png/.pdf")
+
+    exs = _examples.examples()
+    ex1 = _examples.get(1)  # its start and goal lie in the slice ψ = -0.5 drawn on the right
+    marks = {"Example 1 start": (*ex1.rpy_start[:2], "o"),
+             "Example 1 goal": (*ex1.rpy_goal[:2], "X")}
+    save(figures.singular_set_figure(psi_slice=ex1.rpy_start[2], marks=marks), "singular_set")
+    save(figures.singular_slices_figure(), "singular_set_slices")
+    save(figures.normal_form_figure(), "normal_form")
+    for ex in exs:
+        save(figures.mechanism_figure(ex.R_start, ex.R_goal, title=f"{ex.title}: start and goal"),
+             f"example{ex.number}_mechanism")
+        results = [s.result for s in solved if s.example.number == ex.number and len(s.result.R)]
+        if not results:
+            continue
+        stem = f"example{ex.number}"
+        save(figures.example_overview_figure(results, title=f"{ex.title} ({ex.description})"),
+             f"{stem}_overview")
+        save(figures.convergence_figure(results), f"{stem}_convergence")
+        save(figures.controls_figure(results), f"{stem}_controls")
+        save(figures.rpy_figure(results), f"{stem}_rpy")
+        save(figures.leg_lengths_figure(results), f"{stem}_leg_lengths")
+        save(figures.delta_figure(results), f"{stem}_delta")
+    ex3 = [s for s in solved if s.example.number == 3 and len(s.result.R)]
+    if ex3:
+        gif = outdir / "example3_animation.gif"
+        figures.animate_platform(ex3[0].result, gif)
+        written.append(gif)
+        progress(f"      wrote {gif.name}")
+    return written
+
+
+def summary_table(rows: list[dict]) -> str:
+    """Markdown table of the summary rows."""
+    head = ("| example | method | strategy | success | iterations | re-simulated ‖l_T‖ [rad] "
+            "| min \\|Δ\\| | time [s] |\n|---|---|---|---|---|---|---|---|")
+    lines = [head]
+    for r in rows:
+        err = "–" if r["terminal_error"] is None else f"{r['terminal_error']:.1e}"
+        md = "–" if r["min_delta"] is None else f"{r['min_delta']:.3f}"
+        lines.append(f"| {r['example']} | {r['method']} | {r['strategy']} | "
+                     f"{'yes' if r['success'] else 'no'} | {r['iterations']} | {err} | {md} | "
+                     f"{r['seconds']:.3f} |")
+    return "\n".join(lines)
+
+
+def run(outdir: Path = DEFAULT_OUTDIR, audit: bool = True, draw: bool = True) -> int:
+    """The whole job; returns the exit status."""
+    from derivations import audit as _audit
+    from derivations import codegen
+
+    t0 = time.perf_counter()
+    outdir = Path(outdir)
+    outdir.mkdir(parents=True, exist_ok=True)
+    _log("checking that the generated modules match a fresh derivation ...")
+    stale = codegen.check()
+    if stale:
+        for path, _ in stale:
+            _log(f"stale generated module: {path} (run `nonholo derive`)")
+        return 1
+    if audit:
+        _log("auditing the appendix against the derivation ...")
+        print(_audit.format_table(_audit.run()), flush=True)
+    _log("solving the examples ...")
+    solved = solve_all()
+    plans = outdir / "plans"
+    plans.mkdir(exist_ok=True)
+    for s in solved:
+        s.result.save(plans / f"example{s.example.number}_{s.result.method}.json")
+    rows = [s.summary() for s in solved]
+    (outdir / "summary.json").write_text(json.dumps(rows, indent=2) + "\n")
+    (outdir / "summary.md").write_text(summary_table(rows) + "\n")
+    print(summary_table(rows), flush=True)
+    if draw:
+        _log("drawing the figures ...")
+        write_figures(solved, outdir)
+    failed = [s for s in solved if s.example.must_succeed and not s.ok]
+    for s in solved:
+        if not s.example.must_succeed and not s.ok:
+            _log(f"note: {s.example.title} not solved by strategy {s.result.strategy!r}: "
+                 f"{s.result.reason}")
+    _log(f"done in {time.perf_counter() - t0:.1f} s; outputs in {outdir}/")
+    if failed:
+        _log("FAILED: " + ", ".join(f"{s.example.title} ({s.result.method})" for s in failed))
+        return 1
+    return 0

@@ -1,0 +1,235 @@
+"""Simulation of ``dR/dt = [L(R) u] R`` on SO(3) and of its variational system (9).
+
+Conventions: spatial angular velocity ``ω = L(R) u`` (``dR/dt = [ω] R``), time in
+seconds, rotations as 3×3 matrices. Variations are spatial too: ``∂R/∂θ = [s] R``.
+
+The integrator is the 4th-order commutator-free Lie-group method CF4 with a fixed step
+``h = T/steps`` (see :mod:`nonholo.kernels`): ``R`` is updated by products of Rodrigues
+exponentials, so ``|RᵀR − I|`` stays at round-off level (≲ 1e-14). With the default
+:data:`DEFAULT_STEPS` the endpoint of the paper's examples is within 1e-9 (geodesic
+distance) of a DOP853 solution with ``rtol = atol = 1e-13``, see :data:`DEFAULT_STEPS`.
+
+The variational system ``ds/dt = A s + B ∂u/∂θ``, ``A = Q(R, u) + [L(R) u]``, ``B = L(R)``
+is integrated alongside through ``Z(t) = Φ(t, 0)^{-1}``: :func:`variational` returns
+``Φ(T, t_n) = Z(T)^{-1} Z(t_n)``, the mobility matrix
+``M(T) = ∫ Φ(T,t) B Bᵀ Φ(T,t)ᵀ dt`` (by quadrature; :func:`nonholo.verify.mobility_lyapunov`
+solves the Lyapunov equation instead), and for a parametrised control ``u = u(λ)`` the
+Jacobian ``J = ∂s_T/∂λ = ∫ Φ(T,t) B(t) ∂u/∂λ(t) dt``.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from . import kernels as _kernels
+from . import mechanisms
+from .controls import STAGE_FRACTIONS, Controls, _check_count, _check_T
+from .so3 import check_rotation
+
+#: Default number of CF4 steps on ``[0, T]``. Measured on Examples 1 and 2 of MODEL.md
+#: (``T = 1``; the initial control and the planned controls of both methods, see
+#: ``benchmarks/bench_plan.py``): the endpoint differs from DOP853 (``rtol = atol =
+#: 1e-13``) by at most 4.4e-11 rad with 400 steps (7.3e-10 with 200, 1.2e-8 with 100;
+#: order 4, halving the step divides the error by ≈ 16). Larger inputs need more steps:
+#: the error grows like ``(h |ω|)⁴``.
+DEFAULT_STEPS = 400
+
+#: ``simulate`` stops (with :class:`SingularTrajectoryError`) where ``|Δ|`` falls below this.
+DELTA_STOP = 1e-9
+
+
+class SingularTrajectoryError(ValueError):
+    """The trajectory reached the singular surface ``Δ = 0`` (or ``ω`` became non-finite).
+
+    ``trajectory`` holds the part simulated before that happened.
+    """
+
+    def __init__(self, message: str, trajectory: "Trajectory"):
+        super().__init__(message)
+        self.trajectory = trajectory
+
+
+@dataclass(frozen=True)
+class Trajectory:
+    """Samples of a simulated motion at ``t_n = n T/steps``.
+
+    ``R`` has shape ``(n, 3, 3)``, ``u`` shape ``(n, m)`` (the inputs at ``t_n``, with
+    piecewise-constant controls the value on ``[t_n, t_{n+1})``), ``delta`` shape ``(n,)``
+    (``Δ(R(t_n))``, ``None`` for mechanisms without a singular set). ``min_delta`` is the
+    least ``|Δ|`` over every point where the integrator evaluated ``L`` (``None`` without a
+    singular set).
+    """
+
+    t: np.ndarray
+    R: np.ndarray
+    u: np.ndarray
+    delta: np.ndarray | None
+    min_delta: float | None
+    mechanism: str
+    T: float
+    steps: int
+
+    @property
+    def R_T(self) -> np.ndarray:
+        """The endpoint ``R(T)``."""
+        return self.R[-1]
+
+
+@dataclass(frozen=True)
+class Variational:
+    """The trajectory with the variational system (9) along it (see :func:`variational`).
+
+    ``Z[n] = Φ(t_n, 0)^{-1}``; ``M`` is the mobility matrix ``M(T)``; ``J`` the Jacobian
+    ``∂s_T/∂λ`` (3 × len(λ)) of parametrised controls (``None`` for a plain ``u(t)``).
+    """
+
+    trajectory: Trajectory
+    Z: np.ndarray
+    M: np.ndarray
+    J: np.ndarray | None
+
+    @property
+    def Phi(self) -> np.ndarray:
+        """``Φ(T, t_n)`` for every sample, shape ``(n, 3, 3)``."""
+        return np.linalg.solve(self.Z[-1], self.Z)
+
+
+def delta_samples(mechanism, R: np.ndarray) -> np.ndarray | None:
+    """``Δ(R[n])`` for a stack ``R`` of shape ``(n, 3, 3)``; ``None`` without a singular set."""
+    mech = mechanisms.get(mechanism)
+    if not mech.has_singular_set:
+        return None
+    R = np.asarray(R, dtype=float)
+    try:
+        # generated Δ is plain arithmetic on entries R[i, j]: evaluate it on (3, 3, n)
+        d = np.asarray(mech.delta(R.transpose(1, 2, 0)), dtype=float)
+        if d.shape == (R.shape[0],):
+            return d
+    except (TypeError, ValueError, IndexError):
+        pass
+    return np.array([mech.delta(r) for r in R], dtype=float)
+
+
+def stage_table(controls, T: float, steps: int, n_inputs: int) -> np.ndarray:
+    """The integrator's input table ``U`` (``(steps, 3, m)``, see :mod:`nonholo.kernels`).
+
+    ``controls`` is a :class:`~nonholo.controls.Controls` (its ``T`` must equal ``T``) or a
+    vectorised function ``u(t)``, ``t (n,) -> (n, m)``, evaluated at the stage times (use
+    a ``Controls`` for discontinuous inputs: it keeps each step on one side of a jump).
+    """
+    T = _check_T(T)
+    steps = _check_count(steps, "steps")
+    if isinstance(controls, Controls):
+        if controls.T != T:
+            raise ValueError(f"the controls are defined on [0, {controls.T:g}], not on [0, {T:g}]")
+        U = controls.stage_table(steps)
+    elif callable(controls):
+        h = T / steps
+        t = ((np.arange(steps)[:, None] + STAGE_FRACTIONS[None, :]) * h).ravel()
+        U = np.asarray(controls(t), dtype=float)
+        if U.ndim == 1 and n_inputs == 1:
+            U = U[:, None]
+        if U.shape != (3 * steps, n_inputs):
+            raise ValueError(
+                f"controls(t) must return shape (len(t), {n_inputs}) for t of shape (n,); "
+                f"got {U.shape} for n = {3 * steps}")
+        U = U.reshape(steps, 3, n_inputs)
+    else:
+        raise ValueError("controls must be a nonholo.controls.Controls or a function u(t)")
+    if U.shape[2] != n_inputs:
+        raise ValueError(f"the controls have {U.shape[2]} inputs, the mechanism has {n_inputs}")
+    if not np.all(np.isfinite(U)):
+        raise ValueError("the controls have non-finite values")
+    return np.ascontiguousarray(U, dtype=float)
+
+
+def _sign_of_delta(kern, mech, R0) -> float:
+    if not kern.has_singular_set:
+        return 1.0
+    d0 = float(mech.delta(R0))
+    if d0 == 0.0:
+        raise ValueError("R0 lies on the singular surface Δ(R) = 0, where L(R) is undefined")
+    return float(np.sign(d0))
+
+
+def _trajectory(mech, Rs, U, T, steps, n, dmin, sgn) -> Trajectory:
+    h = T / steps
+    t = np.arange(n + 1) * h
+    if n == steps:
+        t[-1] = T
+    u = np.concatenate([U[:n, 0], U[steps - 1:steps, 2]]) if n == steps else U[:n + 1, 0]
+    R = Rs[:n + 1].copy()
+    return Trajectory(t=t, R=R, u=u.copy(), delta=delta_samples(mech, R),
+                      min_delta=(float(dmin) if mech.has_singular_set else None),
+                      mechanism=mech.name, T=T, steps=steps)
+
+
+def _stopped(mech, n, t_stop, dmin, sgn, traj) -> SingularTrajectoryError:
+    if mech.has_singular_set and dmin <= 0.0:
+        why = ("reaches the singular surface Δ = 0 (Δ changes sign between two integrator "
+               "points: |ω| ~ 1/|Δ| blows up there)")
+    elif mech.has_singular_set and dmin < DELTA_STOP:
+        why = f"reaches the singular surface Δ = 0 (|Δ| = {dmin:.3g})"
+    else:
+        why = "produces a non-finite angular velocity"
+    return SingularTrajectoryError(f"the trajectory {why} at t ≈ {t_stop:.6g} s", traj)
+
+
+def simulate(R0, controls, T: float, *, mechanism: str = "platform",
+             steps: int = DEFAULT_STEPS) -> Trajectory:
+    """Solve ``dR/dt = [L(R) u(t)] R``, ``R(0) = R0`` on ``[0, T]`` with ``steps`` CF4 steps.
+
+    ``controls``: a :class:`~nonholo.controls.Controls` or a vectorised ``u(t)``.
+    Raises ``ValueError`` for a bad ``R0``/``T``/``steps``/controls and
+    :class:`SingularTrajectoryError` if the motion runs into ``Δ = 0``.
+    """
+    mech = mechanisms.get(mechanism)
+    R0 = check_rotation(R0, "R0")
+    T = _check_T(T)
+    steps = _check_count(steps, "steps")
+    kern = _kernels.get(mech.name)
+    sgn = _sign_of_delta(kern, mech, R0)
+    U = stage_table(controls, T, steps, mech.n_inputs)
+    Rs = np.empty((steps + 1, 3, 3))
+    n, dmin, t_stop = kern.forward(R0, U, T / steps, sgn, DELTA_STOP, Rs)
+    traj = _trajectory(mech, Rs, U, T, steps, n, dmin, sgn)
+    if n < steps:
+        raise _stopped(mech, n, t_stop, dmin, sgn, traj)
+    return traj
+
+
+def variational(R0, controls, T: float, *, mechanism: str = "platform",
+                steps: int = DEFAULT_STEPS) -> Variational:
+    """Simulate and integrate the variational system (9) along the motion.
+
+    Returns a :class:`Variational` with ``Φ(T, t_n)`` (``.Phi``), ``M(T)`` (``.M``) and,
+    when ``controls`` is a :class:`~nonholo.controls.Controls`, ``J = ∂s_T/∂λ`` (``.J``):
+    for a change ``δλ`` of the parameters the endpoint moves to ``exp([J δλ]) R_T`` to
+    first order. For grid controls the columns ``(j, i)`` of ``J`` are the
+    ``G_j = ∫_{I_j} Φ(T,t) B(t) dt`` of the nonparametric update.
+    """
+    mech = mechanisms.get(mechanism)
+    R0 = check_rotation(R0, "R0")
+    T = _check_T(T)
+    steps = _check_count(steps, "steps")
+    kern = _kernels.get(mech.name)
+    sgn = _sign_of_delta(kern, mech, R0)
+    U = stage_table(controls, T, steps, mech.n_inputs)
+    if isinstance(controls, Controls):
+        Bidx, Bval, stride_b, stride_i = controls.sparse_basis(steps)
+        J = np.empty((3, controls.params.size))
+    else:
+        # no parameters: an empty basis (the kernel then skips the Jacobian)
+        Bidx, Bval, stride_b, stride_i = np.zeros((steps, 3, 0), np.int64), np.zeros((steps, 3, 0)), 0, 0
+        J = np.empty((3, 0))
+    Rs = np.empty((steps + 1, 3, 3))
+    Zs = np.empty((steps + 1, 3, 3))
+    M = np.empty((3, 3))
+    n, dmin, t_stop = kern.forward_variational(R0, U, T / steps, sgn, DELTA_STOP, Bidx, Bval,
+                                               stride_b, stride_i, Rs, Zs, J, M, True)
+    traj = _trajectory(mech, Rs, U, T, steps, n, dmin, sgn)
+    if n < steps:
+        raise _stopped(mech, n, t_stop, dmin, sgn, traj)
+    return Variational(trajectory=traj, Z=Zs, M=M, J=J if isinstance(controls, Controls) else None)
+

@@ -1,0 +1,113 @@
+"""Independent checks of planned motions with SciPy's DOP853 (no numba, no Lie-group tricks).
+
+- :func:`resimulate` integrates the nine entries of ``R`` in ``dR/dt = [L(R) u(t)] R`` with
+  ``solve_ivp(method="DOP853", rtol=atol=1e-13)``, using the mechanism's generated ``L``
+  in plain NumPy. For piecewise-constant controls each interval between ``breakpoints``
+  is integrated separately (the control is evaluated strictly inside the interval), so
+  the adaptive integrator never steps across a jump.
+- :func:`terminal_error` is ``|l_T|`` with ``[l_T] = log(R_T R_dᵀ)`` (geodesic distance, rad).
+- :func:`mobility_lyapunov` solves the Lyapunov equation ``dM/dt = B Bᵀ + A M + M Aᵀ``,
+  ``M(0) = 0`` (``A = Q(R,u) + [L(R)u]``, ``B = L(R)``) together with ``R``: the mobility
+  matrix ``M(T)`` of the appendix, to compare with the quadrature in
+  :func:`nonholo.simulation.variational`.
+"""
+from __future__ import annotations
+
+import numpy as np
+from scipy.integrate import solve_ivp
+
+from . import mechanisms, so3
+
+RTOL = 1e-13
+ATOL = 1e-13
+
+
+def _segments(T: float, controls, breakpoints):
+    if breakpoints is None:
+        breakpoints = getattr(controls, "breakpoints", None)
+    if breakpoints is None:
+        return [(0.0, T)]
+    b = np.unique(np.clip(np.asarray(breakpoints, dtype=float), 0.0, T))
+    b = np.union1d(b, [0.0, T])
+    return list(zip(b[:-1], b[1:]))
+
+
+def _input(controls, a: float, b: float, m: int):
+    """``u(t)`` on the open interval ``(a, b)`` (``t`` nudged inside at the ends)."""
+    eps = 1e-9 * (b - a)
+
+    def u(t):
+        tt = min(max(t, a + eps), b - eps)
+        return np.asarray(controls(np.array([tt])), dtype=float).reshape(m)
+
+    return u
+
+
+def _solve(rhs, y0, segments, rtol, atol):
+    y = np.asarray(y0, dtype=float)
+    for a, b in segments:
+        sol = solve_ivp(rhs(a, b), (a, b), y, method="DOP853", rtol=rtol, atol=atol)
+        if not sol.success:
+            raise RuntimeError(f"DOP853 failed on [{a:g}, {b:g}]: {sol.message}")
+        y = sol.y[:, -1]
+        if not np.all(np.isfinite(y)):
+            raise RuntimeError(f"DOP853 produced non-finite values on [{a:g}, {b:g}]")
+    return y
+
+
+def resimulate(R0, controls, T: float, mechanism: str = "platform", breakpoints=None,
+               *, rtol: float = RTOL, atol: float = ATOL) -> np.ndarray:
+    """``R(T)`` of ``dR/dt = [L(R) u(t)] R``, ``R(0) = R0``, by DOP853 (tight tolerances).
+
+    ``controls`` is a vectorised ``u(t)`` (``(n,) -> (n, m)``), e.g. ``PlanResult.controls``
+    or a :class:`~nonholo.controls.Controls`; ``breakpoints`` (default: the controls'
+    ``breakpoints`` attribute, if any) are times where ``u`` may jump.
+    """
+    mech = mechanisms.get(mechanism)
+    R0 = so3.check_rotation(R0, "R0")
+    L, m = mech.L, mech.n_inputs
+
+    def rhs(a, b):
+        u = _input(controls, a, b, m)
+
+        def f(t, y):
+            R = y.reshape(3, 3)
+            return (so3.hat(L(R) @ u(t)) @ R).ravel()
+
+        return f
+
+    return _solve(rhs, R0.ravel(), _segments(float(T), controls, breakpoints), rtol, atol).reshape(3, 3)
+
+
+def terminal_error(R_T, Rd) -> float:
+    """``|l_T|``, ``[l_T] = log(R_T R_dᵀ)``: the geodesic distance from ``R_T`` to ``R_d`` (rad)."""
+    return float(np.linalg.norm(so3.log(np.asarray(R_T) @ np.asarray(Rd).T)))
+
+
+def mobility_lyapunov(R0, controls, T: float, mechanism: str = "platform", breakpoints=None,
+                      *, rtol: float = 1e-12, atol: float = 1e-12) -> np.ndarray:
+    """``M(T)`` from ``dM/dt = B Bᵀ + A M + M Aᵀ``, ``M(0) = 0`` (integrated with ``R``)."""
+    mech = mechanisms.get(mechanism)
+    R0 = so3.check_rotation(R0, "R0")
+    L, Q, m = mech.L, mech.Q, mech.n_inputs
+
+    def rhs(a, b):
+        u = _input(controls, a, b, m)
+
+        def f(t, y):
+            R = y[:9].reshape(3, 3)
+            M = y[9:].reshape(3, 3)
+            ut = u(t)
+            B = L(R)
+            w = B @ ut
+            A = Q(R, ut) + so3.hat(w)
+            dR = so3.hat(w) @ R
+            dM = B @ B.T + A @ M + M @ A.T
+            return np.concatenate([dR.ravel(), dM.ravel()])
+
+        return f
+
+    y0 = np.concatenate([R0.ravel(), np.zeros(9)])
+    y = _solve(rhs, y0, _segments(float(T), controls, breakpoints), rtol, atol)
+    M = y[9:].reshape(3, 3)
+    return 0.5 * (M + M.T)

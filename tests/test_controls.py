@@ -1,0 +1,133 @@
+"""Control parametrisations: evaluation, stage tables, sparse basis, metric, (de)serialisation."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from nonholo import controls as C
+from nonholo.kernels import stage_values
+
+T = 1.7
+
+
+def fourier(seed=0, K=2, m=2):
+    return C.Fourier(T, np.random.default_rng(seed).normal(size=(m, 2 * K + 1)))
+
+
+def grid_controls(seed=0, grid=10, m=2):
+    return C.PiecewiseConstant(T, np.random.default_rng(seed).normal(size=(grid, m)))
+
+
+def test_fourier_formula_vectorised():
+    u = fourier(K=3)
+    t = np.linspace(0.0, T, 7)
+    w = 2 * np.pi / T
+    lam = u.coeffs
+    expected = np.stack([lam[i, 0] + sum(lam[i, 2 * k - 1] * np.sin(k * w * t) + lam[i, 2 * k] * np.cos(k * w * t)
+                                          for k in range(1, 4)) for i in range(2)], axis=1)
+    assert u(t).shape == (7, 2)
+    np.testing.assert_allclose(u(t), expected, rtol=0, atol=1e-14)
+    assert u(0.3).shape == (2,)
+    np.testing.assert_allclose(u(0.3), u(np.array([0.3]))[0])
+    assert u.params.size == 2 * (2 * 3 + 1)
+
+
+def test_paper_initial_is_exact_in_fourier_basis():
+    u = C.Fourier.fit(C.paper_initial(T), T, 2)
+    expected = np.zeros((2, 5))
+    expected[0, 1] = 0.3      # u1 = 0.3 sin ωt
+    expected[1, 2] = 0.3      # u2 = 0.3 cos ωt
+    np.testing.assert_allclose(u.coeffs, expected, atol=1e-15)
+    t = np.linspace(0, T, 11)
+    np.testing.assert_allclose(u(t), C.paper_initial(T)(t), atol=1e-15)
+
+
+def test_piecewise_evaluation_right_continuous():
+    u = grid_controls(grid=4)
+    bp = u.breakpoints
+    np.testing.assert_array_equal(bp, np.linspace(0, T, 5))
+    np.testing.assert_array_equal(u(bp[:-1]), u.values)            # t_j belongs to interval j
+    np.testing.assert_array_equal(u(bp[1:-1] - 1e-12), u.values[:-1])
+    np.testing.assert_array_equal(u(np.array([T])), u.values[-1:])  # u(T) = last value
+    assert u(0.1).shape == (2,)
+
+
+def test_piecewise_fit_is_the_interval_mean():
+    u = C.PiecewiseConstant.fit(lambda t: np.stack([t, t ** 2], axis=-1), T, 5)
+    a, b = u.breakpoints[:-1], u.breakpoints[1:]
+    np.testing.assert_allclose(u.values[:, 0], (a + b) / 2, rtol=1e-14)
+    np.testing.assert_allclose(u.values[:, 1], (b ** 3 - a ** 3) / (3 * (b - a)), rtol=1e-13)
+
+
+@pytest.mark.parametrize("make", [fourier, grid_controls])
+def test_stage_table_matches_evaluation_and_sparse_basis(make):
+    u = make()
+    steps = 40
+    h = T / steps
+    U = u.stage_table(steps)
+    assert U.shape == (steps, 3, 2)
+    if isinstance(u, C.Fourier):
+        t = (np.arange(steps)[:, None] + np.array([0, 0.5, 1.0])) * h
+        np.testing.assert_allclose(U, u(t.ravel()).reshape(steps, 3, 2), atol=1e-13)
+    else:
+        # constant on each step, the value of the interval holding the step
+        np.testing.assert_array_equal(U, np.broadcast_to(u(np.arange(steps) * h)[:, None, :], U.shape))
+    # the sparse basis is the same linear map λ -> U (the one the kernels differentiate)
+    Bidx, Bval, sb, si = u.sparse_basis(steps)
+    np.testing.assert_allclose(stage_values(u.params, Bidx, Bval, sb, si, 2), U, atol=1e-13)
+    # ... and linear: U(λ + μ) = U(λ) + U(μ)
+    v = u.with_params(np.ones_like(u.params))
+    w = u.with_params(u.params + v.params)
+    np.testing.assert_allclose(w.stage_table(steps), U + v.stage_table(steps), atol=1e-12)
+
+
+@pytest.mark.parametrize("make", [fourier, grid_controls])
+def test_metric_is_the_l2_gram_diagonal(make):
+    u = make()
+    x, w = np.polynomial.legendre.leggauss(40)
+    # composite Gauss on the grid (exact for the piecewise-constant, accurate for Fourier)
+    edges = np.linspace(0, T, 41)
+    t = (0.5 * (edges[:-1] + edges[1:])[:, None] + 0.5 * np.diff(edges)[:, None] * x).ravel()
+    wt = (0.5 * np.diff(edges)[:, None] * w).ravel()
+    integral = np.sum(wt * np.sum(u(t) ** 2, axis=1))
+    assert integral == pytest.approx(np.sum(u.metric() * u.params ** 2), rel=1e-12)
+
+
+@pytest.mark.parametrize("make", [fourier, grid_controls])
+def test_dict_round_trip(make):
+    u = make()
+    v = C.from_dict(u.to_dict())
+    assert v == u and type(v) is type(u)
+    t = np.linspace(0, T, 13)
+    np.testing.assert_array_equal(v(t), u(t))
+
+
+def test_with_params_does_not_alias():
+    u = fourier()
+    p = u.params
+    p[0] = 99.0
+    assert u.params[0] != 99.0
+    v = u.with_params(p)
+    assert v.params[0] == 99.0 and u.params[0] != 99.0
+    with pytest.raises(ValueError):
+        u.with_params(np.full(u.params.size, np.nan))
+    with pytest.raises(ValueError):
+        u.with_params(np.ones(3))
+
+
+@pytest.mark.parametrize("bad", [
+    lambda: C.Fourier(0.0, np.zeros((2, 5))),
+    lambda: C.Fourier(-1.0, np.zeros((2, 5))),
+    lambda: C.Fourier(np.nan, np.zeros((2, 5))),
+    lambda: C.Fourier(1.0, np.zeros((2, 4))),
+    lambda: C.Fourier(1.0, np.zeros((2, 1))),
+    lambda: C.Fourier(1.0, [[np.nan, 0, 0]]),
+    lambda: C.Fourier.fit(C.paper_initial(1.0), 1.0, 0),
+    lambda: C.PiecewiseConstant(1.0, np.zeros((0, 2))),
+    lambda: C.PiecewiseConstant.fit(C.paper_initial(1.0), 1.0, 0),
+    lambda: C.PiecewiseConstant(1.0, np.zeros((10, 2))).stage_table(25),
+    lambda: C.from_dict({"kind": "spline"}),
+])
+def test_bad_parameters_raise(bad):
+    with pytest.raises(ValueError):
+        bad()
