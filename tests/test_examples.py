@@ -1,0 +1,66 @@
+"""The examples' data, and the main job `nonholo reproduce` end to end."""
+import json
+
+import numpy as np
+import pytest
+
+from nonholo import examples, mechanisms, so3
+from nonholo.cli import main
+
+delta = mechanisms.get("platform").delta
+
+
+def test_examples_1_2_match_the_model():
+    ex1, ex2 = examples.get(1), examples.get(2)
+    assert so3.distance(ex1.R_start, ex1.R_goal) == pytest.approx(0.58, abs=0.005)
+    assert delta(ex1.R_start) == pytest.approx(0.727, abs=5e-4)
+    assert delta(ex1.R_goal) == pytest.approx(0.582, abs=5e-4)
+    assert delta(ex2.R_start) == pytest.approx(0.844, abs=5e-4)
+    assert delta(ex2.R_goal) == pytest.approx(0.882, abs=5e-4)
+    np.testing.assert_allclose(so3.as_rpy(ex2.R_start @ ex2.R_goal.T @ ex2.R_goal), ex2.rpy_start)
+
+
+@pytest.mark.parametrize("number", [3, 4])
+def test_parking_goals_meet_the_conditions(number):
+    ex = examples.get(number)
+    R0, Rd = ex.R_start, ex.R_goal
+    assert so3.distance(R0, Rd) == pytest.approx(0.6, abs=1e-12)
+    assert Rd[0, 0] == pytest.approx(R0[0, 0], abs=1e-12)  # leg 2 ends at its initial length
+    assert Rd[1, 1] == pytest.approx(R0[1, 1], abs=1e-12)  # leg 1 too
+    assert np.sign(delta(Rd)) == np.sign(delta(R0))
+
+
+def test_example3_is_the_parking_goal_nearest_to_the_reference():
+    ex3, ex4 = examples.get(3), examples.get(4)
+    ref = so3.exp(0.6 * np.array([1.0, 0, 0])) @ ex3.R_start
+    assert so3.distance(ex3.R_goal, ref) < so3.distance(ex4.R_goal, ref)
+    assert so3.distance(ex3.R_goal, ex4.R_goal) > 0.1
+
+
+def test_unknown_example():
+    with pytest.raises(ValueError):
+        examples.get(7)
+
+
+def test_reproduce_writes_summary_and_figures(tmp_path, capsys):
+    assert main(["reproduce", "--out", str(tmp_path), "--no-audit"]) == 0
+    rows = json.loads((tmp_path / "summary.json").read_text())
+    keys = {"example", "method", "strategy", "success", "iterations", "terminal_error",
+            "min_delta", "seconds"}
+    assert all(keys <= set(r) for r in rows)
+    for number in (1, 2):
+        mine = [r for r in rows if r["example"] == number]
+        assert {r["method"] for r in mine} == {"parametric", "nonparametric"}
+        for r in mine:
+            assert r["success"] and r["terminal_error"] <= 1e-8 and r["min_delta"] >= 0.2
+    assert {r["example"] for r in rows} == {1, 2, 3, 4}
+    stems = ["singular_set", "singular_set_slices", "normal_form"] + [
+        f"example{k}_{what}" for k in (1, 2, 3) for what in
+        ("mechanism", "overview", "convergence", "controls", "rpy", "leg_lengths", "delta")]
+    for stem in stems:
+        for ext in ("png", "pdf"):
+            assert (tmp_path / f"{stem}.{ext}").stat().st_size > 5000, stem
+    assert (tmp_path / "example3_animation.gif").stat().st_size > 10000
+    from nonholo.result import PlanResult
+    again = PlanResult.load(tmp_path / "plans" / "example1_parametric.json")
+    assert again.success and again.terminal_error <= 1e-10
