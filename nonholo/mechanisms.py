@@ -7,8 +7,10 @@ depends on which mechanism it is.
 from __future__ import annotations
 
 import importlib
+import importlib.util
 from dataclasses import dataclass
 from functools import cache
+from pathlib import Path
 from types import ModuleType
 
 from .generated import MECHANISMS as NAMES
@@ -61,11 +63,42 @@ class NumericMechanism:
         return f"NumericMechanism({self.name!r}: {self.description})"
 
 
+#: Mechanisms registered at run time from generated modules outside the package.
+_REGISTERED: dict[str, ModuleType] = {}
+
+
+def names() -> tuple[str, ...]:
+    """Names of every known mechanism: the package's, then those registered at run time."""
+    return tuple(NAMES) + tuple(n for n in _REGISTERED if n not in NAMES)
+
+
 @cache
 def get(name: str = "platform") -> NumericMechanism:
     """The numeric mechanism called ``name`` (``ValueError`` lists the known names)."""
     if isinstance(name, NumericMechanism):
         return name
+    if name in _REGISTERED:
+        return NumericMechanism(name, _REGISTERED[name])
     if name not in NAMES:
-        raise ValueError(f"unknown mechanism {name!r}; known: {', '.join(NAMES)}")
+        raise ValueError(f"unknown mechanism {name!r}; known: {', '.join(names())}")
     return NumericMechanism(name, importlib.import_module(f"nonholo.generated.{name}"))
+
+
+def register(path) -> NumericMechanism:
+    """Make a generated module written outside the package usable by its ``NAME``.
+
+    ``path`` is a file written by :func:`derivations.codegen.write_mechanism`; afterwards
+    ``plan(..., mechanism=NAME)`` and every other function taking a mechanism name work
+    with it, in this process. (To add a mechanism for good, register it in
+    ``derivations/catalog.py`` and run ``nonholo derive``.)
+    """
+    path = Path(path)
+    spec = importlib.util.spec_from_file_location(f"nonholo_registered_{path.stem}", path)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    name = module.NAME
+    if name in NAMES:
+        raise ValueError(f"mechanism {name!r} already exists in the package")
+    _REGISTERED[name] = module
+    get.cache_clear()
+    return get(name)
