@@ -40,6 +40,7 @@ from pathlib import Path
 import matplotlib
 import numpy as np
 from matplotlib.figure import Figure
+from scipy.spatial.transform import Rotation
 from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
 from mpl_toolkits.mplot3d import proj3d
@@ -489,9 +490,25 @@ _PI_TICKS = ([-np.pi, -np.pi / 2, 0, np.pi / 2, np.pi], ["−π", "−π/2", "0"
 _HALF_PI_TICKS = ([-np.pi / 2, 0, np.pi / 2], ["−π/2", "0", "π/2"])
 
 
-def _draw_slice(ax, psi: float, n: int = 241, marks=None):
+def mechanism_delta_rpy(mechanism, phi, theta, psi) -> np.ndarray:
+    """``Δ(RPY(φ, ϑ, ψ))`` of any mechanism with a singular set, on arrays of angles.
+
+    The generated ``delta(R)`` reads the entries ``R[i, j]``: given a stack of rotations
+    transposed to shape (3, 3, ...) it evaluates all of them at once.
+    """
+    mech = mechanisms.get(mechanism)
+    phi, theta, psi = np.broadcast_arrays(*(np.asarray(a, dtype=float) for a in (phi, theta, psi)))
+    R = Rotation.from_euler("ZYX", np.stack([phi, theta, psi], -1).reshape(-1, 3)).as_matrix()
+    return np.asarray(mech.delta(np.moveaxis(R, 0, -1)), dtype=float).reshape(phi.shape)
+
+
+def _draw_slice(ax, psi: float, n: int = 241, marks=None, mechanism: str = "platform"):
     F, T = np.meshgrid(np.linspace(-np.pi, np.pi, n), np.linspace(-np.pi / 2, np.pi / 2, n))
-    D = delta_rpy(F, T, psi)
+    if mechanism == "platform":
+        D = delta_rpy(F, T, psi)
+    else:
+        D = mechanism_delta_rpy(mechanism, F, T, psi)
+        D = D / np.max(np.abs(D))  # the colour scale is [-1, 1]
     levels = np.linspace(-1.0, 1.0, 21)
     cs = ax.contourf(F, T, D, levels=levels, cmap="RdBu_r", vmin=-1.05, vmax=1.05)
     ax.contour(F, T, D, levels=levels[levels != 0], colors="k", linewidths=0.3, alpha=0.35)
@@ -572,6 +589,35 @@ def singular_set_figure(psi_slice: float = -0.5, marks: dict | None = None,
 
 
 @_styled
+@_styled
+def mechanism_card_figure(mechanism: str, R=None, result=None, psi_slice: float = 0.0) -> Figure:
+    """One mechanism at a glance: the platform's schematic at ``R`` (default: identity) and
+    its singular set on the slice ``ψ = psi_slice``; for a mechanism without legs, the
+    paths of the body axes along ``result`` (a planned motion) and its inputs."""
+    mech = mechanisms.get(mechanism)
+    fig = Figure(figsize=(12.0, 5.2), layout="constrained")
+    gs = fig.add_gridspec(1, 2, width_ratios=[1.0, 1.1])
+    ax = fig.add_subplot(gs[0], projection="3d")
+    R = np.eye(3) if R is None else np.asarray(R, dtype=float)
+    if mech.geometry is not None:
+        draw_platform(ax, R, mechanism)
+        dtext = f",  Δ = {float(mech.delta(R)):+.3f}" if mech.has_singular_set else ""
+        ax.set_title(f"{_rpy_text(R)}{dtext}")
+    elif result is not None:
+        plot_body_axes(ax, result)
+        ax.set_title("paths of the body axes $R(t)e_k$")
+    ax2 = fig.add_subplot(gs[1])
+    if mech.has_singular_set:
+        cs = _draw_slice(ax2, psi_slice, n=181, mechanism=mechanism)
+        cb = fig.colorbar(cs, ax=ax2, shrink=0.9, ticks=np.linspace(-1, 1, 5))
+        cb.set_label("Δ / max|Δ| [-]")
+    elif result is not None:
+        plot_controls(ax2, result)
+        ax2.set_title("planned inputs")
+    fig.suptitle(f"{mechanism}: {mech.description}")
+    return fig
+
+
 def singular_slices_figure(psi_values=(-2.0, -0.5, 0.5, 2.0), marks: dict | None = None) -> Figure:
     """``Δ(φ, ϑ, ψ)`` on slices ``ψ = const``: colour = value (red Δ > 0, blue Δ < 0),
     thick black = ``Δ = 0``. ``marks``: ``{label: (φ, ϑ, ψ, marker)}``, drawn on the slice

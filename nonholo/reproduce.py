@@ -21,6 +21,8 @@ import time
 from dataclasses import dataclass
 from pathlib import Path
 
+import numpy as np
+
 from . import examples as _examples
 from . import figures, verify
 from .planner import STRATEGIES, plan
@@ -88,6 +90,22 @@ def solve_all(progress=_log) -> list[Solved]:
     return solved
 
 
+def mechanism_cards():
+    """``(figure, stem)`` of every mechanism: the platforms at a regular pose with their
+    singular sets, the others with a planned motion (RPY(0.1, 0.2, 0.3) → RPY(0.8, -0.4, 0.5))."""
+    from . import mechanisms, so3
+
+    for name in mechanisms.NAMES:
+        mech = mechanisms.get(name)
+        if mech.geometry is not None:
+            R = np.eye(3) if abs(float(mech.delta(np.eye(3)))) > 0.1 else _examples.get(1).R_start
+            psi = float(so3.as_rpy(R)[2])
+            yield figures.mechanism_card_figure(name, R=R, psi_slice=psi), f"mechanism_{name}"
+        else:
+            result = plan(so3.from_rpy(0.1, 0.2, 0.3), so3.from_rpy(0.8, -0.4, 0.5), mechanism=name)
+            yield figures.mechanism_card_figure(name, result=result), f"mechanism_{name}"
+
+
 def write_figures(solved: list[Solved], outdir: Path, progress=_log) -> list[Path]:
     """All figures of the mechanism, the singular set and the examples."""
     written: list[Path] = []
@@ -97,6 +115,8 @@ def write_figures(solved: list[Solved], outdir: Path, progress=_log) -> list[Pat
         progress(f"      wrote {stem}.png/.pdf")
 
     exs = _examples.examples()
+    for fig, stem in mechanism_cards():
+        save(fig, stem)
     ex1 = _examples.get(1)  # its start and goal lie in the slice ψ = -0.5 drawn on the right
     marks = {"Example 1 start": (*ex1.rpy_start[:2], "o"),
              "Example 1 goal": (*ex1.rpy_goal[:2], "X")}

@@ -54,7 +54,8 @@ def test_reproduce_writes_summary_and_figures(tmp_path, capsys):
         for r in mine:
             assert r["success"] and r["terminal_error"] <= 1e-8 and r["min_delta"] >= 0.2
     assert {r["example"] for r in rows} == {1, 2, 3, 4}
-    stems = ["singular_set", "singular_set_slices", "normal_form"] + [
+    stems = ["singular_set", "singular_set_slices", "normal_form", "mechanism_platform",
+             "mechanism_platform_raised", "mechanism_attitude"] + [
         f"example{k}_{what}" for k in (1, 2, 3) for what in
         ("mechanism", "overview", "convergence", "controls", "rpy", "leg_lengths", "delta")]
     for stem in stems:

@@ -193,3 +193,21 @@ def test_animation(results, tmp_path):
     with Image.open(path) as im:
         assert im.format == "GIF"
         assert im.n_frames == 4
+
+
+def test_mechanism_delta_rpy_matches_the_analytic_form():
+    from nonholo import figures as F
+    rng = np.random.default_rng(5)
+    a = rng.uniform(-3, 3, size=(3, 7, 5))
+    np.testing.assert_allclose(F.mechanism_delta_rpy("platform", *a), F.delta_rpy(*a), atol=1e-14)
+    R = so3.from_rpy(*a[:, 2, 3])
+    assert F.mechanism_delta_rpy("platform_raised", *a)[2, 3] == pytest.approx(
+        float(mechanisms.get("platform_raised").delta(R)), abs=1e-14)
+
+
+@pytest.mark.parametrize("name", ["platform", "platform_raised"])
+def test_mechanism_card(name):
+    from nonholo import figures as F
+    fig = F.mechanism_card_figure(name)
+    assert len(fig.axes) == 3  # schematic, slice, colour bar
+    assert "[" in fig.axes[1].get_xlabel()
