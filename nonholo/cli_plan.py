@@ -5,7 +5,8 @@ Example::
     nonholo plan --from 0.5 1.2 -0.5 --to 1.0 0.9 -0.5 --T 1 --harmonics 2 --out plan.json --plot plan.png
 
 Orientations are given as RPY angles ``φ ϑ ψ`` in radians, ``RPY(φ, ϑ, ψ) =
-R(Z, φ) R(Y, ϑ) R(X, ψ)``. One line is printed per accepted iteration (iteration, error
+R(Z, φ) R(Y, ϑ) R(X, ψ)``. The strategy is ``robust`` unless ``--strategy paper`` asks for
+the appendix's algorithm as published (see :mod:`nonholo.robust`). One line is printed per accepted iteration (iteration, error
 ``|l_T|`` in rad, the step ``γh``, least ``|Δ|`` along the trajectory), then a summary.
 Exit status: 0 on success, 1 if the planner failed, 2 on bad input.
 """
@@ -34,7 +35,8 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
                    help="Fourier controls (parametric) or piecewise constant (nonparametric)")
     p.add_argument("--harmonics", type=int, default=2, help="Fourier harmonics K (default 2)")
     p.add_argument("--grid", type=int, default=100, help="intervals of the nonparametric grid (default 100)")
-    p.add_argument("--strategy", default="paper", help="planning strategy (default: paper)")
+    p.add_argument("--strategy", default="robust",
+                   help=f"planning strategy: {', '.join(planner.STRATEGIES)} (default: robust)")
     p.add_argument("--mechanism", default="platform", help=f"mechanism ({', '.join(MECHANISMS)})")
     p.add_argument("--gamma", type=float, default=0.5, help="decay rate γ of the θ-flow (default 0.5)")
     p.add_argument("--tol", type=float, default=1e-10, help="stop when |l_T| <= tol (rad)")

@@ -98,6 +98,24 @@ class Controls(ABC):
 
         return stage_values(self._flat, *self.sparse_basis(steps), self.n_inputs)
 
+    def stage_function(self, steps: int):
+        """``f(params, out) -> out``: the stage table of this parametrisation with the flat
+        parameters ``params``, written into ``out`` (shape ``(steps, 3, m)``).
+
+        The planner's fast path: nothing is validated and no object is built per
+        evaluation (``params`` must be a float64 vector of the right size).
+        """
+        from .kernels import stage_values
+
+        Bidx, Bval, sb, si = self.sparse_basis(steps)
+        m = self.n_inputs
+
+        def fill(params, out):
+            out[...] = stage_values(params, Bidx, Bval, sb, si, m)
+            return out
+
+        return fill
+
     @abstractmethod
     def sparse_basis(self, steps: int) -> tuple[np.ndarray, np.ndarray, int, int]:
         """``(Bidx, Bval, stride_b, stride_i)`` with
@@ -106,6 +124,12 @@ class Controls(ABC):
         ``Bidx`` (int64) and ``Bval`` have shape ``(steps, 3, q)``: the parametrisation as
         the kernels see it (they accumulate ``J = ∂s_T/∂λ`` with it).
         """
+
+    def kernel_basis(self, steps: int) -> tuple[np.ndarray, np.ndarray, int, int]:
+        """The stage basis in the form the variational kernel contracts fastest: the
+        :meth:`sparse_basis`, or its dense form (empty ``Bidx``, ``Bval`` of shape
+        ``(steps, 3, nb)`` over every index) — see :func:`nonholo.kernels._forward_variational`."""
+        return self.sparse_basis(steps)
 
     def check_steps(self, steps: int) -> int:
         """``steps`` if the integrator can use it with these controls, else ``ValueError``."""
@@ -138,6 +162,9 @@ def _fourier_stage_basis(T: float, K: int, steps: int) -> np.ndarray:
     h = T / steps
     t = (np.arange(steps)[:, None] + STAGE_FRACTIONS[None, :]) * h
     return fourier_basis(t.ravel(), T, K).reshape(steps, 3, 2 * K + 1)
+
+
+_EMPTY_INDEX = np.zeros((0, 3, 0), dtype=np.int64)
 
 
 @lru_cache(maxsize=32)
@@ -210,6 +237,23 @@ class Fourier(Controls):
         steps = self.check_steps(steps)
         basis = _fourier_stage_basis(self.T, self.harmonics, steps)
         return (basis.reshape(3 * steps, -1) @ self.coeffs.T).reshape(steps, 3, self.n_inputs)
+
+    def stage_function(self, steps: int):
+        # one dense product with the cached stage basis (the map of ``sparse_basis``)
+        steps = self.check_steps(steps)
+        m, nb = self.coeffs.shape
+        basis = _fourier_stage_basis(self.T, self.harmonics, steps).reshape(3 * steps, nb)
+
+        def fill(params, out):
+            np.dot(basis, np.ascontiguousarray(params.reshape(m, nb).T), out=out.reshape(3 * steps, m))
+            return out
+
+        return fill
+
+    def kernel_basis(self, steps: int):
+        steps = self.check_steps(steps)
+        nb = self.coeffs.shape[1]
+        return (_EMPTY_INDEX, _fourier_stage_basis(self.T, self.harmonics, steps), 1, nb)
 
     def sparse_basis(self, steps: int):
         steps = self.check_steps(steps)
@@ -320,6 +364,17 @@ class PiecewiseConstant(Controls):
                 "integration step straddles a jump of the piecewise-constant control")
         return steps
 
+    def stage_function(self, steps: int):
+        steps = self.check_steps(steps)
+        from .kernels import grid_stage_values
+
+        g, m = self.values.shape
+
+        def fill(params, out):
+            return grid_stage_values(params.reshape(g, m), out)
+
+        return fill
+
     def sparse_basis(self, steps: int):
         """One entry per stage: the interval's index (so ``J``'s columns are the ``G_j``)."""
         return _grid_basis(self.grid, self.check_steps(steps)) + (self.n_inputs, 1)
@@ -349,7 +404,154 @@ class PiecewiseConstant(Controls):
         return f"PiecewiseConstant(T={self.T:g}, grid={self.grid}, m={self.n_inputs})"
 
 
-KINDS: dict[str, type[Controls]] = {Fourier.kind: Fourier, PiecewiseConstant.kind: PiecewiseConstant}
+# ------------------------------------------------------------------------------------------
+# Physical inputs of a motion planned in the desingularised frame
+# ------------------------------------------------------------------------------------------
+
+
+class FrameControls(Controls):
+    """Physical inputs ``u(t) = W(R(t)) w(t)`` of a motion planned in frame coordinates.
+
+    The motion is planned in the desingularised input coordinates of the generated module:
+    ``dR/dt = [N(R) w] R``, ``R(0) = R0``, where ``N(R)`` (3×m, orthonormal columns) spans
+    the admissible angular velocities and ``w(t)`` — the control ``frame``, a
+    :class:`Fourier` or :class:`PiecewiseConstant` — holds the frame coordinates of ``ω``
+    (rad/s). ``W(R) = (N(R)ᵀ L(R))^{-1}`` (polynomial, finite everywhere) converts them to
+    the mechanism's physical inputs, ``L(R) W(R) w = N(R) w``; this object evaluates
+    ``u(t) = W(R(t)) w(t)`` in physical units, vectorised over ``t``.
+
+    ``R(t)``: the nodes of ``steps`` CF4 steps of the frame system from ``R0`` (computed
+    once, on first use, by :func:`nonholo.kernels.get` ``(mechanism, frame=True)``), and
+    between nodes one CF4 step of length ``t − t_n`` from the node below — the same local
+    approximation as an integrator step, ``O(h⁵)`` from the exact motion (≈ 1e-13 rad with
+    the default 400 steps on ``T = 1``). Parameters ``λ`` (:attr:`params`) and
+    :meth:`metric` are those of ``frame``; ``u`` is not linear in them, so there is no
+    sparse basis. :meth:`stage_table` gives the physical inputs at the stage times of any
+    step count (grid controls: the step's own value at its end), so
+    :func:`nonholo.simulation.simulate` accepts this object and re-traces the motion in
+    the physical system.
+    """
+
+    kind = "frame"
+
+    def __init__(self, frame: Controls, R0, mechanism: str = "platform", steps: int = 400):
+        from . import kernels, mechanisms, so3
+
+        if not isinstance(frame, (Fourier, PiecewiseConstant)):
+            raise ValueError(f"frame must be Fourier or PiecewiseConstant controls, got {type(frame).__name__}")
+        super().__init__(frame.T)
+        name = mechanisms.get(mechanism).name
+        if not kernels.has_frame(name):
+            raise ValueError(f"mechanism {name!r} has no desingularised frame N(R)")
+        if mechanisms.get(name).n_inputs != frame.n_inputs:
+            raise ValueError(f"mechanism {name!r} has {mechanisms.get(name).n_inputs} inputs, "
+                             f"the frame controls {frame.n_inputs}")
+        self.frame = frame
+        self.mechanism = name
+        self.steps = frame.check_steps(steps)
+        R = np.array(so3.check_rotation(R0, "R0"), dtype=float)
+        R.setflags(write=False)
+        self.R0 = R
+        self._nodes = None
+
+    def _set(self, params):
+        self.frame = self.frame.with_params(params)
+        self._nodes = None
+
+    def with_params(self, params) -> "FrameControls":
+        return FrameControls(self.frame.with_params(params), self.R0, self.mechanism, self.steps)
+
+    @property
+    def params(self) -> np.ndarray:
+        return self.frame.params
+
+    @property
+    def n_inputs(self) -> int:
+        return self.frame.n_inputs
+
+    @property
+    def breakpoints(self) -> np.ndarray | None:
+        return self.frame.breakpoints
+
+    @property
+    def nodes(self) -> np.ndarray:
+        """``R(t_n)``, ``t_n = nT/steps``: the CF4 nodes of the frame motion, shape ``(steps+1, 3, 3)``."""
+        if self._nodes is None:
+            from .kernels import get
+
+            Rs = np.empty((self.steps + 1, 3, 3))
+            n, _, _ = get(self.mechanism, True).forward(
+                np.ascontiguousarray(self.R0), self.frame.stage_table(self.steps), self.T / self.steps,
+                1.0, -np.inf, Rs)
+            if n != self.steps:
+                raise ValueError("the frame motion produced a non-finite angular velocity")
+            Rs.setflags(write=False)
+            self._nodes = Rs
+        return self._nodes
+
+    def _evaluate(self, t, w_end=None):
+        """``(R(t), u(t))`` for ``t`` of shape ``(n,)``; ``w_end``: the ``w`` to use at ``t``."""
+        from .kernels import get
+
+        t = np.clip(np.asarray(t, dtype=float).reshape(-1), 0.0, self.T)
+        n_t, m = t.size, self.n_inputs
+        h = self.T / self.steps
+        r = t / h
+        k = np.floor(r)
+        near = np.rint(r)
+        snap = np.abs(r - near) <= 1e-9
+        k = np.minimum(np.where(snap, near, k), self.steps).astype(np.int64)
+        s = np.where(snap, 0.0, t - k * h)
+        tk = k * h
+        Wst = self.frame(np.concatenate([tk, tk + 0.5 * s, t])).reshape(3, n_t, m).transpose(1, 0, 2)
+        Wst = np.ascontiguousarray(Wst)
+        w_end = Wst[:, 2] if w_end is None else np.ascontiguousarray(w_end, dtype=float).reshape(n_t, m)
+        Rt = np.empty((n_t, 3, 3))
+        u = np.empty((n_t, m))
+        get(self.mechanism, True).frame_inputs(self.nodes, h, k, s, Wst, np.ascontiguousarray(w_end), Rt, u)
+        return Rt, u
+
+    def __call__(self, t):
+        scalar = np.ndim(t) == 0
+        u = self._evaluate(t)[1]
+        return u[0] if scalar else u.reshape(np.shape(t) + (self.n_inputs,))
+
+    def states(self, t) -> np.ndarray:
+        """``R(t)`` of the planned motion, shape ``(n, 3, 3)`` for ``t`` of shape ``(n,)``."""
+        return self._evaluate(t)[0]
+
+    def frame_inputs(self, t) -> np.ndarray:
+        """``w(t)``, the frame coordinates of ``ω = N(R) w`` (the planner's controls)."""
+        return self.frame(t)
+
+    def stage_table(self, steps: int) -> np.ndarray:
+        steps = self.check_steps(steps)
+        h = self.T / steps
+        t = ((np.arange(steps)[:, None] + STAGE_FRACTIONS[None, :]) * h).ravel()
+        w_end = self.frame.stage_table(steps).reshape(-1, self.n_inputs)
+        return self._evaluate(t, w_end)[1].reshape(steps, 3, self.n_inputs)
+
+    def check_steps(self, steps: int) -> int:
+        return self.frame.check_steps(steps)
+
+    def sparse_basis(self, steps: int):
+        raise NotImplementedError("the physical inputs u = W(R(t)) w(t) are not linear in the "
+                                  "parameters; the frame controls (.frame) have a basis")
+
+    def metric(self) -> np.ndarray:
+        """The L2 metric of the frame controls ``w`` (see :meth:`Controls.metric`)."""
+        return self.frame.metric()
+
+    def to_dict(self) -> dict:
+        return {"kind": self.kind, "T": self.T, "mechanism": self.mechanism, "steps": self.steps,
+                "R0": self.R0.tolist(), "frame": self.frame.to_dict()}
+
+    def __repr__(self) -> str:
+        return f"FrameControls({self.frame!r} in the frame of {self.mechanism!r}, {self.steps} steps)"
+
+
+KINDS: dict[str, type[Controls]] = {Fourier.kind: Fourier, PiecewiseConstant.kind: PiecewiseConstant,
+                                    FrameControls.kind: FrameControls}
 
 
 def from_dict(d: dict) -> Controls:
@@ -359,6 +561,8 @@ def from_dict(d: dict) -> Controls:
         return Fourier(d["T"], d["coeffs"])
     if kind == PiecewiseConstant.kind:
         return PiecewiseConstant(d["T"], d["values"])
+    if kind == FrameControls.kind:
+        return FrameControls(from_dict(d["frame"]), d["R0"], d["mechanism"], d["steps"])
     raise ValueError(f"unknown control parametrisation {kind!r}; known: {', '.join(KINDS)}")
 
 

@@ -46,10 +46,22 @@ evaluated; the kernels stop as soon as it falls below ``delta_stop`` (or ``ω`` 
 finite) and report how many steps were completed, so a trajectory running into ``Δ = 0``
 never produces NaN. Mechanisms without a singular set use ``Δ ≡ +inf``.
 
+For Fourier bases the kernel can instead store the stage weights ``W_c`` of every step
+(``Wd``) and contract them with the *dense* stage basis by one matrix product after the
+loop (BLAS) — same ``J``, a third of the accumulation cost; the stored weights also give
+the sensitivity of intermediate states (used by the barrier of :mod:`nonholo.robust`).
+
 Kernels are compiled per mechanism, from the generated ``L``, ``Q`` and ``delta``
 (rewritten to fill preallocated arrays instead of allocating, see :func:`into`), and
 cached on disk by mechanism name and a hash of the generated module's source
-(``cache=True``); see :func:`get`.
+(``cache=True``); see :func:`get`. ``get(name, frame=True)`` binds the same templates to
+the desingularised frame ``N(R)``, ``QN(R, w)`` of the generated module instead (the system
+``dR/dt = [N(R) w] R``; ``Δ`` is still the mechanism's), with :func:`_frame_inputs`
+(bound to ``W(R)``) evaluating the physical inputs ``u = W(R(t)) w(t)`` between nodes.
+
+Small helpers of the planner: :func:`log_error` (``l_T`` and ``|l_T|``),
+:func:`min_norm_step` (3×3 Cholesky solve with an eigen fallback),
+:func:`grid_stage_values`.
 """
 from __future__ import annotations
 
@@ -176,6 +188,17 @@ def log_rotation(R):
 
 
 @numba.njit(**_JIT)
+def log_error(R, Rd):
+    """``(l, |l|)`` with ``[l] = log(R Rdᵀ)``: the planner's error ``l_T`` and its norm (rad)."""
+    P = np.empty((3, 3))
+    for i in range(3):
+        for j in range(3):
+            P[i, j] = R[i, 0] * Rd[j, 0] + R[i, 1] * Rd[j, 1] + R[i, 2] * Rd[j, 2]
+    l = log_rotation(P)
+    return l, np.sqrt(l[0] * l[0] + l[1] * l[1] + l[2] * l[2])
+
+
+@numba.njit(**_JIT)
 def _eigh3(A, w, V):
     """Eigen decomposition of a symmetric 3×3 ``A`` (cyclic Jacobi): ``A = V diag(w) Vᵀ``."""
     a = A.copy()
@@ -215,38 +238,87 @@ def _eigh3(A, w, V):
 
 
 @numba.njit(**_JIT)
-def min_norm_step(J, l, scale):
-    """``x = S (J S)^# l`` with ``S = diag(scale)``: the least ``|S^{-1} x|`` minimising ``|J x − l|``.
-
-    ``(J S)^# = (J S)ᵀ ((J S)(J S)ᵀ)^#`` with the 3×3 pseudo-inverse from an eigen
-    decomposition (eigenvalues below ``1e-14·max`` dropped), so a rank-deficient ``J``
-    gives the minimum-norm least-squares step rather than a blow-up.
-    """
-    p = J.shape[1]
-    Jw = np.empty((3, p))
-    for i in range(3):
-        for k in range(p):
-            Jw[i, k] = J[i, k] * scale[k]
-    A = np.zeros((3, 3))
-    for i in range(3):
-        for j in range(3):
-            s = 0.0
-            for k in range(p):
-                s += Jw[i, k] * Jw[j, k]
-            A[i, j] = s
+def _pinv_solve3(A, l, y):
+    """``y = A^# l`` for a symmetric positive semi-definite 3×3 ``A`` (eigenvalues below
+    ``1e-14·max`` dropped)."""
     w = np.empty(3)
     V = np.empty((3, 3))
     _eigh3(A, w, V)
     wmax = max(w[0], max(w[1], w[2]))
-    y = np.zeros(3)
+    for i in range(3):
+        y[i] = 0.0
     for q in range(3):
         if w[q] > wmax * 1e-14 and w[q] > 0.0:
             c = (V[0, q] * l[0] + V[1, q] * l[1] + V[2, q] * l[2]) / w[q]
             for i in range(3):
                 y[i] += c * V[i, q]
+
+
+#: :func:`min_norm_step` solves by Cholesky while every pivot exceeds this fraction of
+#: the largest diagonal entry of ``J S² Jᵀ`` (else the eigen pseudo-inverse is used).
+CHOLESKY_PIVOT = 1e-10
+
+
+@numba.njit(**_JIT)
+def min_norm_step(J, l, scale):
+    """``x = S (J S)^# l`` with ``S = diag(scale)``: the least ``|S^{-1} x|`` minimising ``|J x − l|``.
+
+    ``(J S)^# = (J S)ᵀ ((J S)(J S)ᵀ)^{-1}``: the 3×3 system ``J S² Jᵀ y = l`` is solved by
+    Cholesky; when a pivot falls below :data:`CHOLESKY_PIVOT` times the largest diagonal
+    entry (``J`` rank-deficient or nearly so) by the pseudo-inverse from an eigen
+    decomposition instead (eigenvalues below ``1e-14·max`` dropped), so a rank-deficient
+    ``J`` gives the minimum-norm least-squares step rather than a blow-up.
+    """
+    p = J.shape[1]
+    A = np.zeros((3, 3))
+    for k in range(p):
+        s2 = scale[k] * scale[k]
+        j0 = J[0, k] * s2
+        j1 = J[1, k] * s2
+        j2 = J[2, k] * s2
+        A[0, 0] += j0 * J[0, k]
+        A[1, 0] += j1 * J[0, k]
+        A[1, 1] += j1 * J[1, k]
+        A[2, 0] += j2 * J[0, k]
+        A[2, 1] += j2 * J[1, k]
+        A[2, 2] += j2 * J[2, k]
+    A[0, 1] = A[1, 0]
+    A[0, 2] = A[2, 0]
+    A[1, 2] = A[2, 1]
+    y = np.empty(3)
+    amax = max(A[0, 0], max(A[1, 1], A[2, 2]))
+    floor = CHOLESKY_PIVOT * amax
+    ok = amax > 0.0
+    # A = C Cᵀ, C lower triangular
+    c00 = c10 = c11 = c20 = c21 = c22 = 0.0
+    if ok:
+        d = A[0, 0]
+        ok = d > floor
+        if ok:
+            c00 = np.sqrt(d)
+            c10 = A[1, 0] / c00
+            c20 = A[2, 0] / c00
+            d = A[1, 1] - c10 * c10
+            ok = d > floor
+            if ok:
+                c11 = np.sqrt(d)
+                c21 = (A[2, 1] - c20 * c10) / c11
+                d = A[2, 2] - c20 * c20 - c21 * c21
+                ok = d > floor
+                if ok:
+                    c22 = np.sqrt(d)
+    if ok:
+        z0 = l[0] / c00
+        z1 = (l[1] - c10 * z0) / c11
+        z2 = (l[2] - c20 * z0 - c21 * z1) / c22
+        y[2] = z2 / c22
+        y[1] = (z1 - c21 * y[2]) / c11
+        y[0] = (z0 - c10 * y[1] - c20 * y[2]) / c00
+    else:
+        _pinv_solve3(A, l, y)
     x = np.empty(p)
     for k in range(p):
-        x[k] = scale[k] * (Jw[0, k] * y[0] + Jw[1, k] * y[1] + Jw[2, k] * y[2])
+        x[k] = scale[k] * scale[k] * (J[0, k] * y[0] + J[1, k] * y[1] + J[2, k] * y[2])
     return x
 
 
@@ -264,6 +336,20 @@ def stage_values(lam, Bidx, Bval, stride_b, stride_i, m):
                 for i in range(m):
                     U[n, c, i] += v * lam[base + i * stride_i]
     return U
+
+
+@numba.njit(**_JIT)
+def grid_stage_values(values, out):
+    """Stage table of grid controls: ``out[n, c] = values[n // r]`` (``r = N / grid``)."""
+    g = values.shape[0]
+    m = values.shape[1]
+    r = out.shape[0] // g
+    for j in range(g):
+        for n in range(j * r, (j + 1) * r):
+            for c in range(3):
+                for i in range(m):
+                    out[n, c, i] = values[j, i]
+    return out
 
 
 # --------------------------------------------------------------------------------------
@@ -379,19 +465,28 @@ def _zstage(Zc, Y, u, F, B, Qm, f, K):
 
 
 def _forward_variational(R0, U, h, sgn, delta_stop, Bidx, Bval, stride_b, stride_i,
-                         Rs, Zs, J, Mq, full):
+                         Rs, Zs, J, Mq, Wd, full):
     """CF4 for ``R`` together with ``Z = Φ(t,0)^{-1}``, the Jacobian ``J`` and ``M(T)``.
 
-    Inputs: as :func:`_forward`, plus the sparse stage basis ``(Bidx, Bval, stride_b,
-    stride_i)`` of the parametrisation (``Bidx.shape[2] == 0``: no Jacobian).
+    Inputs: as :func:`_forward`, plus the stage basis ``(Bidx, Bval, stride_b, stride_i)``
+    of the parametrisation: sparse (``Bidx.shape[2] == 0``: no Jacobian), or *dense* when
+    ``Bidx`` is empty (``Bidx.shape[0] == 0``) and ``Bval`` has shape ``(N, 3, nb)``:
+    ``Bidx[n, c, q] = q`` for every ``q < nb`` (Fourier bases); ``J`` is then one matrix
+    product ``Wdᵀ Bval`` after the loop (BLAS) instead of a scatter per stage.
     Outputs (preallocated): ``Rs`` (``(N+1, 3, 3)``), ``Zs`` (``(N+1, 3, 3)``, ``Z(t_n)``;
     only ``Zs[N] = Z(T)`` unless ``full``), ``J`` (3 × p) ``= ∂s_T/∂λ``, ``Mq`` (3×3)
-    ``= M(T)`` (only if ``full``). Returns what :func:`_forward` returns; ``J``, ``Mq`` and
-    ``Zs[N]`` are valid only if the run completed.
+    ``= M(T)`` (only if ``full``), ``Wd``: shape ``(3N, 3m)`` (required by a dense basis)
+    to receive the stage weights ``Wd[3n + c, i·m + k] = (W_c)_{ik}`` of every step —
+    ``W_0 = h/6 Z_1 B_1``, ``W_½ = h/3 (Z_2 B_2 + Z_3 B_3)``, ``W_1 = h/6 Z_4 B_4``, so
+    ``∫_0^T Z B v dt ≈ Σ W_c v(t_n + c h)`` for any ``v`` — or ``(0, 3m)``. Returns what
+    :func:`_forward` returns; ``J``, ``Mq``, ``Wd`` and ``Zs[N]`` are valid only if the run
+    completed.
     """
     N = U.shape[0]
     m = U.shape[2]
-    nq = Bidx.shape[2]
+    dense = Bidx.shape[0] == 0 and Bval.shape[0] == N
+    keep_w = Wd.shape[0] == 3 * N
+    nq = 0 if dense else Bidx.shape[2]
     R = np.empty((3, 3))
     Y2 = np.empty((3, 3))
     Y3 = np.empty((3, 3))
@@ -494,7 +589,12 @@ def _forward_variational(R0, U, h, sgn, delta_stop, Bidx, Bval, stride_b, stride
                 W[0, i, k] = h6 * K1[i, k]
                 W[1, i, k] = h3 * (K2[i, k] + K3[i, k])
                 W[2, i, k] = h6 * K4[i, k]
-        # J += Σ_c W_c ∂U[n, c]/∂λ
+        if keep_w:
+            for c in range(3):
+                for i in range(3):
+                    for k in range(m):
+                        Wd[3 * n + c, i * m + k] = W[c, i, k]
+        # J += Σ_c W_c ∂U[n, c]/∂λ (sparse basis)
         for c in range(3):
             for k in range(m):
                 w0 = W[c, 0, k]
@@ -536,6 +636,14 @@ def _forward_variational(R0, U, h, sgn, delta_stop, Bidx, Bval, stride_b, stride
             Zs[N, i, j] = Z[i, j]
     _inv33(Z, E)
     p = J.shape[1]
+    if dense:
+        nb = Bval.shape[2]
+        A = np.dot(Wd.T, Bval.reshape((3 * N, nb)))        # (3m, nb)
+        for k in range(m):
+            for q in range(nb):
+                col = q * stride_b + k * stride_i
+                for i in range(3):
+                    J[i, col] = A[i * m + k, q]
     for k in range(p):
         a0 = J[0, k]
         a1 = J[1, k]
@@ -554,6 +662,73 @@ def _forward_variational(R0, U, h, sgn, delta_stop, Bidx, Bval, stride_b, stride
             for j in range(3):
                 Mq[i, j] = 0.5 * (Zc[i, j] + Zc[j, i])
     return N, dmin, -1.0
+
+
+def _frame_inputs(nodes, h, idx, s, Wst, w_end, Rout, out):
+    """Physical inputs ``u = W(R(t)) w(t)`` along a motion planned in frame coordinates.
+
+    Bound with ``L_into`` = the frame ``N`` (``ω = N(R) w``) and ``W_into`` = ``W`` (``u =
+    W(R) w``). For every sample ``k``: ``R(t_k)`` is node ``idx[k]`` of the CF4
+    trajectory ``nodes`` (step ``h``) advanced by one CF4 step of length ``s[k]``
+    (``0 ≤ s[k] < h``; none if ``s[k] == 0``) with frame inputs ``Wst[k, 0]``,
+    ``Wst[k, 1]``, ``Wst[k, 2]`` at its start, middle and end — the same local
+    approximation as a step of the integrator, ``O(s⁵)`` from the exact motion. Outputs
+    ``Rout[k] = R(t_k)`` and ``out[k] = W(R(t_k)) w_end[k]``.
+    """
+    n_t = idx.shape[0]
+    m = Wst.shape[2]
+    R = np.empty((3, 3))
+    Y2 = np.empty((3, 3))
+    Y3 = np.empty((3, 3))
+    Y4 = np.empty((3, 3))
+    Rh = np.empty((3, 3))
+    E = np.empty((3, 3))
+    B = np.empty((3, m))
+    Wm = np.empty((m, m))
+    F1 = np.empty(3)
+    F2 = np.empty(3)
+    F3 = np.empty(3)
+    F4 = np.empty(3)
+    for k in range(n_t):
+        n = idx[k]
+        sk = s[k]
+        if sk == 0.0:
+            for i in range(3):
+                for j in range(3):
+                    R[i, j] = nodes[n, i, j]
+        else:
+            for i in range(3):
+                for j in range(3):
+                    Y4[i, j] = nodes[n, i, j]
+            s2 = 0.5 * sk
+            s12 = sk / 12.0
+            L_into(Y4, B)
+            _omega(B, Wst[k, 0], m, F1)
+            _exp_times(s2 * F1[0], s2 * F1[1], s2 * F1[2], Y4, E, Y2)
+            L_into(Y2, B)
+            _omega(B, Wst[k, 1], m, F2)
+            _exp_times(s2 * F2[0], s2 * F2[1], s2 * F2[2], Y4, E, Y3)
+            L_into(Y3, B)
+            _omega(B, Wst[k, 1], m, F3)
+            _exp_times(sk * F3[0] - s2 * F1[0], sk * F3[1] - s2 * F1[1], sk * F3[2] - s2 * F1[2],
+                       Y2, E, Rh)
+            L_into(Rh, B)
+            _omega(B, Wst[k, 2], m, F4)
+            _exp_times(s12 * (3.0 * F1[0] + 2.0 * F2[0] + 2.0 * F3[0] - F4[0]),
+                       s12 * (3.0 * F1[1] + 2.0 * F2[1] + 2.0 * F3[1] - F4[1]),
+                       s12 * (3.0 * F1[2] + 2.0 * F2[2] + 2.0 * F3[2] - F4[2]), Y4, E, Rh)
+            _exp_times(s12 * (-F1[0] + 2.0 * F2[0] + 2.0 * F3[0] + 3.0 * F4[0]),
+                       s12 * (-F1[1] + 2.0 * F2[1] + 2.0 * F3[1] + 3.0 * F4[1]),
+                       s12 * (-F1[2] + 2.0 * F2[2] + 2.0 * F3[2] + 3.0 * F4[2]), Rh, E, R)
+        for i in range(3):
+            for j in range(3):
+                Rout[k, i, j] = R[i, j]
+        W_into(R, Wm)
+        for i in range(m):
+            v = 0.0
+            for j in range(m):
+                v += Wm[i, j] * w_end[k, j]
+            out[k, i] = v
 
 
 def _no_delta(R):
@@ -620,6 +795,8 @@ class Kernels:
     has_singular_set: bool
     forward: object
     forward_variational: object
+    frame: bool = False
+    frame_inputs: object = None
 
 
 def _bind(template, tag: str, glb: dict):
@@ -632,26 +809,48 @@ def _bind(template, tag: str, glb: dict):
     return numba.njit(**_JIT)(f)
 
 
+def has_frame(name: str) -> bool:
+    """Whether mechanism ``name``'s generated module provides the frame ``N``, ``QN``, ``W``."""
+    return bool(getattr(mechanisms.get(name).module, "HAS_FRAME", False))
+
+
 @cache
-def get(name: str = "platform") -> Kernels:
-    """The compiled kernels of mechanism ``name`` (compiled once, cached on disk)."""
+def get(name: str = "platform", frame: bool = False) -> Kernels:
+    """The compiled kernels of mechanism ``name`` (compiled once, cached on disk).
+
+    ``frame=False``: bound to ``L``, ``Q`` — the system ``dR/dt = [L(R) u] R`` in the
+    physical inputs ``u``. ``frame=True``: bound to the desingularised frame ``N``,
+    ``QN`` of the generated module (``dR/dt = [N(R) w] R``, ``ω = N(R) w``), with
+    :func:`_frame_inputs` (bound to ``W``) for the physical inputs ``u = W(R) w``;
+    ``ValueError`` if the mechanism has no frame (``HAS_FRAME`` false). Both monitor the
+    mechanism's ``Δ``.
+    """
     mech = mechanisms.get(name)
+    if frame and not has_frame(mech.name):
+        raise ValueError(f"mechanism {mech.name!r} has no desingularised frame N(R) (HAS_FRAME)")
     src = inspect.getsource(mech.module)
-    tag = f"{mech.name}_{hashlib.sha256(src.encode()).hexdigest()[:12]}"
+    tag = f"{mech.name}{'_frame' if frame else ''}_{hashlib.sha256(src.encode()).hexdigest()[:12]}"
     plain = dict(nogil=True, error_model="numpy")
     glb = dict(globals())
-    glb["L_into"] = numba.njit(**plain)(into(mech.L))
+    L, Q = (mech.module.N, mech.module.QN) if frame else (mech.L, mech.Q)
+    glb["L_into"] = numba.njit(**plain)(into(L))
     # Q feeds only the variational system (the Jacobian): fast-math lets LLVM turn its
     # ``x**(-2.0)`` into a multiplication (the result changes at round-off level).
-    glb["Q_into"] = numba.njit(fastmath=True, **plain)(into(mech.Q))
+    glb["Q_into"] = numba.njit(fastmath=True, **plain)(into(Q))
     glb["delta"] = numba.njit(**plain)(mech.delta) if mech.has_singular_set else _no_delta_jit
     glb["_zstage"] = _bind(_zstage, tag, glb)
+    extra = {}
+    if frame:
+        glb["W_into"] = numba.njit(**plain)(into(mech.module.W))
+        extra["frame_inputs"] = _bind(_frame_inputs, tag, glb)
     return Kernels(
         name=mech.name,
         n_inputs=mech.n_inputs,
         has_singular_set=mech.has_singular_set,
         forward=_bind(_forward, tag, glb),
         forward_variational=_bind(_forward_variational, tag, glb),
+        frame=frame,
+        **extra,
     )
 
 

@@ -4,8 +4,11 @@ File format (``PlanResult.save``): one JSON object, ``"format": "nonholo.plan/1"
 the scalar fields, ``R0``/``Rd`` as nested 3×3 lists, the samples ``t`` (n), ``R``
 (n×3×3), ``u`` (n×m) and ``delta`` (n, or null), ``history`` (a list of per-iteration
 records) and ``controls``, the parametrisation (``{"kind": "fourier", "T", "harmonics",
-"coeffs"}`` or ``{"kind": "piecewise_constant", "T", "grid", "values"}``, see
-:mod:`nonholo.controls`) from which ``controls(t)`` is rebuilt. Floats are written with
+"coeffs"}``, ``{"kind": "piecewise_constant", "T", "grid", "values"}`` or, for a motion
+planned in frame coordinates (strategy ``"robust"``), ``{"kind": "frame", "T",
+"mechanism", "steps", "R0", "frame": <the w parametrisation>}``, see
+:mod:`nonholo.controls`) from which ``controls(t)`` is rebuilt (identically: the frame
+motion's nodes are recomputed by the same kernel). Floats are written with
 ``repr`` precision, so a save/load round trip reproduces every number exactly. Quantities
 that do not exist (``min_delta`` for a mechanism without a singular set, the terminal
 error of a run stopped before any simulation) are ``null``/``None``, never NaN.
@@ -35,11 +38,21 @@ class PlanResult:
       nothing was simulated).
     - ``iterations``: accepted θ-steps; ``history``: one record per accepted iteration
       (``iteration``, ``error``, ``step`` = ``γh`` used, ``min_delta``, ``phase`` =
-      ``"initial"``/``"flow"``/``"newton"``, ``rejected`` = step halvings before it).
+      ``"initial"``/``"flow"``/``"newton"``, ``rejected`` = step halvings before it;
+      strategy ``"robust"`` adds ``attempt``, the index of the initial guess, and one
+      record with phase ``"restart"`` where a new guess starts).
     - ``t``, ``R``, ``u``, ``delta``: samples of the final trajectory at the integrator's
-      step points (``R`` spatial-frame rotations, ``u`` in the mechanism's input units).
-    - ``parametrisation``: the planned control (a :class:`~nonholo.controls.Controls`);
-      :meth:`controls` evaluates it.
+      step points (``R`` spatial-frame rotations, ``u`` in the mechanism's input units);
+      ``steps`` is the number of integrator steps of that trajectory.
+    - ``sensitivity``: ``max_t |Φ(T, t)|_F`` of the physical system along the planned
+      motion — how much a perturbation of the orientation at ``t`` is amplified at ``T``
+      when the planned ``u(t)`` is played open loop (``|Φ(T,T)|_F = √3``); computed by the
+      ``"robust"`` strategy (``None`` otherwise). Above ~100 an independent re-simulation
+      can no longer reproduce ``R(T)`` to 1e-8 rad (see :mod:`nonholo.robust`).
+    - ``parametrisation``: the planned control (a :class:`~nonholo.controls.Controls`:
+      Fourier or grid controls of ``u``, or :class:`~nonholo.controls.FrameControls`
+      wrapping those of the frame coordinates ``w``); :meth:`controls` evaluates the
+      physical inputs ``u(t)``.
     """
 
     success: bool
@@ -62,6 +75,7 @@ class PlanResult:
     steps: int
     seconds: float
     options: dict = field(default_factory=dict)
+    sensitivity: float | None = None
 
     # -- controls ----------------------------------------------------------------------
     def controls(self, t) -> np.ndarray:
@@ -75,7 +89,7 @@ class PlanResult:
 
     @property
     def params(self) -> np.ndarray:
-        """The planned control's parameter vector ``λ``."""
+        """The planned control's parameter vector ``λ`` (of ``w`` for frame controls)."""
         return self.parametrisation.params
 
     @property
@@ -103,6 +117,7 @@ class PlanResult:
             "steps": int(self.steps),
             "seconds": self.seconds,
             "options": self.options,
+            "sensitivity": self.sensitivity,
             "R0": arr(self.R0),
             "Rd": arr(self.Rd),
             "controls": self.parametrisation.to_dict(),
@@ -134,6 +149,7 @@ class PlanResult:
             mechanism=d["mechanism"], method=d["method"], strategy=d["strategy"],
             T=float(d["T"]), R0=arr(d["R0"], (3, 3)), Rd=arr(d["Rd"], (3, 3)),
             steps=int(d["steps"]), seconds=float(d["seconds"]), options=dict(d.get("options", {})),
+            sensitivity=d.get("sensitivity"),
         )
 
     def save(self, path) -> Path:

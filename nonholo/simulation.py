@@ -24,7 +24,7 @@ import numpy as np
 
 from . import kernels as _kernels
 from . import mechanisms
-from .controls import STAGE_FRACTIONS, Controls, _check_count, _check_T
+from .controls import STAGE_FRACTIONS, Controls, FrameControls, _check_count, _check_T
 from .so3 import check_rotation
 
 #: Default number of CF4 steps on ``[0, T]``. Measured on Examples 1 and 2 of MODEL.md
@@ -204,7 +204,9 @@ def variational(R0, controls, T: float, *, mechanism: str = "platform",
     """Simulate and integrate the variational system (9) along the motion.
 
     Returns a :class:`Variational` with ``Φ(T, t_n)`` (``.Phi``), ``M(T)`` (``.M``) and,
-    when ``controls`` is a :class:`~nonholo.controls.Controls`, ``J = ∂s_T/∂λ`` (``.J``):
+    when ``controls`` is a :class:`~nonholo.controls.Controls` linear in its parameters
+    (Fourier or grid controls, not :class:`~nonholo.controls.FrameControls`),
+    ``J = ∂s_T/∂λ`` (``.J``):
     for a change ``δλ`` of the parameters the endpoint moves to ``exp([J δλ]) R_T`` to
     first order. For grid controls the columns ``(j, i)`` of ``J`` are the
     ``G_j = ∫_{I_j} Φ(T,t) B(t) dt`` of the nonparametric update.
@@ -216,7 +218,8 @@ def variational(R0, controls, T: float, *, mechanism: str = "platform",
     kern = _kernels.get(mech.name)
     sgn = _sign_of_delta(kern, mech, R0)
     U = stage_table(controls, T, steps, mech.n_inputs)
-    if isinstance(controls, Controls):
+    linear = isinstance(controls, Controls) and not isinstance(controls, FrameControls)
+    if linear:
         Bidx, Bval, stride_b, stride_i = controls.sparse_basis(steps)
         J = np.empty((3, controls.params.size))
     else:
@@ -227,9 +230,10 @@ def variational(R0, controls, T: float, *, mechanism: str = "platform",
     Zs = np.empty((steps + 1, 3, 3))
     M = np.empty((3, 3))
     n, dmin, t_stop = kern.forward_variational(R0, U, T / steps, sgn, DELTA_STOP, Bidx, Bval,
-                                               stride_b, stride_i, Rs, Zs, J, M, True)
+                                               stride_b, stride_i, Rs, Zs, J, M,
+                                               np.empty((0, 3 * mech.n_inputs)), True)
     traj = _trajectory(mech, Rs, U, T, steps, n, dmin, sgn)
     if n < steps:
         raise _stopped(mech, n, t_stop, dmin, sgn, traj)
-    return Variational(trajectory=traj, Z=Zs, M=M, J=J if isinstance(controls, Controls) else None)
+    return Variational(trajectory=traj, Z=Zs, M=M, J=J if linear else None)
 

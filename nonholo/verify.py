@@ -5,6 +5,8 @@
   in plain NumPy. For piecewise-constant controls each interval between ``breakpoints``
   is integrated separately (the control is evaluated strictly inside the interval), so
   the adaptive integrator never steps across a jump.
+- :func:`resimulate_path` is the same integration with dense output, for the least ``|Δ|``
+  along the re-simulated motion.
 - :func:`terminal_error` is ``|l_T|`` with ``[l_T] = log(R_T R_dᵀ)`` (geodesic distance, rad).
 - :func:`mobility_lyapunov` solves the Lyapunov equation ``dM/dt = B Bᵀ + A M + M Aᵀ``,
   ``M(0) = 0`` (``A = Q(R,u) + [L(R)u]``, ``B = L(R)``) together with ``R``: the mobility
@@ -77,6 +79,47 @@ def resimulate(R0, controls, T: float, mechanism: str = "platform", breakpoints=
         return f
 
     return _solve(rhs, R0.ravel(), _segments(float(T), controls, breakpoints), rtol, atol).reshape(3, 3)
+
+
+def resimulate_path(R0, controls, T: float, mechanism: str = "platform", breakpoints=None,
+                    samples: int = 2001, *, rtol: float = RTOL, atol: float = ATOL):
+    """The motion of :func:`resimulate` on ``samples`` uniform times (DOP853 dense output).
+
+    Returns ``(t, R, delta)``: ``t`` (n,), ``R`` (n, 3, 3) at ``t`` and at every step the
+    integrator took (``t`` sorted, ``t[-1] = T``), and ``Δ(R)`` there (``None`` for a
+    mechanism without a singular set) — the least ``|Δ|`` along the re-simulated motion is
+    ``abs(delta).min()`` up to the sampling.
+    """
+    mech = mechanisms.get(mechanism)
+    R0 = so3.check_rotation(R0, "R0")
+    L, m = mech.L, mech.n_inputs
+    ts, Rs = [], []
+    y = R0.ravel()
+    grid = np.linspace(0.0, float(T), int(samples))
+    for a, b in _segments(float(T), controls, breakpoints):
+        u = _input(controls, a, b, m)
+
+        def f(t, y, u=u):
+            R = y.reshape(3, 3)
+            return (so3.hat(L(R) @ u(t)) @ R).ravel()
+
+        sol = solve_ivp(f, (a, b), y, method="DOP853", rtol=rtol, atol=atol, dense_output=True)
+        if not sol.success or not np.all(np.isfinite(sol.y)):
+            raise RuntimeError(f"DOP853 failed on [{a:g}, {b:g}]: {sol.message}")
+        inside = grid[(grid >= a) & (grid <= b)]
+        t = np.concatenate([sol.t, inside])
+        Y = np.concatenate([sol.y, sol.sol(inside).reshape(9, -1)], axis=1)
+        ts.append(t)
+        Rs.append(Y.T.reshape(-1, 3, 3))
+        y = sol.y[:, -1]
+    t = np.concatenate(ts)
+    R = np.concatenate(Rs)
+    order = np.argsort(t, kind="stable")
+    t, R = t[order], R[order]
+    delta = None
+    if mech.has_singular_set:
+        delta = np.array([mech.delta(r) for r in R])
+    return t, R, delta
 
 
 def terminal_error(R_T, Rd) -> float:

@@ -131,3 +131,81 @@ def test_with_params_does_not_alias():
 def test_bad_parameters_raise(bad):
     with pytest.raises(ValueError):
         bad()
+
+
+# -- the planner's fast stage table ------------------------------------------------------------
+
+@pytest.mark.parametrize("make", [fourier, grid_controls])
+def test_stage_function_equals_stage_table(make):
+    u = make()
+    steps = 40
+    fill = u.stage_function(steps)
+    out = np.empty((steps, 3, 2))
+    p = np.random.default_rng(9).normal(size=u.params.size)
+    assert fill(p, out) is out
+    np.testing.assert_allclose(out, u.with_params(p).stage_table(steps), rtol=0, atol=1e-14)
+
+
+# -- physical inputs of a motion planned in the frame coordinates ----------------------------
+
+def frame_controls(kind="fourier", R0=None):
+    from nonholo import so3
+
+    R0 = so3.from_rpy(0.5, 1.2, -0.5) if R0 is None else R0
+    w = (C.Fourier(1.0, [[0.2, 0.5, 0.1, 0.0, 0.1], [0.1, 0.0, 0.4, 0.2, 0.0]]) if kind == "fourier"
+         else C.PiecewiseConstant(1.0, np.random.default_rng(2).normal(scale=0.4, size=(8, 2))))
+    return C.FrameControls(w, R0, "platform", 400)
+
+
+@pytest.mark.parametrize("kind", ["fourier", "grid"])
+def test_frame_controls_are_the_physical_inputs(kind):
+    from nonholo import mechanisms
+
+    mech = mechanisms.get("platform")
+    u = frame_controls(kind)
+    t = np.random.default_rng(1).uniform(0.0, 1.0, 50)
+    R, uu = u.states(t), u(t)
+    assert uu.shape == (50, 2) and u(0.3).shape == (2,)
+    np.testing.assert_array_equal(u(0.3), u(np.array([0.3]))[0])
+    w = u.frame_inputs(t)
+    for k in range(50):
+        np.testing.assert_allclose(mech.L(R[k]) @ uu[k], mech.module.N(R[k]) @ w[k], atol=1e-12)
+        np.testing.assert_allclose(uu[k], mech.module.W(R[k]) @ w[k], atol=1e-15)
+    # at the nodes R(t) is the node itself; u is continuous across them (Fourier)
+    h = 1.0 / 400
+    np.testing.assert_array_equal(u.states(np.array([0.0, 37 * h, 1.0])), u.nodes[[0, 37, 400]])
+    if kind == "fourier":
+        np.testing.assert_allclose(u(np.array([37 * h - 1e-9])), u(np.array([37 * h])), atol=1e-8)
+
+
+@pytest.mark.parametrize("kind", ["fourier", "grid"])
+def test_frame_controls_round_trip_and_stage_table(kind):
+    u = frame_controls(kind)
+    v = C.from_dict(u.to_dict())
+    assert v == u and type(v) is C.FrameControls
+    t = np.linspace(0.0, 1.0, 101)
+    np.testing.assert_array_equal(v(t), u(t))
+    if kind == "grid":
+        np.testing.assert_array_equal(u.breakpoints, np.linspace(0.0, 1.0, 9))
+    U = u.stage_table(80)
+    tt = (np.arange(80)[:, None] + np.array([0.0, 0.5, 1.0])) * (1.0 / 80)
+    if kind == "fourier":
+        np.testing.assert_allclose(U, u(tt.ravel()).reshape(80, 3, 2), atol=1e-13)
+    else:       # the step's own value at its end (left limit at a grid jump)
+        np.testing.assert_allclose(U[:, 2], u(tt[:, 2] - 1e-12), atol=1e-9)
+    w = u.with_params(u.params * 0.5)
+    assert isinstance(w, C.FrameControls) and not np.allclose(w(t), u(t))
+    with pytest.raises(NotImplementedError):
+        u.sparse_basis(400)
+
+
+@pytest.mark.parametrize("bad", [
+    lambda: C.FrameControls(frame_controls(), np.eye(3), "platform", 400),
+    lambda: C.FrameControls(C.Fourier(1.0, np.zeros((3, 5))), np.eye(3), "platform", 400),
+    lambda: C.FrameControls(C.Fourier(1.0, np.zeros((2, 5))), np.eye(3), "tripod", 400),
+    lambda: C.FrameControls(C.Fourier(1.0, np.zeros((2, 5))), np.ones((3, 3)), "platform", 400),
+    lambda: C.FrameControls(C.PiecewiseConstant(1.0, np.zeros((7, 2))), np.eye(3), "platform", 400),
+])
+def test_frame_controls_bad_input(bad):
+    with pytest.raises(ValueError):
+        bad()

@@ -1,4 +1,8 @@
-"""The Jacobian planner (appendix eqs. (4)–(11)): convergence, verification, bad input, I/O, CLI."""
+"""The Jacobian planner (appendix eqs. (4)–(11)): convergence, verification, bad input, I/O, CLI.
+
+Tests of the appendix's algorithm itself pass ``strategy="paper"``; the default strategy
+(``"robust"``) has its own tests in ``test_robust.py`` and joins the generic ones here.
+"""
 from __future__ import annotations
 
 import argparse
@@ -14,6 +18,7 @@ from nonholo import simulation as S
 from nonholo.result import PlanResult
 
 METHODS = planner.METHODS
+STRATEGIES = ("paper", "robust")
 
 #: MODEL.md, "The examples": RPY angles (rad) of R0 and Rd, T = 1.
 EXAMPLES = {
@@ -47,16 +52,22 @@ def check_solution(res, R0, Rd, tol=1e-10):
 
 # -- the examples of MODEL.md ----------------------------------------------------------------
 
+@pytest.mark.parametrize("strategy", STRATEGIES)
 @pytest.mark.parametrize("k", sorted(EXAMPLES))
 @pytest.mark.parametrize("method", METHODS)
-def test_examples_converge_and_resimulate(k, method):
+def test_examples_converge_and_resimulate(k, method, strategy):
     R0, Rd = example(k)
-    res = planner.plan(R0, Rd, method=method)
+    res = planner.plan(R0, Rd, method=method, strategy=strategy)
     check_solution(res, R0, Rd)
+    assert res.strategy == strategy
     assert res.iterations <= 20
     assert res.min_delta >= 0.3          # MODEL.md: these stay well clear of Δ = 0
     kind = C.Fourier if method == "parametric" else C.PiecewiseConstant
-    assert isinstance(res.parametrisation, kind)
+    par = res.parametrisation
+    if strategy == "robust":             # planned in the frame coordinates w, u = W(R) w
+        assert isinstance(par, C.FrameControls)
+        par = par.frame
+    assert isinstance(par, kind)
     assert res.params.size == (10 if method == "parametric" else 200)
 
 
@@ -90,17 +101,18 @@ def reachable_goals(count: int, seed: int = 0):
     return goals
 
 
+@pytest.mark.parametrize("strategy", STRATEGIES)
 @pytest.mark.parametrize("method", METHODS)
-def test_reachable_goals_converge(method):
+def test_reachable_goals_converge(method, strategy):
     for R0, Rd in reachable_goals(6):
-        check_solution(planner.plan(R0, Rd, method=method), R0, Rd)
+        check_solution(planner.plan(R0, Rd, method=method, strategy=strategy), R0, Rd)
 
 
 def test_hard_goal_fails_gracefully():
     """A reachable goal (generated as above) on which the plain θ-flow runs into the barrier."""
     R0, Rd = so3.from_rpy(2.2642, 0.0361, 1.9724), so3.from_rpy(1.6499, 0.1579, 2.7202)
     for method in METHODS:
-        res = planner.plan(R0, Rd, method=method)
+        res = planner.plan(R0, Rd, method=method, strategy="paper")
         assert not res.success
         assert "min_step" in res.reason and "delta_min" in res.reason
         assert res.min_delta >= 1e-2                      # the last accepted trajectory
@@ -115,7 +127,8 @@ def test_error_decays_as_prescribed_by_the_flow(method):
     R0, Rd = example(1)
     dev = {}
     for step in (0.1, 0.05, 0.025):
-        res = planner.plan(R0, Rd, method=method, gamma=1.0, step=step, newton_below=0.0, max_iter=6)
+        res = planner.plan(R0, Rd, method=method, gamma=1.0, step=step, newton_below=0.0, max_iter=6,
+                           strategy="paper")
         assert all(h["rejected"] == 0 and h["step"] == pytest.approx(step) for h in res.history[1:])
         e = np.array([h["error"] for h in res.history])
         dev[step] = np.abs(e[1:] / e[:-1] - np.exp(-step)).max()
@@ -127,7 +140,7 @@ def test_error_decays_as_prescribed_by_the_flow(method):
 @pytest.mark.parametrize("method", METHODS)
 def test_newton_phase_converges_quadratically(k, method):
     R0, Rd = example(k)
-    res = planner.plan(R0, Rd, method=method)
+    res = planner.plan(R0, Rd, method=method, strategy="paper")
     e = [h["error"] for h in res.history]
     phases = [h["phase"] for h in res.history]
     first = phases.index("newton")
@@ -140,7 +153,7 @@ def test_newton_phase_converges_quadratically(k, method):
 def test_flow_only_converges_linearly_without_newton():
     """Control for the test above: with γh = 0.5 and no Newton phase the error halves."""
     R0, Rd = example(1)
-    res = planner.plan(R0, Rd, newton_below=0.0, max_iter=15, tol=1e-30)
+    res = planner.plan(R0, Rd, newton_below=0.0, max_iter=15, tol=1e-30, strategy="paper")
     e = np.array([h["error"] for h in res.history])
     assert not res.success and "max_iter" in res.reason
     np.testing.assert_allclose(e[-5:] / e[-6:-1], 0.5, rtol=1e-3)
@@ -148,11 +161,12 @@ def test_flow_only_converges_linearly_without_newton():
 
 # -- other mechanisms ---------------------------------------------------------------------
 
+@pytest.mark.parametrize("strategy", STRATEGIES)
 @pytest.mark.parametrize("method", METHODS)
-def test_attitude_mechanism_plans_without_delta_checks(method):
+def test_attitude_mechanism_plans_without_delta_checks(method, strategy):
     R0 = np.eye(3)                                   # fine here: no singular set
     Rd = so3.from_rpy(0.4, -0.3, 0.8)
-    res = planner.plan(R0, Rd, method=method, mechanism="attitude")
+    res = planner.plan(R0, Rd, method=method, mechanism="attitude", strategy=strategy)
     check_solution(res, R0, Rd)
     assert all(h["min_delta"] is None for h in res.history)
 
@@ -180,7 +194,7 @@ NON_ORTHO = R_OK + 1e-6
     ((R_OK, RD_OK), {"harmonics": 0}, "harmonics"),
     ((R_OK, RD_OK), {"harmonics": 1.5}, "harmonics"),
     ((R_OK, RD_OK), {"method": "nonparametric", "grid": 0}, "grid"),
-    ((R_OK, RD_OK), {"strategy": "robust"}, "strategy"),
+    ((R_OK, RD_OK), {"strategy": "magic"}, "strategy"),
     ((R_OK, RD_OK), {"method": "spline"}, "method"),
     ((R_OK, RD_OK), {"mechanism": "tripod"}, "mechanism"),
     ((R_OK, RD_OK), {"gamma": 0.0}, "gamma"),
@@ -219,7 +233,7 @@ def test_goal_beyond_the_singular_surface_returns_at_once(Rd, match):
 def test_initial_control_into_the_singularity_fails_gracefully():
     R0, Rd = example(1)
     u0 = C.Fourier(1.0, [[1.0, 0, 0, 0, 0], [0.0, 0, 0, 0, 0]])      # runs into Δ = 0
-    res = planner.plan(R0, Rd, u0=u0)
+    res = planner.plan(R0, Rd, u0=u0, strategy="paper")
     assert not res.success and "initial control" in res.reason and "Δ = 0" in res.reason
     assert res.iterations == 0 and res.terminal_error is None
     assert 0 < len(res.t) < res.steps + 1
@@ -231,24 +245,26 @@ def test_initial_control_into_the_singularity_fails_gracefully():
 
 def test_u0_as_function_or_controls():
     R0, Rd = example(2)
-    a = planner.plan(R0, Rd, u0=C.paper_initial(1.0))
-    b = planner.plan(R0, Rd, u0=C.Fourier.fit(C.paper_initial(1.0), 1.0, 2))
-    c = planner.plan(R0, Rd)
+    a = planner.plan(R0, Rd, u0=C.paper_initial(1.0), strategy="paper")
+    b = planner.plan(R0, Rd, u0=C.Fourier.fit(C.paper_initial(1.0), 1.0, 2), strategy="paper")
+    c = planner.plan(R0, Rd, strategy="paper")
     np.testing.assert_allclose(a.params, c.params, atol=1e-12)
     np.testing.assert_array_equal(b.params, c.params)
 
 
-def test_callback_sees_every_iteration_and_can_stop():
+@pytest.mark.parametrize("strategy", STRATEGIES)
+def test_callback_sees_every_iteration_and_can_stop(strategy):
     R0, Rd = example(1)
     seen = []
-    res = planner.plan(R0, Rd, callback=seen.append)
+    res = planner.plan(R0, Rd, callback=seen.append, strategy=strategy)
     assert [r["iteration"] for r in seen] == list(range(res.iterations + 1)) and seen == res.history
-    res = planner.plan(R0, Rd, callback=lambda r: r["iteration"] >= 3)
+    res = planner.plan(R0, Rd, callback=lambda r: r["iteration"] >= 3, strategy=strategy)
     assert not res.success and res.iterations == 3 and "callback" in res.reason
 
 
 @pytest.mark.parametrize("kw", [{}, {"method": "nonparametric", "grid": 40},
-                                {"mechanism": "attitude"}, {"Rd": so3.from_rpy(-1.0, 0.9, -0.5)}])
+                                {"mechanism": "attitude"}, {"Rd": so3.from_rpy(-1.0, 0.9, -0.5)},
+                                {"strategy": "paper"}, {"strategy": "paper", "method": "nonparametric"}])
 def test_save_load_round_trip(tmp_path, kw):
     R0, Rd = example(1)
     Rd = kw.pop("Rd", Rd)
@@ -293,7 +309,7 @@ def test_a_new_strategy_plugs_in_without_touching_the_paper_one():
         res = planner.plan(R0, Rd, strategy="test-sobolev")
         check_solution(res, R0, Rd)
         assert res.strategy == "test-sobolev"
-        assert not np.allclose(res.params, planner.plan(R0, Rd).params, atol=1e-3)
+        assert not np.allclose(res.params, planner.plan(R0, Rd, strategy="paper").params, atol=1e-3)
     finally:
         del planner.STRATEGIES["test-sobolev"]
 

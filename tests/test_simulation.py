@@ -199,3 +199,78 @@ def test_singular_trajectory_stops_cleanly():
 def test_bad_input_raises_value_error(R0, controls, T, kw):
     with pytest.raises(ValueError):
         S.simulate(R0, controls, T, **kw)
+
+
+# -- planner kernels: dense Jacobian, frame coordinates, minimum-norm solve ------------------
+
+def test_dense_basis_gives_the_sparse_jacobian():
+    R0, _ = example(1)
+    u = bumpy(seed=1)
+    kern = kernels.get("platform")
+    U = u.stage_table(400)
+    out = []
+    for basis in (u.sparse_basis(400), u.kernel_basis(400)):
+        J = np.empty((3, 10))
+        Wd = np.empty((1200, 6))
+        n, _, _ = kern.forward_variational(R0, U, 1 / 400, 1.0, 1e-9, *basis, np.empty((401, 3, 3)),
+                                           np.empty((401, 3, 3)), J, np.empty((3, 3)), Wd, False)
+        assert n == 400
+        out.append(J)
+    assert u.kernel_basis(400)[0].shape[0] == 0            # the dense form
+    np.testing.assert_allclose(out[1], out[0], rtol=1e-13, atol=1e-15)
+
+
+@pytest.mark.parametrize("mechanism", ["platform", "attitude"])
+def test_frame_jacobian_matches_finite_differences(mechanism):
+    """In frame coordinates (kernels bound to N, QN) J = ∂s_T/∂λ of the w-parameters."""
+    from nonholo import planner
+
+    R0, _ = example(2)
+    w = bumpy(seed=5)
+    prob = planner.Problem(R0, R0, 1.0, mechanism, "parametric", 400, 1e-2, frame=True)
+    ev = prob.evaluate(w)
+    eps = 1e-6
+    fd = np.empty_like(ev.J)
+    for j in range(10):
+        e = np.zeros(10)
+        e[j] = eps
+        Rp = C.FrameControls(w.with_params(w.params + e), R0, mechanism, 400).nodes[-1]
+        Rm = C.FrameControls(w.with_params(w.params - e), R0, mechanism, 400).nodes[-1]
+        fd[:, j] = endpoint_variation(Rp, Rm, eps)
+    assert rel(ev.J, fd) <= 1e-7
+    np.testing.assert_allclose(ev.R[-1], C.FrameControls(w, R0, mechanism, 400).nodes[-1], atol=1e-14)
+
+
+def test_min_norm_step_cholesky_and_fallback():
+    rng = np.random.default_rng(0)
+    J = rng.normal(size=(3, 10))
+    l = rng.normal(size=3)
+    s = rng.uniform(0.5, 2.0, 10)
+    x = kernels.min_norm_step(J, l, s)
+    S = np.diag(s)
+    np.testing.assert_allclose(x, S @ np.linalg.pinv(J @ S) @ l, rtol=1e-12, atol=1e-14)
+    # rank 2: the minimum-norm least-squares step (eigen fallback), not a blow-up
+    J2 = J.copy()
+    J2[2] = J2[0] + 2 * J2[1]
+    x2 = kernels.min_norm_step(J2, l, np.ones(10))
+    np.testing.assert_allclose(x2, np.linalg.pinv(J2) @ l, rtol=1e-9, atol=1e-12)
+    np.testing.assert_array_equal(kernels.min_norm_step(np.zeros((3, 4)), l, np.ones(4)), np.zeros(4))
+
+
+def test_log_error():
+    rng = np.random.default_rng(3)
+    for _ in range(20):
+        A, B = so3.exp(rng.normal(size=3)), so3.exp(rng.normal(size=3))
+        l, e = kernels.log_error(A, B)
+        np.testing.assert_allclose(l, so3.log(A @ B.T), atol=1e-12)
+        assert e == pytest.approx(np.linalg.norm(so3.log(A @ B.T)), abs=1e-12)
+
+
+def test_physical_simulation_of_frame_controls():
+    """simulate/variational accept FrameControls: the physical system re-traces the frame motion."""
+    R0, _ = example(1)
+    u = C.FrameControls(bumpy(seed=2), R0, "platform", 400)
+    tr = S.simulate(R0, u, 1.0, steps=800)
+    assert so3.distance(tr.R_T, u.nodes[-1]) <= 1e-9
+    var = S.variational(R0, u, 1.0)
+    assert var.J is None and so3.distance(var.trajectory.R_T, u.nodes[-1]) <= 1e-9

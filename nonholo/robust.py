@@ -1,0 +1,385 @@
+"""Strategy ``"robust"`` (the default of :func:`nonholo.planner.plan`).
+
+DESIGN-PLACEHOLDER
+"""
+from __future__ import annotations
+
+from typing import Iterator
+
+import numpy as np
+
+from . import kernels as _kernels
+from . import so3
+from .controls import Controls, Fourier, FrameControls, PiecewiseConstant
+from .planner import (DELTA_STOP, Evaluation, Outcome, Problem, Strategy, _ones, _record,
+                      register_strategy)
+from .simulation import SingularTrajectoryError, delta_samples, simulate, variational
+
+#: Amplitude (rad/s) of the loop ``w = a (sin ωt, cos ωt)`` of the initial guesses.
+LOOP_AMPLITUDE = 0.3
+#: Random initial guesses (the last restarts): Fourier ``w`` with standard normal
+#: coefficients scaled to an RMS log-uniform in this range (rad/s), from this seed.
+RANDOM_RMS = (0.2, 1.5)
+RANDOM_SEED = 20140901
+
+
+def to_frame(problem: Problem, controls: Controls) -> Controls:
+    """The frame control ``w`` that reproduces the physical ``controls`` from ``problem.R0``.
+
+    ``w = N(R)ᵀ ω`` with ``ω = L(R) u`` along the physical motion (simulated with
+    ``problem.steps`` CF4 steps), projected on the parametrisation of ``controls``
+    (least squares on the Fourier basis; interval means on the grid). Raises
+    :class:`~nonholo.simulation.SingularTrajectoryError` if the physical motion runs into
+    ``Δ = 0``.
+    """
+    mech = problem.mechanism
+    tr = simulate(problem.R0, controls, problem.T, mechanism=mech.name, steps=problem.steps)
+    N, L = mech.module.N, mech.L
+    w = np.array([N(R).T @ (L(R) @ u) for R, u in zip(tr.R[:-1], tr.u[:-1])])
+    t = tr.t[:-1]
+    if isinstance(controls, Fourier):
+        from .controls import fourier_basis
+
+        phi = fourier_basis(t, problem.T, controls.harmonics)
+        coeffs = np.linalg.lstsq(phi, w, rcond=None)[0].T
+        return Fourier(problem.T, coeffs)
+    j = controls.interval(t)
+    values = np.zeros((controls.grid, controls.n_inputs))
+    np.add.at(values, j, w)
+    values /= np.bincount(j, minlength=controls.grid)[:, None]
+    return PiecewiseConstant(problem.T, values)
+
+
+def spatial_gradient_delta(mechanism, R: np.ndarray, eps: float = 1e-6) -> np.ndarray:
+    """``∇Δ`` at each ``R[n]``: ``Δ(exp([s]) R) = Δ(R) + ∇Δ·s + O(|s|²)`` (central differences
+    of the generated ``Δ``, error ``O(ε²)``), shape ``(n, 3)``."""
+    g = np.empty((len(R), 3))
+    for k in range(3):
+        e = np.zeros(3)
+        e[k] = eps
+        g[:, k] = (delta_samples(mechanism, so3.exp(e) @ R)
+                   - delta_samples(mechanism, so3.exp(-e) @ R)) / (2.0 * eps)
+    return g
+
+
+def barrier_gradient(problem: Problem, ev: Evaluation, d0: float) -> np.ndarray | None:
+    """Gradient in ``λ`` of the barrier ``φ = Σ_{n=1..N} h ψ(d_n)``, ``d_n = sgn(Δ(R0)) Δ(R(t_n))``,
+    ``ψ(d) = −log(d/d₀)`` for ``d < d₀`` and 0 above (``None`` if no node is below ``d₀``).
+
+    ``ev`` must hold ``Z`` and the stage weights ``Wd`` (``full`` evaluation). The
+    sensitivity of a node is ``s_n = Z_n^{-1} S_n``, ``S_n = Σ_{stages r before t_n} W_r
+    ∂U_r/∂λ``; with ``a_n = h ψ'(d_n) sgn ∇Δ(R_n)`` and ``μ_n = a_n Z_n^{-1}``,
+    ``∇φ = Σ_n μ_n S_n = Σ_r (ν_{n(r)} W_r) ∂U_r/∂λ`` where ``ν_k = Σ_{n > k} μ_n`` (suffix
+    sums) — one backward pass over the stored stages, no extra simulation.
+    """
+    if not ev.complete or ev.Z is None:
+        return None
+    N, h, m = problem.steps, problem.h, problem.mechanism.n_inputs
+    d = problem.sign * delta_samples(problem.mechanism.name, ev.R)
+    active = d < d0
+    active[0] = False
+    if not active.any():
+        return None
+    a = np.zeros((N + 1, 3))
+    grad = spatial_gradient_delta(problem.mechanism.name, ev.R[active])
+    a[active] = (h * problem.sign * (-1.0 / d[active]))[:, None] * grad
+    mu = np.linalg.solve(np.transpose(ev.Z, (0, 2, 1)), a[:, :, None])[:, :, 0]    # a_n Z_n^{-1}
+    nu = np.cumsum(mu[::-1], axis=0)[::-1]                  # Σ_{n ≥ k} μ_n
+    nu = nu[1:]                                              # Σ_{n > k} μ_n, k = 0 … N−1
+    v = np.einsum("ni,ncik->nck", nu, ev.Wd.reshape(N, 3, 3, m)).reshape(3 * N, m)
+    return _contract(problem, v)
+
+
+def _contract(problem: Problem, v: np.ndarray) -> np.ndarray:
+    """``Σ_r Σ_k v[r, k] ∂U[r, k]/∂λ`` over the stage rows ``r = 3n + c`` (a vector in ``λ``)."""
+    Bidx, Bval, sb, si = problem.stage_basis
+    N, m = problem.steps, v.shape[1]
+    out = np.zeros(problem.n_params)
+    if Bidx.shape[0] == 0:                                  # dense basis
+        G = v.T @ Bval.reshape(3 * N, -1)                    # (m, nb)
+        cols = np.arange(G.shape[1])[None, :] * sb + np.arange(m)[:, None] * si
+        out[cols.ravel()] = G.ravel()
+        return out
+    nq = Bidx.shape[2]
+    cols = Bidx.reshape(3 * N, nq, 1) * sb + np.arange(m)[None, None, :] * si
+    np.add.at(out, cols.ravel(), (Bval.reshape(3 * N, nq, 1) * v[:, None, :]).ravel())
+    return out
+
+
+def _like(controls: Controls, func, T: float, harmonics: int | None = None) -> Controls:
+    """``func`` projected on the parametrisation of ``controls`` (``harmonics`` overrides K)."""
+    if isinstance(controls, Fourier):
+        return Fourier.fit(func, T, harmonics or controls.harmonics, controls.n_inputs)
+    return PiecewiseConstant.fit(func, T, controls.grid, controls.n_inputs)
+
+
+def _loop(T: float, m: int, amplitude: float, phase: float = 0.0, mean=None):
+    """``w_i(t) = mean_i + a sin(ωt + φ + iπ/2)``, ``ω = 2π/T``: a loop (plus a drift)."""
+    w = 2.0 * np.pi / T
+    shift = 0.5 * np.pi * np.arange(m) + phase
+    mean = np.zeros(m) if mean is None else np.asarray(mean, dtype=float)
+
+    def f(t):
+        t = np.asarray(t, dtype=float)
+        return mean + amplitude * np.sin(w * t[..., None] + shift)
+
+    return f
+
+
+@register_strategy
+class RobustStrategy(Strategy):
+    """Jacobian method in the desingularised frame coordinates, with restarts (see the module)."""
+
+    name = "robust"
+    #: accepted steps of one attempt before the next initial guess is tried
+    attempt_iterations = 60
+    #: refine the integrator's grid when the estimated discretisation error of ``R(T)``
+    #: exceeds this (rad; the acceptance of a plan re-simulated by DOP853 is 1e-8)
+    refine_above = 1e-9
+    #: finest grid of the refinement
+    max_steps = 6400
+    #: null-space barrier on ``Δ`` in the flow steps (see :meth:`direction`)
+    barrier = True
+    #: the barrier ``ψ(d) = −log(d/d₀)`` acts where ``d = sgn(Δ(R0)) Δ < d₀``
+    barrier_d0 = 0.1
+    #: size of the barrier term relative to the minimum-norm step (in the metric)
+    barrier_weight = 2.0
+    #: an attempt stops when ``|l_T|`` (above ``newton_below``) shrank by less than a factor
+    #: ``stall_ratio`` over the last ``stall_window`` accepted steps (0: never)
+    stall_window = 5
+    stall_ratio = 0.97
+    #: random initial guesses after the deterministic ones
+    random_guesses = 6
+    #: a converged plan whose physical sensitivity (:meth:`sensitivity`) exceeds this is
+    #: kept only if no later attempt converges to a better-conditioned one
+    max_sensitivity = 100.0
+
+    def frame(self, mechanism: str) -> bool:
+        return _kernels.has_frame(mechanism)
+
+    #: whether the first initial guess is the caller's ``u0`` (set by :meth:`initial`)
+    given = False
+    #: what happened to the caller's ``u0`` if it could not be used (set by :meth:`initial`)
+    u0_note = ""
+
+    def initial(self, problem, controls, given):
+        """In frame coordinates: ``u0`` (physical) converted by :func:`to_frame`; without
+        ``u0`` the default loop ``w = 0.3 (sin ωt, cos ωt)``."""
+        self.given, self.u0_note = given, ""
+        if not (given and problem.frame):
+            return controls
+        try:
+            return to_frame(problem, controls)
+        except SingularTrajectoryError as exc:
+            self.given = False
+            self.u0_note = f"u0 not used ({exc})"
+            return _like(controls, _loop(problem.T, controls.n_inputs, LOOP_AMPLITUDE), problem.T)
+
+    # -- initial guesses -----------------------------------------------------------------
+    def attempts(self, problem: Problem, first: Controls) -> Iterator[tuple[str, Controls]]:
+        """The initial controls tried in turn: ``first``, then other loops and drifts."""
+        T, m = problem.T, first.n_inputs
+        l0 = so3.log(problem.Rd @ problem.R0.T)
+        frame = problem.mechanism.module.N(problem.R0) if problem.frame else problem.mechanism.L(problem.R0)
+        drift = np.linalg.lstsq(frame, l0, rcond=None)[0] / T
+        K = first.harmonics if isinstance(first, Fourier) else None
+        if self.given:
+            yield "u0", first
+        yield "drift", _like(first, _loop(T, m, LOOP_AMPLITUDE, 0.0, drift), T)
+        if not self.given:
+            yield "loop", first
+        yield "loop", _like(first, _loop(T, m, 1.0, 0.5 * np.pi), T)
+        if K is not None:
+            yield "harmonics", _like(first, _loop(T, m, LOOP_AMPLITUDE, 0.0, drift), T, K + 1)
+            yield "harmonics", _like(first, _loop(T, m, LOOP_AMPLITUDE, 0.5 * np.pi, drift), T, K + 2)
+        rng = np.random.default_rng(RANDOM_SEED)
+        for j in range(self.random_guesses):
+            Kj = (K or 2) + 2 * (j % 2)
+            c = rng.standard_normal((m, 2 * Kj + 1))
+            rms = np.exp(rng.uniform(*np.log(RANDOM_RMS)))
+            c *= rms / np.sqrt(np.sum(c[:, 0] ** 2) + 0.5 * np.sum(c[:, 1:] ** 2))
+            f = Fourier(T, c)
+            yield "random", f if K is not None else _like(first, f, T)
+
+    # -- one descent ----------------------------------------------------------------------
+    def wants_full(self, problem: Problem, ev: Evaluation) -> bool:
+        """Whether the next evaluations should keep ``Z`` and the stage weights (for the barrier)."""
+        return (self.barrier and problem.has_delta and ev.min_delta is not None
+                and ev.min_delta < 2.0 * self.barrier_d0)
+
+    def direction(self, problem: Problem, ev: Evaluation, scale: np.ndarray,
+                  newton: bool = False) -> np.ndarray:
+        """The step direction (the step is ``−γh`` or ``−1`` times it).
+
+        ``d = S (J S)^# l`` (``S = diag(scale)``: minimum norm in the metric ``S^{-2}``).
+        On flow steps whose trajectory comes within :attr:`barrier_d0` of ``Δ = 0`` (and
+        :attr:`barrier` is on), plus the barrier term ``β |d|_S g/|g|_S`` (``β`` = :attr:`barrier_weight`) with ``g`` the
+        ``S^{-2}``-orthogonal projection of ``−S²∇φ`` on the null space of ``J``
+        (:func:`barrier_gradient`): it leaves ``l_T`` unchanged to first order and moves
+        the trajectory away from ``Δ = 0``.
+        """
+        d = _kernels.min_norm_step(ev.J, ev.l, scale)
+        if newton or not self.barrier or not problem.has_delta or ev.min_delta >= self.barrier_d0:
+            return d
+        full = ev if ev.Z is not None else problem.evaluate(ev.params, full=True)
+        g = barrier_gradient(problem, full, self.barrier_d0)
+        if g is None:
+            return d
+        g = scale * scale * g
+        null = g - _kernels.min_norm_step(ev.J, ev.J @ g, scale)
+        size = np.linalg.norm(null / scale)
+        if not size > 0.0:
+            return d
+        return d + (self.barrier_weight * np.linalg.norm(d / scale) / size) * null
+
+    def descend(self, problem: Problem, ev: Evaluation, attempt: int, it0: int, budget: int,
+                history: list, callback) -> tuple[Evaluation, int, str, bool]:
+        """Flow then Newton steps from the admissible ``ev``; returns
+        ``(last accepted evaluation, accepted steps, reason, stopped by callback)``."""
+        opt = self.options
+        metric = None if problem.method == "parametric" else ev.parametrisation.metric()
+        scale_vec = _ones(ev.params.size) if metric is None else 1.0 / np.sqrt(metric)
+        h = opt.step
+        it = 0
+        errors = [ev.error]
+        while True:
+            if ev.error <= opt.tol:
+                return ev, it, f"converged: |l_T| = {ev.error:.3g} <= tol = {opt.tol:g}", False
+            if it >= budget:
+                return ev, it, f"{budget} steps taken with |l_T| = {ev.error:.3g}", False
+            w = self.stall_window
+            if w and len(errors) > w and ev.error >= opt.newton_below and ev.error > self.stall_ratio * errors[-1 - w]:
+                return ev, it, (f"stalled at |l_T| = {ev.error:.3g} (less than "
+                                f"{100 * (1 - self.stall_ratio):.3g} % in {w} steps)"), False
+            newton = ev.error < opt.newton_below
+            scale = 1.0 if newton else opt.gamma * h
+            direction = self.direction(problem, ev, scale_vec, newton)
+            full = self.wants_full(problem, ev)
+            rejected = 0
+            while True:
+                trial = problem.evaluate(ev.params - scale * direction, full=full)
+                if problem.admissible(trial) and trial.error < ev.error:
+                    break
+                last = (problem.why_not(trial) if not problem.admissible(trial) else
+                        f"|l_T| did not decrease ({trial.error:.3g} >= {ev.error:.3g})")
+                rejected += 1
+                scale *= 0.5
+                if not newton:
+                    h *= 0.5
+                if scale < opt.min_step:
+                    return ev, it, (f"step size fell below min_step = {opt.min_step:g} at |l_T| = "
+                                    f"{ev.error:.3g}; last rejected step: {last}"), False
+            it += 1
+            ev = trial
+            errors.append(ev.error)
+            if not newton and rejected == 0:
+                h = min(2.0 * h, opt.step)
+            rec = _record(it0 + it, ev, scale, "newton" if newton else "flow", rejected)
+            rec["attempt"] = attempt
+            history.append(rec)
+            if callback is not None and callback(rec):
+                return ev, it, "stopped by callback", True
+
+    # -- accuracy of the integrator -----------------------------------------------------
+    def discretisation_error(self, problem: Problem, ev: Evaluation) -> float:
+        """Richardson estimate of the integrator's error at ``R(T)`` for ``ev``'s control:
+        ``16/15`` of the distance between the endpoints with ``N`` and ``2N`` CF4 steps (rad)."""
+        N2 = 2 * problem.steps
+        Rs = np.empty((N2 + 1, 3, 3))
+        problem.kernels.forward(problem.R0, ev.controls.stage_table(N2), 0.5 * problem.h,
+                                problem.sign, -np.inf, Rs)
+        return float(_kernels.log_error(Rs[N2], ev.R[-1])[1]) * 16.0 / 15.0
+
+    def refine(self, problem: Problem, ev: Evaluation, attempt: int, it0: int, history: list,
+               callback) -> tuple[Problem, Evaluation, int, str]:
+        """Double the integrator's steps while the endpoint's discretisation error (see
+        :meth:`discretisation_error`) exceeds :attr:`refine_above`, re-converging with Newton
+        steps on each finer grid. Returns ``(problem, evaluation, accepted steps, note)``."""
+        opt = self.options
+        it = 0
+        note = ""
+        est = self.discretisation_error(problem, ev)
+        while est > self.refine_above and 2 * problem.steps <= self.max_steps:
+            fine = Problem(problem.R0, problem.Rd, problem.T, problem.mechanism.name, problem.method,
+                           2 * problem.steps, problem.delta_min, problem.frame)
+            trial = fine.evaluate(ev.controls)
+            if not fine.admissible(trial):
+                return problem, ev, it, note
+            trial, n, why, stop = self.descend(fine, trial, attempt, it0 + it, 20, history, callback)
+            it += n
+            if stop or trial.error > opt.tol:
+                return problem, ev, it, note + f"refinement to {fine.steps} steps failed: {why}"
+            note = (f"integrator refined to {fine.steps} steps (estimated discretisation error "
+                    f"{est:.2g} rad with {problem.steps})")
+            problem, ev = fine, trial
+            est = self.discretisation_error(problem, ev)
+        return problem, ev, it, note
+
+    def sensitivity(self, problem: Problem, ev: Evaluation) -> float:
+        """``max_n |Φ(T, t_n)|_F`` of the *physical* system ``dR/dt = [L(R) u] R`` along the
+        motion of ``ev`` played with its physical inputs (:func:`nonholo.simulation.variational`,
+        ``problem.steps`` steps): the amplification of a perturbation at ``t_n`` by ``T``."""
+        par = (FrameControls(ev.controls, problem.R0, problem.mechanism.name, problem.steps)
+               if problem.frame else ev.controls)
+        try:
+            var = variational(problem.R0, par, problem.T, mechanism=problem.mechanism.name,
+                              steps=problem.steps)
+        except SingularTrajectoryError:
+            return float("inf")
+        return float(np.sqrt(np.max(np.sum(var.Phi ** 2, axis=(1, 2)))))
+
+    def solve(self, problem, controls, callback=None):
+        opt = self.options
+        history: list = []
+        it = 0
+        best: Evaluation | None = None
+        first_failure: Evaluation | None = None
+        converged = None        # best-conditioned converged plan above max_sensitivity
+        notes = []
+        tail = f"; {self.u0_note}" if self.u0_note else ""
+        for k, (label, w0) in enumerate(self.attempts(problem, controls)):
+            if k and it >= opt.max_iter:
+                break
+            ev = problem.evaluate(w0, delta_stop=DELTA_STOP)
+            if not problem.admissible(ev):
+                notes.append(f"{label}: initial control not admissible ({problem.why_not(ev)})")
+                first_failure = first_failure or ev
+                continue
+            rec = _record(it, ev, 0.0, "initial" if k == 0 else "restart", 0)
+            rec["attempt"] = k
+            history.append(rec)
+            if callback is not None and callback(rec):
+                return Outcome(ev, False, "stopped by callback", history, it)
+            budget = min(self.attempt_iterations, opt.max_iter - it)
+            ev, n, why, stop = self.descend(problem, ev, k, it, budget, history, callback)
+            it += n
+            if stop:
+                return Outcome(ev, False, why, history, it)
+            if ev.error <= opt.tol:
+                why += f" (attempt {k + 1}: {label})" if k else ""
+                fine, ev, n, note = self.refine(problem, ev, k, it, history, callback)
+                it += n
+                why += f"; {note}" if note else ""
+                G = self.sensitivity(fine, ev)
+                if G <= self.max_sensitivity:
+                    return Outcome(ev, True, why + tail, history, it,
+                                   fine if fine is not problem else None, G)
+                notes.append(f"{label}: converged with sensitivity {G:.3g} > {self.max_sensitivity:g}")
+                if converged is None or G < converged[0]:
+                    converged = (G, ev, fine, why)
+                continue
+            notes.append(f"{label}: {why}")
+            if best is None or ev.error < best.error:
+                best = ev
+        if converged is not None:
+            G, ev, fine, why = converged
+            why += (f"; sensitivity max|Φ(T,t)| = {G:.3g} > {self.max_sensitivity:g} (the best of "
+                    f"{sum('converged with' in x for x in notes)} converged attempts; an open-loop "
+                    "replay amplifies errors by that much)")
+            return Outcome(ev, True, why + tail, history, it, fine if fine is not problem else None, G)
+        final = best if best is not None else first_failure
+        if final is None:
+            final = problem.evaluate(controls, delta_stop=DELTA_STOP)
+        reason = (f"no attempt converged within max_iter = {opt.max_iter} ({len(notes)} attempts): "
+                  + "; ".join(notes) + tail)
+        return Outcome(final, False, reason, history, it)

@@ -1,0 +1,261 @@
+"""Strategy "robust" (the default of `plan`): reachable goals, parking, rejection, I/O; and the
+unchanged paper strategy."""
+from __future__ import annotations
+
+import inspect
+import json
+import statistics
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from nonholo import controls as C
+from nonholo import examples, mechanisms, planner, robust, so3, verify
+from nonholo.result import PlanResult
+
+PLATFORM = mechanisms.get("platform")
+DATA = Path(__file__).parent / "data"
+
+
+def goal_slice(per_band: int = 6) -> list[dict]:
+    """``per_band`` goals of each reachable band of the benchmark set, spread over its starts."""
+    from benchmarks.goalset import load_goals
+
+    goals = load_goals()
+    out = []
+    for band in ("near", "far"):
+        g = [x for x in goals if x["band"] == band]
+        out += [g[i] for i in np.linspace(0, len(g) - 1, per_band).round().astype(int)]
+    return out
+
+
+def across_goals() -> list[dict]:
+    from benchmarks.goalset import load_goals
+
+    return [g for g in load_goals() if g["band"] == "across"]
+
+
+def other_parking_goal():
+    """The second solution of Example 3's conditions: ``Rd = exp([v]) R0``, ``v ≈ (−0.543, −0.033, −0.253)``."""
+    R0 = examples.get(3).R_start
+    return R0, examples.parallel_parking_goal(R0, 0.6, np.array([-0.543, -0.033, -0.253]))
+
+
+def verified(res, R0, Rd, T=1.0):
+    """Success as in the benchmark: DOP853 re-simulation of the physical ``controls(t)``
+    ends within 1e-8 rad of ``Rd`` and keeps ``|Δ| ≥ 1e-2`` on the dense path."""
+    assert res.success, res.reason
+    RT = verify.resimulate(R0, res.controls, T, res.mechanism, res.breakpoints)
+    assert verify.terminal_error(RT, Rd) <= 1e-8
+    _, _, d = verify.resimulate_path(R0, res.controls, T, res.mechanism, res.breakpoints, samples=501)
+    assert np.min(np.sign(PLATFORM.delta(R0)) * d) >= 1e-2
+    assert res.min_delta >= 1e-2
+    np.testing.assert_array_equal(res.u, res.controls(res.t))
+
+
+def test_robust_is_the_default():
+    assert inspect.signature(planner.plan).parameters["strategy"].default == "robust"
+    ex = examples.get(1)
+    res = planner.plan(ex.R_start, ex.R_goal)
+    assert res.strategy == "robust" and res.success
+    assert isinstance(res.parametrisation, C.FrameControls)
+
+
+@pytest.mark.parametrize("goal", goal_slice(), ids=lambda g: g["id"])
+def test_benchmark_slice(goal):
+    res = planner.plan(goal["R0"], goal["Rd"], T=goal["T"])
+    verified(res, goal["R0"], goal["Rd"], goal["T"])
+
+
+@pytest.mark.parametrize("method", planner.METHODS)
+def test_example3_and_the_other_parking_goal(method):
+    ex3 = examples.get(3)
+    R0, other = other_parking_goal()
+    assert so3.distance(R0, other) == pytest.approx(0.6, abs=1e-12)
+    assert other[0, 0] == pytest.approx(R0[0, 0], abs=1e-12) and other[1, 1] == pytest.approx(R0[1, 1], abs=1e-12)
+    assert so3.distance(other, ex3.R_goal) > 0.1
+    for Rd in (ex3.R_goal, other):
+        verified(planner.plan(R0, Rd, method=method), R0, Rd)
+
+
+def test_paper_strategy_fails_the_other_parking_goal():
+    """What the robust strategy is for: the appendix's algorithm steers into Δ = 0 here."""
+    R0, other = other_parking_goal()
+    for gamma in (0.2, 0.5, 1.0):
+        res = planner.plan(R0, other, strategy="paper", gamma=gamma)
+        assert not res.success and "delta_min" in res.reason
+
+
+def test_hard_goal_of_the_paper_strategy_is_solved():
+    """The reachable goal of test_planner.test_hard_goal_fails_gracefully."""
+    R0, Rd = so3.from_rpy(2.2642, 0.0361, 1.9724), so3.from_rpy(1.6499, 0.1579, 2.7202)
+    for method in planner.METHODS:
+        verified(planner.plan(R0, Rd, method=method), R0, Rd)
+
+
+def test_goals_across_the_singular_surface_are_rejected_fast():
+    goals = across_goals()
+    assert len(goals) >= 10
+    planner.plan(goals[0]["R0"], goals[0]["Rd"])
+    times = []
+    for g in goals:
+        t = time.perf_counter()
+        res = planner.plan(g["R0"], g["Rd"], T=g["T"])
+        times.append(time.perf_counter() - t)
+        assert not res.success and "across the singular surface" in res.reason
+        assert res.iterations == 0 and len(res.t) == 0 and res.terminal_error is None
+    assert statistics.median(times) < 1e-3 and max(times) < 2e-2
+
+
+@pytest.mark.parametrize("method", planner.METHODS)
+def test_save_load_keeps_the_physical_controls(tmp_path, method):
+    ex = examples.get(2)
+    res = planner.plan(ex.R_start, ex.R_goal, method=method, grid=50)
+    back = PlanResult.load(res.save(tmp_path / "plan.json"))
+    assert back == res and back.strategy == "robust"
+    t = np.linspace(0.0, 1.0, 777)
+    np.testing.assert_array_equal(back.controls(t), res.controls(t))
+    np.testing.assert_array_equal(back.u, res.u)
+    d = json.loads((tmp_path / "plan.json").read_text())
+    assert d["controls"]["kind"] == "frame" and d["controls"]["frame"]["kind"] in ("fourier", "piecewise_constant")
+    # u is physical: L(R) u = N(R) w along the planned motion (ω in the admissible plane)
+    par = res.parametrisation
+    R, u, w = par.states(t), res.controls(t), par.frame_inputs(t)
+    N = PLATFORM.module.N
+    for k in range(0, len(t), 50):
+        np.testing.assert_allclose(PLATFORM.L(R[k]) @ u[k], N(R[k]) @ w[k], atol=1e-12)
+    assert np.abs(res.u).max() > 0.05       # leg rates, not zero placeholders
+
+
+def test_history_records_attempts_and_restarts():
+    class BadFirst(robust.RobustStrategy):
+        """First guess a loop that runs into Δ = 0 at once, then the default guesses."""
+
+        name = "test-bad-first"
+
+        def attempts(self, problem, first):
+            yield "bad", C.Fourier(1.0, [[6.0, 0, 0, 0, 0], [-6.0, 0, 0, 0, 0]])
+            yield from super().attempts(problem, first)
+
+    planner.register_strategy(BadFirst)
+    try:
+        ex = examples.get(1)
+        res = planner.plan(ex.R_start, ex.R_goal, strategy="test-bad-first")
+        verified(res, ex.R_start, ex.R_goal)
+        assert "attempt 2: drift" in res.reason
+        assert res.history[0]["phase"] == "restart" and res.history[0]["attempt"] == 1
+    finally:
+        del planner.STRATEGIES["test-bad-first"]
+
+
+def test_failure_reports_every_attempt():
+    ex = examples.get(2)
+    res = planner.plan(ex.R_start, ex.R_goal, max_iter=4)
+    assert not res.success and "no attempt converged" in res.reason and "drift" in res.reason
+    assert res.iterations <= 4 and res.terminal_error is not None
+    assert np.all(np.isfinite(res.u))
+
+
+def test_u0_that_runs_into_the_singularity_is_replaced():
+    R0, Rd = examples.get(1).R_start, examples.get(1).R_goal
+    u0 = C.Fourier(1.0, [[1.0, 0, 0, 0, 0], [0.0, 0, 0, 0, 0]])
+    res = planner.plan(R0, Rd, u0=u0)
+    verified(res, R0, Rd)
+    assert "u0 not used" in res.reason
+
+
+def test_physical_u0_is_converted_to_frame_coordinates():
+    """``u0`` is physical: its frame version reproduces the same motion."""
+    R0 = examples.get(1).R_start
+    u0 = C.Fourier(1.0, [[0.1, 0.2, 0.0, 0.05, 0.0], [0.0, 0.0, 0.25, 0.0, -0.05]])
+    problem = planner.Problem(R0, R0, 1.0, "platform", "parametric", 400, 1e-2, frame=True)
+    w0 = robust.to_frame(problem, u0)
+    from nonholo.simulation import simulate
+
+    R_u = simulate(R0, u0, 1.0).R_T
+    R_w = C.FrameControls(w0, R0, "platform", 400).nodes[-1]
+    assert so3.distance(R_u, R_w) < 2e-2        # K = 2 truncation of w(t) only
+
+
+def test_integrator_refinement():
+    class Fine(robust.RobustStrategy):
+        name = "test-fine"
+        refine_above = 1e-13
+
+    planner.register_strategy(Fine)
+    try:
+        ex = examples.get(1)
+        res = planner.plan(ex.R_start, ex.R_goal, strategy="test-fine")
+        verified(res, ex.R_start, ex.R_goal)
+        assert res.steps > 400 and res.R.shape == (res.steps + 1, 3, 3) and "refined" in res.reason
+        assert res.parametrisation.steps == res.steps
+    finally:
+        del planner.STRATEGIES["test-fine"]
+
+
+def test_attitude_has_no_delta_checks_with_robust():
+    R0, Rd = np.eye(3), so3.from_rpy(2.0, -1.0, 0.5)
+    res = planner.plan(R0, Rd, mechanism="attitude")
+    assert res.success and res.min_delta is None and res.delta is None
+    RT = verify.resimulate(R0, res.controls, 1.0, "attitude")
+    assert verify.terminal_error(RT, Rd) <= 1e-8
+
+
+# -- the paper strategy, unchanged -------------------------------------------------------------
+
+def test_paper_strategy_unchanged():
+    """Examples 1–2, both methods, against tests/data/paper_strategy_examples.json.
+
+    The fixture was recorded before the robust strategy existed with::
+
+        for k, (a, b) in EXAMPLES.items():            # RPY angles of R0, Rd (MODEL.md)
+            for method in planner.METHODS:
+                res = planner.plan(so3.from_rpy(*a), so3.from_rpy(*b), method=method)
+                record(res.iterations, [h[...] for h in res.history], res.params)
+
+    (every option at its default; "paper" was the default strategy then). Errors are
+    compared with ``rtol = 1e-9`` above the round-off floor (``atol = 1e-12``: the last
+    Newton step ends at ~1e-14, where the value is round-off).
+    """
+    fx = json.loads((DATA / "paper_strategy_examples.json").read_text())
+    assert len(fx["runs"]) == 4
+    for run in fx["runs"]:
+        ex = fx["examples"][str(run["example"])]
+        res = planner.plan(so3.from_rpy(*ex["R0_rpy"]), so3.from_rpy(*ex["Rd_rpy"]),
+                           method=run["method"], strategy="paper")
+        assert res.success == run["success"] and res.iterations == run["iterations"]
+        assert [h["phase"] for h in res.history] == run["phases"]
+        assert [h["rejected"] for h in res.history] == run["rejected"]
+        np.testing.assert_allclose([h["error"] for h in res.history], run["errors"], rtol=1e-9, atol=1e-12)
+        np.testing.assert_allclose([h["step"] for h in res.history], run["steps"], rtol=1e-12)
+        np.testing.assert_allclose([h["min_delta"] for h in res.history], run["min_delta"], rtol=1e-9)
+        np.testing.assert_allclose(res.params, run["params"], rtol=1e-8, atol=1e-10)
+
+
+def test_sensitivity_is_reported_and_used():
+    """``sensitivity`` = max |Φ(T,t)|_F of the physical system; above ``max_sensitivity`` a
+    converged plan is kept only as a last resort (and said so)."""
+    ex = examples.get(1)
+    res = planner.plan(ex.R_start, ex.R_goal)
+    assert np.sqrt(3.0) - 1e-9 <= res.sensitivity <= robust.RobustStrategy.max_sensitivity
+    from nonholo.simulation import variational
+
+    Phi = variational(ex.R_start, res.parametrisation, 1.0).Phi
+    assert res.sensitivity == pytest.approx(np.sqrt(np.max(np.sum(Phi ** 2, axis=(1, 2)))), rel=1e-9)
+    assert planner.plan(ex.R_start, ex.R_goal, strategy="paper").sensitivity is None
+
+    class Strict(robust.RobustStrategy):
+        name = "test-strict"
+        max_sensitivity = 1.0           # below √3: no plan qualifies
+        random_guesses = 0
+
+    planner.register_strategy(Strict)
+    try:
+        res = planner.plan(ex.R_start, ex.R_goal, strategy="test-strict")
+        verified(res, ex.R_start, ex.R_goal)
+        assert "sensitivity" in res.reason and "converged attempts" in res.reason
+        assert res.sensitivity > 1.0
+    finally:
+        del planner.STRATEGIES["test-strict"]
