@@ -13,9 +13,16 @@ units — for the platform the scaled leg rates ``u_i = d(l_i²)/dt / (4ab)``, 1
 
 Both evaluate vectorised: ``controls(t)`` with ``t`` of shape ``(n,)`` gives ``(n, m)``
 (a scalar ``t`` gives ``(m,)``). Each also provides what the integrator and the planner
-need: the stage table of the CF4 integrator and the sparse stage basis ``∂U/∂λ`` from
-which the kernels accumulate the Jacobian (see :mod:`nonholo.kernels`), the diagonal of the L2
-Gram matrix ``∫ uᵀu dt = λᵀ diag(metric) λ``, and a JSON-able description.
+need: the stage table of the CF4 integrator (and :meth:`Controls.stage_function`, the same
+map from a bare parameter vector into a preallocated table), the sparse stage basis
+``∂U/∂λ`` from which the kernels accumulate the Jacobian (and
+:meth:`Controls.kernel_basis`, its dense form for Fourier series; see
+:mod:`nonholo.kernels`), the diagonal of the L2 Gram matrix ``∫ uᵀu dt = λᵀ diag(metric) λ``,
+and a JSON-able description.
+
+:class:`FrameControls` wraps either of them as the frame coordinates ``w`` of a motion
+planned in the desingularised frame ``ω = N(R) w`` and evaluates the physical inputs
+``u(t) = W(R(t)) w(t)`` along it (not linear in ``λ``).
 """
 from __future__ import annotations
 
@@ -503,8 +510,16 @@ class FrameControls(Controls):
         k = np.minimum(np.where(snap, near, k), self.steps).astype(np.int64)
         s = np.where(snap, 0.0, t - k * h)
         tk = k * h
-        Wst = self.frame(np.concatenate([tk, tk + 0.5 * s, t])).reshape(3, n_t, m).transpose(1, 0, 2)
-        Wst = np.ascontiguousarray(Wst)
+        if isinstance(self.frame, PiecewiseConstant):
+            # the partial step uses its step's own value (the middle of a step never lies
+            # on a grid point, while t_k = k·h may round to either side of one)
+            wk = self.frame(np.minimum(tk, self.T - h) + 0.5 * h)
+            Wst = np.ascontiguousarray(np.broadcast_to(wk[:, None, :], (n_t, 3, m)))
+            if w_end is None:
+                w_end = self.frame(t)
+        else:
+            Wst = self.frame(np.concatenate([tk, tk + 0.5 * s, t])).reshape(3, n_t, m).transpose(1, 0, 2)
+            Wst = np.ascontiguousarray(Wst)
         w_end = Wst[:, 2] if w_end is None else np.ascontiguousarray(w_end, dtype=float).reshape(n_t, m)
         Rt = np.empty((n_t, 3, 3))
         u = np.empty((n_t, m))

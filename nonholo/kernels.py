@@ -54,7 +54,8 @@ the sensitivity of intermediate states (used by the barrier of :mod:`nonholo.rob
 Kernels are compiled per mechanism, from the generated ``L``, ``Q`` and ``delta``
 (rewritten to fill preallocated arrays instead of allocating, see :func:`into`), and
 cached on disk by mechanism name and a hash of the generated module's source
-(``cache=True``); see :func:`get`. ``get(name, frame=True)`` binds the same templates to
+(``cache=True``; not for a module registered at run time from a file, which another
+process could not import by name); see :func:`get`. ``get(name, frame=True)`` binds the same templates to
 the desingularised frame ``N(R)``, ``QN(R, w)`` of the generated module instead (the system
 ``dR/dt = [N(R) w] R``; ``Δ`` is still the mechanism's), with :func:`_frame_inputs`
 (bound to ``W(R)``) evaluating the physical inputs ``u = W(R(t)) w(t)`` between nodes.
@@ -68,6 +69,7 @@ from __future__ import annotations
 import ast
 import hashlib
 import inspect
+import sys
 import textwrap
 import types
 from dataclasses import dataclass
@@ -799,14 +801,19 @@ class Kernels:
     frame_inputs: object = None
 
 
-def _bind(template, tag: str, glb: dict):
+def _bind(template, tag: str, glb: dict, cache: bool = True):
     f = types.FunctionType(template.__code__, glb, template.__name__)
     # A distinct qualified name per mechanism (and per version of its generated module)
     # gives each compiled copy its own on-disk cache entry.
     f.__qualname__ = f"{template.__name__}__{tag}"
     f.__module__ = __name__
     f.__doc__ = template.__doc__
-    return numba.njit(**_JIT)(f)
+    return numba.njit(**{**_JIT, "cache": cache})(f)
+
+
+def _importable(module) -> bool:
+    """Whether ``module`` can be re-imported by name (a cached kernel refers to it by name)."""
+    return sys.modules.get(getattr(module, "__name__", None)) is module
 
 
 def has_frame(name: str) -> bool:
@@ -830,6 +837,9 @@ def get(name: str = "platform", frame: bool = False) -> Kernels:
         raise ValueError(f"mechanism {mech.name!r} has no desingularised frame N(R) (HAS_FRAME)")
     src = inspect.getsource(mech.module)
     tag = f"{mech.name}{'_frame' if frame else ''}_{hashlib.sha256(src.encode()).hexdigest()[:12]}"
+    # a module registered at run time from a file (mechanisms.register) is not importable
+    # by name: a kernel loaded from the disk cache in another process could not resolve it
+    cache = _importable(mech.module)
     plain = dict(nogil=True, error_model="numpy")
     glb = dict(globals())
     L, Q = (mech.module.N, mech.module.QN) if frame else (mech.L, mech.Q)
@@ -838,17 +848,17 @@ def get(name: str = "platform", frame: bool = False) -> Kernels:
     # ``x**(-2.0)`` into a multiplication (the result changes at round-off level).
     glb["Q_into"] = numba.njit(fastmath=True, **plain)(into(Q))
     glb["delta"] = numba.njit(**plain)(mech.delta) if mech.has_singular_set else _no_delta_jit
-    glb["_zstage"] = _bind(_zstage, tag, glb)
+    glb["_zstage"] = _bind(_zstage, tag, glb, cache)
     extra = {}
     if frame:
         glb["W_into"] = numba.njit(**plain)(into(mech.module.W))
-        extra["frame_inputs"] = _bind(_frame_inputs, tag, glb)
+        extra["frame_inputs"] = _bind(_frame_inputs, tag, glb, cache)
     return Kernels(
         name=mech.name,
         n_inputs=mech.n_inputs,
         has_singular_set=mech.has_singular_set,
-        forward=_bind(_forward, tag, glb),
-        forward_variational=_bind(_forward_variational, tag, glb),
+        forward=_bind(_forward, tag, glb, cache),
+        forward_variational=_bind(_forward_variational, tag, glb, cache),
         frame=frame,
         **extra,
     )

@@ -46,7 +46,11 @@ touching :class:`PaperStrategy`. Two are provided: ``"paper"`` (above) and ``"ro
 default of :func:`plan` (:mod:`nonholo.robust`: the same flow in the desingularised frame
 coordinates ``w`` of ``ω = N(R) w``, with a drift initial guess, restarts and a null-space
 barrier on ``Δ``; the result's controls are the physical inputs ``u = W(R) w``, see
-:class:`~nonholo.controls.FrameControls`).
+:class:`~nonholo.controls.FrameControls`). Measured by ``python -m benchmarks.bench_robust``
+on the benchmark set (``benchmarks/goals.json``, success = DOP853 re-simulation of the
+physical controls within 1e-8 rad and ``|Δ| ≥ 1e-2`` on the dense path): ``"paper"``
+73 % near / 69 % far, ``"robust"`` 100 % / 100 % in a median 3.6 / 4.0 ms; goals across
+``Δ = 0`` rejected in a median 90 µs. Per-ingredient numbers: :mod:`nonholo.robust`.
 
 Cost of an iteration. :class:`Problem` keeps, per parametrisation, the stage-table
 function and the stage basis (dense for Fourier series: the kernel contracts the stored

@@ -259,3 +259,13 @@ def test_sensitivity_is_reported_and_used():
         assert res.sensitivity > 1.0
     finally:
         del planner.STRATEGIES["test-strict"]
+
+
+@pytest.mark.parametrize("T, grid", [(1.0, 40), (2.0, 40), (0.5, 25)])
+def test_grid_controls_replay_exactly(T, grid):
+    """Several integrator steps per grid interval, T ≠ 1: the physical replay matches."""
+    ex = examples.get(2)
+    res = planner.plan(ex.R_start, ex.R_goal, T=T, method="nonparametric", grid=grid)
+    verified(res, ex.R_start, ex.R_goal, T)
+    RT = verify.resimulate(ex.R_start, res.controls, T, breakpoints=res.breakpoints)
+    assert verify.terminal_error(RT, ex.R_goal) <= 1e-11
