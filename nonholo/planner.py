@@ -368,21 +368,11 @@ class PaperStrategy(Strategy):
             newton = ev.error < opt.newton_below
             scale = 1.0 if newton else opt.gamma * h
             direction = _kernels.min_norm_step(ev.J, ev.l, scale_vec)
-            params = ev.params
-            rejected = 0
-            while True:
-                trial = problem.evaluate(params - scale * direction)
-                if problem.admissible(trial) and trial.error < ev.error:
-                    break
-                last = (problem.why_not(trial) if not problem.admissible(trial) else
-                        f"|l_T| did not decrease ({trial.error:.3g} >= {ev.error:.3g})")
-                rejected += 1
-                scale *= 0.5
-                if not newton:
-                    h *= 0.5
-                if scale < opt.min_step:
-                    return Outcome(ev, False, f"step size fell below min_step = {opt.min_step:g} at "
-                                   f"|l_T| = {ev.error:.3g}; last rejected step: {last}", history, it)
+            trial, scale, rejected, failure = backtrack(problem, ev, direction, scale, opt.min_step)
+            if failure:
+                return Outcome(ev, False, failure, history, it)
+            if not newton:
+                h *= 0.5 ** rejected
             it += 1
             ev = trial
             if not newton and rejected == 0:
@@ -390,6 +380,28 @@ class PaperStrategy(Strategy):
             history.append(_record(it, ev, scale, "newton" if newton else "flow", rejected))
             if callback is not None and callback(history[-1]):
                 return Outcome(ev, False, "stopped by callback", history, it)
+
+
+def backtrack(problem: Problem, ev: Evaluation, direction: np.ndarray, scale: float,
+              min_step: float, full: bool = False):
+    """Step control of the θ-flow: halve ``scale`` until ``λ − scale·direction`` is
+    admissible (reaches ``T`` with ``|Δ| ≥ delta_min``) and lowers ``|l_T|``.
+
+    Returns ``(trial, scale, halvings, None)``, or ``(None, scale, halvings, reason)`` once
+    ``scale`` falls below ``min_step``.
+    """
+    rejected = 0
+    while True:
+        trial = problem.evaluate(ev.params - scale * direction, full=full)
+        if problem.admissible(trial) and trial.error < ev.error:
+            return trial, scale, rejected, None
+        last = (problem.why_not(trial) if not problem.admissible(trial) else
+                f"|l_T| did not decrease ({trial.error:.3g} >= {ev.error:.3g})")
+        rejected += 1
+        scale *= 0.5
+        if scale < min_step:
+            return None, scale, rejected, (f"step size fell below min_step = {min_step:g} at "
+                                           f"|l_T| = {ev.error:.3g}; last rejected step: {last}")
 
 
 def initial_controls(method: str, T: float, n_inputs: int, harmonics: int, grid: int, u0=None) -> Controls:

@@ -91,7 +91,7 @@ from . import kernels as _kernels
 from . import so3
 from .controls import Controls, Fourier, FrameControls, PiecewiseConstant
 from .planner import (DELTA_STOP, Evaluation, Outcome, Problem, Strategy, _ones, _record,
-                      register_strategy)
+                      backtrack, register_strategy)
 from .simulation import SingularTrajectoryError, delta_samples, simulate, variational
 
 #: Amplitude (rad/s) of the loop ``w = a (sin ωt, cos ωt)`` of the initial guesses.
@@ -333,21 +333,12 @@ class RobustStrategy(Strategy):
             newton = ev.error < opt.newton_below
             scale = 1.0 if newton else opt.gamma * h
             direction = self.direction(problem, ev, scale_vec, newton)
-            full = self.wants_full(problem, ev)
-            rejected = 0
-            while True:
-                trial = problem.evaluate(ev.params - scale * direction, full=full)
-                if problem.admissible(trial) and trial.error < ev.error:
-                    break
-                last = (problem.why_not(trial) if not problem.admissible(trial) else
-                        f"|l_T| did not decrease ({trial.error:.3g} >= {ev.error:.3g})")
-                rejected += 1
-                scale *= 0.5
-                if not newton:
-                    h *= 0.5
-                if scale < opt.min_step:
-                    return ev, it, (f"step size fell below min_step = {opt.min_step:g} at |l_T| = "
-                                    f"{ev.error:.3g}; last rejected step: {last}"), False
+            trial, scale, rejected, failure = backtrack(problem, ev, direction, scale, opt.min_step,
+                                                        full=self.wants_full(problem, ev))
+            if failure:
+                return ev, it, failure, False
+            if not newton:
+                h *= 0.5 ** rejected
             it += 1
             ev = trial
             errors.append(ev.error)
