@@ -176,6 +176,18 @@ def _stopped(mech, n, t_stop, dmin, sgn, traj) -> SingularTrajectoryError:
     return SingularTrajectoryError(f"the trajectory {why} at t ≈ {t_stop:.6g} s", traj)
 
 
+def _setup(R0, controls, T, mechanism, steps):
+    """Checked inputs of a simulation: the mechanism, ``R0``, ``T``, ``steps``, its kernels,
+    ``sgn Δ(R0)`` and the controls' stage table."""
+    mech = mechanisms.get(mechanism)
+    R0 = check_rotation(R0, "R0")
+    T = _check_T(T)
+    steps = _check_count(steps, "steps")
+    kern = _kernels.get(mech.name)
+    sgn = _sign_of_delta(kern, mech, R0)
+    return mech, R0, T, steps, kern, sgn, stage_table(controls, T, steps, mech.n_inputs)
+
+
 def simulate(R0, controls, T: float, *, mechanism: str = "platform",
              steps: int = DEFAULT_STEPS) -> Trajectory:
     """Solve ``dR/dt = [L(R) u(t)] R``, ``R(0) = R0`` on ``[0, T]`` with ``steps`` CF4 steps.
@@ -184,13 +196,7 @@ def simulate(R0, controls, T: float, *, mechanism: str = "platform",
     Raises ``ValueError`` for a bad ``R0``/``T``/``steps``/controls and
     :class:`SingularTrajectoryError` if the motion runs into ``Δ = 0``.
     """
-    mech = mechanisms.get(mechanism)
-    R0 = check_rotation(R0, "R0")
-    T = _check_T(T)
-    steps = _check_count(steps, "steps")
-    kern = _kernels.get(mech.name)
-    sgn = _sign_of_delta(kern, mech, R0)
-    U = stage_table(controls, T, steps, mech.n_inputs)
+    mech, R0, T, steps, kern, sgn, U = _setup(R0, controls, T, mechanism, steps)
     Rs = np.empty((steps + 1, 3, 3))
     n, dmin, t_stop = kern.forward(R0, U, T / steps, sgn, DELTA_STOP, Rs)
     traj = _trajectory(mech, Rs, U, T, steps, n, dmin, sgn)
@@ -211,13 +217,7 @@ def variational(R0, controls, T: float, *, mechanism: str = "platform",
     first order. For grid controls the columns ``(j, i)`` of ``J`` are the
     ``G_j = ∫_{I_j} Φ(T,t) B(t) dt`` of the nonparametric update.
     """
-    mech = mechanisms.get(mechanism)
-    R0 = check_rotation(R0, "R0")
-    T = _check_T(T)
-    steps = _check_count(steps, "steps")
-    kern = _kernels.get(mech.name)
-    sgn = _sign_of_delta(kern, mech, R0)
-    U = stage_table(controls, T, steps, mech.n_inputs)
+    mech, R0, T, steps, kern, sgn, U = _setup(R0, controls, T, mechanism, steps)
     linear = isinstance(controls, Controls) and not isinstance(controls, FrameControls)
     if linear:
         Bidx, Bval, stride_b, stride_i = controls.sparse_basis(steps)
