@@ -428,7 +428,8 @@ class FrameControls(Controls):
     ``u(t) = W(R(t)) w(t)`` in physical units, vectorised over ``t``.
 
     ``R(t)``: the nodes of ``steps`` CF4 steps of the frame system from ``R0`` (computed
-    once, on first use, by :func:`nonholo.kernels.get` ``(mechanism, frame=True)``), and
+    once, on first use, by :func:`nonholo.kernels.get` ``(mechanism, frame=True)``, or
+    given as ``nodes`` by a planner that has just computed them), and
     between nodes one CF4 step of length ``t − t_n`` from the node below — the same local
     approximation as an integrator step, ``O(h⁵)`` from the exact motion (≈ 1e-13 rad with
     the default 400 steps on ``T = 1``). Parameters ``λ`` (:attr:`params`) and
@@ -441,7 +442,8 @@ class FrameControls(Controls):
 
     kind = "frame"
 
-    def __init__(self, frame: Controls, R0, mechanism: str = "platform", steps: int = 400):
+    def __init__(self, frame: Controls, R0, mechanism: str = "platform", steps: int = 400,
+                 nodes=None):
         from . import kernels, mechanisms, so3
 
         if not isinstance(frame, (Fourier, PiecewiseConstant)):
@@ -460,6 +462,13 @@ class FrameControls(Controls):
         R.setflags(write=False)
         self.R0 = R
         self._nodes = None
+        if nodes is not None:
+            nodes = np.array(nodes, dtype=float)
+            if nodes.shape != (self.steps + 1, 3, 3) or not np.array_equal(nodes[0], R):
+                raise ValueError(f"nodes must be the {self.steps + 1} CF4 nodes of the frame motion "
+                                 f"from R0, shape ({self.steps + 1}, 3, 3), got {nodes.shape}")
+            nodes.setflags(write=False)
+            self._nodes = nodes
 
     def _set(self, params):
         self.frame = self.frame.with_params(params)
@@ -510,7 +519,12 @@ class FrameControls(Controls):
         k = np.minimum(np.where(snap, near, k), self.steps).astype(np.int64)
         s = np.where(snap, 0.0, t - k * h)
         tk = k * h
-        if isinstance(self.frame, PiecewiseConstant):
+        if not s.any():
+            # every sample on a node: u = W(R_k) w(t_k), no partial step to take
+            Wst = np.empty((n_t, 3, m))
+            if w_end is None:
+                w_end = self.frame(t)
+        elif isinstance(self.frame, PiecewiseConstant):
             # the partial step uses its step's own value (the middle of a step never lies
             # on a grid point, while t_k = k·h may round to either side of one)
             wk = self.frame(np.minimum(tk, self.T - h) + 0.5 * h)

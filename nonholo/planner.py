@@ -503,7 +503,8 @@ def plan(R0, Rd, *, T: float = 1.0, method: str = "parametric", harmonics: int =
         if ev is None:
             par = controls                  # nothing simulated: the physical initial control
         elif problem.frame:
-            par = FrameControls(ev.controls, R0, mech.name, n_steps)
+            par = FrameControls(ev.controls, R0, mech.name, n_steps,
+                                nodes=ev.R if ev.complete else None)
         else:
             par = ev.controls
         R = ev.R if ev is not None else np.empty((0, 3, 3))

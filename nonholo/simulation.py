@@ -92,7 +92,7 @@ class Variational:
     @property
     def Phi(self) -> np.ndarray:
         """``Φ(T, t_n)`` for every sample, shape ``(n, 3, 3)``."""
-        return np.linalg.solve(self.Z[-1], self.Z)
+        return np.linalg.inv(self.Z[-1]) @ self.Z          # Φ(T, 0) Φ(t_n, 0)^{-1}
 
 
 def delta_samples(mechanism, R: np.ndarray) -> np.ndarray | None:

@@ -199,6 +199,28 @@ def test_frame_controls_round_trip_and_stage_table(kind):
         u.sparse_basis(400)
 
 
+@pytest.mark.parametrize("kind", ["fourier", "grid"])
+def test_frame_controls_given_nodes_and_stages_on_nodes(kind):
+    """Nodes handed over by a planner are used as they are; a stage table whose stage times
+    are all nodes (here 200 steps of 2h) is ``W(R_n) w(t_n)`` at those nodes."""
+    from nonholo import mechanisms
+
+    u = frame_controls(kind)
+    v = C.FrameControls(u.frame, u.R0, "platform", 400, nodes=u.nodes)
+    t = np.random.default_rng(3).uniform(0.0, 1.0, 20)
+    np.testing.assert_array_equal(v(t), u(t))
+    U = v.stage_table(200)
+    W, nodes = mechanisms.get("platform").module.W, u.nodes
+    w_end = u.frame.stage_table(200)
+    for j in (0, 57, 199):
+        for c in range(3):
+            np.testing.assert_allclose(U[j, c], W(nodes[2 * j + c]) @ w_end[j, c], rtol=0, atol=1e-15)
+    with pytest.raises(ValueError, match="nodes"):
+        C.FrameControls(u.frame, u.R0, "platform", 400, nodes=u.nodes[:-1])
+    with pytest.raises(ValueError, match="nodes"):
+        C.FrameControls(u.frame, u.R0, "platform", 400, nodes=u.nodes[::-1])
+
+
 @pytest.mark.parametrize("bad", [
     lambda: C.FrameControls(frame_controls(), np.eye(3), "platform", 400),
     lambda: C.FrameControls(C.Fourier(1.0, np.zeros((3, 5))), np.eye(3), "platform", 400),
