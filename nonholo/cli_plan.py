@@ -38,7 +38,8 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     p.add_argument("--strategy", default="robust",
                    help=f"planning strategy: {', '.join(planner.STRATEGIES)} (default: robust)")
     p.add_argument("--mechanism", default="platform", help=f"mechanism ({', '.join(MECHANISMS)})")
-    p.add_argument("--gamma", type=float, default=0.5, help="decay rate γ of the θ-flow (default 0.5)")
+    p.add_argument("--gamma", type=float, default=None,
+                   help="decay rate γ of the θ-flow (default: the strategy's, 1 robust, 0.5 paper)")
     p.add_argument("--tol", type=float, default=1e-10, help="stop when |l_T| <= tol (rad)")
     p.add_argument("--max-iter", type=int, default=200, help="maximum number of iterations")
     p.add_argument("--delta-min", type=float, default=1e-2, help="keep |Δ| >= this along the motion")

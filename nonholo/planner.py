@@ -281,6 +281,8 @@ class Strategy(ABC):
     """
 
     name: ClassVar[str] = ""
+    #: ``γ`` of :func:`plan` when the caller gives none
+    default_gamma: ClassVar[float] = 0.5
 
     def __init__(self, options: Options):
         self.options = options
@@ -439,7 +441,7 @@ def default_steps(method: str, grid: int) -> int:
 
 
 def plan(R0, Rd, *, T: float = 1.0, method: str = "parametric", harmonics: int = 2,
-         grid: int = 100, u0=None, gamma: float = 0.5, step: float = 1.0, tol: float = 1e-10,
+         grid: int = 100, u0=None, gamma: float | None = None, step: float = 1.0, tol: float = 1e-10,
          max_iter: int = 200, strategy: str = "robust", mechanism: str = "platform",
          delta_min: float = 1e-2, steps: int | None = None, newton_below: float = 1e-3,
          min_step: float = 1e-6, callback: Callable[[dict], object] | None = None) -> PlanResult:
@@ -455,7 +457,8 @@ def plan(R0, Rd, *, T: float = 1.0, method: str = "parametric", harmonics: int =
       the examples'). ``"robust"`` converts it to frame coordinates
       (:func:`nonholo.robust.to_frame`) and tries it first.
     - ``gamma`` (γ), ``step`` (initial θ-step h): each flow step asks the error to shrink
-      by ``γh``; ``newton_below``: below this ``|l_T|`` take full Newton steps (``γh = 1``);
+      by ``γh`` (default γ: the strategy's ``default_gamma``, 0.5 for ``"paper"`` as in
+      the paper's examples, 1 for ``"robust"``); ``newton_below``: below this ``|l_T|`` take full Newton steps (``γh = 1``);
       ``min_step``: give up when a step halved below this ``γh``; ``tol``: stop when
       ``|l_T| ≤ tol`` (rad); ``max_iter``: accepted steps at most.
     - ``delta_min``: every trajectory accepted keeps ``|Δ| ≥ delta_min`` (ignored for
@@ -481,6 +484,8 @@ def plan(R0, Rd, *, T: float = 1.0, method: str = "parametric", harmonics: int =
     grid = _check_count(grid, "grid")
     R0 = so3.check_rotation(R0, "R0")
     Rd = so3.check_rotation(Rd, "Rd")
+    if gamma is None:
+        gamma = STRATEGIES[strategy].default_gamma
     options = Options(gamma=gamma, step=step, tol=tol, max_iter=max_iter,
                       newton_below=newton_below, min_step=min_step, delta_min=delta_min)
     if mech.has_singular_set and float(mech.delta(R0)) == 0.0:
