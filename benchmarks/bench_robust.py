@@ -41,6 +41,7 @@ Strategies (``--ingredients``), built from the ingredients of :mod:`nonholo.robu
   loop, K+1 and K+2 harmonics, 6 random ones) when an attempt fails or stalls;
 - ``robust``: the default — ``w+drift+rest.`` with the barrier (and the integrator
   refinement);
+- ``robust γ=0.5``: the default with the paper's ``γ = 0.5`` instead of ``γ = 1``;
 - ``robust in u``: the default with every ingredient but the frame coordinates.
 
 Results (``--ingredients --stress 777 4242 --hard 99 --random 1 2``, 2-core machine;
@@ -125,11 +126,19 @@ class _WDriftRestarts(robust.RobustStrategy):
     barrier = False
 
 
-for _cls in (_InU, _W, _WBarrier, _WDrift, _WDriftRestarts):
+class _Gamma05(robust.RobustStrategy):
+    """The default strategy with the paper's ``γ = 0.5`` (flow steps ask for half the error)."""
+
+    name = "bench:robust-gamma-0.5"
+    default_gamma = 0.5
+
+
+for _cls in (_InU, _W, _WBarrier, _WDrift, _WDriftRestarts, _Gamma05):
     planner.register_strategy(_cls)
 
 VARIANTS = {"paper": "paper", "w": _W.name, "w+barrier": _WBarrier.name, "w+drift": _WDrift.name,
-            "w+drift+rest.": _WDriftRestarts.name, "robust": "robust", "robust in u": _InU.name}
+            "w+drift+rest.": _WDriftRestarts.name, "robust": "robust", "robust γ=0.5": _Gamma05.name,
+            "robust in u": _InU.name}
 
 
 # --------------------------------------------------------------------------------------
