@@ -4,8 +4,9 @@ The task is that of :mod:`nonholo.planner`: steer ``dR/dt = [L(R) u] R`` from ``
 ``R_d`` in time ``T`` while ``sgn(Δ(R0))·Δ ≥ delta_min`` along the motion (``|L| ~ 1/|Δ|``:
 on ``Δ = 0`` the legs lose control of the platform). Goals across ``Δ = 0`` are rejected
 by :func:`~nonholo.planner.plan` before anything is simulated. The appendix's θ-flow is
-kept — Euler steps ``λ ← λ − γh d`` with ``d`` the minimum-norm solution of ``J d = l_T``,
-halved on rejection, full Newton steps once ``|l_T| < newton_below``, a step accepted
+kept — Euler steps ``λ ← λ − γh d`` with ``d`` the minimum-norm solution of ``J d = l_T``
+(``γ = 1`` unless the caller sets it, :attr:`RobustStrategy.default_gamma`: a step asks for
+the whole error, a damped Newton step), halved on rejection, full Newton steps once ``|l_T| < newton_below``, a step accepted
 only if it reaches ``T`` with ``|Δ| ≥ delta_min`` at every integrator point and lowers
 ``|l_T|`` — with these ingredients:
 
@@ -43,7 +44,7 @@ only if it reaches ``T`` with ``|Δ| ≥ delta_min`` at every integrator point a
    steps) and Newton steps re-converge (:meth:`RobustStrategy.refine`).
 5. **Conditioning.** The result reports ``sensitivity = max_t |Φ(T,t)|_F`` of the
    *physical* system along the plan (the factor by which an error at ``t`` is amplified
-   at ``T`` when ``u(t)`` is replayed open loop; ≈ 1 ms to compute). On the ~150
+   at ``T`` when ``u(t)`` is replayed open loop; ≈ 0.25 ms to compute). On the ~150
    converged plans of the near and far random pairs (``--random 1``), a DOP853
    re-simulation (rtol 1e-13) reproduced ``R(T)`` to 2e-9 rad or better below 100 and not
    reliably above (7e-8…1e-6 for 215…2.5e4); refining the integrator does not help there,
