@@ -49,18 +49,19 @@ success in % near / far, random pairs also ≥ 1.8 rad)::
 
                     benchmark    stress 777   stress 4242  hard 99      random 1          random 2
     paper           73.4/ 68.8   81.7/ 72.5   66.7/ 60.0   79.2/ 74.2   37.5/11.2/ 5.0    27.5/ 6.2/ 0.0
-    w               100 / 100    100 / 97.5   100 / 100    99.2/ 96.7   73.8/62.5/16.2    70.0/55.0/18.8
-    w+barrier       100 / 100    100 / 100    100 / 100    100 / 100    92.5/86.2/37.5    91.2/73.8/35.0
-    w+drift         100 / 100    100 / 100    100 / 100    100 / 100    73.8/63.8/23.8    72.5/60.0/20.0
-    w+drift+rest.   100 / 100    100 / 100    100 / 100    100 / 100    98.8/91.2/43.8    97.5/85.0/42.5
-    robust          100 / 100    100 / 100    100 / 100    100 / 100    100 /96.2/66.2    100 /95.0/71.2
-    robust in u     100 / 100    100 / 99.2   100 / 100    100 / 97.5   81.2/58.8/21.2    78.8/56.2/20.0
+    w               100 / 98.4   100 / 96.7   100 / 100    99.2/ 95.0   73.8/62.5/16.2    70.0/55.0/18.8
+    w+barrier       100 / 100    100 / 100    100 / 100    100 / 100    92.5/86.2/38.8    92.5/75.0/36.2
+    w+drift         100 / 100    100 / 100    100 / 100    100 / 100    73.8/62.5/23.8    73.8/57.5/20.0
+    w+drift+rest.   100 / 100    100 / 100    100 / 100    100 / 100    98.8/92.5/43.8    97.5/86.2/41.2
+    robust          100 / 100    100 / 100    100 / 100    100 / 100    100 /97.5/66.2    100 /95.0/72.5
+    robust γ=0.5    100 / 100    100 / 100    100 / 100    100 / 100    100 /96.2/66.2    100 /95.0/71.2
+    robust in u     100 / 100    100 / 99.2   100 / 100    100 / 100    81.2/58.8/20.0    81.2/56.2/20.0
 
 The default run (``python -m benchmarks.bench_robust``, 2-core machine): robust 100 % of
-the near and far benchmark goals, median 3.6 / 4.0 ms (max 4.2 / 7.0 ms), 7 / 9
-iterations, no restart (paper: 73.4 / 68.8 %, 2.7 / 2.9 ms); the 24 goals across ``Δ = 0``
-rejected in a median 90 µs, max 0.24 ms; Example 3 and the other parking goal solved by
-both methods (≈ 5 ms), the latter failed by the paper strategy for every γ. See
+the near and far benchmark goals, median 1.9 / 2.0 ms (max 2.5 / 2.9 ms), 3 / 3
+iterations, no restart (paper: 73.4 / 68.8 %, 2.6 / 2.9 ms); the 24 goals across ``Δ = 0``
+rejected in a median 90 µs, max 0.3 ms; Example 3 and the other parking goal solved by
+both methods (≈ 3 ms), the latter failed by the paper strategy for every γ. See
 :mod:`nonholo.robust` for the design and what each ingredient buys.
 """
 from __future__ import annotations

@@ -60,27 +60,32 @@ AND ``sgnΔ ≥ 1e-2`` on the dense re-simulated path; sets described in
 
                     benchmark    stress 777   stress 4242  hard 99      random 1          random 2
     paper           73.4/ 68.8   81.7/ 72.5   66.7/ 60.0   79.2/ 74.2   37.5/11.2/ 5.0    27.5/ 6.2/ 0.0
-    w               100 / 100    100 / 97.5   100 / 100    99.2/ 96.7   73.8/62.5/16.2    70.0/55.0/18.8
-    w+barrier       100 / 100    100 / 100    100 / 100    100 / 100    92.5/86.2/37.5    91.2/73.8/35.0
-    w+drift         100 / 100    100 / 100    100 / 100    100 / 100    73.8/63.8/23.8    72.5/60.0/20.0
-    w+drift+rest.   100 / 100    100 / 100    100 / 100    100 / 100    98.8/91.2/43.8    97.5/85.0/42.5
-    robust          100 / 100    100 / 100    100 / 100    100 / 100    100 /96.2/66.2    100 /95.0/71.2
-    robust in u     100 / 100    100 / 99.2   100 / 100    100 / 97.5   81.2/58.8/21.2    78.8/56.2/20.0
+    w               100 / 98.4   100 / 96.7   100 / 100    99.2/ 95.0   73.8/62.5/16.2    70.0/55.0/18.8
+    w+barrier       100 / 100    100 / 100    100 / 100    100 / 100    92.5/86.2/38.8    92.5/75.0/36.2
+    w+drift         100 / 100    100 / 100    100 / 100    100 / 100    73.8/62.5/23.8    73.8/57.5/20.0
+    w+drift+rest.   100 / 100    100 / 100    100 / 100    100 / 100    98.8/92.5/43.8    97.5/86.2/41.2
+    robust          100 / 100    100 / 100    100 / 100    100 / 100    100 /97.5/66.2    100 /95.0/72.5
+    robust γ=0.5    100 / 100    100 / 100    100 / 100    100 / 100    100 /96.2/66.2    100 /95.0/71.2
+    robust in u     100 / 100    100 / 99.2   100 / 100    100 / 100    81.2/58.8/20.0    81.2/56.2/20.0
 
 (``w``: frame coordinates, loop initial guess, one attempt; ``+barrier``/``+drift``: that
 ingredient added; ``+rest.``: drift then the restarts; ``robust``: everything, the default;
-``robust in u``: everything but the frame coordinates.) The frame coordinates carry the
-benchmark (paper 69–73 % → 100 %); the drift guess cuts the iterations (median 11 → 7 near,
-13 → 9 far) and settles the last hard goals; barrier and restarts matter on the random
-pairs, the barrier most where the trajectory must skirt ``Δ = 0`` (weight β = 2 and the
-conditioning rule raised random 1 far from 69 to 77 of 80 against β = 1 without it). On
-the benchmark set the default plans a reachable goal in a median 3.6 ms near, 4.0 ms far
-(max 7 ms; paper: 2.7 / 2.9 ms), with 7 / 9 iterations and no restart; goals across
-``Δ = 0`` are rejected in a median 90 µs (max 0.25 ms, the whole ``plan`` call); Example 3
-and the other parking goal (``v ≈ (−0.543, −0.033, −0.253)``, which the paper strategy
-fails for every γ in 0.1–1) are solved by both methods in 11 iterations (≈ 5 ms,
-re-simulated error ≤ 1e-10, min Δ 0.10–0.16). On the random pairs beyond 1.8 rad a failure
-costs up to ~0.1 s (all attempts; ``max_iter`` bounds it).
+``robust γ=0.5``: the default with the paper's ``γ``; ``robust in u``: everything but the
+frame coordinates; all but ``paper`` and ``robust γ=0.5`` with ``γ = 1``.) The frame
+coordinates carry the benchmark (paper 69–73 % → 100 %); the drift guess cuts the
+iterations (median 4 → 3 near, 5 → 3 far) and settles the last hard goals; barrier and
+restarts matter on the random pairs, the barrier most where the trajectory must skirt
+``Δ = 0`` (weight β = 2 and the conditioning rule raised random 1 far from 69 to 77 of 80
+against β = 1 without it, measured with ``γ = 0.5``). ``γ = 1`` instead of 0.5 changes
+no success rate by more than 1.3 points (up on random 1 far and random 2 beyond) and
+cuts the median iterations on the benchmark from 7 / 9 to 3 / 3 (random 1: 11–36 → 5–23).
+On the benchmark set the default plans a reachable goal in a median 1.9 ms near, 2.0 ms
+far (max 2.9 ms; paper: 2.6 / 2.9 ms), with 3 / 3 iterations and no restart; goals
+across ``Δ = 0`` are rejected in a median 90 µs (max 0.3 ms, the whole ``plan`` call);
+Example 3 and the other parking goal (``v ≈ (−0.543, −0.033, −0.253)``, which the paper
+strategy fails for every γ in 0.1–1) are solved by both methods in 5–6 iterations
+(≈ 3 ms, re-simulated error ≤ 1e-10, min Δ 0.10–0.16). On the random pairs beyond
+1.8 rad a failure costs up to ~0.12 s (all attempts; ``max_iter`` bounds it).
 """
 from __future__ import annotations
 
