@@ -150,6 +150,18 @@ def test_history_records_attempts_and_restarts():
         del planner.STRATEGIES["test-bad-first"]
 
 
+def test_default_gamma_is_the_strategys():
+    """``gamma=None`` takes the strategy's ``default_gamma`` (robust 1, paper 0.5, as in the
+    paper's examples); a given ``gamma`` is used as it is."""
+    ex = examples.get(1)
+    assert planner.plan(ex.R_start, ex.R_goal).options["gamma"] == 1.0
+    paper = planner.plan(ex.R_start, ex.R_goal, strategy="paper")
+    assert paper.options["gamma"] == 0.5
+    # the paper strategy's first flow step asks the error to shrink by γh = 0.5
+    assert paper.history[1]["step"] == 0.5
+    assert planner.plan(ex.R_start, ex.R_goal, gamma=0.3).options["gamma"] == 0.3
+
+
 def test_failure_reports_every_attempt():
     ex = examples.get(2)
     res = planner.plan(ex.R_start, ex.R_goal, max_iter=1)
