@@ -458,7 +458,8 @@ def plan(R0, Rd, *, T: float = 1.0, method: str = "parametric", harmonics: int =
       (:func:`nonholo.robust.to_frame`) and tries it first.
     - ``gamma`` (γ), ``step`` (initial θ-step h): each flow step asks the error to shrink
       by ``γh`` (default γ: the strategy's ``default_gamma``, 0.5 for ``"paper"`` as in
-      the paper's examples, 1 for ``"robust"``); ``newton_below``: below this ``|l_T|`` take full Newton steps (``γh = 1``);
+      the paper's examples, 1 for ``"robust"``); ``newton_below``: below this ``|l_T|``
+      take full Newton steps (``γh = 1``);
       ``min_step``: give up when a step halved below this ``γh``; ``tol``: stop when
       ``|l_T| ≤ tol`` (rad); ``max_iter``: accepted steps at most.
     - ``delta_min``: every trajectory accepted keeps ``|Δ| ≥ delta_min`` (ignored for

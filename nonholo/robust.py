@@ -6,9 +6,9 @@ on ``Δ = 0`` the legs lose control of the platform). Goals across ``Δ = 0`` ar
 by :func:`~nonholo.planner.plan` before anything is simulated. The appendix's θ-flow is
 kept — Euler steps ``λ ← λ − γh d`` with ``d`` the minimum-norm solution of ``J d = l_T``
 (``γ = 1`` unless the caller sets it, :attr:`RobustStrategy.default_gamma`: a step asks for
-the whole error, a damped Newton step), halved on rejection, full Newton steps once ``|l_T| < newton_below``, a step accepted
-only if it reaches ``T`` with ``|Δ| ≥ delta_min`` at every integrator point and lowers
-``|l_T|`` — with these ingredients:
+the whole error, a damped Newton step), halved on rejection, full Newton steps once
+``|l_T| < newton_below``, a step accepted only if it reaches ``T`` with ``|Δ| ≥ delta_min``
+at every integrator point and lowers ``|l_T|`` — with these ingredients:
 
 1. **Frame coordinates.** The control planned is ``w`` in ``ω = N(R) w``, ``N(R)`` the
    orthonormal frame of admissible angular velocities of the generated module (platform:

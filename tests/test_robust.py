@@ -166,7 +166,7 @@ def test_failure_reports_every_attempt():
     ex = examples.get(2)
     res = planner.plan(ex.R_start, ex.R_goal, max_iter=1)
     assert not res.success and "no attempt converged" in res.reason and "drift" in res.reason
-    assert res.iterations <= 4 and res.terminal_error is not None
+    assert res.iterations <= 1 and res.terminal_error is not None
     assert np.all(np.isfinite(res.u))
 
 
