@@ -83,7 +83,7 @@ from pathlib import Path
 import numpy as np
 from scipy.integrate import solve_ivp
 
-from nonholo import mechanisms, so3
+from nonholo import catalog, so3
 
 from .goalset import load_goals
 
@@ -136,7 +136,7 @@ def resimulate_path(R0, controls, T: float, breakpoints=None, mechanism: str = "
     about ``samples`` dense-output points spread over ``[0, T]`` plus every integrator
     step, in time order (up to where the integration stopped if it failed).
     """
-    mech = mechanisms.get(mechanism)
+    mech = catalog.get(mechanism)
     L, m = mech.L, mech.n_inputs
     y = np.asarray(R0, dtype=float).ravel()
     ts, Rs = [np.array([0.0])], [y.reshape(1, 3, 3)]

@@ -8,7 +8,7 @@ reproduces the file.
 How the goals are made
 ----------------------
 System: ``dR/dt = [L(R) u] R`` with the generated ``L`` of the mechanism ``"platform"``
-(:func:`nonholo.mechanisms.get`), ``Δ(R) = r12 r31 + r21 r32``. ``SO(3) \\ {Δ = 0}`` has
+(:func:`nonholo.catalog.get`), ``Δ(R) = r12 r31 + r21 r32``. ``SO(3) \\ {Δ = 0}`` has
 two components and no motion crosses ``Δ = 0``.
 
 - Starts: :data:`N_STARTS` orientations, half with ``Δ > 0`` and half with ``Δ < 0``,
@@ -72,7 +72,7 @@ from pathlib import Path
 import numpy as np
 from scipy.integrate import solve_ivp
 
-from nonholo import mechanisms, so3
+from nonholo import catalog, so3
 
 FORMAT = "nonholo.goalset/1"
 DEFAULT_PATH = Path(__file__).resolve().parent / "goals.json"
@@ -100,7 +100,7 @@ PAPER_STARTS = ((0.5, 1.2, -0.5), (1.5, 1.4, 0.5))
 _KIND_STARTS, _KIND_REACHABLE, _KIND_ACROSS = 0, 1, 2
 _BAND_CODE = {"near": 0, "far": 1}
 
-_MECH = mechanisms.get("platform")
+_MECH = catalog.get("platform")
 
 
 def delta(R) -> float:

@@ -1,8 +1,12 @@
 """Code generation: SymPy expressions → plain-Python numeric modules in ``nonholo/generated``.
 
-One function per output (``delta``, ``L``, ``Q``, ``delta_rpy``, ``normal_form``); each
-body is straight-line float arithmetic after common-subexpression elimination, so the
-functions run as they are under NumPy and compile unchanged with ``numba.njit``.
+Each body is straight-line float arithmetic after common-subexpression elimination, so
+the functions run as they are under NumPy and compile unchanged with ``numba.njit``.
+Scalar outputs (``delta``, ``delta_rpy``, ``normal_form``) are returned. A matrix output
+is emitted in the two forms its users need: ``NAME_into(args, out)`` fills a
+preallocated array and returns nothing — the form the compiled integrator calls in its
+inner loop, where allocating a result would cost as much as the arithmetic — and
+``NAME(args)`` allocates the array and calls it (for NumPy callers).
 """
 from __future__ import annotations
 
@@ -48,7 +52,7 @@ def _print(expr) -> str:
 
 def _function(name: str, args: str, unpack: dict[sp.Symbol, str], outputs: list[sp.Expr],
               shape: tuple[int, ...] | None, doc: str) -> str:
-    """Source of one generated function.
+    """Source of one generated function (two for an array output, see the module docstring).
 
     ``unpack`` maps input symbols to the Python expressions that read them; ``outputs``
     are the entries (row-major) of an array of ``shape`` or, with ``shape=None``, a scalar
@@ -56,7 +60,8 @@ def _function(name: str, args: str, unpack: dict[sp.Symbol, str], outputs: list[
     """
     subexprs, reduced = sp.cse(outputs, symbols=sp.numbered_symbols("x"), order="canonical")
     used = set().union(*(e.free_symbols for e in outputs)) if outputs else set()
-    lines = [f"def {name}({args}):", f'    """{doc}"""']
+    header = f"def {name}({args}):" if shape is None else f"def {name}_into({args}, out):"
+    lines = [header, f'    """{doc}"""' if shape is None else f'    """{doc} Fills ``out`` {shape}."""']
     for sym, src in unpack.items():
         if sym in used and str(sym) != src:
             lines.append(f"    {sym} = {src}")
@@ -66,11 +71,11 @@ def _function(name: str, args: str, unpack: dict[sp.Symbol, str], outputs: list[
         values = ", ".join(_print(e) for e in reduced)
         lines.append(f"    return {values}")
     else:
-        lines.append(f"    out = numpy.empty({shape})")
         indices = itertools.product(*(range(n) for n in shape))
         for index, e in zip(indices, reduced):
             lines.append(f"    out[{', '.join(map(str, index))}] = {_print(e)}")
-        lines.append("    return out")
+        lines += ["", "", f"def {name}({args}):", f'    """{doc}"""',
+                  f"    out = numpy.empty({shape})", f"    {name}_into({args}, out)", "    return out"]
     return "\n".join(lines) + "\n"
 
 

@@ -3,14 +3,20 @@
 The numeric kinematics come from generated modules (``nonholo.generated``, written by
 ``nonholo derive`` from the SymPy derivations in ``derivations/``). Entry points:
 
-- ``nonholo.plan(R0, Rd, ...)`` → :class:`~nonholo.result.PlanResult` (:mod:`nonholo.planner`);
+- ``nonholo.plan(R0, Rd, ..., mechanism=...)`` → :class:`~nonholo.result.PlanResult`
+  (:mod:`nonholo.planner`);
 - ``nonholo.simulate(R0, controls, T, ...)`` → :class:`~nonholo.simulation.Trajectory`
-  (:mod:`nonholo.simulation`).
+  (:mod:`nonholo.simulation`);
+- :class:`~nonholo.mechanism.Mechanism`: a mechanism's numeric kinematics
+  (``Mechanism.from_symbolic`` builds one from a derivation); ``nonholo.mechanism_named``
+  looks one up by name, :func:`nonholo.catalog.names` lists them.
 """
 __version__ = "0.1.0"
 
+from .catalog import get as mechanism_named  # noqa: E402
+from .mechanism import Mechanism  # noqa: E402
 from .planner import plan  # noqa: E402
 from .result import PlanResult  # noqa: E402
 from .simulation import simulate  # noqa: E402
 
-__all__ = ["plan", "simulate", "PlanResult"]
+__all__ = ["plan", "simulate", "PlanResult", "Mechanism", "mechanism_named"]

@@ -7,7 +7,7 @@ import sys
 import time
 from pathlib import Path
 
-from . import cli_plan, cli_reproduce
+from . import catalog, cli_plan, cli_reproduce
 
 
 def _derive(args) -> int:
@@ -46,10 +46,8 @@ def _audit(args) -> int:
 
 
 def _mechanisms(args) -> int:
-    from . import mechanisms
-
-    for name in mechanisms.NAMES:
-        m = mechanisms.get(name)
+    for name in catalog.names():
+        m = catalog.get(name)
         singular = "singular set Δ = 0" if m.has_singular_set else "no singular set"
         print(f"{name:<16} {m.description} ({m.n_inputs} inputs, {singular})")
     return 0

@@ -17,7 +17,7 @@ import sys
 
 import numpy as np
 
-from . import mechanisms, planner, so3
+from . import catalog, planner, so3
 from .generated import MECHANISMS
 
 
@@ -94,7 +94,7 @@ def plot(res, path) -> None:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    mech = mechanisms.get(res.mechanism)
+    mech = catalog.get(res.mechanism)
     has_delta = res.delta is not None
     fig, axes = plt.subplots(3 if has_delta else 2, 1, sharex=True, figsize=(7, 7 if has_delta else 5))
     tt = np.linspace(0.0, res.T, 1001)

@@ -46,7 +46,7 @@ from matplotlib.patches import Patch
 from mpl_toolkits.mplot3d import proj3d
 from mpl_toolkits.mplot3d.art3d import Poly3DCollection
 
-from . import mechanisms, so3
+from . import catalog, so3
 from .generated import platform_singularity
 
 # --------------------------------------------------------------------------------------
@@ -169,7 +169,7 @@ def as_geometry(geometry=None, a: float = 1.6, b: float = 1.0, rho: float = 1.0)
                         base2=np.array([a, 0.0, 0.0]), tip2=np.array([b, 0.0, 0.0]),
                         contact=np.array([0.0, 0.0, rho]), axle=np.array([s, -s, 0.0]))
     if isinstance(geometry, str):
-        module = mechanisms.get(geometry).module
+        module = catalog.get(geometry).module
         if not hasattr(module, "GEOMETRY"):
             raise ValueError(f"mechanism {geometry!r} has no legs/disk geometry to draw")
         geometry = module.GEOMETRY
@@ -209,7 +209,7 @@ def leg_lengths(R, geometry=None) -> np.ndarray:
 
 def _mechanism(name):
     try:
-        return mechanisms.get(name if name is not None else "platform")
+        return catalog.get(name if name is not None else "platform")
     except ValueError:
         return None
 
@@ -496,7 +496,7 @@ def mechanism_delta_rpy(mechanism, phi, theta, psi) -> np.ndarray:
     The generated ``delta(R)`` reads the entries ``R[i, j]``: given a stack of rotations
     transposed to shape (3, 3, ...) it evaluates all of them at once.
     """
-    mech = mechanisms.get(mechanism)
+    mech = catalog.get(mechanism)
     phi, theta, psi = np.broadcast_arrays(*(np.asarray(a, dtype=float) for a in (phi, theta, psi)))
     R = Rotation.from_euler("ZYX", np.stack([phi, theta, psi], -1).reshape(-1, 3)).as_matrix()
     return np.asarray(mech.delta(np.moveaxis(R, 0, -1)), dtype=float).reshape(phi.shape)
@@ -594,7 +594,7 @@ def mechanism_card_figure(mechanism: str, R=None, result=None, psi_slice: float 
     """One mechanism at a glance: the platform's schematic at ``R`` (default: identity) and
     its singular set on the slice ``ψ = psi_slice``; for a mechanism without legs, the
     paths of the body axes along ``result`` (a planned motion) and its inputs."""
-    mech = mechanisms.get(mechanism)
+    mech = catalog.get(mechanism)
     fig = Figure(figsize=(12.0, 5.2), layout="constrained")
     gs = fig.add_gridspec(1, 2, width_ratios=[1.0, 1.1])
     ax = fig.add_subplot(gs[0], projection="3d")

@@ -24,7 +24,7 @@ from pathlib import Path
 import numpy as np
 
 from . import examples as _examples
-from . import figures, verify
+from . import catalog, figures, so3, verify
 from .planner import STRATEGIES, plan
 
 DEFAULT_OUTDIR = Path("paper_figures")
@@ -93,10 +93,8 @@ def solve_all(progress=_log) -> list[Solved]:
 def mechanism_cards():
     """``(figure, stem)`` of every mechanism: the platforms at a regular pose with their
     singular sets, the others with a planned motion (RPY(0.1, 0.2, 0.3) → RPY(0.8, -0.4, 0.5))."""
-    from . import mechanisms, so3
-
-    for name in mechanisms.NAMES:
-        mech = mechanisms.get(name)
+    for name in catalog.names():
+        mech = catalog.get(name)
         if mech.geometry is not None:
             R = np.eye(3) if abs(float(mech.delta(np.eye(3)))) > 0.1 else _examples.get(1).R_start
             psi = float(so3.as_rpy(R)[2])

@@ -7,7 +7,7 @@ records) and ``controls``, the parametrisation (``{"kind": "fourier", "T", "harm
 "coeffs"}``, ``{"kind": "piecewise_constant", "T", "grid", "values"}`` or, for a motion
 planned in frame coordinates (strategy ``"robust"``), ``{"kind": "frame", "T",
 "mechanism", "steps", "R0", "frame": <the w parametrisation>}``, see
-:mod:`nonholo.controls`) from which ``controls(t)`` is rebuilt (identically: the frame
+:mod:`nonholo.controls` and :mod:`nonholo.replay`) from which ``controls(t)`` is rebuilt (identically: the frame
 motion's nodes are recomputed by the same kernel). Floats are written with
 ``repr`` precision, so a save/load round trip reproduces every number exactly. Quantities
 that do not exist (``min_delta`` for a mechanism without a singular set, the terminal
@@ -21,7 +21,8 @@ from pathlib import Path
 
 import numpy as np
 
-from .controls import Controls, from_dict
+from .controls import Controls
+from .replay import FrameControls, from_dict
 
 FORMAT = "nonholo.plan/1"
 
@@ -48,9 +49,9 @@ class PlanResult:
       motion — how much a perturbation of the orientation at ``t`` is amplified at ``T``
       when the planned ``u(t)`` is played open loop (``|Φ(T,T)|_F = √3``); computed by the
       ``"robust"`` strategy (``None`` otherwise). Above ~100 an independent re-simulation
-      can no longer reproduce ``R(T)`` to 1e-8 rad (see :mod:`nonholo.robust`).
+      can no longer reproduce ``R(T)`` to 1e-8 rad (see :mod:`nonholo.planning.robust`).
     - ``parametrisation``: the planned control (a :class:`~nonholo.controls.Controls`:
-      Fourier or grid controls of ``u``, or :class:`~nonholo.controls.FrameControls`
+      Fourier or grid controls of ``u``, or :class:`~nonholo.replay.FrameControls`
       wrapping those of the frame coordinates ``w``); :meth:`controls` evaluates the
       physical inputs ``u(t)``.
     """
@@ -65,7 +66,7 @@ class PlanResult:
     R: np.ndarray
     u: np.ndarray
     delta: np.ndarray | None
-    parametrisation: Controls
+    parametrisation: Controls | FrameControls
     mechanism: str
     method: str
     strategy: str

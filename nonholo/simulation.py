@@ -4,10 +4,10 @@ Conventions: spatial angular velocity ``ω = L(R) u`` (``dR/dt = [ω] R``), time
 seconds, rotations as 3×3 matrices. Variations are spatial too: ``∂R/∂θ = [s] R``.
 
 The integrator is the 4th-order commutator-free Lie-group method CF4 with a fixed step
-``h = T/steps`` (see :mod:`nonholo.kernels`): ``R`` is updated by products of Rodrigues
-exponentials, so ``|RᵀR − I|`` stays at round-off level (≲ 1e-14). With the default
-:data:`DEFAULT_STEPS` the endpoint of the paper's examples is within 1e-9 (geodesic
-distance) of a DOP853 solution with ``rtol = atol = 1e-13``, see :data:`DEFAULT_STEPS`.
+``h = T/steps`` (see :mod:`nonholo.cf4`): ``R`` is updated by products of Rodrigues
+exponentials, so ``|RᵀR − I|`` stays at round-off level. Its discretisation error
+against DOP853 is measured by ``python -m benchmarks.bench_plan``
+(``benchmarks/results/bench_plan.md``).
 
 The variational system ``ds/dt = A s + B ∂u/∂θ``, ``A = Q(R, u) + [L(R) u]``, ``B = L(R)``
 is integrated alongside through ``Z(t) = Φ(t, 0)^{-1}``: :func:`variational` returns
@@ -22,17 +22,15 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from . import kernels as _kernels
-from . import mechanisms
-from .controls import STAGE_FRACTIONS, Controls, FrameControls, _check_count, _check_T
+from . import catalog, stages
+from .checks import check_count, check_time
+from .controls import Controls
 from .so3 import check_rotation
 
-#: Default number of CF4 steps on ``[0, T]``. Measured on Examples 1 and 2 of MODEL.md
-#: (``T = 1``; the initial control and the planned controls of both methods, see
-#: ``benchmarks/bench_plan.py``): the endpoint differs from DOP853 (``rtol = atol =
-#: 1e-13``) by at most 4.4e-11 rad with 400 steps (7.3e-10 with 200, 1.2e-8 with 100;
-#: order 4, halving the step divides the error by ≈ 16). Larger inputs need more steps:
-#: the error grows like ``(h |ω|)⁴``.
+#: Default number of CF4 steps on ``[0, T]``: chosen so that on the examples of MODEL.md
+#: (``T = 1``) the endpoint is within the planner's 1e-10 rad of a DOP853 solution
+#: (``benchmarks/results/bench_plan.md``). The method has order 4: the error grows like
+#: ``(h |ω|)⁴``, so larger inputs need more steps.
 DEFAULT_STEPS = 400
 
 #: ``simulate`` stops (with :class:`SingularTrajectoryError`) where ``|Δ|`` falls below this.
@@ -95,38 +93,21 @@ class Variational:
         return np.linalg.inv(self.Z[-1]) @ self.Z          # Φ(T, 0) Φ(t_n, 0)^{-1}
 
 
-def delta_samples(mechanism, R: np.ndarray) -> np.ndarray | None:
-    """``Δ(R[n])`` for a stack ``R`` of shape ``(n, 3, 3)``; ``None`` without a singular set."""
-    mech = mechanisms.get(mechanism)
-    if not mech.has_singular_set:
-        return None
-    R = np.asarray(R, dtype=float)
-    try:
-        # generated Δ is plain arithmetic on entries R[i, j]: evaluate it on (3, 3, n)
-        d = np.asarray(mech.delta(R.transpose(1, 2, 0)), dtype=float)
-        if d.shape == (R.shape[0],):
-            return d
-    except (TypeError, ValueError, IndexError):
-        pass
-    return np.array([mech.delta(r) for r in R], dtype=float)
-
-
 def stage_table(controls, T: float, steps: int, n_inputs: int) -> np.ndarray:
     """The integrator's input table ``U`` (``(steps, 3, m)``, see :mod:`nonholo.kernels`).
 
-    ``controls`` is a :class:`~nonholo.controls.Controls` (its ``T`` must equal ``T``) or a
-    vectorised function ``u(t)``, ``t (n,) -> (n, m)``, evaluated at the stage times (use
+    ``controls`` is a :class:`~nonholo.controls.Controls` or a
+    :class:`~nonholo.replay.FrameControls` (its ``T`` must equal ``T``) or a vectorised function ``u(t)``, ``t (n,) -> (n, m)``, evaluated at the stage times (use
     a ``Controls`` for discontinuous inputs: it keeps each step on one side of a jump).
     """
-    T = _check_T(T)
-    steps = _check_count(steps, "steps")
-    if isinstance(controls, Controls):
+    T = check_time(T)
+    steps = check_count(steps, "steps")
+    if hasattr(controls, "stage_table") or isinstance(controls, Controls):
         if controls.T != T:
             raise ValueError(f"the controls are defined on [0, {controls.T:g}], not on [0, {T:g}]")
-        U = controls.stage_table(steps)
+        U = stages.stage_table(controls, steps)
     elif callable(controls):
-        h = T / steps
-        t = ((np.arange(steps)[:, None] + STAGE_FRACTIONS[None, :]) * h).ravel()
+        t = stages.stage_times(T, steps).ravel()
         U = np.asarray(controls(t), dtype=float)
         if U.ndim == 1 and n_inputs == 1:
             U = U[:, None]
@@ -160,7 +141,7 @@ def _trajectory(mech, Rs, U, T, steps, n, dmin, sgn) -> Trajectory:
         t[-1] = T
     u = np.concatenate([U[:n, 0], U[steps - 1:steps, 2]]) if n == steps else U[:n + 1, 0]
     R = Rs[:n + 1].copy()
-    return Trajectory(t=t, R=R, u=u.copy(), delta=delta_samples(mech, R),
+    return Trajectory(t=t, R=R, u=u.copy(), delta=mech.delta_samples(R),
                       min_delta=(float(dmin) if mech.has_singular_set else None),
                       mechanism=mech.name, T=T, steps=steps)
 
@@ -179,20 +160,22 @@ def _stopped(mech, n, t_stop, dmin, sgn, traj) -> SingularTrajectoryError:
 def _setup(R0, controls, T, mechanism, steps):
     """Checked inputs of a simulation: the mechanism, ``R0``, ``T``, ``steps``, its kernels,
     ``sgn Δ(R0)`` and the controls' stage table."""
-    mech = mechanisms.get(mechanism)
+    mech = catalog.get(mechanism)
     R0 = check_rotation(R0, "R0")
-    T = _check_T(T)
-    steps = _check_count(steps, "steps")
-    kern = _kernels.get(mech.name)
+    T = check_time(T)
+    steps = check_count(steps, "steps")
+    kern = mech.kernels()
     sgn = _sign_of_delta(kern, mech, R0)
     return mech, R0, T, steps, kern, sgn, stage_table(controls, T, steps, mech.n_inputs)
 
 
-def simulate(R0, controls, T: float, *, mechanism: str = "platform",
+def simulate(R0, controls, T: float, *, mechanism="platform",
              steps: int = DEFAULT_STEPS) -> Trajectory:
     """Solve ``dR/dt = [L(R) u(t)] R``, ``R(0) = R0`` on ``[0, T]`` with ``steps`` CF4 steps.
 
-    ``controls``: a :class:`~nonholo.controls.Controls` or a vectorised ``u(t)``.
+    ``controls``: a :class:`~nonholo.controls.Controls`, a
+    :class:`~nonholo.replay.FrameControls` or a vectorised ``u(t)``; ``mechanism``: a
+    :class:`~nonholo.mechanism.Mechanism` or its name.
     Raises ``ValueError`` for a bad ``R0``/``T``/``steps``/controls and
     :class:`SingularTrajectoryError` if the motion runs into ``Δ = 0``.
     """
@@ -205,22 +188,22 @@ def simulate(R0, controls, T: float, *, mechanism: str = "platform",
     return traj
 
 
-def variational(R0, controls, T: float, *, mechanism: str = "platform",
+def variational(R0, controls, T: float, *, mechanism="platform",
                 steps: int = DEFAULT_STEPS) -> Variational:
     """Simulate and integrate the variational system (9) along the motion.
 
     Returns a :class:`Variational` with ``Φ(T, t_n)`` (``.Phi``), ``M(T)`` (``.M``) and,
     when ``controls`` is a :class:`~nonholo.controls.Controls` linear in its parameters
-    (Fourier or grid controls, not :class:`~nonholo.controls.FrameControls`),
+    (Fourier or grid controls),
     ``J = ∂s_T/∂λ`` (``.J``):
     for a change ``δλ`` of the parameters the endpoint moves to ``exp([J δλ]) R_T`` to
     first order. For grid controls the columns ``(j, i)`` of ``J`` are the
     ``G_j = ∫_{I_j} Φ(T,t) B(t) dt`` of the nonparametric update.
     """
     mech, R0, T, steps, kern, sgn, U = _setup(R0, controls, T, mechanism, steps)
-    linear = isinstance(controls, Controls) and not isinstance(controls, FrameControls)
+    linear = isinstance(controls, Controls)
     if linear:
-        Bidx, Bval, stride_b, stride_i = controls.sparse_basis(steps)
+        Bidx, Bval, stride_b, stride_i = stages.sparse_basis(controls, steps)
         J = np.empty((3, controls.params.size))
     else:
         # no parameters: an empty basis (the kernel then skips the Jacobian)

@@ -18,7 +18,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.integrate import solve_ivp
 
-from . import mechanisms, so3
+from . import catalog, so3
 
 RTOL = 1e-13
 ATOL = 1e-13
@@ -57,7 +57,7 @@ def _solve(rhs, y0, segments, rtol, atol):
     return y
 
 
-def resimulate(R0, controls, T: float, mechanism: str = "platform", breakpoints=None,
+def resimulate(R0, controls, T: float, mechanism="platform", breakpoints=None,
                *, rtol: float = RTOL, atol: float = ATOL) -> np.ndarray:
     """``R(T)`` of ``dR/dt = [L(R) u(t)] R``, ``R(0) = R0``, by DOP853 (tight tolerances).
 
@@ -65,7 +65,7 @@ def resimulate(R0, controls, T: float, mechanism: str = "platform", breakpoints=
     or a :class:`~nonholo.controls.Controls`; ``breakpoints`` (default: the controls'
     ``breakpoints`` attribute, if any) are times where ``u`` may jump.
     """
-    mech = mechanisms.get(mechanism)
+    mech = catalog.get(mechanism)
     R0 = so3.check_rotation(R0, "R0")
     L, m = mech.L, mech.n_inputs
 
@@ -81,7 +81,7 @@ def resimulate(R0, controls, T: float, mechanism: str = "platform", breakpoints=
     return _solve(rhs, R0.ravel(), _segments(float(T), controls, breakpoints), rtol, atol).reshape(3, 3)
 
 
-def resimulate_path(R0, controls, T: float, mechanism: str = "platform", breakpoints=None,
+def resimulate_path(R0, controls, T: float, mechanism="platform", breakpoints=None,
                     samples: int = 2001, *, rtol: float = RTOL, atol: float = ATOL):
     """The motion of :func:`resimulate` on ``samples`` uniform times (DOP853 dense output).
 
@@ -90,7 +90,7 @@ def resimulate_path(R0, controls, T: float, mechanism: str = "platform", breakpo
     mechanism without a singular set) — the least ``|Δ|`` along the re-simulated motion is
     ``abs(delta).min()`` up to the sampling.
     """
-    mech = mechanisms.get(mechanism)
+    mech = catalog.get(mechanism)
     R0 = so3.check_rotation(R0, "R0")
     L, m = mech.L, mech.n_inputs
     ts, Rs = [], []
@@ -127,10 +127,10 @@ def terminal_error(R_T, Rd) -> float:
     return float(np.linalg.norm(so3.log(np.asarray(R_T) @ np.asarray(Rd).T)))
 
 
-def mobility_lyapunov(R0, controls, T: float, mechanism: str = "platform", breakpoints=None,
+def mobility_lyapunov(R0, controls, T: float, mechanism="platform", breakpoints=None,
                       *, rtol: float = 1e-12, atol: float = 1e-12) -> np.ndarray:
     """``M(T)`` from ``dM/dt = B Bᵀ + A M + M Aᵀ``, ``M(0) = 0`` (integrated with ``R``)."""
-    mech = mechanisms.get(mechanism)
+    mech = catalog.get(mechanism)
     R0 = so3.check_rotation(R0, "R0")
     L, Q, m = mech.L, mech.Q, mech.n_inputs
 

@@ -14,26 +14,31 @@ N_INPUTS = 2
 HAS_SINGULAR_SET = False
 
 
-def L(R):
-    """L(R) of the spatial-form system dR/dt = [L(R) u] R."""
+def L_into(R, out):
+    """L(R) of the spatial-form system dR/dt = [L(R) u] R. Fills ``out`` (3, 2)."""
     r11 = R[0, 0]
     r12 = R[0, 1]
     r21 = R[1, 0]
     r22 = R[1, 1]
     r31 = R[2, 0]
     r32 = R[2, 1]
-    out = numpy.empty((3, 2))
     out[0, 0] = r11
     out[0, 1] = r12
     out[1, 0] = r21
     out[1, 1] = r22
     out[2, 0] = r31
     out[2, 1] = r32
+
+
+def L(R):
+    """L(R) of the spatial-form system dR/dt = [L(R) u] R."""
+    out = numpy.empty((3, 2))
+    L_into(R, out)
     return out
 
 
-def Q(R, u):
-    """Q(R, u) with d/de L(exp(e[s]) R) u = Q(R, u) s at e = 0 (eq. (12))."""
+def Q_into(R, u, out):
+    """Q(R, u) with d/de L(exp(e[s]) R) u = Q(R, u) s at e = 0 (eq. (12)). Fills ``out`` (3, 3)."""
     r11 = R[0, 0]
     r12 = R[0, 1]
     r21 = R[1, 0]
@@ -45,7 +50,6 @@ def Q(R, u):
     x0 = r31*u1 + r32*u2
     x1 = r21*u1 + r22*u2
     x2 = r11*u1 + r12*u2
-    out = numpy.empty((3, 3))
     out[0, 0] = 0
     out[0, 1] = x0
     out[0, 2] = -x1
@@ -55,32 +59,43 @@ def Q(R, u):
     out[2, 0] = x1
     out[2, 1] = -x2
     out[2, 2] = 0
+
+
+def Q(R, u):
+    """Q(R, u) with d/de L(exp(e[s]) R) u = Q(R, u) s at e = 0 (eq. (12))."""
+    out = numpy.empty((3, 3))
+    Q_into(R, u, out)
     return out
 
 
 HAS_FRAME = True
 
 
-def N(R):
-    """N(R): orthonormal frame of the admissible angular velocities, ω = N(R) w."""
+def N_into(R, out):
+    """N(R): orthonormal frame of the admissible angular velocities, ω = N(R) w. Fills ``out`` (3, 2)."""
     r11 = R[0, 0]
     r12 = R[0, 1]
     r21 = R[1, 0]
     r22 = R[1, 1]
     r31 = R[2, 0]
     r32 = R[2, 1]
-    out = numpy.empty((3, 2))
     out[0, 0] = r11
     out[0, 1] = r12
     out[1, 0] = r21
     out[1, 1] = r22
     out[2, 0] = r31
     out[2, 1] = r32
+
+
+def N(R):
+    """N(R): orthonormal frame of the admissible angular velocities, ω = N(R) w."""
+    out = numpy.empty((3, 2))
+    N_into(R, out)
     return out
 
 
-def QN(R, w):
-    """QN(R, w) with d/de N(exp(e[s]) R) w = QN(R, w) s at e = 0."""
+def QN_into(R, w, out):
+    """QN(R, w) with d/de N(exp(e[s]) R) w = QN(R, w) s at e = 0. Fills ``out`` (3, 3)."""
     r11 = R[0, 0]
     r12 = R[0, 1]
     r21 = R[1, 0]
@@ -92,7 +107,6 @@ def QN(R, w):
     x0 = r31*w1 + r32*w2
     x1 = r21*w1 + r22*w2
     x2 = r11*w1 + r12*w2
-    out = numpy.empty((3, 3))
     out[0, 0] = 0
     out[0, 1] = x0
     out[0, 2] = -x1
@@ -102,14 +116,25 @@ def QN(R, w):
     out[2, 0] = x1
     out[2, 1] = -x2
     out[2, 2] = 0
+
+
+def QN(R, w):
+    """QN(R, w) with d/de N(exp(e[s]) R) w = QN(R, w) s at e = 0."""
+    out = numpy.empty((3, 3))
+    QN_into(R, w, out)
     return out
+
+
+def W_into(R, out):
+    """W(R) = (N(R)^T L(R))^-1: physical inputs u = W(R) w for ω = N(R) w. Fills ``out`` (2, 2)."""
+    out[0, 0] = 1
+    out[0, 1] = 0
+    out[1, 0] = 0
+    out[1, 1] = 1
 
 
 def W(R):
     """W(R) = (N(R)^T L(R))^-1: physical inputs u = W(R) w for ω = N(R) w."""
     out = numpy.empty((2, 2))
-    out[0, 0] = 1
-    out[0, 1] = 0
-    out[1, 0] = 0
-    out[1, 1] = 1
+    W_into(R, out)
     return out

@@ -35,8 +35,8 @@ def delta(R):
     return r12*r31 + r21*r32
 
 
-def L(R):
-    """L(R) of the spatial-form system dR/dt = [L(R) u] R."""
+def L_into(R, out):
+    """L(R) of the spatial-form system dR/dt = [L(R) u] R. Fills ``out`` (3, 2)."""
     r12 = R[0, 1]
     r21 = R[1, 0]
     r31 = R[2, 0]
@@ -44,18 +44,23 @@ def L(R):
     x0 = 2/(r12*r31 + r21*r32)
     x1 = r21*x0
     x2 = r12*x0
-    out = numpy.empty((3, 2))
     out[0, 0] = x1
     out[0, 1] = x2
     out[1, 0] = -x1
     out[1, 1] = -x2
     out[2, 0] = -r31*x0
     out[2, 1] = r32*x0
+
+
+def L(R):
+    """L(R) of the spatial-form system dR/dt = [L(R) u] R."""
+    out = numpy.empty((3, 2))
+    L_into(R, out)
     return out
 
 
-def Q(R, u):
-    """Q(R, u) with d/de L(exp(e[s]) R) u = Q(R, u) s at e = 0 (eq. (12))."""
+def Q_into(R, u, out):
+    """Q(R, u) with d/de L(exp(e[s]) R) u = Q(R, u) s at e = 0 (eq. (12)). Fills ``out`` (3, 3)."""
     r11 = R[0, 0]
     r12 = R[0, 1]
     r21 = R[1, 0]
@@ -91,7 +96,6 @@ def Q(R, u):
     x24 = 2*r12*r31*u1*x3 - x14 - x16
     x25 = u2*x13 - x1*x7 + x20
     x26 = r31**2*x5 - r31*x15
-    out = numpy.empty((3, 3))
     out[0, 0] = r21*x9 + r22*x11 - r31*x18
     out[0, 1] = -r11*x9 - r12*x11 + r32*x22
     out[0, 2] = r11*x18 - r22*x22
@@ -101,28 +105,38 @@ def Q(R, u):
     out[2, 0] = r21*x24 + r22*x25 - r31*x23
     out[2, 1] = -r11*x24 - r12*x25 + r32*x26
     out[2, 2] = r11*x23 - r22*x26
+
+
+def Q(R, u):
+    """Q(R, u) with d/de L(exp(e[s]) R) u = Q(R, u) s at e = 0 (eq. (12))."""
+    out = numpy.empty((3, 3))
+    Q_into(R, u, out)
     return out
 
 
 HAS_FRAME = True
 
 
-def N(R):
-    """N(R): orthonormal frame of the admissible angular velocities, ω = N(R) w."""
+def N_into(R, out):
+    """N(R): orthonormal frame of the admissible angular velocities, ω = N(R) w. Fills ``out`` (3, 2)."""
     x0 = (1/2)*numpy.sqrt(2)
-    out = numpy.empty((3, 2))
     out[0, 0] = -x0
     out[0, 1] = 0
     out[1, 0] = x0
     out[1, 1] = 0
     out[2, 0] = 0
     out[2, 1] = 1
+
+
+def N(R):
+    """N(R): orthonormal frame of the admissible angular velocities, ω = N(R) w."""
+    out = numpy.empty((3, 2))
+    N_into(R, out)
     return out
 
 
-def QN(R, w):
-    """QN(R, w) with d/de N(exp(e[s]) R) w = QN(R, w) s at e = 0."""
-    out = numpy.empty((3, 3))
+def QN_into(R, w, out):
+    """QN(R, w) with d/de N(exp(e[s]) R) w = QN(R, w) s at e = 0. Fills ``out`` (3, 3)."""
     out[0, 0] = 0
     out[0, 1] = 0
     out[0, 2] = 0
@@ -132,19 +146,30 @@ def QN(R, w):
     out[2, 0] = 0
     out[2, 1] = 0
     out[2, 2] = 0
+
+
+def QN(R, w):
+    """QN(R, w) with d/de N(exp(e[s]) R) w = QN(R, w) s at e = 0."""
+    out = numpy.empty((3, 3))
+    QN_into(R, w, out)
     return out
 
 
-def W(R):
-    """W(R) = (N(R)^T L(R))^-1: physical inputs u = W(R) w for ω = N(R) w."""
+def W_into(R, out):
+    """W(R) = (N(R)^T L(R))^-1: physical inputs u = W(R) w for ω = N(R) w. Fills ``out`` (2, 2)."""
     r12 = R[0, 1]
     r21 = R[1, 0]
     r31 = R[2, 0]
     r32 = R[2, 1]
     x0 = (1/4)*numpy.sqrt(2)
-    out = numpy.empty((2, 2))
     out[0, 0] = -r32*x0
     out[0, 1] = -1/2*r12
     out[1, 0] = -r31*x0
     out[1, 1] = (1/2)*r21
+
+
+def W(R):
+    """W(R) = (N(R)^T L(R))^-1: physical inputs u = W(R) w for ω = N(R) w."""
+    out = numpy.empty((2, 2))
+    W_into(R, out)
     return out

@@ -37,8 +37,8 @@ def delta(R):
     return r11*r22 - r11*r32 - r12*r21 - r22*r31 + r31*r32
 
 
-def L(R):
-    """L(R) of the spatial-form system dR/dt = [L(R) u] R."""
+def L_into(R, out):
+    """L(R) of the spatial-form system dR/dt = [L(R) u] R. Fills ``out`` (3, 2)."""
     r11 = R[0, 0]
     r12 = R[0, 1]
     r21 = R[1, 0]
@@ -46,18 +46,23 @@ def L(R):
     r31 = R[2, 0]
     r32 = R[2, 1]
     x0 = 2*numpy.sqrt(2)/(r11*r22 - r11*r32 - r12*r21 - r22*r31 + r31*r32)
-    out = numpy.empty((3, 2))
     out[0, 0] = r12*x0
     out[0, 1] = -x0*(r11 - r31)
     out[1, 0] = x0*(r22 - r32)
     out[1, 1] = -r21*x0
     out[2, 0] = 0
     out[2, 1] = 0
+
+
+def L(R):
+    """L(R) of the spatial-form system dR/dt = [L(R) u] R."""
+    out = numpy.empty((3, 2))
+    L_into(R, out)
     return out
 
 
-def Q(R, u):
-    """Q(R, u) with d/de L(exp(e[s]) R) u = Q(R, u) s at e = 0 (eq. (12))."""
+def Q_into(R, u, out):
+    """Q(R, u) with d/de L(exp(e[s]) R) u = Q(R, u) s at e = 0 (eq. (12)). Fills ``out`` (3, 3)."""
     r11 = R[0, 0]
     r12 = R[0, 1]
     r21 = R[1, 0]
@@ -97,7 +102,6 @@ def Q(R, u):
     x28 = x13*x17*x6 - x13*x24 + x19
     x29 = -r21**2*x8 + 2*r21*u1*x17*x2*x3
     x30 = 2*u1*x17*x2*x22*x3 - x22*x24
-    out = numpy.empty((3, 3))
     out[0, 0] = r21*x18 + r22*x12 - r31*x10 - r32*x14
     out[0, 1] = -r11*x18 - r12*x12 + r31*x23 + r32*x21
     out[0, 2] = r11*x10 + r12*x14 - r21*x23 - r22*x21
@@ -107,27 +111,37 @@ def Q(R, u):
     out[2, 0] = 0
     out[2, 1] = 0
     out[2, 2] = 0
+
+
+def Q(R, u):
+    """Q(R, u) with d/de L(exp(e[s]) R) u = Q(R, u) s at e = 0 (eq. (12))."""
+    out = numpy.empty((3, 3))
+    Q_into(R, u, out)
     return out
 
 
 HAS_FRAME = True
 
 
-def N(R):
-    """N(R): orthonormal frame of the admissible angular velocities, ω = N(R) w."""
-    out = numpy.empty((3, 2))
+def N_into(R, out):
+    """N(R): orthonormal frame of the admissible angular velocities, ω = N(R) w. Fills ``out`` (3, 2)."""
     out[0, 0] = 1
     out[0, 1] = 0
     out[1, 0] = 0
     out[1, 1] = 1
     out[2, 0] = 0
     out[2, 1] = 0
+
+
+def N(R):
+    """N(R): orthonormal frame of the admissible angular velocities, ω = N(R) w."""
+    out = numpy.empty((3, 2))
+    N_into(R, out)
     return out
 
 
-def QN(R, w):
-    """QN(R, w) with d/de N(exp(e[s]) R) w = QN(R, w) s at e = 0."""
-    out = numpy.empty((3, 3))
+def QN_into(R, w, out):
+    """QN(R, w) with d/de N(exp(e[s]) R) w = QN(R, w) s at e = 0. Fills ``out`` (3, 3)."""
     out[0, 0] = 0
     out[0, 1] = 0
     out[0, 2] = 0
@@ -137,11 +151,17 @@ def QN(R, w):
     out[2, 0] = 0
     out[2, 1] = 0
     out[2, 2] = 0
+
+
+def QN(R, w):
+    """QN(R, w) with d/de N(exp(e[s]) R) w = QN(R, w) s at e = 0."""
+    out = numpy.empty((3, 3))
+    QN_into(R, w, out)
     return out
 
 
-def W(R):
-    """W(R) = (N(R)^T L(R))^-1: physical inputs u = W(R) w for ω = N(R) w."""
+def W_into(R, out):
+    """W(R) = (N(R)^T L(R))^-1: physical inputs u = W(R) w for ω = N(R) w. Fills ``out`` (2, 2)."""
     r11 = R[0, 0]
     r12 = R[0, 1]
     r21 = R[1, 0]
@@ -149,9 +169,14 @@ def W(R):
     r31 = R[2, 0]
     r32 = R[2, 1]
     x0 = (1/4)*numpy.sqrt(2)
-    out = numpy.empty((2, 2))
     out[0, 0] = -r21*x0
     out[0, 1] = x0*(r11 - r31)
     out[1, 0] = -x0*(r22 - r32)
     out[1, 1] = r12*x0
+
+
+def W(R):
+    """W(R) = (N(R)^T L(R))^-1: physical inputs u = W(R) w for ω = N(R) w."""
+    out = numpy.empty((2, 2))
+    W_into(R, out)
     return out

@@ -1,9 +1,9 @@
-"""Strategy ``"robust"`` (the default of :func:`nonholo.planner.plan`).
+"""Strategy ``"robust"`` (the default of :func:`nonholo.plan`).
 
-The task is that of :mod:`nonholo.planner`: steer ``dR/dt = [L(R) u] R`` from ``R0`` to
+The task is that of :mod:`nonholo.planning.core`: steer ``dR/dt = [L(R) u] R`` from ``R0`` to
 ``R_d`` in time ``T`` while ``sgn(Δ(R0))·Δ ≥ delta_min`` along the motion (``|L| ~ 1/|Δ|``:
 on ``Δ = 0`` the legs lose control of the platform). Goals across ``Δ = 0`` are rejected
-by :func:`~nonholo.planner.plan` before anything is simulated. The appendix's θ-flow is
+by :func:`nonholo.plan` before anything is simulated. The appendix's θ-flow is
 kept — Euler steps ``λ ← λ − γh d`` with ``d`` the minimum-norm solution of ``J d = l_T``
 (``γ = 1`` unless the caller sets it, :attr:`RobustStrategy.default_gamma`: a step asks for
 the whole error, a damped Newton step), halved on rejection, full Newton steps once
@@ -12,15 +12,15 @@ at every integrator point and lowers ``|l_T|`` — with these ingredients:
 
 1. **Frame coordinates.** The control planned is ``w`` in ``ω = N(R) w``, ``N(R)`` the
    orthonormal frame of admissible angular velocities of the generated module (platform:
-   constant, ``ω = w_1 (−e_1 + e_2)/√2 + w_2 e_3``): the kernels are bound to ``N`` and
-   ``QN`` (:func:`nonholo.kernels.get` with ``frame=True``), ``Δ`` is still monitored, and
+   constant, ``ω = w_1 (−e_1 + e_2)/√2 + w_2 e_3``): the kernels integrate ``N`` and
+   ``QN`` (:meth:`nonholo.mechanism.Mechanism.kernels` with ``frame=True``), ``Δ`` is still monitored, and
    the minimum norm is taken in ``w`` (Euclidean on its Fourier coefficients, L2 on the
    grid). In the physical inputs the metric degenerates near ``Δ = 0`` — ``L ~ 1/Δ``
    makes angular velocity cheap there, so minimum-norm steps steer into the singular
    surface; in ``w`` every admissible ``ω`` costs its size. The physical leg rates are
    ``u = W(R) w`` (``W = (NᵀL)^{-1}``, polynomial), evaluated along the planned motion by
-   :class:`~nonholo.controls.FrameControls`, which is what the result's ``controls(t)``
-   returns. Mechanisms without a frame (``HAS_FRAME`` false) are planned in ``u`` with the
+   :class:`~nonholo.replay.FrameControls`, which is what the result's ``controls(t)``
+   returns. Mechanisms without a frame are planned in ``u`` with the
    other ingredients; for the attitude mechanism ``N = L`` and nothing changes but the
    strategy's other ingredients.
 2. **Initial guesses, restarts.** First the drift guess: ``w = w̄ + 0.3 (sin ωt, cos ωt)``
@@ -44,48 +44,14 @@ at every integrator point and lowers ``|l_T|`` — with these ingredients:
    steps) and Newton steps re-converge (:meth:`RobustStrategy.refine`).
 5. **Conditioning.** The result reports ``sensitivity = max_t |Φ(T,t)|_F`` of the
    *physical* system along the plan (the factor by which an error at ``t`` is amplified
-   at ``T`` when ``u(t)`` is replayed open loop; ≈ 0.25 ms to compute). On the ~150
-   converged plans of the near and far random pairs (``--random 1``), a DOP853
-   re-simulation (rtol 1e-13) reproduced ``R(T)`` to 2e-9 rad or better below 100 and not
-   reliably above (7e-8…1e-6 for 215…2.5e4); refining the integrator does not help there,
-   the open-loop replay itself is ill-conditioned. A converged plan above 100 is
-   kept only if no later attempt converges to a better-conditioned one (then the reason
-   says so).
+   at ``T`` when ``u(t)`` is replayed open loop). Above about 100 an independent
+   re-simulation no longer reproduces ``R(T)`` reliably to 1e-8 rad, and refining the
+   integrator does not help: the open-loop replay itself is ill-conditioned. A converged
+   plan above :attr:`RobustStrategy.max_sensitivity` is kept only if no later attempt
+   converges to a better-conditioned one (then the reason says so).
 
-Measured effect of each ingredient (``python -m benchmarks.bench_robust --ingredients
---stress 777 4242 --hard 99 --random 1 2``, 2-core machine, after JIT warm-up; success =
-planner success AND DOP853 re-simulation of ``controls(t)`` within 1e-8 rad of ``R_d``
-AND ``sgnΔ ≥ 1e-2`` on the dense re-simulated path; sets described in
-:mod:`benchmarks.bench_robust`; % near / far, random pairs also ≥ 1.8 rad)::
-
-                    benchmark    stress 777   stress 4242  hard 99      random 1          random 2
-    paper           73.4/ 68.8   81.7/ 72.5   66.7/ 60.0   79.2/ 74.2   37.5/11.2/ 5.0    27.5/ 6.2/ 0.0
-    w               100 / 98.4   100 / 96.7   100 / 100    99.2/ 95.0   73.8/62.5/16.2    70.0/55.0/18.8
-    w+barrier       100 / 100    100 / 100    100 / 100    100 / 100    92.5/86.2/38.8    92.5/75.0/36.2
-    w+drift         100 / 100    100 / 100    100 / 100    100 / 100    73.8/62.5/23.8    73.8/57.5/20.0
-    w+drift+rest.   100 / 100    100 / 100    100 / 100    100 / 100    98.8/92.5/43.8    97.5/86.2/41.2
-    robust          100 / 100    100 / 100    100 / 100    100 / 100    100 /97.5/66.2    100 /95.0/72.5
-    robust γ=0.5    100 / 100    100 / 100    100 / 100    100 / 100    100 /96.2/66.2    100 /95.0/71.2
-    robust in u     100 / 100    100 / 99.2   100 / 100    100 / 100    81.2/58.8/20.0    81.2/56.2/20.0
-
-(``w``: frame coordinates, loop initial guess, one attempt; ``+barrier``/``+drift``: that
-ingredient added; ``+rest.``: drift then the restarts; ``robust``: everything, the default;
-``robust γ=0.5``: the default with the paper's ``γ``; ``robust in u``: everything but the
-frame coordinates; all but ``paper`` and ``robust γ=0.5`` with ``γ = 1``.) The frame
-coordinates carry the benchmark (paper 69–73 % → 100 %); the drift guess cuts the
-iterations (median 4 → 3 near, 5 → 3 far) and settles the last hard goals; barrier and
-restarts matter on the random pairs, the barrier most where the trajectory must skirt
-``Δ = 0`` (weight β = 2 and the conditioning rule raised random 1 far from 69 to 77 of 80
-against β = 1 without it, measured with ``γ = 0.5``). ``γ = 1`` instead of 0.5 changes
-no success rate by more than 1.3 points (up on random 1 far and random 2 beyond) and
-cuts the median iterations on the benchmark from 7 / 9 to 3 / 3 (random 1: 11–36 → 5–23).
-On the benchmark set the default plans a reachable goal in a median 1.9 ms near, 2.0 ms
-far (max 2.9 ms; paper: 2.6 / 2.9 ms), with 3 / 3 iterations and no restart; goals
-across ``Δ = 0`` are rejected in a median 90 µs (max 0.3 ms, the whole ``plan`` call);
-Example 3 and the other parking goal (``v ≈ (−0.543, −0.033, −0.253)``, which the paper
-strategy fails for every γ in 0.1–1) are solved by both methods in 5–6 iterations
-(≈ 3 ms, re-simulated error ≤ 1e-10, min Δ 0.10–0.16). On the random pairs beyond
-1.8 rad a failure costs up to ~0.12 s (all attempts; ``max_iter`` bounds it).
+What each ingredient buys, and the strategy's speed and success rates, are measured by
+``python -m benchmarks.bench_robust`` (``benchmarks/results/bench_robust.md``).
 """
 from __future__ import annotations
 
@@ -93,12 +59,11 @@ from typing import Iterator
 
 import numpy as np
 
-from . import kernels as _kernels
-from . import so3
-from .controls import Controls, Fourier, FrameControls, PiecewiseConstant
-from .planner import (DELTA_STOP, Evaluation, Outcome, Problem, Strategy, _ones, _record,
-                      backtrack, register_strategy)
-from .simulation import SingularTrajectoryError, delta_samples, simulate, variational
+from .. import kernels, so3, stages
+from ..controls import Controls, Fourier, PiecewiseConstant, fourier_basis
+from ..replay import FrameControls
+from ..simulation import DELTA_STOP, SingularTrajectoryError, simulate, variational
+from .core import Evaluation, Outcome, Problem, Start, Strategy, descend, record, step_scale
 
 #: Amplitude (rad/s) of the loop ``w = a (sin ωt, cos ωt)`` of the initial guesses.
 LOOP_AMPLITUDE = 0.3
@@ -118,13 +83,11 @@ def to_frame(problem: Problem, controls: Controls) -> Controls:
     ``Δ = 0``.
     """
     mech = problem.mechanism
-    tr = simulate(problem.R0, controls, problem.T, mechanism=mech.name, steps=problem.steps)
-    N, L = mech.module.N, mech.L
+    tr = simulate(problem.R0, controls, problem.T, mechanism=mech, steps=problem.steps)
+    N, L = mech.frame.N, mech.L
     w = np.array([N(R).T @ (L(R) @ u) for R, u in zip(tr.R[:-1], tr.u[:-1])])
     t = tr.t[:-1]
     if isinstance(controls, Fourier):
-        from .controls import fourier_basis
-
         phi = fourier_basis(t, problem.T, controls.harmonics)
         coeffs = np.linalg.lstsq(phi, w, rcond=None)[0].T
         return Fourier(problem.T, coeffs)
@@ -142,8 +105,8 @@ def spatial_gradient_delta(mechanism, R: np.ndarray, eps: float = 1e-6) -> np.nd
     for k in range(3):
         e = np.zeros(3)
         e[k] = eps
-        g[:, k] = (delta_samples(mechanism, so3.exp(e) @ R)
-                   - delta_samples(mechanism, so3.exp(-e) @ R)) / (2.0 * eps)
+        g[:, k] = (mechanism.delta_samples(so3.exp(e) @ R)
+                   - mechanism.delta_samples(so3.exp(-e) @ R)) / (2.0 * eps)
     return g
 
 
@@ -160,13 +123,13 @@ def barrier_gradient(problem: Problem, ev: Evaluation, d0: float) -> np.ndarray 
     if not ev.complete or ev.Z is None:
         return None
     N, h, m = problem.steps, problem.h, problem.mechanism.n_inputs
-    d = problem.sign * delta_samples(problem.mechanism.name, ev.R)
+    d = problem.sign * problem.mechanism.delta_samples(ev.R)
     active = d < d0
     active[0] = False
     if not active.any():
         return None
     a = np.zeros((N + 1, 3))
-    grad = spatial_gradient_delta(problem.mechanism.name, ev.R[active])
+    grad = spatial_gradient_delta(problem.mechanism, ev.R[active])
     a[active] = (h * problem.sign * (-1.0 / d[active]))[:, None] * grad
     mu = np.linalg.solve(np.transpose(ev.Z, (0, 2, 1)), a[:, :, None])[:, :, 0]    # a_n Z_n^{-1}
     nu = np.cumsum(mu[::-1], axis=0)[::-1]                  # Σ_{n ≥ k} μ_n
@@ -211,15 +174,13 @@ def _loop(T: float, m: int, amplitude: float, phase: float = 0.0, mean=None):
     return f
 
 
-@register_strategy
 class RobustStrategy(Strategy):
     """Jacobian method in the desingularised frame coordinates, with restarts (see the module)."""
 
     name = "robust"
     #: ``γ = 1``: a flow step asks for the whole error (a damped Newton step with the
-    #: barrier term, halved on rejection); against ``γ = 0.5``: a median of 3 steps
-    #: instead of 7–9 on the benchmark set, the same success or better on every set of
-    #: the module's table (see there)
+    #: barrier term, halved on rejection); ``γ = 0.5`` is measured beside it by
+    #: ``python -m benchmarks.bench_robust --ingredients``
     default_gamma = 1.0
     #: accepted steps of one attempt before the next initial guess is tried
     attempt_iterations = 60
@@ -244,39 +205,33 @@ class RobustStrategy(Strategy):
     #: kept only if no later attempt converges to a better-conditioned one
     max_sensitivity = 100.0
 
-    def frame(self, mechanism: str) -> bool:
-        return _kernels.has_frame(mechanism)
-
-    #: whether the first initial guess is the caller's ``u0`` (set by :meth:`initial`)
-    given = False
-    #: what happened to the caller's ``u0`` if it could not be used (set by :meth:`initial`)
-    u0_note = ""
+    def frame(self, mechanism) -> bool:
+        return mechanism.has_frame
 
     def initial(self, problem, controls, given):
         """In frame coordinates: ``u0`` (physical) converted by :func:`to_frame`; without
         ``u0`` the default loop ``w = 0.3 (sin ωt, cos ωt)``."""
-        self.given, self.u0_note = given, ""
         if not (given and problem.frame):
-            return controls
+            return Start(controls, given)
         try:
-            return to_frame(problem, controls)
+            return Start(to_frame(problem, controls), True)
         except SingularTrajectoryError as exc:
-            self.given = False
-            self.u0_note = f"u0 not used ({exc})"
-            return _like(controls, _loop(problem.T, controls.n_inputs, LOOP_AMPLITUDE), problem.T)
+            return Start(_like(controls, _loop(problem.T, controls.n_inputs, LOOP_AMPLITUDE), problem.T),
+                         False, f"u0 not used ({exc})")
 
     # -- initial guesses -----------------------------------------------------------------
-    def attempts(self, problem: Problem, first: Controls) -> Iterator[tuple[str, Controls]]:
-        """The initial controls tried in turn: ``first``, then other loops and drifts."""
+    def attempts(self, problem: Problem, start: Start) -> Iterator[tuple[str, Controls]]:
+        """The initial controls tried in turn: ``start``'s, then other loops and drifts."""
+        first = start.controls
         T, m = problem.T, first.n_inputs
-        l0 = _kernels.log_rotation(problem.Rd @ problem.R0.T)
-        frame = problem.mechanism.module.N(problem.R0) if problem.frame else problem.mechanism.L(problem.R0)
+        l0 = kernels.log_rotation(problem.Rd @ problem.R0.T)
+        frame = problem.mechanism.frame.N(problem.R0) if problem.frame else problem.mechanism.L(problem.R0)
         drift = np.linalg.lstsq(frame, l0, rcond=None)[0] / T
         K = first.harmonics if isinstance(first, Fourier) else None
-        if self.given:
+        if start.given:
             yield "u0", first
         yield "drift", _like(first, _loop(T, m, LOOP_AMPLITUDE, 0.0, drift), T)
-        if not self.given:
+        if not start.given:
             yield "loop", first
         yield "loop", _like(first, _loop(T, m, 1.0, 0.5 * np.pi), T)
         if K is not None:
@@ -308,7 +263,7 @@ class RobustStrategy(Strategy):
         (:func:`barrier_gradient`): it leaves ``l_T`` unchanged to first order and moves
         the trajectory away from ``Δ = 0``.
         """
-        d = _kernels.min_norm_step(ev.J, ev.l, scale)
+        d = kernels.min_norm_step(ev.J, ev.l, scale)
         if newton or not self.barrier or not problem.has_delta or ev.min_delta >= self.barrier_d0:
             return d
         full = ev if ev.Z is not None else problem.evaluate(ev.params, full=True)
@@ -316,50 +271,24 @@ class RobustStrategy(Strategy):
         if g is None:
             return d
         g = scale * scale * g
-        null = g - _kernels.min_norm_step(ev.J, ev.J @ g, scale)
+        null = g - kernels.min_norm_step(ev.J, ev.J @ g, scale)
         size = np.linalg.norm(null / scale)
         if not size > 0.0:
             return d
         return d + (self.barrier_weight * np.linalg.norm(d / scale) / size) * null
 
-    def descend(self, problem: Problem, ev: Evaluation, attempt: int, it0: int, budget: int,
-                history: list, callback) -> tuple[Evaluation, int, str, bool]:
-        """Flow then Newton steps from the admissible ``ev``; returns
-        ``(last accepted evaluation, accepted steps, reason, stopped by callback)``."""
-        opt = self.options
-        metric = None if problem.method == "parametric" else ev.parametrisation.metric()
-        scale_vec = _ones(ev.params.size) if metric is None else 1.0 / np.sqrt(metric)
-        h = opt.step
-        it = 0
-        errors = [ev.error]
-        while True:
-            if ev.error <= opt.tol:
-                return ev, it, f"converged: |l_T| = {ev.error:.3g} <= tol = {opt.tol:g}", False
-            if it >= budget:
-                return ev, it, f"{budget} steps taken with |l_T| = {ev.error:.3g}", False
-            w = self.stall_window
-            if w and len(errors) > w and ev.error >= opt.newton_below and ev.error > self.stall_ratio * errors[-1 - w]:
-                return ev, it, (f"stalled at |l_T| = {ev.error:.3g} (less than "
-                                f"{100 * (1 - self.stall_ratio):.3g} % in {w} steps)"), False
-            newton = ev.error < opt.newton_below
-            scale = 1.0 if newton else opt.gamma * h
-            direction = self.direction(problem, ev, scale_vec, newton)
-            trial, scale, rejected, failure = backtrack(problem, ev, direction, scale, opt.min_step,
-                                                        full=self.wants_full(problem, ev))
-            if failure:
-                return ev, it, failure, False
-            if not newton:
-                h *= 0.5 ** rejected
-            it += 1
-            ev = trial
-            errors.append(ev.error)
-            if not newton and rejected == 0:
-                h = min(2.0 * h, opt.step)
-            rec = _record(it0 + it, ev, scale, "newton" if newton else "flow", rejected)
-            rec["attempt"] = attempt
-            history.append(rec)
-            if callback is not None and callback(rec):
-                return ev, it, "stopped by callback", True
+    def descend(self, problem: Problem, ev: Evaluation, attempt: int, first: int, budget: int,
+                history: list, callback):
+        """Flow then Newton steps from the admissible ``ev`` (:func:`~nonholo.planning.core.descend`
+        with this strategy's direction, barrier evaluations and stall rule)."""
+        scale = step_scale(problem, ev.parametrisation)
+        d = descend(problem, ev, self.options, lambda ev, newton: self.direction(problem, ev, scale, newton),
+                    budget=budget, history=history, callback=callback, first=first,
+                    full=lambda ev: self.wants_full(problem, ev),
+                    stall=(self.stall_window, self.stall_ratio), tags={"attempt": attempt})
+        if d.status == "budget":
+            d.reason = f"{budget} steps taken with {d.reason}"
+        return d
 
     # -- accuracy of the integrator -----------------------------------------------------
     def discretisation_error(self, problem: Problem, ev: Evaluation) -> float:
@@ -367,9 +296,9 @@ class RobustStrategy(Strategy):
         ``16/15`` of the distance between the endpoints with ``N`` and ``2N`` CF4 steps (rad)."""
         N2 = 2 * problem.steps
         Rs = np.empty((N2 + 1, 3, 3))
-        problem.kernels.forward(problem.R0, ev.controls.stage_table(N2), 0.5 * problem.h,
+        problem.kernels.forward(problem.R0, stages.stage_table(ev.controls, N2), 0.5 * problem.h,
                                 problem.sign, -np.inf, Rs)
-        return float(_kernels.log_error(Rs[N2], ev.R[-1])[1]) * 16.0 / 15.0
+        return float(kernels.log_error(Rs[N2], ev.R[-1])[1]) * 16.0 / 15.0
 
     def refine(self, problem: Problem, ev: Evaluation, attempt: int, it0: int, history: list,
                callback) -> tuple[Problem, Evaluation, int, str]:
@@ -381,15 +310,15 @@ class RobustStrategy(Strategy):
         note = ""
         est = self.discretisation_error(problem, ev)
         while est > self.refine_above and 2 * problem.steps <= self.max_steps:
-            fine = Problem(problem.R0, problem.Rd, problem.T, problem.mechanism.name, problem.method,
-                           2 * problem.steps, problem.delta_min, problem.frame)
+            fine = problem.refined(2 * problem.steps)
             trial = fine.evaluate(ev.controls)
             if not fine.admissible(trial):
                 return problem, ev, it, note
-            trial, n, why, stop = self.descend(fine, trial, attempt, it0 + it, 20, history, callback)
-            it += n
-            if stop or trial.error > opt.tol:
-                return problem, ev, it, note + f"refinement to {fine.steps} steps failed: {why}"
+            d = self.descend(fine, trial, attempt, it0 + it, 20, history, callback)
+            it += d.steps
+            trial = d.evaluation
+            if d.status == "stopped" or trial.error > opt.tol:
+                return problem, ev, it, note + f"refinement to {fine.steps} steps failed: {d.reason}"
             note = (f"integrator refined to {fine.steps} steps (estimated discretisation error "
                     f"{est:.2g} rad with {problem.steps})")
             problem, ev = fine, trial
@@ -404,27 +333,25 @@ class RobustStrategy(Strategy):
         :func:`nonholo.simulation.variational` with ``steps/2`` CF4 steps when ``steps`` is
         even (and the controls allow it), ``steps`` otherwise: every stage time of a step of
         ``2h`` is then a node of the plan, where ``u = W(R_n) w(t_n)`` needs no partial
-        step (:class:`~nonholo.controls.FrameControls` given ``ev``'s nodes), and ``Φ`` is
-        taken on every other node. On the 128 reachable goals of the benchmark set this is
-        within 6e-6 (relative; median 3e-11) of the maximum over all nodes with ``steps``
-        steps — ample for a conditioning figure compared with :attr:`max_sensitivity` —
-        at a fifth of the cost (``tests/test_robust.py`` checks it on a slice).
+        step (:class:`~nonholo.replay.FrameControls` given ``ev``'s nodes), and ``Φ`` is
+        taken on every other node: close to the maximum over all nodes — ample for a
+        conditioning figure compared with :attr:`max_sensitivity` — at a fraction of the
+        cost (``tests/test_robust.py`` checks it on a slice).
         """
         steps = problem.steps
         try:
-            coarse = ev.controls.check_steps(steps // 2) if steps % 2 == 0 else steps
+            coarse = stages.check_steps(ev.controls, steps // 2) if steps % 2 == 0 else steps
         except ValueError:
             coarse = steps
-        par = (FrameControls(ev.controls, problem.R0, problem.mechanism.name, steps, nodes=ev.R)
+        par = (FrameControls(ev.controls, problem.R0, problem.mechanism, steps, nodes=ev.R)
                if problem.frame else ev.controls)
         try:
-            var = variational(problem.R0, par, problem.T, mechanism=problem.mechanism.name,
-                              steps=coarse)
+            var = variational(problem.R0, par, problem.T, mechanism=problem.mechanism, steps=coarse)
         except SingularTrajectoryError:
             return float("inf")
         return float(np.sqrt(np.max(np.sum(var.Phi ** 2, axis=(1, 2)))))
 
-    def solve(self, problem, controls, callback=None):
+    def solve(self, problem, start, callback=None):
         opt = self.options
         history: list = []
         it = 0
@@ -432,8 +359,8 @@ class RobustStrategy(Strategy):
         first_failure: Evaluation | None = None
         converged = None        # best-conditioned converged plan above max_sensitivity
         notes = []
-        tail = f"; {self.u0_note}" if self.u0_note else ""
-        for k, (label, w0) in enumerate(self.attempts(problem, controls)):
+        tail = f"; {start.note}" if start.note else ""
+        for k, (label, w0) in enumerate(self.attempts(problem, start)):
             if k and it >= opt.max_iter:
                 break
             ev = problem.evaluate(w0, delta_stop=DELTA_STOP)
@@ -441,15 +368,15 @@ class RobustStrategy(Strategy):
                 notes.append(f"{label}: initial control not admissible ({problem.why_not(ev)})")
                 first_failure = first_failure or ev
                 continue
-            rec = _record(it, ev, 0.0, "initial" if k == 0 else "restart", 0)
-            rec["attempt"] = k
+            rec = record(it, ev, 0.0, "initial" if k == 0 else "restart", 0, attempt=k)
             history.append(rec)
             if callback is not None and callback(rec):
                 return Outcome(ev, False, "stopped by callback", history, it)
             budget = min(self.attempt_iterations, opt.max_iter - it)
-            ev, n, why, stop = self.descend(problem, ev, k, it, budget, history, callback)
-            it += n
-            if stop:
+            d = self.descend(problem, ev, k, it, budget, history, callback)
+            ev, why = d.evaluation, d.reason
+            it += d.steps
+            if d.status == "stopped":
                 return Outcome(ev, False, why, history, it)
             if ev.error <= opt.tol:
                 why += f" (attempt {k + 1}: {label})" if k else ""
@@ -475,7 +402,7 @@ class RobustStrategy(Strategy):
             return Outcome(ev, True, why + tail, history, it, fine if fine is not problem else None, G)
         final = best if best is not None else first_failure
         if final is None:
-            final = problem.evaluate(controls, delta_stop=DELTA_STOP)
+            final = problem.evaluate(start.controls, delta_stop=DELTA_STOP)
         reason = (f"no attempt converged within max_iter = {opt.max_iter} ({len(notes)} attempts): "
                   + "; ".join(notes) + tail)
         return Outcome(final, False, reason, history, it)

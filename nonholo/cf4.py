@@ -1,0 +1,497 @@
+"""The CF4 Lie-group integrator and the variational system (9), compiled per system.
+
+Conventions
+-----------
+- A *system* is ``dR/dt = [ω] R`` with ``ω = G(R) v`` (spatial form): ``G = L`` and ``v``
+  the physical inputs ``u`` of a mechanism, or ``G = N`` (its desingularised frame) and
+  ``v = w`` the frame coordinates. It is integrated while the mechanism's ``Δ`` is
+  watched (``Δ ≡ +inf`` without a singular set).
+- Fixed step ``h = T/N``. The inputs enter through a *stage table* ``U`` of shape
+  ``(N, 3, m)``: ``U[n, 0]``, ``U[n, 1]``, ``U[n, 2]`` are the inputs at ``t_n``,
+  ``t_n + h/2`` and ``t_n + h`` of step ``n`` (``t_n = n h``); see :mod:`nonholo.stages`.
+
+One step (:func:`cf4_step`) is the 4th-order commutator-free method CF4 of Celledoni,
+Marthinsen and Owren (2003) with the Rodrigues exponential; every update multiplies ``R``
+by a rotation, so ``R`` stays on SO(3) up to round-off::
+
+    F1 = G(R) U[n,0]
+    Y2 = exp(h/2 F1) R,            F2 = G(Y2) U[n,1]
+    Y3 = exp(h/2 F2) R,            F3 = G(Y3) U[n,1]
+    Y4 = exp(h F3 - h/2 F1) Y2,    F4 = G(Y4) U[n,2]
+    R½ = exp(h/12 (3F1 + 2F2 + 2F3 - F4)) R
+    R' = exp(h/12 (-F1 + 2F2 + 2F3 + 3F4)) R½
+
+It is the only place the scheme is written; every kernel below takes its steps with it:
+:func:`forward` (the motion), :func:`forward_variational` (the motion with the
+variational system) and :func:`frame_inputs` (the physical inputs along a motion planned
+in frame coordinates, one partial step from the nearest node).
+
+The variational system (9), ``ds/dt = A s + B ∂v/∂θ`` with ``A = DG(R, v) + [G(R) v]``
+(``DG = Q`` for ``G = L``, eq. (12)) and ``B = G(R)``, is handled through
+``Z(t) = Φ(t, 0)^{-1}``, ``dZ/dt = -Z A``, ``Z(0) = I``. Then ``Φ(T, t) = Z(T)^{-1} Z(t)`` and
+
+    s_T = Z(T)^{-1} ∫ Z(t) B(t) ∂v/∂θ(t) dt,
+    M(T) = ∫ Φ(T,t) B Bᵀ Φ(T,t)ᵀ dt = Z(T)^{-1} [∫ Z B Bᵀ Zᵀ dt] Z(T)^{-T}.
+
+``Z`` and the two integrals are advanced on the product group ``SO(3) × (R^{3×3}, +) × …``
+(on the additive factors CF4 reduces to the classical RK4 tableau, evaluated at CF4's own
+stage points ``Y_i``), so the coupled scheme is of order 4. The quadrature weights of a
+step are ``W_0 = h/6 Z_1 B_1``, ``W_½ = h/3 (Z_2 B_2 + Z_3 B_3)``, ``W_1 = h/6 Z_4 B_4``
+(3×m) at the stage times ``c = 0, ½, 1``.
+
+Parametrised inputs are linear in their parameters ``λ``: the kernel takes the *stage
+basis* ``(Bidx, Bval, stride_b, stride_i)`` with ``U[n, c, i] = Σ_q Bval[n, c, q]
+λ[Bidx[n, c, q]·stride_b + i·stride_i]`` and accumulates ``J = Z(T)^{-1} Σ_{n,c} W_c
+∂U[n, c]/∂λ`` in place — one pass per planner iteration (``J = ∂s_T/∂λ`` of (10)). For
+Fourier bases it can instead keep the stage weights of every step (``Wd``) and contract
+them with the *dense* basis by one matrix product after the loop (BLAS): the same ``J``
+at a third of the accumulation cost; the stored weights also give the sensitivity of
+intermediate states (the barrier of :mod:`nonholo.planning.robust`).
+
+Singular set: ``sgn Δ`` (``sgn = sign Δ(R0)``) is checked at every stage point and node;
+the kernels stop as soon as it falls below ``delta_stop`` (or ``ω`` is not finite) and
+report how many steps were completed, so a trajectory running into ``Δ = 0`` never
+produces NaN.
+
+Compilation. The kernels call the system through four names — :func:`field_into`,
+:func:`field_derivative_into`, :func:`singularity` and (frame systems) :func:`inputs_into`
+— defined below as placeholders. :func:`compile_system` makes, per system, a copy of each
+kernel whose globals bind those names to the generated functions of the mechanism
+(``L_into``/``Q_into`` or ``N_into``/``QN_into``, ``delta``, ``W_into``, compiled with
+``numba.njit``), so that numba inlines them; each copy has its own qualified name (the
+mechanism, the system, a hash of the generated source), hence its own on-disk cache
+entry. (A closure over the compiled functions would read the same, but numba cannot
+cache it: the cache key pickles the closure's cells, and a compiled function pickles
+differently in every process.)
+"""
+from __future__ import annotations
+
+import hashlib
+import inspect
+import sys
+import types
+from dataclasses import dataclass
+
+import numba
+import numpy as np
+
+from .kernels import JIT_OPTIONS, exp_times, inv33
+
+# --------------------------------------------------------------------------------------
+# The system a kernel integrates (bound per system by compile_system)
+# --------------------------------------------------------------------------------------
+
+
+def field_into(R, out):
+    """``out = G(R)`` (3×m): the angular velocity per unit input (``L`` or ``N``)."""
+    raise NotImplementedError("placeholder: bound per system by nonholo.cf4.compile_system")
+
+
+def field_derivative_into(R, v, out):
+    """``out = DG(R, v)`` (3×3) with ``d/dε G(exp(ε[s]) R) v = DG s`` (``Q`` or ``QN``)."""
+    raise NotImplementedError("placeholder: bound per system by nonholo.cf4.compile_system")
+
+
+def singularity(R):
+    """``Δ(R)`` of the mechanism (``+inf`` without a singular set)."""
+    raise NotImplementedError("placeholder: bound per system by nonholo.cf4.compile_system")
+
+
+def inputs_into(R, out):
+    """``out = W(R)`` (m×m): physical inputs ``u = W(R) w`` of frame coordinates ``w``."""
+    raise NotImplementedError("placeholder: bound per system by nonholo.cf4.compile_system")
+
+
+def no_singularity(R):
+    """``Δ ≡ +inf``: the singularity function of a mechanism without a singular set."""
+    return np.inf
+
+
+# --------------------------------------------------------------------------------------
+# One CF4 step
+# --------------------------------------------------------------------------------------
+
+
+@numba.njit(**JIT_OPTIONS)
+def angular_velocity(B, v, out):
+    """``out = B v`` (3×m times m); ``False`` if not finite."""
+    m = B.shape[1]
+    for i in range(3):
+        s = 0.0
+        for k in range(m):
+            s += B[i, k] * v[k]
+        out[i] = s
+    return np.isfinite(out[0]) and np.isfinite(out[1]) and np.isfinite(out[2])
+
+
+def cf4_step(R, Rnext, v0, v1, v2, h, sgn, delta_stop, dmin, Y, B, F, E):
+    """One CF4 step of length ``h`` from ``R`` into ``Rnext`` (see the module docstring).
+
+    ``v0``, ``v1``, ``v2``: the inputs at the start, middle and end of the step. Fills the
+    stage points ``Y[0..2] = Y2, Y3, Y4``, the fields ``B[k] = G(Y_{k+1})`` (``Y_1 = R``)
+    and the angular velocities ``F[k]`` (``E`` is scratch). Returns ``(stop, dmin)``:
+    ``dmin`` lowered to every ``sgnΔ`` evaluated (at ``Y2``, ``Y3``, ``Y4`` and
+    ``Rnext``); ``stop = -1`` if the step completed, else the fraction of the step (0, ½
+    or 1) where ``sgnΔ < delta_stop`` or ``ω`` was not finite.
+    """
+    h2 = 0.5 * h
+    h12 = h / 12.0
+    field_into(R, B[0])
+    if not angular_velocity(B[0], v0, F[0]):
+        return 0.0, dmin
+    exp_times(h2 * F[0, 0], h2 * F[0, 1], h2 * F[0, 2], R, E, Y[0])
+    d = sgn * singularity(Y[0])
+    dmin = min(dmin, d)
+    if not d >= delta_stop:
+        return 0.5, dmin
+    field_into(Y[0], B[1])
+    if not angular_velocity(B[1], v1, F[1]):
+        return 0.5, dmin
+    exp_times(h2 * F[1, 0], h2 * F[1, 1], h2 * F[1, 2], R, E, Y[1])
+    d = sgn * singularity(Y[1])
+    dmin = min(dmin, d)
+    if not d >= delta_stop:
+        return 0.5, dmin
+    field_into(Y[1], B[2])
+    if not angular_velocity(B[2], v1, F[2]):
+        return 0.5, dmin
+    exp_times(h * F[2, 0] - h2 * F[0, 0], h * F[2, 1] - h2 * F[0, 1], h * F[2, 2] - h2 * F[0, 2],
+              Y[0], E, Y[2])
+    d = sgn * singularity(Y[2])
+    dmin = min(dmin, d)
+    if not d >= delta_stop:
+        return 1.0, dmin
+    field_into(Y[2], B[3])
+    if not angular_velocity(B[3], v2, F[3]):
+        return 1.0, dmin
+    Rh = Y[3]
+    exp_times(h12 * (3.0 * F[0, 0] + 2.0 * F[1, 0] + 2.0 * F[2, 0] - F[3, 0]),
+              h12 * (3.0 * F[0, 1] + 2.0 * F[1, 1] + 2.0 * F[2, 1] - F[3, 1]),
+              h12 * (3.0 * F[0, 2] + 2.0 * F[1, 2] + 2.0 * F[2, 2] - F[3, 2]), R, E, Rh)
+    exp_times(h12 * (-F[0, 0] + 2.0 * F[1, 0] + 2.0 * F[2, 0] + 3.0 * F[3, 0]),
+              h12 * (-F[0, 1] + 2.0 * F[1, 1] + 2.0 * F[2, 1] + 3.0 * F[3, 1]),
+              h12 * (-F[0, 2] + 2.0 * F[1, 2] + 2.0 * F[2, 2] + 3.0 * F[3, 2]), Rh, E, Rnext)
+    d = sgn * singularity(Rnext)
+    dmin = min(dmin, d)
+    if not d >= delta_stop:
+        return 1.0, dmin
+    return -1.0, dmin
+
+
+@numba.njit(**JIT_OPTIONS)
+def step_workspace(m):
+    """Scratch of :func:`cf4_step`: ``(Y, B, F, E)`` (``Y[3]`` holds ``R½``)."""
+    return np.empty((4, 3, 3)), np.empty((4, 3, m)), np.empty((4, 3)), np.empty((3, 3))
+
+
+# --------------------------------------------------------------------------------------
+# Kernels
+# --------------------------------------------------------------------------------------
+
+
+def forward(R0, U, h, sgn, delta_stop, Rs):
+    """CF4 over ``N = len(U)`` steps; ``Rs[n]`` = R at ``t_n`` (shape ``(N+1, 3, 3)``).
+
+    Returns ``(n_done, min sgnΔ, t_stop)``: the number of completed steps (``N`` unless the
+    trajectory reached ``sgnΔ < delta_stop`` or a non-finite ``ω``), the least ``sgnΔ`` over
+    all evaluation points of the completed steps, and the stage time where it stopped
+    (``-1`` if it did not).
+    """
+    N = U.shape[0]
+    Y, B, F, E = step_workspace(U.shape[2])
+    for i in range(3):
+        for j in range(3):
+            Rs[0, i, j] = R0[i, j]
+    dmin = sgn * singularity(Rs[0])
+    if not dmin >= delta_stop:
+        return 0, dmin, 0.0
+    for n in range(N):
+        stop, dmin = cf4_step(Rs[n], Rs[n + 1], U[n, 0], U[n, 1], U[n, 2], h, sgn, delta_stop,
+                              dmin, Y, B, F, E)
+        if stop >= 0.0:
+            return n, dmin, n * h + stop * h
+    return N, dmin, -1.0
+
+
+def zstage(Zc, Y, v, F, B, Qm, f, K):
+    """One stage of ``dZ/dt = -Z A``, ``A = DG(Y, v) + [F]``: ``f = -Zc A``; and ``K = Zc B``."""
+    field_derivative_into(Y, v, Qm)
+    # A in locals (lets LLVM keep it in registers: the arrays could alias)
+    a00 = Qm[0, 0]
+    a01 = Qm[0, 1] - F[2]
+    a02 = Qm[0, 2] + F[1]
+    a10 = Qm[1, 0] + F[2]
+    a11 = Qm[1, 1]
+    a12 = Qm[1, 2] - F[0]
+    a20 = Qm[2, 0] - F[1]
+    a21 = Qm[2, 1] + F[0]
+    a22 = Qm[2, 2]
+    m = B.shape[1]
+    for i in range(3):
+        z0 = Zc[i, 0]
+        z1 = Zc[i, 1]
+        z2 = Zc[i, 2]
+        f[i, 0] = -(z0 * a00 + z1 * a10 + z2 * a20)
+        f[i, 1] = -(z0 * a01 + z1 * a11 + z2 * a21)
+        f[i, 2] = -(z0 * a02 + z1 * a12 + z2 * a22)
+        for k in range(m):
+            K[i, k] = z0 * B[0, k] + z1 * B[1, k] + z2 * B[2, k]
+
+
+def forward_variational(R0, U, h, sgn, delta_stop, Bidx, Bval, stride_b, stride_i,
+                        Rs, Zs, J, Mq, Wd, full):
+    """CF4 for ``R`` together with ``Z = Φ(t,0)^{-1}``, the Jacobian ``J`` and ``M(T)``.
+
+    Inputs: as :func:`forward`, plus the stage basis ``(Bidx, Bval, stride_b, stride_i)``
+    of the parametrisation: sparse (``Bidx.shape[2] == 0``: no Jacobian), or *dense* when
+    ``Bidx`` is empty (``Bidx.shape[0] == 0``) and ``Bval`` has shape ``(N, 3, nb)``:
+    ``Bidx[n, c, q] = q`` for every ``q < nb`` (Fourier bases); ``J`` is then one matrix
+    product ``Wdᵀ Bval`` after the loop (BLAS) instead of a scatter per stage.
+    Outputs (preallocated): ``Rs`` (``(N+1, 3, 3)``), ``Zs`` (``(N+1, 3, 3)``, ``Z(t_n)``;
+    only ``Zs[N] = Z(T)`` unless ``full``), ``J`` (3 × p) ``= ∂s_T/∂λ``, ``Mq`` (3×3)
+    ``= M(T)`` (only if ``full``), ``Wd``: shape ``(3N, 3m)`` (required by a dense basis)
+    to receive the stage weights ``Wd[3n + c, i·m + k] = (W_c)_{ik}`` of every step —
+    ``W_0 = h/6 Z_1 B_1``, ``W_½ = h/3 (Z_2 B_2 + Z_3 B_3)``, ``W_1 = h/6 Z_4 B_4``, so
+    ``∫_0^T Z B v dt ≈ Σ W_c v(t_n + c h)`` for any ``v`` — or ``(0, 3m)``. Returns what
+    :func:`forward` returns; ``J``, ``Mq``, ``Wd`` and ``Zs[N]`` are valid only if the run
+    completed.
+    """
+    N = U.shape[0]
+    m = U.shape[2]
+    dense = Bidx.shape[0] == 0 and Bval.shape[0] == N
+    keep_w = Wd.shape[0] == 3 * N
+    nq = 0 if dense else Bidx.shape[2]
+    Y, B, F, E = step_workspace(m)
+    Z = np.empty((3, 3))
+    Zc = np.empty((3, 3))
+    Qm = np.empty((3, 3))
+    f = np.empty((4, 3, 3))
+    K = np.empty((4, 3, m))
+    W = np.empty((3, 3, m))
+    J[:, :] = 0.0
+    for i in range(3):
+        for j in range(3):
+            Rs[0, i, j] = R0[i, j]
+            Z[i, j] = 1.0 if i == j else 0.0
+            Zs[0, i, j] = Z[i, j]
+            Mq[i, j] = 0.0
+    dmin = sgn * singularity(Rs[0])
+    if not dmin >= delta_stop:
+        return 0, dmin, 0.0
+    h2 = 0.5 * h
+    h6 = h / 6.0
+    h3 = h / 3.0
+    for n in range(N):
+        stop, dmin = cf4_step(Rs[n], Rs[n + 1], U[n, 0], U[n, 1], U[n, 2], h, sgn, delta_stop,
+                              dmin, Y, B, F, E)
+        if stop >= 0.0:
+            return n, dmin, n * h + stop * h
+        # Z at the stage points (Y1 = R(t_n), Z1 = Z), as RK4 on the additive factor
+        zstage(Z, Rs[n], U[n, 0], F[0], B[0], Qm, f[0], K[0])
+        for i in range(3):
+            for j in range(3):
+                Zc[i, j] = Z[i, j] + h2 * f[0, i, j]
+        zstage(Zc, Y[0], U[n, 1], F[1], B[1], Qm, f[1], K[1])
+        for i in range(3):
+            for j in range(3):
+                Zc[i, j] = Z[i, j] + h2 * f[1, i, j]
+        zstage(Zc, Y[1], U[n, 1], F[2], B[2], Qm, f[2], K[2])
+        for i in range(3):
+            for j in range(3):
+                Zc[i, j] = Z[i, j] + h * f[2, i, j]
+        zstage(Zc, Y[2], U[n, 2], F[3], B[3], Qm, f[3], K[3])
+        # update Z; quadrature weights of the step at c = 0, ½, 1
+        for i in range(3):
+            for j in range(3):
+                Z[i, j] += h6 * (f[0, i, j] + 2.0 * f[1, i, j] + 2.0 * f[2, i, j] + f[3, i, j])
+            for k in range(m):
+                W[0, i, k] = h6 * K[0, i, k]
+                W[1, i, k] = h3 * (K[1, i, k] + K[2, i, k])
+                W[2, i, k] = h6 * K[3, i, k]
+        if keep_w:
+            for c in range(3):
+                for i in range(3):
+                    for k in range(m):
+                        Wd[3 * n + c, i * m + k] = W[c, i, k]
+        # J += Σ_c W_c ∂U[n, c]/∂λ (sparse basis)
+        for c in range(3):
+            for k in range(m):
+                w0 = W[c, 0, k]
+                w1 = W[c, 1, k]
+                w2 = W[c, 2, k]
+                off = k * stride_i
+                for q in range(nq):
+                    v = Bval[n, c, q]
+                    col = Bidx[n, c, q] * stride_b + off
+                    J[0, col] += v * w0
+                    J[1, col] += v * w1
+                    J[2, col] += v * w2
+        if full:
+            for i in range(3):
+                for j in range(3):
+                    Zs[n + 1, i, j] = Z[i, j]
+            for i in range(3):
+                for j in range(i, 3):
+                    s1 = 0.0
+                    s2 = 0.0
+                    s3 = 0.0
+                    s4 = 0.0
+                    for k in range(m):
+                        s1 += K[0, i, k] * K[0, j, k]
+                        s2 += K[1, i, k] * K[1, j, k]
+                        s3 += K[2, i, k] * K[2, j, k]
+                        s4 += K[3, i, k] * K[3, j, k]
+                    v = h6 * (s1 + 2.0 * s2 + 2.0 * s3 + s4)
+                    Mq[i, j] += v
+                    if j != i:
+                        Mq[j, i] += v
+    # Z(T), J = Z(T)^{-1} Σ W ∂U/∂λ, M(T) = Z(T)^{-1} Mq Z(T)^{-T}
+    for i in range(3):
+        for j in range(3):
+            Zs[N, i, j] = Z[i, j]
+    inv33(Z, E)
+    p = J.shape[1]
+    if dense:
+        nb = Bval.shape[2]
+        A = np.dot(Wd.T, Bval.reshape((3 * N, nb)))        # (3m, nb)
+        for k in range(m):
+            for q in range(nb):
+                col = q * stride_b + k * stride_i
+                for i in range(3):
+                    J[i, col] = A[i * m + k, q]
+    for k in range(p):
+        a0 = J[0, k]
+        a1 = J[1, k]
+        a2 = J[2, k]
+        for i in range(3):
+            J[i, k] = E[i, 0] * a0 + E[i, 1] * a1 + E[i, 2] * a2
+    if full:
+        X = np.empty((3, 3))        # X = Z(T)^{-1} Mq, then Mq = X Z(T)^{-T}
+        for i in range(3):
+            for j in range(3):
+                X[i, j] = E[i, 0] * Mq[0, j] + E[i, 1] * Mq[1, j] + E[i, 2] * Mq[2, j]
+        for i in range(3):
+            for j in range(3):
+                Zc[i, j] = X[i, 0] * E[j, 0] + X[i, 1] * E[j, 1] + X[i, 2] * E[j, 2]
+        for i in range(3):
+            for j in range(3):
+                Mq[i, j] = 0.5 * (Zc[i, j] + Zc[j, i])
+    return N, dmin, -1.0
+
+
+def frame_inputs(nodes, idx, s, Wst, w_end, Rout, out):
+    """Physical inputs ``u = W(R(t)) w(t)`` along a motion planned in frame coordinates.
+
+    For every sample ``k``: ``R(t_k)`` is node ``idx[k]`` of the CF4 trajectory ``nodes``
+    advanced by one CF4 step (:func:`cf4_step`) of length ``s[k]`` (none if ``s[k] == 0``)
+    with frame inputs ``Wst[k, 0]``, ``Wst[k, 1]``, ``Wst[k, 2]`` at its start, middle and
+    end — the same local approximation as a step of the integrator, ``O(s⁵)`` from the
+    exact motion. Outputs ``Rout[k] = R(t_k)`` and ``out[k] = W(R(t_k)) w_end[k]``.
+    """
+    n_t = idx.shape[0]
+    m = Wst.shape[2]
+    Y, B, F, E = step_workspace(m)
+    Wm = np.empty((m, m))
+    for k in range(n_t):
+        if s[k] == 0.0:
+            for i in range(3):
+                for j in range(3):
+                    Rout[k, i, j] = nodes[idx[k], i, j]
+        else:
+            cf4_step(nodes[idx[k]], Rout[k], Wst[k, 0], Wst[k, 1], Wst[k, 2], s[k], 1.0, -np.inf,
+                     np.inf, Y, B, F, E)
+        inputs_into(Rout[k], Wm)
+        for i in range(m):
+            v = 0.0
+            for j in range(m):
+                v += Wm[i, j] * w_end[k, j]
+            out[k, i] = v
+
+
+# --------------------------------------------------------------------------------------
+# Compilation per system
+# --------------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class Kernels:
+    """The compiled kernels of one system (arguments: see the functions of this module).
+
+    ``frame``: the system is the mechanism's desingularised frame ``ω = N(R) w``
+    (then :attr:`frame_inputs` evaluates ``u = W(R) w``), else ``ω = L(R) u``.
+    """
+
+    name: str
+    frame: bool
+    n_inputs: int
+    has_singular_set: bool
+    forward: object
+    forward_variational: object
+    frame_inputs: object = None
+
+
+#: The kernels of this module in the order their callers need them (callees first).
+_TEMPLATES = (cf4_step, forward, zstage, forward_variational, frame_inputs)
+_PLAIN = dict(nogil=True, error_model="numpy")
+
+
+def _specialise(template, bindings: dict, tag: str, cache: bool):
+    """A compiled copy of ``template`` whose globals bind the system's names (``bindings``)."""
+    glb = {**template.__globals__, **bindings}
+    f = types.FunctionType(template.__code__, glb, template.__name__)
+    f.__qualname__ = f"{template.__name__}__{tag}"        # its own cache entry
+    f.__module__ = __name__
+    f.__doc__ = template.__doc__
+    return numba.njit(**{**JIT_OPTIONS, "cache": cache})(f)
+
+
+def system_tag(module, frame: bool) -> str:
+    """The cache name of a system: mechanism, system and a hash of the generated source."""
+    src = inspect.getsource(module) if _importable(module) else module.SOURCE
+    return f"{module.NAME}{'_frame' if frame else ''}_{hashlib.sha256(src.encode()).hexdigest()[:12]}"
+
+
+def _importable(module) -> bool:
+    """Whether ``module`` can be re-imported by name (a cached kernel refers to it by name)."""
+    return sys.modules.get(getattr(module, "__name__", None)) is module
+
+
+_COMPILED: dict[str, Kernels] = {}
+
+
+def compile_system(module, frame: bool = False) -> Kernels:
+    """The kernels of the system of generated ``module`` (compiled once, cached on disk).
+
+    ``frame=False``: ``ω = L(R) u`` (``L_into``, ``Q_into``); ``frame=True``: the
+    desingularised frame ``ω = N(R) w`` (``N_into``, ``QN_into``, and ``W_into`` for
+    :func:`frame_inputs`). Both watch the mechanism's ``delta`` (if any). Kernels of a
+    module that cannot be re-imported by name (built in this process, see
+    :meth:`nonholo.mechanism.Mechanism.from_symbolic`) are not cached on disk.
+    Numba compiles a kernel on its first call, so a run pays only for what it uses.
+    """
+    tag = system_tag(module, frame)
+    if tag in _COMPILED:
+        return _COMPILED[tag]
+    if frame and not getattr(module, "HAS_FRAME", False):
+        raise ValueError(f"mechanism {module.NAME!r} has no desingularised frame N(R)")
+    cache = _importable(module)
+    G, DG = (module.N_into, module.QN_into) if frame else (module.L_into, module.Q_into)
+    bindings = {
+        "field_into": numba.njit(**_PLAIN)(G),
+        # DG feeds only the variational system (the Jacobian): fast-math lets LLVM turn
+        # its ``x**(-2.0)`` into a multiplication (the result changes at round-off level)
+        "field_derivative_into": numba.njit(fastmath=True, **_PLAIN)(DG),
+        "singularity": numba.njit(**_PLAIN)(module.delta if module.HAS_SINGULAR_SET else no_singularity),
+    }
+    if frame:
+        bindings["inputs_into"] = numba.njit(**_PLAIN)(module.W_into)
+    for template in _TEMPLATES:
+        if template is frame_inputs and not frame:
+            continue
+        bindings[template.__name__] = _specialise(template, bindings, tag, cache)
+    kern = Kernels(name=module.NAME, frame=frame, n_inputs=module.N_INPUTS,
+                   has_singular_set=module.HAS_SINGULAR_SET, forward=bindings["forward"],
+                   forward_variational=bindings["forward_variational"],
+                   frame_inputs=bindings.get("frame_inputs"))
+    _COMPILED[tag] = kern
+    return kern

@@ -1,0 +1,164 @@
+"""The numeric :class:`Mechanism`: everything the planners, the simulator and the figures
+need to know about one mechanism, built from its generated module.
+
+A mechanism on SO(3) is a driftless system ``dR/dt = [L(R) u] R`` (spatial angular
+velocity ``ω = L(R) u``, ``u`` its ``m`` inputs). Its generated module
+(``nonholo/generated/<name>.py``, written by ``nonholo derive`` from the SymPy derivation
+in ``derivations/``) provides
+
+- ``L(R)`` (3×m) and ``Q(R, u)`` (3×3, ``(∂L/∂θ) u = Q s`` for ``∂R/∂θ = [s] R``, eq. (12));
+- ``delta(R)``, the singularity function, where ``L`` blows up on ``Δ = 0`` (else none);
+- the desingularised frame, when the derivation gives one: ``N(R)`` (3×m, orthonormal
+  columns spanning the admissible angular velocities), ``QN(R, w)`` (its ``Q``) and
+  ``W(R) = (N(R)ᵀ L(R))^{-1}`` (physical inputs ``u = W(R) w`` of ``ω = N(R) w``);
+- ``GEOMETRY``, the joint points of a two-leg platform, for drawings (else none);
+
+each matrix also as ``NAME_into(..., out)`` for the compiled integrator
+(:meth:`Mechanism.kernels`). Nothing downstream depends on which mechanism it is;
+:mod:`nonholo.catalog` looks mechanisms up by name.
+"""
+from __future__ import annotations
+
+import types
+from dataclasses import dataclass, field
+from typing import Callable
+
+import numpy as np
+
+from . import cf4
+
+
+@dataclass(frozen=True)
+class Geometry:
+    """Numeric geometry of a two-leg platform with one rolling disk (the symbolic one is
+    ``derivations.mechanism.PlatformGeometry``): base joints ``base_i`` (world frame),
+    platform joints ``tip_i`` (platform frame, world position ``R tip_i``), the disk's
+    contact point ``contact`` on the sphere and its unit axle direction ``axle`` (world).
+    Lengths in the units of the derivation's drawing dimensions; the sphere's radius is
+    ``|contact|``."""
+
+    base1: np.ndarray
+    tip1: np.ndarray
+    base2: np.ndarray
+    tip2: np.ndarray
+    contact: np.ndarray
+    axle: np.ndarray
+
+    FIELDS = ("base1", "tip1", "base2", "tip2", "contact", "axle")
+
+    @classmethod
+    def from_mapping(cls, data) -> "Geometry":
+        """From a mapping of the six fields to 3-vectors (the generated ``GEOMETRY``)."""
+        vals = {k: np.array(data[k], dtype=float) for k in cls.FIELDS}
+        vals["axle"] = vals["axle"] / np.linalg.norm(vals["axle"])
+        return cls(**vals)
+
+    @property
+    def radius(self) -> float:
+        return float(np.linalg.norm(self.contact))
+
+    @property
+    def bases(self) -> tuple[np.ndarray, np.ndarray]:
+        return self.base1, self.base2
+
+    @property
+    def tips(self) -> tuple[np.ndarray, np.ndarray]:
+        return self.tip1, self.tip2
+
+    def leg_lengths(self, R) -> np.ndarray:
+        """``l_i = |R tip_i − base_i|``: shape (2,) for one ``R``, (n, 2) for a stack (n, 3, 3)."""
+        R = np.asarray(R, dtype=float)
+        Rs = R[None] if R.ndim == 2 else R
+        out = np.stack([np.linalg.norm(Rs @ tip - base, axis=-1)
+                        for base, tip in zip(self.bases, self.tips)], axis=-1)
+        return out[0] if R.ndim == 2 else out
+
+
+@dataclass(frozen=True)
+class Frame:
+    """The desingularised input frame of a mechanism: ``ω = N(R) w``, ``u = W(R) w``."""
+
+    N: Callable
+    QN: Callable
+    W: Callable
+
+
+@dataclass(frozen=True, eq=False)
+class Mechanism:
+    """Numeric kinematics of one mechanism (see the module docstring).
+
+    ``delta`` is ``None`` without a singular set; ``frame`` is ``None`` without a
+    desingularised frame; ``geometry`` is ``None`` for a mechanism that is not a
+    two-leg platform. ``state_space`` names the state (``"SO(3)"``: an orientation ``R``).
+    ``module`` is the generated module the numbers come from (the integrator compiles
+    its ``*_into`` functions).
+    """
+
+    name: str
+    description: str
+    inputs: tuple[str, ...]
+    L: Callable
+    Q: Callable
+    delta: Callable | None
+    frame: Frame | None
+    geometry: Geometry | None
+    module: types.ModuleType = field(repr=False)
+    state_space: str = "SO(3)"
+
+    @property
+    def n_inputs(self) -> int:
+        return len(self.inputs)
+
+    @property
+    def has_singular_set(self) -> bool:
+        return self.delta is not None
+
+    @property
+    def has_frame(self) -> bool:
+        return self.frame is not None
+
+    def kernels(self, frame: bool = False) -> cf4.Kernels:
+        """The compiled integrator kernels of ``ω = L(R) u`` (or, ``frame=True``, of the
+        desingularised ``ω = N(R) w``); see :func:`nonholo.cf4.compile_system`."""
+        if frame and not self.has_frame:
+            raise ValueError(f"mechanism {self.name!r} has no desingularised frame N(R)")
+        return cf4.compile_system(self.module, frame)
+
+    def delta_samples(self, R) -> np.ndarray | None:
+        """``Δ(R[n])`` for a stack ``R`` of shape ``(n, 3, 3)``; ``None`` without a singular set."""
+        if self.delta is None:
+            return None
+        R = np.asarray(R, dtype=float)
+        # the generated Δ is plain arithmetic on entries R[i, j]: evaluate it on (3, 3, n)
+        return np.asarray(self.delta(R.transpose(1, 2, 0)), dtype=float).reshape(R.shape[0])
+
+    @classmethod
+    def from_module(cls, module: types.ModuleType) -> "Mechanism":
+        """The mechanism of a generated module."""
+        frame = Frame(module.N, module.QN, module.W) if getattr(module, "HAS_FRAME", False) else None
+        geometry = getattr(module, "GEOMETRY", None)
+        return cls(name=module.NAME, description=module.DESCRIPTION, inputs=tuple(module.INPUTS),
+                   L=module.L, Q=module.Q, delta=module.delta if module.HAS_SINGULAR_SET else None,
+                   frame=frame, geometry=None if geometry is None else Geometry.from_mapping(geometry),
+                   module=module)
+
+    @classmethod
+    def from_symbolic(cls, mechanism) -> "Mechanism":
+        """The numeric mechanism of a symbolic ``derivations.mechanism.Mechanism``, in one
+        call: its module is generated (as ``nonholo derive`` would write it) and loaded
+        in this process. Its kernels are compiled on first use and not cached on disk
+        (the module exists only in this process); to add a mechanism for good, put it in
+        ``derivations/catalog.py`` and run ``nonholo derive``. To look it up by name,
+        :func:`nonholo.catalog.add` it.
+        """
+        from derivations import codegen        # SymPy: imported only when asked for
+
+        source = codegen.mechanism_module(mechanism)
+        module = types.ModuleType(f"nonholo_symbolic_{mechanism.name}")
+        module.SOURCE = source
+        exec(compile(source, f"<generated module of mechanism {mechanism.name!r}>", "exec"),
+             module.__dict__)
+        return cls.from_module(module)
+
+    def __repr__(self) -> str:
+        return f"Mechanism({self.name!r}: {self.description})"

@@ -1,0 +1,413 @@
+"""The planning core shared by every strategy: the problem, its evaluation, the options,
+the step loop of the θ-flow, its step control, and the result builder.
+
+Problem: steer ``dR/dt = [L(R) u] R`` (spatial form) from ``R(0) = R0`` to ``R(T) = R_d``
+(Tchoń & Jakubiak, appendix eqs. (4)–(11)). Along a family of controls ``u_θ`` the error
+``e = log(R_T R_dᵀ) = [l_T]`` is asked to decay as ``dl_T/dθ = −γ l_T`` (4)–(5); with
+``s_T = P(l_T) dl_T/dθ`` (7), ``P`` the left Jacobian of SO(3) (:func:`nonholo.so3.dexp`)
+and ``P(l) l = l``, this asks for ``s_T = −γ l_T``, ``s_T = J ∂λ/∂θ`` with the Jacobian
+``J = ∂s_T/∂λ`` of the variational system (9)–(10) (:meth:`Problem.evaluate`). Its
+minimum-norm solution in a diagonal metric ``W`` is the update (11):
+``Δλ = −γh W^{-1/2} (J W^{-1/2})^# l_T`` (:func:`nonholo.kernels.min_norm_step`).
+
+Step loop (:func:`descend`). The θ-flow is integrated by explicit Euler steps
+``θ → θ + h``. A step is accepted only if the new trajectory reaches ``T`` with
+``|Δ| ≥ delta_min`` at every point where the integrator evaluates the field (checked by
+the kernel, which stops at once otherwise) and ``|l_T|`` decreases; otherwise ``h`` is
+halved (:func:`backtrack`), and the loop gives up, with the reason, once ``γh <
+min_step``. After a step accepted at the first try ``h`` doubles again, up to its
+initial value. Once ``|l_T| < newton_below`` the steps are full Newton steps, ``γh = 1``
+(halved if rejected): exact Newton for the discrete map ``λ ↦ l_T``, whose derivative is
+``P(l_T)^{-1} J`` — since ``P^{-1} l = l``, ``P^{-1} J Δλ = −l`` and ``J Δλ = −l`` have the
+same minimum-norm solution — so the convergence is quadratic.
+
+A strategy (:class:`Strategy`) chooses the coordinates of the planned control, the
+initial guesses and the step direction; it keeps no state between runs — what it needs
+during a run lives in the :class:`Start` and :class:`Problem` it is given.
+"""
+from __future__ import annotations
+
+import math
+import time
+from abc import ABC, abstractmethod
+from dataclasses import asdict, dataclass, field
+from functools import lru_cache
+from typing import Callable, ClassVar
+
+import numpy as np
+
+from .. import kernels, stages
+from ..controls import Controls
+from ..mechanism import Mechanism
+from ..replay import FrameControls
+from ..result import PlanResult
+
+
+@dataclass(frozen=True)
+class Options:
+    """Numerical settings of a planning run (see :func:`nonholo.plan`)."""
+
+    gamma: float = 0.5
+    step: float = 1.0
+    tol: float = 1e-10
+    max_iter: int = 200
+    newton_below: float = 1e-3
+    min_step: float = 1e-6
+    delta_min: float = 1e-2
+
+    def __post_init__(self):
+        for name in ("gamma", "step", "tol", "min_step"):
+            v = getattr(self, name)
+            if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
+                raise ValueError(f"{name} must be a positive number, got {v!r}")
+        for name in ("newton_below", "delta_min"):
+            v = getattr(self, name)
+            if not (isinstance(v, (int, float)) and math.isfinite(v) and v >= 0):
+                raise ValueError(f"{name} must be a non-negative number, got {v!r}")
+        if isinstance(self.max_iter, bool) or int(self.max_iter) != self.max_iter or self.max_iter < 0:
+            raise ValueError(f"max_iter must be a non-negative integer, got {self.max_iter!r}")
+
+
+class Evaluation:
+    """One simulation of the planning problem for a control (with the Jacobian).
+
+    ``params``: the control's flat parameter vector ``λ`` in the parametrisation
+    ``parametrisation`` (whose own parameters are irrelevant); :attr:`controls` builds the
+    control object on first use. ``complete``: the trajectory reached ``T`` (the kernel
+    stops early where ``sgnΔ < delta_stop`` or ``ω`` is not finite). ``min_delta``: least
+    ``sgn(Δ(R0))·Δ`` over the integrator's evaluation points (= least ``|Δ|`` unless the
+    motion crossed ``Δ = 0``; ``None`` without a singular set). ``l``, ``error``, ``J``
+    only when complete; ``Z`` (``Z(t_n) = Φ(t_n, 0)^{-1}`` at every node, ``(N+1, 3, 3)``)
+    and ``Wd`` (the kernel's stage weights, ``(3N, 3m)``, see
+    :func:`nonholo.cf4.forward_variational`) only when the evaluation was asked for
+    them (``full``): with them the sensitivity of ``R(t_n)`` to ``λ`` is
+    ``s_n = Z_n^{-1} Σ_{stages r before t_n} W_r ∂U_r/∂λ``.
+    """
+
+    __slots__ = ("params", "parametrisation", "complete", "steps_done", "t_stop", "min_delta",
+                 "R", "l", "error", "J", "Z", "Wd", "_controls")
+
+    def __init__(self, params, parametrisation, complete, steps_done, t_stop, min_delta, R,
+                 controls=None):
+        self.params = params
+        self.parametrisation = parametrisation
+        self.complete = complete
+        self.steps_done = steps_done
+        self.t_stop = t_stop
+        self.min_delta = min_delta
+        self.R = R
+        self.l = self.error = self.J = self.Z = self.Wd = None
+        self._controls = controls
+
+    @property
+    def controls(self) -> Controls:
+        """The evaluated control as a :class:`~nonholo.controls.Controls` (validated)."""
+        if self._controls is None:
+            self._controls = self.parametrisation.with_params(self.params)
+        return self._controls
+
+    @property
+    def R_T(self) -> np.ndarray | None:
+        return self.R[-1] if self.complete else None
+
+
+class Problem:
+    """``R0 → R_d`` in time ``T`` for one mechanism, with the integrator's buffers.
+
+    :meth:`evaluate` simulates a control with the variational system and returns the
+    error ``l_T`` and the Jacobian ``J = ∂s_T/∂λ``. ``frame=True`` integrates the system
+    in the desingularised frame coordinates ``w`` (``dR/dt = [N(R) w] R``; ``Δ`` is still
+    monitored): ``λ`` then parametrises ``w``.
+    """
+
+    def __init__(self, R0, Rd, T: float, mechanism: Mechanism, method: str, steps: int,
+                 delta_min: float, frame: bool = False):
+        self.mechanism = mechanism
+        self.frame = frame
+        self.kernels = mechanism.kernels(frame)
+        self.R0 = np.ascontiguousarray(R0, dtype=float)
+        self.Rd = np.ascontiguousarray(Rd, dtype=float)
+        self.T = T
+        self.method = method
+        self.steps = steps
+        self.h = T / steps
+        self.delta_min = delta_min
+        self.has_delta = mechanism.has_singular_set
+        self.delta0 = float(mechanism.delta(self.R0)) if self.has_delta else None
+        self.deltad = float(mechanism.delta(self.Rd)) if self.has_delta else None
+        self.sign = float(np.sign(self.delta0)) if self.has_delta else 1.0
+        self._Rs = np.empty((steps + 1, 3, 3))
+        self._Zs = np.empty((steps + 1, 3, 3))
+        self._M = np.empty((3, 3))
+        self._U = np.empty((steps, 3, mechanism.n_inputs))
+        self._Wd = np.empty((3 * steps, 3 * mechanism.n_inputs))
+        self.parametrisation: Controls | None = None
+        self.evaluations = 0
+
+    def refined(self, steps: int) -> "Problem":
+        """The same problem on a grid of ``steps`` integrator steps."""
+        return Problem(self.R0, self.Rd, self.T, self.mechanism, self.method, steps, self.delta_min,
+                       self.frame)
+
+    def use(self, controls: Controls) -> None:
+        """Interpret parameter vectors passed to :meth:`evaluate` in ``controls``' parametrisation."""
+        self.parametrisation = controls
+        self._fill = stages.stage_function(controls, self.steps)
+        self.stage_basis = stages.kernel_basis(controls, self.steps)
+        self.n_params = controls.params.size
+
+    def evaluate(self, x, delta_stop: float | None = None, full: bool = False) -> Evaluation:
+        """Simulate a control: a :class:`~nonholo.controls.Controls` (which becomes the
+        parametrisation, see :meth:`use`) or a flat parameter vector ``λ`` in the current
+        parametrisation. Stops early where ``sgnΔ < delta_stop`` (default ``delta_min``).
+        ``full``: keep ``Z(t_n)`` at every node and the stage weights (:attr:`Evaluation.Z`,
+        :attr:`Evaluation.Wd`)."""
+        given = None
+        if isinstance(x, Controls):
+            if x is not self.parametrisation:
+                self.use(x)
+            given, x = x, x.params
+        stop = self.delta_min if delta_stop is None else delta_stop
+        U = self._fill(x, self._U)
+        J = np.empty((3, self.n_params))
+        n, dmin, t_stop = self.kernels.forward_variational(
+            self.R0, U, self.h, self.sign, stop, *self.stage_basis, self._Rs, self._Zs, J, self._M,
+            self._Wd, full)
+        self.evaluations += 1
+        complete = n == self.steps
+        ev = Evaluation(x, self.parametrisation, complete, int(n), None if complete else float(t_stop),
+                        float(dmin) if self.has_delta else None, self._Rs[:n + 1].copy(), given)
+        if complete:
+            ev.l, err = kernels.log_error(self._Rs[n], self.Rd)
+            ev.error = float(err)
+            ev.J = J
+            if full:
+                ev.Z = self._Zs.copy()
+                ev.Wd = self._Wd.copy()
+        return ev
+
+    def admissible(self, ev: Evaluation) -> bool:
+        """Complete and ``|Δ| ≥ delta_min`` along the whole trajectory."""
+        return ev.complete and (not self.has_delta or ev.min_delta >= self.delta_min)
+
+    def why_not(self, ev: Evaluation) -> str:
+        """Why ``ev`` is not admissible."""
+        if self.has_delta and (ev.min_delta is None or ev.min_delta < self.delta_min):
+            where = f" at t ≈ {ev.t_stop:.4g} s" if ev.t_stop is not None else ""
+            if ev.min_delta <= 0.0:
+                return (f"the trajectory ran into the singular surface Δ = 0{where} (|ω| ~ 1/|Δ| "
+                        "blows up there; the fixed-step integrator stepped across it)")
+            return f"|Δ| fell to {ev.min_delta:.6g} < delta_min = {self.delta_min:g}{where}"
+        if not ev.complete:
+            return f"the angular velocity became non-finite at t ≈ {ev.t_stop:.4g} s"
+        return "admissible"
+
+
+@lru_cache(maxsize=16)
+def _ones(p: int) -> np.ndarray:
+    a = np.ones(p)
+    a.setflags(write=False)
+    return a
+
+
+def step_scale(problem: Problem, controls: Controls) -> np.ndarray:
+    """``S = W^{-1/2}`` of the metric the minimum norm is taken in: Euclidean on Fourier
+    coefficients (parametric form, ``J^#``), L2 in time on grid controls (nonparametric
+    form, eq. (11): ``W = diag(h_j)``)."""
+    if problem.method == "parametric":
+        return _ones(controls.params.size)
+    return 1.0 / np.sqrt(controls.metric())
+
+
+def record(iteration: int, ev: Evaluation, step: float, phase: str, rejected: int, **extra) -> dict:
+    """One entry of a result's ``history`` (see :class:`~nonholo.result.PlanResult`)."""
+    return {"iteration": iteration, "error": ev.error, "step": step,
+            "min_delta": ev.min_delta, "phase": phase, "rejected": rejected, **extra}
+
+
+def backtrack(problem: Problem, ev: Evaluation, direction: np.ndarray, scale: float,
+              min_step: float, full: bool = False):
+    """Step control of the θ-flow: halve ``scale`` until ``λ − scale·direction`` is
+    admissible (reaches ``T`` with ``|Δ| ≥ delta_min``) and lowers ``|l_T|``.
+
+    Returns ``(trial, scale, halvings, None)``, or ``(None, scale, halvings, reason)`` once
+    ``scale`` falls below ``min_step``.
+    """
+    rejected = 0
+    while True:
+        trial = problem.evaluate(ev.params - scale * direction, full=full)
+        if problem.admissible(trial) and trial.error < ev.error:
+            return trial, scale, rejected, None
+        last = (problem.why_not(trial) if not problem.admissible(trial) else
+                f"|l_T| did not decrease ({trial.error:.3g} >= {ev.error:.3g})")
+        rejected += 1
+        scale *= 0.5
+        if scale < min_step:
+            return None, scale, rejected, (f"step size fell below min_step = {min_step:g} at "
+                                           f"|l_T| = {ev.error:.3g}; last rejected step: {last}")
+
+
+@dataclass
+class Descent:
+    """How :func:`descend` ended: ``status`` is ``"converged"``, ``"budget"`` (``budget``
+    steps taken), ``"stalled"``, ``"failed"`` (a step below ``min_step``) or
+    ``"stopped"`` (by the callback); ``evaluation`` is the last accepted one."""
+
+    evaluation: Evaluation
+    steps: int
+    status: str
+    reason: str
+
+
+def descend(problem: Problem, ev: Evaluation, options: Options,
+            direction: Callable[[Evaluation, bool], np.ndarray], *, budget: int, history: list,
+            callback=None, first: int = 0, full: Callable[[Evaluation], bool] | None = None,
+            stall: tuple[int, float] | None = None, tags: dict | None = None) -> Descent:
+    """The step loop: flow steps, then Newton steps, from the admissible ``ev``.
+
+    ``direction(ev, newton)`` gives the step direction (the step is ``−γh`` or ``−1`` times
+    it); ``full(ev)`` whether trial evaluations keep the data of a full evaluation;
+    ``stall = (window, ratio)``: stop when ``|l_T|`` (above ``newton_below``) shrank by
+    less than a factor ``ratio`` over the last ``window`` steps. Each accepted step is
+    appended to ``history`` (numbered from ``first + 1``, with ``tags``) and passed to
+    ``callback``, whose true return value stops the loop.
+    """
+    h = options.step
+    it = 0
+    errors = [ev.error]
+    tags = tags or {}
+    while True:
+        if ev.error <= options.tol:
+            return Descent(ev, it, "converged", f"converged: |l_T| = {ev.error:.3g} <= tol = {options.tol:g}")
+        if it >= budget:
+            return Descent(ev, it, "budget", f"|l_T| = {ev.error:.3g}")
+        if stall is not None:
+            w, ratio = stall
+            if w and len(errors) > w and ev.error >= options.newton_below and ev.error > ratio * errors[-1 - w]:
+                return Descent(ev, it, "stalled", f"stalled at |l_T| = {ev.error:.3g} (less than "
+                               f"{100 * (1 - ratio):.3g} % in {w} steps)")
+        newton = ev.error < options.newton_below
+        scale = 1.0 if newton else options.gamma * h
+        trial, scale, rejected, failure = backtrack(problem, ev, direction(ev, newton), scale,
+                                                    options.min_step, full=full(ev) if full else False)
+        if failure:
+            return Descent(ev, it, "failed", failure)
+        if not newton:
+            h *= 0.5 ** rejected
+        it += 1
+        ev = trial
+        errors.append(ev.error)
+        if not newton and rejected == 0:
+            h = min(2.0 * h, options.step)
+        history.append(record(first + it, ev, scale, "newton" if newton else "flow", rejected, **tags))
+        if callback is not None and callback(history[-1]):
+            return Descent(ev, it, "stopped", "stopped by callback")
+
+
+@dataclass(frozen=True)
+class Start:
+    """The initial control of a run in the strategy's coordinates: ``given`` if it is the
+    caller's ``u0`` (converted), with a ``note`` on what happened to a ``u0`` that could
+    not be used."""
+
+    controls: Controls
+    given: bool = False
+    note: str = ""
+
+
+@dataclass
+class Outcome:
+    """What a strategy returns to :func:`nonholo.plan`."""
+
+    evaluation: Evaluation
+    success: bool
+    reason: str
+    history: list = field(default_factory=list)
+    iterations: int = 0
+    #: the problem the final evaluation belongs to, when not the one :func:`nonholo.plan`
+    #: built (e.g. a finer integrator grid)
+    problem: Problem | None = None
+    #: ``max_t |Φ(T, t)|_F`` of the physical system along the final motion, if computed
+    sensitivity: float | None = None
+
+
+class Strategy(ABC):
+    """A way of following the θ-flow (see :data:`nonholo.planner.STRATEGIES`).
+
+    :meth:`frame` chooses the coordinates of the planned control (physical inputs ``u``
+    of ``dR/dt = [L(R) u] R``, or frame coordinates ``w`` of ``dR/dt = [N(R) w] R``);
+    :meth:`initial` turns the (validated, physical) initial control into those
+    coordinates; :meth:`solve` plans. A strategy object holds only its options.
+    """
+
+    name: ClassVar[str] = ""
+    #: ``γ`` of :func:`nonholo.plan` when the caller gives none
+    default_gamma: ClassVar[float] = 0.5
+
+    def __init__(self, options: Options):
+        self.options = options
+
+    def frame(self, mechanism: Mechanism) -> bool:
+        """Plan in the desingularised frame coordinates ``w`` (``False``: physical inputs)."""
+        return False
+
+    def initial(self, problem: Problem, controls: Controls, given: bool) -> Start:
+        """The initial control in this strategy's coordinates, from the physical ``controls``
+        (the default initial control, or the caller's ``u0`` when ``given``)."""
+        return Start(controls, given)
+
+    @abstractmethod
+    def solve(self, problem: Problem, start: Start,
+              callback: Callable[[dict], object] | None = None) -> Outcome:
+        """Plan from ``start``; call ``callback(record)`` per accepted step."""
+
+
+@dataclass(frozen=True)
+class Request:
+    """What the caller of :func:`nonholo.plan` asked for (validated)."""
+
+    mechanism: Mechanism
+    method: str
+    strategy: str
+    T: float
+    R0: np.ndarray
+    Rd: np.ndarray
+    steps: int
+    options: Options
+    harmonics: int
+    grid: int
+    controls: Controls          # the physical initial control
+    started: float              # time.perf_counter() when the call began
+
+
+def build_result(request: Request, outcome: Outcome | None, success: bool, reason: str,
+                 problem: Problem | None = None) -> PlanResult:
+    """The :class:`~nonholo.result.PlanResult` of a run (``outcome=None``: nothing simulated)."""
+    mech, T = request.mechanism, request.T
+    ev = outcome.evaluation if outcome is not None else None
+    if outcome is not None and outcome.problem is not None:
+        problem = outcome.problem
+    n_steps = request.steps if problem is None else problem.steps
+    n = 0 if ev is None else ev.steps_done + 1
+    t = np.arange(n) * (T / n_steps)
+    if ev is not None and ev.complete:
+        t[-1] = T
+    if ev is None:
+        par = request.controls              # nothing simulated: the physical initial control
+    elif problem.frame:
+        par = FrameControls(ev.controls, request.R0, mech, n_steps, nodes=ev.R if ev.complete else None)
+    else:
+        par = ev.controls
+    R = ev.R if ev is not None else np.empty((0, 3, 3))
+    return PlanResult(
+        success=success, reason=reason,
+        terminal_error=None if ev is None else ev.error,
+        min_delta=None if ev is None else ev.min_delta,
+        iterations=0 if outcome is None else outcome.iterations,
+        history=[] if outcome is None else outcome.history,
+        t=t, R=R, u=par(t).reshape(n, mech.n_inputs), delta=mech.delta_samples(R),
+        parametrisation=par, mechanism=mech.name, method=request.method, strategy=request.strategy,
+        T=T, R0=request.R0, Rd=request.Rd, steps=n_steps,
+        seconds=time.perf_counter() - request.started,
+        options={**asdict(request.options), "harmonics": request.harmonics, "grid": request.grid},
+        sensitivity=None if outcome is None else outcome.sensitivity)
