@@ -48,6 +48,7 @@ from mpl_toolkits.mplot3d.art3d import Poly3DCollection
 
 from . import catalog, so3
 from .generated import platform_singularity
+from .mechanism import Geometry, Mechanism
 
 # --------------------------------------------------------------------------------------
 # Style
@@ -108,37 +109,6 @@ def save_figure(fig: Figure, stem: str, outdir=".", dpi: int = 150) -> tuple[Pat
 # --------------------------------------------------------------------------------------
 
 
-@dataclass(frozen=True)
-class Geometry:
-    """Numeric geometry of a two-leg platform with one rolling disk (see
-    ``derivations.mechanism.PlatformGeometry``): base joints ``base_i`` (world frame),
-    platform joints ``tip_i`` (platform frame, world position ``R tip_i``), the disk's
-    contact point ``contact`` on the sphere and its axle direction ``axle`` (world).
-    The sphere's radius is ``|contact|``."""
-
-    base1: np.ndarray
-    tip1: np.ndarray
-    base2: np.ndarray
-    tip2: np.ndarray
-    contact: np.ndarray
-    axle: np.ndarray
-
-    @property
-    def radius(self) -> float:
-        return float(np.linalg.norm(self.contact))
-
-    @property
-    def bases(self) -> tuple[np.ndarray, np.ndarray]:
-        return self.base1, self.base2
-
-    @property
-    def tips(self) -> tuple[np.ndarray, np.ndarray]:
-        return self.tip1, self.tip2
-
-
-_FIELDS = ("base1", "tip1", "base2", "tip2", "contact", "axle")
-
-
 def _numeric_vector(v, dims) -> np.ndarray:
     out = []
     for c in v:
@@ -150,35 +120,39 @@ def _numeric_vector(v, dims) -> np.ndarray:
     return np.array(out, dtype=float)
 
 
-def as_geometry(geometry=None, a: float = 1.6, b: float = 1.0, rho: float = 1.0) -> Geometry:
-    """A numeric :class:`Geometry`.
+#: The drawing dimensions of the generated platforms (``derivations.codegen.DRAWING_DIMENSIONS``).
+DEFAULT_DIMENSIONS = {"a": 1.6, "b": 1.0, "rho": 1.0}
 
-    ``geometry`` may be ``None`` (the paper's placement: leg 1 from ``a e_2`` to
-    ``R (b e_2)``, leg 2 from ``a e_1`` to ``R (b e_1)``, the disk at the pole ``ρ e_3``
-    with its axle along ``(e_1 - e_2)/√2``), a :class:`Geometry`, a mechanism name
-    (its generated ``GEOMETRY``), a mapping with the six fields, or any object with the
-    six attributes -- e.g. a symbolic ``PlatformGeometry``, whose symbols ``a, b, rho``
-    are replaced by the given numbers.
+
+def as_geometry(geometry=None, a: float = 1.6, b: float = 1.0, rho: float = 1.0) -> Geometry:
+    """A numeric :class:`~nonholo.mechanism.Geometry`.
+
+    ``geometry`` may be ``None`` (the paper's platform, from its derivation: leg 1 from
+    ``a e_2`` to ``R (b e_2)``, leg 2 from ``a e_1`` to ``R (b e_1)``, the disk at the pole
+    ``ρ e_3`` with its axle along ``(e_1 - e_2)/√2``), a :class:`Geometry`, a
+    :class:`~nonholo.mechanism.Mechanism` or a mechanism name (its geometry), a mapping
+    with the six fields, or any object with the six attributes -- e.g. a symbolic
+    ``PlatformGeometry``, whose symbols ``a, b, rho`` are replaced by the given numbers.
     """
     if isinstance(geometry, Geometry):
         return geometry
     dims = {"a": a, "b": b, "rho": rho}
     if geometry is None:
-        s = np.sqrt(0.5)
-        return Geometry(base1=np.array([0.0, a, 0.0]), tip1=np.array([0.0, b, 0.0]),
-                        base2=np.array([a, 0.0, 0.0]), tip2=np.array([b, 0.0, 0.0]),
-                        contact=np.array([0.0, 0.0, rho]), axle=np.array([s, -s, 0.0]))
-    if isinstance(geometry, str):
-        module = catalog.get(geometry).module
-        if not hasattr(module, "GEOMETRY"):
-            raise ValueError(f"mechanism {geometry!r} has no legs/disk geometry to draw")
-        geometry = module.GEOMETRY
+        if dims == DEFAULT_DIMENSIONS:
+            return catalog.get("platform").geometry
+        from derivations.mechanism import PAPER_GEOMETRY     # SymPy: only for other dimensions
+
+        geometry = PAPER_GEOMETRY
+    if isinstance(geometry, (str, Mechanism)):
+        mech = catalog.get(geometry)
+        if mech.geometry is None:
+            raise ValueError(f"mechanism {mech.name!r} has no legs/disk geometry to draw")
+        return mech.geometry
     if isinstance(geometry, dict):
-        vals = {k: _numeric_vector(geometry[k], dims) for k in _FIELDS}
+        vals = {k: _numeric_vector(geometry[k], dims) for k in Geometry.FIELDS}
     else:
-        vals = {k: _numeric_vector(getattr(geometry, k), dims) for k in _FIELDS}
-    vals["axle"] = vals["axle"] / np.linalg.norm(vals["axle"])
-    return Geometry(**vals)
+        vals = {k: _numeric_vector(getattr(geometry, k), dims) for k in Geometry.FIELDS}
+    return Geometry.from_mapping(vals)
 
 
 def _geometry_for(results, geometry) -> Geometry | None:
@@ -198,13 +172,7 @@ def _geometry_for(results, geometry) -> Geometry | None:
 def leg_lengths(R, geometry=None) -> np.ndarray:
     """Leg lengths ``l_i = |R tip_i - base_i|``: shape (2,) for one ``R``, (n, 2) for a
     stack of rotations (n, 3, 3)."""
-    g = as_geometry(geometry)
-    R = np.asarray(R, dtype=float)
-    single = R.ndim == 2
-    Rs = R[None] if single else R
-    out = np.stack([np.linalg.norm(Rs @ tip - base, axis=-1)
-                    for base, tip in zip(g.bases, g.tips)], axis=-1)
-    return out[0] if single else out
+    return as_geometry(geometry).leg_lengths(R)
 
 
 def _mechanism(name):
