@@ -53,14 +53,13 @@ the kernels stop as soon as it falls below ``delta_stop`` (or ``ω`` is not fini
 report how many steps were completed, so a trajectory running into ``Δ = 0`` never
 produces NaN.
 
-Compilation. The kernels call the system through four names — :func:`field_into`,
-:func:`field_derivative_into`, :func:`singularity` and (frame systems) :func:`inputs_into`
-— defined below as placeholders. :func:`compile_system` makes, per system, a copy of each
-kernel whose globals bind those names to the generated functions of the mechanism
-(``L_into``/``Q_into`` or ``N_into``/``QN_into``, ``delta``, ``W_into``, compiled with
-``numba.njit``), so that numba inlines them; each copy has its own qualified name (the
-mechanism, the system, a hash of the generated source), hence its own on-disk cache
-entry. (A closure over the compiled functions would read the same, but numba cannot
+Compilation. The kernels call the mechanism through the names of its generated
+functions — ``L_into``, ``Q_into``, ``N_into``, ``QN_into``, ``W_into``, ``delta`` — defined
+below as placeholders, and take the system (``frame``: ``N``/``QN``, else ``L``/``Q``) as an
+argument. :func:`compile_system` makes, per mechanism, a copy of each kernel whose globals
+bind those names to the mechanism's generated functions (compiled with ``numba.njit``),
+so that numba inlines them; each copy has its own qualified name (the mechanism and a
+hash of its generated source), hence its own on-disk cache entry. (A closure over the compiled functions would read the same, but numba cannot
 cache it: the cache key pickles the closure's cells, and a compiled function pickles
 differently in every process.)
 """
@@ -70,41 +69,60 @@ import hashlib
 import inspect
 import sys
 import types
-from dataclasses import dataclass
-
 import numba
 import numpy as np
 
 from .kernels import JIT_OPTIONS, exp_times, inv33
 
 # --------------------------------------------------------------------------------------
-# The system a kernel integrates (bound per system by compile_system)
+# The mechanism a kernel integrates (bound per mechanism by compile_system)
 # --------------------------------------------------------------------------------------
 
 
-def field_into(R, out):
-    """``out = G(R)`` (3×m): the angular velocity per unit input (``L`` or ``N``)."""
-    raise NotImplementedError("placeholder: bound per system by nonholo.cf4.compile_system")
+def _placeholder(*args):
+    raise NotImplementedError("placeholder: bound per mechanism by nonholo.cf4.compile_system")
 
 
-def field_derivative_into(R, v, out):
-    """``out = DG(R, v)`` (3×3) with ``d/dε G(exp(ε[s]) R) v = DG s`` (``Q`` or ``QN``)."""
-    raise NotImplementedError("placeholder: bound per system by nonholo.cf4.compile_system")
-
-
-def singularity(R):
-    """``Δ(R)`` of the mechanism (``+inf`` without a singular set)."""
-    raise NotImplementedError("placeholder: bound per system by nonholo.cf4.compile_system")
-
-
-def inputs_into(R, out):
-    """``out = W(R)`` (m×m): physical inputs ``u = W(R) w`` of frame coordinates ``w``."""
-    raise NotImplementedError("placeholder: bound per system by nonholo.cf4.compile_system")
+#: ``L_into(R, out)``: ``out = L(R)`` (3×m), the generated function of the mechanism.
+L_into = _placeholder
+#: ``Q_into(R, u, out)``: ``out = Q(R, u)`` (3×3) of eq. (12).
+Q_into = _placeholder
+#: ``N_into(R, out)``: ``out = N(R)``, the desingularised frame (``L`` without one).
+N_into = _placeholder
+#: ``QN_into(R, w, out)``: ``out = QN(R, w)``, the ``Q`` of the frame (``Q`` without one).
+QN_into = _placeholder
+#: ``W_into(R, out)``: ``out = W(R)`` (m×m), ``u = W(R) w`` (the identity without a frame).
+W_into = _placeholder
+#: ``delta(R)``: the singularity function ``Δ(R)`` (``+inf`` without a singular set).
+delta = _placeholder
 
 
 def no_singularity(R):
     """``Δ ≡ +inf``: the singularity function of a mechanism without a singular set."""
     return np.inf
+
+
+def identity_into(R, out):
+    """``out = I``: ``W`` of a mechanism without a frame (its frame coordinates are its inputs)."""
+    for i in range(out.shape[0]):
+        for j in range(out.shape[1]):
+            out[i, j] = 1.0 if i == j else 0.0
+
+
+def field_into(R, frame, out):
+    """``out = G(R)``: ``N(R)`` for the frame system, ``L(R)`` for the physical one."""
+    if frame:
+        N_into(R, out)
+    else:
+        L_into(R, out)
+
+
+def field_derivative_into(R, v, frame, out):
+    """``out = DG(R, v)`` with ``d/dε G(exp(ε[s]) R) v = DG s``: ``QN`` or ``Q``."""
+    if frame:
+        QN_into(R, v, out)
+    else:
+        Q_into(R, v, out)
 
 
 # --------------------------------------------------------------------------------------
@@ -124,10 +142,11 @@ def angular_velocity(B, v, out):
     return np.isfinite(out[0]) and np.isfinite(out[1]) and np.isfinite(out[2])
 
 
-def cf4_step(R, Rnext, v0, v1, v2, h, sgn, delta_stop, dmin, Y, B, F, E):
+def cf4_step(R, Rnext, v0, v1, v2, h, frame, sgn, delta_stop, dmin, Y, B, F, E):
     """One CF4 step of length ``h`` from ``R`` into ``Rnext`` (see the module docstring).
 
-    ``v0``, ``v1``, ``v2``: the inputs at the start, middle and end of the step. Fills the
+    ``v0``, ``v1``, ``v2``: the inputs at the start, middle and end of the step (of the
+    frame system if ``frame``, else of the physical one). Fills the
     stage points ``Y[0..2] = Y2, Y3, Y4``, the fields ``B[k] = G(Y_{k+1})`` (``Y_1 = R``)
     and the angular velocities ``F[k]`` (``E`` is scratch). Returns ``(stop, dmin)``:
     ``dmin`` lowered to every ``sgnΔ`` evaluated (at ``Y2``, ``Y3``, ``Y4`` and
@@ -136,32 +155,32 @@ def cf4_step(R, Rnext, v0, v1, v2, h, sgn, delta_stop, dmin, Y, B, F, E):
     """
     h2 = 0.5 * h
     h12 = h / 12.0
-    field_into(R, B[0])
+    field_into(R, frame, B[0])
     if not angular_velocity(B[0], v0, F[0]):
         return 0.0, dmin
     exp_times(h2 * F[0, 0], h2 * F[0, 1], h2 * F[0, 2], R, E, Y[0])
-    d = sgn * singularity(Y[0])
+    d = sgn * delta(Y[0])
     dmin = min(dmin, d)
     if not d >= delta_stop:
         return 0.5, dmin
-    field_into(Y[0], B[1])
+    field_into(Y[0], frame, B[1])
     if not angular_velocity(B[1], v1, F[1]):
         return 0.5, dmin
     exp_times(h2 * F[1, 0], h2 * F[1, 1], h2 * F[1, 2], R, E, Y[1])
-    d = sgn * singularity(Y[1])
+    d = sgn * delta(Y[1])
     dmin = min(dmin, d)
     if not d >= delta_stop:
         return 0.5, dmin
-    field_into(Y[1], B[2])
+    field_into(Y[1], frame, B[2])
     if not angular_velocity(B[2], v1, F[2]):
         return 0.5, dmin
     exp_times(h * F[2, 0] - h2 * F[0, 0], h * F[2, 1] - h2 * F[0, 1], h * F[2, 2] - h2 * F[0, 2],
               Y[0], E, Y[2])
-    d = sgn * singularity(Y[2])
+    d = sgn * delta(Y[2])
     dmin = min(dmin, d)
     if not d >= delta_stop:
         return 1.0, dmin
-    field_into(Y[2], B[3])
+    field_into(Y[2], frame, B[3])
     if not angular_velocity(B[3], v2, F[3]):
         return 1.0, dmin
     Rh = Y[3]
@@ -171,7 +190,7 @@ def cf4_step(R, Rnext, v0, v1, v2, h, sgn, delta_stop, dmin, Y, B, F, E):
     exp_times(h12 * (-F[0, 0] + 2.0 * F[1, 0] + 2.0 * F[2, 0] + 3.0 * F[3, 0]),
               h12 * (-F[0, 1] + 2.0 * F[1, 1] + 2.0 * F[2, 1] + 3.0 * F[3, 1]),
               h12 * (-F[0, 2] + 2.0 * F[1, 2] + 2.0 * F[2, 2] + 3.0 * F[3, 2]), Rh, E, Rnext)
-    d = sgn * singularity(Rnext)
+    d = sgn * delta(Rnext)
     dmin = min(dmin, d)
     if not d >= delta_stop:
         return 1.0, dmin
@@ -189,7 +208,7 @@ def step_workspace(m):
 # --------------------------------------------------------------------------------------
 
 
-def forward(R0, U, h, sgn, delta_stop, Rs):
+def forward(R0, U, h, frame, sgn, delta_stop, Rs):
     """CF4 over ``N = len(U)`` steps; ``Rs[n]`` = R at ``t_n`` (shape ``(N+1, 3, 3)``).
 
     Returns ``(n_done, min sgnΔ, t_stop)``: the number of completed steps (``N`` unless the
@@ -202,20 +221,20 @@ def forward(R0, U, h, sgn, delta_stop, Rs):
     for i in range(3):
         for j in range(3):
             Rs[0, i, j] = R0[i, j]
-    dmin = sgn * singularity(Rs[0])
+    dmin = sgn * delta(Rs[0])
     if not dmin >= delta_stop:
         return 0, dmin, 0.0
     for n in range(N):
-        stop, dmin = cf4_step(Rs[n], Rs[n + 1], U[n, 0], U[n, 1], U[n, 2], h, sgn, delta_stop,
-                              dmin, Y, B, F, E)
+        stop, dmin = cf4_step(Rs[n], Rs[n + 1], U[n, 0], U[n, 1], U[n, 2], h, frame, sgn,
+                              delta_stop, dmin, Y, B, F, E)
         if stop >= 0.0:
             return n, dmin, n * h + stop * h
     return N, dmin, -1.0
 
 
-def zstage(Zc, Y, v, F, B, Qm, f, K):
+def zstage(Zc, Y, v, frame, F, B, Qm, f, K):
     """One stage of ``dZ/dt = -Z A``, ``A = DG(Y, v) + [F]``: ``f = -Zc A``; and ``K = Zc B``."""
-    field_derivative_into(Y, v, Qm)
+    field_derivative_into(Y, v, frame, Qm)
     # A in locals (lets LLVM keep it in registers: the arrays could alias)
     a00 = Qm[0, 0]
     a01 = Qm[0, 1] - F[2]
@@ -238,7 +257,7 @@ def zstage(Zc, Y, v, F, B, Qm, f, K):
             K[i, k] = z0 * B[0, k] + z1 * B[1, k] + z2 * B[2, k]
 
 
-def forward_variational(R0, U, h, sgn, delta_stop, Bidx, Bval, stride_b, stride_i,
+def forward_variational(R0, U, h, frame, sgn, delta_stop, Bidx, Bval, stride_b, stride_i,
                         Rs, Zs, J, Mq, Wd, full):
     """CF4 for ``R`` together with ``Z = Φ(t,0)^{-1}``, the Jacobian ``J`` and ``M(T)``.
 
@@ -275,31 +294,31 @@ def forward_variational(R0, U, h, sgn, delta_stop, Bidx, Bval, stride_b, stride_
             Z[i, j] = 1.0 if i == j else 0.0
             Zs[0, i, j] = Z[i, j]
             Mq[i, j] = 0.0
-    dmin = sgn * singularity(Rs[0])
+    dmin = sgn * delta(Rs[0])
     if not dmin >= delta_stop:
         return 0, dmin, 0.0
     h2 = 0.5 * h
     h6 = h / 6.0
     h3 = h / 3.0
     for n in range(N):
-        stop, dmin = cf4_step(Rs[n], Rs[n + 1], U[n, 0], U[n, 1], U[n, 2], h, sgn, delta_stop,
-                              dmin, Y, B, F, E)
+        stop, dmin = cf4_step(Rs[n], Rs[n + 1], U[n, 0], U[n, 1], U[n, 2], h, frame, sgn,
+                              delta_stop, dmin, Y, B, F, E)
         if stop >= 0.0:
             return n, dmin, n * h + stop * h
         # Z at the stage points (Y1 = R(t_n), Z1 = Z), as RK4 on the additive factor
-        zstage(Z, Rs[n], U[n, 0], F[0], B[0], Qm, f[0], K[0])
+        zstage(Z, Rs[n], U[n, 0], frame, F[0], B[0], Qm, f[0], K[0])
         for i in range(3):
             for j in range(3):
                 Zc[i, j] = Z[i, j] + h2 * f[0, i, j]
-        zstage(Zc, Y[0], U[n, 1], F[1], B[1], Qm, f[1], K[1])
+        zstage(Zc, Y[0], U[n, 1], frame, F[1], B[1], Qm, f[1], K[1])
         for i in range(3):
             for j in range(3):
                 Zc[i, j] = Z[i, j] + h2 * f[1, i, j]
-        zstage(Zc, Y[1], U[n, 1], F[2], B[2], Qm, f[2], K[2])
+        zstage(Zc, Y[1], U[n, 1], frame, F[2], B[2], Qm, f[2], K[2])
         for i in range(3):
             for j in range(3):
                 Zc[i, j] = Z[i, j] + h * f[2, i, j]
-        zstage(Zc, Y[2], U[n, 2], F[3], B[3], Qm, f[3], K[3])
+        zstage(Zc, Y[2], U[n, 2], frame, F[3], B[3], Qm, f[3], K[3])
         # update Z; quadrature weights of the step at c = 0, ½, 1
         for i in range(3):
             for j in range(3):
@@ -379,12 +398,12 @@ def forward_variational(R0, U, h, sgn, delta_stop, Bidx, Bval, stride_b, stride_
     return N, dmin, -1.0
 
 
-def frame_inputs(nodes, idx, s, Wst, w_end, Rout, out):
+def frame_inputs(nodes, idx, s, frame, Wst, w_end, Rout, out):
     """Physical inputs ``u = W(R(t)) w(t)`` along a motion planned in frame coordinates.
 
     For every sample ``k``: ``R(t_k)`` is node ``idx[k]`` of the CF4 trajectory ``nodes``
-    advanced by one CF4 step (:func:`cf4_step`) of length ``s[k]`` (none if ``s[k] == 0``)
-    with frame inputs ``Wst[k, 0]``, ``Wst[k, 1]``, ``Wst[k, 2]`` at its start, middle and
+    advanced by one CF4 step (:func:`cf4_step`, of the frame system: ``frame`` is true)
+    of length ``s[k]`` (none if ``s[k] == 0``) with frame inputs ``Wst[k, 0]``, ``Wst[k, 1]``, ``Wst[k, 2]`` at its start, middle and
     end — the same local approximation as a step of the integrator, ``O(s⁵)`` from the
     exact motion. Outputs ``Rout[k] = R(t_k)`` and ``out[k] = W(R(t_k)) w_end[k]``.
     """
@@ -398,9 +417,9 @@ def frame_inputs(nodes, idx, s, Wst, w_end, Rout, out):
                 for j in range(3):
                     Rout[k, i, j] = nodes[idx[k], i, j]
         else:
-            cf4_step(nodes[idx[k]], Rout[k], Wst[k, 0], Wst[k, 1], Wst[k, 2], s[k], 1.0, -np.inf,
-                     np.inf, Y, B, F, E)
-        inputs_into(Rout[k], Wm)
+            cf4_step(nodes[idx[k]], Rout[k], Wst[k, 0], Wst[k, 1], Wst[k, 2], s[k], frame, 1.0,
+                     -np.inf, np.inf, Y, B, F, E)
+        W_into(Rout[k], Wm)
         for i in range(m):
             v = 0.0
             for j in range(m):
@@ -413,30 +432,44 @@ def frame_inputs(nodes, idx, s, Wst, w_end, Rout, out):
 # --------------------------------------------------------------------------------------
 
 
-@dataclass(frozen=True)
 class Kernels:
-    """The compiled kernels of one system (arguments: see the functions of this module).
+    """The compiled kernels of one system of a mechanism: ``ω = L(R) u`` or, with
+    ``frame``, its desingularised frame ``ω = N(R) w`` (then :meth:`frame_inputs`
+    evaluates ``u = W(R) w``). The arguments are those of the module's functions of the
+    same names, without ``frame``."""
 
-    ``frame``: the system is the mechanism's desingularised frame ``ω = N(R) w``
-    (then :attr:`frame_inputs` evaluates ``u = W(R) w``), else ``ω = L(R) u``.
-    """
+    def __init__(self, compiled: dict, name: str, frame: bool, n_inputs: int, has_singular_set: bool):
+        self._compiled = compiled
+        self.name = name
+        self.frame = frame
+        self.n_inputs = n_inputs
+        self.has_singular_set = has_singular_set
 
-    name: str
-    frame: bool
-    n_inputs: int
-    has_singular_set: bool
-    forward: object
-    forward_variational: object
-    frame_inputs: object = None
+    def forward(self, R0, U, h, sgn, delta_stop, Rs):
+        return self._compiled["forward"](R0, U, h, self.frame, sgn, delta_stop, Rs)
+
+    def forward_variational(self, R0, U, h, sgn, delta_stop, Bidx, Bval, stride_b, stride_i,
+                            Rs, Zs, J, Mq, Wd, full):
+        return self._compiled["forward_variational"](R0, U, h, self.frame, sgn, delta_stop, Bidx, Bval,
+                                                     stride_b, stride_i, Rs, Zs, J, Mq, Wd, full)
+
+    def frame_inputs(self, nodes, idx, s, Wst, w_end, Rout, out):
+        if not self.frame:
+            raise ValueError("frame_inputs needs the kernels of the frame system (frame=True)")
+        return self._compiled["frame_inputs"](nodes, idx, s, True, Wst, w_end, Rout, out)
+
+    def __repr__(self) -> str:
+        return f"Kernels({self.name!r}, frame={self.frame})"
 
 
-#: The kernels of this module in the order their callers need them (callees first).
-_TEMPLATES = (cf4_step, forward, zstage, forward_variational, frame_inputs)
+#: The kernels of this module, callees first.
+_TEMPLATES = (field_into, field_derivative_into, cf4_step, forward, zstage, forward_variational,
+              frame_inputs)
 _PLAIN = dict(nogil=True, error_model="numpy")
 
 
 def _specialise(template, bindings: dict, tag: str, cache: bool):
-    """A compiled copy of ``template`` whose globals bind the system's names (``bindings``)."""
+    """A compiled copy of ``template`` whose globals bind the mechanism's names (``bindings``)."""
     glb = {**template.__globals__, **bindings}
     f = types.FunctionType(template.__code__, glb, template.__name__)
     f.__qualname__ = f"{template.__name__}__{tag}"        # its own cache entry
@@ -445,10 +478,10 @@ def _specialise(template, bindings: dict, tag: str, cache: bool):
     return numba.njit(**{**JIT_OPTIONS, "cache": cache})(f)
 
 
-def system_tag(module, frame: bool) -> str:
-    """The cache name of a system: mechanism, system and a hash of the generated source."""
+def mechanism_tag(module) -> str:
+    """The cache name of a mechanism's kernels: its name and a hash of the generated source."""
     src = inspect.getsource(module) if _importable(module) else module.SOURCE
-    return f"{module.NAME}{'_frame' if frame else ''}_{hashlib.sha256(src.encode()).hexdigest()[:12]}"
+    return f"{module.NAME}_{hashlib.sha256(src.encode()).hexdigest()[:12]}"
 
 
 def _importable(module) -> bool:
@@ -456,42 +489,40 @@ def _importable(module) -> bool:
     return sys.modules.get(getattr(module, "__name__", None)) is module
 
 
-_COMPILED: dict[str, Kernels] = {}
+_COMPILED: dict[str, dict] = {}
 
 
 def compile_system(module, frame: bool = False) -> Kernels:
-    """The kernels of the system of generated ``module`` (compiled once, cached on disk).
+    """The kernels of the generated ``module``'s mechanism (compiled once, cached on disk).
 
-    ``frame=False``: ``ω = L(R) u`` (``L_into``, ``Q_into``); ``frame=True``: the
+    ``frame=False``: the system ``ω = L(R) u`` (``L_into``, ``Q_into``); ``frame=True``: the
     desingularised frame ``ω = N(R) w`` (``N_into``, ``QN_into``, and ``W_into`` for
-    :func:`frame_inputs`). Both watch the mechanism's ``delta`` (if any). Kernels of a
-    module that cannot be re-imported by name (built in this process, see
-    :meth:`nonholo.mechanism.Mechanism.from_symbolic`) are not cached on disk.
-    Numba compiles a kernel on its first call, so a run pays only for what it uses.
+    :func:`frame_inputs`). Both watch the mechanism's ``delta`` (if any), and both run on
+    the same compiled kernels (the system is an argument), so a run that uses both pays
+    for one compilation. Kernels of a module that cannot be re-imported by name (built in
+    this process, see :meth:`nonholo.mechanism.Mechanism.from_symbolic`) are not cached
+    on disk. Numba compiles a kernel on its first call, so a run pays only for what it
+    uses.
     """
-    tag = system_tag(module, frame)
-    if tag in _COMPILED:
-        return _COMPILED[tag]
     if frame and not getattr(module, "HAS_FRAME", False):
         raise ValueError(f"mechanism {module.NAME!r} has no desingularised frame N(R)")
-    cache = _importable(module)
-    G, DG = (module.N_into, module.QN_into) if frame else (module.L_into, module.Q_into)
-    bindings = {
-        "field_into": numba.njit(**_PLAIN)(G),
-        # DG feeds only the variational system (the Jacobian): fast-math lets LLVM turn
-        # its ``x**(-2.0)`` into a multiplication (the result changes at round-off level)
-        "field_derivative_into": numba.njit(fastmath=True, **_PLAIN)(DG),
-        "singularity": numba.njit(**_PLAIN)(module.delta if module.HAS_SINGULAR_SET else no_singularity),
-    }
-    if frame:
-        bindings["inputs_into"] = numba.njit(**_PLAIN)(module.W_into)
-    for template in _TEMPLATES:
-        if template is frame_inputs and not frame:
-            continue
-        bindings[template.__name__] = _specialise(template, bindings, tag, cache)
-    kern = Kernels(name=module.NAME, frame=frame, n_inputs=module.N_INPUTS,
-                   has_singular_set=module.HAS_SINGULAR_SET, forward=bindings["forward"],
-                   forward_variational=bindings["forward_variational"],
-                   frame_inputs=bindings.get("frame_inputs"))
-    _COMPILED[tag] = kern
-    return kern
+    tag = mechanism_tag(module)
+    if tag not in _COMPILED:
+        cache = _importable(module)
+        has_frame = getattr(module, "HAS_FRAME", False)
+        generated = {
+            "L_into": module.L_into,
+            "Q_into": module.Q_into,
+            "N_into": module.N_into if has_frame else module.L_into,
+            "QN_into": module.QN_into if has_frame else module.Q_into,
+            "W_into": module.W_into if has_frame else identity_into,
+            "delta": module.delta if module.HAS_SINGULAR_SET else no_singularity,
+        }
+        # Q and QN feed only the variational system (the Jacobian): fast-math lets LLVM turn
+        # their ``x**(-2.0)`` into a multiplication (the result changes at round-off level)
+        bindings = {name: numba.njit(fastmath=name in ("Q_into", "QN_into"), **_PLAIN)(f)
+                    for name, f in generated.items()}
+        for template in _TEMPLATES:
+            bindings[template.__name__] = _specialise(template, bindings, tag, cache)
+        _COMPILED[tag] = bindings
+    return Kernels(_COMPILED[tag], module.NAME, frame, module.N_INPUTS, module.HAS_SINGULAR_SET)
