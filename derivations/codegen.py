@@ -207,15 +207,6 @@ def generated_files() -> dict[str, str]:
     return files
 
 
-def write_mechanism(mechanism: Mechanism, outdir) -> Path:
-    """Write one mechanism's generated module to ``outdir/<name>.py`` (e.g. to try a
-    mechanism out with :func:`nonholo.mechanisms.register` before adding it to the catalog)."""
-    path = Path(outdir) / f"{mechanism.name}.py"
-    path.parent.mkdir(parents=True, exist_ok=True)
-    path.write_text(mechanism_module(mechanism))
-    return path
-
-
 def write(outdir: Path = GENERATED_DIR) -> list[Path]:
     """Write every generated module into ``outdir``; returns the paths written."""
     outdir.mkdir(parents=True, exist_ok=True)
