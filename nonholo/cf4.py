@@ -142,46 +142,48 @@ def angular_velocity(B, v, out):
     return np.isfinite(out[0]) and np.isfinite(out[1]) and np.isfinite(out[2])
 
 
+def cf4_stage(ax, ay, az, base, Y, v, frame, sgn, delta_stop, dmin, B, F, E):
+    """One stage of :func:`cf4_step`: the stage point ``Y = exp([a]) base``, its ``sgnΔ``
+    (lowering ``dmin``), the field ``B = G(Y)`` and the angular velocity ``F = B v``.
+    Returns ``(ok, dmin)``: ``ok`` is false where ``sgnΔ < delta_stop`` or ``ω`` is not
+    finite (then ``B`` and ``F`` are not computed or not usable)."""
+    exp_times(ax, ay, az, base, E, Y)
+    d = sgn * delta(Y)
+    dmin = min(dmin, d)
+    if not d >= delta_stop:
+        return False, dmin
+    field_into(Y, frame, B)
+    return angular_velocity(B, v, F), dmin
+
+
 def cf4_step(R, Rnext, v0, v1, v2, h, frame, sgn, delta_stop, dmin, Y, B, F, E):
     """One CF4 step of length ``h`` from ``R`` into ``Rnext`` (see the module docstring).
 
     ``v0``, ``v1``, ``v2``: the inputs at the start, middle and end of the step (of the
-    frame system if ``frame``, else of the physical one). Fills the
-    stage points ``Y[0..2] = Y2, Y3, Y4``, the fields ``B[k] = G(Y_{k+1})`` (``Y_1 = R``)
-    and the angular velocities ``F[k]`` (``E`` is scratch). Returns ``(stop, dmin)``:
-    ``dmin`` lowered to every ``sgnΔ`` evaluated (at ``Y2``, ``Y3``, ``Y4`` and
-    ``Rnext``); ``stop = -1`` if the step completed, else the fraction of the step (0, ½
-    or 1) where ``sgnΔ < delta_stop`` or ``ω`` was not finite.
+    frame system if ``frame``, else of the physical one). Fills the stage points
+    ``Y[0..2] = Y2, Y3, Y4``, the fields ``B[k] = G(Y_{k+1})`` (``Y_1 = R``) and the
+    angular velocities ``F[k]`` (``E`` is scratch). Returns ``(stop, dmin)``: ``dmin``
+    lowered to every ``sgnΔ`` evaluated (at ``Y2``, ``Y3``, ``Y4`` and ``Rnext``);
+    ``stop = -1`` if the step completed, else the fraction of the step (0, ½ or 1) where
+    ``sgnΔ < delta_stop`` or ``ω`` was not finite.
     """
     h2 = 0.5 * h
     h12 = h / 12.0
     field_into(R, frame, B[0])
     if not angular_velocity(B[0], v0, F[0]):
         return 0.0, dmin
-    exp_times(h2 * F[0, 0], h2 * F[0, 1], h2 * F[0, 2], R, E, Y[0])
-    d = sgn * delta(Y[0])
-    dmin = min(dmin, d)
-    if not d >= delta_stop:
+    ok, dmin = cf4_stage(h2 * F[0, 0], h2 * F[0, 1], h2 * F[0, 2], R, Y[0], v1, frame, sgn,
+                         delta_stop, dmin, B[1], F[1], E)
+    if not ok:
         return 0.5, dmin
-    field_into(Y[0], frame, B[1])
-    if not angular_velocity(B[1], v1, F[1]):
+    ok, dmin = cf4_stage(h2 * F[1, 0], h2 * F[1, 1], h2 * F[1, 2], R, Y[1], v1, frame, sgn,
+                         delta_stop, dmin, B[2], F[2], E)
+    if not ok:
         return 0.5, dmin
-    exp_times(h2 * F[1, 0], h2 * F[1, 1], h2 * F[1, 2], R, E, Y[1])
-    d = sgn * delta(Y[1])
-    dmin = min(dmin, d)
-    if not d >= delta_stop:
-        return 0.5, dmin
-    field_into(Y[1], frame, B[2])
-    if not angular_velocity(B[2], v1, F[2]):
-        return 0.5, dmin
-    exp_times(h * F[2, 0] - h2 * F[0, 0], h * F[2, 1] - h2 * F[0, 1], h * F[2, 2] - h2 * F[0, 2],
-              Y[0], E, Y[2])
-    d = sgn * delta(Y[2])
-    dmin = min(dmin, d)
-    if not d >= delta_stop:
-        return 1.0, dmin
-    field_into(Y[2], frame, B[3])
-    if not angular_velocity(B[3], v2, F[3]):
+    ok, dmin = cf4_stage(h * F[2, 0] - h2 * F[0, 0], h * F[2, 1] - h2 * F[0, 1],
+                         h * F[2, 2] - h2 * F[0, 2], Y[0], Y[2], v2, frame, sgn, delta_stop, dmin,
+                         B[3], F[3], E)
+    if not ok:
         return 1.0, dmin
     Rh = Y[3]
     exp_times(h12 * (3.0 * F[0, 0] + 2.0 * F[1, 0] + 2.0 * F[2, 0] - F[3, 0]),
@@ -463,7 +465,7 @@ class Kernels:
 
 
 #: The kernels of this module, callees first.
-_TEMPLATES = (field_into, field_derivative_into, cf4_step, forward, zstage, forward_variational,
+_TEMPLATES = (field_into, field_derivative_into, cf4_stage, cf4_step, forward, zstage, forward_variational,
               frame_inputs)
 _PLAIN = dict(nogil=True, error_model="numpy")
 

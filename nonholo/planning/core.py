@@ -367,15 +367,15 @@ class Request:
     """What the caller of :func:`nonholo.plan` asked for (validated)."""
 
     mechanism: Mechanism
-    method: str
-    strategy: str
-    T: float
     R0: np.ndarray
     Rd: np.ndarray
-    steps: int
-    options: Options
+    T: float
+    method: str
     harmonics: int
     grid: int
+    strategy: str
+    options: Options
+    steps: int
     controls: Controls          # the physical initial control
     started: float              # time.perf_counter() when the call began
 
