@@ -307,20 +307,15 @@ def forward_variational(R0, U, h, frame, sgn, delta_stop, Bidx, Bval, stride_b, 
                               delta_stop, dmin, Y, B, F, E)
         if stop >= 0.0:
             return n, dmin, n * h + stop * h
-        # Z at the stage points (Y1 = R(t_n), Z1 = Z), as RK4 on the additive factor
+        # Z at the stage points (Y1 = R(t_n), Z1 = Z), as RK4 on the additive factor:
+        # stage c + 1 at Y[c - 1], Zc = Z + (h/2, h/2, h)[c - 1] f[c - 1], inputs U[n, (c + 1) // 2]
         zstage(Z, Rs[n], U[n, 0], frame, F[0], B[0], Qm, f[0], K[0])
-        for i in range(3):
-            for j in range(3):
-                Zc[i, j] = Z[i, j] + h2 * f[0, i, j]
-        zstage(Zc, Y[0], U[n, 1], frame, F[1], B[1], Qm, f[1], K[1])
-        for i in range(3):
-            for j in range(3):
-                Zc[i, j] = Z[i, j] + h2 * f[1, i, j]
-        zstage(Zc, Y[1], U[n, 1], frame, F[2], B[2], Qm, f[2], K[2])
-        for i in range(3):
-            for j in range(3):
-                Zc[i, j] = Z[i, j] + h * f[2, i, j]
-        zstage(Zc, Y[2], U[n, 2], frame, F[3], B[3], Qm, f[3], K[3])
+        for c in range(1, 4):
+            a = h if c == 3 else h2
+            for i in range(3):
+                for j in range(3):
+                    Zc[i, j] = Z[i, j] + a * f[c - 1, i, j]
+            zstage(Zc, Y[c - 1], U[n, (c + 1) // 2], frame, F[c], B[c], Qm, f[c], K[c])
         # update Z; quadrature weights of the step at c = 0, ½, 1
         for i in range(3):
             for j in range(3):
