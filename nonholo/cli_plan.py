@@ -18,7 +18,6 @@ import sys
 import numpy as np
 
 from . import catalog, planner, so3
-from .generated import MECHANISMS
 
 
 def add_parser(subparsers) -> argparse.ArgumentParser:
@@ -37,7 +36,8 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     p.add_argument("--grid", type=int, default=100, help="intervals of the nonparametric grid (default 100)")
     p.add_argument("--strategy", default="robust",
                    help=f"planning strategy: {', '.join(planner.STRATEGIES)} (default: robust)")
-    p.add_argument("--mechanism", default="platform", help=f"mechanism ({', '.join(MECHANISMS)})")
+    p.add_argument("--mechanism", default="platform",
+                   help=f"mechanism ({', '.join(catalog.names())}; see `nonholo mechanisms`)")
     p.add_argument("--gamma", type=float, default=None,
                    help="decay rate γ of the θ-flow (default: the strategy's, 1 robust, 0.5 paper)")
     p.add_argument("--tol", type=float, default=1e-10, help="stop when |l_T| <= tol (rad)")
