@@ -53,13 +53,19 @@ the kernels stop as soon as it falls below ``delta_stop`` (or ``ω`` is not fini
 report how many steps were completed, so a trajectory running into ``Δ = 0`` never
 produces NaN.
 
-Compilation. The kernels call the mechanism through the names of its generated
-functions — ``L_into``, ``Q_into``, ``N_into``, ``QN_into``, ``W_into``, ``delta`` — defined
-below as placeholders, and take the system (``frame``: ``N``/``QN``, else ``L``/``Q``) as an
-argument. :func:`compile_system` makes, per mechanism, a copy of each kernel whose globals
-bind those names to the mechanism's generated functions (compiled with ``numba.njit``),
-so that numba inlines them; each copy has its own qualified name (the mechanism and a
-hash of its generated source), hence its own on-disk cache entry. (A closure over the compiled functions would read the same, but numba cannot
+Compilation. The kernels call the system through four names — ``field_into``,
+``field_derivative_into``, ``delta`` and (frame systems) ``W_into`` — defined below as
+placeholders. :func:`compile_system` makes, per system, a copy of each kernel whose
+globals bind those names to the mechanism's generated functions (``L_into``/``Q_into`` or
+``N_into``/``QN_into``, ``delta``, ``W_into``, compiled with ``numba.njit``), so that they
+are inlined; each copy has its own qualified name (mechanism, system, a hash of the
+generated source), hence its own on-disk cache entry. The step itself is inlined too,
+but by code generation: a call costs the kernels about half again their time (the
+arrays of the step no longer stay in registers), and numba's own inlining multiplies
+the compilation time. ``nonholo derive`` writes :mod:`nonholo.generated.cf4_kernels`, the
+kernels of this module with every call of :func:`cf4_step` and :func:`cf4_stage` expanded
+in place; that is what gets compiled, and ``tests/test_cf4.py`` checks it against the
+kernels of this module compiled as they are. (A closure over the compiled functions would read the same, but numba cannot
 cache it: the cache key pickles the closure's cells, and a compiled function pickles
 differently in every process.)
 """
@@ -69,65 +75,39 @@ import hashlib
 import inspect
 import sys
 import types
+from dataclasses import dataclass
+
 import numba
 import numpy as np
 
+from .generated import cf4_kernels as kernels_inlined
 from .kernels import JIT_OPTIONS, exp_times, inv33
 
 # --------------------------------------------------------------------------------------
-# The mechanism a kernel integrates (bound per mechanism by compile_system)
+# The system a kernel integrates (bound per system by compile_system)
 # --------------------------------------------------------------------------------------
 
 
 def _placeholder(*args):
-    raise NotImplementedError("placeholder: bound per mechanism by nonholo.cf4.compile_system")
+    raise NotImplementedError("placeholder: bound per system by nonholo.cf4.compile_system")
 
 
-#: ``L_into(R, out)``: ``out = L(R)`` (3×m), the generated function of the mechanism.
-L_into = _placeholder
-#: ``Q_into(R, u, out)``: ``out = Q(R, u)`` (3×3) of eq. (12).
-Q_into = _placeholder
-#: ``N_into(R, out)``: ``out = N(R)``, the desingularised frame (``L`` without one).
-N_into = _placeholder
-#: ``QN_into(R, w, out)``: ``out = QN(R, w)``, the ``Q`` of the frame (``Q`` without one).
-QN_into = _placeholder
-#: ``W_into(R, out)``: ``out = W(R)`` (m×m), ``u = W(R) w`` (the identity without a frame).
-W_into = _placeholder
-#: ``delta(R)``: the singularity function ``Δ(R)`` (``+inf`` without a singular set).
+#: ``field_into(R, out)``: ``out = G(R)`` (3×m), the mechanism's generated ``L_into`` or,
+#: for the frame system, ``N_into``.
+field_into = _placeholder
+#: ``field_derivative_into(R, v, out)``: ``out = DG(R, v)`` (3×3) with
+#: ``d/dε G(exp(ε[s]) R) v = DG s``: the generated ``Q_into`` (eq. (12)) or ``QN_into``.
+field_derivative_into = _placeholder
+#: ``delta(R)``: the mechanism's singularity function ``Δ(R)`` (``+inf`` without one).
 delta = _placeholder
+#: ``W_into(R, out)``: ``out = W(R)`` (m×m), physical inputs ``u = W(R) w`` of frame
+#: coordinates ``w`` (frame system only).
+W_into = _placeholder
 
 
 def no_singularity(R):
     """``Δ ≡ +inf``: the singularity function of a mechanism without a singular set."""
     return np.inf
-
-
-def identity_into(R, out):
-    """``out = I``: ``W`` of a mechanism without a frame (its frame coordinates are its inputs)."""
-    for i in range(out.shape[0]):
-        for j in range(out.shape[1]):
-            out[i, j] = 1.0 if i == j else 0.0
-
-
-def field_into(R, frame, out):
-    """``out = G(R)``: ``N(R)`` for the frame system, ``L(R)`` for the physical one."""
-    if frame:
-        N_into(R, out)
-    else:
-        L_into(R, out)
-
-
-def field_derivative_into(R, v, frame, out):
-    """``out = DG(R, v)`` with ``d/dε G(exp(ε[s]) R) v = DG s``: ``QN`` or ``Q``."""
-    if frame:
-        QN_into(R, v, out)
-    else:
-        Q_into(R, v, out)
-
-
-# --------------------------------------------------------------------------------------
-# One CF4 step
-# --------------------------------------------------------------------------------------
 
 
 @numba.njit(**JIT_OPTIONS)
@@ -142,67 +122,69 @@ def angular_velocity(B, v, out):
     return np.isfinite(out[0]) and np.isfinite(out[1]) and np.isfinite(out[2])
 
 
-def cf4_stage(ax, ay, az, base, Y, v, frame, sgn, delta_stop, dmin, B, F, E):
+def cf4_stage(ax, ay, az, base, Y, v, sgn, delta_stop, dmin, B, F, E):
     """One stage of :func:`cf4_step`: the stage point ``Y = exp([a]) base``, its ``sgnΔ``
     (lowering ``dmin``), the field ``B = G(Y)`` and the angular velocity ``F = B v``.
-    Returns ``(ok, dmin)``: ``ok`` is false where ``sgnΔ < delta_stop`` or ``ω`` is not
-    finite (then ``B`` and ``F`` are not computed or not usable)."""
+    Returns ``(ok, dmin)``: ``ok`` is false where ``sgnΔ < delta_stop`` (or is NaN) or
+    ``ω`` is not finite."""
+    ok = False
     exp_times(ax, ay, az, base, E, Y)
     d = sgn * delta(Y)
     dmin = min(dmin, d)
-    if not d >= delta_stop:
-        return False, dmin
-    field_into(Y, frame, B)
-    return angular_velocity(B, v, F), dmin
+    if d >= delta_stop:
+        field_into(Y, B)
+        ok = angular_velocity(B, v, F)
+    return ok, dmin
 
 
-def cf4_step(R, Rnext, v0, v1, v2, h, frame, sgn, delta_stop, dmin, Y, B, F, E):
-    """One CF4 step of length ``h`` from ``R`` into ``Rnext`` (see the module docstring).
+def cf4_step(R, Rn, v0, v1, v2, h, sgn, delta_stop, dmin, Y2, Y3, Y4, Rh, E,
+             B1, B2, B3, B4, F1, F2, F3, F4):
+    """One CF4 step of length ``h`` from ``R`` into ``Rn`` (see the module docstring).
 
-    ``v0``, ``v1``, ``v2``: the inputs at the start, middle and end of the step (of the
-    frame system if ``frame``, else of the physical one). Fills the stage points
-    ``Y[0..2] = Y2, Y3, Y4``, the fields ``B[k] = G(Y_{k+1})`` (``Y_1 = R``) and the
-    angular velocities ``F[k]`` (``E`` is scratch). Returns ``(stop, dmin)``: ``dmin``
-    lowered to every ``sgnΔ`` evaluated (at ``Y2``, ``Y3``, ``Y4`` and ``Rnext``);
-    ``stop = -1`` if the step completed, else the fraction of the step (0, ½ or 1) where
-    ``sgnΔ < delta_stop`` or ``ω`` was not finite.
+    ``v0``, ``v1``, ``v2``: the inputs at the start, middle and end of the step. Fills the
+    stage points ``Y2``, ``Y3``, ``Y4``, the fields ``B1 … B4`` (``B_k = G(Y_k)``, ``Y1 = R``)
+    and the angular velocities ``F1 … F4`` (``Rh``, ``E``: scratch). Returns
+    ``(stop, dmin)``: ``dmin`` lowered to every ``sgnΔ`` evaluated (at ``Y2``, ``Y3``,
+    ``Y4`` and ``Rn``); ``stop = -1`` if the step completed, else the fraction of the step
+    (0, ½ or 1) where ``sgnΔ < delta_stop`` or ``ω`` was not finite. (The workspace is
+    passed array by array: views into one larger array would cost a reference count
+    pair each, per step. Written with ``break`` rather than early returns so that it can
+    be inlined, see :mod:`nonholo.generated.cf4_kernels`.)
     """
-    h2 = 0.5 * h
-    h12 = h / 12.0
-    field_into(R, frame, B[0])
-    if not angular_velocity(B[0], v0, F[0]):
-        return 0.0, dmin
-    ok, dmin = cf4_stage(h2 * F[0, 0], h2 * F[0, 1], h2 * F[0, 2], R, Y[0], v1, frame, sgn,
-                         delta_stop, dmin, B[1], F[1], E)
-    if not ok:
-        return 0.5, dmin
-    ok, dmin = cf4_stage(h2 * F[1, 0], h2 * F[1, 1], h2 * F[1, 2], R, Y[1], v1, frame, sgn,
-                         delta_stop, dmin, B[2], F[2], E)
-    if not ok:
-        return 0.5, dmin
-    ok, dmin = cf4_stage(h * F[2, 0] - h2 * F[0, 0], h * F[2, 1] - h2 * F[0, 1],
-                         h * F[2, 2] - h2 * F[0, 2], Y[0], Y[2], v2, frame, sgn, delta_stop, dmin,
-                         B[3], F[3], E)
-    if not ok:
-        return 1.0, dmin
-    Rh = Y[3]
-    exp_times(h12 * (3.0 * F[0, 0] + 2.0 * F[1, 0] + 2.0 * F[2, 0] - F[3, 0]),
-              h12 * (3.0 * F[0, 1] + 2.0 * F[1, 1] + 2.0 * F[2, 1] - F[3, 1]),
-              h12 * (3.0 * F[0, 2] + 2.0 * F[1, 2] + 2.0 * F[2, 2] - F[3, 2]), R, E, Rh)
-    exp_times(h12 * (-F[0, 0] + 2.0 * F[1, 0] + 2.0 * F[2, 0] + 3.0 * F[3, 0]),
-              h12 * (-F[0, 1] + 2.0 * F[1, 1] + 2.0 * F[2, 1] + 3.0 * F[3, 1]),
-              h12 * (-F[0, 2] + 2.0 * F[1, 2] + 2.0 * F[2, 2] + 3.0 * F[3, 2]), Rh, E, Rnext)
-    d = sgn * delta(Rnext)
-    dmin = min(dmin, d)
-    if not d >= delta_stop:
-        return 1.0, dmin
-    return -1.0, dmin
-
-
-@numba.njit(**JIT_OPTIONS)
-def step_workspace(m):
-    """Scratch of :func:`cf4_step`: ``(Y, B, F, E)`` (``Y[3]`` holds ``R½``)."""
-    return np.empty((4, 3, 3)), np.empty((4, 3, m)), np.empty((4, 3)), np.empty((3, 3))
+    stop = -1.0
+    for _ in range(1):
+        h2 = 0.5 * h
+        h12 = h / 12.0
+        field_into(R, B1)
+        if not angular_velocity(B1, v0, F1):
+            stop = 0.0
+            break
+        ok, dmin = cf4_stage(h2 * F1[0], h2 * F1[1], h2 * F1[2], R, Y2, v1, sgn, delta_stop, dmin,
+                             B2, F2, E)
+        if not ok:
+            stop = 0.5
+            break
+        ok, dmin = cf4_stage(h2 * F2[0], h2 * F2[1], h2 * F2[2], R, Y3, v1, sgn, delta_stop, dmin,
+                             B3, F3, E)
+        if not ok:
+            stop = 0.5
+            break
+        ok, dmin = cf4_stage(h * F3[0] - h2 * F1[0], h * F3[1] - h2 * F1[1], h * F3[2] - h2 * F1[2],
+                             Y2, Y4, v2, sgn, delta_stop, dmin, B4, F4, E)
+        if not ok:
+            stop = 1.0
+            break
+        exp_times(h12 * (3.0 * F1[0] + 2.0 * F2[0] + 2.0 * F3[0] - F4[0]),
+                  h12 * (3.0 * F1[1] + 2.0 * F2[1] + 2.0 * F3[1] - F4[1]),
+                  h12 * (3.0 * F1[2] + 2.0 * F2[2] + 2.0 * F3[2] - F4[2]), R, E, Rh)
+        exp_times(h12 * (-F1[0] + 2.0 * F2[0] + 2.0 * F3[0] + 3.0 * F4[0]),
+                  h12 * (-F1[1] + 2.0 * F2[1] + 2.0 * F3[1] + 3.0 * F4[1]),
+                  h12 * (-F1[2] + 2.0 * F2[2] + 2.0 * F3[2] + 3.0 * F4[2]), Rh, E, Rn)
+        d = sgn * delta(Rn)
+        dmin = min(dmin, d)
+        if not d >= delta_stop:
+            stop = 1.0
+    return stop, dmin
 
 
 # --------------------------------------------------------------------------------------
@@ -210,7 +192,7 @@ def step_workspace(m):
 # --------------------------------------------------------------------------------------
 
 
-def forward(R0, U, h, frame, sgn, delta_stop, Rs):
+def forward(R0, U, h, sgn, delta_stop, Rs):
     """CF4 over ``N = len(U)`` steps; ``Rs[n]`` = R at ``t_n`` (shape ``(N+1, 3, 3)``).
 
     Returns ``(n_done, min sgnΔ, t_stop)``: the number of completed steps (``N`` unless the
@@ -219,24 +201,52 @@ def forward(R0, U, h, frame, sgn, delta_stop, Rs):
     (``-1`` if it did not).
     """
     N = U.shape[0]
-    Y, B, F, E = step_workspace(U.shape[2])
+    m = U.shape[2]
+    R = R0.copy()
+    Rn = np.empty((3, 3))
+    Y2 = np.empty((3, 3))
+    Y3 = np.empty((3, 3))
+    Y4 = np.empty((3, 3))
+    Rh = np.empty((3, 3))
+    E = np.empty((3, 3))
+    B1 = np.empty((3, m))
+    B2 = np.empty((3, m))
+    B3 = np.empty((3, m))
+    B4 = np.empty((3, m))
+    F1 = np.empty(3)
+    F2 = np.empty(3)
+    F3 = np.empty(3)
+    F4 = np.empty(3)
     for i in range(3):
         for j in range(3):
             Rs[0, i, j] = R0[i, j]
-    dmin = sgn * delta(Rs[0])
+    dmin = sgn * delta(R)
     if not dmin >= delta_stop:
         return 0, dmin, 0.0
     for n in range(N):
-        stop, dmin = cf4_step(Rs[n], Rs[n + 1], U[n, 0], U[n, 1], U[n, 2], h, frame, sgn,
-                              delta_stop, dmin, Y, B, F, E)
+        stop, dmin = cf4_step(R, Rn, U[n, 0], U[n, 1], U[n, 2], h, sgn, delta_stop, dmin,
+                              Y2, Y3, Y4, Rh, E, B1, B2, B3, B4, F1, F2, F3, F4)
         if stop >= 0.0:
             return n, dmin, n * h + stop * h
+        for i in range(3):
+            for j in range(3):
+                R[i, j] = Rn[i, j]
+                Rs[n + 1, i, j] = Rn[i, j]
     return N, dmin, -1.0
 
 
-def zstage(Zc, Y, v, frame, F, B, Qm, f, K):
+@numba.njit(**JIT_OPTIONS)
+def zpredict(Z, a, f, out):
+    """``out = Z + a f`` (3×3): the value of ``Z`` at a stage of RK4; returns ``out``."""
+    for i in range(3):
+        for j in range(3):
+            out[i, j] = Z[i, j] + a * f[i, j]
+    return out
+
+
+def zstage(Zc, Y, v, F, B, Qm, f, K):
     """One stage of ``dZ/dt = -Z A``, ``A = DG(Y, v) + [F]``: ``f = -Zc A``; and ``K = Zc B``."""
-    field_derivative_into(Y, v, frame, Qm)
+    field_derivative_into(Y, v, Qm)
     # A in locals (lets LLVM keep it in registers: the arrays could alias)
     a00 = Qm[0, 0]
     a01 = Qm[0, 1] - F[2]
@@ -259,7 +269,7 @@ def zstage(Zc, Y, v, frame, F, B, Qm, f, K):
             K[i, k] = z0 * B[0, k] + z1 * B[1, k] + z2 * B[2, k]
 
 
-def forward_variational(R0, U, h, frame, sgn, delta_stop, Bidx, Bval, stride_b, stride_i,
+def forward_variational(R0, U, h, sgn, delta_stop, Bidx, Bval, stride_b, stride_i,
                         Rs, Zs, J, Mq, Wd, full):
     """CF4 for ``R`` together with ``Z = Φ(t,0)^{-1}``, the Jacobian ``J`` and ``M(T)``.
 
@@ -282,13 +292,33 @@ def forward_variational(R0, U, h, frame, sgn, delta_stop, Bidx, Bval, stride_b, 
     dense = Bidx.shape[0] == 0 and Bval.shape[0] == N
     keep_w = Wd.shape[0] == 3 * N
     nq = 0 if dense else Bidx.shape[2]
-    Y, B, F, E = step_workspace(m)
+    R = R0.copy()
+    Rn = np.empty((3, 3))
+    Y2 = np.empty((3, 3))
+    Y3 = np.empty((3, 3))
+    Y4 = np.empty((3, 3))
+    Rh = np.empty((3, 3))
+    E = np.empty((3, 3))
     Z = np.empty((3, 3))
     Zc = np.empty((3, 3))
     Qm = np.empty((3, 3))
-    f = np.empty((4, 3, 3))
-    K = np.empty((4, 3, m))
+    f1 = np.empty((3, 3))
+    f2 = np.empty((3, 3))
+    f3 = np.empty((3, 3))
+    f4 = np.empty((3, 3))
+    B1 = np.empty((3, m))
+    B2 = np.empty((3, m))
+    B3 = np.empty((3, m))
+    B4 = np.empty((3, m))
+    K1 = np.empty((3, m))
+    K2 = np.empty((3, m))
+    K3 = np.empty((3, m))
+    K4 = np.empty((3, m))
     W = np.empty((3, 3, m))
+    F1 = np.empty(3)
+    F2 = np.empty(3)
+    F3 = np.empty(3)
+    F4 = np.empty(3)
     J[:, :] = 0.0
     for i in range(3):
         for j in range(3):
@@ -296,34 +326,34 @@ def forward_variational(R0, U, h, frame, sgn, delta_stop, Bidx, Bval, stride_b, 
             Z[i, j] = 1.0 if i == j else 0.0
             Zs[0, i, j] = Z[i, j]
             Mq[i, j] = 0.0
-    dmin = sgn * delta(Rs[0])
+    dmin = sgn * delta(R)
     if not dmin >= delta_stop:
         return 0, dmin, 0.0
     h2 = 0.5 * h
     h6 = h / 6.0
     h3 = h / 3.0
     for n in range(N):
-        stop, dmin = cf4_step(Rs[n], Rs[n + 1], U[n, 0], U[n, 1], U[n, 2], h, frame, sgn,
-                              delta_stop, dmin, Y, B, F, E)
+        stop, dmin = cf4_step(R, Rn, U[n, 0], U[n, 1], U[n, 2], h, sgn, delta_stop, dmin,
+                              Y2, Y3, Y4, Rh, E, B1, B2, B3, B4, F1, F2, F3, F4)
         if stop >= 0.0:
             return n, dmin, n * h + stop * h
-        # Z at the stage points (Y1 = R(t_n), Z1 = Z), as RK4 on the additive factor:
-        # stage c + 1 at Y[c - 1], Zc = Z + (h/2, h/2, h)[c - 1] f[c - 1], inputs U[n, (c + 1) // 2]
-        zstage(Z, Rs[n], U[n, 0], frame, F[0], B[0], Qm, f[0], K[0])
-        for c in range(1, 4):
-            a = h if c == 3 else h2
-            for i in range(3):
-                for j in range(3):
-                    Zc[i, j] = Z[i, j] + a * f[c - 1, i, j]
-            zstage(Zc, Y[c - 1], U[n, (c + 1) // 2], frame, F[c], B[c], Qm, f[c], K[c])
+        # Z at the stage points (Y1 = R(t_n), Z1 = Z), as RK4 on the additive factor
+        zstage(Z, R, U[n, 0], F1, B1, Qm, f1, K1)
+        zstage(zpredict(Z, h2, f1, Zc), Y2, U[n, 1], F2, B2, Qm, f2, K2)
+        zstage(zpredict(Z, h2, f2, Zc), Y3, U[n, 1], F3, B3, Qm, f3, K3)
+        zstage(zpredict(Z, h, f3, Zc), Y4, U[n, 2], F4, B4, Qm, f4, K4)
+        for i in range(3):
+            for j in range(3):
+                R[i, j] = Rn[i, j]
+                Rs[n + 1, i, j] = Rn[i, j]
         # update Z; quadrature weights of the step at c = 0, ½, 1
         for i in range(3):
             for j in range(3):
-                Z[i, j] += h6 * (f[0, i, j] + 2.0 * f[1, i, j] + 2.0 * f[2, i, j] + f[3, i, j])
+                Z[i, j] += h6 * (f1[i, j] + 2.0 * f2[i, j] + 2.0 * f3[i, j] + f4[i, j])
             for k in range(m):
-                W[0, i, k] = h6 * K[0, i, k]
-                W[1, i, k] = h3 * (K[1, i, k] + K[2, i, k])
-                W[2, i, k] = h6 * K[3, i, k]
+                W[0, i, k] = h6 * K1[i, k]
+                W[1, i, k] = h3 * (K2[i, k] + K3[i, k])
+                W[2, i, k] = h6 * K4[i, k]
         if keep_w:
             for c in range(3):
                 for i in range(3):
@@ -353,10 +383,10 @@ def forward_variational(R0, U, h, frame, sgn, delta_stop, Bidx, Bval, stride_b, 
                     s3 = 0.0
                     s4 = 0.0
                     for k in range(m):
-                        s1 += K[0, i, k] * K[0, j, k]
-                        s2 += K[1, i, k] * K[1, j, k]
-                        s3 += K[2, i, k] * K[2, j, k]
-                        s4 += K[3, i, k] * K[3, j, k]
+                        s1 += K1[i, k] * K1[j, k]
+                        s2 += K2[i, k] * K2[j, k]
+                        s3 += K3[i, k] * K3[j, k]
+                        s4 += K4[i, k] * K4[j, k]
                     v = h6 * (s1 + 2.0 * s2 + 2.0 * s3 + s4)
                     Mq[i, j] += v
                     if j != i:
@@ -395,28 +425,45 @@ def forward_variational(R0, U, h, frame, sgn, delta_stop, Bidx, Bval, stride_b, 
     return N, dmin, -1.0
 
 
-def frame_inputs(nodes, idx, s, frame, Wst, w_end, Rout, out):
+def frame_inputs(nodes, idx, s, Wst, w_end, Rout, out):
     """Physical inputs ``u = W(R(t)) w(t)`` along a motion planned in frame coordinates.
 
     For every sample ``k``: ``R(t_k)`` is node ``idx[k]`` of the CF4 trajectory ``nodes``
-    advanced by one CF4 step (:func:`cf4_step`, of the frame system: ``frame`` is true)
-    of length ``s[k]`` (none if ``s[k] == 0``) with frame inputs ``Wst[k, 0]``, ``Wst[k, 1]``, ``Wst[k, 2]`` at its start, middle and
-    end — the same local approximation as a step of the integrator, ``O(s⁵)`` from the
-    exact motion. Outputs ``Rout[k] = R(t_k)`` and ``out[k] = W(R(t_k)) w_end[k]``.
+    advanced by one CF4 step (:func:`cf4_step`) of length ``s[k]`` (none if ``s[k] == 0``) with frame inputs ``Wst[k, 0]``,
+    ``Wst[k, 1]``, ``Wst[k, 2]`` at its start, middle and end — the same local
+    approximation as a step of the integrator, ``O(s⁵)`` from the exact motion. Outputs
+    ``Rout[k] = R(t_k)`` and ``out[k] = W(R(t_k)) w_end[k]``.
     """
     n_t = idx.shape[0]
     m = Wst.shape[2]
-    Y, B, F, E = step_workspace(m)
+    R = np.empty((3, 3))
+    Rn = np.empty((3, 3))
+    Y2 = np.empty((3, 3))
+    Y3 = np.empty((3, 3))
+    Y4 = np.empty((3, 3))
+    Rh = np.empty((3, 3))
+    E = np.empty((3, 3))
+    B1 = np.empty((3, m))
+    B2 = np.empty((3, m))
+    B3 = np.empty((3, m))
+    B4 = np.empty((3, m))
+    F1 = np.empty(3)
+    F2 = np.empty(3)
+    F3 = np.empty(3)
+    F4 = np.empty(3)
     Wm = np.empty((m, m))
     for k in range(n_t):
-        if s[k] == 0.0:
-            for i in range(3):
-                for j in range(3):
-                    Rout[k, i, j] = nodes[idx[k], i, j]
-        else:
-            cf4_step(nodes[idx[k]], Rout[k], Wst[k, 0], Wst[k, 1], Wst[k, 2], s[k], frame, 1.0,
-                     -np.inf, np.inf, Y, B, F, E)
-        W_into(Rout[k], Wm)
+        for i in range(3):
+            for j in range(3):
+                R[i, j] = nodes[idx[k], i, j]
+                Rn[i, j] = R[i, j]
+        if s[k] != 0.0:
+            stop, dmin = cf4_step(R, Rn, Wst[k, 0], Wst[k, 1], Wst[k, 2], s[k], 1.0, -np.inf, np.inf,
+                                  Y2, Y3, Y4, Rh, E, B1, B2, B3, B4, F1, F2, F3, F4)
+        for i in range(3):
+            for j in range(3):
+                Rout[k, i, j] = Rn[i, j]
+        W_into(Rn, Wm)
         for i in range(m):
             v = 0.0
             for j in range(m):
@@ -429,56 +476,43 @@ def frame_inputs(nodes, idx, s, frame, Wst, w_end, Rout, out):
 # --------------------------------------------------------------------------------------
 
 
+@dataclass(frozen=True)
 class Kernels:
     """The compiled kernels of one system of a mechanism: ``ω = L(R) u`` or, with
-    ``frame``, its desingularised frame ``ω = N(R) w`` (then :meth:`frame_inputs`
-    evaluates ``u = W(R) w``). The arguments are those of the module's functions of the
-    same names, without ``frame``."""
+    ``frame``, its desingularised frame ``ω = N(R) w`` (then :attr:`frame_inputs`
+    evaluates ``u = W(R) w``). Arguments: those of the functions of the same names."""
 
-    def __init__(self, compiled: dict, name: str, frame: bool, n_inputs: int, has_singular_set: bool):
-        self._compiled = compiled
-        self.name = name
-        self.frame = frame
-        self.n_inputs = n_inputs
-        self.has_singular_set = has_singular_set
-
-    def forward(self, R0, U, h, sgn, delta_stop, Rs):
-        return self._compiled["forward"](R0, U, h, self.frame, sgn, delta_stop, Rs)
-
-    def forward_variational(self, R0, U, h, sgn, delta_stop, Bidx, Bval, stride_b, stride_i,
-                            Rs, Zs, J, Mq, Wd, full):
-        return self._compiled["forward_variational"](R0, U, h, self.frame, sgn, delta_stop, Bidx, Bval,
-                                                     stride_b, stride_i, Rs, Zs, J, Mq, Wd, full)
-
-    def frame_inputs(self, nodes, idx, s, Wst, w_end, Rout, out):
-        if not self.frame:
-            raise ValueError("frame_inputs needs the kernels of the frame system (frame=True)")
-        return self._compiled["frame_inputs"](nodes, idx, s, True, Wst, w_end, Rout, out)
-
-    def __repr__(self) -> str:
-        return f"Kernels({self.name!r}, frame={self.frame})"
+    name: str
+    frame: bool
+    n_inputs: int
+    has_singular_set: bool
+    forward: object
+    forward_variational: object
+    frame_inputs: object = None
 
 
-#: The kernels of this module, callees first.
-_TEMPLATES = (field_into, field_derivative_into, cf4_stage, cf4_step, forward, zstage, forward_variational,
-              frame_inputs)
+#: The kernels, in the form numba compiles: :mod:`nonholo.generated.cf4_kernels`, the
+#: functions of this module with the calls of :func:`cf4_step` and :func:`cf4_stage`
+#: expanded in place (written by ``nonholo derive``).
+_TEMPLATES = (zstage, kernels_inlined.forward, kernels_inlined.forward_variational,
+              kernels_inlined.frame_inputs)
 _PLAIN = dict(nogil=True, error_model="numpy")
 
 
 def _specialise(template, bindings: dict, tag: str, cache: bool):
-    """A compiled copy of ``template`` whose globals bind the mechanism's names (``bindings``)."""
-    glb = {**template.__globals__, **bindings}
-    f = types.FunctionType(template.__code__, glb, template.__name__)
+    """A compiled copy of ``template`` whose globals are this module's with the system's
+    names bound (``bindings``)."""
+    f = types.FunctionType(template.__code__, {**globals(), **bindings}, template.__name__)
     f.__qualname__ = f"{template.__name__}__{tag}"        # its own cache entry
     f.__module__ = __name__
     f.__doc__ = template.__doc__
     return numba.njit(**{**JIT_OPTIONS, "cache": cache})(f)
 
 
-def mechanism_tag(module) -> str:
-    """The cache name of a mechanism's kernels: its name and a hash of the generated source."""
+def system_tag(module, frame: bool) -> str:
+    """The cache name of a system: mechanism, system and a hash of the generated source."""
     src = inspect.getsource(module) if _importable(module) else module.SOURCE
-    return f"{module.NAME}_{hashlib.sha256(src.encode()).hexdigest()[:12]}"
+    return f"{module.NAME}{'_frame' if frame else ''}_{hashlib.sha256(src.encode()).hexdigest()[:12]}"
 
 
 def _importable(module) -> bool:
@@ -486,40 +520,43 @@ def _importable(module) -> bool:
     return sys.modules.get(getattr(module, "__name__", None)) is module
 
 
-_COMPILED: dict[str, dict] = {}
+_COMPILED: dict[str, Kernels] = {}
 
 
 def compile_system(module, frame: bool = False) -> Kernels:
-    """The kernels of the generated ``module``'s mechanism (compiled once, cached on disk).
+    """The kernels of a system of the generated ``module``'s mechanism (compiled once,
+    cached on disk).
 
-    ``frame=False``: the system ``ω = L(R) u`` (``L_into``, ``Q_into``); ``frame=True``: the
+    ``frame=False``: ``ω = L(R) u`` (``L_into``, ``Q_into``); ``frame=True``: the
     desingularised frame ``ω = N(R) w`` (``N_into``, ``QN_into``, and ``W_into`` for
-    :func:`frame_inputs`). Both watch the mechanism's ``delta`` (if any), and both run on
-    the same compiled kernels (the system is an argument), so a run that uses both pays
-    for one compilation. Kernels of a module that cannot be re-imported by name (built in
-    this process, see :meth:`nonholo.mechanism.Mechanism.from_symbolic`) are not cached
-    on disk. Numba compiles a kernel on its first call, so a run pays only for what it
-    uses.
+    :func:`frame_inputs`). Both watch the mechanism's ``delta`` (if any). Kernels of a
+    module that cannot be re-imported by name (built in this process, see
+    :meth:`nonholo.mechanism.Mechanism.from_symbolic`) are not cached on disk. Numba
+    compiles a kernel on its first call, so a run pays only for what it uses.
     """
     if frame and not getattr(module, "HAS_FRAME", False):
         raise ValueError(f"mechanism {module.NAME!r} has no desingularised frame N(R)")
-    tag = mechanism_tag(module)
-    if tag not in _COMPILED:
-        cache = _importable(module)
-        has_frame = getattr(module, "HAS_FRAME", False)
-        generated = {
-            "L_into": module.L_into,
-            "Q_into": module.Q_into,
-            "N_into": module.N_into if has_frame else module.L_into,
-            "QN_into": module.QN_into if has_frame else module.Q_into,
-            "W_into": module.W_into if has_frame else identity_into,
-            "delta": module.delta if module.HAS_SINGULAR_SET else no_singularity,
-        }
-        # Q and QN feed only the variational system (the Jacobian): fast-math lets LLVM turn
-        # their ``x**(-2.0)`` into a multiplication (the result changes at round-off level)
-        bindings = {name: numba.njit(fastmath=name in ("Q_into", "QN_into"), **_PLAIN)(f)
-                    for name, f in generated.items()}
-        for template in _TEMPLATES:
-            bindings[template.__name__] = _specialise(template, bindings, tag, cache)
-        _COMPILED[tag] = bindings
-    return Kernels(_COMPILED[tag], module.NAME, frame, module.N_INPUTS, module.HAS_SINGULAR_SET)
+    tag = system_tag(module, frame)
+    if tag in _COMPILED:
+        return _COMPILED[tag]
+    cache = _importable(module)
+    G, DG = (module.N_into, module.QN_into) if frame else (module.L_into, module.Q_into)
+    bindings = {
+        "field_into": numba.njit(**_PLAIN)(G),
+        # DG feeds only the variational system (the Jacobian): fast-math lets LLVM turn
+        # its ``x**(-2.0)`` into a multiplication (the result changes at round-off level)
+        "field_derivative_into": numba.njit(fastmath=True, **_PLAIN)(DG),
+        "delta": numba.njit(**_PLAIN)(module.delta if module.HAS_SINGULAR_SET else no_singularity),
+    }
+    if frame:
+        bindings["W_into"] = numba.njit(**_PLAIN)(module.W_into)
+    for template in _TEMPLATES:
+        if template.__name__ == "frame_inputs" and not frame:
+            continue
+        bindings[template.__name__] = _specialise(template, bindings, tag, cache)
+    kern = Kernels(name=module.NAME, frame=frame, n_inputs=module.N_INPUTS,
+                   has_singular_set=module.HAS_SINGULAR_SET, forward=bindings["forward"],
+                   forward_variational=bindings["forward_variational"],
+                   frame_inputs=bindings.get("frame_inputs"))
+    _COMPILED[tag] = kern
+    return kern
