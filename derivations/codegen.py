@@ -208,7 +208,7 @@ def singularity_module() -> str:
 #: the kernels that call it.
 CF4_SOURCE = GENERATED_DIR.parent / "cf4.py"
 #: Functions whose calls are expanded in place, and the kernels written with them.
-CF4_INLINED = ("cf4_step", "cf4_stage")
+CF4_INLINED = ("cf4_step", "cf4_stage", "zpredict")
 CF4_KERNELS = ("forward", "forward_variational", "frame_inputs")
 
 
@@ -223,15 +223,16 @@ class _Rename(ast.NodeTransformer):
 
 
 def _expand(body: list, functions: dict) -> list:
-    """``body`` with every statement ``a, b = f(...)`` (``f`` in ``functions``) replaced by
-    ``f``'s body: arguments that are names rename the parameters, others are assigned to
-    them first; ``f`` must end in ``return x, y`` (assigned to ``a, b`` where they differ)."""
+    """``body`` with every statement ``a, b = f(...)`` or ``f(...)`` (``f`` in ``functions``)
+    replaced by ``f``'s body: arguments that are names rename the parameters, others are
+    assigned to them first; in the first form ``f`` must end in ``return x, y`` (assigned
+    to ``a, b`` where they differ), in the second it must not return anything."""
     out = []
     for stmt in body:
         for field in ("body", "orelse"):
             if isinstance(getattr(stmt, field, None), list):
                 setattr(stmt, field, _expand(getattr(stmt, field), functions))
-        call = stmt.value if isinstance(stmt, ast.Assign) else None
+        call = stmt.value if isinstance(stmt, (ast.Assign, ast.Expr)) else None
         if not (isinstance(call, ast.Call) and isinstance(call.func, ast.Name)
                 and call.func.id in functions):
             out.append(stmt)
@@ -249,6 +250,11 @@ def _expand(body: list, functions: dict) -> list:
                 pre.append(ast.Assign([ast.Name(p, ast.Store())], a, lineno=0))
         inner = [copy.deepcopy(st) for st in fn.body
                  if not (isinstance(st, ast.Expr) and isinstance(st.value, ast.Constant))]
+        if isinstance(stmt, ast.Expr):
+            if any(isinstance(node, ast.Return) for st in inner for node in ast.walk(st)):
+                raise ValueError(f"inline {fn.name}: a call as a statement must not return")
+            out += pre + _expand([_Rename(names).visit(st) for st in inner], functions)
+            continue
         ret = inner.pop()
         if not isinstance(ret, ast.Return) or not isinstance(ret.value, ast.Tuple):
             raise ValueError(f"inline {fn.name}: must end in `return x, y`")

@@ -18,20 +18,7 @@ def forward(R0, U, h, sgn, delta_stop, Rs):
     N = U.shape[0]
     m = U.shape[2]
     R = R0.copy()
-    Rn = np.empty((3, 3))
-    Y2 = np.empty((3, 3))
-    Y3 = np.empty((3, 3))
-    Y4 = np.empty((3, 3))
-    Rh = np.empty((3, 3))
-    E = np.empty((3, 3))
-    B1 = np.empty((3, m))
-    B2 = np.empty((3, m))
-    B3 = np.empty((3, m))
-    B4 = np.empty((3, m))
-    F1 = np.empty(3)
-    F2 = np.empty(3)
-    F3 = np.empty(3)
-    F4 = np.empty(3)
+    Rn, Y2, Y3, Y4, Rh, E, B1, B2, B3, B4, F1, F2, F3, F4 = step_workspace(m)
     for i in range(3):
         for j in range(3):
             Rs[0, i, j] = R0[i, j]
@@ -133,6 +120,14 @@ def forward_variational(R0, U, h, sgn, delta_stop, Bidx, Bval, stride_b, stride_
     Y4 = np.empty((3, 3))
     Rh = np.empty((3, 3))
     E = np.empty((3, 3))
+    B1 = np.empty((3, m))
+    B2 = np.empty((3, m))
+    B3 = np.empty((3, m))
+    B4 = np.empty((3, m))
+    F1 = np.empty(3)
+    F2 = np.empty(3)
+    F3 = np.empty(3)
+    F4 = np.empty(3)
     Z = np.empty((3, 3))
     Zc = np.empty((3, 3))
     Qm = np.empty((3, 3))
@@ -140,19 +135,11 @@ def forward_variational(R0, U, h, sgn, delta_stop, Bidx, Bval, stride_b, stride_
     f2 = np.empty((3, 3))
     f3 = np.empty((3, 3))
     f4 = np.empty((3, 3))
-    B1 = np.empty((3, m))
-    B2 = np.empty((3, m))
-    B3 = np.empty((3, m))
-    B4 = np.empty((3, m))
     K1 = np.empty((3, m))
     K2 = np.empty((3, m))
     K3 = np.empty((3, m))
     K4 = np.empty((3, m))
     W = np.empty((3, 3, m))
-    F1 = np.empty(3)
-    F2 = np.empty(3)
-    F3 = np.empty(3)
-    F4 = np.empty(3)
     J[:, :] = 0.0
     for i in range(3):
         for j in range(3):
@@ -226,9 +213,18 @@ def forward_variational(R0, U, h, sgn, delta_stop, Bidx, Bval, stride_b, stride_
         if stop >= 0.0:
             return (n, dmin, n * h + stop * h)
         zstage(Z, R, U[n, 0], F1, B1, Qm, f1, K1)
-        zstage(zpredict(Z, h2, f1, Zc), Y2, U[n, 1], F2, B2, Qm, f2, K2)
-        zstage(zpredict(Z, h2, f2, Zc), Y3, U[n, 1], F3, B3, Qm, f3, K3)
-        zstage(zpredict(Z, h, f3, Zc), Y4, U[n, 2], F4, B4, Qm, f4, K4)
+        for i in range(3):
+            for j in range(3):
+                Zc[i, j] = Z[i, j] + h2 * f1[i, j]
+        zstage(Zc, Y2, U[n, 1], F2, B2, Qm, f2, K2)
+        for i in range(3):
+            for j in range(3):
+                Zc[i, j] = Z[i, j] + h2 * f2[i, j]
+        zstage(Zc, Y3, U[n, 1], F3, B3, Qm, f3, K3)
+        for i in range(3):
+            for j in range(3):
+                Zc[i, j] = Z[i, j] + h * f3[i, j]
+        zstage(Zc, Y4, U[n, 2], F4, B4, Qm, f4, K4)
         for i in range(3):
             for j in range(3):
                 R[i, j] = Rn[i, j]
@@ -321,20 +317,7 @@ def frame_inputs(nodes, idx, s, Wst, w_end, Rout, out):
     n_t = idx.shape[0]
     m = Wst.shape[2]
     R = np.empty((3, 3))
-    Rn = np.empty((3, 3))
-    Y2 = np.empty((3, 3))
-    Y3 = np.empty((3, 3))
-    Y4 = np.empty((3, 3))
-    Rh = np.empty((3, 3))
-    E = np.empty((3, 3))
-    B1 = np.empty((3, m))
-    B2 = np.empty((3, m))
-    B3 = np.empty((3, m))
-    B4 = np.empty((3, m))
-    F1 = np.empty(3)
-    F2 = np.empty(3)
-    F3 = np.empty(3)
-    F4 = np.empty(3)
+    Rn, Y2, Y3, Y4, Rh, E, B1, B2, B3, B4, F1, F2, F3, F4 = step_workspace(m)
     Wm = np.empty((m, m))
     for k in range(n_t):
         for i in range(3):
