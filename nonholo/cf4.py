@@ -479,10 +479,12 @@ class Kernels:
 
 
 #: The kernels, in the form numba compiles: :mod:`nonholo.generated.cf4_kernels`, the
-#: functions of this module with the calls of :func:`cf4_step` and :func:`cf4_stage`
-#: expanded in place (written by ``nonholo derive``).
+#: functions of this module with the calls of :func:`cf4_step`, :func:`cf4_stage` and
+#: :func:`zpredict` expanded in place (written by ``nonholo derive``).
 _TEMPLATES = (zstage, kernels_inlined.forward, kernels_inlined.forward_variational,
               kernels_inlined.frame_inputs)
+#: The kernels as written here (``compile_system(..., inlined=False)``).
+_WRITTEN = (cf4_stage, cf4_step, zstage, forward, forward_variational, frame_inputs)
 _PLAIN = dict(nogil=True, error_model="numpy")
 
 
@@ -512,7 +514,7 @@ _COMPILED: dict[str, Kernels] = {}
 _BY_MODULE: dict[tuple, Kernels] = {}
 
 
-def compile_system(module, frame: bool = False) -> Kernels:
+def compile_system(module, frame: bool = False, inlined: bool = True) -> Kernels:
     """The kernels of a system of the generated ``module``'s mechanism (compiled once,
     cached on disk).
 
@@ -522,16 +524,27 @@ def compile_system(module, frame: bool = False) -> Kernels:
     module that cannot be re-imported by name (built in this process, see
     :meth:`nonholo.mechanism.Mechanism.from_symbolic`) are not cached on disk. Numba
     compiles a kernel on its first call, so a run pays only for what it uses.
+    ``inlined=False`` compiles the kernels as this module writes them instead (the step
+    called, not inlined; slower, not cached): the reference the generated ones are
+    checked against.
     """
-    if (module, frame) in _BY_MODULE:
+    if (module, frame) in _BY_MODULE and inlined:
         return _BY_MODULE[module, frame]
     if frame and not getattr(module, "HAS_FRAME", False):
         raise ValueError(f"mechanism {module.NAME!r} has no desingularised frame N(R)")
+    if not inlined:
+        return _compile(module, frame, _WRITTEN, system_tag(module, frame) + "_written", False)
     tag = system_tag(module, frame)
     if tag in _COMPILED:
         _BY_MODULE[module, frame] = _COMPILED[tag]
         return _COMPILED[tag]
-    cache = _importable(module)
+    kern = _compile(module, frame, _TEMPLATES, tag, _importable(module))
+    _COMPILED[tag] = _BY_MODULE[module, frame] = kern
+    return kern
+
+
+def _compile(module, frame: bool, templates, tag: str, cache: bool) -> Kernels:
+    """Compile ``templates`` for a system of ``module`` (see :func:`compile_system`)."""
     G, DG = (module.N_into, module.QN_into) if frame else (module.L_into, module.Q_into)
     bindings = {
         "field_into": numba.njit(**_PLAIN)(G),
@@ -542,7 +555,7 @@ def compile_system(module, frame: bool = False) -> Kernels:
     }
     if frame:
         bindings["W_into"] = numba.njit(**_PLAIN)(module.W_into)
-    for template in _TEMPLATES:
+    for template in templates:
         if template.__name__ == "frame_inputs" and not frame:
             continue
         bindings[template.__name__] = _specialise(template, bindings, tag, cache)
@@ -550,5 +563,4 @@ def compile_system(module, frame: bool = False) -> Kernels:
                    has_singular_set=module.HAS_SINGULAR_SET, forward=bindings["forward"],
                    forward_variational=bindings["forward_variational"],
                    frame_inputs=bindings.get("frame_inputs"))
-    _COMPILED[tag] = _BY_MODULE[module, frame] = kern
     return kern
