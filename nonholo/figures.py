@@ -1037,7 +1037,9 @@ def plot_delta(ax, results, threshold: float | None = 1e-2, labels=None) -> None
     for i, (res, lab) in enumerate(zip(results, labels)):
         if not _has_trajectory(res):
             continue
-        d = delta_along(res.R, getattr(res, "mechanism", "platform"))
+        d = getattr(res, "delta", None)     # a result's own samples, whatever its mechanism
+        if d is None:
+            d = delta_along(res.R, getattr(res, "mechanism", "platform"))
         if d is None:
             continue
         drawn = True

@@ -2,9 +2,10 @@
 nonholo/cf4.py compiled as written (the step called), and against a fresh generation."""
 import numpy as np
 import pytest
+from conftest import example
 
 from derivations import codegen
-from nonholo import catalog, cf4, so3, stages
+from nonholo import catalog, cf4, stages
 from nonholo.controls import Fourier, PiecewiseConstant
 from nonholo.generated import cf4_kernels
 
@@ -19,7 +20,7 @@ def test_inlined_kernels_equal_the_written_ones(name, frame):
     fast = cf4.compile_system(mech.module, frame)
     ref = cf4.compile_system(mech.module, frame, inlined=False)
     rng = np.random.default_rng(7)
-    R0 = np.ascontiguousarray(so3.from_rpy(0.5, 1.2, -0.5))
+    R0 = np.ascontiguousarray(example(1)[0])
     for controls in (Fourier(1.0, 0.4 * rng.normal(size=(2, 5))),
                      PiecewiseConstant(1.0, 0.4 * rng.normal(size=(20, 2)))):
         steps = 200
@@ -60,7 +61,7 @@ def test_a_stopped_run_reports_where():
     mech = catalog.get("platform")
     fast = cf4.compile_system(mech.module)
     ref = cf4.compile_system(mech.module, inlined=False)
-    R0 = np.ascontiguousarray(so3.from_rpy(0.5, 1.2, -0.5))
+    R0 = np.ascontiguousarray(example(1)[0])
     U = stages.stage_table(Fourier(1.0, [[3.0, 0, 0, 0, 0], [-3.0, 0, 0, 0, 0]]), 100)
     got = []
     for kern in (fast, ref):

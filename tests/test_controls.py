@@ -4,8 +4,12 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from conftest import example
+
+from nonholo import catalog, replay, stages
 from nonholo import controls as C
-from nonholo.kernels import stage_values
+from nonholo.replay import FrameControls
+from nonholo.stages import stage_values
 
 T = 1.7
 
@@ -64,21 +68,23 @@ def test_stage_table_matches_evaluation_and_sparse_basis(make):
     u = make()
     steps = 40
     h = T / steps
-    U = u.stage_table(steps)
+    U = stages.stage_table(u, steps)
     assert U.shape == (steps, 3, 2)
+    t = (np.arange(steps)[:, None] + np.array([0, 0.5, 1.0])) * h
+    np.testing.assert_array_equal(stages.STAGE_FRACTIONS, [0.0, 0.5, 1.0])
+    np.testing.assert_allclose(stages.stage_times(T, steps), t, rtol=1e-15, atol=0)
     if isinstance(u, C.Fourier):
-        t = (np.arange(steps)[:, None] + np.array([0, 0.5, 1.0])) * h
         np.testing.assert_allclose(U, u(t.ravel()).reshape(steps, 3, 2), atol=1e-13)
     else:
         # constant on each step, the value of the interval holding the step
         np.testing.assert_array_equal(U, np.broadcast_to(u(np.arange(steps) * h)[:, None, :], U.shape))
     # the sparse basis is the same linear map λ -> U (the one the kernels differentiate)
-    Bidx, Bval, sb, si = u.sparse_basis(steps)
+    Bidx, Bval, sb, si = stages.sparse_basis(u, steps)
     np.testing.assert_allclose(stage_values(u.params, Bidx, Bval, sb, si, 2), U, atol=1e-13)
     # ... and linear: U(λ + μ) = U(λ) + U(μ)
     v = u.with_params(np.ones_like(u.params))
     w = u.with_params(u.params + v.params)
-    np.testing.assert_allclose(w.stage_table(steps), U + v.stage_table(steps), atol=1e-12)
+    np.testing.assert_allclose(stages.stage_table(w, steps), U + stages.stage_table(v, steps), atol=1e-12)
 
 
 @pytest.mark.parametrize("make", [fourier, grid_controls])
@@ -100,6 +106,8 @@ def test_dict_round_trip(make):
     assert v == u and type(v) is type(u)
     t = np.linspace(0, T, 13)
     np.testing.assert_array_equal(v(t), u(t))
+    w = replay.from_dict(u.to_dict())       # loads either kind
+    assert w == u and type(w) is type(u)
 
 
 def test_with_params_does_not_alias():
@@ -125,7 +133,7 @@ def test_with_params_does_not_alias():
     lambda: C.Fourier.fit(C.paper_initial(1.0), 1.0, 0),
     lambda: C.PiecewiseConstant(1.0, np.zeros((0, 2))),
     lambda: C.PiecewiseConstant.fit(C.paper_initial(1.0), 1.0, 0),
-    lambda: C.PiecewiseConstant(1.0, np.zeros((10, 2))).stage_table(25),
+    lambda: stages.stage_table(C.PiecewiseConstant(1.0, np.zeros((10, 2))), 25),
     lambda: C.from_dict({"kind": "spline"}),
 ])
 def test_bad_parameters_raise(bad):
@@ -139,29 +147,25 @@ def test_bad_parameters_raise(bad):
 def test_stage_function_equals_stage_table(make):
     u = make()
     steps = 40
-    fill = u.stage_function(steps)
+    fill = stages.stage_function(u, steps)
     out = np.empty((steps, 3, 2))
     p = np.random.default_rng(9).normal(size=u.params.size)
     assert fill(p, out) is out
-    np.testing.assert_allclose(out, u.with_params(p).stage_table(steps), rtol=0, atol=1e-14)
+    np.testing.assert_allclose(out, stages.stage_table(u.with_params(p), steps), rtol=0, atol=1e-14)
 
 
 # -- physical inputs of a motion planned in the frame coordinates ----------------------------
 
 def frame_controls(kind="fourier", R0=None):
-    from nonholo import so3
-
-    R0 = so3.from_rpy(0.5, 1.2, -0.5) if R0 is None else R0
+    R0 = example(1)[0] if R0 is None else R0
     w = (C.Fourier(1.0, [[0.2, 0.5, 0.1, 0.0, 0.1], [0.1, 0.0, 0.4, 0.2, 0.0]]) if kind == "fourier"
          else C.PiecewiseConstant(1.0, np.random.default_rng(2).normal(scale=0.4, size=(8, 2))))
-    return C.FrameControls(w, R0, "platform", 400)
+    return FrameControls(w, R0, "platform", 400)
 
 
 @pytest.mark.parametrize("kind", ["fourier", "grid"])
 def test_frame_controls_are_the_physical_inputs(kind):
-    from nonholo import mechanisms
-
-    mech = mechanisms.get("platform")
+    mech = catalog.get("platform")
     u = frame_controls(kind)
     t = np.random.default_rng(1).uniform(0.0, 1.0, 50)
     R, uu = u.states(t), u(t)
@@ -169,8 +173,8 @@ def test_frame_controls_are_the_physical_inputs(kind):
     np.testing.assert_array_equal(u(0.3), u(np.array([0.3]))[0])
     w = u.frame_inputs(t)
     for k in range(50):
-        np.testing.assert_allclose(mech.L(R[k]) @ uu[k], mech.module.N(R[k]) @ w[k], atol=1e-12)
-        np.testing.assert_allclose(uu[k], mech.module.W(R[k]) @ w[k], atol=1e-15)
+        np.testing.assert_allclose(mech.L(R[k]) @ uu[k], mech.frame.N(R[k]) @ w[k], atol=1e-12)
+        np.testing.assert_allclose(uu[k], mech.frame.W(R[k]) @ w[k], atol=1e-15)
     # at the nodes R(t) is the node itself; u is continuous across them (Fourier)
     h = 1.0 / 400
     np.testing.assert_array_equal(u.states(np.array([0.0, 37 * h, 1.0])), u.nodes[[0, 37, 400]])
@@ -181,52 +185,58 @@ def test_frame_controls_are_the_physical_inputs(kind):
 @pytest.mark.parametrize("kind", ["fourier", "grid"])
 def test_frame_controls_round_trip_and_stage_table(kind):
     u = frame_controls(kind)
-    v = C.from_dict(u.to_dict())
-    assert v == u and type(v) is C.FrameControls
+    v = replay.from_dict(u.to_dict())
+    assert v == u and type(v) is FrameControls
+    # the replay holds the Mechanism; its description names it
+    assert v.mechanism is catalog.get("platform") and u.to_dict()["mechanism"] == "platform"
+    with pytest.raises(ValueError, match="frame"):      # controls.from_dict: parametrisations only
+        C.from_dict(u.to_dict())
     t = np.linspace(0.0, 1.0, 101)
     np.testing.assert_array_equal(v(t), u(t))
     if kind == "grid":
         np.testing.assert_array_equal(u.breakpoints, np.linspace(0.0, 1.0, 9))
     U = u.stage_table(80)
+    np.testing.assert_array_equal(stages.stage_table(u, 80), U)     # the integrator's way in
     tt = (np.arange(80)[:, None] + np.array([0.0, 0.5, 1.0])) * (1.0 / 80)
     if kind == "fourier":
         np.testing.assert_allclose(U, u(tt.ravel()).reshape(80, 3, 2), atol=1e-13)
     else:       # the step's own value at its end (left limit at a grid jump)
         np.testing.assert_allclose(U[:, 2], u(tt[:, 2] - 1e-12), atol=1e-9)
     w = u.with_params(u.params * 0.5)
-    assert isinstance(w, C.FrameControls) and not np.allclose(w(t), u(t))
-    with pytest.raises(NotImplementedError):
-        u.sparse_basis(400)
+    assert isinstance(w, FrameControls) and not np.allclose(w(t), u(t))
+    # u = W(R(t)) w(t) is not linear in the parameters: no stage basis, no stage function
+    with pytest.raises(ValueError, match="not linear"):
+        stages.sparse_basis(u, 400)
+    with pytest.raises(ValueError, match="not linear"):
+        stages.stage_function(u, 400)
 
 
 @pytest.mark.parametrize("kind", ["fourier", "grid"])
 def test_frame_controls_given_nodes_and_stages_on_nodes(kind):
     """Nodes handed over by a planner are used as they are; a stage table whose stage times
     are all nodes (here 200 steps of 2h) is ``W(R_n) w(t_n)`` at those nodes."""
-    from nonholo import mechanisms
-
     u = frame_controls(kind)
-    v = C.FrameControls(u.frame, u.R0, "platform", 400, nodes=u.nodes)
+    v = FrameControls(u.frame, u.R0, "platform", 400, nodes=u.nodes)
     t = np.random.default_rng(3).uniform(0.0, 1.0, 20)
     np.testing.assert_array_equal(v(t), u(t))
     U = v.stage_table(200)
-    W, nodes = mechanisms.get("platform").module.W, u.nodes
-    w_end = u.frame.stage_table(200)
+    W, nodes = catalog.get("platform").frame.W, u.nodes
+    w_end = stages.stage_table(u.frame, 200)
     for j in (0, 57, 199):
         for c in range(3):
             np.testing.assert_allclose(U[j, c], W(nodes[2 * j + c]) @ w_end[j, c], rtol=0, atol=1e-15)
     with pytest.raises(ValueError, match="nodes"):
-        C.FrameControls(u.frame, u.R0, "platform", 400, nodes=u.nodes[:-1])
+        FrameControls(u.frame, u.R0, "platform", 400, nodes=u.nodes[:-1])
     with pytest.raises(ValueError, match="nodes"):
-        C.FrameControls(u.frame, u.R0, "platform", 400, nodes=u.nodes[::-1])
+        FrameControls(u.frame, u.R0, "platform", 400, nodes=u.nodes[::-1])
 
 
 @pytest.mark.parametrize("bad", [
-    lambda: C.FrameControls(frame_controls(), np.eye(3), "platform", 400),
-    lambda: C.FrameControls(C.Fourier(1.0, np.zeros((3, 5))), np.eye(3), "platform", 400),
-    lambda: C.FrameControls(C.Fourier(1.0, np.zeros((2, 5))), np.eye(3), "tripod", 400),
-    lambda: C.FrameControls(C.Fourier(1.0, np.zeros((2, 5))), np.ones((3, 3)), "platform", 400),
-    lambda: C.FrameControls(C.PiecewiseConstant(1.0, np.zeros((7, 2))), np.eye(3), "platform", 400),
+    lambda: FrameControls(frame_controls(), np.eye(3), "platform", 400),
+    lambda: FrameControls(C.Fourier(1.0, np.zeros((3, 5))), np.eye(3), "platform", 400),
+    lambda: FrameControls(C.Fourier(1.0, np.zeros((2, 5))), np.eye(3), "tripod", 400),
+    lambda: FrameControls(C.Fourier(1.0, np.zeros((2, 5))), np.ones((3, 3)), "platform", 400),
+    lambda: FrameControls(C.PiecewiseConstant(1.0, np.zeros((7, 2))), np.eye(3), "platform", 400),
 ])
 def test_frame_controls_bad_input(bad):
     with pytest.raises(ValueError):

@@ -4,13 +4,13 @@ import shutil
 import numpy as np
 import pytest
 import sympy as sp
-from scipy.spatial.transform import Rotation
+from conftest import random_rotations as _random_rotations
 
 from derivations import catalog, codegen, singularity
 from derivations.mechanism import constraint_matrix, PAPER_GEOMETRY, paper_platform
 from derivations.so3 import r
 from derivations.variational import Q_matrix, inputs
-from nonholo import mechanisms, so3
+from nonholo import catalog as numeric, so3
 from nonholo.generated import platform_singularity as gen_sing
 
 RNG = np.random.default_rng(2014)
@@ -18,13 +18,8 @@ N_POINTS = 120
 
 
 def random_rotations(n, min_abs_delta=0.05):
-    """Random rotations away from Δ = 0 (where L and Q are undefined)."""
-    out = []
-    while len(out) < n:
-        R = Rotation.random(random_state=RNG.integers(1 << 31)).as_matrix()
-        if abs(R[0, 1] * R[2, 0] + R[1, 0] * R[2, 1]) > min_abs_delta:
-            out.append(R)
-    return out
+    """Random rotations away from the platform's Δ = 0 (where L and Q are undefined)."""
+    return _random_rotations(n, RNG, min_abs_delta)
 
 
 def _mp(expr_list, args):
@@ -35,7 +30,7 @@ def _mp(expr_list, args):
 @pytest.mark.parametrize("name", list(catalog.MECHANISMS))
 def test_generated_matches_symbolic(name):
     sym = catalog.get(name)
-    num = mechanisms.get(name)
+    num = numeric.get(name)
     u = inputs(sym.n_inputs)
     f_L = _mp(list(sym.L), list(r))
     f_Q = _mp(list(Q_matrix(sym.L, u)), list(r) + list(u))
@@ -46,6 +41,7 @@ def test_generated_matches_symbolic(name):
         pairs = [(num.L(R).ravel(), np.array(f_L(*R.ravel()), dtype=float)),
                  (num.Q(R, uu).ravel(), np.array(f_Q(*R.ravel(), *uu), dtype=float))]
         if f_d is not None:
+            assert num.has_singular_set
             pairs.append((np.array([num.delta(R)]), np.array([float(f_d(*R.ravel()))])))
         for got, want in pairs:
             worst = max(worst, np.max(np.abs(got - want)) / max(1.0, np.max(np.abs(want))))
@@ -54,7 +50,7 @@ def test_generated_matches_symbolic(name):
 
 @pytest.mark.parametrize("name", list(catalog.MECHANISMS))
 def test_Q_is_derivative_of_L_along_left_variations(name):
-    num = mechanisms.get(name)
+    num = numeric.get(name)
     eps = 1e-6
     for R in random_rotations(20, min_abs_delta=0.2):
         u = RNG.normal(size=num.n_inputs)
@@ -67,7 +63,7 @@ def test_delta_is_constraint_determinant_up_to_derived_constant():
     m = paper_platform()
     kappa = float(m.derivation["kappa"])
     C = sp.lambdify(list(r), constraint_matrix(PAPER_GEOMETRY).subs({}), "numpy")
-    num = mechanisms.get("platform")
+    num = numeric.get("platform")
     for R in random_rotations(50):
         assert np.linalg.det(np.array(C(*R.ravel()), dtype=float)) == pytest.approx(
             kappa * num.delta(R), rel=1e-12, abs=1e-15)
@@ -76,7 +72,7 @@ def test_delta_is_constraint_determinant_up_to_derived_constant():
 
 def test_L_solves_the_constraint_equations():
     C = sp.lambdify(list(r), constraint_matrix(PAPER_GEOMETRY), "numpy")
-    num = mechanisms.get("platform")
+    num = numeric.get("platform")
     for R in random_rotations(30):
         CR = np.array(C(*R.ravel()), dtype=float)
         np.testing.assert_allclose(CR @ num.L(R), [[1, 0], [0, 1], [0, 0]], atol=1e-12)
@@ -88,7 +84,7 @@ def test_normal_form_identity_at_small_angles():
         x, y, z = gen_sing.normal_form(phi, theta, psi)
         d = gen_sing.delta_rpy(phi, theta, psi)
         assert z**3 + x * y == pytest.approx(d, rel=1e-10, abs=1e-15)
-        assert d == pytest.approx(mechanisms.get("platform").delta(so3.from_rpy(phi, theta, psi)),
+        assert d == pytest.approx(numeric.get("platform").delta(so3.from_rpy(phi, theta, psi)),
                                   rel=1e-10, abs=1e-15)
 
 
@@ -138,14 +134,14 @@ def test_paper_instance_gives_the_papers_L():
     L_paper = 2 / D * sp.Matrix([[r[1, 0], r[0, 1]], [-r[1, 0], -r[0, 1]], [-r[2, 0], r[2, 1]]])
     assert (m.L - L_paper).applyfunc(sp.cancel).is_zero_matrix
     f = sp.lambdify(list(r), L_paper, "numpy")
-    num = mechanisms.get("platform")
+    num = numeric.get("platform")
     for R in random_rotations(50):
         np.testing.assert_allclose(num.L(R), np.array(f(*R.ravel()), dtype=float),
                                    rtol=1e-14, atol=1e-14 * np.abs(num.L(R)).max())
 
 
 def test_raised_platform_is_regular_at_identity_and_splits_SO3():
-    num = mechanisms.get("platform_raised")
+    num = numeric.get("platform_raised")
     assert num.delta(np.eye(3)) == pytest.approx(1.0)
     values = np.array([num.delta(R) for R in random_rotations(400, min_abs_delta=0.0)])
     assert (values > 0.05).any() and (values < -0.05).any()
@@ -156,7 +152,9 @@ def test_desingularised_frame(name):
     """ω = N(R) w with N orthonormal; u = W(R) w reproduces it (L W = N); W is finite
     everywhere (polynomial in r_ij); QN is the derivative of N along left variations."""
     sym = catalog.get(name)
-    gen = mechanisms.get(name).module
+    num = numeric.get(name)
+    assert num.has_frame
+    gen = num.frame                 # N, QN, W of the desingularised frame
     W_sym = sym.frame_inputs if sym.frame_inputs is not None else \
         __import__("derivations.mechanism", fromlist=["input_map"]).input_map(sym.L, sym.frame)
     assert all(sp.denom(sp.cancel(w)).free_symbols == set() for w in W_sym)
@@ -166,7 +164,7 @@ def test_desingularised_frame(name):
         N = gen.N(R)
         np.testing.assert_allclose(N.T @ N, np.eye(2), atol=1e-14)
         np.testing.assert_allclose(N, np.array(f_N(*R.ravel()), dtype=float).reshape(3, 2), atol=1e-14)
-        np.testing.assert_allclose(gen.L(R) @ gen.W(R), N, atol=1e-11)
+        np.testing.assert_allclose(num.L(R) @ gen.W(R), N, atol=1e-11)
         w, s = RNG.normal(size=2), RNG.normal(size=3)
         fd = (gen.N(so3.exp(eps * s) @ R) @ w - gen.N(so3.exp(-eps * s) @ R) @ w) / (2 * eps)
         np.testing.assert_allclose(gen.QN(R, w) @ s, fd, atol=1e-8)

@@ -4,10 +4,10 @@ import json
 import numpy as np
 import pytest
 
-from nonholo import examples, mechanisms, so3
+from nonholo import catalog, examples, so3
 from nonholo.cli import main
 
-delta = mechanisms.get("platform").delta
+delta = catalog.get("platform").delta
 
 
 def test_examples_1_2_match_the_model():

@@ -13,10 +13,13 @@ from PIL import Image
 from scipy.integrate import solve_ivp
 from scipy.spatial.transform import Rotation
 
-from nonholo import figures, mechanisms, so3
+from conftest import example
+
+from nonholo import catalog, examples, figures, so3
+from nonholo.mechanism import Geometry
 
 RNG = np.random.default_rng(7)
-PLATFORM = mechanisms.get("platform")
+PLATFORM = catalog.get("platform")
 UNITS = re.compile(r"\[[^\]]+\]")
 
 
@@ -38,7 +41,7 @@ def stand_in(method, amplitude, n_flow=8, n_newton=3, gamma=0.3):
     def ufun(t):
         return amplitude * np.array([np.sin(2 * np.pi * t), np.cos(2 * np.pi * t)])
 
-    t, R, u = simulate(so3.from_rpy(0.5, 1.2, -0.5), ufun)
+    t, R, u = simulate(example(1)[0], ufun)
     d = np.array([PLATFORM.delta(Ri) for Ri in R])
     history, e = [], 0.58
     for k in range(n_flow):
@@ -78,7 +81,7 @@ def check_figure(fig, n_axes, tmp_path, stem):
 
 
 def test_mechanism_figure(tmp_path):
-    R0, R1 = so3.from_rpy(0.5, 1.2, -0.5), so3.from_rpy(1.0, 0.9, -0.5)
+    R0, R1 = example(1)
     check_figure(figures.mechanism_figure(R0), 1, tmp_path, "mech1")
     fig = figures.mechanism_figure(R0, R1, title="Example 1")
     check_figure(fig, 2, tmp_path, "mech2")
@@ -95,9 +98,16 @@ def test_mechanism_figure_other_geometry(tmp_path):
     from derivations.catalog import RAISED_GEOMETRY
 
     g = figures.as_geometry(RAISED_GEOMETRY)
+    assert isinstance(g, Geometry)
     assert np.allclose(g.base1, 1.6 * np.array([1, 0, 1]) / np.sqrt(2))
     assert np.allclose(g.contact, np.array([1, 1, 0]) / np.sqrt(2))
     fig = figures.mechanism_figure(np.eye(3), geometry=g, mechanism="platform_raised")
+    assert "Δ = +1.000" in fig.axes[0].get_title()
+    # the generated module's drawing geometry is the same one (a = 1.6, b = rho = 1)
+    raised = catalog.get("platform_raised")
+    for name in Geometry.FIELDS:
+        assert np.allclose(getattr(raised.geometry, name), getattr(g, name))
+    fig = figures.mechanism_figure(np.eye(3), mechanism=raised)       # a Mechanism object
     assert "Δ = +1.000" in fig.axes[0].get_title()
 
 
@@ -107,10 +117,14 @@ def test_default_geometry_is_the_papers():
     sym = figures.as_geometry(PAPER_GEOMETRY)  # a = 1.6, b = rho = 1 substituted
     num = figures.as_geometry()
     gen = figures.as_geometry("platform")
-    for name in ("base1", "tip1", "base2", "tip2", "contact", "axle"):
+    assert gen is PLATFORM.geometry and figures.as_geometry(PLATFORM) is PLATFORM.geometry
+    assert Geometry.FIELDS == ("base1", "tip1", "base2", "tip2", "contact", "axle")
+    for name in Geometry.FIELDS:
         assert np.allclose(getattr(sym, name), getattr(num, name))
         assert np.allclose(getattr(gen, name), getattr(num, name))
     assert num.radius == 1.0
+    with pytest.raises(ValueError, match="no legs"):
+        figures.as_geometry("attitude")
 
 
 def test_leg_lengths_closed_form():
@@ -121,6 +135,7 @@ def test_leg_lengths_closed_form():
     assert np.allclose(lengths[:, 0] ** 2, a * a + b * b - 2 * a * b * Rs[:, 1, 1], atol=1e-12)
     assert np.allclose(lengths[:, 1] ** 2, a * a + b * b - 2 * a * b * Rs[:, 0, 0], atol=1e-12)
     assert np.allclose(figures.leg_lengths(Rs[0]), lengths[0])
+    np.testing.assert_array_equal(PLATFORM.geometry.leg_lengths(Rs), lengths)
     # other dimensions
     g = figures.as_geometry(None, a=2.0, b=0.5, rho=0.5)
     l = figures.leg_lengths(Rs, g)
@@ -185,7 +200,7 @@ def test_plotted_data(results):
     assert figures.newton_switch(res.history) == 8
     assert figures.newton_switch([{"step": 1.0}] * 3) is None
     rpy = figures.rpy_along(res.R)
-    assert np.allclose(rpy[0], [0.5, 1.2, -0.5])
+    assert np.allclose(rpy[0], examples.get(1).rpy_start)       # (0.5, 1.2, -0.5)
 
 
 def test_animation(results, tmp_path):
@@ -202,7 +217,7 @@ def test_mechanism_delta_rpy_matches_the_analytic_form():
     np.testing.assert_allclose(F.mechanism_delta_rpy("platform", *a), F.delta_rpy(*a), atol=1e-14)
     R = so3.from_rpy(*a[:, 2, 3])
     assert F.mechanism_delta_rpy("platform_raised", *a)[2, 3] == pytest.approx(
-        float(mechanisms.get("platform_raised").delta(R)), abs=1e-14)
+        float(catalog.get("platform_raised").delta(R)), abs=1e-14)
 
 
 @pytest.mark.parametrize("name", ["platform", "platform_raised"])

@@ -3,49 +3,40 @@ import zlib
 
 import numpy as np
 import pytest
-from scipy.spatial.transform import Rotation
+from conftest import example, reachable_goals
 
-from nonholo import mechanisms, plan, simulate, verify
+from nonholo import Mechanism, catalog, mechanism_named, plan, simulation, verify
 from nonholo.cli import main
 from nonholo.controls import Fourier
 from nonholo.generated import MECHANISMS
 
 
-def reachable_goals(name, count, seed):
-    """Goals made by simulating random Fourier controls from random starts, keeping
-    |Δ| ≥ 0.1 along the way (mechanisms with a singular set) — reachable by construction."""
-    mech = mechanisms.get(name)
-    rng = np.random.default_rng(seed)
-    goals = []
-    while len(goals) < count:
-        R0 = Rotation.random(random_state=rng.integers(1 << 31)).as_matrix()
-        if mech.has_singular_set and abs(mech.delta(R0)) < 0.3:
-            continue
-        controls = Fourier(1.0, rng.normal(scale=0.4, size=(mech.n_inputs, 5)))
-        try:
-            traj = simulate(R0, controls, 1.0, mechanism=name)
-        except ValueError:  # ran into Δ = 0
-            continue
-        if mech.has_singular_set and np.min(np.abs(traj.delta)) < 0.1:
-            continue
-        goals.append((R0, traj.R_T))
-    return goals
-
-
 def test_mechanism_names():
     assert {"platform", "platform_raised", "attitude"} <= set(MECHANISMS)
+    assert catalog.names()[:len(MECHANISMS)] == tuple(MECHANISMS)
+    for name in MECHANISMS:
+        mech = catalog.get(name)
+        assert isinstance(mech, Mechanism) and mech.name == name
+        assert catalog.get(mech) is mech and mechanism_named(name) is mech
 
 
 def test_cli_lists_mechanisms(capsys):
+    """``nonholo mechanisms``: one line per name of ``catalog.names()``, in order, with its
+    description, input count and whether it has a singular set."""
     assert main(["mechanisms"]) == 0
-    out = capsys.readouterr().out
+    lines = capsys.readouterr().out.splitlines()
     for name in MECHANISMS:
-        assert name in out
+        assert name in catalog.names()
+    assert [ln.split()[0] for ln in lines] == list(catalog.names())
+    for line, name in zip(lines, catalog.names()):
+        mech = catalog.get(name)
+        assert mech.description in line and f"{mech.n_inputs} inputs" in line
+        assert ("no singular set" in line) == (not mech.has_singular_set)
 
 
 @pytest.mark.parametrize("name", MECHANISMS)
 def test_planner_converges_on_reachable_goals(name):
-    mech = mechanisms.get(name)
+    mech = catalog.get(name)
     for R0, Rd in reachable_goals(name, 4, seed=zlib.crc32(name.encode())):
         r = plan(R0, Rd, mechanism=name)
         assert r.success, r.reason
@@ -71,3 +62,24 @@ def test_cli_plan_with_mechanism(tmp_path, capsys):
 def test_unknown_mechanism():
     with pytest.raises(ValueError, match="unknown mechanism"):
         plan(np.eye(3), np.eye(3), mechanism="no_such_thing")
+
+
+@pytest.mark.parametrize("name", MECHANISMS)
+def test_a_mechanism_object_works_wherever_its_name_does(name):
+    mech = catalog.get(name)
+    R0, Rd = example(1)
+    u = Fourier(1.0, [[0.05, 0.1, 0.0, 0.0, 0.05], [-0.05, 0.0, 0.1, 0.05, 0.0]])
+    a = simulation.simulate(R0, u, 1.0, mechanism=mech)
+    b = simulation.simulate(R0, u, 1.0, mechanism=name)
+    np.testing.assert_array_equal(a.R, b.R)
+    assert a.mechanism == b.mechanism == name
+    va, vb = (simulation.variational(R0, u, 1.0, mechanism=m) for m in (mech, name))
+    np.testing.assert_array_equal(va.J, vb.J)
+    np.testing.assert_array_equal(va.M, vb.M)
+    np.testing.assert_array_equal(verify.resimulate(R0, u, 1.0, mech), verify.resimulate(R0, u, 1.0, name))
+    np.testing.assert_array_equal(verify.mobility_lyapunov(R0, u, 1.0, mech),
+                                  verify.mobility_lyapunov(R0, u, 1.0, name))
+    ra, rb = plan(R0, Rd, mechanism=mech), plan(R0, Rd, mechanism=name)
+    assert ra.success and rb.success and ra.mechanism == rb.mechanism == name
+    np.testing.assert_array_equal(ra.params, rb.params)
+    np.testing.assert_array_equal(ra.R, rb.R)

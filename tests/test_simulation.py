@@ -4,21 +4,13 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from conftest import example, platform_delta
+
+from nonholo import catalog, kernels, so3, stages, verify
 from nonholo import controls as C
-from nonholo import kernels, so3, verify
 from nonholo import simulation as S
-
-#: MODEL.md, "The examples": RPY angles (rad) of R0 and Rd, T = 1.
-EXAMPLES = {
-    1: ((0.5, 1.2, -0.5), (1.0, 0.9, -0.5)),
-    2: ((1.5, 1.4, 0.5), (1.5, 1.4, -0.5)),
-}
-
-
-def example(k: int):
-    """``(R0, Rd)`` of example ``k`` of MODEL.md."""
-    a, b = EXAMPLES[k]
-    return so3.from_rpy(*a), so3.from_rpy(*b)
+from nonholo.planning.core import Problem
+from nonholo.replay import FrameControls
 
 
 def initial(T=1.0):
@@ -52,12 +44,8 @@ def test_stays_on_so3_and_matches_dop853_with_default_steps(k, make):
     assert np.all(np.linalg.det(tr.R) > 0)
     # the default step count: discretisation error ≤ 1e-9 (DOP853, rtol = atol = 1e-13)
     assert so3.distance(tr.R_T, verify.resimulate(R0, u, 1.0)) <= 1e-9
-    np.testing.assert_allclose(tr.delta, [so3_delta(R) for R in tr.R], atol=1e-15)
+    np.testing.assert_allclose(tr.delta, [platform_delta(R) for R in tr.R], atol=1e-15)
     assert tr.min_delta <= np.abs(tr.delta).min() + 1e-15
-
-
-def so3_delta(R):
-    return R[0, 1] * R[2, 0] + R[1, 0] * R[2, 1]
 
 
 def test_orthonormal_under_large_rotations():
@@ -206,39 +194,37 @@ def test_bad_input_raises_value_error(R0, controls, T, kw):
 def test_dense_basis_gives_the_sparse_jacobian():
     R0, _ = example(1)
     u = bumpy(seed=1)
-    kern = kernels.get("platform")
-    U = u.stage_table(400)
+    kern = catalog.get("platform").kernels()
+    U = stages.stage_table(u, 400)
     out = []
-    for basis in (u.sparse_basis(400), u.kernel_basis(400)):
+    for basis in (stages.sparse_basis(u, 400), stages.kernel_basis(u, 400)):
         J = np.empty((3, 10))
         Wd = np.empty((1200, 6))
         n, _, _ = kern.forward_variational(R0, U, 1 / 400, 1.0, 1e-9, *basis, np.empty((401, 3, 3)),
                                            np.empty((401, 3, 3)), J, np.empty((3, 3)), Wd, False)
         assert n == 400
         out.append(J)
-    assert u.kernel_basis(400)[0].shape[0] == 0            # the dense form
+    assert stages.kernel_basis(u, 400)[0].shape[0] == 0    # the dense form
     np.testing.assert_allclose(out[1], out[0], rtol=1e-13, atol=1e-15)
 
 
 @pytest.mark.parametrize("mechanism", ["platform", "attitude"])
 def test_frame_jacobian_matches_finite_differences(mechanism):
     """In frame coordinates (kernels bound to N, QN) J = ∂s_T/∂λ of the w-parameters."""
-    from nonholo import planner
-
     R0, _ = example(2)
     w = bumpy(seed=5)
-    prob = planner.Problem(R0, R0, 1.0, mechanism, "parametric", 400, 1e-2, frame=True)
+    prob = Problem(R0, R0, 1.0, catalog.get(mechanism), "parametric", 400, 1e-2, frame=True)
     ev = prob.evaluate(w)
     eps = 1e-6
     fd = np.empty_like(ev.J)
     for j in range(10):
         e = np.zeros(10)
         e[j] = eps
-        Rp = C.FrameControls(w.with_params(w.params + e), R0, mechanism, 400).nodes[-1]
-        Rm = C.FrameControls(w.with_params(w.params - e), R0, mechanism, 400).nodes[-1]
+        Rp = FrameControls(w.with_params(w.params + e), R0, mechanism, 400).nodes[-1]
+        Rm = FrameControls(w.with_params(w.params - e), R0, mechanism, 400).nodes[-1]
         fd[:, j] = endpoint_variation(Rp, Rm, eps)
     assert rel(ev.J, fd) <= 1e-7
-    np.testing.assert_allclose(ev.R[-1], C.FrameControls(w, R0, mechanism, 400).nodes[-1], atol=1e-14)
+    np.testing.assert_allclose(ev.R[-1], FrameControls(w, R0, mechanism, 400).nodes[-1], atol=1e-14)
 
 
 def test_min_norm_step_cholesky_and_fallback():
@@ -269,7 +255,7 @@ def test_log_error():
 def test_physical_simulation_of_frame_controls():
     """simulate/variational accept FrameControls: the physical system re-traces the frame motion."""
     R0, _ = example(1)
-    u = C.FrameControls(bumpy(seed=2), R0, "platform", 400)
+    u = FrameControls(bumpy(seed=2), R0, "platform", 400)
     tr = S.simulate(R0, u, 1.0, steps=800)
     assert so3.distance(tr.R_T, u.nodes[-1]) <= 1e-9
     var = S.variational(R0, u, 1.0)

@@ -1,0 +1,174 @@
+"""The package's import structure, from its source (``ast``, nothing is imported):
+
+- the import graph of the ``nonholo.*`` modules has no cycle;
+- no module imports a private name (``_x``) from another ``nonholo`` module.
+
+Every ``import``/``from … import`` statement counts, wherever it is (module level, inside a
+function, under ``if TYPE_CHECKING``), relative or absolute. ``from P import x`` is an
+edge to the module ``P.x`` when ``x`` is a submodule of the package ``P``, else to ``P``.
+The implicit import of a module's parent packages is not an edge (every module would
+otherwise depend on ``nonholo/__init__``).
+"""
+from __future__ import annotations
+
+import ast
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+PACKAGE = "nonholo"
+
+
+def module_files() -> dict[str, Path]:
+    """``{"nonholo.x.y": path}`` for every module of the package (``__init__`` as the package)."""
+    out = {}
+    for path in sorted((ROOT / PACKAGE).rglob("*.py")):
+        parts = list(path.relative_to(ROOT).with_suffix("").parts)
+        if parts[-1] == "__init__":
+            parts.pop()
+        out[".".join(parts)] = path
+    return out
+
+
+MODULES = module_files()
+
+
+def is_package(name: str) -> bool:
+    return MODULES[name].name == "__init__.py"
+
+
+def resolve(module: str, level: int, target: str | None) -> str:
+    """The absolute name of ``from <level dots><target> import …`` written in ``module``."""
+    if level == 0:
+        return target or ""
+    base = module.split(".") if is_package(module) else module.split(".")[:-1]
+    base = base[:len(base) - (level - 1)] if level > 1 else base
+    return ".".join(base + ([target] if target else []))
+
+
+def imports(module: str) -> list[tuple[str, str | None, int]]:
+    """``(imported module, imported name or None, line)`` for every import in ``module``,
+    restricted to ``nonholo`` modules."""
+    tree = ast.parse(MODULES[module].read_text(), filename=str(MODULES[module]))
+    out = []
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Import):
+            for alias in node.names:
+                if alias.name == PACKAGE or alias.name.startswith(PACKAGE + "."):
+                    out.append((alias.name, None, node.lineno))
+        elif isinstance(node, ast.ImportFrom):
+            src = resolve(module, node.level, node.module)
+            if not (src == PACKAGE or src.startswith(PACKAGE + ".")):
+                continue
+            for alias in node.names:
+                sub = f"{src}.{alias.name}"
+                if sub in MODULES:
+                    out.append((sub, None, node.lineno))           # from package import submodule
+                else:
+                    out.append((src, alias.name, node.lineno))
+    return out
+
+
+def graph() -> dict[str, set[str]]:
+    edges = {m: set() for m in MODULES}
+    for m in MODULES:
+        for target, _, _ in imports(m):
+            assert target in MODULES, f"{m} imports {target}, which is not a module of the package"
+            if target != m:
+                edges[m].add(target)
+    return edges
+
+
+def cycles(edges: dict[str, set[str]]) -> list[list[str]]:
+    """The strongly connected components with more than one module (Tarjan)."""
+    index, low, stack, on, out = {}, {}, [], set(), []
+    counter = [0]
+
+    def visit(v):
+        index[v] = low[v] = counter[0]
+        counter[0] += 1
+        stack.append(v)
+        on.add(v)
+        for w in sorted(edges[v]):
+            if w not in index:
+                visit(w)
+                low[v] = min(low[v], low[w])
+            elif w in on:
+                low[v] = min(low[v], index[w])
+        if low[v] == index[v]:
+            comp = []
+            while True:
+                w = stack.pop()
+                on.discard(w)
+                comp.append(w)
+                if w == v:
+                    break
+            if len(comp) > 1:
+                out.append(sorted(comp))
+
+    for v in sorted(edges):
+        if v not in index:
+            visit(v)
+    return out
+
+
+# -- the checker itself, on small examples ------------------------------------------------------
+
+def test_resolution_of_relative_imports():
+    assert resolve("nonholo.planning.core", 2, None) == "nonholo"
+    assert resolve("nonholo.planning.core", 2, "kernels") == "nonholo.kernels"
+    assert resolve("nonholo.planning.core", 1, "paper") == "nonholo.planning.paper"
+    assert resolve("nonholo.planning", 1, "core") == "nonholo.planning.core"       # a package's own
+    assert resolve("nonholo.catalog", 1, "generated") == "nonholo.generated"
+    assert resolve("nonholo", 1, "catalog") == "nonholo.catalog"
+
+
+def test_cycle_finder():
+    assert cycles({"a": {"b"}, "b": {"c"}, "c": set()}) == []
+    assert cycles({"a": {"b"}, "b": {"c"}, "c": {"a"}, "d": {"a"}}) == [["a", "b", "c"]]
+
+
+def test_the_graph_sees_every_form_of_import():
+    """Known imports of the package, one of each form."""
+    edges = graph()
+    assert "nonholo.kernels" in edges["nonholo.planning.core"]          # from .. import kernels
+    assert "nonholo.replay" in edges["nonholo.planning.core"]           # from ..replay import X
+    assert "nonholo.generated" in edges["nonholo.catalog"]              # from .generated import X
+    assert "nonholo.planning.core" in edges["nonholo.planner"]          # from .planning.core import X
+    assert "nonholo.cf4" in edges["nonholo.mechanism"]                  # from . import cf4
+    # imports inside functions count too
+    inner = [(m, t) for m in MODULES for node in ast.walk(ast.parse(MODULES[m].read_text()))
+             if isinstance(node, ast.FunctionDef)
+             for sub in ast.walk(node) if isinstance(sub, ast.ImportFrom) and sub.level
+             for t in [resolve(m, sub.level, sub.module)]]
+    for m, t in inner:
+        assert t in edges[m] or any(x.startswith(t + ".") for x in edges[m]), (m, t)
+
+
+# -- the package ----------------------------------------------------------------------------
+
+def test_every_module_is_parsed():
+    assert {"nonholo", "nonholo.catalog", "nonholo.mechanism", "nonholo.cf4", "nonholo.planning.core",
+            "nonholo.planning.robust", "nonholo.generated.platform"} <= set(MODULES)
+
+
+def test_no_import_cycle():
+    found = cycles(graph())
+    assert not found, "import cycles among nonholo modules: " + "; ".join(" <-> ".join(c) for c in found)
+
+
+def test_no_private_name_is_imported_from_another_module():
+    offending = [f"{m}:{line}: from {src} import {name}"
+                 for m in MODULES for src, name, line in imports(m)
+                 if name is not None and name.startswith("_") and not name.startswith("__") and src != m]
+    offending += [f"{m}:{line}: import {src}" for m in MODULES for src, name, line in imports(m)
+                  if name is None and any(p.startswith("_") and not p.startswith("__")
+                                          for p in src.split("."))]
+    assert not offending, "private names imported across nonholo modules:\n" + "\n".join(offending)
+
+
+@pytest.mark.parametrize("module", sorted(MODULES))
+def test_imports_resolve_to_modules_of_the_package(module):
+    for target, _, line in imports(module):
+        assert target in MODULES, f"{module}:{line} imports {target}"
