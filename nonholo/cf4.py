@@ -59,15 +59,17 @@ placeholders. :func:`compile_system` makes, per system, a copy of each kernel wh
 globals bind those names to the mechanism's generated functions (``L_into``/``Q_into`` or
 ``N_into``/``QN_into``, ``delta``, ``W_into``, compiled with ``numba.njit``), so that they
 are inlined; each copy has its own qualified name (mechanism, system, a hash of the
-generated source), hence its own on-disk cache entry. The step itself is inlined too,
-but by code generation: a call costs the kernels about half again their time (the
-arrays of the step no longer stay in registers), and numba's own inlining multiplies
-the compilation time. ``nonholo derive`` writes :mod:`nonholo.generated.cf4_kernels`, the
-kernels of this module with every call of :func:`cf4_step` and :func:`cf4_stage` expanded
-in place; that is what gets compiled, and ``tests/test_cf4.py`` checks it against the
-kernels of this module compiled as they are. (A closure over the compiled functions would read the same, but numba cannot
-cache it: the cache key pickles the closure's cells, and a compiled function pickles
-differently in every process.)
+generated source), hence its own on-disk cache entry. (A closure over the compiled
+functions would read the same, but numba cannot cache it: the cache key pickles the
+closure's cells, and a compiled function pickles differently in every process.)
+
+The step is inlined too, by code generation: called, it keeps its arrays out of
+registers and slows every kernel markedly, and numba's own inlining multiplies the
+compilation time. ``nonholo derive`` writes :mod:`nonholo.generated.cf4_kernels`, the
+kernels of this module with every call of :func:`cf4_step`, :func:`cf4_stage` and
+:func:`zpredict` expanded in place; that is what gets compiled.
+``compile_system(..., inlined=False)`` compiles the kernels as written here, and
+``tests/test_cf4.py`` checks that both give the same numbers, bit for bit.
 """
 from __future__ import annotations
 
