@@ -1,36 +1,110 @@
 """Timing of the Jacobian planner on the examples of MODEL.md (run by hand).
 
-    python -m benchmarks.bench_plan [--repeat 30]
+    python -m benchmarks.bench_plan [--repeat 30] [--cold-runs 3]
 
-Prints, for Examples 1 and 2 and both methods (strategy "paper"): median/min/max wall time of ``plan`` (after
-warm-up), iterations, terminal error; the median time of one bare forward simulation
-(the CF4 kernel alone) and of one planner iteration (simulation with the variational
-system + Jacobian contraction + error + minimum-norm solve), and their ratio; the
-discretisation error of the default step count against DOP853 (rtol = atol = 1e-13) for
-the initial and the planned controls; and the first-call (import + JIT or cache load) time.
+Measures, and writes to ``benchmarks/results/bench_plan.md`` (also echoed to standard
+output; the file is headed by the date, the git commit, the machine and the command, see
+:mod:`benchmarks.report`):
+
+- start-up: the first :func:`nonholo.plan` of Example 1 (default strategy) in a fresh
+  Python process whose numba cache (``NUMBA_CACHE_DIR``) is a new, empty directory — the
+  import time and the first plan's time, which includes compiling the kernels — then the
+  same in a second fresh process with that cache, now warm; and the first plan with the
+  strategy ``"paper"`` in two more processes on the same cache (the first of them may
+  still compile what the default strategy did not need). Median (and range) over
+  ``--cold-runs`` fresh cache directories;
+- for Examples 1 and 2 and both methods (strategy ``"paper"``): median/min/max wall time
+  of ``plan`` after warm-up, iterations, simulations (evaluations), terminal error, the
+  error of a DOP853 re-simulation (rtol = atol = 1e-13) of the planned control, and the
+  discretisation error of the planner's own endpoint against it;
+- the discretisation error of N = 100 … 800 CF4 steps against DOP853 for the initial and
+  the planned controls;
+- the median time of one bare forward simulation (the CF4 kernel alone) and of one
+  planner iteration (simulation with the variational system + Jacobian contraction +
+  error + minimum-norm solve + update + admissibility test + history record), their
+  ratio (and the largest median ratio), and the ratio of the stage table + variational
+  kernel alone.
 """
 from __future__ import annotations
 
 import argparse
+import json
+import os
+import shutil
 import statistics
 import subprocess
 import sys
+import tempfile
 import time
 
 import numpy as np
+
+from .report import Report
 
 EXAMPLES = {
     1: ((0.5, 1.2, -0.5), (1.0, 0.9, -0.5)),
     2: ((1.5, 1.4, 0.5), (1.5, 1.4, -0.5)),
 }
 
-FIRST_CALL = """
-import time
+#: Run in a fresh interpreter: import nonholo, plan Example 1 (strategy argv[1], or the
+#: default), print the times as JSON.
+FIRST_PLAN = r"""
+import json, sys, time
 t0 = time.perf_counter()
-from nonholo import planner, so3
-r = planner.plan(so3.from_rpy(0.5, 1.2, -0.5), so3.from_rpy(1.0, 0.9, -0.5), strategy="paper")
-print(time.perf_counter() - t0)
+import nonholo
+from nonholo import so3
+t1 = time.perf_counter()
+kw = {} if sys.argv[1] == "default" else {"strategy": sys.argv[1]}
+res = nonholo.plan(so3.from_rpy(0.5, 1.2, -0.5), so3.from_rpy(1.0, 0.9, -0.5), **kw)
+t2 = time.perf_counter()
+print(json.dumps({"import": t1 - t0, "plan": t2 - t1, "success": bool(res.success),
+                  "strategy": res.strategy}))
 """
+
+
+def _first_plan(cache_dir: str, strategy: str) -> dict:
+    env = dict(os.environ, NUMBA_CACHE_DIR=cache_dir)
+    t = time.perf_counter()
+    out = subprocess.run([sys.executable, "-c", FIRST_PLAN, strategy], capture_output=True, text=True,
+                         env=env)
+    wall = time.perf_counter() - t
+    if out.returncode != 0:
+        raise RuntimeError(f"fresh process failed ({strategy}):\n{out.stderr}")
+    return {**json.loads(out.stdout.strip().splitlines()[-1]), "process": wall}
+
+
+def start_up(report: Report, runs: int) -> None:
+    """Cold (empty numba cache) and warm first plans in fresh processes."""
+    cases = (("empty cache", "default"), ("warm cache", "default"),
+             ("cache warmed by the default strategy", "paper"), ("warm cache", "paper"))
+    times = {c: [] for c in cases}
+    for _ in range(runs):
+        cache = tempfile.mkdtemp(prefix="nonholo_numba_cache_")
+        try:
+            for case in cases:
+                times[case].append(_first_plan(cache, case[1]))
+        finally:
+            shutil.rmtree(cache, ignore_errors=True)
+
+    def cell(xs):
+        return f"{statistics.median(xs):.2f} ({min(xs):.2f}–{max(xs):.2f})"
+
+    report.heading("Start-up: the first plan in a fresh process")
+    report.paragraph(
+        "Example 1 (`nonholo.plan(RPY(0.5, 1.2, -0.5), RPY(1.0, 0.9, -0.5))`) in a fresh Python "
+        f"process, `NUMBA_CACHE_DIR` a new empty directory per run; the processes of one run share "
+        f"it, in the order of the rows. Median (min–max) over {runs} runs, seconds. *import*: "
+        "`import nonholo`; *first plan*: the `plan` call (with the kernels' compilation or their "
+        "loading from the cache); *process*: the whole child process as timed by the parent "
+        "(interpreter start-up and exit included).")
+    rows = []
+    for (label, strategy), ts in times.items():
+        rows.append([label, f"{ts[0]['strategy']} (default)" if strategy == "default" else strategy,
+                     cell([t["import"] for t in ts]), cell([t["plan"] for t in ts]),
+                     cell([t["process"] for t in ts]),
+                     "yes" if all(t["success"] for t in ts) else "NO"])
+    report.table(["numba cache", "strategy", "import [s]", "first plan [s]", "process [s]", "success"],
+                 rows, ["l", "l", "r", "r", "r", "l"])
 
 
 def _median_interleaved(fns: dict, repeat: int, number: int) -> dict:
@@ -44,67 +118,86 @@ def _median_interleaved(fns: dict, repeat: int, number: int) -> dict:
     return {k: np.array(v) for k, v in times.items()}
 
 
-def main(argv=None) -> None:
-    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--repeat", type=int, default=30)
-    args = ap.parse_args(argv)
+def plan_times(report: Report, repeat: int) -> None:
+    from nonholo import planner, so3, verify
 
-    out = subprocess.run([sys.executable, "-c", FIRST_CALL], capture_output=True, text=True, check=True)
-    print(f"first call in a fresh process (imports + kernels from the numba cache + plan): "
-          f"{float(out.stdout):.2f} s")
-
-    from nonholo import kernels, planner, so3, verify
-    from nonholo.simulation import simulate
-
-    print("\nplan() wall time after warm-up (ms):")
-    print(f"{'example':>8} {'method':>14} {'median':>8} {'min':>8} {'max':>8} {'iters':>6} "
-          f"{'evals':>6} {'|l_T|':>9} {'resim err':>9} {'disc. err':>9}")
+    report.heading('plan() after warm-up (strategy "paper")')
+    report.paragraph(
+        f"Wall time of `plan` over {repeat} calls after one warm-up call (ms); *evaluations*: "
+        "simulations with the variational system (iterations + 1 + rejected steps); *|l_T|*: the "
+        "planner's terminal error; *re-simulated*: terminal error of the planned control "
+        "re-simulated by DOP853 (rtol = atol = 1e-13); *discretisation*: geodesic distance "
+        "between the planner's R(T) and DOP853's (rad).")
+    rows = []
     for k, (a, b) in EXAMPLES.items():
         R0, Rd = so3.from_rpy(*a), so3.from_rpy(*b)
         for method in planner.METHODS:
             res = planner.plan(R0, Rd, method=method, strategy="paper")
             ts = []
-            for _ in range(args.repeat):
+            for _ in range(repeat):
                 t = time.perf_counter()
                 res = planner.plan(R0, Rd, method=method, strategy="paper")
                 ts.append(time.perf_counter() - t)
             evals = res.iterations + 1 + sum(h["rejected"] for h in res.history)
             R_ref = verify.resimulate(R0, res.controls, res.T, res.mechanism, res.breakpoints)
-            disc = so3.distance(res.R_T, R_ref)
-            print(f"{k:>8} {method:>14} {1e3 * statistics.median(ts):8.2f} {1e3 * min(ts):8.2f} "
-                  f"{1e3 * max(ts):8.2f} {res.iterations:6d} {evals:6d} {res.terminal_error:9.2e} "
-                  f"{verify.terminal_error(R_ref, Rd):9.2e} {disc:9.2e}")
+            rows.append([k, method, f"{1e3 * statistics.median(ts):.2f}", f"{1e3 * min(ts):.2f}",
+                         f"{1e3 * max(ts):.2f}", res.iterations, evals, f"{res.terminal_error:.2e}",
+                         f"{verify.terminal_error(R_ref, Rd):.2e}", f"{so3.distance(res.R_T, R_ref):.2e}"])
+    report.table(["example", "method", "median [ms]", "min [ms]", "max [ms]", "iterations",
+                  "evaluations", "|l_T|", "re-simulated", "discretisation"], rows,
+                 ["r", "l"] + ["r"] * 8)
 
-    print("\ndiscretisation error of N CF4 steps vs DOP853 (geodesic distance of R(T), rad):")
+
+def discretisation(report: Report) -> None:
+    from nonholo import planner, so3, verify
+    from nonholo.simulation import simulate
+
+    counts = (100, 200, 400, 800)
+    report.heading("Discretisation error of N CF4 steps")
+    report.paragraph(
+        "Geodesic distance (rad) between R(T) after N CF4 steps and DOP853 (rtol = atol = 1e-13), "
+        "T = 1, for the initial control `u = 0.3 (sin 2πt, cos 2πt)` and the control planned by "
+        'the strategy "paper".')
+    rows = []
     for k, (a, b) in EXAMPLES.items():
         R0, Rd = so3.from_rpy(*a), so3.from_rpy(*b)
         for method in planner.METHODS:
             for label, par in (("initial", planner.initial_controls(method, 1.0, 2, 2, 100)),
                                ("planned", planner.plan(R0, Rd, method=method, strategy="paper").parametrisation)):
                 R_ref = verify.resimulate(R0, par, 1.0)
-                errs = [so3.distance(simulate(R0, par, 1.0, steps=n).R_T, R_ref) for n in (100, 200, 400, 800)]
-                print(f"  example {k} {method:>13} {label:>8}: " +
-                      "  ".join(f"N={n}: {e:.1e}" for n, e in zip((100, 200, 400, 800), errs)))
+                rows.append([k, method, label] + [f"{so3.distance(simulate(R0, par, 1.0, steps=n).R_T, R_ref):.1e}"
+                                                  for n in counts])
+    report.table(["example", "method", "control"] + [f"N = {n}" for n in counts], rows,
+                 ["r", "l", "l"] + ["r"] * len(counts))
 
-    print("\none iteration vs one bare forward simulation (kernels called directly, µs; median and min"
-          " over repeats of 20 calls, interleaved):")
-    print("  iteration = what the paper strategy does per accepted step: Problem.evaluate (stage table,")
-    print("  CF4 with the variational system and the Jacobian, log error), the minimum-norm solve, the")
-    print("  parameter update, the admissibility test and the history record.")
+
+def iteration_cost(report: Report, repeat: int) -> None:
+    from nonholo import catalog, kernels, planner, so3, stages
+    from nonholo.planning.core import Problem, record, step_scale
+
+    report.heading("One iteration vs one bare forward simulation")
+    report.paragraph(
+        "Kernels called directly, µs per call; median and min over "
+        f"{repeat} repeats of 20 calls, the three measurements interleaved. *forward*: the CF4 "
+        "kernel alone on a precomputed stage table; *iteration*: what the strategy \"paper\" does "
+        "per accepted step — `Problem.evaluate` (stage table, CF4 with the variational system and "
+        "the Jacobian, log error), the minimum-norm solve, the parameter update, the "
+        "admissibility test and the history record; *kernel*: the stage table "
+        "(`stages.stage_function`) and the variational kernel alone.")
+    mech = catalog.get("platform")
+    rows = []
     ratios = []
     for k, (a, b) in EXAMPLES.items():
         R0, Rd = so3.from_rpy(*a), so3.from_rpy(*b)
         for method in planner.METHODS:
             res = planner.plan(R0, Rd, method=method, strategy="paper")
             steps = res.steps
-            prob = planner.Problem(R0, Rd, 1.0, "platform", method, steps, 1e-2)
             par = res.parametrisation
+            prob = Problem(R0, Rd, 1.0, mech, method, steps, 1e-2)
             prob.use(par)
-            params = par.params
-            strat = planner.PaperStrategy(planner.Options())
-            metric = strat.metric(prob, par)
-            scale = np.ones(params.size) if metric is None else 1.0 / np.sqrt(metric)
-            U = par.stage_table(steps)
+            params = par.params.copy()
+            scale = step_scale(prob, par)
+            U = stages.stage_table(par, steps)
             Rs = np.empty((steps + 1, 3, 3))
             kern = prob.kernels
 
@@ -116,29 +209,50 @@ def main(argv=None) -> None:
                 d = kernels.min_norm_step(ev.J, ev.l, scale)
                 trial = params - 0.5 * d
                 ok = prob.admissible(ev) and ev.error < 1.0
-                planner._record(1, ev, 0.5, "flow", int(not ok))
+                record(1, ev, 0.5, "flow", int(not ok))
                 return trial
 
+            fill = stages.stage_function(par, steps)
+            basis = prob.stage_basis
+            m = mech.n_inputs
+            U2 = np.empty((steps, 3, m))
             Zs = np.empty((steps + 1, 3, 3))
             J = np.empty((3, params.size))
             M = np.empty((3, 3))
-            U2 = np.empty_like(U)
+            Wd = np.empty((3 * steps, 3 * m))
 
             def variational_kernel():
-                prob._fill(params, U2)
-                kern.forward_variational(prob.R0, U2, prob.h, prob.sign, 1e-2, *prob._basis, Rs, Zs, J, M,
-                                         prob._Wd, False)
+                fill(params, U2)
+                kern.forward_variational(prob.R0, U2, prob.h, prob.sign, 1e-2, *basis, Rs, Zs, J, M,
+                                         Wd, False)
 
             t = _median_interleaved({"forward": forward, "iteration": iteration,
-                                     "kernel": variational_kernel}, args.repeat, 20)
+                                     "kernel": variational_kernel}, repeat, 20)
             for stat in (np.median, np.min):
                 f, it, kv = (stat(t[x]) * 1e6 for x in ("forward", "iteration", "kernel"))
                 if stat is np.median:
                     ratios.append(it / f)
-                print(f"  example {k} {method:>13} (N = {steps}, {stat.__name__:>6}): forward {f:6.1f}   "
-                      f"iteration {it:6.1f}   ratio {it / f:4.2f}   "
-                      f"(stage table + variational kernel {kv:6.1f}, ratio {kv / f:4.2f})")
-    print(f"  largest median ratio: {max(ratios):.2f}")
+                rows.append([k, method, steps, stat.__name__, f"{f:.1f}", f"{it:.1f}", f"{it / f:.2f}",
+                             f"{kv:.1f}", f"{kv / f:.2f}"])
+    report.table(["example", "method", "N", "statistic", "forward [µs]", "iteration [µs]",
+                  "iteration / forward", "kernel [µs]", "kernel / forward"], rows,
+                 ["r", "l", "r", "l"] + ["r"] * 5)
+    report.paragraph(f"Largest median ratio iteration / forward: **{max(ratios):.2f}**.")
+
+
+def main(argv=None) -> None:
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--repeat", type=int, default=30)
+    ap.add_argument("--cold-runs", type=int, default=3, help="fresh numba caches for the start-up times")
+    args = ap.parse_args(argv)
+
+    report = Report("bench_plan.md", "Planner timing on Examples 1 and 2 (bench_plan)",
+                    "benchmarks.bench_plan", argv)
+    start_up(report, args.cold_runs)
+    plan_times(report, args.repeat)
+    discretisation(report)
+    iteration_cost(report, args.repeat)
+    report.write()
 
 
 if __name__ == "__main__":

@@ -4,7 +4,7 @@
     python -m benchmarks.bench_robust --ingredients     # ... and what each ingredient buys
     python -m benchmarks.bench_robust --stress 777 4242 --hard 99 --ingredients
 
-Prints, per strategy, goal set and band (``near``: geodesic distance 0.2–0.8 rad, ``far``:
+Measures, per strategy, goal set and band (``near``: geodesic distance 0.2–0.8 rad, ``far``:
 0.8–1.8 rad): the success rate, the median and maximum wall time of
 :func:`nonholo.planner.plan` (after JIT warm-up), the median number of iterations and how
 many goals needed a restart (an initial guess after the first); the rejection time of
@@ -28,7 +28,9 @@ random pairs in one component of ``Δ ≠ 0`` with ``|Δ| ≥ 0.05`` at both end
 distance band (:func:`random_pairs`; ``beyond``: ≥ 1.8 rad) — reachable, but not
 necessarily by a motion as simple as those that generated the other sets.
 
-Strategies (``--ingredients``), built from the ingredients of :mod:`nonholo.robust`:
+Strategies (``--ingredients``), built from the ingredients of :mod:`nonholo.planning.robust`
+(each a :class:`~nonholo.planning.robust.RobustStrategy` subclass passed to
+:func:`nonholo.plan` as ``strategy=``):
 
 - ``paper``: the appendix's algorithm in the physical inputs ``u`` (Euclidean minimum
   norm on the Fourier coefficients of ``u``), initial loop ``u = 0.3 (sin, cos)``;
@@ -44,15 +46,13 @@ Strategies (``--ingredients``), built from the ingredients of :mod:`nonholo.robu
 - ``robust γ=0.5``: the default with the paper's ``γ = 0.5`` instead of ``γ = 1``;
 - ``robust in u``: the default with every ingredient but the frame coordinates.
 
-Results of ``--ingredients --stress 777 4242 --hard 99 --random 1 2``: the table in
-:mod:`nonholo.robust` (kept there, next to the design it measures).
-
-The default run (``python -m benchmarks.bench_robust``, 2-core machine): robust 100 % of
-the near and far benchmark goals, median 1.9 / 2.0 ms (max 2.5 / 2.9 ms), 3 / 3
-iterations, no restart (paper: 73.4 / 68.8 %, 2.6 / 2.9 ms); the 24 goals across ``Δ = 0``
-rejected in a median 90 µs, max 0.3 ms; Example 3 and the other parking goal solved by
-both methods (≈ 3 ms), the latter failed by the paper strategy for every γ. See
-:mod:`nonholo.robust` for the design and what each ingredient buys.
+Output: ``benchmarks/results/bench_robust.md`` for the default run,
+``benchmarks/results/bench_robust_ingredients.md`` with ``--ingredients`` (``--out``
+names another file in ``benchmarks/results/``), echoed to standard output: markdown
+tables of the measurements above (with ``--ingredients`` first a summary, the success
+rate of every strategy on every set and band), headed by the date, the git commit, the
+machine and the command (:mod:`benchmarks.report`). The design the ingredients belong to is described in
+:mod:`nonholo.planning.robust`.
 """
 from __future__ import annotations
 
@@ -63,17 +63,21 @@ import time
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from nonholo import examples, planner, robust, so3, verify
+from nonholo import examples, planner, so3, verify
+from nonholo.planning.robust import RobustStrategy
+
+from .report import Report
 
 RESIM_TOL = 1e-8
 DELTA_MIN = 1e-2
+BANDS = ("near", "far", "beyond")
 
 
 # --------------------------------------------------------------------------------------
 # Variants: one ingredient at a time
 # --------------------------------------------------------------------------------------
 
-class _InU(robust.RobustStrategy):
+class _InU(RobustStrategy):
     """The default strategy in the physical inputs ``u``."""
 
     name = "bench:robust-in-u"
@@ -82,14 +86,14 @@ class _InU(robust.RobustStrategy):
         return False
 
 
-class _W(robust.RobustStrategy):
+class _W(RobustStrategy):
     """Frame coordinates, the default loop only, no barrier."""
 
     name = "bench:w"
     barrier = False
 
-    def attempts(self, problem, first):
-        yield "loop", first
+    def attempts(self, problem, start):
+        yield "loop", start.controls
 
 
 class _WBarrier(_W):
@@ -99,17 +103,17 @@ class _WBarrier(_W):
     barrier = True
 
 
-class _WDrift(robust.RobustStrategy):
+class _WDrift(RobustStrategy):
     """Frame coordinates, the drift guess only, no barrier."""
 
     name = "bench:w+drift"
     barrier = False
 
-    def attempts(self, problem, first):
-        yield next(iter(super().attempts(problem, first)))
+    def attempts(self, problem, start):
+        yield next(iter(super().attempts(problem, start)))
 
 
-class _WDriftRestarts(robust.RobustStrategy):
+class _WDriftRestarts(RobustStrategy):
     """Frame coordinates, the drift guess and the restarts (stall detection, deterministic
     then random guesses), no barrier."""
 
@@ -117,19 +121,17 @@ class _WDriftRestarts(robust.RobustStrategy):
     barrier = False
 
 
-class _Gamma05(robust.RobustStrategy):
+class _Gamma05(RobustStrategy):
     """The default strategy with the paper's ``γ = 0.5`` (flow steps ask for half the error)."""
 
     name = "bench:robust-gamma-0.5"
     default_gamma = 0.5
 
 
-for _cls in (_InU, _W, _WBarrier, _WDrift, _WDriftRestarts, _Gamma05):
-    planner.register_strategy(_cls)
-
-VARIANTS = {"paper": "paper", "w": _W.name, "w+barrier": _WBarrier.name, "w+drift": _WDrift.name,
-            "w+drift+rest.": _WDriftRestarts.name, "robust": "robust", "robust γ=0.5": _Gamma05.name,
-            "robust in u": _InU.name}
+#: label -> the ``strategy`` argument of :func:`nonholo.plan` (a name or a Strategy subclass)
+VARIANTS = {"paper": "paper", "w": _W, "w+barrier": _WBarrier, "w+drift": _WDrift,
+            "w+drift+rest.": _WDriftRestarts, "robust": "robust", "robust γ=0.5": _Gamma05,
+            "robust in u": _InU}
 
 
 # --------------------------------------------------------------------------------------
@@ -237,7 +239,7 @@ def check(res, R0, Rd, T) -> dict:
     return out
 
 
-def run(strategy: str, goals: list[dict]) -> list[dict]:
+def run(strategy, goals: list[dict]) -> list[dict]:
     rows = []
     for g in goals:
         t = time.perf_counter()
@@ -249,17 +251,25 @@ def run(strategy: str, goals: list[dict]) -> list[dict]:
     return rows
 
 
-def report(label: str, rows: list[dict]) -> None:
-    for band in ("near", "far", "beyond"):
+def band_rows(label: str, rows: list[dict]) -> list[list]:
+    """Table rows of one strategy on one set: success, times, iterations, restarts per band."""
+    out = []
+    for band in BANDS:
         r = [x for x in rows if x["band"] == band]
         if not r:
             continue
         ok = sum(x["ok"] for x in r)
         walls = [x["wall"] * 1e3 for x in r]
-        print(f"  {label:>12} {band:>5}: {ok:3d}/{len(r):3d} = {100 * ok / len(r):5.1f} %   "
-              f"time median {statistics.median(walls):6.2f} ms, max {max(walls):7.2f} ms   "
-              f"iterations median {statistics.median(x['iterations'] for x in r):4.1f}   "
-              f"restarts used {sum(x['restarts'] > 0 for x in r):3d}")
+        out.append([label, band, f"{ok}/{len(r)}", f"{100 * ok / len(r):.1f} %",
+                    f"{statistics.median(walls):.2f}", f"{max(walls):.2f}",
+                    f"{statistics.median(x['iterations'] for x in r):.1f}",
+                    sum(x["restarts"] > 0 for x in r)])
+    return out
+
+
+SET_HEADERS = ["strategy", "band", "solved", "rate", "median time [ms]", "max time [ms]",
+               "median iterations", "restarts used"]
+SET_ALIGN = ["l", "l", "r", "r", "r", "r", "r", "r"]
 
 
 def warm_up(strategies) -> None:
@@ -269,7 +279,7 @@ def warm_up(strategies) -> None:
             planner.plan(R0, Rd, strategy=s, method=method)
 
 
-def rejection(goals: list[dict], repeat: int = 20) -> None:
+def rejection(report: Report, goals: list[dict], repeat: int = 20) -> None:
     across = [g for g in goals if g["band"] == "across"]
     ts = []
     for _ in range(repeat):
@@ -278,18 +288,26 @@ def rejection(goals: list[dict], repeat: int = 20) -> None:
             res = planner.plan(g["R0"], g["Rd"], T=g["T"])
             ts.append(time.perf_counter() - t)
             assert not res.success and "across the singular surface" in res.reason, res.reason
-    print(f"\ngoals across Δ = 0 ({len(across)} goals × {repeat}): all rejected; full plan() call "
-          f"median {statistics.median(ts) * 1e6:.0f} µs, max {max(ts) * 1e6:.0f} µs")
+    report.heading("Goals across Δ = 0")
+    report.paragraph(
+        f"The {len(across)} goals of the benchmark set across Δ = 0, each planned {repeat} times "
+        "(default strategy): all rejected; the full `plan()` call took a median "
+        f"**{statistics.median(ts) * 1e6:.0f} µs**, max {max(ts) * 1e6:.0f} µs.")
 
 
-def parking() -> None:
+def parking(report: Report) -> None:
     ex3 = examples.get(3)
     R0 = ex3.R_start
     other = examples.parallel_parking_goal(R0, 0.6, np.array([-0.543, -0.033, -0.253]))
-    print("\nparking goals from R0 = RPY(0.5, 1.2, -0.5) (T = 1, K = 2):")
+    report.heading("Parking goals")
+    report.paragraph("From R0 = RPY(0.5, 1.2, -0.5), T = 1, K = 2: the goal of Example 3 and the "
+                     "\"other\" parking goal, `Rd = exp([v]) R0`.")
+    rows = []
+    gamma_rows = []
+    gammas = (0.1, 0.2, 0.3, 0.5, 0.7, 1.0)
     for name, Rd in (("Example 3", ex3.R_goal), ("other", other)):
         v = so3.log(Rd @ R0.T)
-        print(f"  {name}: Rd = exp([v]) R0, v = ({v[0]:+.3f}, {v[1]:+.3f}, {v[2]:+.3f})")
+        vtext = f"({v[0]:+.3f}, {v[1]:+.3f}, {v[2]:+.3f})"
         for strategy in ("robust", "paper"):
             for method in planner.METHODS:
                 t = time.perf_counter()
@@ -298,12 +316,37 @@ def parking() -> None:
                 c = check(res, R0, Rd, 1.0)
                 resim = "n/a" if c["resim"] is None else f"{c['resim']:.1e}"
                 md = "n/a" if c["dense_min_delta"] is None else f"{c['dense_min_delta']:.3f}"
-                print(f"    {strategy:>6} {method:>13}: {'solved' if c['ok'] else 'FAILED'}  "
-                      f"re-simulated |l_T| {resim}, min Δ {md}, {res.iterations} iterations, "
-                      f"{wall * 1e3:.1f} ms" + ("" if c["ok"] else f"  ({res.reason[:90]})"))
-        gammas = (0.1, 0.2, 0.3, 0.5, 0.7, 1.0)
+                rows.append([name, vtext, strategy, method, "solved" if c["ok"] else "FAILED", resim, md,
+                             res.iterations, f"{wall * 1e3:.1f}", "" if c["ok"] else res.reason[:90]])
         solved = [planner.plan(R0, Rd, strategy="paper", gamma=g).success for g in gammas]
-        print(f"    paper, γ = {gammas}: solved {solved}")
+        gamma_rows.append([name] + ["yes" if x else "no" for x in solved])
+    report.table(["goal", "v", "strategy", "method", "result", "re-simulated |l_T|", "min Δ",
+                  "iterations", "time [ms]", "reason (failures)"], rows,
+                 ["l", "l", "l", "l", "l", "r", "r", "r", "r", "l"])
+    report.paragraph('Solved by the strategy "paper" for each γ:')
+    report.table(["goal"] + [f"γ = {g}" for g in gammas], gamma_rows, ["l"] + ["l"] * len(gammas))
+
+
+def summary_table(report: Report, results: dict) -> None:
+    """Success rate (%) of every strategy on every set, per band."""
+    first = next(iter(results.values()))
+    sets = list(first)
+    headers = ["strategy"] + [f"{name} ({' / '.join(b for b in BANDS if any(r['band'] == b for r in rows))})"
+                              for name, rows in first.items()]
+    table = []
+    for label, per_set in results.items():
+        cells = [label]
+        for set_name in sets:
+            rows = per_set[set_name]
+            rates = []
+            for band in BANDS:
+                r = [x for x in rows if x["band"] == band]
+                if r:
+                    rates.append(f"{100 * sum(x['ok'] for x in r) / len(r):.1f}")
+            cells.append(" / ".join(rates))
+        table.append(cells)
+    report.heading("Summary: success rate (%) per set and band")
+    report.table(headers, table, ["l"] + ["r"] * len(sets))
 
 
 def main(argv=None) -> None:
@@ -313,33 +356,54 @@ def main(argv=None) -> None:
     ap.add_argument("--hard", type=int, nargs="*", default=[], metavar="SEED", help="harder goal sets")
     ap.add_argument("--random", type=int, nargs="*", default=[], metavar="SEED",
                     help="uniformly random pairs in one component (not all reachable by short motions)")
+    ap.add_argument("--out", default=None, metavar="NAME",
+                    help="results file in benchmarks/results/ (default: bench_robust.md, "
+                         "bench_robust_ingredients.md with --ingredients)")
     args = ap.parse_args(argv)
+    out = args.out or ("bench_robust_ingredients.md" if args.ingredients else "bench_robust.md")
 
+    report = Report(out, "Strategies of the planner on reachable goals (bench_robust)"
+                    + (": the ingredients" if args.ingredients else ""), "benchmarks.bench_robust", argv)
     names = list(VARIANTS) if args.ingredients else ["robust", "paper"]
     warm_up([VARIANTS[n] for n in names])
     goals = benchmark_goals()
     sets = {"benchmark": [g for g in goals if g["band"] != "across"]}
+    built = []
     for seed in args.stress:
         t = time.perf_counter()
         sets[f"stress {seed}"] = stress_goals(seed)
-        print(f"(built stress set {seed} in {time.perf_counter() - t:.0f} s)")
+        built.append(f"stress set {seed} built in {time.perf_counter() - t:.0f} s")
     for seed in args.hard:
         t = time.perf_counter()
         sets[f"hard {seed}"] = hard_goals(seed)
-        print(f"(built hard set {seed} in {time.perf_counter() - t:.0f} s)")
-
+        built.append(f"hard set {seed} built in {time.perf_counter() - t:.0f} s")
     for seed in args.random:
         sets[f"random pairs {seed}"] = random_pairs(seed)
-    print(f"success = plan success, DOP853 re-simulation of controls(t) within {RESIM_TOL:g} rad "
-          f"and min Δ ≥ {DELTA_MIN:g} on the dense path")
+    report.paragraph(
+        f"Success = plan success, DOP853 re-simulation of `controls(t)` within {RESIM_TOL:g} rad "
+        f"of the goal and min sgn(Δ(R0))·Δ ≥ {DELTA_MIN:g} on the dense re-simulated path. Times: "
+        "the whole `plan()` call after warm-up (T = 1, parametric, K = 2, "
+        f"delta_min = {DELTA_MIN:g}); *restarts used*: goals solved or failed after more than one "
+        "initial guess." + (f" ({'; '.join(built)}.)" if built else ""))
+
+    results = {n: {} for n in names}
+    detail = []
     for set_name, gs in sets.items():
-        print(f"\n{set_name} (" + ", ".join(f"{sum(g['band'] == b for g in gs)} {b}"
-                                             for b in ("near", "far", "beyond")
-                                             if any(g["band"] == b for g in gs)) + "):")
+        counts = ", ".join(f"{sum(g['band'] == b for g in gs)} {b}" for b in BANDS
+                           if any(g["band"] == b for g in gs))
+        rows = []
         for n in names:
-            report(n, run(VARIANTS[n], gs))
-    rejection(goals)
-    parking()
+            results[n][set_name] = run(VARIANTS[n], gs)
+            rows += band_rows(n, results[n][set_name])
+        detail.append((f"{set_name} ({counts})", rows))
+    if args.ingredients:
+        summary_table(report, results)
+    for title, rows in detail:
+        report.heading(f"Set: {title}")
+        report.table(SET_HEADERS, rows, SET_ALIGN)
+    rejection(report, goals)
+    parking(report)
+    report.write()
 
 
 if __name__ == "__main__":

@@ -69,12 +69,8 @@ Outputs (``benchmarks/results/``, or ``--out DIR``)
 from __future__ import annotations
 
 import argparse
-import datetime as _dt
 import json
 import math
-import os
-import platform
-import subprocess
 import sys
 import time
 import traceback
@@ -86,8 +82,8 @@ from scipy.integrate import solve_ivp
 from nonholo import catalog, so3
 
 from .goalset import load_goals
+from .report import RESULTS_DIR, command as command_line, header_lines, machine_info, utc_now
 
-RESULTS_DIR = Path(__file__).resolve().parent / "results"
 DELTA_MIN = 1e-2
 SUCCESS_TOL = 1e-8
 RTOL = 1e-13
@@ -400,44 +396,6 @@ def speed_ratios(summary: dict) -> dict:
 # --------------------------------------------------------------------------------------
 # Reports
 # --------------------------------------------------------------------------------------
-def machine_info() -> dict:
-    info = {"cores": os.cpu_count(), "platform": platform.platform(),
-            "python": platform.python_version(), "processor": platform.processor() or None}
-    try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
-                info["processor"] = line.split(":", 1)[1].strip()
-                break
-    except OSError:
-        pass
-    import scipy
-
-    info["numpy"] = np.__version__
-    info["scipy"] = scipy.__version__
-    try:
-        import numba
-
-        info["numba"] = numba.__version__
-    except ImportError:
-        pass
-    try:
-        import casadi
-
-        info["casadi"] = casadi.__version__
-    except ImportError:
-        info["casadi"] = None
-    try:
-        rev = subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True, text=True,
-                             cwd=Path(__file__).resolve().parent, timeout=10)
-        dirty = subprocess.run(["git", "status", "--porcelain"], capture_output=True, text=True,
-                               cwd=Path(__file__).resolve().parent, timeout=10)
-        if rev.returncode == 0:
-            info["git"] = rev.stdout.strip() + (" (with uncommitted changes)" if dirty.stdout.strip() else "")
-    except (OSError, subprocess.SubprocessError):
-        pass
-    return info
-
-
 def _fmt(x, spec=".3g", none="–"):
     if x is None:
         return none
@@ -451,14 +409,9 @@ def _ms(x):
 
 
 def write_markdown(path: Path, meta: dict, summary: dict, ratios: dict, records: list[dict]) -> None:
-    L = ["# Planner comparison on the benchmark goal set", ""]
-    L.append(f"- Date: {meta['date']}")
-    L.append(f"- Command: `{meta['command']}`")
-    mi = meta["machine"]
-    L.append(f"- Machine: {mi.get('processor')}, {mi['cores']} cores, {mi['platform']}; "
-             f"Python {mi['python']}, NumPy {mi['numpy']}, SciPy {mi['scipy']}, "
-             f"numba {mi.get('numba')}, CasADi {mi.get('casadi')}"
-             + (f"; code {mi['git']}" if mi.get("git") else ""))
+    L = header_lines("Planner comparison on the benchmark goal set", meta["command"], meta["date"],
+                     meta["machine"])
+    L.pop()                         # the header's closing blank line: the list goes on
     L.append(f"- Goals: `{meta['goals_file']}`, bands {', '.join(meta['bands'])} "
              f"({', '.join(f'{b}: {n}' for b, n in meta['goal_counts'].items())})"
              + (f", at most {meta['limit']} per band" if meta.get("limit") else ""))
@@ -680,8 +633,7 @@ def main(argv=None) -> int:
     ap.add_argument("--goals", type=Path, default=None, help="goal file (default benchmarks/goals.json)")
     ap.add_argument("--out", type=Path, default=RESULTS_DIR, help="output directory (default %(default)s)")
     args = ap.parse_args(argv)
-    cmd_args = list(sys.argv[1:] if argv is None else argv)
-    command = " ".join(["python -m benchmarks.compare", *cmd_args])
+    command = command_line("benchmarks.compare", argv)
     t_all = time.perf_counter()
 
     goals_all = load_goals(args.goals)
@@ -743,9 +695,9 @@ def main(argv=None) -> int:
     for g in goals:
         counts[g["band"]] = counts.get(g["band"], 0) + 1
     meta = {
-        "date": _dt.datetime.now().astimezone().isoformat(timespec="seconds"),
+        "date": utc_now(),
         "command": command,
-        "machine": machine_info(),
+        "machine": machine_info(("casadi",)),
         "goals_file": str(args.goals or "benchmarks/goals.json"),
         "bands": args.bands,
         "limit": args.limit,

@@ -157,15 +157,12 @@ def as_geometry(geometry=None, a: float = 1.6, b: float = 1.0, rho: float = 1.0)
 
 def _geometry_for(results, geometry) -> Geometry | None:
     """The geometry given, else that of the results' mechanism (``None`` if it has no
-    legs), else the paper's."""
+    legs or is unknown), else (results without a mechanism) the paper's."""
     if geometry is not None:
         return as_geometry(geometry)
-    name = getattr(results[0], "mechanism", None) if results else None
-    if isinstance(name, str) and _mechanism(name) is not None:
-        try:
-            return as_geometry(name)
-        except ValueError:
-            return None
+    if results and getattr(results[0], "mechanism", None) is not None:
+        mech = _result_mechanism(results[0])
+        return None if mech is None else mech.geometry
     return as_geometry(None)
 
 
@@ -180,6 +177,16 @@ def _mechanism(name):
         return catalog.get(name if name is not None else "platform")
     except ValueError:
         return None
+
+
+def _result_mechanism(res):
+    """The :class:`Mechanism` of a result: the one its controls were replayed with (a
+    mechanism built in the session need not be in the catalog), else the one its name
+    gives (``None`` if unknown)."""
+    mech = getattr(getattr(res, "parametrisation", None), "mechanism", None)
+    if isinstance(mech, Mechanism):
+        return mech
+    return _mechanism(getattr(res, "mechanism", "platform"))
 
 
 def delta_along(R, mechanism="platform") -> np.ndarray | None:
@@ -1018,7 +1025,7 @@ def leg_lengths_figure(results, geometry=None, title: str | None = None) -> Figu
 
 def _singular(results) -> bool:
     """Whether the results' mechanism has a singular set (the platform's by default)."""
-    mech = _mechanism(getattr(results[0], "mechanism", "platform") if results else "platform")
+    mech = _result_mechanism(results[0]) if results else _mechanism("platform")
     return mech is None or mech.has_singular_set
 
 

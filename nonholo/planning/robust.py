@@ -51,7 +51,8 @@ at every integrator point and lowers ``|l_T|`` — with these ingredients:
    converges to a better-conditioned one (then the reason says so).
 
 What each ingredient buys, and the strategy's speed and success rates, are measured by
-``python -m benchmarks.bench_robust`` (``benchmarks/results/bench_robust.md``).
+``python -m benchmarks.bench_robust`` (``benchmarks/results/bench_robust.md``; with
+``--ingredients``: ``bench_robust_ingredients.md``).
 """
 from __future__ import annotations
 
