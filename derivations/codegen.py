@@ -157,8 +157,12 @@ DRAWING_DIMENSIONS = {a: sp.Rational(8, 5), b: 1, rho: 1}
 
 def geometry_data(geometry) -> str:
     """``GEOMETRY``: the platform's joint points, contact point and axle as floats."""
-    lines = ["#: Joint points (world: base, platform frame: tip), disk contact and axle, with",
-             f"#: {', '.join(f'{k} = {v}' for k, v in DRAWING_DIMENSIONS.items())} (for drawings).",
+    dims = ", ".join(f"{str(k)!r}: {float(v)!r}" for k, v in DRAWING_DIMENSIONS.items())
+    lines = ["#: The dimensions the drawings use: base joints at distance a from O, platform",
+             "#: joints at b, sphere radius rho (the kinematics do not depend on them).",
+             f"DRAWING_DIMENSIONS = {{{dims}}}",
+             "#: Joint points (world: base, platform frame: tip), disk contact and axle, with",
+             "#: DRAWING_DIMENSIONS (for drawings).",
              "GEOMETRY = {"]
     for key in ("base1", "tip1", "base2", "tip2", "contact", "axle"):
         vec = [float(sp.sympify(c).subs(DRAWING_DIMENSIONS)) for c in getattr(geometry, key)]

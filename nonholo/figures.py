@@ -120,11 +120,8 @@ def _numeric_vector(v, dims) -> np.ndarray:
     return np.array(out, dtype=float)
 
 
-#: The drawing dimensions of the generated platforms (``derivations.codegen.DRAWING_DIMENSIONS``).
-DEFAULT_DIMENSIONS = {"a": 1.6, "b": 1.0, "rho": 1.0}
-
-
-def as_geometry(geometry=None, a: float = 1.6, b: float = 1.0, rho: float = 1.0) -> Geometry:
+def as_geometry(geometry=None, a: float | None = None, b: float | None = None,
+                rho: float | None = None) -> Geometry:
     """A numeric :class:`~nonholo.mechanism.Geometry`.
 
     ``geometry`` may be ``None`` (the paper's platform, from its derivation: leg 1 from
@@ -132,14 +129,17 @@ def as_geometry(geometry=None, a: float = 1.6, b: float = 1.0, rho: float = 1.0)
     ``ρ e_3`` with its axle along ``(e_1 - e_2)/√2``), a :class:`Geometry`, a
     :class:`~nonholo.mechanism.Mechanism` or a mechanism name (its geometry), a mapping
     with the six fields, or any object with the six attributes -- e.g. a symbolic
-    ``PlatformGeometry``, whose symbols ``a, b, rho`` are replaced by the given numbers.
+    ``PlatformGeometry``, whose symbols ``a, b, rho`` are replaced by the given numbers
+    (default: the generated platforms' ``DRAWING_DIMENSIONS``).
     """
     if isinstance(geometry, Geometry):
         return geometry
-    dims = {"a": a, "b": b, "rho": rho}
+    platform = catalog.get("platform")
+    given = {"a": a, "b": b, "rho": rho}
+    dims = {k: platform.module.DRAWING_DIMENSIONS[k] if v is None else v for k, v in given.items()}
     if geometry is None:
-        if dims == DEFAULT_DIMENSIONS:
-            return catalog.get("platform").geometry
+        if all(v is None for v in given.values()):
+            return platform.geometry
         from derivations.mechanism import PAPER_GEOMETRY     # SymPy: only for other dimensions
 
         geometry = PAPER_GEOMETRY

@@ -14,8 +14,11 @@ N_INPUTS = 2
 HAS_SINGULAR_SET = True
 
 
+#: The dimensions the drawings use: base joints at distance a from O, platform
+#: joints at b, sphere radius rho (the kinematics do not depend on them).
+DRAWING_DIMENSIONS = {'a': 1.6, 'b': 1.0, 'rho': 1.0}
 #: Joint points (world: base, platform frame: tip), disk contact and axle, with
-#: a = 8/5, b = 1, rho = 1 (for drawings).
+#: DRAWING_DIMENSIONS (for drawings).
 GEOMETRY = {
     'base1': (1.131370849898476, 0.0, 1.131370849898476),
     'tip1': (1.0, 0.0, 0.0),
