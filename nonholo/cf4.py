@@ -290,8 +290,8 @@ def forward_variational(R0, U, h, sgn, delta_stop, Bidx, Bval, stride_b, stride_
     keep_w = Wd.shape[0] == 3 * N
     nq = 0 if dense else Bidx.shape[2]
     R = R0.copy()
-    # the step's arrays allocated here, not by step_workspace: LLVM then knows them apart
-    # (a third faster)
+    # the step's arrays allocated here, not by step_workspace: LLVM then knows them apart,
+    # which makes this kernel markedly faster (benchmarks/bench_plan.py)
     Rn = np.empty((3, 3))
     Y2 = np.empty((3, 3))
     Y3 = np.empty((3, 3))
