@@ -79,11 +79,11 @@ import sys
 import types
 from dataclasses import dataclass
 
-import numba
 import numpy as np
 
 from .generated import cf4_kernels as kernels_inlined
-from .kernels import JIT_OPTIONS, exp_times, inv33
+from .jit import jit
+from .kernels import exp_times, inv33
 
 # --------------------------------------------------------------------------------------
 # The system a kernel integrates (bound per system by compile_system)
@@ -112,7 +112,7 @@ def no_singularity(R):
     return np.inf
 
 
-@numba.njit(**JIT_OPTIONS)
+@jit
 def angular_velocity(B, v, out):
     """``out = B v`` (3×m times m); ``False`` if not finite."""
     m = B.shape[1]
@@ -189,7 +189,7 @@ def cf4_step(R, Rn, v0, v1, v2, h, sgn, delta_stop, dmin, Y2, Y3, Y4, Rh, E,
     return stop, dmin
 
 
-@numba.njit(**JIT_OPTIONS)
+@jit
 def step_workspace(m):
     """The arrays :func:`cf4_step` fills besides ``R``: ``(Rn, Y2, Y3, Y4, Rh, E, B1, B2,
     B3, B4, F1, F2, F3, F4)`` for ``m`` inputs."""
@@ -233,7 +233,7 @@ def forward(R0, U, h, sgn, delta_stop, Rs):
     return N, dmin, -1.0
 
 
-@numba.njit(**JIT_OPTIONS)
+@jit
 def zpredict(Z, a, f, out):
     """``out = Z + a f`` (3×3): the value of ``Z`` at a stage of RK4."""
     for i in range(3):
@@ -487,7 +487,6 @@ _TEMPLATES = (zstage, kernels_inlined.forward, kernels_inlined.forward_variation
               kernels_inlined.frame_inputs)
 #: The kernels as written here (``compile_system(..., inlined=False)``).
 _WRITTEN = (cf4_stage, cf4_step, zstage, forward, forward_variational, frame_inputs)
-_PLAIN = dict(nogil=True, error_model="numpy")
 
 
 def _specialise(template, bindings: dict, tag: str, cache: bool):
@@ -497,7 +496,7 @@ def _specialise(template, bindings: dict, tag: str, cache: bool):
     f.__qualname__ = f"{template.__name__}__{tag}"        # its own cache entry
     f.__module__ = __name__
     f.__doc__ = template.__doc__
-    return numba.njit(**{**JIT_OPTIONS, "cache": cache})(f)
+    return jit(f, cache=cache)
 
 
 def system_tag(module, frame: bool) -> str:
@@ -549,14 +548,14 @@ def _compile(module, frame: bool, templates, tag: str, cache: bool) -> Kernels:
     """Compile ``templates`` for a system of ``module`` (see :func:`compile_system`)."""
     G, DG = (module.N_into, module.QN_into) if frame else (module.L_into, module.Q_into)
     bindings = {
-        "field_into": numba.njit(**_PLAIN)(G),
+        "field_into": jit(G, cache=False),
         # DG feeds only the variational system (the Jacobian): fast-math lets LLVM turn
         # its ``x**(-2.0)`` into a multiplication (the result changes at round-off level)
-        "field_derivative_into": numba.njit(fastmath=True, **_PLAIN)(DG),
-        "delta": numba.njit(**_PLAIN)(module.delta if module.HAS_SINGULAR_SET else no_singularity),
+        "field_derivative_into": jit(DG, cache=False, fastmath=True),
+        "delta": jit(module.delta if module.HAS_SINGULAR_SET else no_singularity, cache=False),
     }
     if frame:
-        bindings["W_into"] = numba.njit(**_PLAIN)(module.W_into)
+        bindings["W_into"] = jit(module.W_into, cache=False)
     for template in templates:
         if template.__name__ == "frame_inputs" and not frame:
             continue

@@ -11,14 +11,12 @@ The integrator itself is :mod:`nonholo.cf4`.
 """
 from __future__ import annotations
 
-import numba
 import numpy as np
 
-#: Options of every compiled function of the package (cached on disk; IEEE arithmetic).
-JIT_OPTIONS = dict(cache=True, nogil=True, error_model="numpy", fastmath=False)
+from .jit import jit
 
 
-@numba.njit(**JIT_OPTIONS)
+@jit
 def rodrigues(wx, wy, wz, E):
     """``E = exp([w])`` (Rodrigues; Taylor series for small angles)."""
     a2 = wx * wx + wy * wy + wz * wz
@@ -46,7 +44,7 @@ def rodrigues(wx, wy, wz, E):
     E[2, 1] = c1 * wx + c2 * yz
 
 
-@numba.njit(**JIT_OPTIONS)
+@jit
 def exp_times(wx, wy, wz, R, E, out):
     """``out = exp([w]) R`` (``E`` is scratch; ``out`` must not alias ``R``)."""
     rodrigues(wx, wy, wz, E)
@@ -58,7 +56,7 @@ def exp_times(wx, wy, wz, R, E, out):
             out[i, j] = e0 * R[0, j] + e1 * R[1, j] + e2 * R[2, j]
 
 
-@numba.njit(**JIT_OPTIONS)
+@jit
 def inv33(Z, out):
     """``out = Z^{-1}`` (cofactors)."""
     c00 = Z[1, 1] * Z[2, 2] - Z[1, 2] * Z[2, 1]
@@ -76,7 +74,7 @@ def inv33(Z, out):
     out[2, 2] = (Z[0, 0] * Z[1, 1] - Z[0, 1] * Z[1, 0]) * d
 
 
-@numba.njit(**JIT_OPTIONS)
+@jit
 def log_rotation(R):
     """Rotation vector ``l`` with ``exp([l]) = R``, ``|l| ≤ π`` (the error of (4): ``[l] = log R``).
 
@@ -113,7 +111,7 @@ def log_rotation(R):
     return out
 
 
-@numba.njit(**JIT_OPTIONS)
+@jit
 def log_error(R, Rd):
     """``(l, |l|)`` with ``[l] = log(R Rdᵀ)``: the planner's error ``l_T`` and its norm (rad)."""
     P = np.empty((3, 3))
@@ -124,7 +122,7 @@ def log_error(R, Rd):
     return l, np.sqrt(l[0] * l[0] + l[1] * l[1] + l[2] * l[2])
 
 
-@numba.njit(**JIT_OPTIONS)
+@jit
 def _eigh3(A, w, V):
     """Eigen decomposition of a symmetric 3×3 ``A`` (cyclic Jacobi): ``A = V diag(w) Vᵀ``."""
     a = A.copy()
@@ -163,7 +161,7 @@ def _eigh3(A, w, V):
         w[i] = a[i, i]
 
 
-@numba.njit(**JIT_OPTIONS)
+@jit
 def _pinv_solve3(A, l, y):
     """``y = A^# l`` for a symmetric positive semi-definite 3×3 ``A`` (eigenvalues below
     ``1e-14·max`` dropped)."""
@@ -185,7 +183,7 @@ def _pinv_solve3(A, l, y):
 CHOLESKY_PIVOT = 1e-10
 
 
-@numba.njit(**JIT_OPTIONS)
+@jit
 def scaled_gram(J, scale):
     """``A = J S² Jᵀ`` (3×3), ``S = diag(scale)``."""
     p = J.shape[1]
@@ -207,7 +205,7 @@ def scaled_gram(J, scale):
     return A
 
 
-@numba.njit(**JIT_OPTIONS)
+@jit
 def scaled_back(J, y, scale):
     """``x = S² Jᵀ y``: the step from the solution ``y`` of ``J S² Jᵀ y = l``."""
     p = J.shape[1]
@@ -217,7 +215,7 @@ def scaled_back(J, y, scale):
     return x
 
 
-@numba.njit(**JIT_OPTIONS)
+@jit
 def cholesky_step(J, l, scale):
     """``(x, True)`` with ``x = S² Jᵀ (J S² Jᵀ)^{-1} l`` by Cholesky, or ``(·, False)`` when a
     pivot falls below :data:`CHOLESKY_PIVOT` times the largest diagonal entry."""
@@ -255,7 +253,7 @@ def cholesky_step(J, l, scale):
     return scaled_back(J, y, scale), True
 
 
-@numba.njit(**JIT_OPTIONS)
+@jit
 def pinv_step(J, l, scale):
     """``x = S² Jᵀ (J S² Jᵀ)^# l`` by the eigen pseudo-inverse (eigenvalues below
     ``1e-14·max`` dropped)."""

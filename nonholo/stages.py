@@ -18,12 +18,11 @@ from __future__ import annotations
 
 from functools import lru_cache
 
-import numba
 import numpy as np
 
 from .checks import check_count
 from .controls import Fourier, PiecewiseConstant, fourier_basis
-from .kernels import JIT_OPTIONS
+from .jit import jit
 
 #: Stage times of one CF4 step, as fractions of the step.
 STAGE_FRACTIONS = np.array([0.0, 0.5, 1.0])
@@ -34,7 +33,7 @@ def stage_times(T: float, steps: int) -> np.ndarray:
     return (np.arange(steps)[:, None] + STAGE_FRACTIONS[None, :]) * (T / steps)
 
 
-@numba.njit(**JIT_OPTIONS)
+@jit
 def stage_values(lam, Bidx, Bval, stride_b, stride_i, m):
     """The stage table ``U[n, c, i] = Σ_q Bval[n, c, q] λ[Bidx[n, c, q]·stride_b + i·stride_i]``."""
     N = Bidx.shape[0]
@@ -50,7 +49,7 @@ def stage_values(lam, Bidx, Bval, stride_b, stride_i, m):
     return U
 
 
-@numba.njit(**JIT_OPTIONS)
+@jit
 def grid_stage_values(values, out):
     """Stage table of grid controls: ``out[n, c] = values[n // r]`` (``r = N / grid``)."""
     g = values.shape[0]
