@@ -23,7 +23,7 @@ from abc import ABC, abstractmethod
 
 import numpy as np
 
-from .checks import check_count, check_time
+from .checks import check_count, check_time, check_times
 
 
 class Controls(ABC):
@@ -141,8 +141,7 @@ class Fourier(Controls):
         return self.coeffs.ravel().copy()
 
     def __call__(self, t):
-        t = np.asarray(t, dtype=float)
-        return fourier_basis(t, self.T, self.harmonics) @ self.coeffs.T
+        return fourier_basis(check_times(t), self.T, self.harmonics) @ self.coeffs.T
 
     def metric(self) -> np.ndarray:
         w = np.full(self.coeffs.shape, self.T / 2.0)
@@ -237,7 +236,7 @@ class PiecewiseConstant(Controls):
         return np.clip(j, 0, self.grid - 1)
 
     def __call__(self, t):
-        return self.values[self.interval(t)]
+        return self.values[self.interval(check_times(t))]
 
     def metric(self) -> np.ndarray:
         return self._metric

@@ -24,7 +24,7 @@ import time
 import numpy as np
 
 from . import catalog, so3, stages
-from .checks import check_count, check_time
+from .checks import MAX_STEPS, check_count, check_time
 from .controls import Controls, Fourier, PiecewiseConstant, paper_initial
 from .planning.core import Options, Problem, Request, Strategy, build_result
 from .planning.paper import PaperStrategy
@@ -136,8 +136,11 @@ def plan(R0, Rd, *, T: float = 1.0, method: str = "parametric", harmonics: int =
     if mech.has_singular_set and float(mech.delta(R0)) == 0.0:
         raise ValueError("R0 lies on the singular surface Δ(R) = 0, where L(R) is undefined "
                          "(e.g. the identity); start from an orientation with Δ(R0) ≠ 0")
+    steps = check_count(default_steps(method, grid) if steps is None else steps, "steps", maximum=MAX_STEPS)
+    if method == "parametric" and 2 * harmonics > steps:
+        raise ValueError(f"harmonics = {harmonics} is more than the integrator's steps = {steps} "
+                         "can resolve (at most steps/2; raise steps or lower harmonics)")
     controls = initial_controls(method, T, mech.n_inputs, harmonics, grid, u0)
-    steps = default_steps(method, grid) if steps is None else check_count(steps, "steps")
     stages.check_steps(controls, steps)
     request = Request(mechanism=mech, method=method, strategy=cls.name, T=T, R0=R0, Rd=Rd, steps=steps,
                       options=options, harmonics=harmonics, grid=grid, controls=controls, started=started)

@@ -26,17 +26,30 @@ def delta(R) -> float:
     return float(_gen.delta(check_rotation(R)))
 
 
+def _finite(value: np.ndarray, name: str, R) -> np.ndarray:
+    """``value`` if finite; else ``ValueError``: ``R`` is (numerically) on ``Δ = 0``."""
+    if not np.all(np.isfinite(value)):
+        raise ValueError(f"R is too close to the singular surface Δ = 0 (Δ(R) = {_gen.delta(R):.3g}): "
+                         f"{name} is not representable in floating point there")
+    return value
+
+
 def L(R) -> np.ndarray:
-    """``L(R)`` (3×2); ``ValueError`` on the singular surface ``Δ(R) = 0``."""
+    """``L(R)`` (3×2); ``ValueError`` on or numerically too close to the singular surface
+    ``Δ(R) = 0`` (``L ~ 1/Δ``)."""
     R = check_rotation(R)
     if _gen.delta(R) == 0.0:
         raise ValueError("R lies on the singular surface Δ(R) = 0, where L(R) is undefined")
-    return _gen.L(R)
+    with np.errstate(all="ignore"):         # overflow is reported by _finite
+        return _finite(_gen.L(R), "L(R)", R)
 
 
 def Q(R, u) -> np.ndarray:
-    """``Q(R, u)`` (3×3) of eq. (12): ``(∂L/∂θ) u = Q s`` for ``∂R/∂θ = [s] R``."""
+    """``Q(R, u)`` (3×3) of eq. (12): ``(∂L/∂θ) u = Q s`` for ``∂R/∂θ = [s] R``; ``ValueError``
+    on or numerically too close to ``Δ = 0`` (``Q ~ 1/Δ²``)."""
     R = check_rotation(R)
     if _gen.delta(R) == 0.0:
         raise ValueError("R lies on the singular surface Δ(R) = 0, where Q(R, u) is undefined")
-    return _gen.Q(R, _inputs(u))
+    u = _inputs(u)
+    with np.errstate(all="ignore"):         # overflow is reported by _finite
+        return _finite(_gen.Q(R, u), "Q(R, u)", R)

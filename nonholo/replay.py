@@ -13,6 +13,7 @@ from __future__ import annotations
 import numpy as np
 
 from . import catalog, so3, stages
+from .checks import check_times
 from .controls import Controls, Fourier, PiecewiseConstant
 from .controls import from_dict as controls_from_dict
 
@@ -95,7 +96,7 @@ class FrameControls:
 
     def _evaluate(self, t, w_end=None):
         """``(R(t), u(t))`` for ``t`` of shape ``(n,)``; ``w_end``: the ``w`` to use at ``t``."""
-        t = np.clip(np.asarray(t, dtype=float).reshape(-1), 0.0, self.T)
+        t = np.clip(check_times(t).reshape(-1), 0.0, self.T)
         n_t, m = t.size, self.n_inputs
         h = self.T / self.steps
         r = t / h

@@ -23,7 +23,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from . import catalog, stages
-from .checks import check_count, check_time
+from .checks import MAX_STEPS, check_count, check_time
 from .controls import Controls
 from .so3 import check_rotation
 
@@ -101,7 +101,7 @@ def stage_table(controls, T: float, steps: int, n_inputs: int) -> np.ndarray:
     a ``Controls`` for discontinuous inputs: it keeps each step on one side of a jump).
     """
     T = check_time(T)
-    steps = check_count(steps, "steps")
+    steps = check_count(steps, "steps", maximum=MAX_STEPS)
     if hasattr(controls, "stage_table") or isinstance(controls, Controls):
         if controls.T != T:
             raise ValueError(f"the controls are defined on [0, {controls.T:g}], not on [0, {T:g}]")
@@ -163,7 +163,7 @@ def _setup(R0, controls, T, mechanism, steps):
     mech = catalog.get(mechanism)
     R0 = check_rotation(R0, "R0")
     T = check_time(T)
-    steps = check_count(steps, "steps")
+    steps = check_count(steps, "steps", maximum=MAX_STEPS)
     kern = mech.kernels()
     sgn = _sign_of_delta(kern, mech, R0)
     return mech, R0, T, steps, kern, sgn, stage_table(controls, T, steps, mech.n_inputs)

@@ -20,7 +20,7 @@ from functools import lru_cache
 
 import numpy as np
 
-from .checks import check_count
+from .checks import MAX_STEPS, check_count
 from .controls import Fourier, PiecewiseConstant, fourier_basis
 from .jit import jit
 
@@ -88,7 +88,7 @@ def check_steps(controls, steps) -> int:
 
     Grid controls need a multiple of the grid, so that no step straddles a jump.
     """
-    steps = check_count(steps, "steps")
+    steps = check_count(steps, "steps", maximum=MAX_STEPS)
     grid = getattr(controls, "grid", None)
     if grid is not None and steps % grid:
         raise ValueError(

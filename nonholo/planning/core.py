@@ -37,6 +37,7 @@ from typing import Callable, ClassVar
 import numpy as np
 
 from .. import kernels, stages
+from ..checks import check_count
 from ..controls import Controls
 from ..mechanism import Mechanism
 from ..replay import FrameControls
@@ -58,14 +59,13 @@ class Options:
     def __post_init__(self):
         for name in ("gamma", "step", "tol", "min_step"):
             v = getattr(self, name)
-            if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
+            if not (isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) and v > 0):
                 raise ValueError(f"{name} must be a positive number, got {v!r}")
         for name in ("newton_below", "delta_min"):
             v = getattr(self, name)
-            if not (isinstance(v, (int, float)) and math.isfinite(v) and v >= 0):
+            if not (isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) and v >= 0):
                 raise ValueError(f"{name} must be a non-negative number, got {v!r}")
-        if isinstance(self.max_iter, bool) or int(self.max_iter) != self.max_iter or self.max_iter < 0:
-            raise ValueError(f"max_iter must be a non-negative integer, got {self.max_iter!r}")
+        object.__setattr__(self, "max_iter", check_count(self.max_iter, "max_iter", minimum=0))
 
 
 class Evaluation:
