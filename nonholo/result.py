@@ -12,16 +12,34 @@ motion's nodes are recomputed by the same kernel). Floats are written with
 ``repr`` precision, so a save/load round trip reproduces every number exactly. Quantities
 that do not exist (``min_delta`` for a mechanism without a singular set, the terminal
 error of a run stopped before any simulation) are ``null``/``None``, never NaN.
+
+Saving is atomic (a complete new file replaces the old one, or the old one stays).
+Loading checks the file (:meth:`PlanResult.from_dict`, :meth:`PlanResult.validate`): every
+field's type and shape, finite numbers, and that the numbers agree with each other — the
+stored samples are those of the stored controls replayed from ``R0`` (``n`` samples at the
+integrator's step points ``t = kT/steps``; ``n = steps + 1`` when the motion reached
+``T``, fewer when it stopped early, none when the planner refused the goal), ``u =
+controls(t)``, ``delta = Δ(R)``, and ``terminal_error``, ``min_delta``, ``success``,
+``mechanism``, ``method``, ``T``, ``steps`` agree with them. A file that does not is
+rejected with a ``ValueError`` naming the field, so a plan cannot be changed — by a
+damaged byte or by hand — without the change being noticed (fields that are records, not
+results, are checked only for their type: ``reason``, ``history``, ``options``,
+``seconds``, ``sensitivity``). Files written by earlier versions of the format load.
 """
 from __future__ import annotations
 
+import contextlib
 import json
+import os
+import secrets
+import stat
 from dataclasses import dataclass, field, fields
 from pathlib import Path
 
 import numpy as np
 
-from .controls import Controls
+from . import catalog, kernels, so3, stages
+from .controls import Controls, Fourier, PiecewiseConstant
 from .replay import FrameControls, from_dict
 
 FORMAT = "nonholo.plan/1"
@@ -130,39 +148,104 @@ class PlanResult:
 
     @classmethod
     def from_dict(cls, d: dict) -> "PlanResult":
+        """The result described by ``d`` (a plan file's object, see the module docstring),
+        checked field by field and for consistency (:meth:`validate`); ``ValueError``
+        naming the field otherwise."""
+        if not isinstance(d, dict):
+            raise ValueError(f"not a nonholo plan file: expected a JSON object, got {_json_type(d)}")
         if d.get("format") != FORMAT:
-            raise ValueError(f"not a nonholo plan file (format {d.get('format')!r}, expected {FORMAT!r})")
-        par = from_dict(d["controls"])
+            raise ValueError(f"not a nonholo plan file (format {_short(d.get('format'))}, expected {FORMAT!r})")
+        missing = [k for k in _REQUIRED if k not in d]
+        if missing:
+            raise ValueError(f"plan file: missing field{'s' if len(missing) > 1 else ''} "
+                             f"{', '.join(map(repr, missing))}")
+        unknown = [k for k in d if k not in _REQUIRED and k not in _OPTIONAL]
+        if unknown:
+            raise ValueError(f"plan file: unknown field{'s' if len(unknown) > 1 else ''} "
+                             f"{', '.join(_short(k) for k in unknown)}")
+        d = {"options": {}, "sensitivity": None, **d}
+        if not isinstance(d["success"], bool):
+            raise ValueError(f"plan file: 'success' must be true or false, got {_short(d['success'])}")
+        mechanism = _string(d, "mechanism")
+        try:
+            mech = catalog.get(mechanism)
+        except ValueError as exc:
+            raise ValueError(f"plan file: 'mechanism': {exc}") from None
+        par = _controls(d["controls"], mech)
         m = par.n_inputs
+        options = d["options"]
+        if not isinstance(options, dict):
+            raise ValueError(f"plan file: 'options' must be an object, got {_json_type(options)}")
+        history = d["history"]
+        if not isinstance(history, list) or not all(isinstance(r, dict) for r in history):
+            raise ValueError("plan file: 'history' must be a list of objects")
+        delta = d["delta"]
+        res = cls(
+            success=d["success"], reason=_string(d, "reason", empty=True),
+            terminal_error=_number(d, "terminal_error", null=True),
+            min_delta=_number(d, "min_delta", null=True),
+            iterations=_integer(d, "iterations", minimum=0), history=list(history),
+            t=_array(d["t"], "t", (None,)), R=_array(d["R"], "R", (None, 3, 3)),
+            u=_array(d["u"], "u", (None, m)),
+            delta=None if delta is None else _array(delta, "delta", (None,)),
+            parametrisation=par, mechanism=mechanism, method=_string(d, "method"),
+            strategy=_string(d, "strategy"), T=_number(d, "T"),
+            R0=_array(d["R0"], "R0", (3, 3)), Rd=_array(d["Rd"], "Rd", (3, 3)),
+            steps=_integer(d, "steps", minimum=1), seconds=_number(d, "seconds"),
+            options=dict(options), sensitivity=_number(d, "sensitivity", null=True))
+        res.validate()
+        return res
 
-        def arr(x, shape=None):
-            if x is None:
-                return None
-            a = np.asarray(x, dtype=float)
-            return a.reshape(shape) if shape is not None else a
-
-        return cls(
-            success=bool(d["success"]), reason=d["reason"],
-            terminal_error=d["terminal_error"], min_delta=d["min_delta"],
-            iterations=int(d["iterations"]), history=list(d["history"]),
-            t=arr(d["t"], (-1,)), R=arr(d["R"], (-1, 3, 3)), u=arr(d["u"], (-1, m)),
-            delta=arr(d["delta"], (-1,)), parametrisation=par,
-            mechanism=d["mechanism"], method=d["method"], strategy=d["strategy"],
-            T=float(d["T"]), R0=arr(d["R0"], (3, 3)), Rd=arr(d["Rd"], (3, 3)),
-            steps=int(d["steps"]), seconds=float(d["seconds"]), options=dict(d.get("options", {})),
-            sensitivity=d.get("sensitivity"),
-        )
+    def validate(self) -> "PlanResult":
+        """Check that the result is one :func:`nonholo.plan` can have produced: types,
+        shapes and finiteness of every field, and consistency — the controls, replayed from
+        ``R0`` by the integrator that planned them, pass through the stored samples ``R``
+        (the physical system for controls of ``u``, the frame system for
+        :class:`~nonholo.replay.FrameControls`, within ``REPLAY_TOL``), ``u = controls(t)``,
+        ``Δ`` of the samples, ``terminal_error`` and ``min_delta`` agree with them, and the
+        labels (mechanism, method, strategy, ``T``, ``steps``, ``R0``) with the controls.
+        Returns ``self``; raises ``ValueError`` naming the field otherwise."""
+        _Validation(self).run()
+        return self
 
     def save(self, path) -> Path:
-        """Write the result as JSON (format ``nonholo.plan/1``, see the module docstring)."""
+        """Write the result as JSON (format ``nonholo.plan/1``, see the module docstring).
+
+        Atomic: the text goes to a temporary file in the same directory, flushed and
+        synced to disk, which then replaces ``path`` (a symbolic link is followed, its
+        target replaced). If anything fails (``OSError``, e.g. a full disk) the error
+        propagates, the temporary file is removed and an existing ``path`` is untouched.
+        """
         path = Path(path)
-        path.write_text(json.dumps(self.to_dict(), allow_nan=False, indent=1))
+        text = json.dumps(self.to_dict(), allow_nan=False, indent=1)
+        target = Path(os.path.realpath(path)) if path.is_symlink() else path
+        _write_atomic(target, text.encode("utf-8"))
         return path
 
     @classmethod
     def load(cls, path) -> "PlanResult":
-        """Read a result written by :meth:`save`."""
-        return cls.from_dict(json.loads(Path(path).read_text()))
+        """Read and check a result written by :meth:`save` (see :meth:`from_dict`); a file
+        that is not one — malformed JSON, wrong or missing fields, numbers that disagree
+        with the controls — raises ``ValueError`` saying what is wrong. A UTF-8 byte-order
+        mark is accepted."""
+        raw = Path(path).read_bytes()
+        try:
+            text = raw.decode("utf-8-sig")
+        except UnicodeDecodeError as exc:
+            raise ValueError(f"{path}: not a nonholo plan file: not UTF-8 text ({exc.reason} at byte "
+                             f"{exc.start})") from None
+        try:
+            d = json.loads(text, object_pairs_hook=_unique_keys)
+        except RecursionError:
+            raise ValueError(f"{path}: not a nonholo plan file: JSON nested too deeply") from None
+        except ValueError as exc:      # json.JSONDecodeError, duplicate keys, huge integers
+            raise ValueError(f"{path}: not a nonholo plan file: {exc}") from None
+        try:
+            return cls.from_dict(d)
+        except RecursionError:
+            raise ValueError(f"{path}: invalid plan file: nested too deeply") from None
+        except ValueError as exc:
+            raise ValueError(f"{path}: {exc}") from None
 
     # -- comparison and display --------------------------------------------------------
     def __eq__(self, other) -> bool:
@@ -192,3 +275,470 @@ class PlanResult:
         if not self.success:
             lines.append(f"  reason: {self.reason}")
         return "\n".join(lines) + ")"
+
+
+# ------------------------------------------------------------------------------------------
+# Plan files: fields, parsing, consistency
+# ------------------------------------------------------------------------------------------
+
+#: the fields of a plan file
+_REQUIRED = ("format", "success", "reason", "terminal_error", "min_delta", "iterations", "history",
+             "mechanism", "method", "strategy", "T", "steps", "seconds", "R0", "Rd", "controls",
+             "t", "R", "u", "delta")
+#: fields the first files of the format did not have (absent: ``{}`` and ``null``)
+_OPTIONAL = ("options", "sensitivity")
+#: the planner's methods, by the kind of the parametrisation each plans with
+_METHOD_OF_KIND = {"fourier": "parametric", "piecewise_constant": "nonparametric"}
+#: the fields of each kind of ``controls``
+_CONTROL_FIELDS = {"fourier": ("kind", "T", "harmonics", "coeffs"),
+                   "piecewise_constant": ("kind", "T", "grid", "values"),
+                   "frame": ("kind", "T", "mechanism", "steps", "R0", "frame")}
+
+#: stored samples ``R`` against the controls replayed from ``R0`` by the planning
+#: integrator (largest entry difference, ≈ rad), and ``terminal_error`` against
+#: ``|log(R[-1] Rdᵀ)|`` (rad). Replays on this machine reproduce both exactly; the
+#: tolerance leaves room for another machine's rounding, amplified along the motion.
+REPLAY_TOL = 1e-9
+#: stored ``u`` against ``controls(t)``, ``delta`` against ``Δ(R)`` and ``min_delta``
+#: against the samples, relative to ``max(1, largest value)``
+VALUE_RTOL = 1e-12
+#: ``t`` against the integrator's step points ``k T/steps``, relative to ``T``
+TIME_RTOL = 1e-12
+#: ``R0``, ``Rd`` and the samples ``R``: ``|RᵀR − I| ≤`` this (as :func:`nonholo.plan` accepts)
+ROTATION_TOL = 1e-9
+#: most integrator steps a plan can have (the planner's limit)
+MAX_STEPS = 10**6
+
+
+def _fail(field: str, message: str):
+    raise ValueError(f"invalid plan: {field!r} {message}")
+
+
+def _short(x) -> str:
+    try:
+        text = repr(x)
+    except ValueError:             # an integer too long to print
+        return "a very large integer"
+    return text if len(text) <= 60 else text[:57] + "..."
+
+
+def _json_type(x) -> str:
+    if x is None:
+        return "null"
+    if isinstance(x, bool):
+        return str(x).lower()
+    if isinstance(x, dict):
+        return "an object"
+    if isinstance(x, (list, tuple)):
+        return "an array"
+    if isinstance(x, str):
+        return f"the string {_short(x)}"
+    return _short(x)
+
+
+def _is_number(x) -> bool:
+    return isinstance(x, (int, float, np.integer, np.floating)) and not isinstance(x, (bool, np.bool_))
+
+
+def _unique_keys(pairs):
+    """``object_pairs_hook`` of :func:`json.loads`: an object with a key twice is an error."""
+    d = {}
+    for k, v in pairs:
+        if k in d:
+            raise ValueError(f"duplicate key {_short(k)} in a JSON object")
+        d[k] = v
+    return d
+
+
+def _string(d: dict, key: str, empty: bool = False, where: str = "") -> str:
+    v = d[key]
+    if not isinstance(v, str) or (not v and not empty):
+        _fail(where + key, f"must be a {'' if empty else 'non-empty '}string, got {_json_type(v)}")
+    return v
+
+
+def _number(d: dict, key: str, null: bool = False, where: str = "") -> float | None:
+    v = d[key]
+    if v is None and null:
+        return None
+    if not _is_number(v):
+        _fail(where + key, f"must be a number{' or null' if null else ''}, got {_json_type(v)}")
+    try:
+        x = float(v)
+    except OverflowError:
+        x = float("inf")
+    if not np.isfinite(x):
+        _fail(where + key, f"must be finite{' (or null)' if null else ''}, got {v!r}")
+    return x
+
+
+def _integer(d: dict, key: str, minimum: int, where: str = "") -> int:
+    v = d[key]
+    if not isinstance(v, (int, np.integer)) or isinstance(v, (bool, np.bool_)) or v < minimum:
+        _fail(where + key, f"must be an integer >= {minimum}, got {_json_type(v)}")
+    if key == "steps" and v > MAX_STEPS:
+        _fail(where + key, f"must be at most {MAX_STEPS}, got {v}")
+    return int(v)
+
+
+def _shape_text(shape) -> str:
+    return "(" + ", ".join("n" if s is None else str(s) for s in shape) + ("," if len(shape) == 1 else "") + ")"
+
+
+def _array(value, field: str, shape: tuple) -> np.ndarray:
+    """``value`` (nested lists of numbers) as a float array of ``shape`` (``None``: any
+    length); ``ValueError`` naming ``field`` for anything else (non-finite entries are
+    left to :meth:`PlanResult.validate`)."""
+    bad = f"must be an array of numbers of shape {_shape_text(shape)}"
+    if isinstance(value, np.ndarray):
+        if value.dtype.kind not in "iuf" or value.ndim != len(shape):
+            _fail(field, bad)
+        a = value.astype(float)
+    else:
+        flat = []
+        dims = list(shape)
+        stack = [(value, 0)]
+        while stack:
+            x, k = stack.pop()
+            if k == len(shape):
+                if not _is_number(x):
+                    _fail(field, f"{bad}: found {_json_type(x)}")
+                flat.append(x)
+                continue
+            if not isinstance(x, (list, tuple)):
+                _fail(field, f"{bad}: found {_json_type(x)}")
+            if dims[k] is None:
+                dims[k] = len(x)
+            if len(x) != dims[k]:
+                _fail(field, f"{bad}: got a row of length {len(x)} where {dims[k]} were expected")
+            stack.extend((y, k + 1) for y in reversed(x))
+        dims = [0 if s is None else s for s in dims]
+        try:
+            a = np.array(flat, dtype=float).reshape(dims)
+        except OverflowError:
+            _fail(field, "has an integer too large for a float")
+    if any(s is not None and s != a.shape[i] for i, s in enumerate(shape)):
+        _fail(field, f"{bad}, got {a.shape}")
+    return a
+
+
+def _rotation(R, field: str) -> None:
+    try:
+        so3.check_rotation(R, repr(field), ROTATION_TOL)
+    except ValueError as exc:
+        raise ValueError(f"invalid plan: {exc}") from None
+
+
+def _fields(d: dict, expected: tuple, where: str) -> None:
+    missing = [k for k in expected if k not in d]
+    unknown = [k for k in d if k not in expected]
+    if missing:
+        _fail(where, f"lacks the field{'s' if len(missing) > 1 else ''} {', '.join(map(repr, missing))}")
+    if unknown:
+        _fail(where, f"has unknown field{'s' if len(unknown) > 1 else ''} {', '.join(_short(k) for k in unknown)}")
+
+
+def _parametrisation(d, where: str, m: int) -> None:
+    """Check the description of Fourier or grid controls with ``m`` inputs (``where``: its field)."""
+    if not isinstance(d, dict):
+        _fail(where, f"must be an object, got {_json_type(d)}")
+    kind = d.get("kind")
+    if kind not in _METHOD_OF_KIND:
+        _fail(where + ".kind", f"must be one of {', '.join(map(repr, _METHOD_OF_KIND))}, got {_short(kind)}")
+    _fields(d, _CONTROL_FIELDS[kind], where)
+    T = _number(d, "T", where=where + ".")
+    if T <= 0:
+        _fail(where + ".T", f"must be positive, got {T}")
+    if kind == "fourier":
+        K = _integer(d, "harmonics", 1, where=where + ".")
+        _array(d["coeffs"], where + ".coeffs", (m, 2 * K + 1))
+    else:
+        g = _integer(d, "grid", 1, where=where + ".")
+        _array(d["values"], where + ".values", (g, m))
+
+
+def _controls(d, mech) -> Controls | FrameControls:
+    """The ``controls`` field of a plan of mechanism ``mech``, checked, as an object."""
+    m = mech.n_inputs
+    if isinstance(d, dict) and d.get("kind") == FrameControls.kind:
+        _fields(d, _CONTROL_FIELDS["frame"], "controls")
+        _parametrisation(d["frame"], "controls.frame", m)
+        if _number(d, "T", where="controls.") != d["frame"]["T"]:
+            _fail("controls.T", f"differs from the frame controls' T ({d['frame']['T']!r})")
+        if _string(d, "mechanism", where="controls.") != mech.name:
+            _fail("controls.mechanism", f"is {d['mechanism']!r}, the plan's mechanism {mech.name!r}")
+        _integer(d, "steps", 1, where="controls.")
+        _rotation(_array(d["R0"], "controls.R0", (3, 3)), "controls.R0")
+    else:
+        _parametrisation(d, "controls", m)
+    try:
+        return from_dict(d)
+    except (ValueError, TypeError, KeyError, IndexError, AttributeError) as exc:
+        _fail("controls", f"cannot be rebuilt: {exc}")
+
+
+def _scan_finite(value, field: str) -> None:
+    """Every number inside the JSON value ``value`` is finite (iteratively: no recursion)."""
+    stack = [value]
+    while stack:
+        x = stack.pop()
+        if isinstance(x, dict):
+            stack.extend(x.values())
+        elif isinstance(x, (list, tuple)):
+            stack.extend(x)
+        elif _is_number(x) and not np.isfinite(float(x)):
+            _fail(field, f"contains a non-finite number ({x})")
+
+
+def _write_atomic(path: Path, data: bytes) -> None:
+    """Write ``data`` to a new file in ``path``'s directory, sync it, then rename it to
+    ``path``; on failure remove it (``path`` is untouched) and re-raise."""
+    directory = path.parent
+    for _ in range(100):
+        tmp = directory / f".{path.name}.{secrets.token_hex(4)}.tmp"
+        try:
+            # mode 0o666 less the umask, as a file created by open(path, "w")
+            fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL | getattr(os, "O_BINARY", 0), 0o666)
+        except FileExistsError:
+            continue
+        break
+    else:
+        raise FileExistsError(f"no free temporary file name in {directory}")
+    try:
+        with os.fdopen(fd, "wb") as f:
+            try:
+                mode = stat.S_IMODE(os.stat(path).st_mode)
+            except OSError:
+                mode = None                      # no file to replace: keep the new file's mode
+            if mode is not None and hasattr(os, "fchmod"):
+                os.fchmod(f.fileno(), mode)      # replacing a file keeps its permissions
+            f.write(data)
+            f.flush()
+            os.fsync(f.fileno())
+        os.replace(tmp, path)
+    except BaseException:
+        with contextlib.suppress(OSError):
+            os.unlink(tmp)
+        raise
+    # make the rename itself durable (POSIX; where a directory cannot be opened, skip)
+    with contextlib.suppress(OSError, AttributeError):
+        dfd = os.open(directory, os.O_RDONLY)
+        try:
+            os.fsync(dfd)
+        finally:
+            os.close(dfd)
+
+
+class _Validation:
+    """The checks of :meth:`PlanResult.validate`, on one result."""
+
+    def __init__(self, result: PlanResult):
+        self.r = result
+
+    def run(self) -> None:
+        r = self.r
+        self.scalars()
+        mech = self.labels()
+        n = self.arrays(mech)
+        complete = n == r.steps + 1
+        if n == 0:
+            self.nothing_simulated()
+            return
+        if not np.array_equal(r.R[0], r.R0):
+            _fail("R", "starts elsewhere than R0 (R[0] != R0)")
+        self.replay(mech, n)
+        self.values(mech, n, complete)
+
+    # -- field by field --------------------------------------------------------------------
+    def scalars(self) -> None:
+        r = self.r
+        if not isinstance(r.success, (bool, np.bool_)):
+            _fail("success", f"must be true or false, got {_json_type(r.success)}")
+        v = vars(r)
+        _string(v, "reason", empty=True)
+        for key in ("mechanism", "method", "strategy"):
+            _string(v, key)
+        _integer(v, "iterations", 0)
+        _integer(v, "steps", 1)
+        if _number(v, "T") <= 0:
+            _fail("T", f"must be a positive time (s), got {r.T}")
+        if _number(v, "seconds") < 0:
+            _fail("seconds", f"must be >= 0, got {r.seconds}")
+        for key in ("terminal_error", "sensitivity"):
+            x = _number(v, key, null=True)
+            if x is not None and x < 0:
+                _fail(key, f"must be >= 0 (or null), got {x}")
+        _number(v, "min_delta", null=True)
+        if not isinstance(r.history, list) or not all(isinstance(h, dict) for h in r.history):
+            _fail("history", "must be a list of objects (one per iteration)")
+        if not isinstance(r.options, dict):
+            _fail("options", f"must be an object, got {_json_type(r.options)}")
+        _scan_finite(r.history, "history")
+        _scan_finite(r.options, "options")
+        for key in ("tol", "delta_min"):
+            if key in r.options and not _is_number(r.options[key]):
+                _fail("options", f"has {key} = {_short(r.options[key])}, not a number")
+
+    def labels(self):
+        """The mechanism; ``method``, ``strategy``, ``T``, ``steps``, ``R0`` against the controls."""
+        r = self.r
+        try:
+            mech = catalog.get(r.mechanism)
+        except ValueError as exc:
+            _fail("mechanism", f"is unknown: {exc}")
+        par = r.parametrisation
+        frame = isinstance(par, FrameControls)
+        inner = par.frame if frame else par
+        if not isinstance(inner, (Fourier, PiecewiseConstant)):
+            _fail("controls", f"must be Fourier, piecewise-constant or frame controls, got {type(par).__name__}")
+        if r.method not in _METHOD_OF_KIND.values():
+            _fail("method", f"must be one of {', '.join(map(repr, _METHOD_OF_KIND.values()))}, got {r.method!r}")
+        if r.method != _METHOD_OF_KIND[inner.kind]:
+            _fail("method", f"is {r.method!r}, but the controls are {inner.kind!r} "
+                            f"(method {_METHOD_OF_KIND[inner.kind]!r})")
+        if par.n_inputs != mech.n_inputs:
+            _fail("controls", f"have {par.n_inputs} inputs, mechanism {mech.name!r} has {mech.n_inputs}")
+        if par.T != r.T:
+            _fail("T", f"is {r.T!r}, the controls are defined on [0, {par.T!r}]")
+        if frame:
+            if par.mechanism.name != r.mechanism:
+                _fail("mechanism", f"is {r.mechanism!r}, the frame controls are of {par.mechanism.name!r}")
+            if par.steps != r.steps:
+                _fail("steps", f"is {r.steps}, the frame controls replay {par.steps} steps")
+            if not np.array_equal(par.R0, r.R0):
+                _fail("R0", "differs from the frame controls' R0")
+            if r.strategy == "paper":
+                _fail("strategy", "is 'paper', which plans the physical inputs, but the controls are "
+                                  "frame controls (strategy 'robust')")
+        if isinstance(inner, PiecewiseConstant) and r.steps % inner.grid:
+            _fail("steps", f"({r.steps}) must be a multiple of the controls' grid ({inner.grid})")
+        return mech
+
+    def arrays(self, mech) -> int:
+        """Shapes and finiteness of ``R0``, ``Rd``, ``t``, ``R``, ``u``, ``delta``; returns ``n``."""
+        r = self.r
+        for key in ("R0", "Rd"):
+            _rotation(getattr(r, key), key)
+        arrays = {"t": r.t, "R": r.R, "u": r.u, "delta": r.delta}
+        for key, a in arrays.items():
+            if key == "delta" and a is None:
+                continue
+            if not isinstance(a, np.ndarray) or a.dtype.kind != "f":
+                _fail(key, "must be a float array")
+            if not np.all(np.isfinite(a)):
+                _fail(key, "has non-finite entries (NaN or infinity)")
+        n = r.t.shape[0] if r.t.ndim == 1 else -1
+        if n < 0:
+            _fail("t", f"must have shape (n,), got {r.t.shape}")
+        for key, shape in (("R", (n, 3, 3)), ("u", (n, mech.n_inputs))):
+            if arrays[key].shape != shape:
+                _fail(key, f"must have shape {shape} (n = {n} samples in t), got {arrays[key].shape}")
+        if mech.has_singular_set:
+            if r.delta is None or r.delta.shape != (n,):
+                _fail("delta", f"must have shape ({n},): mechanism {mech.name!r} has a singular set, "
+                               f"got {'null' if r.delta is None else r.delta.shape}")
+        elif r.delta is not None:
+            _fail("delta", f"must be null: mechanism {mech.name!r} has no singular set")
+        if n > r.steps + 1:
+            _fail("t", f"has {n} samples, more than the {r.steps + 1} step points of {r.steps} steps")
+        expected = np.arange(n) * (r.T / r.steps)
+        if n == r.steps + 1:
+            expected[-1] = r.T
+        if n and np.max(np.abs(r.t - expected)) > TIME_RTOL * r.T:
+            k = int(np.argmax(np.abs(r.t - expected)))
+            _fail("t", f"must hold the integrator's step points k·T/steps: t[{k}] = {r.t[k]!r}, "
+                       f"expected {expected[k]!r}")
+        if n:
+            err = np.max(np.abs(np.einsum("nji,njk->nik", r.R, r.R) - np.eye(3)), axis=(1, 2))
+            k = int(np.argmax(err))
+            if err[k] > ROTATION_TOL:
+                _fail("R", f"sample {k} is not a rotation: |RᵀR - I| = {err[k]:.3g}")
+            det = np.linalg.det(r.R)
+            if np.any(det < 0):
+                _fail("R", f"sample {int(np.argmax(det < 0))} is a reflection (det = -1)")
+        return n
+
+    def nothing_simulated(self) -> None:
+        """A plan without a trajectory (refused before any simulation)."""
+        r = self.r
+        if r.success:
+            _fail("success", "is true, but nothing was simulated (no trajectory)")
+        for key in ("terminal_error", "min_delta", "sensitivity"):
+            if getattr(r, key) is not None:
+                _fail(key, "must be null when nothing was simulated (no trajectory)")
+        if r.iterations or r.history:
+            _fail("iterations", "must be 0, with an empty history, when nothing was simulated")
+        if isinstance(r.parametrisation, FrameControls):
+            _fail("controls", "are frame controls, but nothing was simulated (no trajectory)")
+
+    # -- against the controls --------------------------------------------------------------
+    def replay(self, mech, n: int) -> None:
+        """The controls replayed from ``R0`` — by the integrator that planned them, the
+        physical system's for controls of ``u``, the frame system's for frame controls —
+        pass through the stored samples; keeps the least ``sgnΔ`` over its evaluation
+        points."""
+        r = self.r
+        par = r.parametrisation
+        frame = isinstance(par, FrameControls)
+        if mech.has_singular_set:
+            self.sign = float(np.sign(mech.delta(r.R0)))
+            if self.sign == 0.0:
+                _fail("R0", "lies on the singular surface Δ = 0")
+        else:
+            self.sign = 1.0
+        kern = mech.kernels(frame=frame)
+        U = np.ascontiguousarray(stages.stage_table(par.frame if frame else par, r.steps)[:n - 1])
+        Rs = np.empty((n, 3, 3))
+        done, dmin, _ = kern.forward(np.ascontiguousarray(r.R0, dtype=float), U, r.T / r.steps,
+                                     self.sign, -np.inf, Rs)
+        if done < n - 1:
+            _fail("R", f"goes on to t = {r.t[-1]:.6g} s, but the controls replayed from R0 stop at "
+                       f"t = {r.t[done]:.6g} s (non-finite angular velocity)")
+        dev = np.max(np.abs(Rs - r.R), axis=(1, 2))
+        k = int(np.argmax(dev))
+        if not dev[k] <= REPLAY_TOL:
+            _fail("R", f"disagrees with the controls replayed from R0: by {dev[k]:.3g} at "
+                       f"t = {r.t[k]:.6g} s (tolerance {REPLAY_TOL:g})")
+        self.dmin = float(dmin)
+
+    def values(self, mech, n: int, complete: bool) -> None:
+        """``u``, ``delta``, ``terminal_error``, ``min_delta`` and ``success`` against the samples."""
+        r = self.r
+        u = np.asarray(r.parametrisation(r.t), dtype=float).reshape(n, mech.n_inputs)
+        dev = np.max(np.abs(u - r.u))
+        if not dev <= VALUE_RTOL * max(1.0, float(np.max(np.abs(u)))):
+            _fail("u", f"disagrees with controls(t) by {dev:.3g}")
+        if mech.has_singular_set:
+            d = mech.delta_samples(r.R)
+            dev = np.max(np.abs(d - r.delta))
+            if not dev <= VALUE_RTOL * max(1.0, float(np.max(np.abs(d)))):
+                _fail("delta", f"disagrees with Δ(R) of the samples by {dev:.3g}")
+        if complete:
+            if r.terminal_error is None:
+                _fail("terminal_error", "is null, but the trajectory reaches T")
+            err = float(kernels.log_error(np.ascontiguousarray(r.R[-1]), np.ascontiguousarray(r.Rd))[1])
+            if not abs(err - r.terminal_error) <= REPLAY_TOL:
+                _fail("terminal_error", f"is {r.terminal_error:.6g}, but |log(R[-1] Rdᵀ)| = {err:.6g}")
+        elif r.terminal_error is not None:
+            _fail("terminal_error", f"must be null: the trajectory stops at t = {r.t[-1]:.6g} s < T")
+        if mech.has_singular_set:
+            if r.min_delta is None:
+                _fail("min_delta", f"is null, but mechanism {mech.name!r} has a singular set")
+            tol = VALUE_RTOL * max(1.0, abs(r.min_delta))
+            least = float(np.min(self.sign * r.delta))
+            if r.min_delta > least + tol:
+                _fail("min_delta", f"({r.min_delta:.6g}) exceeds the least sgnΔ of the samples ({least:.6g})")
+            if complete and r.min_delta < self.dmin - tol:
+                _fail("min_delta", f"({r.min_delta:.6g}) is below the least sgnΔ of the replayed motion "
+                                   f"({self.dmin:.6g})")
+        elif r.min_delta is not None:
+            _fail("min_delta", f"must be null: mechanism {mech.name!r} has no singular set")
+        if r.success:
+            if not complete:
+                _fail("success", f"is true, but the trajectory stops at t = {r.t[-1]:.6g} s < T")
+            tol = r.options.get("tol")
+            if tol is not None and r.terminal_error > tol:
+                _fail("success", f"is true, but terminal_error = {r.terminal_error:.3g} > tol = {tol:g}")
+            dmin = r.options.get("delta_min")
+            if mech.has_singular_set and dmin is not None and r.min_delta < dmin:
+                _fail("success", f"is true, but min_delta = {r.min_delta:.4g} < delta_min = {dmin:g}")
