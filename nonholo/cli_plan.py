@@ -7,17 +7,29 @@ Example::
 Orientations are given as RPY angles ``φ ϑ ψ`` in radians, ``RPY(φ, ϑ, ψ) =
 R(Z, φ) R(Y, ϑ) R(X, ψ)``. The strategy is ``robust`` unless ``--strategy paper`` asks for
 the appendix's algorithm as published (see :mod:`nonholo.robust`). One line is printed per accepted iteration (iteration, error
-``|l_T|`` in rad, the step ``γh``, least ``|Δ|`` along the trajectory), then a summary.
-Exit status: 0 on success, 1 if the planner failed, 2 on bad input.
+``|l_T|`` in rad, the step ``γh``, least ``|Δ|`` along the trajectory), then a summary;
+then the result is written to ``--out`` and the figure to ``--plot`` (each even if the
+other cannot be written; a plan file is replaced only once the new one is complete).
+Output closed early by its reader (``nonholo plan ... | head -1``) is not an error: the
+rest is discarded and the files are still written.
+
+Exit status: 0 on success, 1 if the planner failed, 2 on bad input, 3 if ``--out`` or
+``--plot`` could not be written (whatever the planner's outcome; one line on stderr names
+the file and the error).
 """
 from __future__ import annotations
 
 import argparse
+import os
 import sys
+from pathlib import Path
 
 import numpy as np
 
 from . import catalog, planner, so3
+
+#: exit status of ``nonholo plan`` (see the module docstring)
+EXIT_SUCCESS, EXIT_FAILED, EXIT_BAD_INPUT, EXIT_WRITE_FAILED = 0, 1, 2, 3
 
 
 def add_parser(subparsers) -> argparse.ArgumentParser:
@@ -55,14 +67,60 @@ def _fmt(x, spec: str) -> str:
     return "n/a" if x is None else format(x, spec)
 
 
+def _say(text: str) -> None:
+    """Print a line of output at once; if the reader has closed stdout (``| head -1``),
+    send this and all later output to the null device instead of failing."""
+    try:
+        print(text, flush=True)
+    except BrokenPipeError:
+        _discard_stdout()
+
+
+def _discard_stdout() -> None:
+    # the descriptor itself is redirected: what is still buffered, and the flush at exit,
+    # then go to the null device too (no "Exception ignored ... BrokenPipeError")
+    try:
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+        os.close(devnull)
+    except (OSError, ValueError, AttributeError):   # no real descriptor behind sys.stdout
+        sys.stdout = open(os.devnull, "w")
+
+
+def _error(text: str) -> None:
+    """One line on stderr."""
+    print(f"nonholo plan: error: {' '.join(text.split())}", file=sys.stderr, flush=True)
+
+
+def _cannot_write(path, exc: Exception) -> None:
+    why = exc.strerror if isinstance(exc, OSError) and exc.strerror else str(exc)
+    _error(f"cannot write {path}: {why}")
+
+
 def _print_record(rec: dict) -> None:
-    print(f"iter {rec['iteration']:4d}  |l_T| = {_fmt(rec['error'], '.3e')}  "
-          f"step = {rec['step']:<8.4g} min|Δ| = {_fmt(rec['min_delta'], '.4f')}  {rec['phase']}",
-          flush=True)
+    _say(f"iter {rec['iteration']:4d}  |l_T| = {_fmt(rec['error'], '.3e')}  "
+         f"step = {rec['step']:<8.4g} min|Δ| = {_fmt(rec['min_delta'], '.4f')}  {rec['phase']}")
+
+
+def _plot_format_error(path) -> str | None:
+    """Why matplotlib cannot write a figure to ``path`` (its extension), or ``None``."""
+    suffix = Path(path).suffix[1:].lower()
+    if not suffix:
+        return None                                  # matplotlib's default format
+    from matplotlib.backend_bases import FigureCanvasBase
+
+    known = FigureCanvasBase.get_supported_filetypes()
+    if suffix not in known:
+        return f"--plot {path}: unknown figure format {suffix!r}; known: {', '.join(sorted(known))}"
+    return None
 
 
 def run(args) -> int:
     """Run the ``plan`` sub-command for parsed ``args``; returns the exit status."""
+    why = _plot_format_error(args.plot) if args.plot else None
+    if why:
+        _error(why)
+        return EXIT_BAD_INPUT
     try:
         R0 = so3.from_rpy(*args.start)
         Rd = so3.from_rpy(*args.goal)
@@ -72,19 +130,30 @@ def run(args) -> int:
             max_iter=args.max_iter, delta_min=args.delta_min, steps=args.steps,
             callback=None if args.quiet else _print_record)
     except ValueError as exc:
-        print(f"nonholo plan: error: {exc}", file=sys.stderr)
-        return 2
-    print(f"{'success' if res.success else 'FAILED'}: {res.reason}")
-    print(f"terminal error |l_T| = {_fmt(res.terminal_error, '.3e')} rad, min |Δ| = "
-          f"{_fmt(res.min_delta, '.4f')}, {res.iterations} iterations, {res.seconds * 1e3:.1f} ms "
-          f"({res.mechanism}, {res.method}/{res.strategy}, T = {res.T:g} s, {res.steps} steps)")
+        _error(str(exc))
+        return EXIT_BAD_INPUT
+    _say(f"{'success' if res.success else 'FAILED'}: {res.reason}")
+    _say(f"terminal error |l_T| = {_fmt(res.terminal_error, '.3e')} rad, min |Δ| = "
+         f"{_fmt(res.min_delta, '.4f')}, {res.iterations} iterations, {res.seconds * 1e3:.1f} ms "
+         f"({res.mechanism}, {res.method}/{res.strategy}, T = {res.T:g} s, {res.steps} steps)")
+    status = EXIT_SUCCESS if res.success else EXIT_FAILED
     if args.out:
-        res.save(args.out)
-        print(f"wrote {args.out}")
+        try:
+            res.save(args.out)
+        except (OSError, ValueError) as exc:     # ValueError: a number JSON cannot hold
+            _cannot_write(args.out, exc)
+            status = EXIT_WRITE_FAILED
+        else:
+            _say(f"wrote {args.out}")
     if args.plot:
-        plot(res, args.plot)
-        print(f"wrote {args.plot}")
-    return 0 if res.success else 1
+        try:
+            plot(res, args.plot)
+        except OSError as exc:
+            _cannot_write(args.plot, exc)
+            status = EXIT_WRITE_FAILED
+        else:
+            _say(f"wrote {args.plot}")
+    return status
 
 
 def plot(res, path) -> None:
@@ -122,5 +191,7 @@ def plot(res, path) -> None:
         axes[2].legend(fontsize="small")
     axes[-1].set_xlabel("t [s]")
     fig.tight_layout()
-    fig.savefig(path, dpi=100)
-    plt.close(fig)
+    try:
+        fig.savefig(path, dpi=100)
+    finally:
+        plt.close(fig)
