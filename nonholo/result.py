@@ -39,6 +39,7 @@ from pathlib import Path
 import numpy as np
 
 from . import catalog, kernels, so3, stages
+from .checks import MAX_STEPS
 from .controls import Controls, Fourier, PiecewiseConstant
 from .replay import FrameControls, from_dict
 
@@ -306,8 +307,6 @@ VALUE_RTOL = 1e-12
 TIME_RTOL = 1e-12
 #: ``R0``, ``Rd`` and the samples ``R``: ``|RᵀR − I| ≤`` this (as :func:`nonholo.plan` accepts)
 ROTATION_TOL = 1e-9
-#: most integrator steps a plan can have (the planner's limit)
-MAX_STEPS = 10**6
 
 
 def _fail(field: str, message: str):
@@ -466,7 +465,7 @@ def _controls(d, mech) -> Controls | FrameControls:
         if _number(d, "T", where="controls.") != d["frame"]["T"]:
             _fail("controls.T", f"differs from the frame controls' T ({d['frame']['T']!r})")
         if _string(d, "mechanism", where="controls.") != mech.name:
-            _fail("controls.mechanism", f"is {d['mechanism']!r}, the plan's mechanism {mech.name!r}")
+            _fail("controls.mechanism", f"is {d['mechanism']!r}, but the plan's 'mechanism' is {mech.name!r}")
         _integer(d, "steps", 1, where="controls.")
         _rotation(_array(d["R0"], "controls.R0", (3, 3)), "controls.R0")
     else:
@@ -697,8 +696,10 @@ class _Validation:
         dev = np.max(np.abs(Rs - r.R), axis=(1, 2))
         k = int(np.argmax(dev))
         if not dev[k] <= REPLAY_TOL:
-            _fail("R", f"disagrees with the controls replayed from R0: by {dev[k]:.3g} at "
-                       f"t = {r.t[k]:.6g} s (tolerance {REPLAY_TOL:g})")
+            system = "frame system" if frame else "system"
+            _fail("R", f"disagrees with the controls replayed from R0 (the {system} of "
+                       f"{mech.name!r}, {r.steps} steps): by {dev[k]:.3g} at t = {r.t[k]:.6g} s "
+                       f"(tolerance {REPLAY_TOL:g})")
         self.dmin = float(dmin)
 
     def values(self, mech, n: int, complete: bool) -> None:
