@@ -158,28 +158,28 @@ class PlanResult:
             raise ValueError(f"not a nonholo plan file (format {_short(d.get('format'))}, expected {FORMAT!r})")
         missing = [k for k in _REQUIRED if k not in d]
         if missing:
-            raise ValueError(f"plan file: missing field{'s' if len(missing) > 1 else ''} "
+            raise ValueError(f"invalid plan: missing field{'s' if len(missing) > 1 else ''} "
                              f"{', '.join(map(repr, missing))}")
         unknown = [k for k in d if k not in _REQUIRED and k not in _OPTIONAL]
         if unknown:
-            raise ValueError(f"plan file: unknown field{'s' if len(unknown) > 1 else ''} "
+            raise ValueError(f"invalid plan: unknown field{'s' if len(unknown) > 1 else ''} "
                              f"{', '.join(_short(k) for k in unknown)}")
         d = {"options": {}, "sensitivity": None, **d}
         if not isinstance(d["success"], bool):
-            raise ValueError(f"plan file: 'success' must be true or false, got {_short(d['success'])}")
+            raise ValueError(f"invalid plan: 'success' must be true or false, got {_short(d['success'])}")
         mechanism = _string(d, "mechanism")
         try:
             mech = catalog.get(mechanism)
         except ValueError as exc:
-            raise ValueError(f"plan file: 'mechanism': {exc}") from None
+            raise ValueError(f"invalid plan: 'mechanism': {exc}") from None
         par = _controls(d["controls"], mech)
         m = par.n_inputs
         options = d["options"]
         if not isinstance(options, dict):
-            raise ValueError(f"plan file: 'options' must be an object, got {_json_type(options)}")
+            raise ValueError(f"invalid plan: 'options' must be an object, got {_json_type(options)}")
         history = d["history"]
         if not isinstance(history, list) or not all(isinstance(r, dict) for r in history):
-            raise ValueError("plan file: 'history' must be a list of objects")
+            raise ValueError("invalid plan: 'history' must be a list of objects")
         delta = d["delta"]
         res = cls(
             success=d["success"], reason=_string(d, "reason", empty=True),
@@ -216,6 +216,8 @@ class PlanResult:
         synced to disk, which then replaces ``path`` (a symbolic link is followed, its
         target replaced). If anything fails (``OSError``, e.g. a full disk) the error
         propagates, the temporary file is removed and an existing ``path`` is untouched.
+        A result holding a non-finite number, which JSON cannot, raises ``ValueError``
+        before anything is written.
         """
         path = Path(path)
         text = json.dumps(self.to_dict(), allow_nan=False, indent=1)
