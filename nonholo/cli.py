@@ -79,7 +79,11 @@ def build_parser() -> argparse.ArgumentParser:
 
 def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
-    return args.func(args)
+    try:
+        return args.func(args)
+    except BrokenPipeError:            # the reader closed stdout (``| head``): not an error
+        cli_plan.discard_stdout()
+        return 0
 
 
 if __name__ == "__main__":

@@ -73,10 +73,10 @@ def _say(text: str) -> None:
     try:
         print(text, flush=True)
     except BrokenPipeError:
-        _discard_stdout()
+        discard_stdout()
 
 
-def _discard_stdout() -> None:
+def discard_stdout() -> None:
     # the descriptor itself is redirected: what is still buffered, and the flush at exit,
     # then go to the null device too (no "Exception ignored ... BrokenPipeError")
     try:
