@@ -21,13 +21,18 @@ def check_time(T, name: str = "T") -> float:
 MAX_STEPS = 10**6
 
 
+def is_number(x) -> bool:
+    """Whether ``x`` is a real number (Python or NumPy), booleans excluded."""
+    return isinstance(x, (int, float, np.integer, np.floating)) and not isinstance(x, (bool, np.bool_))
+
+
 def check_count(value, name: str, minimum: int = 1, maximum: int | None = None) -> int:
     """An integer ``≥ minimum`` (and ``≤ maximum``) (``harmonics``, ``grid``, ``steps``,
     ``max_iter``, ...); integral floats are accepted, booleans, infinities and non-numbers
     are not."""
-    if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, float, np.integer, np.floating)):
-        raise ValueError(f"{name} must be an integer >= {minimum}, got {value!r}")
-    if not np.isfinite(value) or int(value) != value or value < minimum:
+    integral = isinstance(value, (int, np.integer)) or (is_number(value) and np.isfinite(value)
+                                                         and int(value) == value)
+    if not is_number(value) or not integral or value < minimum:
         raise ValueError(f"{name} must be an integer >= {minimum}, got {value!r}")
     if maximum is not None and value > maximum:
         raise ValueError(f"{name} must be at most {maximum}, got {int(value)}")

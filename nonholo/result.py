@@ -39,7 +39,7 @@ from pathlib import Path
 import numpy as np
 
 from . import catalog, kernels, so3, stages
-from .checks import MAX_STEPS
+from .checks import MAX_STEPS, is_number
 from .controls import Controls, Fourier, PiecewiseConstant
 from .replay import FrameControls, from_dict
 
@@ -337,10 +337,6 @@ def _json_type(x) -> str:
     return _short(x)
 
 
-def _is_number(x) -> bool:
-    return isinstance(x, (int, float, np.integer, np.floating)) and not isinstance(x, (bool, np.bool_))
-
-
 def _unique_keys(pairs):
     """``object_pairs_hook`` of :func:`json.loads`: an object with a key twice is an error."""
     d = {}
@@ -362,7 +358,7 @@ def _number(d: dict, key: str, null: bool = False, where: str = "") -> float | N
     v = d[key]
     if v is None and null:
         return None
-    if not _is_number(v):
+    if not is_number(v):
         _fail(where + key, f"must be a number{' or null' if null else ''}, got {_json_type(v)}")
     try:
         x = float(v)
@@ -402,7 +398,7 @@ def _array(value, field: str, shape: tuple) -> np.ndarray:
         while stack:
             x, k = stack.pop()
             if k == len(shape):
-                if not _is_number(x):
+                if not is_number(x):
                     _fail(field, f"{bad}: found {_json_type(x)}")
                 flat.append(x)
                 continue
@@ -487,7 +483,7 @@ def _scan_finite(value, field: str) -> None:
             stack.extend(x.values())
         elif isinstance(x, (list, tuple)):
             stack.extend(x)
-        elif _is_number(x) and not np.isfinite(float(x)):
+        elif is_number(x) and not np.isfinite(float(x)):
             _fail(field, f"contains a non-finite number ({x})")
 
 
@@ -577,7 +573,7 @@ class _Validation:
         _scan_finite(r.history, "history")
         _scan_finite(r.options, "options")
         for key in ("tol", "delta_min"):
-            if key in r.options and not _is_number(r.options[key]):
+            if key in r.options and not is_number(r.options[key]):
                 _fail("options", f"has {key} = {_short(r.options[key])}, not a number")
 
     def labels(self):

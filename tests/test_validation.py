@@ -58,3 +58,8 @@ def test_platform_kinematics_never_return_non_finite_numbers():
     assert np.all(np.isfinite(L))
     with pytest.raises(ValueError, match="too close to the singular surface"):
         platform.Q(R, [1.0, 0.5])
+
+
+def test_a_huge_integer_count_is_refused_by_name():
+    with pytest.raises(ValueError, match="steps must be at most"):
+        plan(R0, RD, steps=10**400)
