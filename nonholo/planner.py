@@ -26,6 +26,7 @@ import numpy as np
 from . import catalog, so3, stages
 from .checks import MAX_STEPS, check_count, check_time
 from .controls import Controls, Fourier, PiecewiseConstant, paper_initial
+from .planning.certification import certified
 from .planning.core import Options, Problem, Request, Strategy, build_result
 from .planning.paper import PaperStrategy
 from .planning.robust import RobustStrategy
@@ -168,4 +169,6 @@ def plan(R0, Rd, *, T: float = 1.0, method: str = "parametric", harmonics: int =
     problem = Problem(R0, Rd, T, mech, method, steps, options.delta_min, frame=solver.frame(mech))
     start = solver.initial(problem, controls, u0 is not None)
     outcome = solver.solve(problem, start, callback)
+    if outcome.success and outcome.certificate is None:
+        outcome = certified(outcome, problem, options)
     return build_result(request, outcome, outcome.success, outcome.reason, problem)

@@ -38,21 +38,31 @@ from pathlib import Path
 
 import numpy as np
 
-from . import catalog, kernels, so3, stages
+from . import catalog, certify, kernels, so3, stages
 from .checks import MAX_STEPS, is_number
 from .controls import Controls, Fourier, PiecewiseConstant
 from .replay import FrameControls, from_dict
 
-FORMAT = "nonholo.plan/1"
+FORMAT = "nonholo.plan/2"
+#: the format before certificates (``replay_steps``, ``error_bound``): still loaded, checked
+#: against the planner's own replay
+FORMAT_1 = "nonholo.plan/1"
 
 
 @dataclass(eq=False)
 class PlanResult:
     """Result of :func:`nonholo.planner.plan`.
 
-    - ``success``/``reason``: whether ``terminal_error ≤ tol`` was reached, and why not.
+    - ``success``/``reason``: whether the plan is certified (:mod:`nonholo.certify`): its
+      physical controls, replayed on ``replay_steps`` CF4 steps, end within
+      ``terminal_error + error_bound ≤ tol`` of the goal and keep ``|Δ| ≥ delta_min`` —
+      and why not.
     - ``terminal_error``: ``|l_T|`` (rad), ``[l_T] = log(R_T R_dᵀ)`` of the final
-      trajectory (``None`` if nothing was simulated, e.g. a goal across ``Δ = 0``).
+      trajectory (``None`` if nothing was simulated, e.g. a goal across ``Δ = 0``): of the
+      certified replay for a success, of the planner's own trajectory otherwise.
+    - ``error_bound``, ``replay_steps`` (a success only, else ``None``): the bound on the
+      replay's own error at ``T`` (rad) and the CF4 steps of that replay; ``t``, ``R``,
+      ``delta`` are then the replay's nodes at the plan's ``steps`` step points.
     - ``min_delta``: least ``|Δ|`` along the final trajectory, over every point where the
       integrator evaluated ``L`` (``None`` for mechanisms without a singular set, or if
       nothing was simulated).
@@ -66,9 +76,8 @@ class PlanResult:
       ``steps`` is the number of integrator steps of that trajectory.
     - ``sensitivity``: ``max_t |Φ(T, t)|_F`` of the physical system along the planned
       motion — how much a perturbation of the orientation at ``t`` is amplified at ``T``
-      when the planned ``u(t)`` is played open loop (``|Φ(T,T)|_F = √3``); computed by the
-      ``"robust"`` strategy (``None`` otherwise). Above ~100 an independent re-simulation
-      can no longer reproduce ``R(T)`` to 1e-8 rad (see :mod:`nonholo.planning.robust`).
+      when the planned ``u(t)`` is played open loop (``|Φ(T,T)|_F = √3``); computed when
+      a converged plan is certified (``None`` otherwise).
     - ``parametrisation``: the planned control (a :class:`~nonholo.controls.Controls`:
       Fourier or grid controls of ``u``, or :class:`~nonholo.replay.FrameControls`
       wrapping those of the frame coordinates ``w``); :meth:`controls` evaluates the
@@ -96,6 +105,8 @@ class PlanResult:
     seconds: float
     options: dict = field(default_factory=dict)
     sensitivity: float | None = None
+    error_bound: float | None = None
+    replay_steps: int | None = None
 
     # -- controls ----------------------------------------------------------------------
     def controls(self, t) -> np.ndarray:
@@ -138,6 +149,8 @@ class PlanResult:
             "seconds": self.seconds,
             "options": self.options,
             "sensitivity": self.sensitivity,
+            "error_bound": self.error_bound,
+            "replay_steps": None if self.replay_steps is None else int(self.replay_steps),
             "R0": arr(self.R0),
             "Rd": arr(self.Rd),
             "controls": self.parametrisation.to_dict(),
@@ -154,7 +167,7 @@ class PlanResult:
         naming the field otherwise."""
         if not isinstance(d, dict):
             raise ValueError(f"not a nonholo plan file: expected a JSON object, got {_json_type(d)}")
-        if d.get("format") != FORMAT:
+        if d.get("format") not in (FORMAT, FORMAT_1):
             raise ValueError(f"not a nonholo plan file (format {_short(d.get('format'))}, expected {FORMAT!r})")
         missing = [k for k in _REQUIRED if k not in d]
         if missing:
@@ -164,7 +177,7 @@ class PlanResult:
         if unknown:
             raise ValueError(f"invalid plan: unknown field{'s' if len(unknown) > 1 else ''} "
                              f"{', '.join(_short(k) for k in unknown)}")
-        d = {"options": {}, "sensitivity": None, **d}
+        d = {"options": {}, "sensitivity": None, "error_bound": None, "replay_steps": None, **d}
         if not isinstance(d["success"], bool):
             raise ValueError(f"invalid plan: 'success' must be true or false, got {_short(d['success'])}")
         mechanism = _string(d, "mechanism")
@@ -193,24 +206,30 @@ class PlanResult:
             strategy=_string(d, "strategy"), T=_number(d, "T"),
             R0=_array(d["R0"], "R0", (3, 3)), Rd=_array(d["Rd"], "Rd", (3, 3)),
             steps=_integer(d, "steps", minimum=1), seconds=_number(d, "seconds"),
-            options=dict(options), sensitivity=_number(d, "sensitivity", null=True))
-        res.validate()
+            options=dict(options), sensitivity=_number(d, "sensitivity", null=True),
+            error_bound=_number(d, "error_bound", null=True),
+            replay_steps=None if d["replay_steps"] is None else _integer(d, "replay_steps", minimum=2))
+        _Validation(res, legacy=d["format"] == FORMAT_1).run()
         return res
 
     def validate(self) -> "PlanResult":
         """Check that the result is one :func:`nonholo.plan` can have produced: types,
-        shapes and finiteness of every field, and consistency — the controls, replayed from
-        ``R0`` by the integrator that planned them, pass through the stored samples ``R``
-        (the physical system for controls of ``u``, the frame system for
-        :class:`~nonholo.replay.FrameControls`, within ``REPLAY_TOL``), ``u = controls(t)``,
-        ``Δ`` of the samples, ``terminal_error`` and ``min_delta`` agree with them, and the
-        labels (mechanism, method, strategy, ``T``, ``steps``, ``R0``) with the controls.
+        shapes and finiteness of every field, and consistency — the controls replayed from
+        ``R0`` pass through the stored samples ``R`` within ``REPLAY_TOL`` (a certified
+        plan: the physical inputs on ``replay_steps`` CF4 steps, the replay of
+        :mod:`nonholo.certify`; otherwise by the integrator that planned them, the physical
+        system for controls of ``u``, the frame system for
+        :class:`~nonholo.replay.FrameControls`), ``u = controls(t)``, ``Δ`` of the samples,
+        ``terminal_error`` and ``min_delta`` agree with them, ``error_bound`` is at least
+        the replay's Richardson estimate, a success is certified (``terminal_error +
+        error_bound ≤ tol``), and the labels (mechanism, method, strategy, ``T``,
+        ``steps``, ``R0``) agree with the controls.
         Returns ``self``; raises ``ValueError`` naming the field otherwise."""
         _Validation(self).run()
         return self
 
     def save(self, path) -> Path:
-        """Write the result as JSON (format ``nonholo.plan/1``, see the module docstring).
+        """Write the result as JSON (format ``nonholo.plan/2``, see the module docstring).
 
         Atomic: the text goes to a temporary file in the same directory, flushed and
         synced to disk, which then replaces ``path`` (a symbolic link is followed, its
@@ -275,6 +294,10 @@ class PlanResult:
             f"{self.iterations} iterations, min |Δ| = {num(self.min_delta, '.4f')}, "
             f"{self.seconds * 1e3:.1f} ms",
         ]
+        if self.replay_steps is not None:
+            lines.append(f"  certified: physical controls replayed with {self.replay_steps} steps, "
+                         f"error bound {num(self.error_bound, '.1e')} rad, sensitivity "
+                         f"{num(self.sensitivity, '.3g')}")
         if not self.success:
             lines.append(f"  reason: {self.reason}")
         return "\n".join(lines) + ")"
@@ -289,7 +312,7 @@ _REQUIRED = ("format", "success", "reason", "terminal_error", "min_delta", "iter
              "mechanism", "method", "strategy", "T", "steps", "seconds", "R0", "Rd", "controls",
              "t", "R", "u", "delta")
 #: fields the first files of the format did not have (absent: ``{}`` and ``null``)
-_OPTIONAL = ("options", "sensitivity")
+_OPTIONAL = ("options", "sensitivity", "error_bound", "replay_steps")
 #: the planner's methods, by the kind of the parametrisation each plans with
 _METHOD_OF_KIND = {"fourier": "parametric", "piecewise_constant": "nonparametric"}
 #: the fields of each kind of ``controls``
@@ -529,8 +552,10 @@ def _write_atomic(path: Path, data: bytes) -> None:
 class _Validation:
     """The checks of :meth:`PlanResult.validate`, on one result."""
 
-    def __init__(self, result: PlanResult):
+    def __init__(self, result: PlanResult, legacy: bool = False):
         self.r = result
+        #: a file of format ``nonholo.plan/1`` (no certificates)
+        self.legacy = legacy
 
     def run(self) -> None:
         r = self.r
@@ -561,11 +586,21 @@ class _Validation:
             _fail("T", f"must be a positive time (s), got {r.T}")
         if _number(v, "seconds") < 0:
             _fail("seconds", f"must be >= 0, got {r.seconds}")
-        for key in ("terminal_error", "sensitivity"):
+        for key in ("terminal_error", "sensitivity", "error_bound"):
             x = _number(v, key, null=True)
             if x is not None and x < 0:
                 _fail(key, f"must be >= 0 (or null), got {x}")
         _number(v, "min_delta", null=True)
+        if r.replay_steps is not None:
+            M = _integer(v, "replay_steps", 2)
+            if M % (2 * r.steps):
+                _fail("replay_steps", f"({M}) must be an even multiple of steps ({r.steps})")
+            if r.error_bound is None:
+                _fail("error_bound", "is null, but the plan has a certified replay (replay_steps)")
+        elif r.error_bound is not None:
+            _fail("replay_steps", "is null, but the plan has an error bound (error_bound)")
+        if self.legacy and r.replay_steps is not None:
+            _fail("replay_steps", f"is set in a file of format {FORMAT_1!r}, which has no certificates")
         if not isinstance(r.history, list) or not all(isinstance(h, dict) for h in r.history):
             _fail("history", "must be a list of objects (one per iteration)")
         if not isinstance(r.options, dict):
@@ -660,7 +695,7 @@ class _Validation:
         r = self.r
         if r.success:
             _fail("success", "is true, but nothing was simulated (no trajectory)")
-        for key in ("terminal_error", "min_delta", "sensitivity"):
+        for key in ("terminal_error", "min_delta", "sensitivity", "error_bound", "replay_steps"):
             if getattr(r, key) is not None:
                 _fail(key, "must be null when nothing was simulated (no trajectory)")
         if r.iterations or r.history:
@@ -670,24 +705,34 @@ class _Validation:
 
     # -- against the controls --------------------------------------------------------------
     def replay(self, mech, n: int) -> None:
-        """The controls replayed from ``R0`` — by the integrator that planned them, the
-        physical system's for controls of ``u``, the frame system's for frame controls —
-        pass through the stored samples; keeps the least ``sgnΔ`` over its evaluation
-        points."""
+        """The controls replayed from ``R0`` pass through the stored samples; keeps the
+        least ``sgnΔ`` over the replay's evaluation points. A certified plan: the
+        physical inputs on ``replay_steps`` steps (:func:`nonholo.certify.replay`), whose
+        Richardson estimate ``error_bound`` must cover; otherwise by the integrator that
+        planned them, the physical system's for controls of ``u``, the frame system's for
+        frame controls."""
         r = self.r
         par = r.parametrisation
-        frame = isinstance(par, FrameControls)
+        frame = isinstance(par, FrameControls) and r.replay_steps is None
         if mech.has_singular_set:
             self.sign = float(np.sign(mech.delta(r.R0)))
             if self.sign == 0.0:
                 _fail("R0", "lies on the singular surface Δ = 0")
         else:
             self.sign = 1.0
-        kern = mech.kernels(frame=frame)
-        U = np.ascontiguousarray(stages.stage_table(par.frame if frame else par, r.steps)[:n - 1])
-        Rs = np.empty((n, 3, 3))
-        done, dmin, _ = kern.forward(np.ascontiguousarray(r.R0, dtype=float), U, r.T / r.steps,
-                                     self.sign, -np.inf, Rs)
+        if r.replay_steps is not None:
+            if n != r.steps + 1:
+                _fail("replay_steps", f"is set, but the trajectory stops at t = {r.t[-1]:.6g} s < T")
+            M = r.replay_steps
+            R_M, done, dmin = certify.replay(r.R0, par, r.T, mech, M, self.sign)
+            Rs = R_M[::M // r.steps]
+            done //= M // r.steps
+        else:
+            kern = mech.kernels(frame=frame)
+            U = np.ascontiguousarray(stages.stage_table(par.frame if frame else par, r.steps)[:n - 1])
+            Rs = np.empty((n, 3, 3))
+            done, dmin, _ = kern.forward(np.ascontiguousarray(r.R0, dtype=float), U, r.T / r.steps,
+                                         self.sign, -np.inf, Rs)
         if done < n - 1:
             _fail("R", f"goes on to t = {r.t[-1]:.6g} s, but the controls replayed from R0 stop at "
                        f"t = {r.t[done]:.6g} s (non-finite angular velocity)")
@@ -695,10 +740,17 @@ class _Validation:
         k = int(np.argmax(dev))
         if not dev[k] <= REPLAY_TOL:
             system = "frame system" if frame else "system"
+            steps = r.steps if r.replay_steps is None else r.replay_steps
             _fail("R", f"disagrees with the controls replayed from R0 (the {system} of "
-                       f"{mech.name!r}, {r.steps} steps): by {dev[k]:.3g} at t = {r.t[k]:.6g} s "
+                       f"{mech.name!r}, {steps} steps): by {dev[k]:.3g} at t = {r.t[k]:.6g} s "
                        f"(tolerance {REPLAY_TOL:g})")
         self.dmin = float(dmin)
+        if r.replay_steps is not None:
+            R_half = certify.replay(r.R0, par, r.T, mech, M // 2, self.sign)[0]
+            est = certify.richardson(R_M[-1], R_half[-1])
+            if not r.error_bound >= est * (1.0 - 1e-9):
+                _fail("error_bound", f"({r.error_bound:.3g}) is below the replay's own error "
+                                     f"estimate ({est:.3g} rad with {M} steps)")
 
     def values(self, mech, n: int, complete: bool) -> None:
         """``u``, ``delta``, ``terminal_error``, ``min_delta`` and ``success`` against the samples."""
@@ -735,9 +787,13 @@ class _Validation:
         if r.success:
             if not complete:
                 _fail("success", f"is true, but the trajectory stops at t = {r.t[-1]:.6g} s < T")
+            if r.replay_steps is None and not self.legacy:
+                _fail("success", "is true, but the plan has no certificate (replay_steps, error_bound)")
             tol = r.options.get("tol")
-            if tol is not None and r.terminal_error > tol:
-                _fail("success", f"is true, but terminal_error = {r.terminal_error:.3g} > tol = {tol:g}")
+            bound = r.error_bound or 0.0
+            if tol is not None and r.terminal_error + bound > tol:
+                _fail("success", f"is true, but terminal_error + error_bound = "
+                                 f"{r.terminal_error + bound:.3g} > tol = {tol:g}")
             dmin = r.options.get("delta_min")
             if mech.has_singular_set and dmin is not None and r.min_delta < dmin:
                 _fail("success", f"is true, but min_delta = {r.min_delta:.4g} < delta_min = {dmin:g}")

@@ -226,7 +226,12 @@ def _scale_param(factor):
 FORGERIES = {
     "success as a string": ("failed", _set(["success"], "false"), "success", "true or false"),
     "success as a number": ("paper", _set(["success"], 1), "success", ""),
-    "success of a failed plan": ("failed", _set(["success"], True), "success", "tol"),
+    "success of a failed plan": ("failed", _set(["success"], True), "success", "no certificate"),
+    "success of a plan without its certificate": (
+        "paper", lambda d: d.update(replay_steps=None, error_bound=None), "success", "no certificate"),
+    "error bound below the replay's": ("paper", _set(["error_bound"], 1e-30), "error_bound", "estimate"),
+    "success beyond tol": ("paper", _set(["options", "tol"], 1e-16), "success", "tol"),
+    "replay steps not a multiple": ("paper", _set(["replay_steps"], 1000), "replay_steps", "multiple"),
     "success of a stopped plan": ("stopped", _set(["success"], True), "success", ""),
     "relabelled mechanism": ("paper", _set(["mechanism"], "platform_raised"), "R", "controls"),
     "relabelled mechanism, frame": ("robust", _set(["mechanism"], "platform_raised"), "mechanism", ""),
@@ -261,7 +266,7 @@ FORGERIES = {
     "too few inputs": ("paper", _set(["u"], lambda u: u[:-1]), "u", "shape"),
     "too few Δ": ("paper", _set(["delta"], lambda x: x[:-1]), "delta", "shape"),
     "a trajectory shortened": ("paper", lambda d: [d.update({k: d[k][:-1]}) for k in ("t", "R", "u", "delta")],
-                               "terminal_error", ""),
+                               "replay_steps", "stops"),
     "a ragged R": ("paper", _set(["R", 3], lambda R: R[:2]), "R", ""),
     "steps": ("paper", _set(["steps"], 200), "t", ""),
     "steps as a float": ("paper", _set(["steps"], 400.0), "steps", "integer"),

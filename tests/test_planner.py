@@ -15,6 +15,7 @@ from conftest import check_solution, example, example_rpy_args, forbid_simulatio
 from nonholo import cli_plan, kernels, planner, so3
 from nonholo import controls as C
 from nonholo import simulation as S
+from nonholo.result import FORMAT
 from nonholo.planning.core import Outcome, Strategy, descend, record
 from nonholo.planning.paper import PaperStrategy
 from nonholo.replay import FrameControls
@@ -221,7 +222,7 @@ def test_save_load_round_trip(tmp_path, kw):
     np.testing.assert_array_equal(back.controls(t), res.controls(t))
     if res.breakpoints is not None:
         np.testing.assert_array_equal(back.breakpoints, res.breakpoints)
-    assert json.loads(path.read_text())["format"] == "nonholo.plan/1"
+    assert json.loads(path.read_text())["format"] == FORMAT
     assert repr(back) == repr(res)
 
 

@@ -248,7 +248,9 @@ def test_sensitivity_is_reported_and_used():
         Phi = variational(g["R0"], res.parametrisation, g["T"], steps=res.steps).Phi
         assert res.sensitivity == pytest.approx(np.sqrt(np.max(np.sum(Phi ** 2, axis=(1, 2)))),
                                                 rel=1e-5)
-    assert planner.plan(R0, Rd, strategy="paper").sensitivity is None
+    res = planner.plan(R0, Rd, strategy="paper")        # every certified plan has one
+    Phi = variational(R0, res.parametrisation, 1.0).Phi
+    assert res.sensitivity == pytest.approx(np.sqrt(np.max(np.sum(Phi ** 2, axis=(1, 2)))), rel=1e-5)
 
     class Strict(robust.RobustStrategy):
         name = "test-strict"

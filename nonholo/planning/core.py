@@ -39,6 +39,7 @@ import numpy as np
 from .. import kernels, stages
 from ..checks import check_count
 from ..controls import Controls
+from ..certify import Certificate
 from ..mechanism import Mechanism
 from ..replay import FrameControls
 from ..result import PlanResult
@@ -327,8 +328,9 @@ class Outcome:
     #: the problem the final evaluation belongs to, when not the one :func:`nonholo.plan`
     #: built (e.g. a finer integrator grid)
     problem: Problem | None = None
-    #: ``max_t |Φ(T, t)|_F`` of the physical system along the final motion, if computed
-    sensitivity: float | None = None
+    #: the certificate of a success (:mod:`nonholo.planning.certification`); a success
+    #: without one is certified by :func:`nonholo.plan`
+    certificate: Certificate | None = None
 
 
 class Strategy(ABC):
@@ -382,9 +384,11 @@ class Request:
 
 def build_result(request: Request, outcome: Outcome | None, success: bool, reason: str,
                  problem: Problem | None = None) -> PlanResult:
-    """The :class:`~nonholo.result.PlanResult` of a run (``outcome=None``: nothing simulated)."""
+    """The :class:`~nonholo.result.PlanResult` of a run (``outcome=None``: nothing simulated).
+    A success's samples are those of its certified replay."""
     mech, T = request.mechanism, request.T
     ev = outcome.evaluation if outcome is not None else None
+    cert = outcome.certificate if outcome is not None and success else None
     if outcome is not None and outcome.problem is not None:
         problem = outcome.problem
     n_steps = request.steps if problem is None else problem.steps
@@ -399,10 +403,14 @@ def build_result(request: Request, outcome: Outcome | None, success: bool, reaso
     else:
         par = ev.controls
     R = ev.R if ev is not None else np.empty((0, 3, 3))
+    terminal_error = None if ev is None else ev.error
+    min_delta = None if ev is None else ev.min_delta
+    if cert is not None:
+        R = cert.R[::cert.replay_steps // n_steps]
+        terminal_error, min_delta = cert.terminal_error, cert.min_delta
     return PlanResult(
         success=success, reason=reason,
-        terminal_error=None if ev is None else ev.error,
-        min_delta=None if ev is None else ev.min_delta,
+        terminal_error=terminal_error, min_delta=min_delta,
         iterations=0 if outcome is None else outcome.iterations,
         history=[] if outcome is None else outcome.history,
         t=t, R=R, u=par(t).reshape(n, mech.n_inputs), delta=mech.delta_samples(R),
@@ -410,4 +418,6 @@ def build_result(request: Request, outcome: Outcome | None, success: bool, reaso
         T=T, R0=request.R0, Rd=request.Rd, steps=n_steps,
         seconds=time.perf_counter() - request.started,
         options={**asdict(request.options), "harmonics": request.harmonics, "grid": request.grid},
-        sensitivity=None if outcome is None else outcome.sensitivity)
+        sensitivity=None if outcome is None or outcome.certificate is None else outcome.certificate.sensitivity,
+        error_bound=None if cert is None else cert.error_bound,
+        replay_steps=None if cert is None else cert.replay_steps)

@@ -62,8 +62,9 @@ import numpy as np
 
 from .. import kernels, so3, stages
 from ..controls import Controls, Fourier, PiecewiseConstant, fourier_basis
-from ..replay import FrameControls
-from ..simulation import DELTA_STOP, SingularTrajectoryError, simulate, variational
+from ..simulation import DELTA_STOP, SingularTrajectoryError, simulate
+from .certification import certify
+from .certification import note as certificate_note
 from .core import Evaluation, Outcome, Problem, Start, Strategy, descend, record, step_scale
 
 #: Amplitude (rad/s) of the loop ``w = a (sin ωt, cos ωt)`` of the initial guesses.
@@ -326,32 +327,6 @@ class RobustStrategy(Strategy):
             est = self.discretisation_error(problem, ev)
         return problem, ev, it, note
 
-    def sensitivity(self, problem: Problem, ev: Evaluation) -> float:
-        """``max_n |Φ(T, t_n)|_F`` of the *physical* system ``dR/dt = [L(R) u] R`` along the
-        motion of ``ev`` played with its physical inputs: the amplification of a
-        perturbation at ``t_n`` by ``T``.
-
-        :func:`nonholo.simulation.variational` with ``steps/2`` CF4 steps when ``steps`` is
-        even (and the controls allow it), ``steps`` otherwise: every stage time of a step of
-        ``2h`` is then a node of the plan, where ``u = W(R_n) w(t_n)`` needs no partial
-        step (:class:`~nonholo.replay.FrameControls` given ``ev``'s nodes), and ``Φ`` is
-        taken on every other node: close to the maximum over all nodes — ample for a
-        conditioning figure compared with :attr:`max_sensitivity` — at a fraction of the
-        cost (``tests/test_robust.py`` checks it on a slice).
-        """
-        steps = problem.steps
-        try:
-            coarse = stages.check_steps(ev.controls, steps // 2) if steps % 2 == 0 else steps
-        except ValueError:
-            coarse = steps
-        par = (FrameControls(ev.controls, problem.R0, problem.mechanism, steps, nodes=ev.R)
-               if problem.frame else ev.controls)
-        try:
-            var = variational(problem.R0, par, problem.T, mechanism=problem.mechanism, steps=coarse)
-        except SingularTrajectoryError:
-            return float("inf")
-        return float(np.sqrt(np.max(np.sum(var.Phi ** 2, axis=(1, 2)))))
-
     def solve(self, problem, start, callback=None):
         opt = self.options
         history: list = []
@@ -384,23 +359,28 @@ class RobustStrategy(Strategy):
                 fine, ev, n, note = self.refine(problem, ev, k, it, history, callback)
                 it += n
                 why += f"; {note}" if note else ""
-                G = self.sensitivity(fine, ev)
+                ev, cert, corrections = certify(fine, ev, opt)
+                if not cert.passed:
+                    notes.append(f"{label}: converged on the planner's grid, but not certified: {cert.reason}")
+                    continue
+                why += certificate_note(cert, corrections)
+                G = cert.sensitivity
                 if G <= self.max_sensitivity:
                     return Outcome(ev, True, why + tail, history, it,
-                                   fine if fine is not problem else None, G)
+                                   fine if fine is not problem else None, cert)
                 notes.append(f"{label}: converged with sensitivity {G:.3g} > {self.max_sensitivity:g}")
                 if converged is None or G < converged[0]:
-                    converged = (G, ev, fine, why)
+                    converged = (G, ev, fine, why, cert)
                 continue
             notes.append(f"{label}: {why}")
             if best is None or ev.error < best.error:
                 best = ev
         if converged is not None:
-            G, ev, fine, why = converged
+            G, ev, fine, why, cert = converged
             why += (f"; sensitivity max|Φ(T,t)| = {G:.3g} > {self.max_sensitivity:g} (the best of "
                     f"{sum('converged with' in x for x in notes)} converged attempts; an open-loop "
                     "replay amplifies errors by that much)")
-            return Outcome(ev, True, why + tail, history, it, fine if fine is not problem else None, G)
+            return Outcome(ev, True, why + tail, history, it, fine if fine is not problem else None, cert)
         final = best if best is not None else first_failure
         if final is None:
             final = problem.evaluate(start.controls, delta_stop=DELTA_STOP)

@@ -1,0 +1,174 @@
+"""The certificate of a plan: its physical controls replayed, with a bound on the replay's error.
+
+A planner judges its control on its own fixed-step trajectory — in the frame coordinates
+``w`` for strategy ``"robust"``, on a grid chosen for the Jacobian, not for the endpoint.
+What a plan promises is about the *physical* inputs it returns, ``u(t) =
+result.controls(t)``, played on ``dR/dt = [L(R) u] R`` from ``R0``. :func:`measure` replays
+them with CF4 on ``M/2`` and ``M`` steps (aligned with the plan's steps, so no step
+straddles a breakpoint) and bounds the error of the ``M``-step endpoint by
+
+    ``error_bound = SAFETY · |log(R_M(T) R_{M/2}(T)ᵀ)| / 15  +  G · REPLAY_PERTURBATION``
+
+— the Richardson estimate of a fourth-order method (asymptotic: hence the safety factor),
+doubling ``M`` until it is below ``ERROR_FRACTION · tol`` (at most :data:`MAX_REPLAY_STEPS`),
+plus what an error of :data:`REPLAY_PERTURBATION` rad anywhere along the motion (a careful
+independent replay's own accuracy) becomes at ``T`` under the *sensitivity*
+``G = max_t |Φ(T, t)|_F`` of the physical system along the motion (:func:`sensitivity`).
+A plan is certified when the replay's terminal error plus that bound is at most ``tol`` and
+the replay keeps ``sgnΔ ≥ delta_min`` at every point where it evaluates ``L``: then any
+accurate re-simulation of the returned controls ends within ``tol`` of the goal. An
+infinite ``G`` (the variational replay ran into ``Δ = 0``) or one so large that
+``G · REPLAY_PERTURBATION`` alone exceeds ``tol`` makes a plan uncertifiable: its endpoint
+then depends on perturbations below any replay's accuracy.
+
+:class:`Certificate` holds the numbers a :class:`~nonholo.result.PlanResult` stores
+(``replay_steps``, ``terminal_error``, ``error_bound``, ``min_delta``, ``sensitivity``);
+:func:`replay` is the replay itself, which :meth:`~nonholo.result.PlanResult.validate`
+repeats when a plan is loaded.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from . import kernels, stages
+from .simulation import SingularTrajectoryError, variational
+
+#: Factor on the asymptotic Richardson estimate ``|R_M − R_{M/2}|/15`` of the error of ``R_M``.
+SAFETY = 2.0
+#: The replay is refined until its error estimate is below this fraction of ``tol``.
+ERROR_FRACTION = 0.25
+#: The finest replay (CF4 steps on ``[0, T]``): beyond it a plan is not certified.
+MAX_REPLAY_STEPS = 204800
+#: Error (rad) anywhere along the motion that any replay may make — DOP853 at ``rtol =
+#: 1e-13`` — and that reaches ``T`` amplified by the sensitivity ``G``.
+REPLAY_PERTURBATION = 1e-13
+
+
+@dataclass(frozen=True)
+class Certificate:
+    """The physical controls of a plan replayed (see the module).
+
+    ``replay_steps``: CF4 steps of the certified replay ``R_M``; ``terminal_error``:
+    ``|log(R_M(T) R_dᵀ)|`` (rad); ``error_bound``: bound on ``|R(T) − R_M(T)|`` of the exact
+    motion (rad); ``min_delta``: least ``sgn(Δ(R0))·Δ`` over the replay's evaluation points
+    (``None`` without a singular set); ``sensitivity``: ``G``; ``passed``: the plan is
+    certified for the ``tol`` and ``delta_min`` it was measured against; ``reason``: why not;
+    ``correctable``: only the replay's terminal error is too large (the replay is accurate,
+    well conditioned and clear of ``Δ = 0``). ``l``: the replay's ``l_T``; ``R``: its nodes
+    (``M + 1``).
+    """
+
+    replay_steps: int
+    terminal_error: float
+    error_bound: float
+    min_delta: float | None
+    sensitivity: float
+    passed: bool
+    reason: str
+    correctable: bool
+    l: np.ndarray
+    R: np.ndarray
+
+    @property
+    def certified_error(self) -> float:
+        """``terminal_error + error_bound``: how far the exact motion may end from the goal."""
+        return self.terminal_error + self.error_bound
+
+
+def replay(R0, par, T: float, mechanism, steps: int, sign: float = 1.0):
+    """The physical inputs ``par`` (controls or :class:`~nonholo.replay.FrameControls`)
+    replayed on ``dR/dt = [L(R) u] R`` from ``R0`` with ``steps`` CF4 steps.
+
+    Returns ``(R, done, min_delta)``: the nodes ``(steps + 1, 3, 3)``, the steps completed
+    (fewer where the angular velocity became non-finite) and the least ``sign·Δ`` over the
+    evaluation points.
+    """
+    U = np.ascontiguousarray(stages.stage_table(par, steps))
+    Rs = np.empty((steps + 1, 3, 3))
+    done, dmin, _ = mechanism.kernels(frame=False).forward(
+        np.ascontiguousarray(R0, dtype=float), U, T / steps, sign, -np.inf, Rs)
+    return Rs, int(done), float(dmin)
+
+
+def richardson(R_fine: np.ndarray, R_coarse: np.ndarray) -> float:
+    """The error estimate of the ``M``-step endpoint ``R_fine`` from the ``M/2``-step
+    ``R_coarse``: :data:`SAFETY` ``·|log(R_fine R_coarseᵀ)|/15`` (rad)."""
+    return SAFETY * float(kernels.log_error(np.ascontiguousarray(R_fine), np.ascontiguousarray(R_coarse))[1]) / 15.0
+
+
+def sensitivity(R0, par, T: float, mechanism, steps: int) -> float:
+    """``G = max_n |Φ(T, t_n)|_F`` of the physical system along ``par``'s motion:
+    the amplification of a perturbation at ``t_n`` by ``T`` (``inf`` if the replay runs
+    into ``Δ = 0``).
+
+    :func:`nonholo.simulation.variational` with ``steps/2`` CF4 steps when ``steps`` is
+    even (and the controls allow it), ``steps`` otherwise: for frame controls whose nodes
+    are those of ``steps`` steps every stage time is then a node, where ``u = W(R_n)
+    w(t_n)`` needs no partial step, and ``Φ`` is taken on every other node — close to the
+    maximum over all nodes, at a fraction of the cost (``tests/test_certify.py`` checks
+    it against all nodes).
+    """
+    try:
+        coarse = stages.check_steps(par, steps // 2) if steps % 2 == 0 else steps
+    except ValueError:
+        coarse = steps
+    try:
+        var = variational(R0, par, T, mechanism=mechanism, steps=coarse)
+    except SingularTrajectoryError:
+        return float("inf")
+    G = float(np.sqrt(np.max(np.sum(var.Phi ** 2, axis=(1, 2)))))
+    return G if np.isfinite(G) else float("inf")
+
+
+def measure(R0, Rd, T: float, mechanism, par, steps: int, tol: float, delta_min: float,
+            sign: float = 1.0, G: float | None = None) -> Certificate:
+    """The certificate of the physical controls ``par`` (see the module): replays on
+    ``steps/2``·2ᵏ and ``steps``·2ᵏ CF4 steps, ``k`` the least with an error estimate
+    below ``ERROR_FRACTION · tol`` (``steps`` must be even and a multiple of the controls'
+    grid and of a :class:`~nonholo.replay.FrameControls`' steps). ``G``: the sensitivity,
+    if already known."""
+    if G is None:
+        G = sensitivity(R0, par, T, mechanism, getattr(par, "steps", steps))
+    has_delta = mechanism.has_singular_set
+    M = steps
+    R_half, done, _ = replay(R0, par, T, mechanism, M // 2, sign)
+    while True:
+        R, done, dmin = replay(R0, par, T, mechanism, M, sign)
+        if done < M:
+            return _failed(M, G, R, has_delta, dmin, f"the physical replay ({M} steps) produced a "
+                           f"non-finite angular velocity at t ≈ {done * T / M:.4g} s")
+        est = richardson(R[-1], R_half[-1])
+        if not est > ERROR_FRACTION * tol or 2 * M > MAX_REPLAY_STEPS:
+            break
+        R_half, M = R, 2 * M
+    l, err = kernels.log_error(R[-1], np.ascontiguousarray(Rd, dtype=float))
+    err = float(err)
+    bound = est + G * REPLAY_PERTURBATION
+    dmin = dmin if has_delta else None
+    reason = ""
+    correctable = False
+    if not np.isfinite(G):
+        reason = ("the physical replay's sensitivity is infinite (its variational system ran into "
+                  "Δ = 0): the endpoint cannot be certified")
+    elif est > ERROR_FRACTION * tol:
+        reason = (f"the replay's integration error is still ~{est:.2g} rad with {M} steps "
+                  f"(the most certified: {MAX_REPLAY_STEPS}); more than {ERROR_FRACTION:g}·tol")
+    elif G * REPLAY_PERTURBATION > ERROR_FRACTION * tol:
+        reason = (f"the motion is too ill-conditioned for tol = {tol:g}: its sensitivity "
+                  f"max|Φ(T,t)| = {G:.3g} amplifies an error of {REPLAY_PERTURBATION:g} rad (a careful "
+                  f"replay's) to {G * REPLAY_PERTURBATION:.2g} rad")
+    elif has_delta and dmin < delta_min:
+        reason = (f"the physical replay comes within {dmin:.4g} of Δ = 0 (delta_min = {delta_min:g})")
+    elif err + bound > tol:
+        reason = (f"the physical replay ({M} steps) ends {err:.3g} rad from the goal "
+                  f"(+ error bound {bound:.2g} > tol = {tol:g})")
+        correctable = True
+    return Certificate(M, err, bound, dmin, G, not reason, reason, correctable, l, R)
+
+
+def _failed(M, G, R, has_delta, dmin, reason) -> Certificate:
+    return Certificate(M, float("inf"), float("inf"), dmin if has_delta else None, G, False, reason,
+                       False, np.full(3, np.nan), R)
+

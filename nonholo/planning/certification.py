@@ -1,0 +1,77 @@
+"""Certifying a converged plan (:mod:`nonholo.certify`), correcting it where that is all it needs.
+
+A plan converged on the planner's grid ends within ``tol`` of the goal *on that grid*; its
+physical controls, replayed accurately, may end a discretisation error away (for strategy
+``"robust"`` the grid is that of the frame system, and the physical inputs ``u = W(R) w``
+follow the planner's nodes). When the certified replay is accurate and well conditioned
+but misses the goal by more than ``tol`` allows, :func:`certify` corrects the control with
+the planner's own Jacobian: ``λ ← λ − J^# l_T`` with ``l_T`` the *replay's* terminal
+error — a Newton step on the replayed endpoint map, whose derivative differs from the
+planner's ``J`` by the relative discretisation error, so each correction shrinks the
+error by about that factor. At most :data:`MAX_CORRECTIONS`; one that does not halve the
+replay's error ends the corrections.
+"""
+from __future__ import annotations
+
+from dataclasses import replace
+
+from .. import certify as replay_certificate
+from .. import kernels
+from ..certify import Certificate
+from ..replay import FrameControls
+from .core import Evaluation, Options, Outcome, Problem, step_scale
+
+#: Newton corrections on the replayed endpoint at most.
+MAX_CORRECTIONS = 4
+
+
+def physical(problem: Problem, ev: Evaluation):
+    """The physical inputs of ``ev``'s control: the control itself, or for a plan in frame
+    coordinates the :class:`~nonholo.replay.FrameControls` along ``ev``'s nodes."""
+    if not problem.frame:
+        return ev.controls
+    return FrameControls(ev.controls, problem.R0, problem.mechanism, problem.steps, nodes=ev.R)
+
+
+def certify(problem: Problem, ev: Evaluation, options: Options) -> tuple[Evaluation, Certificate, int]:
+    """The certificate of the converged (complete) ``ev``, after corrections where they
+    help (see the module). Returns ``(evaluation, certificate, corrections)``: the
+    evaluation the certificate belongs to, which is ``ev`` unless corrected."""
+    mech = problem.mechanism
+    G = replay_certificate.sensitivity(problem.R0, physical(problem, ev), problem.T, mech, problem.steps)
+
+    def measure(ev: Evaluation, steps: int) -> Certificate:
+        return replay_certificate.measure(problem.R0, problem.Rd, problem.T, mech, physical(problem, ev),
+                                          steps, options.tol, options.delta_min, problem.sign, G)
+
+    cert = measure(ev, 2 * problem.steps)
+    corrections = 0
+    while not cert.passed and cert.correctable and corrections < MAX_CORRECTIONS:
+        d = kernels.min_norm_step(ev.J, cert.l, step_scale(problem, ev.parametrisation))
+        trial = problem.evaluate(ev.params - d)
+        if not problem.admissible(trial):
+            break
+        trial_cert = measure(trial, cert.replay_steps)
+        if not trial_cert.terminal_error < 0.5 * cert.terminal_error:
+            break
+        ev, cert = trial, trial_cert
+        corrections += 1
+    return ev, cert, corrections
+
+
+def certified(outcome: Outcome, problem: Problem, options: Options) -> Outcome:
+    """``outcome`` (a success without a certificate) certified: with its certificate and the
+    evaluation it belongs to, or turned into a failure whose reason says why."""
+    prob = outcome.problem if outcome.problem is not None else problem
+    ev, cert, corrections = certify(prob, outcome.evaluation, options)
+    if not cert.passed:
+        return replace(outcome, success=False,
+                       reason=f"{outcome.reason} on the planner's grid, but not certified: {cert.reason}")
+    return replace(outcome, evaluation=ev, certificate=cert, reason=outcome.reason + note(cert, corrections))
+
+
+def note(cert: Certificate, corrections: int) -> str:
+    """What a success's reason says of its certificate."""
+    fixed = f" after {corrections} correction{'s' * (corrections > 1)}" if corrections else ""
+    return (f"; certified{fixed}: the physical replay ({cert.replay_steps} steps) ends "
+            f"{cert.terminal_error:.2g} rad from the goal, error bound {cert.error_bound:.2g} rad")
