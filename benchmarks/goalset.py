@@ -67,6 +67,7 @@ import argparse
 import json
 import sys
 import time
+import zlib
 from pathlib import Path
 
 import numpy as np
@@ -118,6 +119,35 @@ def _random_rotation(rng: np.random.Generator) -> np.ndarray:
         [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
         [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)],
     ])
+
+
+#: Distance bands (rad) of the uniform random pairs (:func:`uniform_pairs`).
+UNIFORM_BANDS = {"0-1": (0.0, 1.0), "1-1.8": (1.0, 1.8), "1.8-pi": (1.8, np.pi + 1e-12)}
+#: The uniform random pairs keep ``|Δ| ≥`` this at both ends.
+UNIFORM_MIN_DELTA = 0.05
+
+
+def uniform_pairs(mechanism, count: int, seed: int = SEED, min_delta: float = UNIFORM_MIN_DELTA) -> list[dict]:
+    """``count`` pairs ``(R0, Rd)`` drawn independently and uniformly (Haar) from SO(3) and
+    kept when, for a mechanism with a singular set, ``Δ`` has the same sign at both ends
+    and ``|Δ| ≥ min_delta`` there — the whole problem domain of a planner, every pair
+    reachable (same component). ``T = 1``; ``band``: the distance band
+    (:data:`UNIFORM_BANDS`). The stream depends only on ``seed`` and the mechanism's name.
+    """
+    mech = catalog.get(mechanism)
+    rng = np.random.default_rng([seed, 3, zlib.crc32(mech.name.encode())])
+    out = []
+    while len(out) < count:
+        A, B = _random_rotation(rng), _random_rotation(rng)
+        if mech.has_singular_set:
+            dA, dB = float(mech.delta(A)), float(mech.delta(B))
+            if np.sign(dA) != np.sign(dB) or min(abs(dA), abs(dB)) < min_delta:
+                continue
+        dist = so3.distance(A, B)
+        band = next(b for b, (lo, hi) in UNIFORM_BANDS.items() if lo <= dist < hi)
+        out.append({"id": f"uniform-{mech.name}-{len(out):04d}", "band": band, "R0": A, "Rd": B,
+                    "T": T, "distance": dist})
+    return out
 
 
 def _random_axis(rng: np.random.Generator) -> np.ndarray:

@@ -33,7 +33,6 @@ from dataclasses import dataclass
 import numpy as np
 
 from . import kernels, stages
-from .simulation import SingularTrajectoryError, variational
 
 #: Factor on the asymptotic Richardson estimate ``|R_M − R_{M/2}|/15`` of the error of ``R_M``.
 SAFETY = 2.0
@@ -77,15 +76,16 @@ class Certificate:
         return self.terminal_error + self.error_bound
 
 
-def replay(R0, par, T: float, mechanism, steps: int, sign: float = 1.0):
+def replay(R0, par, T: float, mechanism, steps: int, sign: float = 1.0, U=None):
     """The physical inputs ``par`` (controls or :class:`~nonholo.replay.FrameControls`)
-    replayed on ``dR/dt = [L(R) u] R`` from ``R0`` with ``steps`` CF4 steps.
+    replayed on ``dR/dt = [L(R) u] R`` from ``R0`` with ``steps`` CF4 steps (``U``: their
+    stage table, if already known).
 
     Returns ``(R, done, min_delta)``: the nodes ``(steps + 1, 3, 3)``, the steps completed
     (fewer where the angular velocity became non-finite) and the least ``sign·Δ`` over the
     evaluation points.
     """
-    U = np.ascontiguousarray(stages.stage_table(par, steps))
+    U = np.ascontiguousarray(stages.stage_table(par, steps) if U is None else U)
     Rs = np.empty((steps + 1, 3, 3))
     done, dmin, _ = mechanism.kernels(frame=False).forward(
         np.ascontiguousarray(R0, dtype=float), U, T / steps, sign, -np.inf, Rs)
@@ -98,51 +98,71 @@ def richardson(R_fine: np.ndarray, R_coarse: np.ndarray) -> float:
     return SAFETY * float(kernels.log_error(np.ascontiguousarray(R_fine), np.ascontiguousarray(R_coarse))[1]) / 15.0
 
 
-def sensitivity(R0, par, T: float, mechanism, steps: int) -> float:
+def sensitivity(R0, par, T: float, mechanism, steps: int, U=None) -> float:
     """``G = max_n |Φ(T, t_n)|_F`` of the physical system along ``par``'s motion:
     the amplification of a perturbation at ``t_n`` by ``T`` (``inf`` if the replay runs
     into ``Δ = 0``).
 
-    :func:`nonholo.simulation.variational` with ``steps/2`` CF4 steps when ``steps`` is
+    The variational system of the physical inputs (as :func:`nonholo.simulation.variational`) with ``steps/2`` CF4 steps when ``steps`` is
     even (and the controls allow it), ``steps`` otherwise: for frame controls whose nodes
     are those of ``steps`` steps every stage time is then a node, where ``u = W(R_n)
     w(t_n)`` needs no partial step, and ``Φ`` is taken on every other node — close to the
     maximum over all nodes, at a fraction of the cost (``tests/test_certify.py`` checks
-    it against all nodes).
+    it against all nodes). ``U``: the stage table of ``2·steps`` steps, if known.
     """
     try:
         coarse = stages.check_steps(par, steps // 2) if steps % 2 == 0 else steps
     except ValueError:
         coarse = steps
-    try:
-        var = variational(R0, par, T, mechanism=mechanism, steps=coarse)
-    except SingularTrajectoryError:
+    if U is None:
+        U = stages.stage_table(par, coarse)
+    else:
+        U = stages.halve(U)
+        U = U if coarse == steps else stages.halve(U)
+    kern = mechanism.kernels(frame=False)
+    m = mechanism.n_inputs
+    R = np.ascontiguousarray(R0, dtype=float)
+    sign = float(np.sign(mechanism.delta(R))) if mechanism.has_singular_set else 1.0
+    Rs, Zs = np.empty((coarse + 1, 3, 3)), np.empty((coarse + 1, 3, 3))
+    n, _, _ = kern.forward_variational(R, np.ascontiguousarray(U), T / coarse, sign, 0.0, _NO_INDEX,
+                                       np.zeros((coarse, 3, 0)), 0, 0, Rs, Zs, np.empty((3, 0)),
+                                       np.empty((3, 3)), np.empty((0, 3 * m)), True)
+    if n < coarse:
         return float("inf")
-    G = float(np.sqrt(np.max(np.sum(var.Phi ** 2, axis=(1, 2)))))
+    with np.errstate(all="ignore"):
+        Phi = np.linalg.solve(Zs[-1], Zs.transpose(1, 0, 2).reshape(3, -1))   # Φ(T, t_n) side by side
+        G = float(np.sqrt(np.max(np.sum(Phi.reshape(3, -1, 3) ** 2, axis=(0, 2)))))
     return G if np.isfinite(G) else float("inf")
 
 
+_NO_INDEX = np.zeros((0, 3, 0), np.int64)
+
+
 def measure(R0, Rd, T: float, mechanism, par, steps: int, tol: float, delta_min: float,
-            sign: float = 1.0, G: float | None = None) -> Certificate:
+            sign: float = 1.0, G: float | None = None, R_half=None) -> Certificate:
     """The certificate of the physical controls ``par`` (see the module): replays on
     ``steps/2``·2ᵏ and ``steps``·2ᵏ CF4 steps, ``k`` the least with an error estimate
     below ``ERROR_FRACTION · tol`` (``steps`` must be even and a multiple of the controls'
     grid and of a :class:`~nonholo.replay.FrameControls`' steps). ``G``: the sensitivity,
-    if already known."""
-    if G is None:
-        G = sensitivity(R0, par, T, mechanism, getattr(par, "steps", steps))
+    ``R_half``: the endpoint of the ``steps/2`` replay, if already known."""
     has_delta = mechanism.has_singular_set
     M = steps
-    R_half, done, _ = replay(R0, par, T, mechanism, M // 2, sign)
+    U = np.ascontiguousarray(stages.stage_table(par, M))
+    if G is None:
+        G = sensitivity(R0, par, T, mechanism, M // 2, U)
+    if R_half is None:
+        R_half = replay(R0, par, T, mechanism, M // 2, sign, stages.halve(U))[0][-1]
     while True:
-        R, done, dmin = replay(R0, par, T, mechanism, M, sign)
+        if U is None:
+            U = np.ascontiguousarray(stages.stage_table(par, M))
+        R, done, dmin = replay(R0, par, T, mechanism, M, sign, U)
         if done < M:
             return _failed(M, G, R, has_delta, dmin, f"the physical replay ({M} steps) produced a "
                            f"non-finite angular velocity at t ≈ {done * T / M:.4g} s")
-        est = richardson(R[-1], R_half[-1])
+        est = richardson(R[-1], R_half)
         if not est > ERROR_FRACTION * tol or 2 * M > MAX_REPLAY_STEPS:
             break
-        R_half, M = R, 2 * M
+        R_half, M, U = R[-1], 2 * M, None
     l, err = kernels.log_error(R[-1], np.ascontiguousarray(Rd, dtype=float))
     err = float(err)
     bound = est + G * REPLAY_PERTURBATION

@@ -122,10 +122,16 @@ class FrameControls:
             Wst = self.frame(np.concatenate([tk, tk + 0.5 * s, t])).reshape(3, n_t, m).transpose(1, 0, 2)
             Wst = np.ascontiguousarray(Wst)
         w_end = Wst[:, 2] if w_end is None else np.ascontiguousarray(w_end, dtype=float).reshape(n_t, m)
+        return self._inputs(k, s, Wst, w_end)
+
+    def _inputs(self, k, s, Wst, w_end):
+        """``(R, u)`` at ``t_k + s`` (node ``k``, offsets ``s``) from the frame inputs ``Wst``
+        of the partial steps and ``w_end`` at the samples."""
+        n_t, m = k.size, self.n_inputs
         Rt = np.empty((n_t, 3, 3))
         u = np.empty((n_t, m))
-        self.mechanism.kernels(frame=True).frame_inputs(self.nodes, k, s, Wst, np.ascontiguousarray(w_end),
-                                                        Rt, u)
+        self.mechanism.kernels(frame=True).frame_inputs(self.nodes, k, s, np.ascontiguousarray(Wst),
+                                                        np.ascontiguousarray(w_end), Rt, u)
         return Rt, u
 
     def __call__(self, t):
@@ -145,9 +151,26 @@ class FrameControls:
         """The physical inputs at the stage times of ``steps`` steps (grid controls: the
         step's own value at its end), for :func:`nonholo.stages.stage_table`."""
         steps = stages.check_steps(self.frame, steps)
+        if isinstance(self.frame, Fourier) and steps % self.steps == 0:
+            return self._aligned_stage_table(steps)
         t = stages.stage_times(self.T, steps).ravel()
         w_end = stages.stage_table(self.frame, steps).reshape(-1, self.n_inputs)
         return self._evaluate(t, w_end)[1].reshape(steps, 3, self.n_inputs)
+
+    def _aligned_stage_table(self, steps: int) -> np.ndarray:
+        """:meth:`stage_table` for Fourier frame controls and ``steps`` a multiple ``r`` of
+        the nodes' steps: every time a partial step needs ``w`` at — its start (a node),
+        middle and end — is a multiple of ``T/(4·steps)``, so ``w`` is evaluated once on that
+        grid (the stage table of ``2·steps`` steps, a cached basis) and indexed."""
+        m, r = self.n_inputs, steps // self.steps
+        fine = stages.stage_table(self.frame, 2 * steps)                 # w at i·T/(4·steps)
+        grid = np.concatenate([fine[:, :2].reshape(-1, m), fine[-1:, 2]])
+        i_t = (4 * np.arange(steps)[:, None] + 2 * np.arange(3)[None, :]).ravel()
+        k = np.minimum(i_t // (4 * r), self.steps)
+        i_k = 4 * r * k
+        s = (i_t - i_k) * (self.T / (4 * steps))
+        Wst = np.stack([grid[i_k], grid[(i_k + i_t) // 2], grid[i_t]], axis=1)
+        return self._inputs(k, s, Wst, Wst[:, 2])[1].reshape(steps, 3, m)
 
     def to_dict(self) -> dict:
         return {"kind": self.kind, "T": self.T, "mechanism": self.mechanism.name, "steps": self.steps,

@@ -593,7 +593,7 @@ class _Validation:
         _number(v, "min_delta", null=True)
         if r.replay_steps is not None:
             M = _integer(v, "replay_steps", 2)
-            if M % (2 * r.steps):
+            if M % r.steps or M % 2:
                 _fail("replay_steps", f"({M}) must be an even multiple of steps ({r.steps})")
             if r.error_bound is None:
                 _fail("error_bound", "is null, but the plan has a certified replay (replay_steps)")
@@ -724,7 +724,8 @@ class _Validation:
             if n != r.steps + 1:
                 _fail("replay_steps", f"is set, but the trajectory stops at t = {r.t[-1]:.6g} s < T")
             M = r.replay_steps
-            R_M, done, dmin = certify.replay(r.R0, par, r.T, mech, M, self.sign)
+            U = np.ascontiguousarray(stages.stage_table(par, M))
+            R_M, done, dmin = certify.replay(r.R0, par, r.T, mech, M, self.sign, U)
             Rs = R_M[::M // r.steps]
             done //= M // r.steps
         else:
@@ -746,7 +747,7 @@ class _Validation:
                        f"(tolerance {REPLAY_TOL:g})")
         self.dmin = float(dmin)
         if r.replay_steps is not None:
-            R_half = certify.replay(r.R0, par, r.T, mech, M // 2, self.sign)[0]
+            R_half = certify.replay(r.R0, par, r.T, mech, M // 2, self.sign, stages.halve(U))[0]
             est = certify.richardson(R_M[-1], R_half[-1])
             if not r.error_bound >= est * (1.0 - 1e-9):
                 _fail("error_bound", f"({r.error_bound:.3g}) is below the replay's own error "

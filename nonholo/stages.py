@@ -169,3 +169,24 @@ def stage_function(controls, steps: int):
 
         return fill
     raise ValueError(f"{type(controls).__name__} is not linear in its parameters: no stage function")
+
+
+def halve(U: np.ndarray) -> np.ndarray:
+    """The stage table of ``steps/2`` steps from that of ``steps`` (even): every stage time
+    of a coarse step is a node of the fine grid, ``[U[2n, 0], U[2n, 2], U[2n+1, 2]]`` (for
+    grid controls, whose cells hold whole coarse steps, all three are the step's value)."""
+    return np.ascontiguousarray(np.stack([U[0::2, 0], U[0::2, 2], U[1::2, 2]], axis=1))
+
+
+class Tabulated:
+    """Inputs known at the stage times of one grid of ``steps`` steps on ``[0, T]``: their
+    stage table ``U`` (``(steps, 3, m)``), for the integrator of that grid."""
+
+    def __init__(self, T: float, U: np.ndarray):
+        self.T = T
+        self.U = U
+
+    def stage_table(self, steps: int) -> np.ndarray:
+        if steps != self.U.shape[0]:
+            raise ValueError(f"the inputs are tabulated for {self.U.shape[0]} steps, not {steps}")
+        return self.U

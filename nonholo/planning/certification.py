@@ -38,20 +38,28 @@ def certify(problem: Problem, ev: Evaluation, options: Options) -> tuple[Evaluat
     help (see the module). Returns ``(evaluation, certificate, corrections)``: the
     evaluation the certificate belongs to, which is ``ev`` unless corrected."""
     mech = problem.mechanism
-    G = replay_certificate.sensitivity(problem.R0, physical(problem, ev), problem.T, mech, problem.steps)
 
-    def measure(ev: Evaluation, steps: int) -> Certificate:
+    def measure(ev: Evaluation, steps: int, G=None) -> Certificate:
+        # planned in the physical inputs: the planner's trajectory is the replay on steps/2
+        half = ev.R[-1] if not problem.frame and steps == 2 * problem.steps else None
         return replay_certificate.measure(problem.R0, problem.Rd, problem.T, mech, physical(problem, ev),
-                                          steps, options.tol, options.delta_min, problem.sign, G)
+                                          steps, options.tol, options.delta_min, problem.sign, G, half)
 
-    cert = measure(ev, 2 * problem.steps)
+    # the first replays: on N and 2N steps (N: the planner's) when the planner's trajectory
+    # is the replay on N, else on N/2 and N where the controls allow it
+    N = problem.steps
+    grid = getattr(ev.parametrisation, "grid", None)
+    halves = N % 2 == 0 and (grid is None or (N // 2) % grid == 0)
+    first = N if problem.frame and halves else 2 * N
+    cert = measure(ev, first)
+    G = cert.sensitivity
     corrections = 0
     while not cert.passed and cert.correctable and corrections < MAX_CORRECTIONS:
         d = kernels.min_norm_step(ev.J, cert.l, step_scale(problem, ev.parametrisation))
         trial = problem.evaluate(ev.params - d)
         if not problem.admissible(trial):
             break
-        trial_cert = measure(trial, cert.replay_steps)
+        trial_cert = measure(trial, cert.replay_steps, G)
         if not trial_cert.terminal_error < 0.5 * cert.terminal_error:
             break
         ev, cert = trial, trial_cert
