@@ -114,6 +114,11 @@ def plan(R0, Rd, *, T: float = 1.0, method: str = "parametric", harmonics: int =
     - ``callback(record)``: called after each accepted iteration with the history record;
       returning a true value stops the run.
 
+    Success is certified (:mod:`nonholo.certify`): the returned physical controls, replayed
+    with an error bound, end within ``tol`` of ``Rd`` and keep ``|Δ| ≥ delta_min``; a
+    plan converged on the planner's grid that cannot be certified is corrected or fails
+    with the reason. The result's ``error_bound`` and ``replay_steps`` record it.
+
     Raises ``ValueError`` for bad input (``R0``/``Rd`` not rotations, ``Δ(R0) = 0``,
     ``T ≤ 0``, ``harmonics``/``grid``/``steps`` < 1, unknown method/strategy/mechanism, bad
     numerical options). A goal on or across the singular surface ``Δ = 0`` (or within

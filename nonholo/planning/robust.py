@@ -41,14 +41,16 @@ at every integrator point and lowers ``|l_T|`` — with these ingredients:
    (:func:`barrier_gradient`).
 4. **Accuracy.** After convergence the integrator's error at ``R(T)`` is estimated by
    Richardson (``N`` vs ``2N`` steps); above 1e-9 rad the grid is doubled (up to 6400
-   steps) and Newton steps re-converge (:meth:`RobustStrategy.refine`).
-5. **Conditioning.** The result reports ``sensitivity = max_t |Φ(T,t)|_F`` of the
+   steps) and Newton steps re-converge (:meth:`RobustStrategy.refine`). Then the plan is
+   certified (:mod:`nonholo.planning.certification`): its physical inputs are replayed,
+   corrected if the replay misses, and a plan that cannot be certified counts as a failed
+   attempt — the next initial guess is tried.
+5. **Conditioning.** The certificate carries ``sensitivity = max_t |Φ(T,t)|_F`` of the
    *physical* system along the plan (the factor by which an error at ``t`` is amplified
-   at ``T`` when ``u(t)`` is replayed open loop). Above about 100 an independent
-   re-simulation no longer reproduces ``R(T)`` reliably to 1e-8 rad, and refining the
-   integrator does not help: the open-loop replay itself is ill-conditioned. A converged
-   plan above :attr:`RobustStrategy.max_sensitivity` is kept only if no later attempt
-   converges to a better-conditioned one (then the reason says so).
+   at ``T`` when ``u(t)`` is replayed open loop). A certified plan above
+   :attr:`RobustStrategy.max_sensitivity` is kept only if no later attempt converges to a
+   better-conditioned one (then the reason says so); one too ill-conditioned for ``tol``
+   is not certified at all.
 
 What each ingredient buys, and the strategy's speed and success rates, are measured by
 ``python -m benchmarks.bench_robust`` (``benchmarks/results/bench_robust.md``; with
@@ -203,8 +205,8 @@ class RobustStrategy(Strategy):
     stall_ratio = 0.97
     #: random initial guesses after the deterministic ones
     random_guesses = 6
-    #: a converged plan whose physical sensitivity (:meth:`sensitivity`) exceeds this is
-    #: kept only if no later attempt converges to a better-conditioned one
+    #: a certified plan whose physical sensitivity (:func:`nonholo.certify.sensitivity`)
+    #: exceeds this is kept only if no later attempt converges to a better-conditioned one
     max_sensitivity = 100.0
 
     def frame(self, mechanism) -> bool:
