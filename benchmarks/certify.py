@@ -88,8 +88,14 @@ def _check(results, pairs, options) -> list[dict]:
         R_S, _ = verify.resimulate_rk4(R0, pars, T, mech, steps=S)
         R_2S, dmin = verify.resimulate_rk4(R0, pars, T, mech, steps=2 * S)
         for j, i in enumerate(idx):
-            out[i] = {"miss": verify.terminal_error(R_2S[j], pairs[i]["Rd"]),
-                      "checker": float(np.max(np.abs(R_2S[j] - R_S[j]))),
+            R = R_2S[j]
+            checker = float(np.max(np.abs(R - R_S[j])))
+            if not checker <= 1e-9:
+                # RK4 on this grid is not accurate enough (e.g. T = 1e4): DOP853 decides
+                r = results[i]
+                R = verify.resimulate(pairs[i]["R0"], r.controls, r.T, r.mechanism, r.breakpoints)
+                checker = None
+            out[i] = {"miss": verify.terminal_error(R, pairs[i]["Rd"]), "checker": checker,
                       "min_delta": None if dmin is None else float(dmin[j])}
     return out
 
@@ -146,7 +152,7 @@ def summary(rows: list[dict]) -> list[list]:
         miss = [r for r in ok if not r["miss"] <= MISS]
         near = [r for r in ok if has_delta and not r["min_delta"] >= _delta_min(label)]
         worst = max((r["miss"] for r in ok), default=None)
-        checker = max((r["checker"] for r in ok), default=None)
+        checker = max((r["checker"] for r in ok if r["checker"] is not None), default=None)
         bound = max((r["error_bound"] for r in ok), default=None)
         out.append([mech, label, len(rs), len(ok), f"{100 * len(ok) / len(rs):.1f} %", len(miss),
                     len(near), "—" if worst is None else f"{worst:.1e}",
@@ -253,7 +259,8 @@ def main(argv=None) -> None:
         f"steps, S ≥ {RK4_STEPS} aligned with the plan's steps). *misses*: the RK4 endpoint is "
         f"more than {MISS:g} rad from the goal; *near Δ = 0*: the RK4 nodes come closer than "
         "delta_min; *checker*: max |R_2S − R_S| (the check's own error scale); *error bound*: the "
-        "largest certified bound of the plans.")
+        "largest certified bound of the plans. Where the RK4 check's own error scale exceeds 1e-9 "
+        "(long horizons such as T = 1e4) DOP853 decides instead.")
     report.table(["mechanism", "options", "pairs", "claimed successes", "rate", "misses", "near Δ = 0",
                   "worst RK4 error [rad]", "max error bound", "checker", "median plan [ms]"],
                  summary(rows), ["l", "l", "r", "r", "r", "r", "r", "r", "r", "r", "r"])
