@@ -13,13 +13,15 @@ straddles a breakpoint) and bounds the error of the ``M``-step endpoint by
 doubling ``M`` until it is below ``ERROR_FRACTION · tol`` (at most :data:`MAX_REPLAY_STEPS`),
 plus what an error of :data:`REPLAY_PERTURBATION` rad anywhere along the motion (a careful
 independent replay's own accuracy) becomes at ``T`` under the *sensitivity*
-``G = max_t |Φ(T, t)|_F`` of the physical system along the motion (:func:`sensitivity`).
+``G = max_t |Φ(T, t)|_F`` of the physical system along the motion (:func:`sensitivity`,
+on grids refined until two agree: :func:`resolved_sensitivity`).
 A plan is certified when the replay's terminal error plus that bound is at most ``tol`` and
 the replay keeps ``sgnΔ ≥ delta_min`` at every point where it evaluates ``L``: then any
 accurate re-simulation of the returned controls ends within ``tol`` of the goal. An
 infinite ``G`` (the variational replay ran into ``Δ = 0``) or one so large that
 ``G · REPLAY_PERTURBATION`` alone exceeds ``tol`` makes a plan uncertifiable: its endpoint
-then depends on perturbations below any replay's accuracy.
+then depends on perturbations below any replay's accuracy. So does a ``G`` that no grid up
+to :data:`MAX_REPLAY_STEPS` resolves.
 
 :class:`Certificate` holds the numbers a :class:`~nonholo.result.PlanResult` stores
 (``replay_steps``, ``terminal_error``, ``error_bound``, ``min_delta``, ``sensitivity``);
@@ -43,6 +45,9 @@ MAX_REPLAY_STEPS = 204800
 #: Error (rad) anywhere along the motion that any replay may make — DOP853 at ``rtol =
 #: 1e-13`` — and that reaches ``T`` amplified by the sensitivity ``G``.
 REPLAY_PERTURBATION = 1e-13
+#: Sensitivities on grids a factor 2 apart agree (``Φ`` is resolved) when they differ by
+#: at most this fraction of the larger.
+SENSITIVITY_AGREEMENT = 0.25
 
 
 @dataclass(frozen=True)
@@ -98,41 +103,87 @@ def richardson(R_fine: np.ndarray, R_coarse: np.ndarray) -> float:
     return SAFETY * float(kernels.log_error(np.ascontiguousarray(R_fine), np.ascontiguousarray(R_coarse))[1]) / 15.0
 
 
-def sensitivity(R0, par, T: float, mechanism, steps: int, U=None) -> float:
-    """``G = max_n |Φ(T, t_n)|_F`` of the physical system along ``par``'s motion:
-    the amplification of a perturbation at ``t_n`` by ``T`` (``inf`` if the replay runs
-    into ``Δ = 0``).
-
-    The variational system of the physical inputs (as :func:`nonholo.simulation.variational`) with ``steps/2`` CF4 steps when ``steps`` is
-    even (and the controls allow it), ``steps`` otherwise: for frame controls whose nodes
-    are those of ``steps`` steps every stage time is then a node, where ``u = W(R_n)
-    w(t_n)`` needs no partial step, and ``Φ`` is taken on every other node — close to the
-    maximum over all nodes, at a fraction of the cost (``tests/test_certify.py`` checks
-    it against all nodes). ``U``: the stage table of ``2·steps`` steps, if known.
+def sensitivity(R0, par, T: float, mechanism, steps: int, U=None, sign: float | None = None):
+    """``(G, R_T)`` on one grid: ``G = max_n |Φ(T, t_n)|_F`` of the physical system along
+    ``par``'s motion (the amplification of a perturbation at ``t_n`` by ``T``; ``inf`` if
+    the variational replay runs into ``Δ = 0``) and the replay's endpoint ``R_T``, from the
+    variational system of the physical inputs (as :func:`nonholo.simulation.variational`)
+    on ``steps`` CF4 steps (``U``: their stage table, if known). The nodes of ``R`` are
+    those of :func:`replay` on the same steps. ``G`` is only as good as the grid resolves
+    ``Φ``, which may take a finer grid than ``R_T`` does: :func:`resolved_sensitivity`.
     """
-    try:
-        coarse = stages.check_steps(par, steps // 2) if steps % 2 == 0 else steps
-    except ValueError:
-        coarse = steps
     if U is None:
-        U = stages.stage_table(par, coarse)
-    else:
-        U = stages.halve(U)
-        U = U if coarse == steps else stages.halve(U)
+        U = stages.stage_table(par, steps)
     kern = mechanism.kernels(frame=False)
     m = mechanism.n_inputs
     R = np.ascontiguousarray(R0, dtype=float)
-    sign = float(np.sign(mechanism.delta(R))) if mechanism.has_singular_set else 1.0
-    Rs, Zs = np.empty((coarse + 1, 3, 3)), np.empty((coarse + 1, 3, 3))
-    n, _, _ = kern.forward_variational(R, np.ascontiguousarray(U), T / coarse, sign, 0.0, _NO_INDEX,
-                                       np.zeros((coarse, 3, 0)), 0, 0, Rs, Zs, np.empty((3, 0)),
+    if sign is None:
+        sign = float(np.sign(mechanism.delta(R))) if mechanism.has_singular_set else 1.0
+    Rs, Zs = np.empty((steps + 1, 3, 3)), np.empty((steps + 1, 3, 3))
+    n, _, _ = kern.forward_variational(R, np.ascontiguousarray(U), T / steps, sign, 0.0, _NO_INDEX,
+                                       np.zeros((steps, 3, 0)), 0, 0, Rs, Zs, np.empty((3, 0)),
                                        np.empty((3, 3)), np.empty((0, 3 * m)), True)
-    if n < coarse:
-        return float("inf")
+    if n < steps:
+        return float("inf"), None
     with np.errstate(all="ignore"):
         Phi = np.linalg.solve(Zs[-1], Zs.transpose(1, 0, 2).reshape(3, -1))   # Φ(T, t_n) side by side
         G = float(np.sqrt(np.max(np.sum(Phi.reshape(3, -1, 3) ** 2, axis=(0, 2)))))
-    return G if np.isfinite(G) else float("inf")
+    return (G if np.isfinite(G) else float("inf")), Rs[-1]
+
+
+def agree(G_coarse: float, G_fine: float) -> bool:
+    """Two sensitivities on grids a factor 2 apart agree: within :data:`SENSITIVITY_AGREEMENT`
+    of the larger."""
+    return abs(G_fine - G_coarse) <= SENSITIVITY_AGREEMENT * max(G_fine, G_coarse)
+
+
+def resolved_sensitivity(R0, par, T: float, mechanism, steps: int, U=None, sign: float | None = None,
+                         limit: float = np.inf):
+    """The sensitivity of ``par``'s motion resolved: ``G`` on ``steps/2`` and ``steps`` CF4
+    steps (``steps`` alone where the controls' grid forbids ``steps/2``), the grid doubled
+    until the last two agree (:func:`agree`) — a coarse grid can miss a fast growth of
+    ``Φ`` entirely (a motion near ``Δ = 0`` with large inputs: ``G`` 24 on 100 steps,
+    13 000 on 800) while its endpoint looks converged. Stops early when both exceed
+    ``limit`` (too ill-conditioned either way) or one is infinite, and at
+    :data:`MAX_REPLAY_STEPS`.
+
+    ``U``: the stage table of ``2·steps`` steps, if known. Returns ``(G, resolved, grids,
+    R_T)``: the larger of the last two, whether they agree (or exceed ``limit``), the
+    sensitivities by grid, and the endpoint of the ``steps``-step replay.
+    """
+    try:
+        first = stages.check_steps(par, steps // 2) if steps % 2 == 0 else steps
+    except ValueError:
+        first = steps
+    tables = {}
+    if U is not None:
+        tables[2 * steps] = U
+        tables[steps] = stages.halve(U)
+        if first != steps:
+            tables[first] = stages.halve(tables[steps])
+    grids: dict[int, float] = {}
+    R_T = None
+    k = first
+    while True:
+        G, R_k = sensitivity(R0, par, T, mechanism, k, tables.get(k), sign)
+        grids[k] = G
+        if k == steps:
+            R_T = R_k
+        if k == first and first != steps:
+            k *= 2
+            continue
+        Gs = list(grids.values())[-2:]
+        if len(Gs) < 2 or not np.isfinite(G):
+            done = not np.isfinite(G) or 2 * k > MAX_REPLAY_STEPS
+        else:
+            done = agree(*Gs) or min(Gs) > limit or 2 * k > MAX_REPLAY_STEPS
+        if done:
+            break
+        k *= 2
+    Gs = list(grids.values())[-2:]
+    G = max(Gs)
+    resolved = not np.isfinite(G) or (len(Gs) == 2 and (agree(*Gs) or min(Gs) > limit))
+    return G, resolved, grids, R_T
 
 
 _NO_INDEX = np.zeros((0, 3, 0), np.int64)
@@ -148,8 +199,12 @@ def measure(R0, Rd, T: float, mechanism, par, steps: int, tol: float, delta_min:
     has_delta = mechanism.has_singular_set
     M = steps
     U = np.ascontiguousarray(stages.stage_table(par, M))
+    resolved, grids = True, {}
     if G is None:
-        G = sensitivity(R0, par, T, mechanism, M // 2, U)
+        G, resolved, grids, R_T = resolved_sensitivity(
+            R0, par, T, mechanism, M // 2, U, sign, ERROR_FRACTION * tol / REPLAY_PERTURBATION)
+        if R_half is None:
+            R_half = R_T
     if R_half is None:
         R_half = replay(R0, par, T, mechanism, M // 2, sign, stages.halve(U))[0][-1]
     while True:
@@ -172,6 +227,10 @@ def measure(R0, Rd, T: float, mechanism, par, steps: int, tol: float, delta_min:
     if not np.isfinite(G):
         reason = ("the physical replay's sensitivity is infinite (its variational system ran into "
                   "Δ = 0): the endpoint cannot be certified")
+    elif not resolved:
+        found = ", ".join(f"{g:.3g} on {k} steps" for k, g in grids.items())
+        reason = (f"the physical replay's sensitivity max|Φ(T,t)| is not resolved ({found}): "
+                  f"the endpoint's conditioning is unknown")
     elif est > ERROR_FRACTION * tol:
         reason = (f"the replay's integration error is still ~{est:.2g} rad with {M} steps "
                   f"(the most certified: {MAX_REPLAY_STEPS}); more than {ERROR_FRACTION:g}·tol")

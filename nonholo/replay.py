@@ -31,8 +31,8 @@ class FrameControls:
     Evaluates like a control (``u = self(t)``, vectorised, physical units) and gives the
     integrator its stage table (:meth:`stage_table`), so
     :func:`nonholo.simulation.simulate` re-traces the motion in the physical system.
-    ``params``, ``metric`` and ``breakpoints`` are those of ``frame``; ``u`` is not
-    linear in the parameters.
+    ``params`` and ``metric`` are those of ``frame``; ``u`` is not linear in the
+    parameters; ``breakpoints`` are the nodes.
     """
 
     kind = "frame"
@@ -74,8 +74,12 @@ class FrameControls:
         return self.frame.n_inputs
 
     @property
-    def breakpoints(self) -> np.ndarray | None:
-        return self.frame.breakpoints
+    def breakpoints(self) -> np.ndarray:
+        """Where ``u`` or its derivative may jump: every node — the frame's breakpoints
+        are among them (``steps`` is a multiple of a grid), and ``R(t)`` is a different CF4
+        step on each side of a node, so ``du/dt`` jumps by ``O(h⁴)`` there: enough to cost
+        an adaptive integrator that steps across it its accuracy."""
+        return np.linspace(0.0, self.T, self.steps + 1)
 
     def metric(self) -> np.ndarray:
         """The L2 metric of the frame controls ``w`` (see :meth:`Controls.metric`)."""

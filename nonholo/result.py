@@ -115,7 +115,8 @@ class PlanResult:
 
     @property
     def breakpoints(self) -> np.ndarray | None:
-        """Times where the planned control may jump (for :func:`nonholo.verify.resimulate`)."""
+        """Times where the planned control or its derivative may jump (for
+        :func:`nonholo.verify.resimulate`: an adaptive integrator should not step across them)."""
         return self.parametrisation.breakpoints
 
     @property

@@ -116,7 +116,7 @@ def resimulate_path(R0, controls, T: float, mechanism="platform", breakpoints=No
             raise RuntimeError(f"DOP853 failed on [{a:g}, {b:g}]: {sol.message}")
         inside = grid[(grid >= a) & (grid <= b)]
         t = np.concatenate([sol.t, inside])
-        Y = np.concatenate([sol.y, sol.sol(inside).reshape(9, -1)], axis=1)
+        Y = sol.y if not inside.size else np.concatenate([sol.y, sol.sol(inside).reshape(9, -1)], axis=1)
         ts.append(t)
         Rs.append(Y.T.reshape(-1, 3, 3))
         y = sol.y[:, -1]

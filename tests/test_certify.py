@@ -2,16 +2,20 @@
 goal that an independent re-simulation of its physical controls does not reach."""
 from __future__ import annotations
 
+import json
+from pathlib import Path
+
 import numpy as np
 import pytest
 from conftest import example
 
 from benchmarks import goalset
-from nonholo import catalog, certify, planner, verify
+from nonholo import catalog, certify, planner, replay, verify
 from nonholo.planning.core import Outcome, Strategy
 from nonholo.simulation import variational
 
 MISS = 1e-8
+DATA = Path(__file__).parent / "data"
 
 
 def rk4_check(results, pairs, least=3200):
@@ -165,3 +169,71 @@ def test_rk4_check_agrees_with_dop853_and_batches():
     assert dmins[0] == pytest.approx(dmin, abs=1e-15)
     dop = verify.resimulate(R1, other.controls, 1.0, "platform", other.breakpoints)
     assert np.max(np.abs(batch[1] - dop)) < 1e-10
+
+
+def ill_conditioned_plan():
+    """Frame controls an earlier certificate passed: a motion near Δ = 0 with large inputs
+    (``benchmarks.goalset.uniform_pairs("platform", 1000)[301]``, nonparametric), and its goal."""
+    d = json.loads((DATA / "ill_conditioned_frame_plan.json").read_text())
+    return replay.from_dict(d), np.array(d["Rd"])
+
+
+def test_sensitivity_is_resolved_where_a_coarse_grid_misses_it():
+    """On 100 steps ``G`` is hundreds of times too small and the replays on 200 and 400 steps
+    agree to 1e-11: the resolved sensitivity agrees with a 32 times finer grid's, and the
+    plan is not certified for tol = 1e-10."""
+    par, Rd = ill_conditioned_plan()
+    mech = catalog.get("platform")
+    fine, _ = certify.sensitivity(par.R0, par, par.T, mech, 6400)
+    coarse, _ = certify.sensitivity(par.R0, par, par.T, mech, 100)
+    assert coarse < fine / 100
+    G, resolved, grids, _ = certify.resolved_sensitivity(par.R0, par, par.T, mech, 200)
+    assert resolved and G == pytest.approx(fine, rel=certify.SENSITIVITY_AGREEMENT)
+    assert min(grids) == 100 and max(grids) > 200
+    sign = float(np.sign(mech.delta(par.R0)))
+    cert = certify.measure(par.R0, Rd, par.T, mech, par, 400, 1e-10, 1e-2, sign)
+    assert not cert.passed and "ill-conditioned" in cert.reason
+    assert cert.sensitivity >= 10 * coarse      # the finer grids', not the coarse one
+
+
+def test_unresolved_sensitivity_is_not_certified():
+    """A sensitivity no grid up to the finest replay resolves leaves the plan uncertified."""
+    par, Rd = ill_conditioned_plan()
+    mech = catalog.get("platform")
+    sign = float(np.sign(mech.delta(par.R0)))
+    old = certify.MAX_REPLAY_STEPS
+    try:
+        certify.MAX_REPLAY_STEPS = 400          # the grids 100, 200, 400 never agree
+        cert = certify.measure(par.R0, Rd, par.T, mech, par, 400, 1e-3, 1e-2, sign)
+    finally:
+        certify.MAX_REPLAY_STEPS = old
+    assert not cert.passed and "not resolved" in cert.reason
+
+
+def test_uniform_pair_certified_with_a_resolved_sensitivity():
+    """The pair whose earlier plan was certified with ``G`` = 24 (truth 13 000): whatever
+    the planner returns now carries the sensitivity of a 16 times finer grid, and reaches
+    the goal in an adaptive re-simulation."""
+    p = goalset.uniform_pairs("platform", 1000)[301]
+    res = planner.plan(p["R0"], p["Rd"], method="nonparametric")
+    if not res.success:
+        return
+    fine, _ = certify.sensitivity(p["R0"], res.parametrisation, res.T, catalog.get("platform"),
+                                  16 * res.replay_steps)
+    assert res.sensitivity == pytest.approx(fine, rel=certify.SENSITIVITY_AGREEMENT)
+    RT = verify.resimulate(p["R0"], res.controls, res.T, "platform", res.breakpoints)
+    assert verify.terminal_error(RT, p["Rd"]) <= res.options["tol"]
+
+
+def test_frame_controls_break_at_their_nodes():
+    """``du/dt`` jumps at the nodes of frame controls: DOP853 stopping there (the result's
+    ``breakpoints``) agrees with a fine RK4 to 1e-11; across them it does not."""
+    p = goalset.uniform_pairs("platform", 1000)[0]
+    res = planner.plan(p["R0"], p["Rd"])
+    nodes = np.linspace(0.0, res.T, res.parametrisation.steps + 1)
+    assert np.all(np.isin(nodes, res.breakpoints))
+    rk4, _ = verify.resimulate_rk4(p["R0"], res.parametrisation, res.T, "platform", steps=51200)
+    dop = verify.resimulate(p["R0"], res.controls, res.T, "platform", res.breakpoints)
+    assert verify.terminal_error(dop, rk4) <= 1e-11
+    across = verify.resimulate(p["R0"], res.controls, res.T, "platform", breakpoints=[0.0, res.T])
+    assert verify.terminal_error(across, rk4) > 1e-11
