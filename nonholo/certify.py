@@ -74,6 +74,14 @@ class Certificate:
     correctable: bool
     l: np.ndarray
     R: np.ndarray
+    U: np.ndarray | None = None
+
+    def inputs_at(self, steps: int) -> np.ndarray:
+        """The replayed inputs ``u(t_n)`` at the ``steps + 1`` points ``t_n = nT/steps``
+        (``steps`` dividing :attr:`replay_steps`), from the replay's stage table: each
+        node's start-of-step value, the last step's end value at ``T``."""
+        r = self.replay_steps // steps
+        return np.concatenate([self.U[::r, 0], self.U[-1:, 2]])
 
     @property
     def certified_error(self) -> float:
@@ -201,10 +209,20 @@ def measure(R0, Rd, T: float, mechanism, par, steps: int, tol: float, delta_min:
     U = np.ascontiguousarray(stages.stage_table(par, M))
     resolved, grids = True, {}
     if G is None:
-        G, resolved, grids, R_T = resolved_sensitivity(
-            R0, par, T, mechanism, M // 2, U, sign, ERROR_FRACTION * tol / REPLAY_PERTURBATION)
-        if R_half is None:
-            R_half = R_T
+        # on M/8 and M/4 steps where the controls allow it (cheap; the replay on M/2 then
+        # comes from the forward kernel), else on M/4 and M/2 or M/2 and M
+        try:
+            quarter = M % 4 == 0 and stages.check_steps(par, M // 4) == M // 4
+        except ValueError:
+            quarter = False
+        limit = ERROR_FRACTION * tol / REPLAY_PERTURBATION
+        if quarter:
+            G, resolved, grids, _ = resolved_sensitivity(R0, par, T, mechanism, M // 4, stages.halve(U),
+                                                         sign, limit)
+        else:
+            G, resolved, grids, R_T = resolved_sensitivity(R0, par, T, mechanism, M // 2, U, sign, limit)
+            if R_half is None:
+                R_half = R_T
     if R_half is None:
         R_half = replay(R0, par, T, mechanism, M // 2, sign, stages.halve(U))[0][-1]
     while True:
@@ -244,7 +262,7 @@ def measure(R0, Rd, T: float, mechanism, par, steps: int, tol: float, delta_min:
         reason = (f"the physical replay ({M} steps) ends {err:.3g} rad from the goal "
                   f"(+ error bound {bound:.2g} > tol = {tol:g})")
         correctable = True
-    return Certificate(M, err, bound, dmin, G, not reason, reason, correctable, l, R)
+    return Certificate(M, err, bound, dmin, G, not reason, reason, correctable, l, R, U)
 
 
 def _failed(M, G, R, has_delta, dmin, reason) -> Certificate:

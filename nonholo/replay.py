@@ -10,9 +10,11 @@ velocities and ``w(t)`` — a :class:`~nonholo.controls.Fourier` or
 """
 from __future__ import annotations
 
+from functools import lru_cache
+
 import numpy as np
 
-from . import catalog, so3, stages
+from . import catalog, so3, stages, stitched
 from .checks import check_times
 from .controls import Controls, Fourier, PiecewiseConstant
 from .controls import from_dict as controls_from_dict
@@ -72,6 +74,11 @@ class FrameControls:
     @property
     def n_inputs(self) -> int:
         return self.frame.n_inputs
+
+    @property
+    def grid(self) -> int | None:
+        """The frame's grid (grid controls), else ``None``: steps must be a multiple of it."""
+        return getattr(self.frame, "grid", None)
 
     @property
     def breakpoints(self) -> np.ndarray:
@@ -166,15 +173,12 @@ class FrameControls:
         the nodes' steps: every time a partial step needs ``w`` at — its start (a node),
         middle and end — is a multiple of ``T/(4·steps)``, so ``w`` is evaluated once on that
         grid (the stage table of ``2·steps`` steps, a cached basis) and indexed."""
-        m, r = self.n_inputs, steps // self.steps
+        m = self.n_inputs
         fine = stages.stage_table(self.frame, 2 * steps)                 # w at i·T/(4·steps)
         grid = np.concatenate([fine[:, :2].reshape(-1, m), fine[-1:, 2]])
-        i_t = (4 * np.arange(steps)[:, None] + 2 * np.arange(3)[None, :]).ravel()
-        k = np.minimum(i_t // (4 * r), self.steps)
-        i_k = 4 * r * k
-        s = (i_t - i_k) * (self.T / (4 * steps))
-        Wst = np.stack([grid[i_k], grid[(i_k + i_t) // 2], grid[i_t]], axis=1)
-        return self._inputs(k, s, Wst, Wst[:, 2])[1].reshape(steps, 3, m)
+        k, quarters, gather = _aligned_indices(steps, self.steps)
+        Wst = grid[gather]                                               # (3·steps, 3, m)
+        return self._inputs(k, quarters * (self.T / (4 * steps)), Wst, Wst[:, 2])[1].reshape(steps, 3, m)
 
     def to_dict(self) -> dict:
         return {"kind": self.kind, "T": self.T, "mechanism": self.mechanism.name, "steps": self.steps,
@@ -191,9 +195,28 @@ class FrameControls:
                 f"{self.steps} steps)")
 
 
+@lru_cache(maxsize=16)
+def _aligned_indices(steps: int, nodes: int):
+    """For :meth:`FrameControls._aligned_stage_table`: per stage time ``i_t`` (in quarters
+    of the fine step), the node ``k`` below it, the offset from it in quarters, and the
+    indices of ``w`` at the partial step's start, middle and end in the quarter grid."""
+    r = steps // nodes
+    i_t = (4 * np.arange(steps)[:, None] + 2 * np.arange(3)[None, :]).ravel()
+    k = np.minimum(i_t // (4 * r), nodes)
+    i_k = 4 * r * k
+    gather = np.stack([i_k, (i_k + i_t) // 2, i_t], axis=1)
+    for a in (k, gather):
+        a.setflags(write=False)
+    quarters = (i_t - i_k).astype(float)
+    quarters.setflags(write=False)
+    return k, quarters, gather
+
+
 def from_dict(d: dict):
-    """Inverse of ``to_dict`` for a parametrisation (:func:`nonholo.controls.from_dict`) or
-    a :class:`FrameControls`."""
+    """Inverse of ``to_dict`` for a parametrisation (:func:`nonholo.controls.from_dict`), a
+    :class:`FrameControls` or a :class:`~nonholo.stitched.Stitched` of them."""
+    if d.get("kind") == stitched.Stitched.kind:
+        return stitched.from_dict(d, from_dict)
     if d.get("kind") == FrameControls.kind:
         return FrameControls(controls_from_dict(d["frame"]), d["R0"], d["mechanism"], d["steps"])
     return controls_from_dict(d)

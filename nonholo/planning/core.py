@@ -405,15 +405,20 @@ def build_result(request: Request, outcome: Outcome | None, success: bool, reaso
     R = ev.R if ev is not None else np.empty((0, 3, 3))
     terminal_error = None if ev is None else ev.error
     min_delta = None if ev is None else ev.min_delta
+    u = None
     if cert is not None:
         R = cert.R[::cert.replay_steps // n_steps]
         terminal_error, min_delta = cert.terminal_error, cert.min_delta
+        if cert.U is not None and getattr(par, "grid", None) is None:
+            # smooth controls: u(t_n) is the replay's stage value (grid controls: controls(t)
+            # decides which side of a jump a grid point's rounding falls on)
+            u = cert.inputs_at(n_steps)
     return PlanResult(
         success=success, reason=reason,
         terminal_error=terminal_error, min_delta=min_delta,
         iterations=0 if outcome is None else outcome.iterations,
         history=[] if outcome is None else outcome.history,
-        t=t, R=R, u=par(t).reshape(n, mech.n_inputs), delta=mech.delta_samples(R),
+        t=t, R=R, u=par(t).reshape(n, mech.n_inputs) if u is None else u, delta=mech.delta_samples(R),
         parametrisation=par, mechanism=mech.name, method=request.method, strategy=request.strategy,
         T=T, R0=request.R0, Rd=request.Rd, steps=n_steps,
         seconds=time.perf_counter() - request.started,
