@@ -1,0 +1,217 @@
+"""Paths of orientations through the start's component, clear of ``Δ = 0``: the skeleton of
+the global route (:mod:`nonholo.planning.route`).
+
+The Jacobian planner is local: from a far start it may find no control, though every goal
+with ``sgnΔ`` of the start is reachable (in the frame coordinates the admissible angular
+velocities span a plane whose bracket fills R³). A path of orientations whose hops are
+short and whose points keep well clear of ``Δ = 0`` splits such a problem into local ones.
+
+The path comes from a *roadmap* of the mechanism (:class:`Roadmap`, built once per
+mechanism and clearance and cached): :data:`ROADMAP_SAMPLES` Haar-uniform orientations
+(a fixed seed: the same roadmap, hence the same routes, in every process) with
+``|Δ| ≥ clearance``, each joined to its nearest neighbours (a k-d tree on unit
+quaternions) by the geodesic between them where every point of it, at
+:data:`RESOLUTION` rad, keeps ``sgnΔ ≥ clearance``. A query joins the start and the goal
+to the roadmap the same way (near them the clearance may drop to what the start and goal
+have: they may lie closer to ``Δ = 0`` than the roadmap), takes the shortest path
+(Dijkstra, :mod:`scipy.sparse.csgraph`), shortcuts it where a longer geodesic is clear,
+and cuts it into hops of at most ``max_hop`` rad along the geodesics. A mechanism without
+a singular set has the geodesic itself.
+
+Conventions: rotations are ``(n, 3, 3)`` matrices; distances are geodesic angles (rad).
+"""
+from __future__ import annotations
+
+from functools import lru_cache
+
+import numpy as np
+from scipy.sparse import coo_matrix
+from scipy.sparse.csgraph import dijkstra
+from scipy.spatial import cKDTree
+from scipy.spatial.transform import Rotation
+
+from . import catalog, so3
+
+#: Orientations sampled for a roadmap (before those too close to ``Δ = 0`` are dropped).
+ROADMAP_SAMPLES = 4000
+#: Seed of the roadmap's samples.
+ROADMAP_SEED = 20140901
+#: Nearest neighbours a roadmap node is joined to (where the geodesic is clear).
+NEIGHBOURS = 12
+#: Longest roadmap edge (rad).
+MAX_EDGE = 0.9
+#: Spacing (rad) of the points at which a geodesic's clearance is checked.
+RESOLUTION = 0.02
+#: The clearance of a roadmap by default: this quantile of ``|Δ|`` over SO(3).
+CLEARANCE_QUANTILE = 0.1
+#: Longest hop (rad) of a route by default.
+MAX_HOP = 0.6
+
+
+def geodesic(Ra, Rb, s) -> np.ndarray:
+    """``R(s) = exp(s·log(R_b R_aᵀ)) R_a`` for the fractions ``s`` (shape ``(n,)``): ``(n, 3, 3)``."""
+    a = Rotation.from_matrix(Ra)
+    v = (Rotation.from_matrix(Rb) * a.inv()).as_rotvec()
+    return (Rotation.from_rotvec(np.outer(np.asarray(s, dtype=float), v)) * a).as_matrix()
+
+
+def _angles(qa: np.ndarray, qb: np.ndarray) -> np.ndarray:
+    """Geodesic angles between unit quaternions (rows), ``2 arccos |qa·qb|``."""
+    return 2.0 * np.arccos(np.clip(np.abs(np.sum(qa * qb, axis=-1)), 0.0, 1.0))
+
+
+def _clear(mech, sign: float, Ra: np.ndarray, Rb: np.ndarray, level) -> np.ndarray:
+    """For each pair ``(Ra[e], Rb[e])``: ``sgnΔ ≥ level[e]`` at every checked point of the
+    geodesic between them (the ends included)."""
+    E = len(Ra)
+    if E == 0:
+        return np.zeros(0, dtype=bool)
+    a = Rotation.from_matrix(Ra)
+    v = (Rotation.from_matrix(Rb) * a.inv()).as_rotvec()
+    length = np.linalg.norm(v, axis=1)
+    S = int(np.ceil(length.max() / RESOLUTION)) + 1
+    s = np.linspace(0.0, 1.0, S)
+    pts = Rotation.from_rotvec((v[:, None, :] * s[None, :, None]).reshape(-1, 3)) * \
+        Rotation.from_matrix(np.repeat(Ra, S, axis=0))
+    d = sign * mech.delta_samples(pts.as_matrix()).reshape(E, S)
+    return np.all(d >= np.broadcast_to(np.asarray(level, dtype=float), (E,))[:, None], axis=1)
+
+
+class Roadmap:
+    """The roadmap of one mechanism at one clearance (see the module): ``R`` (nodes,
+    ``(n, 3, 3)``), ``sign`` (``sgnΔ`` of each), ``graph`` (sparse, edge lengths in rad)."""
+
+    def __init__(self, mechanism, clearance: float, samples: int = ROADMAP_SAMPLES, seed: int = ROADMAP_SEED):
+        mech = catalog.get(mechanism)
+        if not mech.has_singular_set:
+            raise ValueError(f"mechanism {mech.name!r} has no singular set: it needs no roadmap")
+        self.mechanism = mech
+        self.clearance = float(clearance)
+        rot = Rotation.random(samples, random_state=np.random.default_rng(seed))
+        R = rot.as_matrix()
+        d = mech.delta_samples(R)
+        keep = np.abs(d) >= self.clearance
+        self.R = R[keep]
+        self.q = rot.as_quat()[keep]
+        self.sign = np.sign(d[keep])
+        self.tree = cKDTree(np.concatenate([self.q, -self.q]))
+        n = len(self.R)
+        # candidate edges: nearest neighbours of the same sign, shorter than MAX_EDGE
+        _, idx = self.tree.query(self.q, k=2 * NEIGHBOURS + 1)
+        i = np.repeat(np.arange(n), idx.shape[1])
+        j = idx.ravel() % n
+        ok = (i < j) & (self.sign[i] == self.sign[j])
+        i, j = i[ok], j[ok]
+        pairs = np.unique(np.stack([i, j], axis=1), axis=0)
+        i, j = pairs[:, 0], pairs[:, 1]
+        length = _angles(self.q[i], self.q[j])
+        short = length <= MAX_EDGE
+        i, j, length = i[short], j[short], length[short]
+        clear = np.zeros(len(i), dtype=bool)
+        for s in (-1.0, 1.0):
+            m = self.sign[i] == s
+            clear[m] = _clear(mech, s, self.R[i[m]], self.R[j[m]], self.clearance)
+        i, j, length = i[clear], j[clear], length[clear]
+        self.edges = np.stack([i, j], axis=1)
+        self.lengths = length
+
+    def _graph(self, extra_i, extra_j, extra_len, size):
+        i = np.concatenate([self.edges[:, 0], extra_i])
+        j = np.concatenate([self.edges[:, 1], extra_j])
+        w = np.concatenate([self.lengths, extra_len])
+        return coo_matrix((w, (i, j)), shape=(size, size)).tocsr()
+
+    def _links(self, R, sign: float, level: float, node_index: int):
+        """Edges from ``R`` to its clear roadmap neighbours of the same sign."""
+        q = Rotation.from_matrix(R).as_quat()
+        n = len(self.R)
+        _, idx = self.tree.query(q, k=min(4 * NEIGHBOURS, 2 * n))
+        j = np.unique(np.asarray(idx).ravel() % n)
+        j = j[self.sign[j] == sign]
+        length = _angles(np.broadcast_to(q, (len(j), 4)), self.q[j])
+        j, length = j[length <= MAX_EDGE], length[length <= MAX_EDGE]
+        ok = _clear(self.mechanism, sign, np.broadcast_to(R, (len(j), 3, 3)), self.R[j], level)
+        return np.full(ok.sum(), node_index), j[ok], length[ok]
+
+    def path(self, R0, Rd, level: float) -> np.ndarray | None:
+        """The shortest roadmap path ``R0 → … → Rd`` (``(k, 3, 3)``, ends included) whose
+        links to the start and goal keep ``sgnΔ ≥ level``; ``None`` if none joins them."""
+        sign = float(np.sign(self.mechanism.delta(R0)))
+        n = len(self.R)
+        s_i, s_j, s_l = self._links(R0, sign, level, n)
+        g_i, g_j, g_l = self._links(Rd, sign, level, n + 1)
+        direct = _clear(self.mechanism, sign, R0[None], Rd[None], level)[0]
+        d_i, d_j, d_l = (np.array([n]), np.array([n + 1]), np.array([so3.distance(R0, Rd)])) if direct \
+            else (np.zeros(0, int), np.zeros(0, int), np.zeros(0))
+        graph = self._graph(np.concatenate([s_i, g_i, d_i]), np.concatenate([s_j, g_j, d_j]),
+                            np.concatenate([s_l, g_l, d_l]), n + 2)
+        dist, pred = dijkstra(graph, directed=False, indices=n, return_predecessors=True)
+        if not np.isfinite(dist[n + 1]):
+            return None
+        order = [n + 1]
+        while order[-1] != n:
+            order.append(pred[order[-1]])
+        nodes = np.concatenate([self.R, R0[None], Rd[None]])
+        return nodes[order[::-1]]
+
+
+@lru_cache(maxsize=8)
+def roadmap(mechanism, clearance: float) -> Roadmap:
+    """The cached :class:`Roadmap` of a mechanism (a :class:`~nonholo.mechanism.Mechanism`)."""
+    return Roadmap(mechanism, clearance)
+
+
+def default_clearance(mechanism) -> float:
+    """:data:`CLEARANCE_QUANTILE` of ``|Δ|`` over Haar-uniform orientations (fixed seed)."""
+    return _clearance(catalog.get(mechanism))
+
+
+@lru_cache(maxsize=8)
+def _clearance(mech) -> float:
+    R = Rotation.random(20000, random_state=np.random.default_rng(ROADMAP_SEED + 1)).as_matrix()
+    return float(np.quantile(np.abs(mech.delta_samples(R)), CLEARANCE_QUANTILE))
+
+
+def shortcut(mech, sign: float, path: np.ndarray, level: float) -> np.ndarray:
+    """``path`` with every waypoint dropped that a clear geodesic can skip (greedy, from the
+    start: the farthest waypoint reachable by a clear geodesic is the next)."""
+    out = [0]
+    while out[-1] != len(path) - 1:
+        a = out[-1]
+        js = np.arange(len(path) - 1, a, -1)
+        ok = _clear(mech, sign, np.broadcast_to(path[a], (len(js), 3, 3)), path[js], level)
+        out.append(int(js[np.argmax(ok)]) if ok.any() else a + 1)
+    return path[out]
+
+
+def subdivide(path: np.ndarray, max_hop: float) -> np.ndarray:
+    """``path`` with points inserted along its geodesics so that no hop exceeds ``max_hop``."""
+    out = [path[0]]
+    for Ra, Rb in zip(path[:-1], path[1:]):
+        k = max(1, int(np.ceil(so3.distance(Ra, Rb) / max_hop)))
+        out.extend(geodesic(Ra, Rb, np.arange(1, k + 1) / k))
+    return np.array(out)
+
+
+def orientation_path(mechanism, R0, Rd, *, delta_min: float = 1e-2, clearance: float | None = None,
+                     max_hop: float = MAX_HOP) -> np.ndarray | None:
+    """A path of orientations from ``R0`` to ``Rd`` in the start's component (see the
+    module): ``(k + 1, 3, 3)`` with ``R0`` first, ``Rd`` last and hops of at most
+    ``max_hop`` rad, every point of its geodesics with ``sgnΔ ≥ clearance`` (default
+    :func:`default_clearance`) but near the ends, where it may drop to what they have
+    (never below ``delta_min``). ``None`` if the roadmap joins no such path."""
+    mech = catalog.get(mechanism)
+    R0 = so3.check_rotation(R0, "R0")
+    Rd = so3.check_rotation(Rd, "Rd")
+    if not mech.has_singular_set:
+        return subdivide(np.stack([R0, Rd]), max_hop)
+    if clearance is None:
+        clearance = default_clearance(mech)
+    sign = float(np.sign(mech.delta(R0)))
+    if sign == 0.0 or np.sign(mech.delta(Rd)) != sign:
+        return None
+    level = max(delta_min, min(clearance, 0.9 * sign * float(mech.delta(R0)), 0.9 * sign * float(mech.delta(Rd))))
+    path = roadmap(mech, clearance).path(R0, Rd, level)
+    if path is None:
+        return None
+    return subdivide(shortcut(mech, sign, path, level), max_hop)

@@ -1,0 +1,122 @@
+"""The global route's parts: paths of orientations on the roadmap (nonholo/roadmap.py) and
+stitched controls (nonholo/stitched.py)."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from benchmarks import goalset
+from nonholo import catalog, planner, replay, roadmap, simulation, so3, stages, verify
+from nonholo.controls import Fourier
+from nonholo.stitched import Stitched
+
+
+def dense_delta(mech, path, step=0.005):
+    """``Δ`` along the geodesics of ``path``, every ``step`` rad (finer than the roadmap's check)."""
+    out = []
+    for Ra, Rb in zip(path[:-1], path[1:]):
+        k = max(2, int(np.ceil(so3.distance(Ra, Rb) / step)) + 1)
+        out.append(mech.delta_samples(roadmap.geodesic(Ra, Rb, np.linspace(0.0, 1.0, k))))
+    return np.concatenate(out)
+
+
+def test_geodesic_ends_and_constant_speed():
+    rng = np.random.default_rng(0)
+    Ra, Rb = so3.exp(rng.normal(size=3)), so3.exp(rng.normal(size=3))
+    R = roadmap.geodesic(Ra, Rb, [0.0, 0.25, 0.5, 1.0])
+    np.testing.assert_allclose(R[0], Ra, atol=1e-12)
+    np.testing.assert_allclose(R[-1], Rb, atol=1e-12)
+    d = so3.distance(Ra, Rb)
+    assert so3.distance(Ra, R[1]) == pytest.approx(0.25 * d, abs=1e-9)
+    assert so3.distance(R[2], Rb) == pytest.approx(0.5 * d, abs=1e-9)
+
+
+@pytest.mark.parametrize("mechanism", ["platform", "platform_raised"])
+def test_paths_stay_in_the_component_with_short_hops(mechanism):
+    """Every uniform pair of a slice gets a path: R0 first, Rd last, hops ≤ max_hop, and
+    Δ of the start's sign, never below delta_min, on a check five times finer."""
+    mech = catalog.get(mechanism)
+    for p in goalset.uniform_pairs(mechanism, 40):
+        path = roadmap.orientation_path(mech, p["R0"], p["Rd"], max_hop=0.6)
+        assert path is not None
+        np.testing.assert_array_equal(path[0], p["R0"])
+        np.testing.assert_allclose(path[-1], p["Rd"], atol=1e-12)
+        hops = [so3.distance(a, b) for a, b in zip(path[:-1], path[1:])]
+        assert max(hops) <= 0.6 + 1e-9
+        sign = np.sign(mech.delta(p["R0"]))
+        assert np.min(sign * dense_delta(mech, path)) >= 1e-2
+
+
+def test_across_the_singular_surface_there_is_no_path():
+    mech = catalog.get("platform")
+    p = goalset.uniform_pairs("platform", 1)[0]
+    R0 = np.asarray(p["R0"])
+    for R in (so3.from_rpy(0.3, 0.2, 0.1), so3.from_rpy(-0.4, 0.5, 0.2), so3.from_rpy(2.0, -0.3, 0.4)):
+        if np.sign(mech.delta(R)) != np.sign(mech.delta(R0)):
+            assert roadmap.orientation_path(mech, R0, R) is None
+            return
+    pytest.skip("no orientation of the other sign among the candidates")
+
+
+def test_roadmap_is_the_same_in_every_build():
+    mech = catalog.get("platform")
+    a = roadmap.Roadmap(mech, 0.1, samples=500)
+    b = roadmap.Roadmap(mech, 0.1, samples=500)
+    np.testing.assert_array_equal(a.R, b.R)
+    np.testing.assert_array_equal(a.edges, b.edges)
+    assert np.all(np.abs(mech.delta_samples(a.R)) >= 0.1)
+
+
+def test_without_a_singular_set_the_path_is_the_geodesic():
+    p = goalset.uniform_pairs("attitude", 1)[0]
+    path = roadmap.orientation_path("attitude", p["R0"], p["Rd"], max_hop=0.5)
+    d = so3.distance(p["R0"], p["Rd"])
+    assert len(path) - 1 == int(np.ceil(d / 0.5))
+    total = sum(so3.distance(a, b) for a, b in zip(path[:-1], path[1:]))
+    assert total == pytest.approx(d, abs=1e-9)
+
+
+def two_pieces():
+    """Two plans of Example-like hops, the second from where the first's replay ends."""
+    mech = catalog.get("platform")
+    p = goalset.uniform_pairs("platform", 3)[2]
+    path = roadmap.orientation_path(mech, p["R0"], p["Rd"], max_hop=0.6)
+    a = planner.plan(path[0], path[1], T=0.7)
+    b = planner.plan(a.R_T, path[2], T=0.4)
+    assert a.success and b.success, (a.reason, b.reason)
+    return mech, path, a, b
+
+
+def test_stitched_controls_retime_their_pieces():
+    """``u`` on slot i is the piece's, sped up by c_i = T_i/τ; a simulation of the
+    stitched control passes through each piece's end (driftless: re-timing keeps the path)."""
+    mech, path, a, b = two_pieces()
+    s = Stitched(2.0, [a.parametrisation, b.parametrisation], [path[0], path[1], path[2]])
+    assert s.slot == 1.0 and list(s.segment_times) == [0.0, 1.0, 2.0]
+    t = np.array([0.25, 0.5, 1.5, 1.75])
+    np.testing.assert_allclose(s(t[:2]), 0.7 * a.controls(0.7 * t[:2]), rtol=1e-12)
+    np.testing.assert_allclose(s(t[2:]), 0.4 * b.controls(0.4 * (t[2:] - 1.0)), rtol=1e-12)
+    # the integrator's table is the pieces' tables, scaled
+    U = stages.stage_table(s, 800)
+    np.testing.assert_allclose(U[:400], 0.7 * stages.stage_table(a.parametrisation, 400), rtol=1e-12)
+    tr = simulation.simulate(path[0], s, 2.0, mechanism=mech, steps=2 * a.replay_steps)
+    assert so3.distance(tr.R[a.replay_steps], a.R_T) < 1e-9
+    RT = verify.resimulate(path[0], s, 2.0, mech, s.breakpoints)
+    assert so3.distance(RT, b.R_T) < 1e-9
+
+
+def test_stitched_controls_round_trip_and_refuse_bad_input():
+    mech, path, a, b = two_pieces()
+    s = Stitched(2.0, [a.parametrisation, b.parametrisation], [path[0], path[1], path[2]])
+    back = replay.from_dict(s.to_dict())
+    assert back == s
+    t = np.linspace(0.0, 2.0, 41)
+    np.testing.assert_array_equal(back(t), s(t))
+    with pytest.raises(ValueError, match="waypoints"):
+        Stitched(2.0, [a.parametrisation], [path[0]])
+    with pytest.raises(ValueError, match="at least one piece"):
+        Stitched(2.0, [], [path[0]])
+    with pytest.raises(ValueError, match="inputs"):
+        Stitched(1.0, [a.parametrisation, Fourier(1.0, np.zeros((3, 5)))], path[:3])
+    with pytest.raises(ValueError, match="multiple"):
+        stages.stage_table(Stitched(2.0, [a.parametrisation, b.parametrisation], path[:3]), 3)
