@@ -241,7 +241,20 @@ def main(argv=None) -> None:
     ap.add_argument("--out", default="certify.md", help="file name in benchmarks/results/")
     ap.add_argument("--rows", help="also write every plan's row (JSON Lines) to this file")
     ap.add_argument("--rounds", type=int, default=5, help="timing rounds per revision (default 5)")
+    ap.add_argument("--timing-only", action="store_true",
+                    help="only the goals.json timing against --baseline (to certify_timing.md by default)")
     args = ap.parse_args(argv)
+    if args.timing_only:
+        if not args.baseline:
+            ap.error("--timing-only needs --baseline")
+        out = args.out if args.out != "certify.md" else "certify_timing.md"
+        report = Report(out, "Certified success: plan time against a baseline revision",
+                        "benchmarks.certify", argv)
+        started = time.perf_counter()
+        timing(report, args.baseline, args.rounds)
+        report.paragraph(f"Total time {time.perf_counter() - started:.0f} s.")
+        report.write()
+        return
     report = Report(args.out, "Certified success: claimed successes re-simulated independently",
                     "benchmarks.certify", argv)
     started = time.perf_counter()

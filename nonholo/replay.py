@@ -172,13 +172,16 @@ class FrameControls:
         """:meth:`stage_table` for Fourier frame controls and ``steps`` a multiple ``r`` of
         the nodes' steps: every time a partial step needs ``w`` at — its start (a node),
         middle and end — is a multiple of ``T/(4·steps)``, so ``w`` is evaluated once on that
-        grid (the stage table of ``2·steps`` steps, a cached basis) and indexed."""
+        grid (the stage table of ``2·steps`` steps, a cached basis) and indexed. ``w`` is
+        continuous, so a step's end value is the next step's start value: ``u`` is computed
+        at the ``2·steps + 1`` distinct stage times only."""
         m = self.n_inputs
         fine = stages.stage_table(self.frame, 2 * steps)                 # w at i·T/(4·steps)
         grid = np.concatenate([fine[:, :2].reshape(-1, m), fine[-1:, 2]])
-        k, quarters, gather = _aligned_indices(steps, self.steps)
-        Wst = grid[gather]                                               # (3·steps, 3, m)
-        return self._inputs(k, quarters * (self.T / (4 * steps)), Wst, Wst[:, 2])[1].reshape(steps, 3, m)
+        k, quarters, gather, expand = _aligned_indices(steps, self.steps)
+        Wst = grid[gather]                                               # (2·steps + 1, 3, m)
+        u = self._inputs(k, quarters * (self.T / (4 * steps)), Wst, Wst[:, 2])[1]
+        return u[expand]
 
     def to_dict(self) -> dict:
         return {"kind": self.kind, "T": self.T, "mechanism": self.mechanism.name, "steps": self.steps,
@@ -197,19 +200,20 @@ class FrameControls:
 
 @lru_cache(maxsize=16)
 def _aligned_indices(steps: int, nodes: int):
-    """For :meth:`FrameControls._aligned_stage_table`: per stage time ``i_t`` (in quarters
-    of the fine step), the node ``k`` below it, the offset from it in quarters, and the
-    indices of ``w`` at the partial step's start, middle and end in the quarter grid."""
+    """For :meth:`FrameControls._aligned_stage_table`: per distinct stage time ``i_t`` (in
+    quarters of the fine step: ``0, 2, …, 4·steps``), the node ``k`` below it, the offset
+    from it in quarters, the indices of ``w`` at the partial step's start, middle and end
+    in the quarter grid; and ``expand`` (``(steps, 3)``), the distinct time of each stage."""
     r = steps // nodes
-    i_t = (4 * np.arange(steps)[:, None] + 2 * np.arange(3)[None, :]).ravel()
+    i_t = 2 * np.arange(2 * steps + 1)
     k = np.minimum(i_t // (4 * r), nodes)
     i_k = 4 * r * k
     gather = np.stack([i_k, (i_k + i_t) // 2, i_t], axis=1)
-    for a in (k, gather):
-        a.setflags(write=False)
+    expand = 2 * np.arange(steps)[:, None] + np.arange(3)[None, :]
     quarters = (i_t - i_k).astype(float)
-    quarters.setflags(write=False)
-    return k, quarters, gather
+    for a in (k, gather, expand, quarters):
+        a.setflags(write=False)
+    return k, quarters, gather, expand
 
 
 def from_dict(d: dict):
