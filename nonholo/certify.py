@@ -146,14 +146,14 @@ def agree(G_coarse: float, G_fine: float) -> bool:
 
 
 def resolved_sensitivity(R0, par, T: float, mechanism, steps: int, U=None, sign: float | None = None,
-                         limit: float = np.inf):
+                         limit: float = np.inf, max_steps: int | None = None):
     """The sensitivity of ``par``'s motion resolved: ``G`` on ``steps/2`` and ``steps`` CF4
     steps (``steps`` alone where the controls' grid forbids ``steps/2``), the grid doubled
     until the last two agree (:func:`agree`) — a coarse grid can miss a fast growth of
     ``Φ`` entirely (a motion near ``Δ = 0`` with large inputs: ``G`` 24 on 100 steps,
     13 000 on 800) while its endpoint looks converged. Stops early when both exceed
     ``limit`` (too ill-conditioned either way) or one is infinite, and at
-    :data:`MAX_REPLAY_STEPS`.
+    :data:`MAX_REPLAY_STEPS` (or ``max_steps``).
 
     ``U``: the stage table of ``2·steps`` steps, if known. Returns ``(G, resolved, grids,
     R_T)``: the larger of the last two, whether they agree (or exceed ``limit``), the
@@ -169,6 +169,7 @@ def resolved_sensitivity(R0, par, T: float, mechanism, steps: int, U=None, sign:
         tables[steps] = stages.halve(U)
         if first != steps:
             tables[first] = stages.halve(tables[steps])
+    cap = MAX_REPLAY_STEPS if max_steps is None else max_steps
     grids: dict[int, float] = {}
     R_T = None
     k = first
@@ -182,9 +183,9 @@ def resolved_sensitivity(R0, par, T: float, mechanism, steps: int, U=None, sign:
             continue
         Gs = list(grids.values())[-2:]
         if len(Gs) < 2 or not np.isfinite(G):
-            done = not np.isfinite(G) or 2 * k > MAX_REPLAY_STEPS
+            done = not np.isfinite(G) or 2 * k > cap
         else:
-            done = agree(*Gs) or min(Gs) > limit or 2 * k > MAX_REPLAY_STEPS
+            done = agree(*Gs) or min(Gs) > limit or 2 * k > cap
         if done:
             break
         k *= 2
@@ -198,13 +199,16 @@ _NO_INDEX = np.zeros((0, 3, 0), np.int64)
 
 
 def measure(R0, Rd, T: float, mechanism, par, steps: int, tol: float, delta_min: float,
-            sign: float = 1.0, G: float | None = None, R_half=None) -> Certificate:
+            sign: float = 1.0, G: float | None = None, R_half=None,
+            max_steps: int | None = None) -> Certificate:
     """The certificate of the physical controls ``par`` (see the module): replays on
     ``steps/2``·2ᵏ and ``steps``·2ᵏ CF4 steps, ``k`` the least with an error estimate
     below ``ERROR_FRACTION · tol`` (``steps`` must be even and a multiple of the controls'
     grid and of a :class:`~nonholo.replay.FrameControls`' steps). ``G``: the sensitivity,
-    ``R_half``: the endpoint of the ``steps/2`` replay, if already known."""
+    ``R_half``: the endpoint of the ``steps/2`` replay, if already known; ``max_steps``: the
+    finest replay (default :data:`MAX_REPLAY_STEPS`)."""
     has_delta = mechanism.has_singular_set
+    cap = MAX_REPLAY_STEPS if max_steps is None else max_steps
     M = steps
     U = np.ascontiguousarray(stages.stage_table(par, M))
     resolved, grids = True, {}
@@ -218,9 +222,9 @@ def measure(R0, Rd, T: float, mechanism, par, steps: int, tol: float, delta_min:
         limit = ERROR_FRACTION * tol / REPLAY_PERTURBATION
         if quarter:
             G, resolved, grids, _ = resolved_sensitivity(R0, par, T, mechanism, M // 4, stages.halve(U),
-                                                         sign, limit)
+                                                         sign, limit, cap)
         else:
-            G, resolved, grids, R_T = resolved_sensitivity(R0, par, T, mechanism, M // 2, U, sign, limit)
+            G, resolved, grids, R_T = resolved_sensitivity(R0, par, T, mechanism, M // 2, U, sign, limit, cap)
             if R_half is None:
                 R_half = R_T
     if R_half is None:
@@ -233,7 +237,7 @@ def measure(R0, Rd, T: float, mechanism, par, steps: int, tol: float, delta_min:
             return _failed(M, G, R, has_delta, dmin, f"the physical replay ({M} steps) produced a "
                            f"non-finite angular velocity at t ≈ {done * T / M:.4g} s")
         est = richardson(R[-1], R_half)
-        if not est > ERROR_FRACTION * tol or 2 * M > MAX_REPLAY_STEPS:
+        if not est > ERROR_FRACTION * tol or 2 * M > cap:
             break
         R_half, M, U = R[-1], 2 * M, None
     l, err = kernels.log_error(R[-1], np.ascontiguousarray(Rd, dtype=float))
@@ -251,7 +255,7 @@ def measure(R0, Rd, T: float, mechanism, par, steps: int, tol: float, delta_min:
                   f"the endpoint's conditioning is unknown")
     elif est > ERROR_FRACTION * tol:
         reason = (f"the replay's integration error is still ~{est:.2g} rad with {M} steps "
-                  f"(the most certified: {MAX_REPLAY_STEPS}); more than {ERROR_FRACTION:g}·tol")
+                  f"(the most certified: {cap}); more than {ERROR_FRACTION:g}·tol")
     elif G * REPLAY_PERTURBATION > ERROR_FRACTION * tol:
         reason = (f"the motion is too ill-conditioned for tol = {tol:g}: its sensitivity "
                   f"max|Φ(T,t)| = {G:.3g} amplifies an error of {REPLAY_PERTURBATION:g} rad (a careful "

@@ -26,6 +26,7 @@ import numpy as np
 from . import catalog, so3, stages
 from .checks import MAX_STEPS, check_count, check_time
 from .controls import Controls, Fourier, PiecewiseConstant, paper_initial
+from .planning import route as global_route
 from .planning.certification import certified
 from .planning.core import Options, Problem, Request, Strategy, build_result
 from .planning.paper import PaperStrategy
@@ -34,6 +35,8 @@ from .result import PlanResult
 from .simulation import DEFAULT_STEPS
 
 METHODS = ("parametric", "nonparametric")
+#: The routes :func:`plan` takes to a goal.
+ROUTES = ("auto", "local", "global")
 
 #: The strategies :func:`plan` knows by name.
 STRATEGIES: dict[str, type[Strategy]] = {"paper": PaperStrategy, "robust": RobustStrategy}
@@ -87,7 +90,8 @@ def plan(R0, Rd, *, T: float = 1.0, method: str = "parametric", harmonics: int =
          grid: int = 100, u0=None, gamma: float | None = None, step: float = 1.0, tol: float = 1e-10,
          max_iter: int = 200, strategy="robust", mechanism="platform",
          delta_min: float = 1e-2, steps: int | None = None, newton_below: float = 1e-3,
-         min_step: float = 1e-6, callback: Callable[[dict], object] | None = None) -> PlanResult:
+         min_step: float = 1e-6, callback: Callable[[dict], object] | None = None,
+         route: str = "local") -> PlanResult:
     """Plan a control steering ``R0`` to ``Rd`` in time ``T`` (seconds).
 
     - ``mechanism``: a :class:`~nonholo.mechanism.Mechanism` or its name
@@ -113,6 +117,10 @@ def plan(R0, Rd, *, T: float = 1.0, method: str = "parametric", harmonics: int =
     - ``steps``: CF4 steps on ``[0, T]`` (default :func:`default_steps`).
     - ``callback(record)``: called after each accepted iteration with the history record;
       returning a true value stops the run.
+    - ``route``: ``"local"`` (default) plans from ``R0`` to ``Rd``; ``"auto"`` also takes,
+      if that fails, the global route (:mod:`nonholo.planning.route`): hops along a path of
+      orientations through the start's component, clear of ``Δ = 0``, each planned like a
+      local plan, stitched into one control; ``"global"`` takes only the global route.
 
     Success is certified (:mod:`nonholo.certify`): the returned physical controls, replayed
     with an error bound, end within ``tol`` of ``Rd`` and keep ``|Δ| ≥ delta_min``; a
@@ -126,6 +134,8 @@ def plan(R0, Rd, *, T: float = 1.0, method: str = "parametric", harmonics: int =
     with the reason.
     """
     started = time.perf_counter()
+    if route not in ROUTES:
+        raise ValueError(f"unknown route {route!r}; known: {', '.join(ROUTES)}")
     mech = catalog.get(mechanism)
     if method not in METHODS:
         raise ValueError(f"unknown method {method!r}; known: {', '.join(METHODS)}")
@@ -173,7 +183,24 @@ def plan(R0, Rd, *, T: float = 1.0, method: str = "parametric", harmonics: int =
     solver = cls(options)
     problem = Problem(R0, Rd, T, mech, method, steps, options.delta_min, frame=solver.frame(mech))
     start = solver.initial(problem, controls, u0 is not None)
-    outcome = solver.solve(problem, start, callback)
-    if outcome.success and outcome.certificate is None:
-        outcome = certified(outcome, problem, options)
-    return build_result(request, outcome, outcome.success, outcome.reason, problem)
+    if route == "global":
+        outcome, local_reason = None, "not tried (route 'global')"
+    else:
+        outcome = solver.solve(problem, start, callback)
+        if outcome.success and outcome.certificate is None:
+            outcome = certified(outcome, problem, options)
+        if outcome.success or route == "local":
+            return build_result(request, outcome, outcome.success, outcome.reason, problem)
+        local_reason = outcome.reason
+
+    def hop(Ra, Rb, T_hop, hop_delta_min):
+        return plan(Ra, Rb, T=T_hop, method=method, harmonics=harmonics, grid=grid, gamma=gamma, step=step,
+                    tol=tol, max_iter=max_iter, strategy=global_route.hop_strategy(cls), mechanism=mech,
+                    delta_min=hop_delta_min,
+                    steps=steps, newton_below=newton_below, min_step=min_step, route="local")
+
+    steered = global_route.steer(mech, R0, Rd, T, hop, tol=tol, delta_min=delta_min, sign=problem.sign)
+    if steered.controls is None:
+        return build_result(request, outcome, False,
+                            f"{local_reason}; the global route failed too: {steered.reason}", problem)
+    return global_route.build_result(request, steered, local_reason)

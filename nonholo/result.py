@@ -1,13 +1,15 @@
 """The outcome of a motion-planning run: :class:`PlanResult`, with JSON save/load.
 
-File format (``PlanResult.save``): one JSON object, ``"format": "nonholo.plan/1"``, with
+File format (``PlanResult.save``): one JSON object, ``"format": "nonholo.plan/3"``, with
 the scalar fields, ``R0``/``Rd`` as nested 3×3 lists, the samples ``t`` (n), ``R``
 (n×3×3), ``u`` (n×m) and ``delta`` (n, or null), ``history`` (a list of per-iteration
 records) and ``controls``, the parametrisation (``{"kind": "fourier", "T", "harmonics",
 "coeffs"}``, ``{"kind": "piecewise_constant", "T", "grid", "values"}`` or, for a motion
 planned in frame coordinates (strategy ``"robust"``), ``{"kind": "frame", "T",
-"mechanism", "steps", "R0", "frame": <the w parametrisation>}``, see
-:mod:`nonholo.controls` and :mod:`nonholo.replay`) from which ``controls(t)`` is rebuilt (identically: the frame
+"mechanism", "steps", "R0", "frame": <the w parametrisation>}``, or, for a global route
+(``"route": "global"``), ``{"kind": "stitched", "T", "pieces": [<one of those per hop>],
+"waypoints"}``; see :mod:`nonholo.controls`, :mod:`nonholo.replay` and
+:mod:`nonholo.stitched`) from which ``controls(t)`` is rebuilt (identically: the frame
 motion's nodes are recomputed by the same kernel). Floats are written with
 ``repr`` precision, so a save/load round trip reproduces every number exactly. Quantities
 that do not exist (``min_delta`` for a mechanism without a singular set, the terminal
@@ -24,7 +26,8 @@ controls(t)``, ``delta = Δ(R)``, and ``terminal_error``, ``min_delta``, ``succe
 rejected with a ``ValueError`` naming the field, so a plan cannot be changed — by a
 damaged byte or by hand — without the change being noticed (fields that are records, not
 results, are checked only for their type: ``reason``, ``history``, ``options``,
-``seconds``, ``sensitivity``). Files written by earlier versions of the format load.
+``seconds``, ``sensitivity``). Files written by earlier versions of the format load:
+``nonholo.plan/2`` (no ``route``: local) and ``nonholo.plan/1`` (no certificates).
 """
 from __future__ import annotations
 
@@ -42,11 +45,16 @@ from . import catalog, certify, kernels, so3, stages
 from .checks import MAX_STEPS, is_number
 from .controls import Controls, Fourier, PiecewiseConstant
 from .replay import FrameControls, from_dict
+from .stitched import Stitched
 
-FORMAT = "nonholo.plan/2"
+FORMAT = "nonholo.plan/3"
+#: the format before global routes (``route``, stitched controls): still loaded
+FORMAT_2 = "nonholo.plan/2"
 #: the format before certificates (``replay_steps``, ``error_bound``): still loaded, checked
 #: against the planner's own replay
 FORMAT_1 = "nonholo.plan/1"
+#: how a plan reached its goal: one local plan, or a global route of stitched hops
+ROUTES = ("local", "global")
 
 
 @dataclass(eq=False)
@@ -80,8 +88,12 @@ class PlanResult:
       a converged plan is certified (``None`` otherwise).
     - ``parametrisation``: the planned control (a :class:`~nonholo.controls.Controls`:
       Fourier or grid controls of ``u``, or :class:`~nonholo.replay.FrameControls`
-      wrapping those of the frame coordinates ``w``); :meth:`controls` evaluates the
-      physical inputs ``u(t)``.
+      wrapping those of the frame coordinates ``w``, or for a global route a
+      :class:`~nonholo.stitched.Stitched` of the hops' controls, with the route's
+      waypoints and the hops' breakpoints); :meth:`controls` evaluates the physical
+      inputs ``u(t)``.
+    - ``route``: ``"local"`` (one plan from ``R0`` to ``Rd``) or ``"global"`` (hops along a
+      path of orientations clear of ``Δ = 0``, :mod:`nonholo.planning.route`).
     """
 
     success: bool
@@ -107,6 +119,7 @@ class PlanResult:
     sensitivity: float | None = None
     error_bound: float | None = None
     replay_steps: int | None = None
+    route: str = "local"
 
     # -- controls ----------------------------------------------------------------------
     def controls(self, t) -> np.ndarray:
@@ -152,6 +165,7 @@ class PlanResult:
             "sensitivity": self.sensitivity,
             "error_bound": self.error_bound,
             "replay_steps": None if self.replay_steps is None else int(self.replay_steps),
+            "route": self.route,
             "R0": arr(self.R0),
             "Rd": arr(self.Rd),
             "controls": self.parametrisation.to_dict(),
@@ -168,7 +182,7 @@ class PlanResult:
         naming the field otherwise."""
         if not isinstance(d, dict):
             raise ValueError(f"not a nonholo plan file: expected a JSON object, got {_json_type(d)}")
-        if d.get("format") not in (FORMAT, FORMAT_1):
+        if d.get("format") not in (FORMAT, FORMAT_2, FORMAT_1):
             raise ValueError(f"not a nonholo plan file (format {_short(d.get('format'))}, expected {FORMAT!r})")
         missing = [k for k in _REQUIRED if k not in d]
         if missing:
@@ -178,7 +192,11 @@ class PlanResult:
         if unknown:
             raise ValueError(f"invalid plan: unknown field{'s' if len(unknown) > 1 else ''} "
                              f"{', '.join(_short(k) for k in unknown)}")
-        d = {"options": {}, "sensitivity": None, "error_bound": None, "replay_steps": None, **d}
+        if "route" in d and d["format"] != FORMAT:
+            raise ValueError(f"invalid plan: 'route' is set in a file of format {d['format']!r}, "
+                             "which has no global routes")
+        d = {"options": {}, "sensitivity": None, "error_bound": None, "replay_steps": None,
+             "route": "local", **d}
         if not isinstance(d["success"], bool):
             raise ValueError(f"invalid plan: 'success' must be true or false, got {_short(d['success'])}")
         mechanism = _string(d, "mechanism")
@@ -209,7 +227,8 @@ class PlanResult:
             steps=_integer(d, "steps", minimum=1), seconds=_number(d, "seconds"),
             options=dict(options), sensitivity=_number(d, "sensitivity", null=True),
             error_bound=_number(d, "error_bound", null=True),
-            replay_steps=None if d["replay_steps"] is None else _integer(d, "replay_steps", minimum=2))
+            replay_steps=None if d["replay_steps"] is None else _integer(d, "replay_steps", minimum=2),
+            route=_string(d, "route"))
         _Validation(res, legacy=d["format"] == FORMAT_1).run()
         return res
 
@@ -230,7 +249,7 @@ class PlanResult:
         return self
 
     def save(self, path) -> Path:
-        """Write the result as JSON (format ``nonholo.plan/2``, see the module docstring).
+        """Write the result as JSON (format ``nonholo.plan/3``, see the module docstring).
 
         Atomic: the text goes to a temporary file in the same directory, flushed and
         synced to disk, which then replaces ``path`` (a symbolic link is followed, its
@@ -313,13 +332,14 @@ _REQUIRED = ("format", "success", "reason", "terminal_error", "min_delta", "iter
              "mechanism", "method", "strategy", "T", "steps", "seconds", "R0", "Rd", "controls",
              "t", "R", "u", "delta")
 #: fields the first files of the format did not have (absent: ``{}`` and ``null``)
-_OPTIONAL = ("options", "sensitivity", "error_bound", "replay_steps")
+_OPTIONAL = ("options", "sensitivity", "error_bound", "replay_steps", "route")
 #: the planner's methods, by the kind of the parametrisation each plans with
 _METHOD_OF_KIND = {"fourier": "parametric", "piecewise_constant": "nonparametric"}
 #: the fields of each kind of ``controls``
 _CONTROL_FIELDS = {"fourier": ("kind", "T", "harmonics", "coeffs"),
                    "piecewise_constant": ("kind", "T", "grid", "values"),
-                   "frame": ("kind", "T", "mechanism", "steps", "R0", "frame")}
+                   "frame": ("kind", "T", "mechanism", "steps", "R0", "frame"),
+                   "stitched": ("kind", "T", "pieces", "waypoints")}
 
 #: stored samples ``R`` against the controls replayed from ``R0`` by the planning
 #: integrator (largest entry difference, ≈ rad), and ``terminal_error`` against
@@ -478,20 +498,38 @@ def _parametrisation(d, where: str, m: int) -> None:
         _array(d["values"], where + ".values", (g, m))
 
 
-def _controls(d, mech) -> Controls | FrameControls:
-    """The ``controls`` field of a plan of mechanism ``mech``, checked, as an object."""
+def _physical(d, mech, where: str) -> None:
+    """Check the description of physical controls (a parametrisation or frame controls)."""
     m = mech.n_inputs
     if isinstance(d, dict) and d.get("kind") == FrameControls.kind:
-        _fields(d, _CONTROL_FIELDS["frame"], "controls")
-        _parametrisation(d["frame"], "controls.frame", m)
-        if _number(d, "T", where="controls.") != d["frame"]["T"]:
-            _fail("controls.T", f"differs from the frame controls' T ({d['frame']['T']!r})")
-        if _string(d, "mechanism", where="controls.") != mech.name:
-            _fail("controls.mechanism", f"is {d['mechanism']!r}, but the plan's 'mechanism' is {mech.name!r}")
-        _integer(d, "steps", 1, where="controls.")
-        _rotation(_array(d["R0"], "controls.R0", (3, 3)), "controls.R0")
+        _fields(d, _CONTROL_FIELDS["frame"], where)
+        _parametrisation(d["frame"], where + ".frame", m)
+        if _number(d, "T", where=where + ".") != d["frame"]["T"]:
+            _fail(where + ".T", f"differs from the frame controls' T ({d['frame']['T']!r})")
+        if _string(d, "mechanism", where=where + ".") != mech.name:
+            _fail(where + ".mechanism", f"is {d['mechanism']!r}, but the plan's 'mechanism' is {mech.name!r}")
+        _integer(d, "steps", 1, where=where + ".")
+        _rotation(_array(d["R0"], where + ".R0", (3, 3)), where + ".R0")
     else:
-        _parametrisation(d, "controls", m)
+        _parametrisation(d, where, m)
+
+
+def _controls(d, mech) -> Controls | FrameControls | Stitched:
+    """The ``controls`` field of a plan of mechanism ``mech``, checked, as an object."""
+    if isinstance(d, dict) and d.get("kind") == Stitched.kind:
+        _fields(d, _CONTROL_FIELDS["stitched"], "controls")
+        if _number(d, "T", where="controls.") <= 0:
+            _fail("controls.T", f"must be positive, got {d['T']}")
+        pieces = d["pieces"]
+        if not isinstance(pieces, list) or not pieces:
+            _fail("controls.pieces", "must be a non-empty list")
+        for i, p in enumerate(pieces):
+            _physical(p, mech, f"controls.pieces[{i}]")
+        W = _array(d["waypoints"], "controls.waypoints", (len(pieces) + 1, 3, 3))
+        for i, R in enumerate(W):
+            _rotation(R, f"controls.waypoints[{i}]")
+    else:
+        _physical(d, mech, "controls")
     try:
         return from_dict(d)
     except (ValueError, TypeError, KeyError, IndexError, AttributeError) as exc:
@@ -620,32 +658,54 @@ class _Validation:
         except ValueError as exc:
             _fail("mechanism", f"is unknown: {exc}")
         par = r.parametrisation
-        frame = isinstance(par, FrameControls)
-        inner = par.frame if frame else par
-        if not isinstance(inner, (Fourier, PiecewiseConstant)):
-            _fail("controls", f"must be Fourier, piecewise-constant or frame controls, got {type(par).__name__}")
+        if r.route not in ROUTES:
+            _fail("route", f"must be one of {', '.join(map(repr, ROUTES))}, got {_short(r.route)}")
+        stitched = isinstance(par, Stitched)
+        if stitched != (r.route == "global"):
+            _fail("route", f"is {r.route!r}, but the controls are "
+                           f"{'stitched' if stitched else 'one piece'} (route {'global' if stitched else 'local'!r})")
         if r.method not in _METHOD_OF_KIND.values():
             _fail("method", f"must be one of {', '.join(map(repr, _METHOD_OF_KIND.values()))}, got {r.method!r}")
-        if r.method != _METHOD_OF_KIND[inner.kind]:
-            _fail("method", f"is {r.method!r}, but the controls are {inner.kind!r} "
-                            f"(method {_METHOD_OF_KIND[inner.kind]!r})")
         if par.n_inputs != mech.n_inputs:
             _fail("controls", f"have {par.n_inputs} inputs, mechanism {mech.name!r} has {mech.n_inputs}")
         if par.T != r.T:
             _fail("T", f"is {r.T!r}, the controls are defined on [0, {par.T!r}]")
+        if stitched:
+            if not r.success or r.replay_steps is None:
+                _fail("route", "is 'global', which only a certified success has")
+            if not np.array_equal(par.waypoints[0], r.R0):
+                _fail("R0", "differs from the stitched controls' first waypoint")
+            if r.steps % par.grid:
+                _fail("steps", f"({r.steps}) must be a multiple of the stitched controls' grid ({par.grid})")
+            for i, piece in enumerate(par.pieces):
+                self.piece(piece, mech, f"controls.pieces[{i}]", None, None)
+        else:
+            self.piece(par, mech, "controls", r.steps, r.R0)
+        return mech
+
+    def piece(self, par, mech, where: str, steps: int | None, R0) -> None:
+        """One piece of physical controls against the plan's ``method``, ``strategy``,
+        ``mechanism`` (and ``steps``, ``R0``, when the piece is the whole plan)."""
+        r = self.r
+        frame = isinstance(par, FrameControls)
+        inner = par.frame if frame else par
+        if not isinstance(inner, (Fourier, PiecewiseConstant)):
+            _fail(where, f"must be Fourier, piecewise-constant or frame controls, got {type(par).__name__}")
+        if r.method != _METHOD_OF_KIND[inner.kind]:
+            _fail("method", f"is {r.method!r}, but the controls are {inner.kind!r} "
+                            f"(method {_METHOD_OF_KIND[inner.kind]!r})")
         if frame:
             if par.mechanism.name != r.mechanism:
                 _fail("mechanism", f"is {r.mechanism!r}, the frame controls are of {par.mechanism.name!r}")
-            if par.steps != r.steps:
-                _fail("steps", f"is {r.steps}, the frame controls replay {par.steps} steps")
-            if not np.array_equal(par.R0, r.R0):
+            if steps is not None and par.steps != steps:
+                _fail("steps", f"is {steps}, the frame controls replay {par.steps} steps")
+            if R0 is not None and not np.array_equal(par.R0, R0):
                 _fail("R0", "differs from the frame controls' R0")
             if r.strategy == "paper":
                 _fail("strategy", "is 'paper', which plans the physical inputs, but the controls are "
                                   "frame controls (strategy 'robust')")
-        if isinstance(inner, PiecewiseConstant) and r.steps % inner.grid:
-            _fail("steps", f"({r.steps}) must be a multiple of the controls' grid ({inner.grid})")
-        return mech
+        if steps is not None and isinstance(inner, PiecewiseConstant) and steps % inner.grid:
+            _fail("steps", f"({steps}) must be a multiple of the controls' grid ({inner.grid})")
 
     def arrays(self, mech) -> int:
         """Shapes and finiteness of ``R0``, ``Rd``, ``t``, ``R``, ``u``, ``delta``; returns ``n``."""

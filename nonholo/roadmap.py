@@ -43,9 +43,9 @@ MAX_EDGE = 0.9
 #: Spacing (rad) of the points at which a geodesic's clearance is checked.
 RESOLUTION = 0.02
 #: The clearance of a roadmap by default: this quantile of ``|Δ|`` over SO(3).
-CLEARANCE_QUANTILE = 0.1
+CLEARANCE_QUANTILE = 0.2
 #: Longest hop (rad) of a route by default.
-MAX_HOP = 0.6
+MAX_HOP = 3.2
 
 
 def geodesic(Ra, Rb, s) -> np.ndarray:
@@ -71,9 +71,9 @@ def _clear(mech, sign: float, Ra: np.ndarray, Rb: np.ndarray, level) -> np.ndarr
     length = np.linalg.norm(v, axis=1)
     S = int(np.ceil(length.max() / RESOLUTION)) + 1
     s = np.linspace(0.0, 1.0, S)
-    pts = Rotation.from_rotvec((v[:, None, :] * s[None, :, None]).reshape(-1, 3)) * \
-        Rotation.from_matrix(np.repeat(Ra, S, axis=0))
-    d = sign * mech.delta_samples(pts.as_matrix()).reshape(E, S)
+    turn = Rotation.from_rotvec((v[:, None, :] * s[None, :, None]).reshape(-1, 3)).as_matrix()
+    pts = np.matmul(turn.reshape(E, S, 3, 3), np.asarray(Ra, dtype=float)[:, None])
+    d = sign * mech.delta_samples(pts.reshape(-1, 3, 3)).reshape(E, S)
     return np.all(d >= np.broadcast_to(np.asarray(level, dtype=float), (E,))[:, None], axis=1)
 
 

@@ -120,3 +120,86 @@ def test_stitched_controls_round_trip_and_refuse_bad_input():
         Stitched(1.0, [a.parametrisation, Fourier(1.0, np.zeros((3, 5)))], path[:3])
     with pytest.raises(ValueError, match="multiple"):
         stages.stage_table(Stitched(2.0, [a.parametrisation, b.parametrisation], path[:3]), 3)
+
+
+# -- the global route of plan() --------------------------------------------------------------
+
+#: a uniform pair (platform) whose goal the local planner misses
+FAR = "uniform-platform-0021"
+
+
+def far_pair(mechanism="platform", pid=FAR):
+    return {p["id"]: p for p in goalset.uniform_pairs(mechanism, 1000)}[pid]
+
+
+def test_global_route_reaches_a_goal_the_local_planner_misses(tmp_path):
+    p = far_pair()
+    local = planner.plan(p["R0"], p["Rd"])
+    assert not local.success and local.route == "local"
+    res = planner.plan(p["R0"], p["Rd"], route="auto")
+    assert res.success and res.route == "global", res.reason
+    assert isinstance(res.parametrisation, Stitched) and res.parametrisation.n_pieces >= 2
+    assert res.terminal_error + res.error_bound <= res.options["tol"]
+    assert {rec["hop"] for rec in res.history} == set(range(res.parametrisation.n_pieces))
+    # independent re-simulations of controls(t): DOP853 stopping at every breakpoint, and RK4
+    RT = verify.resimulate(p["R0"], res.controls, res.T, "platform", res.breakpoints)
+    assert verify.terminal_error(RT, p["Rd"]) <= 1e-8
+    rk4, dmin = verify.resimulate_rk4(p["R0"], res.parametrisation, res.T, "platform",
+                                      steps=res.steps * -(-6400 // res.steps))
+    assert verify.terminal_error(rk4, p["Rd"]) <= 1e-8 and dmin >= res.options["delta_min"]
+    # the route's waypoints start at R0 and end at Rd; the file keeps everything
+    W = res.parametrisation.waypoints
+    np.testing.assert_array_equal(W[0], p["R0"])
+    np.testing.assert_allclose(W[-1], p["Rd"], atol=1e-12)
+    path = tmp_path / "far.json"
+    res.save(path)
+    back = type(res).load(path)
+    assert back == res and back.route == "global"
+
+
+def test_route_global_for_a_mechanism_without_a_singular_set():
+    p = goalset.uniform_pairs("attitude", 3)[2]
+    res = planner.plan(p["R0"], p["Rd"], mechanism="attitude", route="global")
+    assert res.success and res.route == "global", res.reason
+    RT = verify.resimulate(p["R0"], res.controls, res.T, "attitude", res.breakpoints)
+    assert verify.terminal_error(RT, p["Rd"]) <= 1e-8
+
+
+def test_route_global_on_platform_raised():
+    p = far_pair("platform_raised", "uniform-platform_raised-0025")
+    res = planner.plan(p["R0"], p["Rd"], mechanism="platform_raised", route="auto")
+    assert res.success and res.route == "global", res.reason
+    RT = verify.resimulate(p["R0"], res.controls, res.T, "platform_raised", res.breakpoints)
+    assert verify.terminal_error(RT, p["Rd"]) <= 1e-8
+
+
+def test_route_argument_and_goals_across_the_singular_surface():
+    p = far_pair()
+    with pytest.raises(ValueError, match="route"):
+        planner.plan(p["R0"], p["Rd"], route="roadmap")
+    mech = catalog.get("platform")
+    across = next(so3.from_rpy(a, b, 0.3) for a in (0.3, 2.0, -1.0) for b in (0.2, -0.4)
+                  if np.sign(mech.delta(so3.from_rpy(a, b, 0.3))) != np.sign(mech.delta(p["R0"])))
+    res = planner.plan(p["R0"], across, route="auto")
+    assert not res.success and "across the singular surface" in res.reason and res.route == "local"
+
+
+def test_plan_files_keep_the_route_honest(tmp_path):
+    """A file may not relabel a local plan as global (or back), nor carry a route in format 2."""
+    import json
+
+    from nonholo.result import FORMAT_2, PlanResult
+
+    p = goalset.uniform_pairs("platform", 3)[0]
+    res = planner.plan(p["R0"], p["Rd"])
+    d = res.to_dict()
+    with pytest.raises(ValueError, match="route"):
+        PlanResult.from_dict({**d, "route": "global"})
+    with pytest.raises(ValueError, match="route"):
+        PlanResult.from_dict({**d, "route": "elsewhere"})
+    with pytest.raises(ValueError, match="route"):
+        PlanResult.from_dict({**d, "format": FORMAT_2})
+    old = {k: v for k, v in d.items() if k != "route"}
+    assert PlanResult.from_dict({**old, "format": FORMAT_2}).route == "local"
+    (tmp_path / "x.json").write_text(json.dumps(d))
+    assert PlanResult.load(tmp_path / "x.json") == res

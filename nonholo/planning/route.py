@@ -15,7 +15,9 @@ enters it.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+import time
+from dataclasses import asdict, dataclass, field
+from functools import lru_cache
 from typing import Callable
 
 import numpy as np
@@ -23,7 +25,9 @@ import numpy as np
 from .. import certify, roadmap, so3
 from ..certify import Certificate
 from ..mechanism import Mechanism
+from ..result import PlanResult
 from ..stitched import Stitched
+from .core import Request
 
 #: The shortest hop a failed hop is split into (rad).
 MIN_HOP = 0.02
@@ -34,6 +38,13 @@ MAX_PIECES = 64
 MAX_HOP_SENSITIVITY = 10.0
 #: Re-plans of the last hop from the stitched replay at most.
 MAX_REPAIRS = 2
+#: Hops keep ``|Δ|`` at least this (or half what their ends have, if less): a motion close
+#: to ``Δ = 0`` is ill-conditioned, and the stitched motion multiplies its hops' conditioning.
+HOP_DELTA_MIN = 0.05
+#: The stitched control's certified replay is at most this many times finer than its hops'.
+STITCHED_REFINEMENT = 8
+#: Wall-clock seconds a global route may take at most.
+TIME_BUDGET = 3.0
 
 
 @dataclass
@@ -52,9 +63,32 @@ def _stitch(T: float, hops: list, R0) -> Stitched:
     return Stitched(T, [h.parametrisation for h in hops], [R0] + [h.Rd for h in hops])
 
 
+@lru_cache(maxsize=8)
+def hop_strategy(cls: type) -> type:
+    """The strategy ``cls`` for hops: where it weighs the conditioning of its plans
+    (``max_sensitivity``), it keeps searching until a hop's is below
+    :data:`MAX_HOP_SENSITIVITY`."""
+    if not hasattr(cls, "max_sensitivity"):
+        return cls
+    return type(cls.__name__, (cls,), {"max_sensitivity": MAX_HOP_SENSITIVITY, "__module__": cls.__module__})
+
+
+def hop_delta_min(mechanism: Mechanism, Ra, Rb, delta_min: float) -> float:
+    """The ``delta_min`` of a hop ``Ra → Rb``: :data:`HOP_DELTA_MIN`, or half the least
+    ``|Δ|`` of its ends if that is less, never below the run's ``delta_min`` (which is
+    all a mechanism without a singular set has)."""
+    if not mechanism.has_singular_set:
+        return delta_min
+    ends = min(abs(float(mechanism.delta(Ra))), abs(float(mechanism.delta(Rb))))
+    return max(delta_min, min(HOP_DELTA_MIN, 0.5 * ends))
+
+
 def steer(mechanism: Mechanism, R0, Rd, T: float, local: Callable, *, tol: float, delta_min: float,
-          sign: float) -> Steered:
-    """The route ``R0 → Rd`` steered hop by hop (see the module)."""
+          sign: float, budget: float = TIME_BUDGET) -> Steered:
+    """The route ``R0 → Rd`` steered hop by hop (see the module). ``local(R_start, R_goal,
+    T, delta_min)`` plans one hop (a :class:`~nonholo.result.PlanResult`); ``budget``:
+    seconds (wall clock) after which no further hop is tried."""
+    started = time.perf_counter()
     path = roadmap.orientation_path(mechanism, R0, Rd, delta_min=delta_min)
     if path is None:
         return Steered(None, None, reason="no path of orientations clear of Δ = 0 joins the start and "
@@ -66,7 +100,10 @@ def steer(mechanism: Mechanism, R0, Rd, T: float, local: Callable, *, tol: float
     while targets:
         if len(hops) + len(targets) > MAX_PIECES:
             return Steered(None, None, hops, f"the route needs more than {MAX_PIECES} hops", path)
-        res = local(R, targets[0], T_hop)
+        if time.perf_counter() - started > budget:
+            return Steered(None, None, hops, f"the route ran out of its {budget:g} s after {len(hops)} "
+                                             f"hops ({len(targets)} to go)", path)
+        res = local(R, targets[0], T_hop, hop_delta_min(mechanism, R, targets[0], delta_min))
         if res.success and res.sensitivity <= MAX_HOP_SENSITIVITY:
             hops.append(res)
             R = res.R_T
@@ -82,15 +119,45 @@ def steer(mechanism: Mechanism, R0, Rd, T: float, local: Callable, *, tol: float
         stitched = _stitch(T, hops, R0)
         k = len(hops)
         M = k * max(h.replay_steps for h in hops)
-        cert = certify.measure(R0, Rd, T, mechanism, stitched, M, tol, delta_min, sign)
+        cert = certify.measure(R0, Rd, T, mechanism, stitched, M, tol, delta_min, sign,
+                               max_steps=min(certify.MAX_REPLAY_STEPS, STITCHED_REFINEMENT * M))
         if cert.passed or not cert.correctable or repair == MAX_REPAIRS:
             break
         # the last hop again, from where the stitched replay enters it
         entry = cert.R[(k - 1) * (cert.replay_steps // k)]
-        res = local(entry, Rd, hops[-1].T)
+        res = local(entry, Rd, hops[-1].T, hop_delta_min(mechanism, entry, Rd, delta_min))
         if not res.success:
             break
         hops[-1] = res
     if not cert.passed:
         return Steered(None, cert, hops, f"the stitched control is not certified: {cert.reason}", path)
     return Steered(stitched, cert, hops, "", path)
+
+
+def build_result(request: Request, steered: Steered, local_reason: str) -> PlanResult:
+    """The :class:`~nonholo.result.PlanResult` of a certified global route: the stitched
+    control, its certified replay sampled at ``k·N`` steps (``N``: the hops' finest grid),
+    the hops' histories one after another (each record tagged with its ``hop``)."""
+    mech, T, cert = request.mechanism, request.T, steered.certificate
+    hops = steered.hops
+    steps = len(hops) * max(h.steps for h in hops)
+    par = steered.controls
+    n = steps + 1
+    t = np.arange(n) * (T / steps)
+    t[-1] = T
+    R = cert.R[::cert.replay_steps // steps]
+    history = [{**rec, "hop": i} for i, h in enumerate(hops) for rec in h.history]
+    reason = (f"reached by the global route: {len(hops)} hops through a path of orientations clear "
+              f"of Δ = 0, stitched (the local planner: {local_reason}); certified: the physical replay "
+              f"({cert.replay_steps} steps) ends {cert.terminal_error:.2g} rad from the goal, error bound "
+              f"{cert.error_bound:.2g} rad")
+    return PlanResult(
+        success=True, reason=reason, terminal_error=cert.terminal_error, min_delta=cert.min_delta,
+        iterations=sum(h.iterations for h in hops), history=history,
+        t=t, R=R, u=par(t).reshape(n, mech.n_inputs), delta=mech.delta_samples(R),
+        parametrisation=par, mechanism=mech.name, method=request.method, strategy=request.strategy,
+        T=T, R0=request.R0, Rd=request.Rd, steps=steps,
+        seconds=time.perf_counter() - request.started,
+        options={**asdict(request.options), "harmonics": request.harmonics, "grid": request.grid},
+        sensitivity=cert.sensitivity, error_bound=cert.error_bound, replay_steps=cert.replay_steps,
+        route="global")
