@@ -3,13 +3,15 @@ of orientations through the start's component.
 
 :func:`steer` takes the path of :func:`nonholo.roadmap.orientation_path` (hops of at most
 :data:`nonholo.roadmap.MAX_HOP` rad, clear of ``Δ = 0``) and plans each hop with the
-local planner (``local(R_start, R_goal, T)``: :func:`nonholo.plan` with the run's
-strategy and options, route ``"local"``), from where the previous hop's certified replay
-ended, so that no hop's error carries into the next. A hop that fails is split at its
-geodesic midpoint (down to :data:`MIN_HOP` rad, at most :data:`MAX_PIECES` pieces in
-all). The hops' physical controls are stitched into one control on ``[0, T]``, an equal
-time share each (:class:`~nonholo.stitched.Stitched`); the stitched control is then
-certified as a whole (:func:`nonholo.certify.measure`). Where that replay misses the goal
+local planner (``local(R_start, R_goal, T, delta_min)``: :func:`nonholo.plan` with the
+run's strategy (:func:`hop_strategy`) and options, route ``"local"``, ``delta_min`` of
+:func:`hop_delta_min`), from where the previous hop's certified replay ended, so that no
+hop's error carries into the next. A hop that fails, or whose sensitivity exceeds
+:data:`MAX_HOP_SENSITIVITY`, is split at its geodesic midpoint (down to :data:`MIN_HOP`
+rad, at most :data:`MAX_PIECES` pieces in all). The hops' physical controls are stitched
+into one control on ``[0, T]``, an equal time share each
+(:class:`~nonholo.stitched.Stitched`); the stitched control is then certified as a whole
+(:func:`nonholo.certify.measure`). Where that replay misses the goal
 by more than ``tol`` allows, the last hop is planned again from where the stitched replay
 enters it.
 """
