@@ -178,21 +178,11 @@ def resolved_sensitivity(R0, par, T: float, mechanism, steps: int, U=None, sign:
         grids[k] = G
         if k == steps:
             R_T = R_k
-        if k == first and first != steps:
-            k *= 2
-            continue
-        Gs = list(grids.values())[-2:]
-        if len(Gs) < 2 or not np.isfinite(G):
-            done = not np.isfinite(G) or 2 * k > cap
-        else:
-            done = agree(*Gs) or min(Gs) > limit or 2 * k > cap
-        if done:
-            break
+        last = list(grids.values())[-2:]
+        resolved = not np.isfinite(G) or (len(last) == 2 and (agree(*last) or min(last) > limit))
+        if resolved or 2 * k > cap:
+            return max(last), resolved, grids, R_T
         k *= 2
-    Gs = list(grids.values())[-2:]
-    G = max(Gs)
-    resolved = not np.isfinite(G) or (len(Gs) == 2 and (agree(*Gs) or min(Gs) > limit))
-    return G, resolved, grids, R_T
 
 
 _NO_INDEX = np.zeros((0, 3, 0), np.int64)
