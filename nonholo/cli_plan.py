@@ -56,6 +56,9 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     p.add_argument("--max-iter", type=int, default=200, help="maximum number of iterations")
     p.add_argument("--delta-min", type=float, default=1e-2, help="keep |Δ| >= this along the motion")
     p.add_argument("--steps", type=int, default=None, help="integrator steps on [0, T]")
+    p.add_argument("--route", choices=planner.ROUTES, default="local",
+                   help="local: one plan from start to goal (default); auto: if that fails, hops "
+                        "along a path of orientations clear of Δ = 0; global: only the hops")
     p.add_argument("--out", default=None, help="write the result as JSON to this file")
     p.add_argument("--plot", default=None, help="write a figure (u, RPY, Δ against t) to this file")
     p.add_argument("--quiet", action="store_true", help="print the summary only")
@@ -127,7 +130,7 @@ def run(args) -> int:
         res = planner.plan(
             R0, Rd, T=args.T, method=args.method, harmonics=args.harmonics, grid=args.grid,
             strategy=args.strategy, mechanism=args.mechanism, gamma=args.gamma, tol=args.tol,
-            max_iter=args.max_iter, delta_min=args.delta_min, steps=args.steps,
+            max_iter=args.max_iter, delta_min=args.delta_min, steps=args.steps, route=args.route,
             callback=None if args.quiet else _print_record)
     except ValueError as exc:
         _error(str(exc))
@@ -135,7 +138,8 @@ def run(args) -> int:
     _say(f"{'success' if res.success else 'FAILED'}: {res.reason}")
     _say(f"terminal error |l_T| = {_fmt(res.terminal_error, '.3e')} rad, min |Δ| = "
          f"{_fmt(res.min_delta, '.4f')}, {res.iterations} iterations, {res.seconds * 1e3:.1f} ms "
-         f"({res.mechanism}, {res.method}/{res.strategy}, T = {res.T:g} s, {res.steps} steps)")
+         f"({res.mechanism}, {res.method}/{res.strategy}, {res.route} route, T = {res.T:g} s, "
+         f"{res.steps} steps)")
     status = EXIT_SUCCESS if res.success else EXIT_FAILED
     if args.out:
         try:

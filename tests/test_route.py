@@ -203,3 +203,28 @@ def test_plan_files_keep_the_route_honest(tmp_path):
     assert PlanResult.from_dict({**old, "format": FORMAT_2}).route == "local"
     (tmp_path / "x.json").write_text(json.dumps(d))
     assert PlanResult.load(tmp_path / "x.json") == res
+
+
+def test_cli_takes_the_route(tmp_path, capsys):
+    import argparse
+
+    from nonholo import cli_plan
+    from nonholo.result import PlanResult
+
+    def cli(argv):
+        parser = argparse.ArgumentParser(prog="nonholo")
+        cli_plan.add_parser(parser.add_subparsers(dest="command"))
+        return cli_plan.run(parser.parse_args(["plan", *argv]))
+
+    p = far_pair()
+    start = [repr(float(a)) for a in so3.as_rpy(p["R0"])]
+    goal = [repr(float(a)) for a in so3.as_rpy(p["Rd"])]
+    out, fig = tmp_path / "far.json", tmp_path / "far.png"
+    assert cli(["--from", *start, "--to", *goal, "--quiet"]) == 1
+    assert cli(["--from", *start, "--to", *goal, "--quiet", "--route", "auto",
+                          "--out", str(out), "--plot", str(fig)]) == 0
+    text = capsys.readouterr().out
+    assert "global route" in text
+    res = PlanResult.load(out)
+    assert res.success and res.route == "global"
+    assert fig.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
