@@ -150,8 +150,8 @@ def resolved_sensitivity(R0, par, T: float, mechanism, steps: int, U=None, sign:
     """The sensitivity of ``par``'s motion resolved: ``G`` on ``steps/2`` and ``steps`` CF4
     steps (``steps`` alone where the controls' grid forbids ``steps/2``), the grid doubled
     until the last two agree (:func:`agree`) — a coarse grid can miss a fast growth of
-    ``Φ`` entirely (a motion near ``Δ = 0`` with large inputs: ``G`` 24 on 100 steps,
-    13 000 on 800) while its endpoint looks converged. Stops early when both exceed
+    ``Φ`` almost entirely (a motion near ``Δ = 0`` with large inputs; ``tests/test_certify.py``
+    keeps one) while its endpoint looks converged. Stops early when both exceed
     ``limit`` (too ill-conditioned either way) or one is infinite, and at
     :data:`MAX_REPLAY_STEPS` (or ``max_steps``).
 
