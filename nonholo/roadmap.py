@@ -48,11 +48,23 @@ CLEARANCE_QUANTILE = 0.2
 MAX_HOP = 3.2
 
 
+def _turns(Ra: np.ndarray, Rb: np.ndarray) -> np.ndarray:
+    """``v_e = log(R_b R_aᵀ)`` (rotation vectors) for stacks ``Ra``, ``Rb`` of shape ``(E, 3, 3)``."""
+    a = Rotation.from_matrix(Ra)
+    return (Rotation.from_matrix(Rb) * a.inv()).as_rotvec()
+
+
+def _points(Ra: np.ndarray, v: np.ndarray, s: np.ndarray) -> np.ndarray:
+    """``exp(s·[v_e]) R_a[e]`` for every pair ``e`` and fraction ``s``: shape ``(E, S, 3, 3)``."""
+    E, S = len(v), len(s)
+    turn = Rotation.from_rotvec((v[:, None, :] * s[None, :, None]).reshape(-1, 3)).as_matrix()
+    return np.matmul(turn.reshape(E, S, 3, 3), np.asarray(Ra, dtype=float)[:, None])
+
+
 def geodesic(Ra, Rb, s) -> np.ndarray:
     """``R(s) = exp(s·log(R_b R_aᵀ)) R_a`` for the fractions ``s`` (shape ``(n,)``): ``(n, 3, 3)``."""
-    a = Rotation.from_matrix(Ra)
-    v = (Rotation.from_matrix(Rb) * a.inv()).as_rotvec()
-    return (Rotation.from_rotvec(np.outer(np.asarray(s, dtype=float), v)) * a).as_matrix()
+    Ra, Rb = np.asarray(Ra, dtype=float)[None], np.asarray(Rb, dtype=float)[None]
+    return _points(Ra, _turns(Ra, Rb), np.asarray(s, dtype=float))[0]
 
 
 def _angles(qa: np.ndarray, qb: np.ndarray) -> np.ndarray:
@@ -66,13 +78,9 @@ def _clear(mech, sign: float, Ra: np.ndarray, Rb: np.ndarray, level) -> np.ndarr
     E = len(Ra)
     if E == 0:
         return np.zeros(0, dtype=bool)
-    a = Rotation.from_matrix(Ra)
-    v = (Rotation.from_matrix(Rb) * a.inv()).as_rotvec()
-    length = np.linalg.norm(v, axis=1)
-    S = int(np.ceil(length.max() / RESOLUTION)) + 1
-    s = np.linspace(0.0, 1.0, S)
-    turn = Rotation.from_rotvec((v[:, None, :] * s[None, :, None]).reshape(-1, 3)).as_matrix()
-    pts = np.matmul(turn.reshape(E, S, 3, 3), np.asarray(Ra, dtype=float)[:, None])
+    v = _turns(Ra, Rb)
+    S = int(np.ceil(np.linalg.norm(v, axis=1).max() / RESOLUTION)) + 1
+    pts = _points(Ra, v, np.linspace(0.0, 1.0, S))
     d = sign * mech.delta_samples(pts.reshape(-1, 3, 3)).reshape(E, S)
     return np.all(d >= np.broadcast_to(np.asarray(level, dtype=float), (E,))[:, None], axis=1)
 
