@@ -127,17 +127,12 @@ UNIFORM_BANDS = {"0-1": (0.0, 1.0), "1-1.8": (1.0, 1.8), "1.8-pi": (1.8, np.pi +
 UNIFORM_MIN_DELTA = 0.05
 
 
-def uniform_pairs(mechanism, count: int, seed: int = SEED, min_delta: float = UNIFORM_MIN_DELTA) -> list[dict]:
-    """``count`` pairs ``(R0, Rd)`` drawn independently and uniformly (Haar) from SO(3) and
-    kept when, for a mechanism with a singular set, ``Δ`` has the same sign at both ends
-    and ``|Δ| ≥ min_delta`` there — the whole problem domain of a planner, every pair
-    reachable (same component). ``T = 1``; ``band``: the distance band
-    (:data:`UNIFORM_BANDS`). The stream depends only on ``seed`` and the mechanism's name.
-    """
+def _uniform_stream(mechanism, seed: int, min_delta: float):
+    """Haar pairs ``(R0, Rd, distance, band)`` in one component, endlessly (see
+    :func:`uniform_pairs`)."""
     mech = catalog.get(mechanism)
     rng = np.random.default_rng([seed, 3, zlib.crc32(mech.name.encode())])
-    out = []
-    while len(out) < count:
+    while True:
         A, B = _random_rotation(rng), _random_rotation(rng)
         if mech.has_singular_set:
             dA, dB = float(mech.delta(A)), float(mech.delta(B))
@@ -145,9 +140,41 @@ def uniform_pairs(mechanism, count: int, seed: int = SEED, min_delta: float = UN
                 continue
         dist = so3.distance(A, B)
         band = next(b for b, (lo, hi) in UNIFORM_BANDS.items() if lo <= dist < hi)
-        out.append({"id": f"uniform-{mech.name}-{len(out):04d}", "band": band, "R0": A, "Rd": B,
+        yield A, B, dist, band
+
+
+def uniform_pairs(mechanism, count: int, seed: int = SEED, min_delta: float = UNIFORM_MIN_DELTA) -> list[dict]:
+    """``count`` pairs ``(R0, Rd)`` drawn independently and uniformly (Haar) from SO(3) and
+    kept when, for a mechanism with a singular set, ``Δ`` has the same sign at both ends
+    and ``|Δ| ≥ min_delta`` there — the whole problem domain of a planner, every pair
+    reachable (same component). ``T = 1``; ``band``: the distance band
+    (:data:`UNIFORM_BANDS`). The stream depends only on ``seed`` and the mechanism's name.
+    """
+    name = catalog.get(mechanism).name
+    out = []
+    for A, B, dist, band in _uniform_stream(mechanism, seed, min_delta):
+        if len(out) == count:
+            break
+        out.append({"id": f"uniform-{name}-{len(out):04d}", "band": band, "R0": A, "Rd": B,
                     "T": T, "distance": dist})
     return out
+
+
+def band_pairs(mechanism, per_band: int, seed: int = SEED, min_delta: float = UNIFORM_MIN_DELTA) -> list[dict]:
+    """The uniform random band set: the stream of :func:`uniform_pairs`, each pair kept
+    while its distance band (:data:`UNIFORM_BANDS`) has fewer than ``per_band`` — so every
+    band holds ``per_band`` pairs, each uniform within its band (near pairs are rare: about
+    one in thirteen is closer than 1 rad). Ordered by band, then by draw; ``id``:
+    ``"band-<mechanism>-<band>-<j>"``."""
+    name = catalog.get(mechanism).name
+    kept: dict[str, list] = {b: [] for b in UNIFORM_BANDS}
+    for A, B, dist, band in _uniform_stream(mechanism, seed, min_delta):
+        if all(len(v) == per_band for v in kept.values()):
+            break
+        if len(kept[band]) < per_band:
+            kept[band].append({"id": f"band-{name}-{band}-{len(kept[band]):04d}", "band": band, "R0": A,
+                               "Rd": B, "T": T, "distance": dist})
+    return [p for b in UNIFORM_BANDS for p in kept[b]]
 
 
 def _random_axis(rng: np.random.Generator) -> np.ndarray:

@@ -193,8 +193,9 @@ def measure(R0, Rd, T: float, mechanism, par, steps: int, tol: float, delta_min:
             max_steps: int | None = None) -> Certificate:
     """The certificate of the physical controls ``par`` (see the module): replays on
     ``steps/2``·2ᵏ and ``steps``·2ᵏ CF4 steps, ``k`` the least with an error estimate
-    below ``ERROR_FRACTION · tol`` (``steps`` must be even and a multiple of the controls'
-    grid and of a :class:`~nonholo.replay.FrameControls`' steps). ``G``: the sensitivity,
+    below ``ERROR_FRACTION · tol``, or ``k = 0`` when the sensitivity already rules the
+    plan out (infinite, unresolved or too large for ``tol``). ``steps`` must be even and a
+    multiple of the controls' grid and of a :class:`~nonholo.replay.FrameControls`' steps. ``G``: the sensitivity,
     ``R_half``: the endpoint of the ``steps/2`` replay, if already known; ``max_steps``: the
     finest replay (default :data:`MAX_REPLAY_STEPS`)."""
     has_delta = mechanism.has_singular_set
@@ -219,6 +220,8 @@ def measure(R0, Rd, T: float, mechanism, par, steps: int, tol: float, delta_min:
                 R_half = R_T
     if R_half is None:
         R_half = replay(R0, par, T, mechanism, M // 2, sign, stages.halve(U))[0][-1]
+    # a sensitivity that already rules the plan out is not worth a finer replay
+    hopeless = not resolved or not G * REPLAY_PERTURBATION <= ERROR_FRACTION * tol
     while True:
         if U is None:
             U = np.ascontiguousarray(stages.stage_table(par, M))
@@ -227,7 +230,7 @@ def measure(R0, Rd, T: float, mechanism, par, steps: int, tol: float, delta_min:
             return _failed(M, G, R, has_delta, dmin, f"the physical replay ({M} steps) produced a "
                            f"non-finite angular velocity at t ≈ {done * T / M:.4g} s")
         est = richardson(R[-1], R_half)
-        if not est > ERROR_FRACTION * tol or 2 * M > cap:
+        if hopeless or not est > ERROR_FRACTION * tol or 2 * M > cap:
             break
         R_half, M, U = R[-1], 2 * M, None
     l, err = kernels.log_error(R[-1], np.ascontiguousarray(Rd, dtype=float))
@@ -243,13 +246,13 @@ def measure(R0, Rd, T: float, mechanism, par, steps: int, tol: float, delta_min:
         found = ", ".join(f"{g:.3g} on {k} steps" for k, g in grids.items())
         reason = (f"the physical replay's sensitivity max|Φ(T,t)| is not resolved ({found}): "
                   f"the endpoint's conditioning is unknown")
-    elif est > ERROR_FRACTION * tol:
-        reason = (f"the replay's integration error is still ~{est:.2g} rad with {M} steps "
-                  f"(the most certified: {cap}); more than {ERROR_FRACTION:g}·tol")
     elif G * REPLAY_PERTURBATION > ERROR_FRACTION * tol:
         reason = (f"the motion is too ill-conditioned for tol = {tol:g}: its sensitivity "
                   f"max|Φ(T,t)| = {G:.3g} amplifies an error of {REPLAY_PERTURBATION:g} rad (a careful "
                   f"replay's) to {G * REPLAY_PERTURBATION:.2g} rad")
+    elif est > ERROR_FRACTION * tol:
+        reason = (f"the replay's integration error is still ~{est:.2g} rad with {M} steps "
+                  f"(the most certified: {cap}); more than {ERROR_FRACTION:g}·tol")
     elif has_delta and dmin < delta_min:
         reason = (f"the physical replay comes within {dmin:.4g} of Δ = 0 (delta_min = {delta_min:g})")
     elif err + bound > tol:

@@ -7,16 +7,17 @@ velocities span a plane whose bracket fills R³). A path of orientations whose h
 short and whose points keep well clear of ``Δ = 0`` splits such a problem into local ones.
 
 The path comes from a *roadmap* of the mechanism (:class:`Roadmap`, built once per
-mechanism and clearance and cached): :data:`ROADMAP_SAMPLES` Haar-uniform orientations
+mechanism, clearance and cost and cached): :data:`ROADMAP_SAMPLES` Haar-uniform orientations
 (a fixed seed: the same roadmap, hence the same routes, in every process) with
 ``|Δ| ≥ clearance``, each joined to its nearest neighbours (a k-d tree on unit
 quaternions) by the geodesic between them where every point of it, at
 :data:`RESOLUTION` rad, keeps ``sgnΔ ≥ clearance``. A query joins the start and the goal
 to the roadmap the same way (near them the clearance may drop to what the start and goal
-have: they may lie closer to ``Δ = 0`` than the roadmap), takes the shortest path
-(Dijkstra, :mod:`scipy.sparse.csgraph`), shortcuts it where a longer geodesic is clear,
-and cuts it into hops of at most ``max_hop`` rad along the geodesics. A mechanism without
-a singular set has the geodesic itself.
+have: they may lie closer to ``Δ = 0`` than the roadmap), takes the cheapest path in
+``∫ ds / |Δ|^power`` (Dijkstra, :mod:`scipy.sparse.csgraph`; see
+:data:`CONDITIONING_POWERS` for why this cost), shortcuts it where a longer geodesic is
+clear and no dearer, and cuts it into hops of at most ``max_hop`` rad along the
+geodesics. A mechanism without a singular set has the geodesic itself.
 
 Conventions: rotations are ``(n, 3, 3)`` matrices; distances are geodesic angles (rad).
 """
@@ -46,6 +47,11 @@ RESOLUTION = 0.02
 CLEARANCE_QUANTILE = 0.2
 #: Longest hop (rad) of a route by default.
 MAX_HOP = 3.2
+#: Paths minimise ``∫ ds / |Δ|^power``, ``power`` one of these (the first by default): an
+#: open-loop motion amplifies errors by about ``exp(c ∫ |ω| dt / |Δ|)`` (``|∂L/∂R| ~
+#: |L|/|Δ|``), so a path that keeps far from ``Δ = 0`` is better conditioned than a shorter
+#: one that does not; a higher power keeps farther away at the price of length.
+CONDITIONING_POWERS = (1.0, 2.0)
 
 
 def _turns(Ra: np.ndarray, Rb: np.ndarray) -> np.ndarray:
@@ -72,29 +78,44 @@ def _angles(qa: np.ndarray, qb: np.ndarray) -> np.ndarray:
     return 2.0 * np.arccos(np.clip(np.abs(np.sum(qa * qb, axis=-1)), 0.0, 1.0))
 
 
-def _clear(mech, sign: float, Ra: np.ndarray, Rb: np.ndarray, level) -> np.ndarray:
-    """For each pair ``(Ra[e], Rb[e])``: ``sgnΔ ≥ level[e]`` at every checked point of the
-    geodesic between them (the ends included)."""
+def _survey(mech, sign: float, Ra: np.ndarray, Rb: np.ndarray, level, power: float = CONDITIONING_POWERS[0]):
+    """For each pair ``(Ra[e], Rb[e])``: whether ``sgnΔ ≥ level[e]`` at every checked point
+    of the geodesic between them (the ends included), and the geodesic's cost
+    ``∫ ds / (sgnΔ)^power`` (trapezoidal on the checked points; ``inf`` where
+    not clear)."""
     E = len(Ra)
     if E == 0:
-        return np.zeros(0, dtype=bool)
+        return np.zeros(0, dtype=bool), np.zeros(0)
     v = _turns(Ra, Rb)
     S = int(np.ceil(np.linalg.norm(v, axis=1).max() / RESOLUTION)) + 1
     pts = _points(Ra, v, np.linspace(0.0, 1.0, S))
     d = sign * mech.delta_samples(pts.reshape(-1, 3, 3)).reshape(E, S)
-    return np.all(d >= np.broadcast_to(np.asarray(level, dtype=float), (E,))[:, None], axis=1)
+    clear = np.all(d >= np.broadcast_to(np.asarray(level, dtype=float), (E,))[:, None], axis=1)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        w = np.where(d > 0, np.abs(d), 0.0) ** -power
+        cost = np.linalg.norm(v, axis=1) * (w[:, 1:] + w[:, :-1]).sum(axis=1) / (2 * (S - 1))
+    return clear, np.where(clear, cost, np.inf)
+
+
+def _clear(mech, sign: float, Ra: np.ndarray, Rb: np.ndarray, level) -> np.ndarray:
+    """For each pair ``(Ra[e], Rb[e])``: ``sgnΔ ≥ level[e]`` at every checked point of the
+    geodesic between them (the ends included)."""
+    return _survey(mech, sign, Ra, Rb, level)[0]
 
 
 class Roadmap:
-    """The roadmap of one mechanism at one clearance (see the module): ``R`` (nodes,
-    ``(n, 3, 3)``), ``sign`` (``sgnΔ`` of each), ``graph`` (sparse, edge lengths in rad)."""
+    """The roadmap of one mechanism at one clearance and cost ``power`` (see the module): ``R`` (nodes,
+    ``(n, 3, 3)``), ``sign`` (``sgnΔ`` of each), ``edges`` (node pairs) and their ``costs``
+    (``∫ ds / |Δ|^power`` along the geodesic)."""
 
-    def __init__(self, mechanism, clearance: float, samples: int = ROADMAP_SAMPLES, seed: int = ROADMAP_SEED):
+    def __init__(self, mechanism, clearance: float, power: float = CONDITIONING_POWERS[0],
+                 samples: int = ROADMAP_SAMPLES, seed: int = ROADMAP_SEED):
         mech = catalog.get(mechanism)
         if not mech.has_singular_set:
             raise ValueError(f"mechanism {mech.name!r} has no singular set: it needs no roadmap")
         self.mechanism = mech
         self.clearance = float(clearance)
+        self.power = float(power)
         rot = Rotation.random(samples, random_state=np.random.default_rng(seed))
         R = rot.as_matrix()
         d = mech.delta_samples(R)
@@ -115,18 +136,17 @@ class Roadmap:
         length = _angles(self.q[i], self.q[j])
         short = length <= MAX_EDGE
         i, j, length = i[short], j[short], length[short]
-        clear = np.zeros(len(i), dtype=bool)
+        clear, cost = np.zeros(len(i), dtype=bool), np.zeros(len(i))
         for s in (-1.0, 1.0):
             m = self.sign[i] == s
-            clear[m] = _clear(mech, s, self.R[i[m]], self.R[j[m]], self.clearance)
-        i, j, length = i[clear], j[clear], length[clear]
-        self.edges = np.stack([i, j], axis=1)
-        self.lengths = length
+            clear[m], cost[m] = _survey(mech, s, self.R[i[m]], self.R[j[m]], self.clearance, self.power)
+        self.edges = np.stack([i[clear], j[clear]], axis=1)
+        self.costs = cost[clear]
 
-    def _graph(self, extra_i, extra_j, extra_len, size):
+    def _graph(self, extra_i, extra_j, extra_cost, size):
         i = np.concatenate([self.edges[:, 0], extra_i])
         j = np.concatenate([self.edges[:, 1], extra_j])
-        w = np.concatenate([self.lengths, extra_len])
+        w = np.concatenate([self.costs, extra_cost])
         return coo_matrix((w, (i, j)), shape=(size, size)).tocsr()
 
     def _links(self, R, sign: float, level: float, node_index: int):
@@ -138,18 +158,19 @@ class Roadmap:
         j = j[self.sign[j] == sign]
         length = _angles(np.broadcast_to(q, (len(j), 4)), self.q[j])
         j, length = j[length <= MAX_EDGE], length[length <= MAX_EDGE]
-        ok = _clear(self.mechanism, sign, np.broadcast_to(R, (len(j), 3, 3)), self.R[j], level)
-        return np.full(ok.sum(), node_index), j[ok], length[ok]
+        ok, cost = _survey(self.mechanism, sign, np.broadcast_to(R, (len(j), 3, 3)), self.R[j], level,
+                           self.power)
+        return np.full(ok.sum(), node_index), j[ok], cost[ok]
 
     def path(self, R0, Rd, level: float) -> np.ndarray | None:
-        """The shortest roadmap path ``R0 → … → Rd`` (``(k, 3, 3)``, ends included) whose
+        """The cheapest roadmap path ``R0 → … → Rd`` (``(k, 3, 3)``, ends included) whose
         links to the start and goal keep ``sgnΔ ≥ level``; ``None`` if none joins them."""
         sign = float(np.sign(self.mechanism.delta(R0)))
         n = len(self.R)
         s_i, s_j, s_l = self._links(R0, sign, level, n)
         g_i, g_j, g_l = self._links(Rd, sign, level, n + 1)
-        direct = _clear(self.mechanism, sign, R0[None], Rd[None], level)[0]
-        d_i, d_j, d_l = (np.array([n]), np.array([n + 1]), np.array([so3.distance(R0, Rd)])) if direct \
+        direct, cost = _survey(self.mechanism, sign, R0[None], Rd[None], level, self.power)
+        d_i, d_j, d_l = (np.array([n]), np.array([n + 1]), cost) if direct[0] \
             else (np.zeros(0, int), np.zeros(0, int), np.zeros(0))
         graph = self._graph(np.concatenate([s_i, g_i, d_i]), np.concatenate([s_j, g_j, d_j]),
                             np.concatenate([s_l, g_l, d_l]), n + 2)
@@ -164,9 +185,9 @@ class Roadmap:
 
 
 @lru_cache(maxsize=8)
-def roadmap(mechanism, clearance: float) -> Roadmap:
+def roadmap(mechanism, clearance: float, power: float = CONDITIONING_POWERS[0]) -> Roadmap:
     """The cached :class:`Roadmap` of a mechanism (a :class:`~nonholo.mechanism.Mechanism`)."""
-    return Roadmap(mechanism, clearance)
+    return Roadmap(mechanism, clearance, power)
 
 
 def default_clearance(mechanism) -> float:
@@ -180,14 +201,18 @@ def _clearance(mech) -> float:
     return float(np.quantile(np.abs(mech.delta_samples(R)), CLEARANCE_QUANTILE))
 
 
-def shortcut(mech, sign: float, path: np.ndarray, level: float) -> np.ndarray:
-    """``path`` with every waypoint dropped that a clear geodesic can skip (greedy, from the
-    start: the farthest waypoint reachable by a clear geodesic is the next)."""
+def shortcut(mech, sign: float, path: np.ndarray, level: float, power: float = CONDITIONING_POWERS[0]) -> np.ndarray:
+    """``path`` with every waypoint dropped that a clear geodesic of no greater cost
+    (``∫ ds / |Δ|^power``) can skip (greedy, from the start: the farthest such waypoint is
+    the next)."""
+    _, legs = _survey(mech, sign, path[:-1], path[1:], -np.inf, power)
+    along = np.concatenate([[0.0], np.cumsum(legs)])
     out = [0]
     while out[-1] != len(path) - 1:
         a = out[-1]
         js = np.arange(len(path) - 1, a, -1)
-        ok = _clear(mech, sign, np.broadcast_to(path[a], (len(js), 3, 3)), path[js], level)
+        ok, cost = _survey(mech, sign, np.broadcast_to(path[a], (len(js), 3, 3)), path[js], level, power)
+        ok &= cost <= (along[js] - along[a]) * (1 + 1e-9)
         out.append(int(js[np.argmax(ok)]) if ok.any() else a + 1)
     return path[out]
 
@@ -202,10 +227,10 @@ def subdivide(path: np.ndarray, max_hop: float) -> np.ndarray:
 
 
 def orientation_path(mechanism, R0, Rd, *, delta_min: float = 1e-2, clearance: float | None = None,
-                     max_hop: float = MAX_HOP) -> np.ndarray | None:
+                     max_hop: float = MAX_HOP, power: float = CONDITIONING_POWERS[0]) -> np.ndarray | None:
     """A path of orientations from ``R0`` to ``Rd`` in the start's component (see the
-    module): ``(k + 1, 3, 3)`` with ``R0`` first, ``Rd`` last and hops of at most
-    ``max_hop`` rad, every point of its geodesics with ``sgnΔ ≥ clearance`` (default
+    module): the cheapest in ``∫ ds / |Δ|^power`` on the roadmap, shortcut, ``(k + 1, 3,
+    3)`` with ``R0`` first, ``Rd`` last and hops of at most ``max_hop`` rad, every point of its geodesics with ``sgnΔ ≥ clearance`` (default
     :func:`default_clearance`) but near the ends, where it may drop to what they have
     (never below ``delta_min``). ``None`` if the roadmap joins no such path."""
     mech = catalog.get(mechanism)
@@ -219,7 +244,7 @@ def orientation_path(mechanism, R0, Rd, *, delta_min: float = 1e-2, clearance: f
     if sign == 0.0 or np.sign(mech.delta(Rd)) != sign:
         return None
     level = max(delta_min, min(clearance, 0.9 * sign * float(mech.delta(R0)), 0.9 * sign * float(mech.delta(Rd))))
-    path = roadmap(mech, clearance).path(R0, Rd, level)
+    path = roadmap(mech, clearance, power).path(R0, Rd, level)
     if path is None:
         return None
-    return subdivide(shortcut(mech, sign, path, level), max_hop)
+    return subdivide(shortcut(mech, sign, path, level, power), max_hop)

@@ -14,6 +14,13 @@ into one control on ``[0, T]``, an equal time share each
 (:func:`nonholo.certify.measure`). Where that replay misses the goal
 by more than ``tol`` allows, the last hop is planned again from where the stitched replay
 enters it.
+
+The stitched motion is played open loop, so its sensitivity is the product of its hops'
+transition matrices: each amplifies errors by a factor that grows with ``∫ |ω| dt /
+|Δ|``. Paths are therefore the cheapest in ``∫ ds / |Δ|^p`` rather than the shortest,
+and where the stitched control is still too ill-conditioned to certify, the route is
+steered again along the path of the next cost :data:`nonholo.roadmap.CONDITIONING_POWERS`
+(within :data:`TIME_BUDGET`).
 """
 from __future__ import annotations
 
@@ -87,14 +94,29 @@ def hop_delta_min(mechanism: Mechanism, Ra, Rb, delta_min: float) -> float:
 
 def steer(mechanism: Mechanism, R0, Rd, T: float, local: Callable, *, tol: float, delta_min: float,
           sign: float, budget: float = TIME_BUDGET) -> Steered:
-    """The route ``R0 → Rd`` steered hop by hop (see the module). ``local(R_start, R_goal,
-    T, delta_min)`` plans one hop (a :class:`~nonholo.result.PlanResult`); ``budget``:
-    seconds (wall clock) after which no further hop is tried."""
+    """The route ``R0 → Rd`` steered hop by hop (see the module) along the path of the
+    first cost of :data:`nonholo.roadmap.CONDITIONING_POWERS`, then of the next while the
+    stitched control cannot be certified. ``local(R_start, R_goal, T, delta_min)`` plans one
+    hop (a :class:`~nonholo.result.PlanResult`); ``budget``: seconds (wall clock) after
+    which no further hop is tried."""
     started = time.perf_counter()
-    path = roadmap.orientation_path(mechanism, R0, Rd, delta_min=delta_min)
-    if path is None:
-        return Steered(None, None, reason="no path of orientations clear of Δ = 0 joins the start and "
-                                          "the goal on the roadmap")
+    steered = None
+    for power in roadmap.CONDITIONING_POWERS:
+        path = roadmap.orientation_path(mechanism, R0, Rd, delta_min=delta_min, power=power)
+        if path is None:
+            return Steered(None, None, reason="no path of orientations clear of Δ = 0 joins the start and "
+                                              "the goal on the roadmap")
+        steered = _steer_path(mechanism, path, Rd, T, local, tol=tol, delta_min=delta_min, sign=sign,
+                              deadline=started + budget)
+        if steered.controls is not None or time.perf_counter() > started + budget:
+            break
+    return steered
+
+
+def _steer_path(mechanism: Mechanism, path, Rd, T: float, local: Callable, *, tol: float, delta_min: float,
+                sign: float, deadline: float) -> Steered:
+    """:func:`steer` along one path of orientations (``path[0]`` the start)."""
+    R0 = path[0]
     T_hop = T / (len(path) - 1)
     targets = list(path[1:])
     hops = []
@@ -102,8 +124,8 @@ def steer(mechanism: Mechanism, R0, Rd, T: float, local: Callable, *, tol: float
     while targets:
         if len(hops) + len(targets) > MAX_PIECES:
             return Steered(None, None, hops, f"the route needs more than {MAX_PIECES} hops", path)
-        if time.perf_counter() - started > budget:
-            return Steered(None, None, hops, f"the route ran out of its {budget:g} s after {len(hops)} "
+        if time.perf_counter() > deadline:
+            return Steered(None, None, hops, f"the route ran out of its time after {len(hops)} "
                                              f"hops ({len(targets)} to go)", path)
         res = local(R, targets[0], T_hop, hop_delta_min(mechanism, R, targets[0], delta_min))
         if res.success and res.sensitivity <= MAX_HOP_SENSITIVITY:
