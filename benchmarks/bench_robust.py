@@ -6,7 +6,7 @@
 
 Measures, per strategy, goal set and band (``near``: geodesic distance 0.2–0.8 rad, ``far``:
 0.8–1.8 rad): the success rate, the median and maximum wall time of
-:func:`nonholo.planner.plan` (after JIT warm-up), the median number of iterations and how
+:func:`nonholo.planner.plan` with ``route="local"`` (the strategy alone; after JIT warm-up), the median number of iterations and how
 many goals needed a restart (an initial guess after the first); the rejection time of
 the goals across ``Δ = 0`` (median/max of the full ``plan`` call); and Example 3 with the
 "other" parking goal.
@@ -243,7 +243,7 @@ def run(strategy, goals: list[dict]) -> list[dict]:
     rows = []
     for g in goals:
         t = time.perf_counter()
-        res = planner.plan(g["R0"], g["Rd"], T=g["T"], strategy=strategy, delta_min=DELTA_MIN)
+        res = planner.plan(g["R0"], g["Rd"], T=g["T"], strategy=strategy, delta_min=DELTA_MIN, route="local")
         wall = time.perf_counter() - t
         restarts = max([h.get("attempt", 0) for h in res.history] or [0])
         rows.append({"id": g["id"], "band": g["band"], "wall": wall, "iterations": res.iterations,
@@ -311,14 +311,14 @@ def parking(report: Report) -> None:
         for strategy in ("robust", "paper"):
             for method in planner.METHODS:
                 t = time.perf_counter()
-                res = planner.plan(R0, Rd, method=method, strategy=strategy)
+                res = planner.plan(R0, Rd, method=method, strategy=strategy, route="local")
                 wall = time.perf_counter() - t
                 c = check(res, R0, Rd, 1.0)
                 resim = "n/a" if c["resim"] is None else f"{c['resim']:.1e}"
                 md = "n/a" if c["dense_min_delta"] is None else f"{c['dense_min_delta']:.3f}"
                 rows.append([name, vtext, strategy, method, "solved" if c["ok"] else "FAILED", resim, md,
                              res.iterations, f"{wall * 1e3:.1f}", "" if c["ok"] else res.reason[:90]])
-        solved = [planner.plan(R0, Rd, strategy="paper", gamma=g).success for g in gammas]
+        solved = [planner.plan(R0, Rd, strategy="paper", gamma=g, route="local").success for g in gammas]
         gamma_rows.append([name] + ["yes" if x else "no" for x in solved])
     report.table(["goal", "v", "strategy", "method", "result", "re-simulated |l_T|", "min Δ",
                   "iterations", "time [ms]", "reason (failures)"], rows,

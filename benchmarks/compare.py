@@ -4,11 +4,17 @@ Run by hand::
 
     python -m benchmarks.compare [--limit N] [--bands near far across]
                                  [--solvers robust paper casadi casadi-fine]
+    python -m benchmarks.compare --set random [--per-band 500] [--peer-pairs 15]
+                                 [--peers nonholo-local casadi ompl]
+
+The second form runs the uniform random band set with OMPL's control planner as a
+further peer (:mod:`benchmarks.random_set`, ``global.md``); what follows is the first.
 
 Solvers (all with ``T`` from the goal, ``delta_min = 0.01``):
 
 - ``robust``, ``paper``: :func:`nonholo.planner.plan` with ``strategy="robust"`` /
-  ``"paper"`` (defaults otherwise: parametric, ``harmonics = 2``, ``tol = 1e-10``). A
+  ``"paper"`` and ``route="local"`` (the strategy alone; defaults otherwise: parametric,
+  ``harmonics = 2``, ``tol = 1e-10``). A
   strategy that the installed planner does not know is reported as unavailable.
 - ``casadi``: :func:`benchmarks.casadi_ms.solve`, minimum ``∫|u|² dt`` by multiple
   shooting, ``N = 40`` piecewise-constant intervals, 2 RKMK4/Cayley substeps per
@@ -237,7 +243,7 @@ class NonholoSolver:
         R0, Rd = (so3.from_rpy(*a) for a in WARMUP)
         t0 = time.perf_counter()
         try:
-            self.planner.plan(R0, Rd, T=1.0, strategy=self.strategy, delta_min=DELTA_MIN)
+            self.planner.plan(R0, Rd, T=1.0, strategy=self.strategy, delta_min=DELTA_MIN, route="local")
         except ValueError as exc:
             if "strategy" in str(exc):
                 raise Unavailable(str(exc)) from None
@@ -247,7 +253,7 @@ class NonholoSolver:
     def run(self, goal: dict) -> dict:
         t0 = time.perf_counter()
         res = self.planner.plan(goal["R0"], goal["Rd"], T=goal["T"], strategy=self.strategy,
-                                delta_min=DELTA_MIN)
+                                delta_min=DELTA_MIN, route="local")
         wall = time.perf_counter() - t0
         rec = {"wall_seconds": wall, "solver_seconds": getattr(res, "seconds", None),
                "solver_success": bool(res.success), "reason": res.reason,
@@ -632,7 +638,19 @@ def main(argv=None) -> int:
     ap.add_argument("--solvers", nargs="+", default=list(DEFAULT_SOLVERS), choices=list(SOLVERS))
     ap.add_argument("--goals", type=Path, default=None, help="goal file (default benchmarks/goals.json)")
     ap.add_argument("--out", type=Path, default=RESULTS_DIR, help="output directory (default %(default)s)")
+    ap.add_argument("--set", choices=("goals", "random"), default="goals",
+                    help="goals: benchmarks/goals.json (compare.md); random: the uniform random band set, "
+                         "the default plan() on every pair and its peers on a subset (global.md, "
+                         "benchmarks.random_set)")
+    ap.add_argument("--per-band", type=int, default=500, help="random set: pairs per band and mechanism")
+    ap.add_argument("--peer-pairs", type=int, default=15, help="random set: platform pairs per band for the peers")
+    ap.add_argument("--peers", nargs="*", default=["nonholo-local", "casadi", "ompl"],
+                    choices=["nonholo-local", "casadi", "ompl"], help="random set: the peers to run")
     args = ap.parse_args(argv)
+    if args.set == "random":
+        from . import random_set
+
+        return random_set.main(argv, args.per_band, args.peer_pairs, args.peers, args.out)
     command = command_line("benchmarks.compare", argv)
     t_all = time.perf_counter()
 

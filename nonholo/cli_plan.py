@@ -56,9 +56,10 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     p.add_argument("--max-iter", type=int, default=200, help="maximum number of iterations")
     p.add_argument("--delta-min", type=float, default=1e-2, help="keep |Δ| >= this along the motion")
     p.add_argument("--steps", type=int, default=None, help="integrator steps on [0, T]")
-    p.add_argument("--route", choices=planner.ROUTES, default="local",
-                   help="local: one plan from start to goal (default); auto: if that fails, hops "
-                        "along a path of orientations clear of Δ = 0; global: only the hops")
+    p.add_argument("--route", choices=planner.ROUTES, default="auto",
+                   help="auto: one plan from start to goal and, if that fails, hops along a path "
+                        "of orientations clear of Δ = 0 (default); local: the one plan only; "
+                        "global: only the hops")
     p.add_argument("--out", default=None, help="write the result as JSON to this file")
     p.add_argument("--plot", default=None, help="write a figure (u, RPY, Δ against t) to this file")
     p.add_argument("--quiet", action="store_true", help="print the summary only")

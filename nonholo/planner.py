@@ -91,7 +91,7 @@ def plan(R0, Rd, *, T: float = 1.0, method: str = "parametric", harmonics: int =
          max_iter: int = 200, strategy="robust", mechanism="platform",
          delta_min: float = 1e-2, steps: int | None = None, newton_below: float = 1e-3,
          min_step: float = 1e-6, callback: Callable[[dict], object] | None = None,
-         route: str = "local") -> PlanResult:
+         route: str = "auto") -> PlanResult:
     """Plan a control steering ``R0`` to ``Rd`` in time ``T`` (seconds).
 
     - ``mechanism``: a :class:`~nonholo.mechanism.Mechanism` or its name
@@ -115,12 +115,13 @@ def plan(R0, Rd, *, T: float = 1.0, method: str = "parametric", harmonics: int =
     - ``delta_min``: every trajectory accepted keeps ``|Δ| ≥ delta_min`` (ignored for
       mechanisms without a singular set).
     - ``steps``: CF4 steps on ``[0, T]`` (default :func:`default_steps`).
-    - ``callback(record)``: called after each accepted iteration with the history record;
-      returning a true value stops the run.
-    - ``route``: ``"local"`` (default) plans from ``R0`` to ``Rd``; ``"auto"`` also takes,
-      if that fails, the global route (:mod:`nonholo.planning.route`): hops along a path of
-      orientations through the start's component, clear of ``Δ = 0``, each planned like a
-      local plan, stitched into one control; ``"global"`` takes only the global route.
+    - ``callback(record)``: called after each accepted iteration of the local plan with the
+      history record; returning a true value stops the run (and no global route is taken).
+    - ``route``: ``"auto"`` (default) plans from ``R0`` to ``Rd`` and, if that fails, takes
+      the global route (:mod:`nonholo.planning.route`): hops along a path of orientations
+      through the start's component, clear of ``Δ = 0``, each planned like a local plan,
+      stitched into one control; ``"local"`` plans from ``R0`` to ``Rd`` only (the
+      strategy alone); ``"global"`` takes only the global route.
 
     Success is certified (:mod:`nonholo.certify`): the returned physical controls, replayed
     with an error bound, end within ``tol`` of ``Rd`` and keep ``|Δ| ≥ delta_min``; a
@@ -189,7 +190,7 @@ def plan(R0, Rd, *, T: float = 1.0, method: str = "parametric", harmonics: int =
         outcome = solver.solve(problem, start, callback)
         if outcome.success and outcome.certificate is None:
             outcome = certified(outcome, problem, options)
-        if outcome.success or route == "local":
+        if outcome.success or route == "local" or outcome.stopped:
             return build_result(request, outcome, outcome.success, outcome.reason, problem)
         local_reason = outcome.reason
 
@@ -199,7 +200,8 @@ def plan(R0, Rd, *, T: float = 1.0, method: str = "parametric", harmonics: int =
                     delta_min=hop_delta_min,
                     steps=steps, newton_below=newton_below, min_step=min_step, route="local")
 
-    steered = global_route.steer(mech, R0, Rd, T, hop, tol=tol, delta_min=delta_min, sign=problem.sign)
+    steered = global_route.steer(mech, R0, Rd, T, hop, tol=tol, delta_min=delta_min, sign=problem.sign,
+                                 started=started)
     if steered.controls is None:
         return build_result(request, outcome, False,
                             f"{local_reason}; the global route failed too: {steered.reason}", problem)

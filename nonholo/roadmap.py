@@ -7,7 +7,7 @@ velocities span a plane whose bracket fills R³). A path of orientations whose h
 short and whose points keep well clear of ``Δ = 0`` splits such a problem into local ones.
 
 The path comes from a *roadmap* of the mechanism (:class:`Roadmap`, built once per
-mechanism, clearance and cost and cached): :data:`ROADMAP_SAMPLES` Haar-uniform orientations
+mechanism and clearance and cached): :data:`ROADMAP_SAMPLES` Haar-uniform orientations
 (a fixed seed: the same roadmap, hence the same routes, in every process) with
 ``|Δ| ≥ clearance``, each joined to its nearest neighbours (a k-d tree on unit
 quaternions) by the geodesic between them where every point of it, at
@@ -47,11 +47,12 @@ RESOLUTION = 0.02
 CLEARANCE_QUANTILE = 0.2
 #: Longest hop (rad) of a route by default.
 MAX_HOP = 3.2
-#: Paths minimise ``∫ ds / |Δ|^power``, ``power`` one of these (the first by default): an
+#: Paths minimise ``∫ ds / |Δ|^power``, ``power`` one of these (the first by default; the
+#: global route tries the next while its stitched motion is too ill-conditioned): an
 #: open-loop motion amplifies errors by about ``exp(c ∫ |ω| dt / |Δ|)`` (``|∂L/∂R| ~
 #: |L|/|Δ|``), so a path that keeps far from ``Δ = 0`` is better conditioned than a shorter
 #: one that does not; a higher power keeps farther away at the price of length.
-CONDITIONING_POWERS = (1.0, 2.0)
+CONDITIONING_POWERS = (1.0, 2.0, 3.0, 0.5, 4.0)
 
 
 def _turns(Ra: np.ndarray, Rb: np.ndarray) -> np.ndarray:
@@ -78,23 +79,34 @@ def _angles(qa: np.ndarray, qb: np.ndarray) -> np.ndarray:
     return 2.0 * np.arccos(np.clip(np.abs(np.sum(qa * qb, axis=-1)), 0.0, 1.0))
 
 
+def _profile(mech, sign: float, Ra: np.ndarray, Rb: np.ndarray, points: int | None = None):
+    """``sgnΔ`` at ``points`` evenly spaced points (ends included; default: every
+    :data:`RESOLUTION` rad of the longest) of the geodesic of each pair ``(Ra[e], Rb[e])``,
+    ``(E, points)``, and the geodesics' lengths ``(E,)``."""
+    v = _turns(Ra, Rb)
+    length = np.linalg.norm(v, axis=1)
+    S = points or int(np.ceil(length.max() / RESOLUTION)) + 1
+    pts = _points(Ra, v, np.linspace(0.0, 1.0, S))
+    return sign * mech.delta_samples(pts.reshape(-1, 3, 3)).reshape(len(Ra), S), length
+
+
+def _cost(d: np.ndarray, length: np.ndarray, power: float) -> np.ndarray:
+    """``∫ ds / (sgnΔ)^power`` of geodesics from their profiles (:func:`_profile`),
+    trapezoidal; ``inf`` where ``sgnΔ ≤ 0`` at a point."""
+    with np.errstate(divide="ignore", invalid="ignore"):
+        w = np.where(d > 0, d, 0.0) ** -power
+    return length * (w[:, 1:] + w[:, :-1]).sum(axis=1) / (2 * (d.shape[1] - 1))
+
+
 def _survey(mech, sign: float, Ra: np.ndarray, Rb: np.ndarray, level, power: float = CONDITIONING_POWERS[0]):
     """For each pair ``(Ra[e], Rb[e])``: whether ``sgnΔ ≥ level[e]`` at every checked point
     of the geodesic between them (the ends included), and the geodesic's cost
-    ``∫ ds / (sgnΔ)^power`` (trapezoidal on the checked points; ``inf`` where
-    not clear)."""
-    E = len(Ra)
-    if E == 0:
+    ``∫ ds / (sgnΔ)^power`` (:func:`_cost`; ``inf`` where not clear)."""
+    if len(Ra) == 0:
         return np.zeros(0, dtype=bool), np.zeros(0)
-    v = _turns(Ra, Rb)
-    S = int(np.ceil(np.linalg.norm(v, axis=1).max() / RESOLUTION)) + 1
-    pts = _points(Ra, v, np.linspace(0.0, 1.0, S))
-    d = sign * mech.delta_samples(pts.reshape(-1, 3, 3)).reshape(E, S)
-    clear = np.all(d >= np.broadcast_to(np.asarray(level, dtype=float), (E,))[:, None], axis=1)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        w = np.where(d > 0, np.abs(d), 0.0) ** -power
-        cost = np.linalg.norm(v, axis=1) * (w[:, 1:] + w[:, :-1]).sum(axis=1) / (2 * (S - 1))
-    return clear, np.where(clear, cost, np.inf)
+    d, length = _profile(mech, sign, Ra, Rb)
+    clear = np.all(d >= np.broadcast_to(np.asarray(level, dtype=float), (len(Ra),))[:, None], axis=1)
+    return clear, np.where(clear, _cost(d, length, power), np.inf)
 
 
 def _clear(mech, sign: float, Ra: np.ndarray, Rb: np.ndarray, level) -> np.ndarray:
@@ -104,18 +116,16 @@ def _clear(mech, sign: float, Ra: np.ndarray, Rb: np.ndarray, level) -> np.ndarr
 
 
 class Roadmap:
-    """The roadmap of one mechanism at one clearance and cost ``power`` (see the module): ``R`` (nodes,
-    ``(n, 3, 3)``), ``sign`` (``sgnΔ`` of each), ``edges`` (node pairs) and their ``costs``
-    (``∫ ds / |Δ|^power`` along the geodesic)."""
+    """The roadmap of one mechanism at one clearance (see the module): ``R`` (nodes,
+    ``(n, 3, 3)``), ``sign`` (``sgnΔ`` of each), ``edges`` (node pairs) and their
+    :meth:`costs`."""
 
-    def __init__(self, mechanism, clearance: float, power: float = CONDITIONING_POWERS[0],
-                 samples: int = ROADMAP_SAMPLES, seed: int = ROADMAP_SEED):
+    def __init__(self, mechanism, clearance: float, samples: int = ROADMAP_SAMPLES, seed: int = ROADMAP_SEED):
         mech = catalog.get(mechanism)
         if not mech.has_singular_set:
             raise ValueError(f"mechanism {mech.name!r} has no singular set: it needs no roadmap")
         self.mechanism = mech
         self.clearance = float(clearance)
-        self.power = float(power)
         rot = Rotation.random(samples, random_state=np.random.default_rng(seed))
         R = rot.as_matrix()
         d = mech.delta_samples(R)
@@ -136,20 +146,30 @@ class Roadmap:
         length = _angles(self.q[i], self.q[j])
         short = length <= MAX_EDGE
         i, j, length = i[short], j[short], length[short]
-        clear, cost = np.zeros(len(i), dtype=bool), np.zeros(len(i))
+        # every edge's Δ profile at the same points, kept for the costs of every power
+        S = int(np.ceil(MAX_EDGE / RESOLUTION)) + 1
+        profile = np.empty((len(i), S))
         for s in (-1.0, 1.0):
             m = self.sign[i] == s
-            clear[m], cost[m] = _survey(mech, s, self.R[i[m]], self.R[j[m]], self.clearance, self.power)
+            profile[m], length[m] = _profile(mech, s, self.R[i[m]], self.R[j[m]], S)
+        clear = np.all(profile >= self.clearance, axis=1)
         self.edges = np.stack([i[clear], j[clear]], axis=1)
-        self.costs = cost[clear]
+        self._profile, self._length = profile[clear], length[clear]
+        self._costs: dict[float, np.ndarray] = {}
 
-    def _graph(self, extra_i, extra_j, extra_cost, size):
+    def costs(self, power: float) -> np.ndarray:
+        """The edges' costs ``∫ ds / |Δ|^power`` (cached per ``power``)."""
+        if power not in self._costs:
+            self._costs[power] = _cost(self._profile, self._length, power)
+        return self._costs[power]
+
+    def _graph(self, extra_i, extra_j, extra_cost, size, power):
         i = np.concatenate([self.edges[:, 0], extra_i])
         j = np.concatenate([self.edges[:, 1], extra_j])
-        w = np.concatenate([self.costs, extra_cost])
+        w = np.concatenate([self.costs(power), extra_cost])
         return coo_matrix((w, (i, j)), shape=(size, size)).tocsr()
 
-    def _links(self, R, sign: float, level: float, node_index: int):
+    def _links(self, R, sign: float, level: float, node_index: int, power: float):
         """Edges from ``R`` to its clear roadmap neighbours of the same sign."""
         q = Rotation.from_matrix(R).as_quat()
         n = len(self.R)
@@ -158,22 +178,21 @@ class Roadmap:
         j = j[self.sign[j] == sign]
         length = _angles(np.broadcast_to(q, (len(j), 4)), self.q[j])
         j, length = j[length <= MAX_EDGE], length[length <= MAX_EDGE]
-        ok, cost = _survey(self.mechanism, sign, np.broadcast_to(R, (len(j), 3, 3)), self.R[j], level,
-                           self.power)
+        ok, cost = _survey(self.mechanism, sign, np.broadcast_to(R, (len(j), 3, 3)), self.R[j], level, power)
         return np.full(ok.sum(), node_index), j[ok], cost[ok]
 
-    def path(self, R0, Rd, level: float) -> np.ndarray | None:
+    def path(self, R0, Rd, level: float, power: float = CONDITIONING_POWERS[0]) -> np.ndarray | None:
         """The cheapest roadmap path ``R0 → … → Rd`` (``(k, 3, 3)``, ends included) whose
         links to the start and goal keep ``sgnΔ ≥ level``; ``None`` if none joins them."""
         sign = float(np.sign(self.mechanism.delta(R0)))
         n = len(self.R)
-        s_i, s_j, s_l = self._links(R0, sign, level, n)
-        g_i, g_j, g_l = self._links(Rd, sign, level, n + 1)
-        direct, cost = _survey(self.mechanism, sign, R0[None], Rd[None], level, self.power)
+        s_i, s_j, s_l = self._links(R0, sign, level, n, power)
+        g_i, g_j, g_l = self._links(Rd, sign, level, n + 1, power)
+        direct, cost = _survey(self.mechanism, sign, R0[None], Rd[None], level, power)
         d_i, d_j, d_l = (np.array([n]), np.array([n + 1]), cost) if direct[0] \
             else (np.zeros(0, int), np.zeros(0, int), np.zeros(0))
         graph = self._graph(np.concatenate([s_i, g_i, d_i]), np.concatenate([s_j, g_j, d_j]),
-                            np.concatenate([s_l, g_l, d_l]), n + 2)
+                            np.concatenate([s_l, g_l, d_l]), n + 2, power)
         dist, pred = dijkstra(graph, directed=False, indices=n, return_predecessors=True)
         if not np.isfinite(dist[n + 1]):
             return None
@@ -185,9 +204,9 @@ class Roadmap:
 
 
 @lru_cache(maxsize=8)
-def roadmap(mechanism, clearance: float, power: float = CONDITIONING_POWERS[0]) -> Roadmap:
+def roadmap(mechanism, clearance: float) -> Roadmap:
     """The cached :class:`Roadmap` of a mechanism (a :class:`~nonholo.mechanism.Mechanism`)."""
-    return Roadmap(mechanism, clearance, power)
+    return Roadmap(mechanism, clearance)
 
 
 def default_clearance(mechanism) -> float:
@@ -244,7 +263,7 @@ def orientation_path(mechanism, R0, Rd, *, delta_min: float = 1e-2, clearance: f
     if sign == 0.0 or np.sign(mech.delta(Rd)) != sign:
         return None
     level = max(delta_min, min(clearance, 0.9 * sign * float(mech.delta(R0)), 0.9 * sign * float(mech.delta(Rd))))
-    path = roadmap(mech, clearance, power).path(R0, Rd, level)
+    path = roadmap(mech, clearance).path(R0, Rd, level, power)
     if path is None:
         return None
     return subdivide(shortcut(mech, sign, path, level, power), max_hop)

@@ -36,8 +36,8 @@ KINDS = {
     "robust_grid": {"method": "nonparametric", "grid": 40},  # frame controls (grid)
     "paper": {"strategy": "paper"},                          # physical Fourier controls
     "paper_grid": {"strategy": "paper", "method": "nonparametric", "grid": 40},
-    "failed": {"strategy": "paper", "max_iter": 3},          # complete trajectory, not converged
-    "stopped": {"strategy": "paper",                         # trajectory stops before T
+    "failed": {"strategy": "paper", "max_iter": 3, "route": "local"},  # complete, not converged
+    "stopped": {"strategy": "paper", "route": "local",       # trajectory stops before T
                 "u0": lambda t: np.stack([5 * np.sin(9 * t), 3 * np.cos(7 * t)], -1)},
     "refused": {"Rd": ACROSS},                               # no trajectory at all
     "attitude": {"mechanism": "attitude"},                   # no singular set

@@ -58,7 +58,7 @@ def test_hard_goal_fails_gracefully():
     """A reachable goal (generated as above) on which the plain θ-flow runs into the barrier."""
     R0, Rd = so3.from_rpy(2.2642, 0.0361, 1.9724), so3.from_rpy(1.6499, 0.1579, 2.7202)
     for method in METHODS:
-        res = planner.plan(R0, Rd, method=method, strategy="paper")
+        res = planner.plan(R0, Rd, method=method, strategy="paper", route="local")
         assert not res.success
         assert "min_step" in res.reason and "delta_min" in res.reason
         assert res.min_delta >= 1e-2                      # the last accepted trajectory
@@ -179,7 +179,7 @@ def test_goal_beyond_the_singular_surface_returns_at_once(Rd, match, monkeypatch
 def test_initial_control_into_the_singularity_fails_gracefully():
     R0, Rd = example(1)
     u0 = C.Fourier(1.0, [[1.0, 0, 0, 0, 0], [0.0, 0, 0, 0, 0]])      # runs into Δ = 0
-    res = planner.plan(R0, Rd, u0=u0, strategy="paper")
+    res = planner.plan(R0, Rd, u0=u0, strategy="paper", route="local")
     assert not res.success and "initial control" in res.reason and "Δ = 0" in res.reason
     assert res.iterations == 0 and res.terminal_error is None
     assert 0 < len(res.t) < res.steps + 1

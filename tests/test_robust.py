@@ -76,7 +76,7 @@ def test_paper_strategy_fails_the_other_parking_goal():
     """What the robust strategy is for: the appendix's algorithm steers into Δ = 0 here."""
     R0, other = other_parking_goal()
     for gamma in (0.2, 0.5, 1.0):
-        res = planner.plan(R0, other, strategy="paper", gamma=gamma)
+        res = planner.plan(R0, other, strategy="paper", gamma=gamma, route="local")
         assert not res.success and "delta_min" in res.reason
 
 

@@ -134,9 +134,9 @@ def far_pair(mechanism="platform", pid=FAR):
 
 def test_global_route_reaches_a_goal_the_local_planner_misses(tmp_path):
     p = far_pair()
-    local = planner.plan(p["R0"], p["Rd"])
+    local = planner.plan(p["R0"], p["Rd"], route="local")
     assert not local.success and local.route == "local"
-    res = planner.plan(p["R0"], p["Rd"], route="auto")
+    res = planner.plan(p["R0"], p["Rd"])                  # the default route: "auto"
     assert res.success and res.route == "global", res.reason
     assert isinstance(res.parametrisation, Stitched) and res.parametrisation.n_pieces >= 2
     assert res.terminal_error + res.error_bound <= res.options["tol"]
@@ -220,11 +220,26 @@ def test_cli_takes_the_route(tmp_path, capsys):
     start = [repr(float(a)) for a in so3.as_rpy(p["R0"])]
     goal = [repr(float(a)) for a in so3.as_rpy(p["Rd"])]
     out, fig = tmp_path / "far.json", tmp_path / "far.png"
-    assert cli(["--from", *start, "--to", *goal, "--quiet"]) == 1
-    assert cli(["--from", *start, "--to", *goal, "--quiet", "--route", "auto",
-                          "--out", str(out), "--plot", str(fig)]) == 0
+    assert cli(["--from", *start, "--to", *goal, "--quiet", "--route", "local"]) == 1
+    assert cli(["--from", *start, "--to", *goal, "--quiet",          # the default route: auto
+                "--out", str(out), "--plot", str(fig)]) == 0
     text = capsys.readouterr().out
     assert "global route" in text
     res = PlanResult.load(out)
     assert res.success and res.route == "global"
     assert fig.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+@pytest.mark.parametrize("mechanism, first, stop", [("platform", 0, 11), ("platform_raised", 8, 10)])
+def test_default_plan_solves_a_slice_of_the_random_band_set(mechanism, first, stop):
+    """Far pairs of ``benchmarks.goalset.band_pairs`` (1.8–π rad), some of which the local
+    planner misses: the default ``plan()`` solves each, certified, and RK4 confirms it."""
+    from test_certify import rk4_check
+
+    far = [p for p in goalset.band_pairs(mechanism, 500) if p["band"] == "1.8-pi"][first:stop]
+    results = [planner.plan(p["R0"], p["Rd"], mechanism=mechanism) for p in far]
+    assert all(r.success for r in results), [r.reason for r in results if not r.success]
+    assert any(r.route == "global" for r in results)
+    for (err, dmin), r in zip(rk4_check(results, far), results):
+        assert err <= 1e-8, (r.route, err)
+        assert dmin >= r.options["delta_min"]

@@ -331,6 +331,8 @@ class Outcome:
     #: the certificate of a success (:mod:`nonholo.planning.certification`); a success
     #: without one is certified by :func:`nonholo.plan`
     certificate: Certificate | None = None
+    #: the caller's callback stopped the run (no further route is tried)
+    stopped: bool = False
 
 
 class Strategy(ABC):

@@ -38,9 +38,10 @@ class PaperStrategy(Strategy):
                            "choose another initial control (u0)")
         history = [record(0, ev, 0.0, "initial", 0)]
         if callback is not None and callback(history[-1]):
-            return Outcome(ev, False, "stopped by callback", history, 0)
+            return Outcome(ev, False, "stopped by callback", history, 0, stopped=True)
         scale = step_scale(problem, start.controls)
         d = descend(problem, ev, opt, lambda ev, newton: kernels.min_norm_step(ev.J, ev.l, scale),
                     budget=opt.max_iter, history=history, callback=callback)
         reason = f"max_iter = {opt.max_iter} reached with {d.reason}" if d.status == "budget" else d.reason
-        return Outcome(d.evaluation, d.status == "converged", reason, history, d.steps)
+        return Outcome(d.evaluation, d.status == "converged", reason, history, d.steps,
+                       stopped=d.status == "stopped")

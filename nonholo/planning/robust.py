@@ -349,13 +349,13 @@ class RobustStrategy(Strategy):
             rec = record(it, ev, 0.0, "initial" if k == 0 else "restart", 0, attempt=k)
             history.append(rec)
             if callback is not None and callback(rec):
-                return Outcome(ev, False, "stopped by callback", history, it)
+                return Outcome(ev, False, "stopped by callback", history, it, stopped=True)
             budget = min(self.attempt_iterations, opt.max_iter - it)
             d = self.descend(problem, ev, k, it, budget, history, callback)
             ev, why = d.evaluation, d.reason
             it += d.steps
             if d.status == "stopped":
-                return Outcome(ev, False, why, history, it)
+                return Outcome(ev, False, why, history, it, stopped=True)
             if ev.error <= opt.tol:
                 why += f" (attempt {k + 1}: {label})" if k else ""
                 fine, ev, n, note = self.refine(problem, ev, k, it, history, callback)

@@ -52,8 +52,9 @@ MAX_REPAIRS = 2
 HOP_DELTA_MIN = 0.05
 #: The stitched control's certified replay is at most this many times finer than its hops'.
 STITCHED_REFINEMENT = 8
-#: Wall-clock seconds a global route may take at most.
-TIME_BUDGET = 3.0
+#: Wall-clock seconds after the start of :func:`nonholo.plan` (the local attempt included)
+#: after which the global route tries no further hop.
+TIME_BUDGET = 2.5
 
 
 @dataclass
@@ -93,13 +94,15 @@ def hop_delta_min(mechanism: Mechanism, Ra, Rb, delta_min: float) -> float:
 
 
 def steer(mechanism: Mechanism, R0, Rd, T: float, local: Callable, *, tol: float, delta_min: float,
-          sign: float, budget: float = TIME_BUDGET) -> Steered:
+          sign: float, budget: float = TIME_BUDGET, started: float | None = None) -> Steered:
     """The route ``R0 → Rd`` steered hop by hop (see the module) along the path of the
     first cost of :data:`nonholo.roadmap.CONDITIONING_POWERS`, then of the next while the
     stitched control cannot be certified. ``local(R_start, R_goal, T, delta_min)`` plans one
     hop (a :class:`~nonholo.result.PlanResult`); ``budget``: seconds (wall clock) after
-    which no further hop is tried."""
-    started = time.perf_counter()
+    ``started`` (a :func:`time.perf_counter` reading; default: now) after which no further
+    hop is tried."""
+    if started is None:
+        started = time.perf_counter()
     steered = None
     for power in roadmap.CONDITIONING_POWERS:
         path = roadmap.orientation_path(mechanism, R0, Rd, delta_min=delta_min, power=power)
