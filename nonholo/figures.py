@@ -1145,6 +1145,58 @@ def plot_min_delta(ax, results, threshold: float | None = 1e-2, labels=None) -> 
     ax.legend(loc="best", framealpha=0.9)
 
 
+def _rpy_curve(R) -> np.ndarray:
+    """RPY angles ``(n, 3)`` of rotations, wrapped to the box, with ``nan`` rows where a
+    curve wraps (so that a line drawn through them breaks there)."""
+    a = Rotation.from_matrix(np.asarray(R, dtype=float)).as_euler("ZYX")
+    jump = np.any(np.abs(np.diff(a, axis=0)) > np.pi, axis=1)
+    return np.insert(a, np.flatnonzero(jump) + 1, np.nan, axis=0)
+
+
+@_styled
+def global_route_figure(result, title: str | None = None) -> Figure:
+    """A plan of the global route (``result.route == "global"``, its controls a
+    :class:`~nonholo.stitched.Stitched`): left, its motion in RPY coordinates over the
+    singular surface ``Δ = 0`` (axes as :func:`singular_set_figure`), the hops' ends
+    marked; right, ``Δ`` along the motion and the stitched controls, the hand-overs
+    between hops dashed."""
+    par = result.parametrisation
+    fig = Figure(figsize=(13.0, 5.6), layout="constrained")
+    gs = fig.add_gridspec(2, 2, width_ratios=[1.2, 1.0])
+    ax = fig.add_subplot(gs[:, 0], projection="3d")
+    _draw_singular_surface(ax, cmap="Greys")
+    a = _rpy_curve(result.R)
+    ax.plot(a[:, 2], a[:, 1], a[:, 0], color="C3", lw=2.0, label="motion R(t)")
+    w = Rotation.from_matrix(np.asarray(par.waypoints)).as_euler("ZYX")
+    ax.scatter(w[1:-1, 2], w[1:-1, 1], w[1:-1, 0], color="k", s=18, depthshade=False, label="ends of hops")
+    for (phi, th, psi), mk, lab in ((w[0], "o", "start"), (w[-1], "*", "goal")):
+        ax.scatter([psi], [th], [phi], marker=mk, s=110, color="gold", edgecolor="k", depthshade=False,
+                   label=lab)
+    ax.set(xlim=(-np.pi, np.pi), ylim=(-np.pi / 2, np.pi / 2), zlim=(-np.pi, np.pi))
+    ax.set_xticks(*_PI_TICKS)
+    ax.set_yticks(*_HALF_PI_TICKS)
+    ax.set_zticks(*_PI_TICKS)
+    ax.set_xlabel("ψ [rad]")
+    ax.set_ylabel("ϑ [rad]")
+    ax.set_zlabel("φ [rad]")
+    ax.set_box_aspect((2, 1, 2), zoom=0.88)
+    ax.view_init(elev=25.0, azim=-60.0)
+    ax.set_title(f"the route over Δ = 0 (grey): {par.n_pieces} hops")
+    ax.legend(loc="upper left", framealpha=0.9, fontsize=8)
+    hand_overs = par.segment_times[1:-1]
+    ax1 = fig.add_subplot(gs[0, 1])
+    plot_delta(ax1, result, threshold=result.options.get("delta_min"))
+    ax2 = fig.add_subplot(gs[1, 1])
+    plot_controls(ax2, result)
+    ax2.set_title("stitched controls (equal time for each hop)")
+    for axis in (ax1, ax2):
+        for t in hand_overs:
+            axis.axvline(t, color="0.4", lw=0.8, ls=":")
+    fig.suptitle(title or f"{result.mechanism}: a far goal reached by the global route "
+                          f"({so3.distance(result.R0, result.Rd):.2f} rad)")
+    return fig
+
+
 @_styled
 def example_overview_figure(results, title: str = "", geometry=None, tol: float | None = None,
                             threshold: float | None = 1e-2) -> Figure:
