@@ -19,9 +19,9 @@ A plan is certified when the replay's terminal error plus that bound is at most 
 the replay keeps ``sgnΔ ≥ delta_min`` at every point where it evaluates ``L``: then any
 accurate re-simulation of the returned controls ends within ``tol`` of the goal. An
 infinite ``G`` (the variational replay ran into ``Δ = 0``) or one so large that
-``G · REPLAY_PERTURBATION`` alone exceeds ``tol`` makes a plan uncertifiable: its endpoint
-then depends on perturbations below any replay's accuracy. So does a ``G`` that no grid up
-to :data:`MAX_REPLAY_STEPS` resolves.
+``G · REPLAY_PERTURBATION`` alone exceeds ``SENSITIVITY_FRACTION · tol`` makes a plan
+uncertifiable: its endpoint then depends on perturbations below any replay's accuracy. So
+does a ``G`` that no grid up to :data:`MAX_REPLAY_STEPS` resolves.
 
 :class:`Certificate` holds the numbers a :class:`~nonholo.result.PlanResult` stores
 (``replay_steps``, ``terminal_error``, ``error_bound``, ``min_delta``, ``sensitivity``);
@@ -45,6 +45,10 @@ MAX_REPLAY_STEPS = 204800
 #: Error (rad) anywhere along the motion that any replay may make — DOP853 at ``rtol =
 #: 1e-13`` — and that reaches ``T`` amplified by the sensitivity ``G``.
 REPLAY_PERTURBATION = 1e-13
+#: A motion whose ``G · REPLAY_PERTURBATION`` exceeds this fraction of ``tol`` is too
+#: ill-conditioned to certify (the rest of ``tol`` is left to the replay's own error and
+#: its distance from the goal).
+SENSITIVITY_FRACTION = 0.5
 #: Sensitivities on grids a factor 2 apart agree (``Φ`` is resolved) when they differ by
 #: at most this fraction of the larger.
 SENSITIVITY_AGREEMENT = 0.25
@@ -210,7 +214,7 @@ def measure(R0, Rd, T: float, mechanism, par, steps: int, tol: float, delta_min:
             quarter = M % 4 == 0 and stages.check_steps(par, M // 4) == M // 4
         except ValueError:
             quarter = False
-        limit = ERROR_FRACTION * tol / REPLAY_PERTURBATION
+        limit = SENSITIVITY_FRACTION * tol / REPLAY_PERTURBATION
         if quarter:
             G, resolved, grids, _ = resolved_sensitivity(R0, par, T, mechanism, M // 4, stages.halve(U),
                                                          sign, limit, cap)
@@ -221,7 +225,7 @@ def measure(R0, Rd, T: float, mechanism, par, steps: int, tol: float, delta_min:
     if R_half is None:
         R_half = replay(R0, par, T, mechanism, M // 2, sign, stages.halve(U))[0][-1]
     # a sensitivity that already rules the plan out is not worth a finer replay
-    hopeless = not resolved or not G * REPLAY_PERTURBATION <= ERROR_FRACTION * tol
+    hopeless = not resolved or not G * REPLAY_PERTURBATION <= SENSITIVITY_FRACTION * tol
     while True:
         if U is None:
             U = np.ascontiguousarray(stages.stage_table(par, M))
@@ -246,7 +250,7 @@ def measure(R0, Rd, T: float, mechanism, par, steps: int, tol: float, delta_min:
         found = ", ".join(f"{g:.3g} on {k} steps" for k, g in grids.items())
         reason = (f"the physical replay's sensitivity max|Φ(T,t)| is not resolved ({found}): "
                   f"the endpoint's conditioning is unknown")
-    elif G * REPLAY_PERTURBATION > ERROR_FRACTION * tol:
+    elif G * REPLAY_PERTURBATION > SENSITIVITY_FRACTION * tol:
         reason = (f"the motion is too ill-conditioned for tol = {tol:g}: its sensitivity "
                   f"max|Φ(T,t)| = {G:.3g} amplifies an error of {REPLAY_PERTURBATION:g} rad (a careful "
                   f"replay's) to {G * REPLAY_PERTURBATION:.2g} rad")

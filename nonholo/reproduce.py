@@ -4,6 +4,8 @@
 
 - the figures of the mechanism, its singular set and of every example (PNG and PDF);
 - an animation of the platform through Example 3 (GIF);
+- ``global_route``: a far goal (:data:`FAR_GOAL`) that the local planner misses, reached
+  by the global route (figure, and ``plans/far_goal.json``);
 - ``plans/example<k>_<method>.json``: every planned result (reload with
   :meth:`nonholo.result.PlanResult.load`);
 - ``summary.json``: one object per (example, method) with ``example``, ``method``,
@@ -30,6 +32,10 @@ from .planner import STRATEGIES, plan
 DEFAULT_OUTDIR = Path("paper_figures")
 #: Re-simulated terminal error required of Examples 1 and 2 (rad).
 RESIM_TOL = 1e-8
+#: A far goal (RPY of start and goal, rad; 2.76 rad apart) that the local planner misses
+#: and the global route reaches: the first pair of the 1.8–π band of
+#: ``benchmarks.goalset.band_pairs("platform", 500)``, rounded.
+FAR_GOAL = ((-1.918, 0.336, -2.521), (1.433, -0.813, 1.324))
 
 
 def strongest_strategy() -> str:
@@ -104,6 +110,11 @@ def mechanism_cards():
             yield figures.mechanism_card_figure(name, result=result), f"mechanism_{name}"
 
 
+def plan_far_goal():
+    """:data:`FAR_GOAL` planned by :func:`nonholo.plan` with its defaults."""
+    return plan(so3.from_rpy(*FAR_GOAL[0]), so3.from_rpy(*FAR_GOAL[1]))
+
+
 def write_figures(solved: list[Solved], outdir: Path, progress=_log) -> list[Path]:
     """All figures of the mechanism, the singular set and the examples."""
     written: list[Path] = []
@@ -135,6 +146,13 @@ def write_figures(solved: list[Solved], outdir: Path, progress=_log) -> list[Pat
         save(figures.rpy_figure(results), f"{stem}_rpy")
         save(figures.leg_lengths_figure(results), f"{stem}_leg_lengths")
         save(figures.delta_figure(results), f"{stem}_delta")
+    far = plan_far_goal()
+    if far.route == "global":
+        save(figures.global_route_figure(far), "global_route")
+    else:
+        progress(f"      note: the far goal took the {far.route} route ({far.reason[:120]}); no global_route figure")
+    (outdir / "plans").mkdir(parents=True, exist_ok=True)
+    far.save(outdir / "plans" / "far_goal.json")
     ex3 = [s for s in solved if s.example.number == 3 and len(s.result.R)]
     if ex3:
         gif = outdir / "example3_animation.gif"

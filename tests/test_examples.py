@@ -57,7 +57,7 @@ def test_reproduce_writes_summary_and_figures(tmp_path, capsys):
     stems = ["singular_set", "singular_set_slices", "normal_form", "mechanism_platform",
              "mechanism_platform_raised", "mechanism_attitude"] + [
         f"example{k}_{what}" for k in (1, 2, 3) for what in
-        ("mechanism", "overview", "convergence", "controls", "rpy", "leg_lengths", "delta")]
+        ("mechanism", "overview", "convergence", "controls", "rpy", "leg_lengths", "delta")] + ["global_route"]
     for stem in stems:
         for ext in ("png", "pdf"):
             assert (tmp_path / f"{stem}.{ext}").stat().st_size > 5000, stem
@@ -65,3 +65,5 @@ def test_reproduce_writes_summary_and_figures(tmp_path, capsys):
     from nonholo.result import PlanResult
     again = PlanResult.load(tmp_path / "plans" / "example1_parametric.json")
     assert again.success and again.terminal_error <= 1e-10
+    far = PlanResult.load(tmp_path / "plans" / "far_goal.json")
+    assert far.success and far.route == "global"
