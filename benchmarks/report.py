@@ -59,7 +59,13 @@ def _version(package: str) -> str | None:
         module = __import__(package)
     except ImportError:
         return None
-    return getattr(module, "__version__", "?")
+    if hasattr(module, "__version__"):
+        return module.__version__
+    try:
+        from importlib.metadata import version
+        return version(package)
+    except Exception:  # not installed as a distribution of that name
+        return "?"
 
 
 def machine_info(extra_packages: tuple[str, ...] = ()) -> dict:

@@ -418,7 +418,7 @@ def _sheet_quads(X, Y, Z, jump=np.pi):
     return quads[span < jump]
 
 
-def _draw_singular_surface(ax, n_theta=61, n_psi=121, cmap="viridis"):
+def _draw_singular_surface(ax, n_theta=61, n_psi=121, cmap="viridis", alpha: float = 1.0):
     """The two sheets of Δ = 0 as height φ over (ψ, ϑ) (axes x = ψ, y = ϑ, z = φ)."""
     phi, th, ps = singular_set_points(n_theta, n_psi)
     quads = np.concatenate([_sheet_quads(phi[k], ps[k], th[k]) for k in range(2)])
@@ -432,6 +432,7 @@ def _draw_singular_surface(ax, n_theta=61, n_psi=121, cmap="viridis"):
     normals = np.divide(normals, norm, out=np.zeros_like(normals), where=norm > 0)
     light = np.array([0.5, -0.6, 0.6]) / np.linalg.norm([0.5, -0.6, 0.6])
     colors[:, :3] *= (0.55 + 0.45 * np.abs(normals @ light))[:, None]
+    colors[:, 3] = alpha
     ax.add_collection3d(Poly3DCollection(quads, facecolors=colors, edgecolors="none"))
 
 
@@ -1164,9 +1165,9 @@ def global_route_figure(result, title: str | None = None) -> Figure:
     fig = Figure(figsize=(13.0, 5.6), layout="constrained")
     gs = fig.add_gridspec(2, 2, width_ratios=[1.2, 1.0])
     ax = fig.add_subplot(gs[:, 0], projection="3d")
-    _draw_singular_surface(ax, cmap="Greys")
+    _draw_singular_surface(ax, n_theta=31, n_psi=61, cmap="Greys", alpha=0.25)
     a = _rpy_curve(result.R)
-    ax.plot(a[:, 2], a[:, 1], a[:, 0], color="C3", lw=2.0, label="motion R(t)")
+    ax.plot(a[:, 2], a[:, 1], a[:, 0], color="C3", lw=2.6, label="motion R(t)", zorder=20)
     w = Rotation.from_matrix(np.asarray(par.waypoints)).as_euler("ZYX")
     ax.scatter(w[1:-1, 2], w[1:-1, 1], w[1:-1, 0], color="k", s=18, depthshade=False, label="ends of hops")
     for (phi, th, psi), mk, lab in ((w[0], "o", "start"), (w[-1], "*", "goal")):
@@ -1181,7 +1182,7 @@ def global_route_figure(result, title: str | None = None) -> Figure:
     ax.set_zlabel("φ [rad]")
     ax.set_box_aspect((2, 1, 2), zoom=0.88)
     ax.view_init(elev=25.0, azim=-60.0)
-    ax.set_title(f"the route over Δ = 0 (grey): {par.n_pieces} hops")
+    ax.set_title(f"the motion and Δ = 0 (grey) in RPY angles: {par.n_pieces} hops")
     ax.legend(loc="upper left", framealpha=0.9, fontsize=8)
     hand_overs = par.segment_times[1:-1]
     ax1 = fig.add_subplot(gs[0, 1])
