@@ -22,7 +22,7 @@ Solvers:
 Verification, independent of the planners: the returned control re-simulated by SciPy's
 DOP853 (:func:`nonholo.verify.resimulate`, ``rtol = atol = 1e-13``, stopping at its
 breakpoints) → final error ``|log(R_T R_dᵀ)|``, and the least ``sgn(Δ(R0)) Δ`` on a dense
-DOP853 path (:func:`benchmarks.compare.resimulate_path`) — for the peers' solutions, every
+DOP853 path (:func:`nonholo.verify.resimulate_path`) — for the peers' solutions, every
 tenth ``nonholo`` success and every fourth by the global route; every ``nonholo`` success
 is also re-simulated by classical RK4 on the nine entries of ``R``
 (:func:`benchmarks.certify.check_successes`: ``S`` and ``2S`` steps, DOP853 where they
@@ -71,19 +71,16 @@ def _log(msg: str) -> None:
 
 
 def check(mechanism, R0, Rd, T: float, controls, breakpoints) -> dict:
-    """Final error (DOP853) and least ``sgn(Δ(R0)) Δ`` on the dense path of ``controls``."""
-    from .compare import resimulate_path
-
+    """Final error and least ``sgn(Δ(R0)) Δ`` of ``controls`` re-simulated by DOP853 with
+    a dense path (:func:`nonholo.verify.resimulate_path`; a failed integration counts as
+    reaching ``Δ = 0``, infinitely far from the goal)."""
     mech = catalog.get(mechanism)
     try:
-        err = verify.terminal_error(verify.resimulate(R0, controls, T, mech, breakpoints), Rd)
+        _, R, d = verify.resimulate_path(R0, controls, T, mech, breakpoints)
     except (RuntimeError, FloatingPointError, ValueError, ZeroDivisionError):
-        err = math.inf
-    path = resimulate_path(R0, controls, T, breakpoints, mechanism=mech.name)
+        return {"final_error": math.inf, "least_delta": 0.0}
     sign = float(np.sign(mech.delta(R0)))
-    d = sign * mech.delta_samples(path["R"])
-    least = float(np.min(d)) if path["ok"] else min(float(np.min(d)), 0.0)
-    return {"final_error": float(err), "least_delta": least}
+    return {"final_error": verify.terminal_error(R[-1], Rd), "least_delta": float(np.min(sign * d))}
 
 
 def _record(solver, mechanism, pair, wall, claimed, checked, **extra) -> dict:
@@ -128,21 +125,21 @@ def run_nonholo(mechanism: str, pairs: list[dict], route: str = "auto", label: s
 
 
 def run_casadi(pairs: list[dict]) -> list[dict]:
-    from .compare import CasadiSolver
+    """:mod:`benchmarks.casadi_ms` with the settings of :mod:`benchmarks.compare`'s
+    ``casadi`` (its NLP built once, on Example 1, before anything is timed)."""
+    from nonholo import so3
 
-    solver = CasadiSolver("casadi", N=40, substeps=2, path_at_substeps=True)
-    solver.warm_up()
+    from . import casadi_ms
+
+    kw = {"N": 40, "substeps": 2, "delta_min": DELTA_MIN, "path_at_substeps": True}
+    casadi_ms.solve(so3.from_rpy(0.5, 1.2, -0.5), so3.from_rpy(1.0, 0.9, -0.5), T=1.0, **kw)
     out = []
     for p in pairs:
-        goal = {**p, "delta0": float(catalog.get("platform").delta(p["R0"]))}
-        try:
-            rec = solver.run(goal)
-        except Exception as exc:  # a crash is a failed run
-            out.append(_record("casadi", "platform", p, None, False, None, reason=f"{type(exc).__name__}: {exc}"))
-            continue
-        checked = {"final_error": rec["terminal_error"], "least_delta": rec["min_delta"]}
-        out.append(_record("casadi", "platform", p, rec["wall_seconds"], rec["solver_success"], checked,
-                           reason=str(rec["reason"])))
+        t = time.perf_counter()
+        r = casadi_ms.solve(p["R0"], p["Rd"], T=p["T"], **kw)
+        wall = time.perf_counter() - t
+        checked = check("platform", p["R0"], p["Rd"], p["T"], r.controls, r.t_grid)
+        out.append(_record("casadi", "platform", p, wall, r.success, checked, reason=r.status))
     return out
 
 
@@ -350,21 +347,14 @@ def main(argv, per_band: int, peer_pairs: int, peers: list[str], out: Path) -> i
     ids = {p["id"] for p in subset}
     for r in records:
         r["peer"] = r["mechanism"] == "platform" and r["id"] in ids
-    if "nonholo-local" in peers:
-        _log(f"nonholo-local on {len(subset)} pairs")
-        records += [{**r, "peer": True} for r in run_nonholo("platform", subset, "local", "nonholo-local")]
-    if "casadi" in peers:
-        _log(f"casadi on {len(subset)} pairs")
+    runners = {"nonholo-local": lambda: run_nonholo("platform", subset, "local", "nonholo-local"),
+               "casadi": lambda: run_casadi(subset), "ompl": lambda: run_ompl(subset)}
+    for name in peers:
+        _log(f"{name} on {len(subset)} pairs")
         try:
-            records += [{**r, "peer": True} for r in run_casadi(subset)]
-        except ImportError as exc:
-            _log(f"casadi: skipped ({exc})")
-    if "ompl" in peers:
-        _log(f"ompl on {len(subset)} pairs")
-        try:
-            records += [{**r, "peer": True} for r in run_ompl(subset)]
-        except ImportError as exc:
-            _log(f"ompl: skipped ({exc})")
+            records += [{**r, "peer": True} for r in runners[name]()]
+        except ImportError as exc:       # an optional peer that is not installed
+            _log(f"{name}: skipped ({exc})")
     with open(out / "global.json", "w") as f:
         json.dump({"meta": meta, "records": [_jsonable(r) for r in records]}, f, indent=1)
     figure(out / "global.png", records)
