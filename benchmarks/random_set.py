@@ -290,7 +290,7 @@ def figure(path: Path, records: list[dict]) -> None:
     axes[1].set_ylabel("success rate")
     axes[1].set_ylim(0, 1.05)
     axes[1].set_title("platform, peer subset: success")
-    axes[1].legend(fontsize=7, loc="lower left")
+    axes[1].legend(fontsize=7, loc="center right")
     axes[2].set_yscale("log")
     axes[2].set_ylabel("wall time (ms)")
     axes[2].set_title("platform, peer subset: time per pair")

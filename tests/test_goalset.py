@@ -107,3 +107,25 @@ def test_load_goals_arrays(goals):
     g = goals[0]
     assert isinstance(g["R0"], np.ndarray) and g["R0"].shape == (3, 3)
     assert isinstance(g["Rd"], np.ndarray) and g["Rd"].shape == (3, 3)
+
+
+@pytest.mark.parametrize("mechanism", ["platform", "platform_raised"])
+def test_band_pairs_fill_every_band_from_the_uniform_stream(mechanism):
+    """Each band holds the requested number of pairs in one component, each at the distance
+    its band says; the pairs are those of the uniform stream (same seed), in draw order."""
+    from nonholo import catalog
+
+    mech = catalog.get(mechanism)
+    pairs = goalset.band_pairs(mechanism, 12)
+    assert [p["band"] for p in pairs] == [b for b in goalset.UNIFORM_BANDS for _ in range(12)]
+    stream = goalset.uniform_pairs(mechanism, 400)
+    for p in pairs:
+        lo, hi = goalset.UNIFORM_BANDS[p["band"]]
+        assert so3.distance(p["R0"], p["Rd"]) == pytest.approx(p["distance"])
+        assert lo <= p["distance"] < hi
+        d0, dd = float(mech.delta(p["R0"])), float(mech.delta(p["Rd"]))
+        assert np.sign(d0) == np.sign(dd) and min(abs(d0), abs(dd)) >= goalset.UNIFORM_MIN_DELTA
+    far = [p for p in pairs if p["band"] == "1.8-pi"]
+    in_stream = [q for q in stream if q["band"] == "1.8-pi"][:12]
+    assert all(np.array_equal(a["R0"], b["R0"]) and np.array_equal(a["Rd"], b["Rd"]) for a, b in zip(far, in_stream))
+    assert goalset.band_pairs(mechanism, 12)[5]["Rd"].tolist() == pairs[5]["Rd"].tolist()
