@@ -199,9 +199,9 @@ def measure(R0, Rd, T: float, mechanism, par, steps: int, tol: float, delta_min:
     ``steps/2``·2ᵏ and ``steps``·2ᵏ CF4 steps, ``k`` the least with an error estimate
     below ``ERROR_FRACTION · tol``, or ``k = 0`` when the sensitivity already rules the
     plan out (infinite, unresolved or too large for ``tol``). ``steps`` must be even and a
-    multiple of the controls' grid and of a :class:`~nonholo.replay.FrameControls`' steps. ``G``: the sensitivity,
-    ``R_half``: the endpoint of the ``steps/2`` replay, if already known; ``max_steps``: the
-    finest replay (default :data:`MAX_REPLAY_STEPS`)."""
+    multiple of the controls' grid and of a :class:`~nonholo.replay.FrameControls`' steps.
+    ``G``: the sensitivity, ``R_half``: the endpoint of the ``steps/2`` replay, if already
+    known; ``max_steps``: the finest replay (default :data:`MAX_REPLAY_STEPS`)."""
     has_delta = mechanism.has_singular_set
     cap = MAX_REPLAY_STEPS if max_steps is None else max_steps
     M = steps

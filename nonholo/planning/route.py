@@ -96,19 +96,22 @@ def hop_delta_min(mechanism: Mechanism, Ra, Rb, delta_min: float) -> float:
 def steer(mechanism: Mechanism, R0, Rd, T: float, local: Callable, *, tol: float, delta_min: float,
           sign: float, budget: float = TIME_BUDGET, started: float | None = None) -> Steered:
     """The route ``R0 → Rd`` steered hop by hop (see the module) along the path of the
-    first cost of :data:`nonholo.roadmap.CONDITIONING_POWERS`, then of the next while the
-    stitched control cannot be certified. ``local(R_start, R_goal, T, delta_min)`` plans one
+    first cost of :data:`nonholo.roadmap.CONDITIONING_POWERS`, then along the path of the
+    next (one not tried yet) while the route fails. ``local(R_start, R_goal, T, delta_min)`` plans one
     hop (a :class:`~nonholo.result.PlanResult`); ``budget``: seconds (wall clock) after
     ``started`` (a :func:`time.perf_counter` reading; default: now) after which no further
     hop is tried."""
     if started is None:
         started = time.perf_counter()
-    steered = None
+    steered, tried = None, []
     for power in roadmap.CONDITIONING_POWERS:
         path = roadmap.orientation_path(mechanism, R0, Rd, delta_min=delta_min, power=power)
         if path is None:
             return Steered(None, None, reason="no path of orientations clear of Δ = 0 joins the start and "
                                               "the goal on the roadmap")
+        if any(q.shape == path.shape and np.array_equal(q, path) for q in tried):
+            continue        # steering is deterministic: the same path fails the same way
+        tried.append(path)
         steered = _steer_path(mechanism, path, Rd, T, local, tol=tol, delta_min=delta_min, sign=sign,
                               deadline=started + budget)
         if steered.controls is not None or time.perf_counter() > started + budget:
