@@ -174,15 +174,9 @@ class Planner:
         self.sign = float(np.sign(mech.delta(R0))) if mech.has_singular_set else 1.0
         if mech.has_singular_set:
             # R0 turned until Δ changes sign: an orientation no valid motion can reach
-            for angle in np.linspace(0.1, np.pi, 32):
-                for axis in np.eye(3):
-                    R = so3.exp(angle * axis) @ R0
-                    if self.sign * float(mech.delta(R)) < -self.delta_min:
-                        self.invalid = R
-                        break
-                else:
-                    continue
-                break
+            turned = (so3.exp(angle * axis) @ R0 for angle in np.linspace(0.1, np.pi, 32) for axis in np.eye(3))
+            self.invalid = next((R for R in turned if self.sign * float(mech.delta(R)) < -self.delta_min),
+                                self.invalid)
         self.setup.clear()
         a, b = self.space.allocState(), self.space.allocState()
         _set(a, R0)

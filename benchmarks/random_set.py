@@ -83,10 +83,15 @@ def check(mechanism, R0, Rd, T: float, controls, breakpoints) -> dict:
     return {"final_error": verify.terminal_error(R[-1], Rd), "least_delta": float(np.min(sign * d))}
 
 
+def _within(checked: dict | None, error: float) -> bool:
+    """The check ends within ``error`` rad of the goal and keeps ``delta_min``."""
+    return checked is not None and checked["final_error"] <= error and checked["least_delta"] >= DELTA_MIN
+
+
 def _record(solver, mechanism, pair, wall, claimed, checked, **extra) -> dict:
-    solved = checked is not None and checked["final_error"] <= SUCCESS_TOL and checked["least_delta"] >= DELTA_MIN
     return {"solver": solver, "mechanism": mechanism, "id": pair["id"], "band": pair["band"],
-            "distance": pair["distance"], "seconds": wall, "claimed": bool(claimed), "solved": bool(solved),
+            "distance": pair["distance"], "seconds": wall, "claimed": bool(claimed),
+            "solved": _within(checked, SUCCESS_TOL), "in_region": _within(checked, REGION),
             **(checked or {"final_error": math.inf, "least_delta": None}), **extra}
 
 
@@ -153,9 +158,8 @@ def run_ompl(pairs: list[dict]) -> list[dict]:
         checked = None
         if sol.controls is not None:
             checked = check("platform", p["R0"], p["Rd"], sol.T, sol.controls, sol.controls.breakpoints)
-        in_region = checked is not None and checked["final_error"] <= REGION and checked["least_delta"] >= DELTA_MIN
         out.append(_record("ompl", "platform", p, sol.seconds, sol.reached, checked, reason=sol.status,
-                           in_region=bool(in_region), duration=sol.T, ompl_error=sol.error))
+                           duration=sol.T, ompl_error=sol.error))
     return out
 
 
@@ -188,26 +192,17 @@ def write(out: Path, argv, records: list[dict], meta: dict, per_band: int, peer_
         "check; a *false claim* is a success the re-simulation does not confirm. Peers' solutions are "
         "checked by DOP853 alone.")
     rep.heading("nonholo: every pair")
-    rows = []
-    for mech in MECHANISMS:
-        for band in (*BANDS, "all"):
-            rs = [r for r in records if r["solver"] == "nonholo" and r["mechanism"] == mech
-                  and (band == "all" or r["band"] == band)]
-            if not rs:
-                continue
-            ts = [r["seconds"] for r in rs]
-            rows.append([mech, band, len(rs), sum(r["solved"] for r in rs),
-                         sum(r["claimed"] and not r["solved"] for r in rs),
-                         sum(r.get("route") == "global" and r["solved"] for r in rs),
-                         _ms(_q(ts, 0.5)), _ms(_q(ts, 0.95)), _ms(max(ts)),
-                         _err(max((r["final_error"] for r in rs if r["claimed"]), default=None))])
-    ts = [r["seconds"] for r in records if r["solver"] == "nonholo"]
+    def summary(rs: list[dict]) -> list:
+        ts = [r["seconds"] for r in rs]
+        return [len(rs), sum(r["solved"] for r in rs), sum(r["claimed"] and not r["solved"] for r in rs),
+                sum(r.get("route") == "global" and r["solved"] for r in rs),
+                _ms(_q(ts, 0.5)), _ms(_q(ts, 0.95)), _ms(max(ts)),
+                _err(max((r["final_error"] for r in rs if r["claimed"]), default=None))]
+
     rs = [r for r in records if r["solver"] == "nonholo"]
-    rows.append(["all", "all", len(rs), sum(r["solved"] for r in rs),
-                 sum(r["claimed"] and not r["solved"] for r in rs),
-                 sum(r.get("route") == "global" and r["solved"] for r in rs),
-                 _ms(_q(ts, 0.5)), _ms(_q(ts, 0.95)), _ms(max(ts)),
-                 _err(max((r["final_error"] for r in rs if r["claimed"]), default=None))])
+    groups = [(mech, band, [r for r in rs if r["mechanism"] == mech and band in ("all", r["band"])])
+              for mech in MECHANISMS for band in (*BANDS, "all")] + [("all", "all", rs)]
+    rows = [[mech, band, *summary(group)] for mech, band, group in groups if group]
     rep.table(["mechanism", "band (rad)", "pairs", "solved", "false claims", "by the global route",
                "median ms", "p95 ms", "max ms", "largest final error"], rows)
     failed = [r for r in rs if not r["solved"]]
@@ -234,7 +229,7 @@ def write(out: Path, argv, records: list[dict], meta: dict, per_band: int, peer_
             ts = [r["seconds"] for r in rs]
             fe = [r["final_error"] for r in rs if np.isfinite(r["final_error"])]
             rows.append([solver, band, len(rs), sum(r["solved"] for r in rs),
-                         sum((r["final_error"] <= REGION and (r["least_delta"] or -1) >= DELTA_MIN) for r in rs),
+                         sum(r["in_region"] for r in rs),
                          sum(r["claimed"] and not r["solved"] for r in rs) if solver != "ompl" else "–",
                          _ms(_q(ts, 0.5)), _ms(_q(ts, 0.95)), _ms(_q(ts, 1.0)),
                          _err(_q(fe, 0.5))])
