@@ -48,7 +48,7 @@ CLEARANCE_QUANTILE = 0.2
 #: Longest hop (rad) of a route by default.
 MAX_HOP = 3.2
 #: Paths minimise ``∫ ds / |Δ|^power``, ``power`` one of these (the first by default; the
-#: global route tries the next while its stitched motion is too ill-conditioned): an
+#: global route tries the next while it fails, e.g. too ill-conditioned to certify): an
 #: open-loop motion amplifies errors by about ``exp(c ∫ |ω| dt / |Δ|)`` (``|∂L/∂R| ~
 #: |L|/|Δ|``), so a path that keeps far from ``Δ = 0`` is better conditioned than a shorter
 #: one that does not; a higher power keeps farther away at the price of length.
@@ -107,12 +107,6 @@ def _survey(mech, sign: float, Ra: np.ndarray, Rb: np.ndarray, level, power: flo
     d, length = _profile(mech, sign, Ra, Rb)
     clear = np.all(d >= np.broadcast_to(np.asarray(level, dtype=float), (len(Ra),))[:, None], axis=1)
     return clear, np.where(clear, _cost(d, length, power), np.inf)
-
-
-def _clear(mech, sign: float, Ra: np.ndarray, Rb: np.ndarray, level) -> np.ndarray:
-    """For each pair ``(Ra[e], Rb[e])``: ``sgnΔ ≥ level[e]`` at every checked point of the
-    geodesic between them (the ends included)."""
-    return _survey(mech, sign, Ra, Rb, level)[0]
 
 
 class Roadmap:
