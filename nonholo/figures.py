@@ -1156,12 +1156,13 @@ def _rpy_curve(R) -> np.ndarray:
 
 @_styled
 def global_route_figure(result, title: str | None = None) -> Figure:
-    """A plan of the global route (``result.route == "global"``, its controls a
-    :class:`~nonholo.stitched.Stitched`): left, its motion in RPY coordinates over the
-    singular surface ``Δ = 0`` (axes as :func:`singular_set_figure`), the hops' ends
-    marked; right, ``Δ`` along the motion and the stitched controls, the hand-overs
-    between hops dashed."""
-    par = result.parametrisation
+    """A plan of the global route (``result.route == "global"``): left, its motion in RPY
+    coordinates over the singular surface ``Δ = 0`` (axes as :func:`singular_set_figure`),
+    the hops' ends marked; right, ``Δ`` along the motion and the controls — the stitched
+    controls of the hops (thin, where the route was re-planned as one smooth control) and
+    the plan's — the hand-overs between hops dotted."""
+    par = result.hops
+    smoothed = result.stitched is not None
     fig = Figure(figsize=(13.0, 5.6), layout="constrained")
     gs = fig.add_gridspec(2, 2, width_ratios=[1.2, 1.0])
     ax = fig.add_subplot(gs[:, 0], projection="3d")
@@ -1189,7 +1190,16 @@ def global_route_figure(result, title: str | None = None) -> Figure:
     plot_delta(ax1, result, threshold=result.options.get("delta_min"))
     ax2 = fig.add_subplot(gs[1, 1])
     plot_controls(ax2, result)
-    ax2.set_title("stitched controls (equal time for each hop)")
+    if smoothed:
+        ts = np.linspace(0.0, result.T, 2001)
+        us = par(ts)
+        for j in range(us.shape[1]):
+            ax2.plot(ts, us[:, j], color=PAIR_COLORS[j], lw=0.8, alpha=0.6,
+                     label=f"$u_{j + 1}$ (stitched)")
+        ax2.legend(loc="best", fontsize=8)
+        ax2.set_title("the stitched controls of the hops (thin) and the smooth re-plan")
+    else:
+        ax2.set_title("stitched controls (equal time for each hop)")
     for axis in (ax1, ax2):
         for t in hand_overs:
             axis.axvline(t, color="0.4", lw=0.8, ls=":")

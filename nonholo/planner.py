@@ -120,7 +120,8 @@ def plan(R0, Rd, *, T: float = 1.0, method: str = "parametric", harmonics: int =
     - ``route``: ``"auto"`` (default) plans from ``R0`` to ``Rd`` and, if that fails, takes
       the global route (:mod:`nonholo.planning.route`): hops along a path of orientations
       through the start's component, clear of ``Δ = 0``, each planned like a local plan,
-      stitched into one control; ``"local"`` plans from ``R0`` to ``Rd`` only (the
+      stitched into one control, then re-planned where it can as one smooth control from
+      the stitched one (the result's ``stitched`` keeps the hops); ``"local"`` plans from ``R0`` to ``Rd`` only (the
       strategy alone); ``"global"`` takes only the global route.
 
     Success is certified (:mod:`nonholo.certify`): the returned physical controls, replayed
@@ -205,4 +206,5 @@ def plan(R0, Rd, *, T: float = 1.0, method: str = "parametric", harmonics: int =
     if steered.controls is None:
         return build_result(request, outcome, False,
                             f"{local_reason}; the global route failed too: {steered.reason}", problem)
-    return global_route.build_result(request, steered, local_reason)
+    smoothed = global_route.smooth(request, steered.controls, cls, deadline=started + global_route.TIME_BUDGET)
+    return global_route.build_result(request, steered, local_reason, smoothed)

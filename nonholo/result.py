@@ -8,7 +8,8 @@ records) and ``controls``, the parametrisation (``{"kind": "fourier", "T", "harm
 planned in frame coordinates (strategy ``"robust"``), ``{"kind": "frame", "T",
 "mechanism", "steps", "R0", "frame": <the w parametrisation>}``, or, for a global route
 (``"route": "global"``), ``{"kind": "stitched", "T", "pieces": [<one of those per hop>],
-"waypoints"}``; see :mod:`nonholo.controls`, :mod:`nonholo.replay` and
+"waypoints"}``, unless the route was re-planned as one smooth control: then ``controls``
+is that control and ``"stitched"`` the route's stitched control (absent otherwise); see :mod:`nonholo.controls`, :mod:`nonholo.replay` and
 :mod:`nonholo.stitched`) from which ``controls(t)`` is rebuilt (identically: the frame
 motion's nodes are recomputed by the same kernel). Floats are written with
 ``repr`` precision, so a save/load round trip reproduces every number exactly. Quantities
@@ -94,6 +95,10 @@ class PlanResult:
       inputs ``u(t)``.
     - ``route``: ``"local"`` (one plan from ``R0`` to ``Rd``) or ``"global"`` (hops along a
       path of orientations clear of ``Δ = 0``, :mod:`nonholo.planning.route`).
+    - ``stitched``: for a global route re-planned as one smooth control (the controls),
+      the stitched control of the route it was planned from (its hops, waypoints and
+      hand-overs; a record: the certificate is the smooth control's); ``None`` otherwise.
+      :attr:`hops` gives a global route's stitched control either way.
     """
 
     success: bool
@@ -120,6 +125,7 @@ class PlanResult:
     error_bound: float | None = None
     replay_steps: int | None = None
     route: str = "local"
+    stitched: Stitched | None = None
 
     # -- controls ----------------------------------------------------------------------
     def controls(self, t) -> np.ndarray:
@@ -131,6 +137,13 @@ class PlanResult:
         """Times where the planned control or its derivative may jump (for
         :func:`nonholo.verify.resimulate`: an adaptive integrator should not step across them)."""
         return self.parametrisation.breakpoints
+
+    @property
+    def hops(self) -> Stitched | None:
+        """A global route's stitched control (the hops' controls, the route's waypoints and
+        hand-overs): the controls themselves, or the record :attr:`stitched` of a smoothed
+        route; ``None`` for a local plan."""
+        return self.parametrisation if isinstance(self.parametrisation, Stitched) else self.stitched
 
     @property
     def params(self) -> np.ndarray:
@@ -166,6 +179,7 @@ class PlanResult:
             "error_bound": self.error_bound,
             "replay_steps": None if self.replay_steps is None else int(self.replay_steps),
             "route": self.route,
+            **({} if self.stitched is None else {"stitched": self.stitched.to_dict()}),
             "R0": arr(self.R0),
             "Rd": arr(self.Rd),
             "controls": self.parametrisation.to_dict(),
@@ -192,11 +206,12 @@ class PlanResult:
         if unknown:
             raise ValueError(f"invalid plan: unknown field{'s' if len(unknown) > 1 else ''} "
                              f"{', '.join(_short(k) for k in unknown)}")
-        if "route" in d and d["format"] != FORMAT:
-            raise ValueError(f"invalid plan: 'route' is set in a file of format {d['format']!r}, "
-                             "which has no global routes")
+        for key in ("route", "stitched"):
+            if key in d and d["format"] != FORMAT:
+                raise ValueError(f"invalid plan: {key!r} is set in a file of format {d['format']!r}, "
+                                 "which has no global routes")
         d = {"options": {}, "sensitivity": None, "error_bound": None, "replay_steps": None,
-             "route": "local", **d}
+             "route": "local", "stitched": None, **d}
         if not isinstance(d["success"], bool):
             raise ValueError(f"invalid plan: 'success' must be true or false, got {_short(d['success'])}")
         mechanism = _string(d, "mechanism")
@@ -205,6 +220,11 @@ class PlanResult:
         except ValueError as exc:
             raise ValueError(f"invalid plan: 'mechanism': {exc}") from None
         par = _controls(d["controls"], mech)
+        stitched = None
+        if d["stitched"] is not None:
+            if not isinstance(d["stitched"], dict) or d["stitched"].get("kind") != Stitched.kind:
+                _fail("stitched", f"must be stitched controls ({{\"kind\": \"stitched\", ...}}) or null")
+            stitched = _controls(d["stitched"], mech, "stitched")
         m = par.n_inputs
         options = d["options"]
         if not isinstance(options, dict):
@@ -228,7 +248,7 @@ class PlanResult:
             options=dict(options), sensitivity=_number(d, "sensitivity", null=True),
             error_bound=_number(d, "error_bound", null=True),
             replay_steps=None if d["replay_steps"] is None else _integer(d, "replay_steps", minimum=2),
-            route=_string(d, "route"))
+            route=_string(d, "route"), stitched=stitched)
         _Validation(res, legacy=d["format"] == FORMAT_1).run()
         return res
 
@@ -332,7 +352,7 @@ _REQUIRED = ("format", "success", "reason", "terminal_error", "min_delta", "iter
              "mechanism", "method", "strategy", "T", "steps", "seconds", "R0", "Rd", "controls",
              "t", "R", "u", "delta")
 #: fields the first files of the format did not have (absent: ``{}`` and ``null``)
-_OPTIONAL = ("options", "sensitivity", "error_bound", "replay_steps", "route")
+_OPTIONAL = ("options", "sensitivity", "error_bound", "replay_steps", "route", "stitched")
 #: the planner's methods, by the kind of the parametrisation each plans with
 _METHOD_OF_KIND = {"fourier": "parametric", "piecewise_constant": "nonparametric"}
 #: the fields of each kind of ``controls``
@@ -514,26 +534,27 @@ def _physical(d, mech, where: str) -> None:
         _parametrisation(d, where, m)
 
 
-def _controls(d, mech) -> Controls | FrameControls | Stitched:
-    """The ``controls`` field of a plan of mechanism ``mech``, checked, as an object."""
+def _controls(d, mech, where: str = "controls") -> Controls | FrameControls | Stitched:
+    """The ``controls`` field (or another field ``where`` holding controls) of a plan of
+    mechanism ``mech``, checked, as an object."""
     if isinstance(d, dict) and d.get("kind") == Stitched.kind:
-        _fields(d, _CONTROL_FIELDS["stitched"], "controls")
-        if _number(d, "T", where="controls.") <= 0:
-            _fail("controls.T", f"must be positive, got {d['T']}")
+        _fields(d, _CONTROL_FIELDS["stitched"], where)
+        if _number(d, "T", where=f"{where}.") <= 0:
+            _fail(f"{where}.T", f"must be positive, got {d['T']}")
         pieces = d["pieces"]
         if not isinstance(pieces, list) or not pieces:
-            _fail("controls.pieces", "must be a non-empty list")
+            _fail(f"{where}.pieces", "must be a non-empty list")
         for i, p in enumerate(pieces):
-            _physical(p, mech, f"controls.pieces[{i}]")
-        W = _array(d["waypoints"], "controls.waypoints", (len(pieces) + 1, 3, 3))
+            _physical(p, mech, f"{where}.pieces[{i}]")
+        W = _array(d["waypoints"], f"{where}.waypoints", (len(pieces) + 1, 3, 3))
         for i, R in enumerate(W):
-            _rotation(R, f"controls.waypoints[{i}]")
+            _rotation(R, f"{where}.waypoints[{i}]")
     else:
-        _physical(d, mech, "controls")
+        _physical(d, mech, where)
     try:
         return from_dict(d)
     except (ValueError, TypeError, KeyError, IndexError, AttributeError) as exc:
-        _fail("controls", f"cannot be rebuilt: {exc}")
+        _fail(where, f"cannot be rebuilt: {exc}")
 
 
 def _scan_finite(value, field: str) -> None:
@@ -661,9 +682,18 @@ class _Validation:
         if r.route not in ROUTES:
             _fail("route", f"must be one of {', '.join(map(repr, ROUTES))}, got {_short(r.route)}")
         stitched = isinstance(par, Stitched)
-        if stitched != (r.route == "global"):
+        if r.stitched is not None:
+            if not isinstance(r.stitched, Stitched):
+                _fail("stitched", f"must be stitched controls or None, got {type(r.stitched).__name__}")
+            if stitched:
+                _fail("stitched", "is set, but the controls are stitched themselves (a smoothed route's "
+                                  "controls are one piece)")
+        routed = stitched or r.stitched is not None
+        if routed != (r.route == "global"):
             _fail("route", f"is {r.route!r}, but the controls are "
-                           f"{'stitched' if stitched else 'one piece'} (route {'global' if stitched else 'local'!r})")
+                           f"{'stitched' if stitched else 'one piece'}"
+                           f"{' with the stitched route they were smoothed from' if r.stitched is not None else ''}"
+                           f" (route {'global' if routed else 'local'!r})")
         if r.method not in _METHOD_OF_KIND.values():
             _fail("method", f"must be one of {', '.join(map(repr, _METHOD_OF_KIND.values()))}, got {r.method!r}")
         if par.n_inputs != mech.n_inputs:
@@ -681,6 +711,15 @@ class _Validation:
                 self.piece(piece, mech, f"controls.pieces[{i}]", None, None)
         else:
             self.piece(par, mech, "controls", r.steps, r.R0)
+        if r.stitched is not None:
+            if not r.success or r.replay_steps is None:
+                _fail("route", "is 'global', which only a certified success has")
+            if r.stitched.T != r.T:
+                _fail("stitched", f"is defined on [0, {r.stitched.T!r}], the plan on [0, {r.T!r}]")
+            if not np.array_equal(r.stitched.waypoints[0], r.R0):
+                _fail("R0", "differs from the stitched route's first waypoint")
+            for i, piece in enumerate(r.stitched.pieces):
+                self.piece(piece, mech, f"stitched.pieces[{i}]", None, None)
         return mech
 
     def piece(self, par, mech, where: str, steps: int | None, R0) -> None:

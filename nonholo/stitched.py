@@ -88,6 +88,18 @@ class Stitched:
 
     # -- evaluation -----------------------------------------------------------------------
     def __call__(self, t):
+        """The physical inputs ``u(t)`` (``(n, m)`` for ``t`` of shape ``(n,)``)."""
+        return self._retimed(t, list(self.pieces))
+
+    def planned(self, t):
+        """The pieces' controls in the coordinates they were planned in — the frame
+        coordinates ``w`` of :class:`~nonholo.replay.FrameControls` pieces, ``u`` of the
+        others — re-timed like :meth:`__call__` (frame systems are driftless too). The
+        initial guess of a re-plan of the whole motion (:func:`nonholo.planning.route.smooth`)."""
+        return self._retimed(t, [getattr(p, "frame", p) for p in self.pieces])
+
+    def _retimed(self, t, functions):
+        """``c_i · f_i(c_i · (t − iτ))`` on slot ``i`` (see the module)."""
         scalar = np.ndim(t) == 0
         t = np.clip(check_times(t).reshape(-1), 0.0, self.T)
         k = len(self.pieces)
@@ -97,7 +109,7 @@ class Stitched:
         for j in np.unique(i):
             sel = i == j
             local = np.clip(c[j] * (t[sel] - j * self.slot), 0.0, self.pieces[j].T)
-            u[sel] = c[j] * np.asarray(self.pieces[j](local)).reshape(-1, self.n_inputs)
+            u[sel] = c[j] * np.asarray(functions[j](local)).reshape(-1, self.n_inputs)
         return u[0] if scalar else u
 
     def stage_table(self, steps: int) -> np.ndarray:

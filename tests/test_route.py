@@ -8,6 +8,8 @@ import pytest
 from benchmarks import goalset
 from nonholo import catalog, planner, replay, roadmap, simulation, so3, stages, verify
 from nonholo.controls import Fourier
+from nonholo.planning import route
+from nonholo.replay import FrameControls
 from nonholo.stitched import Stitched
 
 
@@ -138,9 +140,29 @@ def test_global_route_reaches_a_goal_the_local_planner_misses(tmp_path):
     assert not local.success and local.route == "local"
     res = planner.plan(p["R0"], p["Rd"])                  # the default route: "auto"
     assert res.success and res.route == "global", res.reason
-    assert isinstance(res.parametrisation, Stitched) and res.parametrisation.n_pieces >= 2
+    check_global_result(res, p, tmp_path)
+    # by default the stitched route is re-planned as one smooth control
+    assert isinstance(res.stitched, Stitched) and res.hops is res.stitched
+    assert isinstance(res.parametrisation, FrameControls)
+    assert res.parametrisation.frame.harmonics in route.SMOOTHING_HARMONICS
+    assert None in {rec["hop"] for rec in res.history}
+
+
+def test_a_route_that_is_not_smoothed_keeps_the_stitched_control(tmp_path, monkeypatch):
+    monkeypatch.setattr(route, "SMOOTHING_HARMONICS", ())
+    p = far_pair()
+    res = planner.plan(p["R0"], p["Rd"])
+    assert res.success and res.route == "global", res.reason
+    assert res.stitched is None and res.hops is res.parametrisation
+    check_global_result(res, p, tmp_path)
+    assert {rec["hop"] for rec in res.history} == set(range(res.hops.n_pieces))
+
+
+def check_global_result(res, p, tmp_path):
+    """A certified global route: hops, independent re-simulations, waypoints, save/load."""
+    assert isinstance(res.hops, Stitched) and res.hops.n_pieces >= 2
     assert res.terminal_error + res.error_bound <= res.options["tol"]
-    assert {rec["hop"] for rec in res.history} == set(range(res.parametrisation.n_pieces))
+    assert set(range(res.hops.n_pieces)) <= {rec["hop"] for rec in res.history}
     # independent re-simulations of controls(t): DOP853 stopping at every breakpoint, and RK4
     RT = verify.resimulate(p["R0"], res.controls, res.T, "platform", res.breakpoints)
     assert verify.terminal_error(RT, p["Rd"]) <= 1e-8
@@ -148,13 +170,52 @@ def test_global_route_reaches_a_goal_the_local_planner_misses(tmp_path):
                                       steps=res.steps * -(-6400 // res.steps))
     assert verify.terminal_error(rk4, p["Rd"]) <= 1e-8 and dmin >= res.options["delta_min"]
     # the route's waypoints start at R0 and end at Rd; the file keeps everything
-    W = res.parametrisation.waypoints
+    W = res.hops.waypoints
     np.testing.assert_array_equal(W[0], p["R0"])
     np.testing.assert_allclose(W[-1], p["Rd"], atol=1e-12)
     path = tmp_path / "far.json"
     res.save(path)
     back = type(res).load(path)
-    assert back == res and back.route == "global"
+    assert back == res and back.route == "global" and back.hops == res.hops
+
+
+def test_stitched_planned_coordinates_are_the_hops_own_retimed():
+    """``Stitched.planned``: piece ``i``'s planned (frame) control, re-timed into slot ``i``;
+    the physical ``u`` follows from it along the motion (``u = W(R) w``)."""
+    p = far_pair()
+    res = planner.plan(p["R0"], p["Rd"], route="global")
+    st = res.hops
+    t = np.linspace(0.0, st.T, 301)[:-1]
+    i = np.floor(t / st.slot).astype(int)
+    w = st.planned(t)
+    for j, piece in enumerate(st.pieces):
+        c = piece.T / st.slot
+        sel = i == j
+        np.testing.assert_allclose(w[sel], c * piece.frame(c * (t[sel] - j * st.slot)), rtol=0, atol=1e-14)
+        np.testing.assert_allclose(st(t[sel]), c * piece(c * (t[sel] - j * st.slot)), rtol=0, atol=1e-12)
+
+
+def test_plan_files_keep_the_smoothed_route_honest():
+    """``stitched`` only with a one-piece control on a global route, of the plan's T and R0."""
+    from dataclasses import replace
+
+    from nonholo.result import FORMAT_2, PlanResult
+
+    p = far_pair()
+    res = planner.plan(p["R0"], p["Rd"])
+    assert res.stitched is not None
+    d = res.to_dict()
+    with pytest.raises(ValueError, match="route"):
+        PlanResult.from_dict({**d, "route": "local"})
+    with pytest.raises(ValueError, match="stitched"):
+        PlanResult.from_dict({**d, "stitched": d["controls"]})
+    with pytest.raises(ValueError, match="stitched"):
+        PlanResult.from_dict({**d, "stitched": {**d["stitched"], "T": 2.0}})
+    with pytest.raises(ValueError, match="stitched"):
+        PlanResult.from_dict({**{k: v for k, v in d.items() if k != "route"}, "format": FORMAT_2})
+    with pytest.raises(ValueError, match="stitched"):
+        replace(res, parametrisation=res.stitched).validate()
+    assert PlanResult.from_dict(d) == res
 
 
 def test_route_global_for_a_mechanism_without_a_singular_set():

@@ -15,6 +15,18 @@ into one control on ``[0, T]``, an equal time share each
 by more than ``tol`` allows, the last hop is planned again from where the stitched replay
 enters it.
 
+Smoothing. The stitched control jumps where one hop hands over to the next. Once it is
+certified, :func:`smooth` re-plans the whole motion as one control of the run's
+parametrisation, with the stitched control as the initial guess: its planned coordinates
+(:meth:`~nonholo.stitched.Stitched.planned`; the frame coordinates ``w`` for strategy
+``"robust"``, smooth between hand-overs even where ``u`` is large near ``Δ = 0``)
+projected on :data:`SMOOTHING_HARMONICS` harmonics (or on the run's grid), then the
+strategy's descent from that guess alone (:func:`smoothing_strategy`). The guess starts
+close to the goal along the route's corridor, so the descent is short. Where it
+converges and is certified, the smooth control is the plan's and the stitched one is kept
+as its record (:attr:`nonholo.result.PlanResult.stitched`); otherwise the plan is the
+stitched control.
+
 The stitched motion is played open loop, so its sensitivity is the product of its hops'
 transition matrices: each amplifies errors by a factor that grows with ``∫ |ω| dt /
 |Δ|``. Paths are therefore the cheapest in ``∫ ds / |Δ|^p`` rather than the shortest,
@@ -25,7 +37,7 @@ steered again along the path of the next cost :data:`nonholo.roadmap.CONDITIONIN
 from __future__ import annotations
 
 import time
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, replace
 from functools import lru_cache
 from typing import Callable
 
@@ -33,10 +45,13 @@ import numpy as np
 
 from .. import certify, roadmap, so3
 from ..certify import Certificate
+from ..controls import Fourier, PiecewiseConstant
 from ..mechanism import Mechanism
 from ..result import PlanResult
 from ..stitched import Stitched
-from .core import Request
+from .certification import certified
+from .core import Outcome, Problem, Request, Start
+from .core import build_result as build_local_result
 
 #: The shortest hop a failed hop is split into (rad).
 MIN_HOP = 0.02
@@ -53,8 +68,16 @@ HOP_DELTA_MIN = 0.05
 #: The stitched control's certified replay is at most this many times finer than its hops'.
 STITCHED_REFINEMENT = 8
 #: Wall-clock seconds after the start of :func:`nonholo.plan` (the local attempt included)
-#: after which the global route tries no further hop.
+#: after which the global route tries no further hop, and no smoothing is started or
+#: continued.
 TIME_BUDGET = 2.5
+#: Harmonics of the smooth re-plan of a stitched control (method ``"parametric"``), tried
+#: in turn: the guess must follow the hops' controls, which jump at the hand-overs, well
+#: enough to stay in the route's corridor (fewer harmonics leave it more often than not).
+SMOOTHING_HARMONICS = (16, 32)
+#: Wall-clock seconds the smoothing may take (within :data:`TIME_BUDGET`): most routes
+#: smooth in a fraction of this; the rest keep their stitched control.
+SMOOTHING_TIME = 0.5
 
 
 @dataclass
@@ -81,6 +104,56 @@ def hop_strategy(cls: type) -> type:
     if not hasattr(cls, "max_sensitivity"):
         return cls
     return type(cls.__name__, (cls,), {"max_sensitivity": MAX_HOP_SENSITIVITY, "__module__": cls.__module__})
+
+
+@lru_cache(maxsize=8)
+def smoothing_strategy(cls: type) -> type:
+    """The strategy ``cls`` descending from the given initial control alone (a strategy
+    with several initial guesses, :meth:`attempts`, tries only that one): a smooth re-plan
+    is wanted near the stitched control, not anywhere."""
+    if not hasattr(cls, "attempts"):
+        return cls
+
+    def attempts(self, problem, start):
+        yield "stitched", start.controls
+
+    return type(cls.__name__, (cls,), {"attempts": attempts, "__module__": cls.__module__})
+
+
+def smoothing_guesses(stitched: Stitched, method: str, harmonics: int, grid: int, steps: int) -> list:
+    """The initial controls of :func:`smooth`: the stitched control's planned coordinates
+    projected on :data:`SMOOTHING_HARMONICS` harmonics (those above the run's ``harmonics``
+    that ``steps`` resolve) or, for method ``"nonparametric"``, on the run's grid."""
+    T, m = stitched.T, stitched.n_inputs
+    if method == "nonparametric":
+        return [PiecewiseConstant.fit(stitched.planned, T, grid, m)]
+    return [Fourier.fit(stitched.planned, T, K, m) for K in SMOOTHING_HARMONICS if harmonics < K <= steps // 2]
+
+
+def smooth(request: Request, stitched: Stitched, strategy: type, deadline: float) -> tuple[Outcome, Problem] | None:
+    """The route's motion re-planned as one control (see the module): the certified outcome
+    and its problem, or ``None`` when no guess of :func:`smoothing_guesses` converged to a
+    certified plan within :data:`SMOOTHING_TIME` and before ``deadline`` (a
+    :func:`time.perf_counter` reading; a descent under way stops at its next iteration)."""
+    deadline = min(deadline, time.perf_counter() + SMOOTHING_TIME)
+    opts = request.options
+    solver = smoothing_strategy(strategy)(opts)
+    frame = solver.frame(request.mechanism)
+
+    def out_of_time(record) -> bool:
+        return time.perf_counter() > deadline
+
+    for guess in smoothing_guesses(stitched, request.method, request.harmonics, request.grid, request.steps):
+        if time.perf_counter() > deadline:
+            return None
+        problem = Problem(request.R0, request.Rd, request.T, request.mechanism, request.method, request.steps,
+                          opts.delta_min, frame=frame)
+        outcome = solver.solve(problem, Start(guess, True), out_of_time)
+        if outcome.success and outcome.certificate is None:
+            outcome = certified(outcome, problem, opts)
+        if outcome.success:
+            return outcome, problem
+    return None
 
 
 def hop_delta_min(mechanism: Mechanism, Ra, Rb, delta_min: float) -> float:
@@ -164,23 +237,34 @@ def _steer_path(mechanism: Mechanism, path, Rd, T: float, local: Callable, *, to
     return Steered(stitched, cert, hops, "", path)
 
 
-def build_result(request: Request, steered: Steered, local_reason: str) -> PlanResult:
-    """The :class:`~nonholo.result.PlanResult` of a certified global route: the stitched
-    control, its certified replay sampled at ``k·N`` steps (``N``: the hops' finest grid),
-    the hops' histories one after another (each record tagged with its ``hop``)."""
+def build_result(request: Request, steered: Steered, local_reason: str,
+                 smoothed: tuple[Outcome, Problem] | None = None) -> PlanResult:
+    """The :class:`~nonholo.result.PlanResult` of a certified global route: the hops'
+    histories one after another (each record tagged with its ``hop``), then, if the route
+    was ``smoothed`` (:func:`smooth`), the smooth re-plan's (tagged ``"hop": None``) and
+    that plan with the stitched control as its record; otherwise the stitched control and
+    its certified replay sampled at ``k·N`` steps (``N``: the hops' finest grid)."""
     mech, T, cert = request.mechanism, request.T, steered.certificate
     hops = steered.hops
+    history = [{**rec, "hop": i} for i, h in enumerate(hops) for rec in h.history]
+    route = (f"the global route: {len(hops)} hops through a path of orientations clear of Δ = 0, "
+             f"stitched (the local planner: {local_reason})")
+    if smoothed is not None:
+        outcome, problem = smoothed
+        res = build_local_result(request, outcome, True, outcome.reason, problem)
+        return replace(res, route="global", stitched=steered.controls,
+                       history=history + [{**rec, "hop": None} for rec in res.history],
+                       iterations=sum(h.iterations for h in hops) + res.iterations,
+                       reason=f"reached by {route}, then re-planned as one smooth control from the "
+                              f"stitched one: {res.reason}")
     steps = len(hops) * max(h.steps for h in hops)
     par = steered.controls
     n = steps + 1
     t = np.arange(n) * (T / steps)
     t[-1] = T
     R = cert.R[::cert.replay_steps // steps]
-    history = [{**rec, "hop": i} for i, h in enumerate(hops) for rec in h.history]
-    reason = (f"reached by the global route: {len(hops)} hops through a path of orientations clear "
-              f"of Δ = 0, stitched (the local planner: {local_reason}); certified: the physical replay "
-              f"({cert.replay_steps} steps) ends {cert.terminal_error:.2g} rad from the goal, error bound "
-              f"{cert.error_bound:.2g} rad")
+    reason = (f"reached by {route}; certified: the physical replay ({cert.replay_steps} steps) ends "
+              f"{cert.terminal_error:.2g} rad from the goal, error bound {cert.error_bound:.2g} rad")
     return PlanResult(
         success=True, reason=reason, terminal_error=cert.terminal_error, min_delta=cert.min_delta,
         iterations=sum(h.iterations for h in hops), history=history,
