@@ -13,8 +13,11 @@ other cannot be written; a plan file is replaced only once the new one is comple
 Output closed early by its reader (``nonholo plan ... | head -1``) is not an error: the
 rest is discarded and the files are still written.
 
-Exit status: 0 on success, 1 if the planner failed, 2 on bad input, 3 if ``--out`` or
-``--plot`` could not be written (whatever the planner's outcome; one line on stderr names
+``--csv`` writes a successful plan's motion for an actuator controller
+(:mod:`nonholo.export`), sampled at ``--csv-rate`` Hz.
+
+Exit status: 0 on success, 1 if the planner failed, 2 on bad input, 3 if ``--out``,
+``--plot`` or ``--csv`` could not be written (whatever the planner's outcome; one line on stderr names
 the file and the error).
 """
 from __future__ import annotations
@@ -26,7 +29,7 @@ from pathlib import Path
 
 import numpy as np
 
-from . import catalog, planner, so3
+from . import catalog, export, planner, so3
 
 #: exit status of ``nonholo plan`` (see the module docstring)
 EXIT_SUCCESS, EXIT_FAILED, EXIT_BAD_INPUT, EXIT_WRITE_FAILED = 0, 1, 2, 3
@@ -62,6 +65,11 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
                         "global: only the hops")
     p.add_argument("--out", default=None, help="write the result as JSON to this file")
     p.add_argument("--plot", default=None, help="write a figure (u, RPY, Δ against t) to this file")
+    p.add_argument("--csv", default=None,
+                   help="write the motion as CSV for an actuator controller (t, leg lengths and "
+                        "speeds, u, quaternion qx qy qz qw, delta; only for a successful plan)")
+    p.add_argument("--csv-rate", type=float, default=export.DEFAULT_RATE,
+                   help=f"samples per second of --csv (default {export.DEFAULT_RATE:g})")
     p.add_argument("--quiet", action="store_true", help="print the summary only")
     p.set_defaults(func=run)
     return p
@@ -122,6 +130,11 @@ def _plot_format_error(path) -> str | None:
 def run(args) -> int:
     """Run the ``plan`` sub-command for parsed ``args``; returns the exit status."""
     why = _plot_format_error(args.plot) if args.plot else None
+    if why is None and args.csv:
+        try:
+            export.sample_times(1.0, args.csv_rate)
+        except ValueError as exc:
+            why = f"--csv-rate: {exc}"
     if why:
         _error(why)
         return EXIT_BAD_INPUT
@@ -158,6 +171,17 @@ def run(args) -> int:
             status = EXIT_WRITE_FAILED
         else:
             _say(f"wrote {args.plot}")
+    if args.csv:
+        if not res.success:
+            _say(f"{args.csv} not written: a failed plan is not a motion to play back")
+        else:
+            try:
+                res.to_csv(args.csv, rate=args.csv_rate)
+            except (OSError, ValueError) as exc:
+                _cannot_write(args.csv, exc)
+                status = EXIT_WRITE_FAILED
+            else:
+                _say(f"wrote {args.csv}")
     return status
 
 

@@ -42,7 +42,7 @@ from pathlib import Path
 
 import numpy as np
 
-from . import catalog, certify, kernels, so3, stages
+from . import catalog, certify, export, kernels, so3, stages
 from .checks import MAX_STEPS, is_number
 from .controls import Controls, Fourier, PiecewiseConstant
 from .replay import FrameControls, from_dict
@@ -283,6 +283,13 @@ class PlanResult:
         target = Path(os.path.realpath(path)) if path.is_symlink() else path
         _write_atomic(target, text.encode("utf-8"))
         return path
+
+    def to_csv(self, path, rate: float = export.DEFAULT_RATE) -> Path:
+        """Write the motion sampled at ``rate`` Hz as CSV for an actuator controller: ``t``,
+        leg lengths ``l_i`` and speeds ``dl_i_dt`` (geometry units), inputs ``u_i``, the
+        orientation as a unit quaternion ``qx, qy, qz, qw`` (scalar last) and ``delta``
+        (see :mod:`nonholo.export`). A failed plan raises ``ValueError``."""
+        return export.write_csv(self, path, rate)
 
     @classmethod
     def load(cls, path) -> "PlanResult":
