@@ -63,6 +63,8 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
                    help="auto: one plan from start to goal and, if that fails, hops along a path "
                         "of orientations clear of Δ = 0 (default); local: the one plan only; "
                         "global: only the hops")
+    p.add_argument("--leg-length", nargs=2, type=float, default=None, metavar=("LO", "HI"),
+                   help="keep every leg's length within [LO, HI] (a platform's geometry units)")
     p.add_argument("--out", default=None, help="write the result as JSON to this file")
     p.add_argument("--plot", default=None, help="write a figure (u, RPY, Δ against t) to this file")
     p.add_argument("--csv", default=None,
@@ -145,6 +147,7 @@ def run(args) -> int:
             R0, Rd, T=args.T, method=args.method, harmonics=args.harmonics, grid=args.grid,
             strategy=args.strategy, mechanism=args.mechanism, gamma=args.gamma, tol=args.tol,
             max_iter=args.max_iter, delta_min=args.delta_min, steps=args.steps, route=args.route,
+            leg_length=args.leg_length,
             callback=None if args.quiet else _print_record)
     except ValueError as exc:
         _error(str(exc))
@@ -186,7 +189,9 @@ def run(args) -> int:
 
 
 def plot(res, path) -> None:
-    """Figure of a :class:`~nonholo.result.PlanResult`: ``u(t)``, ``RPY(t)``, ``Δ(t)``."""
+    """Figure of a :class:`~nonholo.result.PlanResult`: ``u(t)``, ``RPY(t)``, ``Δ(t)`` and,
+    for a mechanism with legs, the leg lengths against their stroke limits (if the plan had
+    them)."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -194,7 +199,9 @@ def plot(res, path) -> None:
 
     mech = catalog.get(res.mechanism)
     has_delta = res.delta is not None
-    fig, axes = plt.subplots(3 if has_delta else 2, 1, sharex=True, figsize=(7, 7 if has_delta else 5))
+    legs = mech.has_legs and len(res.R) > 0
+    rows = 2 + has_delta + legs
+    fig, axes = plt.subplots(rows, 1, sharex=True, figsize=(7, 2.4 * rows))
     tt = np.linspace(0.0, res.T, 1001)
     u = res.controls(tt)
     for i in range(u.shape[1]):
@@ -218,6 +225,15 @@ def plot(res, path) -> None:
         axes[2].axhline(0.0, color="k", lw=0.5)
         axes[2].set_ylabel("Δ [-]")
         axes[2].legend(fontsize="small")
+    if legs:
+        ax = axes[2 + has_delta]
+        lengths = mech.leg_lengths(res.R)
+        for i in range(lengths.shape[1]):
+            ax.plot(res.t, lengths[:, i], label=f"l{i + 1}")
+        for k, y in enumerate(res.options.get("leg_length") or ()):
+            ax.axhline(y, color="r", ls="--", label="stroke limits" if k == 0 else None)
+        ax.set_ylabel("leg length")
+        ax.legend(fontsize="small")
     axes[-1].set_xlabel("t [s]")
     fig.tight_layout()
     try:

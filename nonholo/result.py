@@ -45,6 +45,7 @@ import numpy as np
 from . import catalog, certify, export, kernels, so3, stages
 from .checks import MAX_STEPS, is_number
 from .controls import Controls, Fourier, PiecewiseConstant
+from .limits import LegLimits
 from .replay import FrameControls, from_dict
 from .stitched import Stitched
 
@@ -905,3 +906,11 @@ class _Validation:
             dmin = r.options.get("delta_min")
             if mech.has_singular_set and dmin is not None and r.min_delta < dmin:
                 _fail("success", f"is true, but min_delta = {r.min_delta:.4g} < delta_min = {dmin:g}")
+            stroke = r.options.get("leg_length")
+            if stroke is not None:
+                try:
+                    limits = LegLimits.from_argument(stroke, mech)
+                except ValueError as exc:
+                    _fail("options", f"has a bad leg_length: {exc}")
+                if limits.least_clearance(mech, r.R) < -VALUE_RTOL * limits.hi:
+                    _fail("success", f"is true, but {limits.describe(mech, r.R, r.t)}")
