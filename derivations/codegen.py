@@ -20,7 +20,7 @@ import sympy as sp
 from sympy.printing.numpy import NumPyPrinter
 
 from . import catalog, singularity
-from .mechanism import Mechanism, a, b, input_map, rho
+from .mechanism import Mechanism, a, b, input_map, leg_length_squared, leg_rate_row, rho
 from .so3 import r
 from .variational import Q_matrix, inputs
 
@@ -171,6 +171,23 @@ def geometry_data(geometry) -> str:
     return "\n".join(lines)
 
 
+def codegen_legs(mechanism: Mechanism) -> str:
+    """``leg_lengths(R) -> (2,)`` and ``leg_gradients(R) -> (2, 3)`` of a two-leg platform,
+    with :data:`DRAWING_DIMENSIONS`: ``l_i = |R tip_i − base_i|`` and its derivative along
+    ``∂R = [s] R``, ``dl_i = G_i s`` (so ``dl_i/dt = G_i ω``)."""
+    g = mechanism.derivation["geometry"]
+    lengths, gradients = [], []
+    for base, tip in ((g.base1, g.tip1), (g.base2, g.tip2)):
+        length = sp.sqrt(leg_length_squared(base, tip))
+        lengths.append(length.subs(DRAWING_DIMENSIONS))
+        gradients += list((leg_rate_row(base, tip) / (2 * length)).subs(DRAWING_DIMENSIONS))
+    return (_function("leg_lengths", "R", _rotation_unpack(), lengths, (2,),
+                      "Leg lengths l_i(R) = |R tip_i - base_i| (GEOMETRY's units).")
+            + "\n\n" +
+            _function("leg_gradients", "R", _rotation_unpack(), gradients, (2, 3),
+                      "Rows G_i(R) with dl_i = G_i s along dR = [s] R: dl_i/dt = G_i ω."))
+
+
 def mechanism_module(mechanism: Mechanism) -> str:
     """The generated module of one mechanism: ``delta`` (if any), ``L``, ``Q``."""
     doc = f"Numeric kinematics of the mechanism {mechanism.name!r}: {mechanism.description}."
@@ -182,8 +199,9 @@ def mechanism_module(mechanism: Mechanism) -> str:
                  f"N_INPUTS = {mechanism.n_inputs}\n"
                  f"HAS_SINGULAR_SET = {mechanism.delta is not None}\n")
     geometry = mechanism.derivation.get("geometry")
+    parts.append(f"HAS_LEGS = {geometry is not None}\n")
     if geometry is not None:
-        parts.append(geometry_data(geometry))
+        parts += [geometry_data(geometry), codegen_legs(mechanism)]
     if mechanism.delta is not None:
         parts.append(codegen_delta(mechanism))
     parts.append(codegen_L(mechanism))

@@ -194,14 +194,16 @@ _NO_INDEX = np.zeros((0, 3, 0), np.int64)
 
 def measure(R0, Rd, T: float, mechanism, par, steps: int, tol: float, delta_min: float,
             sign: float = 1.0, G: float | None = None, R_half=None,
-            max_steps: int | None = None) -> Certificate:
+            max_steps: int | None = None, leg_limits=None) -> Certificate:
     """The certificate of the physical controls ``par`` (see the module): replays on
     ``steps/2``·2ᵏ and ``steps``·2ᵏ CF4 steps, ``k`` the least with an error estimate
     below ``ERROR_FRACTION · tol``, or ``k = 0`` when the sensitivity already rules the
     plan out (infinite, unresolved or too large for ``tol``). ``steps`` must be even and a
     multiple of the controls' grid and of a :class:`~nonholo.replay.FrameControls`' steps.
     ``G``: the sensitivity, ``R_half``: the endpoint of the ``steps/2`` replay, if already
-    known; ``max_steps``: the finest replay (default :data:`MAX_REPLAY_STEPS`)."""
+    known; ``max_steps``: the finest replay (default :data:`MAX_REPLAY_STEPS`);
+    ``leg_limits``: stroke limits (:class:`~nonholo.limits.LegLimits`) every node of the
+    replay must keep."""
     has_delta = mechanism.has_singular_set
     cap = MAX_REPLAY_STEPS if max_steps is None else max_steps
     M = steps
@@ -259,6 +261,9 @@ def measure(R0, Rd, T: float, mechanism, par, steps: int, tol: float, delta_min:
                   f"(the most certified: {cap}); more than {ERROR_FRACTION:g}·tol")
     elif has_delta and dmin < delta_min:
         reason = (f"the physical replay comes within {dmin:.4g} of Δ = 0 (delta_min = {delta_min:g})")
+    elif leg_limits is not None and leg_limits.least_clearance(mechanism, R) < 0.0:
+        reason = (f"the physical replay leaves the legs' stroke: "
+                  f"{leg_limits.describe(mechanism, R, np.arange(M + 1) * (T / M))}")
     elif err + bound > tol:
         reason = (f"the physical replay ({M} steps) ends {err:.3g} rad from the goal "
                   f"(+ error bound {bound:.2g} > tol = {tol:g})")

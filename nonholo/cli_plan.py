@@ -13,8 +13,11 @@ other cannot be written; a plan file is replaced only once the new one is comple
 Output closed early by its reader (``nonholo plan ... | head -1``) is not an error: the
 rest is discarded and the files are still written.
 
-Exit status: 0 on success, 1 if the planner failed, 2 on bad input, 3 if ``--out`` or
-``--plot`` could not be written (whatever the planner's outcome; one line on stderr names
+``--csv`` writes a successful plan's motion for an actuator controller
+(:mod:`nonholo.export`), sampled at ``--csv-rate`` Hz.
+
+Exit status: 0 on success, 1 if the planner failed, 2 on bad input, 3 if ``--out``,
+``--plot`` or ``--csv`` could not be written (whatever the planner's outcome; one line on stderr names
 the file and the error).
 """
 from __future__ import annotations
@@ -26,7 +29,7 @@ from pathlib import Path
 
 import numpy as np
 
-from . import catalog, planner, so3
+from . import catalog, export, planner, so3
 
 #: exit status of ``nonholo plan`` (see the module docstring)
 EXIT_SUCCESS, EXIT_FAILED, EXIT_BAD_INPUT, EXIT_WRITE_FAILED = 0, 1, 2, 3
@@ -60,8 +63,15 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
                    help="auto: one plan from start to goal and, if that fails, hops along a path "
                         "of orientations clear of Δ = 0 (default); local: the one plan only; "
                         "global: only the hops")
+    p.add_argument("--leg-length", nargs=2, type=float, default=None, metavar=("LO", "HI"),
+                   help="keep every leg's length within [LO, HI] (a platform's geometry units)")
     p.add_argument("--out", default=None, help="write the result as JSON to this file")
     p.add_argument("--plot", default=None, help="write a figure (u, RPY, Δ against t) to this file")
+    p.add_argument("--csv", default=None,
+                   help="write the motion as CSV for an actuator controller (t, leg lengths and "
+                        "speeds, u, quaternion qx qy qz qw, delta; only for a successful plan)")
+    p.add_argument("--csv-rate", type=float, default=export.DEFAULT_RATE,
+                   help=f"samples per second of --csv (default {export.DEFAULT_RATE:g})")
     p.add_argument("--quiet", action="store_true", help="print the summary only")
     p.set_defaults(func=run)
     return p
@@ -122,6 +132,11 @@ def _plot_format_error(path) -> str | None:
 def run(args) -> int:
     """Run the ``plan`` sub-command for parsed ``args``; returns the exit status."""
     why = _plot_format_error(args.plot) if args.plot else None
+    if why is None and args.csv:
+        try:
+            export.sample_times(1.0, args.csv_rate)
+        except ValueError as exc:
+            why = f"--csv-rate: {exc}"
     if why:
         _error(why)
         return EXIT_BAD_INPUT
@@ -132,6 +147,7 @@ def run(args) -> int:
             R0, Rd, T=args.T, method=args.method, harmonics=args.harmonics, grid=args.grid,
             strategy=args.strategy, mechanism=args.mechanism, gamma=args.gamma, tol=args.tol,
             max_iter=args.max_iter, delta_min=args.delta_min, steps=args.steps, route=args.route,
+            leg_length=args.leg_length,
             callback=None if args.quiet else _print_record)
     except ValueError as exc:
         _error(str(exc))
@@ -158,11 +174,24 @@ def run(args) -> int:
             status = EXIT_WRITE_FAILED
         else:
             _say(f"wrote {args.plot}")
+    if args.csv:
+        if not res.success:
+            _say(f"{args.csv} not written: a failed plan is not a motion to play back")
+        else:
+            try:
+                res.to_csv(args.csv, rate=args.csv_rate)
+            except (OSError, ValueError) as exc:
+                _cannot_write(args.csv, exc)
+                status = EXIT_WRITE_FAILED
+            else:
+                _say(f"wrote {args.csv}")
     return status
 
 
 def plot(res, path) -> None:
-    """Figure of a :class:`~nonholo.result.PlanResult`: ``u(t)``, ``RPY(t)``, ``Δ(t)``."""
+    """Figure of a :class:`~nonholo.result.PlanResult`: ``u(t)``, ``RPY(t)``, ``Δ(t)`` and,
+    for a mechanism with legs, the leg lengths against their stroke limits (if the plan had
+    them)."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -170,7 +199,9 @@ def plot(res, path) -> None:
 
     mech = catalog.get(res.mechanism)
     has_delta = res.delta is not None
-    fig, axes = plt.subplots(3 if has_delta else 2, 1, sharex=True, figsize=(7, 7 if has_delta else 5))
+    legs = mech.has_legs and len(res.R) > 0
+    rows = 2 + has_delta + legs
+    fig, axes = plt.subplots(rows, 1, sharex=True, figsize=(7, 2.4 * rows))
     tt = np.linspace(0.0, res.T, 1001)
     u = res.controls(tt)
     for i in range(u.shape[1]):
@@ -194,6 +225,15 @@ def plot(res, path) -> None:
         axes[2].axhline(0.0, color="k", lw=0.5)
         axes[2].set_ylabel("Δ [-]")
         axes[2].legend(fontsize="small")
+    if legs:
+        ax = axes[2 + has_delta]
+        lengths = mech.leg_lengths(res.R)
+        for i in range(lengths.shape[1]):
+            ax.plot(res.t, lengths[:, i], label=f"l{i + 1}")
+        for k, y in enumerate(res.options.get("leg_length") or ()):
+            ax.axhline(y, color="r", ls="--", label="stroke limits" if k == 0 else None)
+        ax.set_ylabel("leg length")
+        ax.legend(fontsize="small")
     axes[-1].set_xlabel("t [s]")
     fig.tight_layout()
     try:

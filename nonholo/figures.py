@@ -1006,6 +1006,12 @@ def plot_leg_lengths(ax, results, geometry=None, labels=None) -> None:
         for j in range(2):
             ax.plot(res.t, lengths[:, j], color=PAIR_COLORS[j], ls=_ls(i),
                     label=f"$l_{j + 1}$ (leg {j + 1})" if i == 0 else None)
+    limits = {tuple(r.options["leg_length"]) for r in results
+              if isinstance(getattr(r, "options", None), dict) and r.options.get("leg_length")}
+    for k, (lo, hi) in enumerate(sorted(limits) if g is not None else ()):
+        for y in (lo, hi):
+            ax.axhline(y / g.radius, color="0.25", lw=1.0, ls="--",
+                       label="stroke limits (leg_length)" if k == 0 and y == lo else None)
     ax.set_xlabel("time t [s]")
     ax.set_ylabel("leg length [ρ]")
     ax.set_title("leg lengths $l_i = |R\\,B_i - A_i|$")

@@ -11,7 +11,9 @@ in ``derivations/``) provides
 - the desingularised frame, when the derivation gives one: ``N(R)`` (3×m, orthonormal
   columns spanning the admissible angular velocities), ``QN(R, w)`` (its ``Q``) and
   ``W(R) = (N(R)ᵀ L(R))^{-1}`` (physical inputs ``u = W(R) w`` of ``ω = N(R) w``);
-- ``GEOMETRY``, the joint points of a two-leg platform, for drawings (else none);
+- ``GEOMETRY``, the joint points of a two-leg platform, for drawings, and its legs'
+  lengths ``leg_lengths(R)`` (``l_i = |R tip_i − base_i|``) with their derivative rows
+  ``leg_gradients(R)`` (``dl_i = G_i s`` along ``∂R = [s] R``), when ``HAS_LEGS``;
 
 each matrix also as ``NAME_into(..., out)`` for the compiled integrator
 (:meth:`Mechanism.kernels`). Nothing downstream depends on which mechanism it is;
@@ -123,6 +125,48 @@ class Mechanism:
         if frame and not self.has_frame:
             raise ValueError(f"mechanism {self.name!r} has no desingularised frame N(R)")
         return cf4.compile_system(self.module, frame)
+
+    @property
+    def has_legs(self) -> bool:
+        """Whether the mechanism has legs whose lengths the derivation gives (a platform)."""
+        return bool(getattr(self.module, "HAS_LEGS", False))
+
+    def leg_lengths(self, R) -> np.ndarray:
+        """``l_i(R) = |R tip_i − base_i|`` (the generated ``leg_lengths``, in the units of
+        :attr:`geometry`): shape ``(k,)`` for one ``R``, ``(n, k)`` for a stack ``(n, 3, 3)``."""
+        return self._legs("leg_lengths_into", R, ())
+
+    def leg_gradients(self, R) -> np.ndarray:
+        """Rows ``G_i(R)`` with ``dl_i = G_i s`` along ``∂R = [s] R``: shape ``(k, 3)`` for one
+        ``R``, ``(n, k, 3)`` for a stack."""
+        return self._legs("leg_gradients_into", R, (3,))
+
+    def leg_speeds(self, R, u) -> np.ndarray:
+        """``dl_i/dt = G_i(R) L(R) u`` for inputs ``u`` at ``R``: shape ``(k,)`` for one ``R``
+        and ``u`` (m,), ``(n, k)`` for stacks ``(n, 3, 3)`` and ``(n, m)``."""
+        R = np.asarray(R, dtype=float)
+        u = np.asarray(u, dtype=float)
+        one = R.ndim == 2
+        Rs, us = (R[None], u[None]) if one else (R, u)
+        L = np.stack([self.L(Ri) for Ri in Rs])
+        out = np.einsum("nkj,nji,ni->nk", self.leg_gradients(Rs), L, us)
+        return out[0] if one else out
+
+    def _legs(self, function: str, R, tail: tuple) -> np.ndarray:
+        """The generated leg function ``function`` (``f(R, out)``, plain arithmetic on the
+        entries of ``R``) on one ``R`` or a stack (evaluated on ``(3, 3, n)`` at once)."""
+        if not self.has_legs:
+            raise ValueError(f"mechanism {self.name!r} has no legs")
+        into = getattr(self.module, function)
+        R = np.asarray(R, dtype=float)
+        k = len(self.geometry.bases)
+        if R.ndim == 2:
+            out = np.empty((k, *tail))
+            into(R, out)
+            return out
+        out = np.empty((k, *tail, R.shape[0]))
+        into(R.transpose(1, 2, 0), out)
+        return np.moveaxis(out, -1, 0)
 
     def delta_samples(self, R) -> np.ndarray | None:
         """``Δ(R[n])`` for a stack ``R`` of shape ``(n, 3, 3)``; ``None`` without a singular set."""

@@ -26,6 +26,7 @@ import numpy as np
 from . import catalog, so3, stages
 from .checks import MAX_STEPS, check_count, check_time
 from .controls import Controls, Fourier, PiecewiseConstant, paper_initial
+from .limits import LegLimits
 from .planning import route as global_route
 from .planning.certification import certified
 from .planning.core import Options, Problem, Request, Strategy, build_result
@@ -91,7 +92,7 @@ def plan(R0, Rd, *, T: float = 1.0, method: str = "parametric", harmonics: int =
          max_iter: int = 200, strategy="robust", mechanism="platform",
          delta_min: float = 1e-2, steps: int | None = None, newton_below: float = 1e-3,
          min_step: float = 1e-6, callback: Callable[[dict], object] | None = None,
-         route: str = "auto") -> PlanResult:
+         route: str = "auto", leg_length=None) -> PlanResult:
     """Plan a control steering ``R0`` to ``Rd`` in time ``T`` (seconds).
 
     - ``mechanism``: a :class:`~nonholo.mechanism.Mechanism` or its name
@@ -114,6 +115,10 @@ def plan(R0, Rd, *, T: float = 1.0, method: str = "parametric", harmonics: int =
       ``|l_T| ≤ tol`` (rad); ``max_iter``: accepted steps at most.
     - ``delta_min``: every trajectory accepted keeps ``|Δ| ≥ delta_min`` (ignored for
       mechanisms without a singular set).
+    - ``leg_length``: ``(lo, hi)``, the legs' stroke (a platform's, in its geometry's
+      units, :meth:`~nonholo.mechanism.Mechanism.leg_lengths`): every leg keeps ``lo ≤
+      l_i(R(t)) ≤ hi`` along the certified motion (:mod:`nonholo.limits`); a start or goal
+      outside fails at once, naming the leg. ``None`` (default): no limits.
     - ``steps``: CF4 steps on ``[0, T]`` (default :func:`default_steps`).
     - ``callback(record)``: called after each accepted iteration of the local plan with the
       history record; returning a true value stops the run (and no global route is taken).
@@ -139,6 +144,7 @@ def plan(R0, Rd, *, T: float = 1.0, method: str = "parametric", harmonics: int =
     if route not in ROUTES:
         raise ValueError(f"unknown route {route!r}; known: {', '.join(ROUTES)}")
     mech = catalog.get(mechanism)
+    leg_limits = LegLimits.from_argument(leg_length, mech)
     if method not in METHODS:
         raise ValueError(f"unknown method {method!r}; known: {', '.join(METHODS)}")
     cls = strategy_class(strategy)
@@ -161,7 +167,8 @@ def plan(R0, Rd, *, T: float = 1.0, method: str = "parametric", harmonics: int =
     controls = initial_controls(method, T, mech.n_inputs, harmonics, grid, u0)
     stages.check_steps(controls, steps)
     request = Request(mechanism=mech, method=method, strategy=cls.name, T=T, R0=R0, Rd=Rd, steps=steps,
-                      options=options, harmonics=harmonics, grid=grid, controls=controls, started=started)
+                      options=options, harmonics=harmonics, grid=grid, controls=controls, started=started,
+                      leg_limits=leg_limits)
 
     # goals that cannot be reached: decided before anything is simulated (or compiled)
     if mech.has_singular_set:
@@ -181,9 +188,14 @@ def plan(R0, Rd, *, T: float = 1.0, method: str = "parametric", harmonics: int =
                        f"surface (|Δ(R0)| = {abs(d0):.3g})")
         if refusal is not None:
             return build_result(request, None, False, refusal)
+    if leg_limits is not None:
+        refusal = leg_limits.violation(mech, R0, "the start") or leg_limits.violation(mech, Rd, "the goal")
+        if refusal is not None:
+            return build_result(request, None, False, refusal)
 
     solver = cls(options)
-    problem = Problem(R0, Rd, T, mech, method, steps, options.delta_min, frame=solver.frame(mech))
+    problem = Problem(R0, Rd, T, mech, method, steps, options.delta_min, frame=solver.frame(mech),
+                      leg_limits=leg_limits)
     start = solver.initial(problem, controls, u0 is not None)
     if route == "global":
         outcome, local_reason = None, "not tried (route 'global')"
@@ -199,10 +211,11 @@ def plan(R0, Rd, *, T: float = 1.0, method: str = "parametric", harmonics: int =
         return plan(Ra, Rb, T=T_hop, method=method, harmonics=harmonics, grid=grid, gamma=gamma, step=step,
                     tol=tol, max_iter=max_iter, strategy=global_route.hop_strategy(cls), mechanism=mech,
                     delta_min=hop_delta_min,
-                    steps=steps, newton_below=newton_below, min_step=min_step, route="local")
+                    steps=steps, newton_below=newton_below, min_step=min_step, route="local",
+                    leg_length=leg_length)
 
     steered = global_route.steer(mech, R0, Rd, T, hop, tol=tol, delta_min=delta_min, sign=problem.sign,
-                                 started=started)
+                                 started=started, leg_limits=leg_limits)
     if steered.controls is None:
         return build_result(request, outcome, False,
                             f"{local_reason}; the global route failed too: {steered.reason}", problem)

@@ -42,9 +42,10 @@ from pathlib import Path
 
 import numpy as np
 
-from . import catalog, certify, kernels, so3, stages
+from . import catalog, certify, export, kernels, so3, stages
 from .checks import MAX_STEPS, is_number
 from .controls import Controls, Fourier, PiecewiseConstant
+from .limits import LegLimits
 from .replay import FrameControls, from_dict
 from .stitched import Stitched
 
@@ -283,6 +284,13 @@ class PlanResult:
         target = Path(os.path.realpath(path)) if path.is_symlink() else path
         _write_atomic(target, text.encode("utf-8"))
         return path
+
+    def to_csv(self, path, rate: float = export.DEFAULT_RATE) -> Path:
+        """Write the motion sampled at ``rate`` Hz as CSV for an actuator controller: ``t``,
+        leg lengths ``l_i`` and speeds ``dl_i_dt`` (geometry units), inputs ``u_i``, the
+        orientation as a unit quaternion ``qx, qy, qz, qw`` (scalar last) and ``delta``
+        (see :mod:`nonholo.export`). A failed plan raises ``ValueError``."""
+        return export.write_csv(self, path, rate)
 
     @classmethod
     def load(cls, path) -> "PlanResult":
@@ -898,3 +906,11 @@ class _Validation:
             dmin = r.options.get("delta_min")
             if mech.has_singular_set and dmin is not None and r.min_delta < dmin:
                 _fail("success", f"is true, but min_delta = {r.min_delta:.4g} < delta_min = {dmin:g}")
+            stroke = r.options.get("leg_length")
+            if stroke is not None:
+                try:
+                    limits = LegLimits.from_argument(stroke, mech)
+                except ValueError as exc:
+                    _fail("options", f"has a bad leg_length: {exc}")
+                if limits.least_clearance(mech, r.R) < -VALUE_RTOL * limits.hi:
+                    _fail("success", f"is true, but {limits.describe(mech, r.R, r.t)}")

@@ -53,6 +53,11 @@ MAX_HOP = 3.2
 #: |L|/|Δ|``), so a path that keeps far from ``Δ = 0`` is better conditioned than a shorter
 #: one that does not; a higher power keeps farther away at the price of length.
 CONDITIONING_POWERS = (1.0, 2.0, 3.0, 0.5, 4.0)
+#: With stroke limits, roadmap edges keep at least this clearance from them (geometry
+#: units): a hop planned along an edge strays from its geodesic.
+LEG_CLEARANCE = 0.02
+#: Edges whose points are checked against stroke limits at once (bounds the memory).
+EDGE_CHUNK = 4096
 
 
 def _turns(Ra: np.ndarray, Rb: np.ndarray) -> np.ndarray:
@@ -79,15 +84,19 @@ def _angles(qa: np.ndarray, qb: np.ndarray) -> np.ndarray:
     return 2.0 * np.arccos(np.clip(np.abs(np.sum(qa * qb, axis=-1)), 0.0, 1.0))
 
 
-def _profile(mech, sign: float, Ra: np.ndarray, Rb: np.ndarray, points: int | None = None):
+def _profile(mech, sign: float, Ra: np.ndarray, Rb: np.ndarray, points: int | None = None, legs=None):
     """``sgnΔ`` at ``points`` evenly spaced points (ends included; default: every
     :data:`RESOLUTION` rad of the longest) of the geodesic of each pair ``(Ra[e], Rb[e])``,
-    ``(E, points)``, and the geodesics' lengths ``(E,)``."""
+    ``(E, points)``, the geodesics' lengths ``(E,)`` and, with stroke limits ``legs``
+    (:class:`~nonholo.limits.LegLimits`), the least clearance of each from them (``(E,)``;
+    else ``None``)."""
     v = _turns(Ra, Rb)
     length = np.linalg.norm(v, axis=1)
     S = points or int(np.ceil(length.max() / RESOLUTION)) + 1
-    pts = _points(Ra, v, np.linspace(0.0, 1.0, S))
-    return sign * mech.delta_samples(pts.reshape(-1, 3, 3)).reshape(len(Ra), S), length
+    pts = _points(Ra, v, np.linspace(0.0, 1.0, S)).reshape(-1, 3, 3)
+    d = sign * mech.delta_samples(pts).reshape(len(Ra), S)
+    within = None if legs is None else legs.clearances(mech, pts).reshape(len(Ra), -1).min(axis=1)
+    return d, length, within
 
 
 def _cost(d: np.ndarray, length: np.ndarray, power: float) -> np.ndarray:
@@ -98,14 +107,18 @@ def _cost(d: np.ndarray, length: np.ndarray, power: float) -> np.ndarray:
     return length * (w[:, 1:] + w[:, :-1]).sum(axis=1) / (2 * (d.shape[1] - 1))
 
 
-def _survey(mech, sign: float, Ra: np.ndarray, Rb: np.ndarray, level, power: float = CONDITIONING_POWERS[0]):
+def _survey(mech, sign: float, Ra: np.ndarray, Rb: np.ndarray, level, power: float = CONDITIONING_POWERS[0],
+            legs=None):
     """For each pair ``(Ra[e], Rb[e])``: whether ``sgnΔ ≥ level[e]`` at every checked point
-    of the geodesic between them (the ends included), and the geodesic's cost
-    ``∫ ds / (sgnΔ)^power`` (:func:`_cost`; ``inf`` where not clear)."""
+    of the geodesic between them (the ends included) — and, with stroke limits ``legs``,
+    every point inside them — and the geodesic's cost ``∫ ds / (sgnΔ)^power``
+    (:func:`_cost`; ``inf`` where not clear)."""
     if len(Ra) == 0:
         return np.zeros(0, dtype=bool), np.zeros(0)
-    d, length = _profile(mech, sign, Ra, Rb)
+    d, length, within = _profile(mech, sign, Ra, Rb, legs=legs)
     clear = np.all(d >= np.broadcast_to(np.asarray(level, dtype=float), (len(Ra),))[:, None], axis=1)
+    if within is not None:
+        clear &= within >= 0.0
     return clear, np.where(clear, _cost(d, length, power), np.inf)
 
 
@@ -145,11 +158,27 @@ class Roadmap:
         profile = np.empty((len(i), S))
         for s in (-1.0, 1.0):
             m = self.sign[i] == s
-            profile[m], length[m] = _profile(mech, s, self.R[i[m]], self.R[j[m]], S)
+            profile[m], length[m], _ = _profile(mech, s, self.R[i[m]], self.R[j[m]], S)
         clear = np.all(profile >= self.clearance, axis=1)
         self.edges = np.stack([i[clear], j[clear]], axis=1)
         self._profile, self._length = profile[clear], length[clear]
         self._costs: dict[float, np.ndarray] = {}
+        self._inside: dict = {}
+
+    def inside(self, legs) -> np.ndarray:
+        """Which edges keep every checked point at least :data:`LEG_CLEARANCE` inside the
+        stroke limits ``legs`` (all, without limits; cached per limits)."""
+        if legs is None:
+            return np.ones(len(self.edges), dtype=bool)
+        if legs not in self._inside:
+            S = self._profile.shape[1]
+            within = np.empty(len(self.edges))
+            for start in range(0, len(self.edges), EDGE_CHUNK):
+                e = self.edges[start:start + EDGE_CHUNK]
+                within[start:start + len(e)] = _profile(self.mechanism, 1.0, self.R[e[:, 0]], self.R[e[:, 1]],
+                                                        S, legs)[2]
+            self._inside[legs] = within >= LEG_CLEARANCE
+        return self._inside[legs]
 
     def costs(self, power: float) -> np.ndarray:
         """The edges' costs ``∫ ds / |Δ|^power`` (cached per ``power``)."""
@@ -157,13 +186,14 @@ class Roadmap:
             self._costs[power] = _cost(self._profile, self._length, power)
         return self._costs[power]
 
-    def _graph(self, extra_i, extra_j, extra_cost, size, power):
-        i = np.concatenate([self.edges[:, 0], extra_i])
-        j = np.concatenate([self.edges[:, 1], extra_j])
-        w = np.concatenate([self.costs(power), extra_cost])
+    def _graph(self, extra_i, extra_j, extra_cost, size, power, legs=None):
+        keep = self.inside(legs)
+        i = np.concatenate([self.edges[keep, 0], extra_i])
+        j = np.concatenate([self.edges[keep, 1], extra_j])
+        w = np.concatenate([self.costs(power)[keep], extra_cost])
         return coo_matrix((w, (i, j)), shape=(size, size)).tocsr()
 
-    def _links(self, R, sign: float, level: float, node_index: int, power: float):
+    def _links(self, R, sign: float, level: float, node_index: int, power: float, legs=None):
         """Edges from ``R`` to its clear roadmap neighbours of the same sign."""
         q = Rotation.from_matrix(R).as_quat()
         n = len(self.R)
@@ -172,21 +202,23 @@ class Roadmap:
         j = j[self.sign[j] == sign]
         length = _angles(np.broadcast_to(q, (len(j), 4)), self.q[j])
         j, length = j[length <= MAX_EDGE], length[length <= MAX_EDGE]
-        ok, cost = _survey(self.mechanism, sign, np.broadcast_to(R, (len(j), 3, 3)), self.R[j], level, power)
+        ok, cost = _survey(self.mechanism, sign, np.broadcast_to(R, (len(j), 3, 3)), self.R[j], level, power, legs)
         return np.full(ok.sum(), node_index), j[ok], cost[ok]
 
-    def path(self, R0, Rd, level: float, power: float = CONDITIONING_POWERS[0]) -> np.ndarray | None:
+    def path(self, R0, Rd, level: float, power: float = CONDITIONING_POWERS[0], legs=None) -> np.ndarray | None:
         """The cheapest roadmap path ``R0 → … → Rd`` (``(k, 3, 3)``, ends included) whose
-        links to the start and goal keep ``sgnΔ ≥ level``; ``None`` if none joins them."""
+        links to the start and goal keep ``sgnΔ ≥ level`` (and, with stroke limits ``legs``,
+        whose every checked point is inside them: see :meth:`inside`); ``None`` if none
+        joins them."""
         sign = float(np.sign(self.mechanism.delta(R0)))
         n = len(self.R)
-        s_i, s_j, s_l = self._links(R0, sign, level, n, power)
-        g_i, g_j, g_l = self._links(Rd, sign, level, n + 1, power)
-        direct, cost = _survey(self.mechanism, sign, R0[None], Rd[None], level, power)
+        s_i, s_j, s_l = self._links(R0, sign, level, n, power, legs)
+        g_i, g_j, g_l = self._links(Rd, sign, level, n + 1, power, legs)
+        direct, cost = _survey(self.mechanism, sign, R0[None], Rd[None], level, power, legs)
         d_i, d_j, d_l = (np.array([n]), np.array([n + 1]), cost) if direct[0] \
             else (np.zeros(0, int), np.zeros(0, int), np.zeros(0))
         graph = self._graph(np.concatenate([s_i, g_i, d_i]), np.concatenate([s_j, g_j, d_j]),
-                            np.concatenate([s_l, g_l, d_l]), n + 2, power)
+                            np.concatenate([s_l, g_l, d_l]), n + 2, power, legs)
         dist, pred = dijkstra(graph, directed=False, indices=n, return_predecessors=True)
         if not np.isfinite(dist[n + 1]):
             return None
@@ -214,17 +246,18 @@ def _clearance(mech) -> float:
     return float(np.quantile(np.abs(mech.delta_samples(R)), CLEARANCE_QUANTILE))
 
 
-def shortcut(mech, sign: float, path: np.ndarray, level: float, power: float = CONDITIONING_POWERS[0]) -> np.ndarray:
+def shortcut(mech, sign: float, path: np.ndarray, level: float, power: float = CONDITIONING_POWERS[0],
+             legs=None) -> np.ndarray:
     """``path`` with every waypoint dropped that a clear geodesic of no greater cost
     (``∫ ds / |Δ|^power``) can skip (greedy, from the start: the farthest such waypoint is
-    the next)."""
-    _, legs = _survey(mech, sign, path[:-1], path[1:], -np.inf, power)
-    along = np.concatenate([[0.0], np.cumsum(legs)])
+    the next); with stroke limits ``legs``, a clear geodesic keeps inside them too."""
+    _, hops = _survey(mech, sign, path[:-1], path[1:], -np.inf, power)
+    along = np.concatenate([[0.0], np.cumsum(hops)])
     out = [0]
     while out[-1] != len(path) - 1:
         a = out[-1]
         js = np.arange(len(path) - 1, a, -1)
-        ok, cost = _survey(mech, sign, np.broadcast_to(path[a], (len(js), 3, 3)), path[js], level, power)
+        ok, cost = _survey(mech, sign, np.broadcast_to(path[a], (len(js), 3, 3)), path[js], level, power, legs)
         ok &= cost <= (along[js] - along[a]) * (1 + 1e-9)
         out.append(int(js[np.argmax(ok)]) if ok.any() else a + 1)
     return path[out]
@@ -240,16 +273,21 @@ def subdivide(path: np.ndarray, max_hop: float) -> np.ndarray:
 
 
 def orientation_path(mechanism, R0, Rd, *, delta_min: float = 1e-2, clearance: float | None = None,
-                     max_hop: float = MAX_HOP, power: float = CONDITIONING_POWERS[0]) -> np.ndarray | None:
+                     max_hop: float = MAX_HOP, power: float = CONDITIONING_POWERS[0],
+                     legs=None) -> np.ndarray | None:
     """A path of orientations from ``R0`` to ``Rd`` in the start's component (see the
     module): the cheapest in ``∫ ds / |Δ|^power`` on the roadmap, shortcut, ``(k + 1, 3,
     3)`` with ``R0`` first, ``Rd`` last and hops of at most ``max_hop`` rad, every point of its geodesics with ``sgnΔ ≥ clearance`` (default
     :func:`default_clearance`) but near the ends, where it may drop to what they have
-    (never below ``delta_min``). ``None`` if the roadmap joins no such path."""
+    (never below ``delta_min``); with stroke limits ``legs``
+    (:class:`~nonholo.limits.LegLimits`), every point inside them as well. ``None`` if the
+    roadmap joins no such path."""
     mech = catalog.get(mechanism)
     R0 = so3.check_rotation(R0, "R0")
     Rd = so3.check_rotation(Rd, "Rd")
     if not mech.has_singular_set:
+        if legs is not None and not _survey(mech, 1.0, R0[None], Rd[None], -np.inf, legs=legs)[0][0]:
+            return None
         return subdivide(np.stack([R0, Rd]), max_hop)
     if clearance is None:
         clearance = default_clearance(mech)
@@ -257,7 +295,7 @@ def orientation_path(mechanism, R0, Rd, *, delta_min: float = 1e-2, clearance: f
     if sign == 0.0 or np.sign(mech.delta(Rd)) != sign:
         return None
     level = max(delta_min, min(clearance, 0.9 * sign * float(mech.delta(R0)), 0.9 * sign * float(mech.delta(Rd))))
-    path = roadmap(mech, clearance).path(R0, Rd, level, power)
+    path = roadmap(mech, clearance).path(R0, Rd, level, power, legs)
     if path is None:
         return None
-    return subdivide(shortcut(mech, sign, path, level, power), max_hop)
+    return subdivide(shortcut(mech, sign, path, level, power, legs), max_hop)

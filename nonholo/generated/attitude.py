@@ -14,6 +14,9 @@ N_INPUTS = 2
 HAS_SINGULAR_SET = False
 
 
+HAS_LEGS = False
+
+
 def L_into(R, out):
     """L(R) of the spatial-form system dR/dt = [L(R) u] R. Fills ``out`` (3, 2)."""
     r11 = R[0, 0]

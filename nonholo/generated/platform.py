@@ -14,6 +14,9 @@ N_INPUTS = 2
 HAS_SINGULAR_SET = True
 
 
+HAS_LEGS = True
+
+
 #: The dimensions the drawings use: base joints at distance a from O, platform
 #: joints at b, sphere radius rho (the kinematics do not depend on them).
 DRAWING_DIMENSIONS = {'a': 1.6, 'b': 1.0, 'rho': 1.0}
@@ -27,6 +30,46 @@ GEOMETRY = {
     'contact': (0.0, 0.0, 1.0),
     'axle': (0.7071067811865476, -0.7071067811865476, 0.0),
 }
+
+
+def leg_lengths_into(R, out):
+    """Leg lengths l_i(R) = |R tip_i - base_i| (GEOMETRY's units). Fills ``out`` (2,)."""
+    r11 = R[0, 0]
+    r22 = R[1, 1]
+    out[0] = numpy.sqrt(89/25 - 16/5*r22)
+    out[1] = numpy.sqrt(89/25 - 16/5*r11)
+
+
+def leg_lengths(R):
+    """Leg lengths l_i(R) = |R tip_i - base_i| (GEOMETRY's units)."""
+    out = numpy.empty((2,))
+    leg_lengths_into(R, out)
+    return out
+
+
+def leg_gradients_into(R, out):
+    """Rows G_i(R) with dl_i = G_i s along dR = [s] R: dl_i/dt = G_i ω. Fills ``out`` (2, 3)."""
+    r11 = R[0, 0]
+    r12 = R[0, 1]
+    r21 = R[1, 0]
+    r22 = R[1, 1]
+    r31 = R[2, 0]
+    r32 = R[2, 1]
+    x0 = (8/5)/numpy.sqrt(89/25 - 16/5*r22)
+    x1 = (8/5)/numpy.sqrt(89/25 - 16/5*r11)
+    out[0, 0] = r32*x0
+    out[0, 1] = 0
+    out[0, 2] = -r12*x0
+    out[1, 0] = 0
+    out[1, 1] = -r31*x1
+    out[1, 2] = r21*x1
+
+
+def leg_gradients(R):
+    """Rows G_i(R) with dl_i = G_i s along dR = [s] R: dl_i/dt = G_i ω."""
+    out = numpy.empty((2, 3))
+    leg_gradients_into(R, out)
+    return out
 
 
 def delta(R):

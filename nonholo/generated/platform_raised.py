@@ -14,6 +14,9 @@ N_INPUTS = 2
 HAS_SINGULAR_SET = True
 
 
+HAS_LEGS = True
+
+
 #: The dimensions the drawings use: base joints at distance a from O, platform
 #: joints at b, sphere radius rho (the kinematics do not depend on them).
 DRAWING_DIMENSIONS = {'a': 1.6, 'b': 1.0, 'rho': 1.0}
@@ -27,6 +30,58 @@ GEOMETRY = {
     'contact': (0.7071067811865476, 0.7071067811865476, 0.0),
     'axle': (0.7071067811865476, -0.7071067811865476, 0.0),
 }
+
+
+def leg_lengths_into(R, out):
+    """Leg lengths l_i(R) = |R tip_i - base_i| (GEOMETRY's units). Fills ``out`` (2,)."""
+    r11 = R[0, 0]
+    r22 = R[1, 1]
+    r31 = R[2, 0]
+    r32 = R[2, 1]
+    x0 = (8/5)*numpy.sqrt(2)
+    out[0] = numpy.sqrt(-r11*x0 - r31*x0 + 89/25)
+    out[1] = numpy.sqrt(-r22*x0 - r32*x0 + 89/25)
+
+
+def leg_lengths(R):
+    """Leg lengths l_i(R) = |R tip_i - base_i| (GEOMETRY's units)."""
+    out = numpy.empty((2,))
+    leg_lengths_into(R, out)
+    return out
+
+
+def leg_gradients_into(R, out):
+    """Rows G_i(R) with dl_i = G_i s along dR = [s] R: dl_i/dt = G_i ω. Fills ``out`` (2, 3)."""
+    r11 = R[0, 0]
+    r12 = R[0, 1]
+    r21 = R[1, 0]
+    r22 = R[1, 1]
+    r31 = R[2, 0]
+    r32 = R[2, 1]
+    x0 = numpy.sqrt(2)
+    x1 = (8/5)*x0
+    x2 = r11*x1
+    x3 = r31*x1
+    x4 = 1/numpy.sqrt(-x2 - x3 + 89/25)
+    x5 = (4/5)*x0
+    x6 = r21*x4*x5
+    x7 = r22*x1
+    x8 = r32*x1
+    x9 = 1/numpy.sqrt(-x7 - x8 + 89/25)
+    x10 = r12*x5*x9
+    out[0, 0] = -x6
+    out[0, 1] = (1/2)*x4*(x2 - x3)
+    out[0, 2] = x6
+    out[1, 0] = (1/2)*x9*(-x7 + x8)
+    out[1, 1] = x10
+    out[1, 2] = -x10
+
+
+def leg_gradients(R):
+    """Rows G_i(R) with dl_i = G_i s along dR = [s] R: dl_i/dt = G_i ω."""
+    out = numpy.empty((2, 3))
+    leg_gradients_into(R, out)
+    return out
 
 
 def delta(R):

@@ -43,7 +43,8 @@ def certify(problem: Problem, ev: Evaluation, options: Options) -> tuple[Evaluat
         # planned in the physical inputs: the planner's trajectory is the replay on steps/2
         half = ev.R[-1] if not problem.frame and steps == 2 * problem.steps else None
         return replay_certificate.measure(problem.R0, problem.Rd, problem.T, mech, physical(problem, ev),
-                                          steps, options.tol, options.delta_min, problem.sign, G, half)
+                                          steps, options.tol, options.delta_min, problem.sign, G, half,
+                                          leg_limits=problem.leg_limits)
 
     # the first replays: on N and 2N steps (N: the planner's) when the planner's trajectory
     # is the replay on N, else on N/2 and N where the controls allow it

@@ -40,6 +40,7 @@ from .. import kernels, stages
 from ..checks import check_count
 from ..controls import Controls
 from ..certify import Certificate
+from ..limits import LegLimits
 from ..mechanism import Mechanism
 from ..replay import FrameControls
 from ..result import PlanResult
@@ -77,7 +78,9 @@ class Evaluation:
     control object on first use. ``complete``: the trajectory reached ``T`` (the kernel
     stops early where ``sgnΔ < delta_stop`` or ``ω`` is not finite). ``min_delta``: least
     ``sgn(Δ(R0))·Δ`` over the integrator's evaluation points (= least ``|Δ|`` unless the
-    motion crossed ``Δ = 0``; ``None`` without a singular set). ``l``, ``error``, ``J``
+    motion crossed ``Δ = 0``; ``None`` without a singular set). ``min_clearance``: least
+    clearance of the nodes from the legs' stroke limits (:mod:`nonholo.limits`; ``None``
+    without limits). ``l``, ``error``, ``J``
     only when complete; ``Z`` (``Z(t_n) = Φ(t_n, 0)^{-1}`` at every node, ``(N+1, 3, 3)``)
     and ``Wd`` (the kernel's stage weights, ``(3N, 3m)``, see
     :func:`nonholo.cf4.forward_variational`) only when the evaluation was asked for
@@ -86,7 +89,7 @@ class Evaluation:
     """
 
     __slots__ = ("params", "parametrisation", "complete", "steps_done", "t_stop", "min_delta",
-                 "R", "l", "error", "J", "Z", "Wd", "_controls")
+                 "min_clearance", "R", "l", "error", "J", "Z", "Wd", "_controls")
 
     def __init__(self, params, parametrisation, complete, steps_done, t_stop, min_delta, R,
                  controls=None):
@@ -96,6 +99,7 @@ class Evaluation:
         self.steps_done = steps_done
         self.t_stop = t_stop
         self.min_delta = min_delta
+        self.min_clearance = None
         self.R = R
         self.l = self.error = self.J = self.Z = self.Wd = None
         self._controls = controls
@@ -118,12 +122,15 @@ class Problem:
     :meth:`evaluate` simulates a control with the variational system and returns the
     error ``l_T`` and the Jacobian ``J = ∂s_T/∂λ``. ``frame=True`` integrates the system
     in the desingularised frame coordinates ``w`` (``dR/dt = [N(R) w] R``; ``Δ`` is still
-    monitored): ``λ`` then parametrises ``w``.
+    monitored): ``λ`` then parametrises ``w``. ``leg_limits``: the legs' stroke limits
+    (:class:`~nonholo.limits.LegLimits`) an admissible trajectory keeps at every node, or
+    ``None``.
     """
 
     def __init__(self, R0, Rd, T: float, mechanism: Mechanism, method: str, steps: int,
-                 delta_min: float, frame: bool = False):
+                 delta_min: float, frame: bool = False, leg_limits: LegLimits | None = None):
         self.mechanism = mechanism
+        self.leg_limits = leg_limits
         self.frame = frame
         self.kernels = mechanism.kernels(frame)
         self.R0 = np.ascontiguousarray(R0, dtype=float)
@@ -148,7 +155,7 @@ class Problem:
     def refined(self, steps: int) -> "Problem":
         """The same problem on a grid of ``steps`` integrator steps."""
         return Problem(self.R0, self.Rd, self.T, self.mechanism, self.method, steps, self.delta_min,
-                       self.frame)
+                       self.frame, self.leg_limits)
 
     def use(self, controls: Controls) -> None:
         """Interpret parameter vectors passed to :meth:`evaluate` in ``controls``' parametrisation."""
@@ -178,6 +185,8 @@ class Problem:
         complete = n == self.steps
         ev = Evaluation(x, self.parametrisation, complete, int(n), None if complete else float(t_stop),
                         float(dmin) if self.has_delta else None, self._Rs[:n + 1].copy(), given)
+        if self.leg_limits is not None:
+            ev.min_clearance = self.leg_limits.least_clearance(self.mechanism, ev.R)
         if complete:
             ev.l, err = kernels.log_error(self._Rs[n], self.Rd)
             ev.error = float(err)
@@ -188,8 +197,10 @@ class Problem:
         return ev
 
     def admissible(self, ev: Evaluation) -> bool:
-        """Complete and ``|Δ| ≥ delta_min`` along the whole trajectory."""
-        return ev.complete and (not self.has_delta or ev.min_delta >= self.delta_min)
+        """Complete, ``|Δ| ≥ delta_min`` along the whole trajectory and every node inside
+        the legs' stroke limits (if any)."""
+        return (ev.complete and (not self.has_delta or ev.min_delta >= self.delta_min)
+                and (self.leg_limits is None or ev.min_clearance >= 0.0))
 
     def why_not(self, ev: Evaluation) -> str:
         """Why ``ev`` is not admissible."""
@@ -201,6 +212,8 @@ class Problem:
             return f"|Δ| fell to {ev.min_delta:.6g} < delta_min = {self.delta_min:g}{where}"
         if not ev.complete:
             return f"the angular velocity became non-finite at t ≈ {ev.t_stop:.4g} s"
+        if self.leg_limits is not None and ev.min_clearance < 0.0:
+            return self.leg_limits.describe(self.mechanism, ev.R, np.arange(len(ev.R)) * self.h)
         return "admissible"
 
 
@@ -382,6 +395,13 @@ class Request:
     steps: int
     controls: Controls          # the physical initial control
     started: float              # time.perf_counter() when the call began
+    leg_limits: LegLimits | None = None
+
+    def recorded_options(self) -> dict:
+        """The options a result records: :class:`Options`, ``harmonics``, ``grid`` and, when
+        set, ``leg_length``."""
+        extra = {} if self.leg_limits is None else {"leg_length": list(self.leg_limits.as_tuple())}
+        return {**asdict(self.options), "harmonics": self.harmonics, "grid": self.grid, **extra}
 
 
 def build_result(request: Request, outcome: Outcome | None, success: bool, reason: str,
@@ -424,7 +444,7 @@ def build_result(request: Request, outcome: Outcome | None, success: bool, reaso
         parametrisation=par, mechanism=mech.name, method=request.method, strategy=request.strategy,
         T=T, R0=request.R0, Rd=request.Rd, steps=n_steps,
         seconds=time.perf_counter() - request.started,
-        options={**asdict(request.options), "harmonics": request.harmonics, "grid": request.grid},
+        options=request.recorded_options(),
         sensitivity=None if outcome is None or outcome.certificate is None else outcome.certificate.sensitivity,
         error_bound=None if cert is None else cert.error_bound,
         replay_steps=None if cert is None else cert.replay_steps)

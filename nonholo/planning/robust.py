@@ -64,6 +64,7 @@ import numpy as np
 
 from .. import kernels, so3, stages
 from ..controls import Controls, Fourier, PiecewiseConstant, fourier_basis
+from ..limits import BARRIER_CLEARANCE
 from ..simulation import DELTA_STOP, SingularTrajectoryError, simulate
 from .certification import certify
 from .certification import note as certificate_note
@@ -116,25 +117,39 @@ def spatial_gradient_delta(mechanism, R: np.ndarray, eps: float = 1e-6) -> np.nd
 
 def barrier_gradient(problem: Problem, ev: Evaluation, d0: float) -> np.ndarray | None:
     """Gradient in ``λ`` of the barrier ``φ = Σ_{n=1..N} h ψ(d_n)``, ``d_n = sgn(Δ(R0)) Δ(R(t_n))``,
-    ``ψ(d) = −log(d/d₀)`` for ``d < d₀`` and 0 above (``None`` if no node is below ``d₀``).
+    ``ψ(d) = −log(d/d₀)`` for ``d < d₀`` and 0 above, plus the same barrier on the legs'
+    clearances from their stroke limits where the problem has them
+    (:meth:`nonholo.limits.LegLimits.clearance_terms`, below
+    :data:`nonholo.limits.BARRIER_CLEARANCE`); ``None`` if no node is that close.
 
     ``ev`` must hold ``Z`` and the stage weights ``Wd`` (``full`` evaluation). The
     sensitivity of a node is ``s_n = Z_n^{-1} S_n``, ``S_n = Σ_{stages r before t_n} W_r
-    ∂U_r/∂λ``; with ``a_n = h ψ'(d_n) sgn ∇Δ(R_n)`` and ``μ_n = a_n Z_n^{-1}``,
+    ∂U_r/∂λ``; with ``a_n = h ψ'(d_n) sgn ∇Δ(R_n)`` (plus ``h ψ'(c) ∇c`` per active clearance) and ``μ_n = a_n Z_n^{-1}``,
     ``∇φ = Σ_n μ_n S_n = Σ_r (ν_{n(r)} W_r) ∂U_r/∂λ`` where ``ν_k = Σ_{n > k} μ_n`` (suffix
     sums) — one backward pass over the stored stages, no extra simulation.
     """
     if not ev.complete or ev.Z is None:
         return None
     N, h, m = problem.steps, problem.h, problem.mechanism.n_inputs
-    d = problem.sign * problem.mechanism.delta_samples(ev.R)
-    active = d < d0
-    active[0] = False
-    if not active.any():
-        return None
     a = np.zeros((N + 1, 3))
-    grad = spatial_gradient_delta(problem.mechanism, ev.R[active])
-    a[active] = (h * problem.sign * (-1.0 / d[active]))[:, None] * grad
+    any_active = False
+    if problem.has_delta:
+        d = problem.sign * problem.mechanism.delta_samples(ev.R)
+        active = d < d0
+        active[0] = False
+        if active.any():
+            grad = spatial_gradient_delta(problem.mechanism, ev.R[active])
+            a[active] = (h * problem.sign * (-1.0 / d[active]))[:, None] * grad
+            any_active = True
+    if problem.leg_limits is not None:
+        terms = problem.leg_limits.clearance_terms(problem.mechanism, ev.R)
+        if terms is not None:
+            nodes, c, rows = terms
+            keep = nodes > 0
+            np.add.at(a, nodes[keep], (h * (-1.0 / c[keep]))[:, None] * rows[keep])
+            any_active = any_active or bool(keep.any())
+    if not any_active:
+        return None
     mu = np.linalg.solve(np.transpose(ev.Z, (0, 2, 1)), a[:, :, None])[:, :, 0]    # a_n Z_n^{-1}
     nu = np.cumsum(mu[::-1], axis=0)[::-1]                  # Σ_{n ≥ k} μ_n
     nu = nu[1:]                                              # Σ_{n > k} μ_n, k = 0 … N−1
@@ -253,8 +268,15 @@ class RobustStrategy(Strategy):
     # -- one descent ----------------------------------------------------------------------
     def wants_full(self, problem: Problem, ev: Evaluation) -> bool:
         """Whether the next evaluations should keep ``Z`` and the stage weights (for the barrier)."""
-        return (self.barrier and problem.has_delta and ev.min_delta is not None
-                and ev.min_delta < 2.0 * self.barrier_d0)
+        return self.barrier and self.near_limits(problem, ev, 2.0)
+
+    def near_limits(self, problem: Problem, ev: Evaluation, factor: float = 1.0) -> bool:
+        """Whether ``ev``'s trajectory comes within ``factor`` times a barrier's reach of
+        ``Δ = 0`` (:attr:`barrier_d0`) or of the legs' stroke limits
+        (:data:`nonholo.limits.BARRIER_CLEARANCE`)."""
+        near_delta = problem.has_delta and ev.min_delta is not None and ev.min_delta < factor * self.barrier_d0
+        near_legs = ev.min_clearance is not None and ev.min_clearance < factor * BARRIER_CLEARANCE
+        return near_delta or near_legs
 
     def direction(self, problem: Problem, ev: Evaluation, scale: np.ndarray,
                   newton: bool = False) -> np.ndarray:
@@ -268,7 +290,7 @@ class RobustStrategy(Strategy):
         the trajectory away from ``Δ = 0``.
         """
         d = kernels.min_norm_step(ev.J, ev.l, scale)
-        if newton or not self.barrier or not problem.has_delta or ev.min_delta >= self.barrier_d0:
+        if newton or not self.barrier or not self.near_limits(problem, ev):
             return d
         full = ev if ev.Z is not None else problem.evaluate(ev.params, full=True)
         g = barrier_gradient(problem, full, self.barrier_d0)

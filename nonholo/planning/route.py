@@ -37,7 +37,7 @@ steered again along the path of the next cost :data:`nonholo.roadmap.CONDITIONIN
 from __future__ import annotations
 
 import time
-from dataclasses import asdict, dataclass, field, replace
+from dataclasses import dataclass, field, replace
 from functools import lru_cache
 from typing import Callable
 
@@ -147,7 +147,7 @@ def smooth(request: Request, stitched: Stitched, strategy: type, deadline: float
         if time.perf_counter() > deadline:
             return None
         problem = Problem(request.R0, request.Rd, request.T, request.mechanism, request.method, request.steps,
-                          opts.delta_min, frame=frame)
+                          opts.delta_min, frame=frame, leg_limits=request.leg_limits)
         outcome = solver.solve(problem, Start(guess, True), out_of_time)
         if outcome.success and outcome.certificate is None:
             outcome = certified(outcome, problem, opts)
@@ -167,33 +167,36 @@ def hop_delta_min(mechanism: Mechanism, Ra, Rb, delta_min: float) -> float:
 
 
 def steer(mechanism: Mechanism, R0, Rd, T: float, local: Callable, *, tol: float, delta_min: float,
-          sign: float, budget: float = TIME_BUDGET, started: float | None = None) -> Steered:
+          sign: float, budget: float = TIME_BUDGET, started: float | None = None,
+          leg_limits=None) -> Steered:
     """The route ``R0 → Rd`` steered hop by hop (see the module) along the path of the
     first cost of :data:`nonholo.roadmap.CONDITIONING_POWERS`, then along the path of the
     next (one not tried yet) while the route fails. ``local(R_start, R_goal, T, delta_min)`` plans one
     hop (a :class:`~nonholo.result.PlanResult`); ``budget``: seconds (wall clock) after
     ``started`` (a :func:`time.perf_counter` reading; default: now) after which no further
-    hop is tried."""
+    hop is tried. ``leg_limits``: stroke limits (:class:`~nonholo.limits.LegLimits`) the
+    path of orientations and the stitched replay keep (``local`` keeps them in each hop)."""
     if started is None:
         started = time.perf_counter()
     steered, tried = None, []
     for power in roadmap.CONDITIONING_POWERS:
-        path = roadmap.orientation_path(mechanism, R0, Rd, delta_min=delta_min, power=power)
+        path = roadmap.orientation_path(mechanism, R0, Rd, delta_min=delta_min, power=power, legs=leg_limits)
         if path is None:
-            return Steered(None, None, reason="no path of orientations clear of Δ = 0 joins the start and "
-                                              "the goal on the roadmap")
+            within = "" if leg_limits is None else " and inside the legs' stroke limits"
+            return Steered(None, None, reason=f"no path of orientations clear of Δ = 0{within} joins the "
+                                              "start and the goal on the roadmap")
         if any(q.shape == path.shape and np.array_equal(q, path) for q in tried):
             continue        # steering is deterministic: the same path fails the same way
         tried.append(path)
         steered = _steer_path(mechanism, path, Rd, T, local, tol=tol, delta_min=delta_min, sign=sign,
-                              deadline=started + budget)
+                              deadline=started + budget, leg_limits=leg_limits)
         if steered.controls is not None or time.perf_counter() > started + budget:
             break
     return steered
 
 
 def _steer_path(mechanism: Mechanism, path, Rd, T: float, local: Callable, *, tol: float, delta_min: float,
-                sign: float, deadline: float) -> Steered:
+                sign: float, deadline: float, leg_limits=None) -> Steered:
     """:func:`steer` along one path of orientations (``path[0]`` the start)."""
     R0 = path[0]
     T_hop = T / (len(path) - 1)
@@ -223,7 +226,8 @@ def _steer_path(mechanism: Mechanism, path, Rd, T: float, local: Callable, *, to
         k = len(hops)
         M = k * max(h.replay_steps for h in hops)
         cert = certify.measure(R0, Rd, T, mechanism, stitched, M, tol, delta_min, sign,
-                               max_steps=min(certify.MAX_REPLAY_STEPS, STITCHED_REFINEMENT * M))
+                               max_steps=min(certify.MAX_REPLAY_STEPS, STITCHED_REFINEMENT * M),
+                               leg_limits=leg_limits)
         if cert.passed or not cert.correctable or repair == MAX_REPAIRS:
             break
         # the last hop again, from where the stitched replay enters it
@@ -272,6 +276,6 @@ def build_result(request: Request, steered: Steered, local_reason: str,
         parametrisation=par, mechanism=mech.name, method=request.method, strategy=request.strategy,
         T=T, R0=request.R0, Rd=request.Rd, steps=steps,
         seconds=time.perf_counter() - request.started,
-        options={**asdict(request.options), "harmonics": request.harmonics, "grid": request.grid},
+        options=request.recorded_options(),
         sensitivity=cert.sensitivity, error_bound=cert.error_bound, replay_steps=cert.replay_steps,
         route="global")

@@ -1,0 +1,102 @@
+"""Stroke limits of a platform's legs: ``lo ≤ l_i(R) ≤ hi`` for every leg ``i``.
+
+A motion is kept inside the limits the way it is kept clear of ``Δ = 0``: a trajectory
+is admissible only if every node's *clearances* ``c = l_i − lo`` and ``c = hi − l_i``
+are non-negative (:meth:`LegLimits.least_clearance`), the certified replay checks the same
+on its finer grid, and the strategy ``"robust"`` adds a null-space barrier on the
+clearances below :data:`BARRIER_CLEARANCE` (:meth:`LegLimits.clearance_terms`). Lengths
+are in the units of the mechanism's geometry (:meth:`nonholo.mechanism.Mechanism.leg_lengths`).
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from .checks import is_number
+
+#: The barrier of strategy ``"robust"`` acts on clearances below this (geometry units).
+BARRIER_CLEARANCE = 0.05
+
+
+@dataclass(frozen=True)
+class LegLimits:
+    """Every leg's length within ``[lo, hi]`` (geometry units)."""
+
+    lo: float
+    hi: float
+
+    @classmethod
+    def from_argument(cls, value, mechanism) -> "LegLimits | None":
+        """``leg_length`` as :func:`nonholo.plan` takes it: ``None`` (no limits) or ``(lo,
+        hi)`` with ``0 ≤ lo < hi`` finite, for a mechanism with legs; ``ValueError`` naming
+        the argument otherwise."""
+        if value is None:
+            return None
+        if not mechanism.has_legs:
+            raise ValueError(f"leg_length: mechanism {mechanism.name!r} has no legs (only platforms do)")
+        try:
+            if isinstance(value, (str, bytes)):
+                raise TypeError
+            lo, hi = value
+        except (TypeError, ValueError):
+            raise ValueError(f"leg_length must be a pair (lo, hi), got {value!r}") from None
+        for name, x in (("lo", lo), ("hi", hi)):
+            if not is_number(x) or not math.isfinite(x) or x < 0:
+                raise ValueError(f"leg_length: {name} must be a finite number >= 0, got {x!r}")
+        if not lo < hi:
+            raise ValueError(f"leg_length: lo must be below hi, got ({lo!r}, {hi!r})")
+        return cls(float(lo), float(hi))
+
+    def as_tuple(self) -> tuple[float, float]:
+        return (self.lo, self.hi)
+
+    # -- clearances --------------------------------------------------------------------------
+    def clearances(self, mechanism, R) -> np.ndarray:
+        """``(l_i − lo, hi − l_i)`` for every leg, shape ``(n, 2k)`` for a stack ``R`` (n, 3, 3)
+        (column ``2i``: leg ``i + 1`` above ``lo``, ``2i + 1``: below ``hi``)."""
+        lengths = mechanism.leg_lengths(np.asarray(R, dtype=float).reshape(-1, 3, 3))
+        out = np.empty((lengths.shape[0], 2 * lengths.shape[1]))
+        out[:, 0::2] = lengths - self.lo
+        out[:, 1::2] = self.hi - lengths
+        return out
+
+    def least_clearance(self, mechanism, R) -> float:
+        """The least clearance over the stack ``R`` (negative: a leg left its stroke)."""
+        return float(self.clearances(mechanism, R).min())
+
+    def violation(self, mechanism, R, what: str) -> str | None:
+        """Why the orientation ``R`` (3, 3) is outside the limits (``what``: e.g. ``"the
+        start"``), naming the leg and by how much; ``None`` inside."""
+        lengths = mechanism.leg_lengths(np.asarray(R, dtype=float))
+        for i, length in enumerate(lengths):
+            if length < self.lo:
+                return (f"{what} is outside the legs' stroke: leg {i + 1} is {length:.4g} long, "
+                        f"{self.lo - length:.3g} below leg_length's lower end {self.lo:g}")
+            if length > self.hi:
+                return (f"{what} is outside the legs' stroke: leg {i + 1} is {length:.4g} long, "
+                        f"{length - self.hi:.3g} above leg_length's upper end {self.hi:g}")
+        return None
+
+    def describe(self, mechanism, R, times=None) -> str:
+        """Where the stack ``R`` leaves the limits the most (for a failure's reason)."""
+        c = self.clearances(mechanism, R)
+        n, j = np.unravel_index(int(np.argmin(c)), c.shape)
+        leg, bound = j // 2 + 1, ("lower", "upper")[j % 2]
+        when = f" at t ≈ {times[n]:.4g} s" if times is not None else ""
+        return (f"leg {leg} passes its {bound} stroke limit by {-c[n, j]:.3g}{when} "
+                f"(leg_length = ({self.lo:g}, {self.hi:g}))")
+
+    def clearance_terms(self, mechanism, R, threshold: float = BARRIER_CLEARANCE):
+        """The active terms of a log barrier ``Σ −log(c/c₀)`` on the clearances of the
+        nodes ``R`` (n, 3, 3): ``(nodes, c, ∇c)`` for every clearance ``c < threshold``
+        (``∇c``: rows with ``dc = ∇c · s`` along ``∂R = [s] R``), or ``None``."""
+        c = self.clearances(mechanism, R)
+        nodes, cols = np.nonzero(c < threshold)
+        if nodes.size == 0:
+            return None
+        G = mechanism.leg_gradients(np.asarray(R)[nodes])               # (a, k, 3)
+        rows = G[np.arange(nodes.size), cols // 2]
+        rows[cols % 2 == 1] *= -1.0                                        # hi − l_i decreases with l_i
+        return nodes, c[nodes, cols], rows
