@@ -27,7 +27,10 @@ Optimal control problem
 -----------------------
 Minimise ``int_0^T |u|^2 dt`` subject to the dynamics, ``R(0) = R0``,
 ``R(T) = Rd`` and the path constraint ``sign(Delta(R0)) Delta(R) >= delta_min``
-(enforced at the shooting nodes, optionally also at the integrator substeps).
+(enforced at the shooting nodes, optionally also at the integrator substeps);
+optionally the legs' stroke ``lo <= l_i(R) <= hi`` at the nodes, with the
+paper's leg lengths ``l_1^2 = a^2 + b^2 - 2ab r22``, ``l_2^2 = a^2 + b^2 - 2ab r11``
+(``a = LEG_A``, ``b = LEG_B``, the drawing dimensions of ``nonholo``'s platform).
 It is transcribed by multiple shooting on a uniform grid of ``N`` intervals
 with piecewise-constant controls and solved by IPOPT with exact Hessians; see
 :func:`solve`.
@@ -77,6 +80,7 @@ __all__ = [
     "resimulate",
     "terminal_error",
     "delta",
+    "leg_lengths",
     "input_matrix",
     "rpy",
     "make_step_function",
@@ -88,6 +92,18 @@ __all__ = [
 SUCCESS_TOL = 1e-6
 
 _OK_STATUSES = ("Solve_Succeeded", "Solved_To_Acceptable_Level")
+
+#: Base-joint distance ``a`` and platform-joint distance ``b`` of the legs (the
+#: geometry's units): only the stroke constraint uses them.
+LEG_A = 1.6
+LEG_B = 1.0
+
+
+def leg_lengths(R: np.ndarray) -> np.ndarray:
+    """``(l_1, l_2)`` of the paper's platform at ``R``."""
+    R = np.asarray(R, dtype=float).reshape(3, 3)
+    c = LEG_A**2 + LEG_B**2
+    return np.sqrt([c - 2 * LEG_A * LEG_B * R[1, 1], c - 2 * LEG_A * LEG_B * R[0, 0]])
 
 
 # ---------------------------------------------------------------------------
@@ -213,12 +229,13 @@ def _build(
     tol: float,
     verbose: bool,
     path_at_substeps: bool,
+    stroke: bool = False,
 ) -> _Problem:
     step = make_step_function(substeps)
 
-    # Parameters: R0 (9), Rd (9), T, sign(Delta(R0)), delta_min.
-    p = ca.MX.sym("p", 21)
-    x0, xd, T, sgn, dmin = p[0:9], p[9:18], p[18], p[19], p[20]
+    # Parameters: R0 (9), Rd (9), T, sign(Delta(R0)), delta_min, lo^2, hi^2.
+    p = ca.MX.sym("p", 23)
+    x0, xd, T, sgn, dmin, lo2, hi2 = p[0:9], p[9:18], p[18], p[19], p[20], p[21], p[22]
     H = T / N
 
     # Decision variables interleaved as [u_0, x_1, u_1, x_2, ..., u_{N-1}, x_N]
@@ -244,6 +261,12 @@ def _build(
         g.append(sgn * d[-nd:] - dmin)
         lbg += [0.0] * nd
         ubg += [np.inf] * nd
+        if stroke:  # lo^2 <= l_i^2 <= hi^2 at node k+1
+            Xk = _mat(X[:, k])
+            sq = LEG_A**2 + LEG_B**2 - 2 * LEG_A * LEG_B * ca.vertcat(Xk[1, 1], Xk[0, 0])
+            g.append(ca.vertcat(sq - lo2, hi2 - sq))
+            lbg += [0.0] * 4
+            ubg += [np.inf] * 4
 
     # Terminal constraint: E = Rd^T R(T) is a rotation (guaranteed by the
     # dynamics); vee(E - E^T) = 0 leaves E in {I} U {rotations by pi}; the
@@ -360,6 +383,7 @@ def solve(
     *,
     path_at_substeps: bool = False,
     reuse_solver: bool = True,
+    leg_length=None,
 ) -> CasadiResult:
     """Plan a minimum-energy motion from ``R0`` to ``Rd`` in time ``T``.
 
@@ -383,6 +407,8 @@ def solve(
         substep points of every interval (not only at the nodes).  This keeps
         the discrete trajectory from stepping over the singular surface
         between nodes, where ``|w| ~ |u| / |Delta|`` becomes large.
+    leg_length : ``(lo, hi)``: keep both legs' lengths (:func:`leg_lengths`)
+        within it at every node; ``None``: no stroke constraint.
     reuse_solver : the NLP is parametric in ``(R0, Rd, T, delta_min)``; when
         True a solver built earlier for the same ``(N, substeps, max_iter,
         tol, verbose, path_at_substeps)`` is reused and ``build_seconds`` is 0.
@@ -416,11 +442,12 @@ def solve(
     sgn = float(np.sign(d0))
 
     # --- build (or reuse) the NLP -------------------------------------------
-    key = (N, substeps, int(max_iter), float(tol), bool(verbose), bool(path_at_substeps))
+    stroke = leg_length is not None
+    key = (N, substeps, int(max_iter), float(tol), bool(verbose), bool(path_at_substeps), stroke)
     t_build = time.perf_counter()
     prob = _CACHE.get(key) if reuse_solver else None
     if prob is None:
-        prob = _build(N, substeps, max_iter, tol, verbose, path_at_substeps)
+        prob = _build(N, substeps, max_iter, tol, verbose, path_at_substeps, stroke)
         if reuse_solver:
             _CACHE[key] = prob
         build_seconds = time.perf_counter() - t_build
@@ -448,7 +475,8 @@ def solve(
     w0 = np.zeros(prob.nx_w)
     w0[prob.idx_u] = U0
     w0[prob.idx_x] = X0.T
-    p = np.concatenate([R0.reshape(9), Rd.reshape(9), [T, sgn, delta_min]])
+    lo, hi = leg_length if stroke else (0.0, np.inf)
+    p = np.concatenate([R0.reshape(9), Rd.reshape(9), [T, sgn, delta_min, lo**2, min(hi**2, 1e300)]])
 
     # --- solve -----------------------------------------------------------------
     t_solve = time.perf_counter()

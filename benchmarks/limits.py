@@ -1,0 +1,195 @@
+"""Plans under the legs' stroke limits: ``nonholo.plan(..., leg_length=(lo, hi))`` against
+CasADi/IPOPT with the same limits, on ``benchmarks/goals.json``.
+
+Run::
+
+    python -m benchmarks.limits [--lo 1.2 --hi 2.0]
+
+The goals: the platform's reachable goals of ``benchmarks/goals.json`` whose start and
+goal both have every leg inside ``[lo, hi]``. Solvers, each timed per call after one
+warm-up call (numba compiled, the NLP built):
+
+- ``nonholo``: :func:`nonholo.plan` with its defaults and ``leg_length=(lo, hi)``,
+  ``delta_min = 0.01``;
+- ``casadi``: :func:`benchmarks.casadi_ms.solve` (minimum ``∫|u|² dt``, the setting of
+  :mod:`benchmarks.compare`'s ``casadi``: 40 intervals, 2 substeps, the Δ constraint at
+  the substeps) with ``leg_length=(lo, hi)`` at its nodes;
+- ``nonholo (no limits)``: :func:`nonholo.plan` without limits, to show how often the
+  limits bind.
+
+Every claimed success is re-simulated by DOP853 (rtol = atol = 1e-13) with a dense path
+(:func:`nonholo.verify.resimulate_path`): *solved* = final error ≤ 1e-8 rad, ``sgnΔ ≥
+delta_min`` and every leg inside ``[lo, hi]`` at every point of the path, the leg lengths
+computed from the platform's numeric geometry (``|R tip_i − base_i|``). Writes
+``benchmarks/results/limits.md`` and ``limits.json``.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+import time
+
+import numpy as np
+
+from nonholo import catalog, planner, so3, verify
+
+from . import goalset
+from .report import RESULTS_DIR, Report
+
+#: Stroke limits of the acceptance (the geometry's units: the base joints at 1.6, the
+#: platform joints at 1 from the centre; legs span 0.6 … 2.6).
+LIMITS = (1.2, 2.0)
+DELTA_MIN = 1e-2
+#: The re-simulated motion must end this close to the goal (rad).
+SUCCESS_TOL = 1e-8
+#: The example used to warm each solver up.
+WARMUP = ((0.5, 1.2, -0.5), (1.0, 0.9, -0.5))
+
+
+def _log(msg: str) -> None:
+    print(msg, file=sys.stderr, flush=True)
+
+
+def goals_inside(limits) -> list[dict]:
+    """The reachable goals of ``goals.json`` whose start and goal keep every leg inside ``limits``."""
+    geom = catalog.get("platform").geometry
+    out = []
+    for g in goalset.load_goals():
+        if g["band"] == "across":
+            continue
+        R0, Rd = np.array(g["R0"]), np.array(g["Rd"])
+        ends = np.concatenate([geom.leg_lengths(R0), geom.leg_lengths(Rd)])
+        if limits[0] <= ends.min() and ends.max() <= limits[1]:
+            out.append({**g, "R0": R0, "Rd": Rd})
+    return out
+
+
+def check(goal: dict, controls, breakpoints, T: float, limits) -> dict:
+    """DOP853 with a dense path: final error, least ``sgnΔ`` and least clearance from the
+    stroke limits (a failed integration: infinitely far, on ``Δ = 0``)."""
+    mech = catalog.get("platform")
+    try:
+        _, R, d = verify.resimulate_path(goal["R0"], controls, T, mech, breakpoints)
+    except (RuntimeError, FloatingPointError, ValueError, ZeroDivisionError):
+        return {"final_error": math.inf, "least_delta": 0.0, "least_clearance": -math.inf}
+    lengths = mech.geometry.leg_lengths(R)
+    sign = float(np.sign(mech.delta(goal["R0"])))
+    return {"final_error": verify.terminal_error(R[-1], goal["Rd"]), "least_delta": float(np.min(sign * d)),
+            "least_clearance": float(min(lengths.min() - limits[0], limits[1] - lengths.max()))}
+
+
+def _solved(c: dict | None) -> bool:
+    return (c is not None and c["final_error"] <= SUCCESS_TOL and c["least_delta"] >= DELTA_MIN
+            and c["least_clearance"] >= 0.0)
+
+
+def run_nonholo(goals, limits, label: str) -> list[dict]:
+    kw = {} if limits is None else {"leg_length": limits}
+    planner.plan(so3.from_rpy(*WARMUP[0]), so3.from_rpy(*WARMUP[1]), delta_min=DELTA_MIN, **kw)
+    timed = []
+    for g in goals:
+        t = time.perf_counter()
+        res = planner.plan(g["R0"], g["Rd"], T=g["T"], delta_min=DELTA_MIN, **kw)
+        timed.append((time.perf_counter() - t, res))
+    out = []
+    for g, (wall, res) in zip(goals, timed):
+        c = check(g, res.controls, res.breakpoints, res.T, limits or (0.0, math.inf)) if res.success else None
+        out.append({"solver": label, "id": g["id"], "seconds": wall, "claimed": bool(res.success),
+                    "solved": _solved(c), "route": res.route, "reason": res.reason[-300:], "check": c})
+    return out
+
+
+def run_casadi(goals, limits) -> list[dict]:
+    from . import casadi_ms
+
+    kw = {"N": 40, "substeps": 2, "delta_min": DELTA_MIN, "path_at_substeps": True, "leg_length": limits}
+    casadi_ms.solve(so3.from_rpy(*WARMUP[0]), so3.from_rpy(*WARMUP[1]), T=1.0, **kw)
+    out = []
+    for g in goals:
+        t = time.perf_counter()
+        r = casadi_ms.solve(g["R0"], g["Rd"], T=g["T"], **kw)
+        wall = time.perf_counter() - t
+        c = check(g, r.controls, r.t_grid, r.T, limits)
+        out.append({"solver": "casadi", "id": g["id"], "seconds": wall, "claimed": bool(r.success),
+                    "solved": _solved(c), "reason": r.status, "check": c, "energy": r.objective})
+    return out
+
+
+def _ms(x) -> str:
+    return "–" if x is None else f"{1e3 * x:.1f}"
+
+
+def summary(records: list[dict]) -> list:
+    ts = [r["seconds"] for r in records]
+    false = sum(r["claimed"] and not r["solved"] for r in records)
+    return [len(records), sum(r["claimed"] for r in records), sum(r["solved"] for r in records), false,
+            _ms(float(np.median(ts))), _ms(float(np.quantile(ts, 0.95))), _ms(max(ts))]
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(prog="python -m benchmarks.limits", description=__doc__.splitlines()[0])
+    ap.add_argument("--lo", type=float, default=LIMITS[0])
+    ap.add_argument("--hi", type=float, default=LIMITS[1])
+    ap.add_argument("--no-casadi", action="store_true", help="leave CasADi out (e.g. not installed)")
+    args = ap.parse_args(argv)
+    limits = (args.lo, args.hi)
+    goals = goals_inside(limits)
+    _log(f"{len(goals)} goals with both ends inside {limits}")
+    records = run_nonholo(goals, limits, "nonholo")
+    _log("nonholo done")
+    records += run_nonholo(goals, None, "nonholo (no limits)")
+    for r in records:
+        if r["solver"] == "nonholo (no limits)" and r["claimed"]:
+            r["inside"] = r["check"]["least_clearance"] >= 0.0 if r["check"] else None
+    _log("nonholo (no limits) done")
+    if not args.no_casadi:
+        records += run_casadi(goals, limits)
+        _log("casadi done")
+    rep = Report("limits.md", "Plans under the legs' stroke limits", "benchmarks.limits", argv,
+                 extra_packages=("casadi",))
+    rep.paragraph(
+        f"The platform's reachable goals of `benchmarks/goals.json` whose start and goal keep both legs "
+        f"inside leg_length = ({limits[0]:g}, {limits[1]:g}) ({len(goals)} goals; the legs span 0.6 … 2.6). "
+        "Each solver timed per call after a warm-up call. Every claimed success re-simulated by DOP853 "
+        f"(rtol = atol = 1e-13, dense path): *solved* = final error ≤ {SUCCESS_TOL:g} rad, sgnΔ ≥ "
+        f"{DELTA_MIN:g} and both legs inside the limits at every point (lengths from the numeric geometry); "
+        "a *false claim* is a claimed success that is not solved. `nonholo`: `plan(R0, Rd, leg_length=...)` "
+        "with its defaults; `casadi`: `benchmarks.casadi_ms.solve` (minimum energy, 40 intervals, 2 substeps, "
+        "Δ at the substeps) with the stroke constraint at its nodes; `nonholo (no limits)`: `plan` without "
+        "limits (its *solved* ignores the limits: see the line below the table).")
+    by = {}
+    for r in records:
+        by.setdefault(r["solver"], []).append(r)
+    rows = []
+    for name, rs in by.items():
+        if name == "nonholo (no limits)":
+            for r in rs:            # solved here: without the limits' condition
+                c = r["check"]
+                r["solved"] = c is not None and c["final_error"] <= SUCCESS_TOL and c["least_delta"] >= DELTA_MIN
+        rows.append([name, *summary(rs)])
+    rep.table(["solver", "goals", "claimed", "solved", "false claims", "median ms", "p95 ms", "max ms"], rows)
+    free = by.get("nonholo (no limits)", [])
+    leave = sum(1 for r in free if r.get("inside") is False)
+    rep.paragraph(f"Without limits, {leave} of the {sum(r['claimed'] for r in free)} plans `nonholo` finds leave "
+                  "the stroke somewhere along the motion: the limits bind on those goals.")
+    if "casadi" in by:
+        med = {k: float(np.median([r["seconds"] for r in by[k]])) for k in ("nonholo", "casadi")}
+        rep.paragraph(f"Median time, casadi / nonholo (same run): **{med['casadi'] / med['nonholo']:.1f}×**.")
+    missed = [r for r in records if r["solver"] in ("nonholo", "casadi") and not r["solved"]]
+    if missed:
+        rep.heading("Goals not solved")
+        rep.table(["solver", "goal", "claimed", "final error", "least clearance", "reason"],
+                  [[r["solver"], r["id"], r["claimed"],
+                    "–" if not r["check"] else f"{r['check']['final_error']:.2g}",
+                    "–" if not r["check"] else f"{r['check']['least_clearance']:.3g}", r["reason"][-160:]]
+                   for r in missed])
+    rep.write()
+    (RESULTS_DIR / "limits.json").write_text(json.dumps(
+        {"limits": limits, "records": records}, indent=1, default=float))
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
