@@ -219,5 +219,6 @@ def plan(R0, Rd, *, T: float = 1.0, method: str = "parametric", harmonics: int =
     if steered.controls is None:
         return build_result(request, outcome, False,
                             f"{local_reason}; the global route failed too: {steered.reason}", problem)
-    smoothed = global_route.smooth(request, steered.controls, cls, deadline=started + global_route.TIME_BUDGET)
+    smoothed = global_route.smooth(request, steered.controls, cls, deadline=started + global_route.TIME_BUDGET,
+                                   reserve=steered.certify_seconds)
     return global_route.build_result(request, steered, local_reason, smoothed)

@@ -26,6 +26,10 @@ from .jit import jit
 
 #: Stage times of one CF4 step, as fractions of the step.
 STAGE_FRACTIONS = np.array([0.0, 0.5, 1.0])
+#: Above this many steps (finer than any grid the planner itself runs on: the replays that
+#: certify a plan) a Fourier series' stage table is evaluated by one inverse FFT instead of
+#: through its stage basis (``3 · steps × (2K + 1)`` sines and cosines).
+FFT_ABOVE = 6400
 
 
 def stage_times(T: float, steps: int) -> np.ndarray:
@@ -136,12 +140,32 @@ def stage_table(controls, steps: int) -> np.ndarray:
     """
     if isinstance(controls, Fourier):
         steps = check_steps(controls, steps)
+        if steps > FFT_ABOVE and 2 * controls.harmonics < steps:
+            return fourier_stage_values(controls, steps)
         basis = _fourier_stage_basis(controls.T, controls.harmonics, steps)
         return (basis.reshape(3 * steps, -1) @ controls.coeffs.T).reshape(steps, 3, controls.n_inputs)
     if isinstance(controls, PiecewiseConstant):
         out = np.empty((check_steps(controls, steps), 3, controls.n_inputs))
         return grid_stage_values(controls.values, out)
     return controls.stage_table(steps)
+
+
+def fourier_stage_values(controls: Fourier, steps: int) -> np.ndarray:
+    """The stage table of the Fourier series ``controls`` by an inverse real FFT: the stage
+    times are the ``2·steps`` points ``j T/(2 steps)`` of a uniform grid of one period (and
+    ``T``, which is ``0`` again), where ``w(t_j) = Σ_k X_k e^{2πi kj/n}/n`` with ``X_0 = n
+    a_0``, ``X_k = (n/2)(b_k − i a_k)`` (``a_k``, ``b_k``: the coefficients of ``sin kωt``,
+    ``cos kωt``). Equal to the stage basis' product up to round-off (``O(ε log n)``
+    relative to the coefficients)."""
+    n = 2 * steps
+    c = controls.coeffs                                  # (m, 2K+1): a0, (sin k, cos k)…
+    X = np.zeros((c.shape[0], n // 2 + 1), dtype=complex)
+    X[:, 0] = n * c[:, 0]
+    X[:, 1:controls.harmonics + 1] = 0.5 * n * (c[:, 2::2] - 1j * c[:, 1::2])
+    x = np.fft.irfft(X, n, axis=1)                       # (m, n) at t_j, j = 0 … n−1
+    x = np.concatenate([x, x[:, :1]], axis=1)            # t = T: one period on
+    j = 2 * np.arange(steps)[:, None] + np.arange(3)[None, :]
+    return np.ascontiguousarray(np.moveaxis(x[:, j], 0, -1))
 
 
 def stage_function(controls, steps: int):

@@ -93,3 +93,10 @@ def test_cli_writes_the_csv(tmp_path, capsys):
                  "--csv", str(out), "--csv-rate", "0"]) == 2
     assert "--csv-rate" in capsys.readouterr().err
     assert export.sample_times(1.0, 3.0).tolist() == [0.0, 1 / 3, 2 / 3, 1.0]
+
+
+def test_cli_csv_that_cannot_be_written_exits_3(tmp_path, capsys):
+    out = tmp_path / "no such dir" / "plan.csv"
+    assert main(["plan", "--from", "0.5", "1.2", "-0.5", "--to", "1.0", "0.9", "-0.5", "--quiet",
+                 "--csv", str(out)]) == 3
+    assert str(out) in capsys.readouterr().err

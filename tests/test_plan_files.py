@@ -145,7 +145,8 @@ def test_cli_a_file_it_cannot_write_is_one_error_line_and_exit_status_3(tmp_path
 
 def test_cli_documents_its_exit_statuses():
     doc = cli_plan.__doc__
-    assert "0 on success, 1 if the planner failed, 2 on bad input, 3 if ``--out`` or" in doc
+    assert "0 on success, 1 if the planner failed, 2 on bad input, 3 if ``--out``," in doc
+    assert "``--plot`` or ``--csv`` could not be written" in doc
 
 
 @pytest.mark.parametrize("reader", ["head -1", "true"])

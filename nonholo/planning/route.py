@@ -90,6 +90,8 @@ class Steered:
     hops: list = field(default_factory=list)
     reason: str = ""
     path: np.ndarray | None = None
+    #: wall-clock seconds the stitched control's last certification took
+    certify_seconds: float = 0.0
 
 
 def _stitch(T: float, hops: list, R0) -> Stitched:
@@ -130,12 +132,19 @@ def smoothing_guesses(stitched: Stitched, method: str, harmonics: int, grid: int
     return [Fourier.fit(stitched.planned, T, K, m) for K in SMOOTHING_HARMONICS if harmonics < K <= steps // 2]
 
 
-def smooth(request: Request, stitched: Stitched, strategy: type, deadline: float) -> tuple[Outcome, Problem] | None:
+def smooth(request: Request, stitched: Stitched, strategy: type, deadline: float,
+           reserve: float = 0.0) -> tuple[Outcome, Problem] | None:
     """The route's motion re-planned as one control (see the module): the certified outcome
     and its problem, or ``None`` when no guess of :func:`smoothing_guesses` converged to a
-    certified plan within :data:`SMOOTHING_TIME` and before ``deadline`` (a
-    :func:`time.perf_counter` reading; a descent under way stops at its next iteration)."""
-    deadline = min(deadline, time.perf_counter() + SMOOTHING_TIME)
+    certified plan in time. ``deadline``: a :func:`time.perf_counter` reading by which the
+    smoothing must be done; ``reserve``: seconds kept for the certification after a
+    descent converges (about what the stitched control's took), which cannot be
+    interrupted. Nothing is tried unless :data:`SMOOTHING_TIME` and ``reserve`` fit before
+    ``deadline``; a descent stops at its first iteration past :data:`SMOOTHING_TIME`."""
+    now = time.perf_counter()
+    if now + SMOOTHING_TIME + reserve > deadline:
+        return None
+    deadline = now + SMOOTHING_TIME
     opts = request.options
     solver = smoothing_strategy(strategy)(opts)
     frame = solver.frame(request.mechanism)
@@ -225,9 +234,11 @@ def _steer_path(mechanism: Mechanism, path, Rd, T: float, local: Callable, *, to
         stitched = _stitch(T, hops, R0)
         k = len(hops)
         M = k * max(h.replay_steps for h in hops)
+        clock = time.perf_counter()
         cert = certify.measure(R0, Rd, T, mechanism, stitched, M, tol, delta_min, sign,
                                max_steps=min(certify.MAX_REPLAY_STEPS, STITCHED_REFINEMENT * M),
                                leg_limits=leg_limits)
+        clock = time.perf_counter() - clock
         if cert.passed or not cert.correctable or repair == MAX_REPAIRS:
             break
         # the last hop again, from where the stitched replay enters it
@@ -238,7 +249,7 @@ def _steer_path(mechanism: Mechanism, path, Rd, T: float, local: Callable, *, to
         hops[-1] = res
     if not cert.passed:
         return Steered(None, cert, hops, f"the stitched control is not certified: {cert.reason}", path)
-    return Steered(stitched, cert, hops, "", path)
+    return Steered(stitched, cert, hops, "", path, clock)
 
 
 def build_result(request: Request, steered: Steered, local_reason: str,
