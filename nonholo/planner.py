@@ -214,11 +214,14 @@ def plan(R0, Rd, *, T: float = 1.0, method: str = "parametric", harmonics: int =
                     steps=steps, newton_below=newton_below, min_step=min_step, route="local",
                     leg_length=leg_length)
 
+    def smooth(stitched, reserve):
+        return global_route.smooth(request, stitched, cls, deadline=started + global_route.TIME_BUDGET,
+                                   reserve=reserve)
+
     steered = global_route.steer(mech, R0, Rd, T, hop, tol=tol, delta_min=delta_min, sign=problem.sign,
-                                 started=started, leg_limits=leg_limits)
-    if steered.controls is None:
+                                 started=started, leg_limits=leg_limits, rescue=smooth)
+    if steered.controls is None and steered.smoothed is None:
         return build_result(request, outcome, False,
                             f"{local_reason}; the global route failed too: {steered.reason}", problem)
-    smoothed = global_route.smooth(request, steered.controls, cls, deadline=started + global_route.TIME_BUDGET,
-                                   reserve=steered.certify_seconds)
+    smoothed = steered.smoothed or smooth(steered.controls, steered.certify_seconds)
     return global_route.build_result(request, steered, local_reason, smoothed)

@@ -304,3 +304,17 @@ def test_default_plan_solves_a_slice_of_the_random_band_set(mechanism, first, st
     for (err, dmin), r in zip(rk4_check(results, far), results):
         assert err <= 1e-8, (r.route, err)
         assert dmin >= r.options["delta_min"]
+
+
+def test_a_stitched_control_too_ill_conditioned_to_certify_is_rescued_by_smoothing(monkeypatch):
+    """Far pair ``band-platform-1.8-pi-0189``: its first route's hops all succeed but their
+    stitched control is not certified; re-planned as one smooth control from it, the motion
+    is certified (the time budget lifted: the test must not depend on the machine's speed)."""
+    monkeypatch.setattr(route, "TIME_BUDGET", 60.0)
+    p = {q["id"]: q for q in goalset.band_pairs("platform", 500)}["band-platform-1.8-pi-0189"]
+    res = planner.plan(p["R0"], p["Rd"])
+    assert res.success and res.route == "global" and res.stitched is not None, res.reason
+    assert "the stitched control is not certified" in res.reason
+    assert res.terminal_error + res.error_bound <= res.options["tol"]
+    RT = verify.resimulate(p["R0"], res.controls, res.T, "platform", res.breakpoints)
+    assert verify.terminal_error(RT, p["Rd"]) <= 1e-8

@@ -25,7 +25,10 @@ strategy's descent from that guess alone (:func:`smoothing_strategy`). The guess
 close to the goal along the route's corridor, so the descent is short. Where it
 converges and is certified, the smooth control is the plan's and the stitched one is kept
 as its record (:attr:`nonholo.result.PlanResult.stitched`); otherwise the plan is the
-stitched control.
+stitched control. A stitched control that is *not* certified — typically too
+ill-conditioned: it multiplies its hops' sensitivities — is smoothed the same way before
+the next path is tried: one smooth control along the same corridor is often far better
+conditioned, and its own certificate decides.
 
 The stitched motion is played open loop, so its sensitivity is the product of its hops'
 transition matrices: each amplifies errors by a factor that grows with ``∫ |ω| dt /
@@ -92,6 +95,12 @@ class Steered:
     path: np.ndarray | None = None
     #: wall-clock seconds the stitched control's last certification took
     certify_seconds: float = 0.0
+    #: the stitched control of a route whose hops all succeeded but whose stitched control
+    #: was not certified (``controls`` is then ``None``)
+    draft: Stitched | None = None
+    #: the route re-planned as one smooth control (:func:`smooth`), when ``steer`` was
+    #: given a ``rescue`` that succeeded on the ``draft``
+    smoothed: tuple | None = None
 
 
 def _stitch(T: float, hops: list, R0) -> Stitched:
@@ -176,17 +185,25 @@ def hop_delta_min(mechanism: Mechanism, Ra, Rb, delta_min: float) -> float:
 
 
 def steer(mechanism: Mechanism, R0, Rd, T: float, local: Callable, *, tol: float, delta_min: float,
-          sign: float, budget: float = TIME_BUDGET, started: float | None = None,
-          leg_limits=None) -> Steered:
+          sign: float, budget: float | None = None, started: float | None = None,
+          leg_limits=None, rescue: Callable | None = None) -> Steered:
     """The route ``R0 → Rd`` steered hop by hop (see the module) along the path of the
     first cost of :data:`nonholo.roadmap.CONDITIONING_POWERS`, then along the path of the
     next (one not tried yet) while the route fails. ``local(R_start, R_goal, T, delta_min)`` plans one
-    hop (a :class:`~nonholo.result.PlanResult`); ``budget``: seconds (wall clock) after
+    hop (a :class:`~nonholo.result.PlanResult`); ``budget``: seconds (wall clock, default
+    :data:`TIME_BUDGET`) after
     ``started`` (a :func:`time.perf_counter` reading; default: now) after which no further
     hop is tried. ``leg_limits``: stroke limits (:class:`~nonholo.limits.LegLimits`) the
-    path of orientations and the stitched replay keep (``local`` keeps them in each hop)."""
+    path of orientations and the stitched replay keep (``local`` keeps them in each hop).
+    ``rescue(draft, seconds)``: called when a path's hops all succeed but their stitched
+    control is not certified (``seconds``: what its certification took); a smooth re-plan
+    from it (:func:`smooth`: an ``(outcome, problem)``, or ``None``) ends the search
+    (``Steered.smoothed``) — one smooth control is often far better conditioned than the
+    product of its hops'."""
     if started is None:
         started = time.perf_counter()
+    if budget is None:
+        budget = TIME_BUDGET
     steered, tried = None, []
     for power in roadmap.CONDITIONING_POWERS:
         path = roadmap.orientation_path(mechanism, R0, Rd, delta_min=delta_min, power=power, legs=leg_limits)
@@ -199,7 +216,9 @@ def steer(mechanism: Mechanism, R0, Rd, T: float, local: Callable, *, tol: float
         tried.append(path)
         steered = _steer_path(mechanism, path, Rd, T, local, tol=tol, delta_min=delta_min, sign=sign,
                               deadline=started + budget, leg_limits=leg_limits)
-        if steered.controls is not None or time.perf_counter() > started + budget:
+        if steered.controls is None and steered.draft is not None and rescue is not None:
+            steered.smoothed = rescue(steered.draft, steered.certify_seconds)
+        if steered.controls is not None or steered.smoothed is not None or time.perf_counter() > started + budget:
             break
     return steered
 
@@ -248,7 +267,8 @@ def _steer_path(mechanism: Mechanism, path, Rd, T: float, local: Callable, *, to
             break
         hops[-1] = res
     if not cert.passed:
-        return Steered(None, cert, hops, f"the stitched control is not certified: {cert.reason}", path)
+        return Steered(None, cert, hops, f"the stitched control is not certified: {cert.reason}", path, clock,
+                       draft=stitched)
     return Steered(stitched, cert, hops, "", path, clock)
 
 
@@ -267,11 +287,12 @@ def build_result(request: Request, steered: Steered, local_reason: str,
     if smoothed is not None:
         outcome, problem = smoothed
         res = build_local_result(request, outcome, True, outcome.reason, problem)
-        return replace(res, route="global", stitched=steered.controls,
+        uncertified = "" if steered.controls is not None else f" ({steered.reason})"
+        return replace(res, route="global", stitched=steered.controls or steered.draft,
                        history=history + [{**rec, "hop": None} for rec in res.history],
                        iterations=sum(h.iterations for h in hops) + res.iterations,
                        reason=f"reached by {route}, then re-planned as one smooth control from the "
-                              f"stitched one: {res.reason}")
+                              f"stitched one{uncertified}: {res.reason}")
     steps = len(hops) * max(h.steps for h in hops)
     par = steered.controls
     n = steps + 1
