@@ -85,8 +85,10 @@ def _solved(c: dict | None) -> bool:
             and c["least_clearance"] >= 0.0)
 
 
-def run_nonholo(goals, limits, label: str) -> list[dict]:
-    kw = {} if limits is None else {"leg_length": limits}
+def run_nonholo(goals, limits, label: str, enforce: bool = True) -> list[dict]:
+    """:func:`nonholo.plan` on every goal, with ``leg_length=limits`` if ``enforce``; the
+    checks measure the clearance from ``limits`` either way."""
+    kw = {"leg_length": limits} if enforce else {}
     planner.plan(so3.from_rpy(*WARMUP[0]), so3.from_rpy(*WARMUP[1]), delta_min=DELTA_MIN, **kw)
     timed = []
     for g in goals:
@@ -95,7 +97,7 @@ def run_nonholo(goals, limits, label: str) -> list[dict]:
         timed.append((time.perf_counter() - t, res))
     out = []
     for g, (wall, res) in zip(goals, timed):
-        c = check(g, res.controls, res.breakpoints, res.T, limits or (0.0, math.inf)) if res.success else None
+        c = check(g, res.controls, res.breakpoints, res.T, limits) if res.success else None
         out.append({"solver": label, "id": g["id"], "seconds": wall, "claimed": bool(res.success),
                     "solved": _solved(c), "route": res.route, "reason": res.reason[-300:], "check": c})
     return out
@@ -139,7 +141,7 @@ def main(argv=None) -> int:
     _log(f"{len(goals)} goals with both ends inside {limits}")
     records = run_nonholo(goals, limits, "nonholo")
     _log("nonholo done")
-    records += run_nonholo(goals, None, "nonholo (no limits)")
+    records += run_nonholo(goals, limits, "nonholo (no limits)", enforce=False)
     for r in records:
         if r["solver"] == "nonholo (no limits)" and r["claimed"]:
             r["inside"] = r["check"]["least_clearance"] >= 0.0 if r["check"] else None
@@ -173,7 +175,7 @@ def main(argv=None) -> int:
     free = by.get("nonholo (no limits)", [])
     leave = sum(1 for r in free if r.get("inside") is False)
     rep.paragraph(f"Without limits, {leave} of the {sum(r['claimed'] for r in free)} plans `nonholo` finds leave "
-                  "the stroke somewhere along the motion: the limits bind on those goals.")
+                  "the stroke somewhere along the re-simulated motion (on those goals the limits bind).")
     if "casadi" in by:
         med = {k: float(np.median([r["seconds"] for r in by[k]])) for k in ("nonholo", "casadi")}
         rep.paragraph(f"Median time, casadi / nonholo (same run): **{med['casadi'] / med['nonholo']:.1f}×**.")

@@ -126,8 +126,8 @@ def plan(R0, Rd, *, T: float = 1.0, method: str = "parametric", harmonics: int =
       the global route (:mod:`nonholo.planning.route`): hops along a path of orientations
       through the start's component, clear of ``Δ = 0``, each planned like a local plan,
       stitched into one control, then re-planned where it can as one smooth control from
-      the stitched one (the result's ``stitched`` keeps the hops); ``"local"`` plans from ``R0`` to ``Rd`` only (the
-      strategy alone); ``"global"`` takes only the global route.
+      the stitched one (the result's ``stitched`` keeps the hops); ``"local"`` plans from
+      ``R0`` to ``Rd`` only (the strategy alone); ``"global"`` takes only the global route.
 
     Success is certified (:mod:`nonholo.certify`): the returned physical controls, replayed
     with an error bound, end within ``tol`` of ``Rd`` and keep ``|Δ| ≥ delta_min``; a
