@@ -1215,6 +1215,33 @@ def global_route_figure(result, title: str | None = None) -> Figure:
 
 
 @_styled
+def leg_limits_figure(free, limited, title: str | None = None) -> Figure:
+    """Leg lengths ``l_i(t)`` of a plan without stroke limits (dashed) and of the same
+    problem planned with ``leg_length`` (solid, ``limited.options["leg_length"]``, drawn as
+    grey lines), in the geometry's units."""
+    mech = catalog.get(limited.mechanism)
+    lo, hi = limited.options["leg_length"]
+    fig = Figure(figsize=(7.2, 4.4), layout="constrained")
+    ax = fig.add_subplot()
+    for res, ls, what in ((free, "--", "without limits"), (limited, "-", f"leg_length = ({lo:g}, {hi:g})")):
+        lengths = mech.leg_lengths(res.R)
+        for j in range(lengths.shape[1]):
+            ax.plot(res.t, lengths[:, j], color=PAIR_COLORS[j], ls=ls, label=f"$l_{j + 1}$, {what}")
+    for y in (lo, hi):
+        ax.axhline(y, color="0.35", lw=1.2, ls=":")
+    bottom, top = ax.get_ylim()
+    for a, b in ((bottom, lo), (hi, top)):           # outside the stroke, shaded
+        if b > a:
+            ax.axhspan(a, b, color="0.85", zorder=0)
+    ax.set_ylim(bottom, top)
+    ax.set_xlabel("time t [s]")
+    ax.set_ylabel("leg length (geometry units)")
+    ax.legend(fontsize=8, loc="best")
+    ax.set_title(title or f"{mech.name}: the legs' stroke kept by plan(..., leg_length=({lo:g}, {hi:g}))")
+    return fig
+
+
+@_styled
 def example_overview_figure(results, title: str = "", geometry=None, tol: float | None = None,
                             threshold: float | None = 1e-2) -> Figure:
     """One example in a 2 × 3 grid: convergence, controls ``u_1, u_2`` [1/s] (scaled leg

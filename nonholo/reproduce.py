@@ -6,6 +6,9 @@
 - an animation of the platform through Example 3 (GIF);
 - ``global_route``: a far goal (:data:`FAR_GOAL`) that the local planner misses, reached
   by the global route (figure, and ``plans/far_goal.json``);
+- ``leg_limits``: a goal (:data:`LIMITS_GOAL`) planned without and with the legs' stroke
+  limits :data:`LEG_LENGTH` (figure; ``plans/leg_limits.json`` and ``plans/leg_limits.csv``,
+  the motion for an actuator controller);
 - ``plans/example<k>_<method>.json``: every planned result (reload with
   :meth:`nonholo.result.PlanResult.load`);
 - ``summary.json``: one object per (example, method) with ``example``, ``method``,
@@ -36,6 +39,11 @@ RESIM_TOL = 1e-8
 #: and the global route reaches: the first pair of the 1.8–π band of
 #: ``benchmarks.goalset.band_pairs("platform", 500)``, rounded.
 FAR_GOAL = ((-1.918, 0.336, -2.521), (1.433, -0.813, 1.324))
+#: A goal (RPY angles of start and goal) whose plan without limits takes leg 1 below 1.2,
+#: planned again with :data:`LEG_LENGTH` (figure ``leg_limits``, ``plans/leg_limits.json``
+#: and ``.csv``).
+LIMITS_GOAL = ((0.5, 1.2, -0.5), (-0.4527, 1.4094, -1.3638))
+LEG_LENGTH = (1.2, 2.0)
 
 
 def strongest_strategy() -> str:
@@ -110,6 +118,12 @@ def mechanism_cards():
             yield figures.mechanism_card_figure(name, result=result), f"mechanism_{name}"
 
 
+def plan_limits_goal():
+    """:data:`LIMITS_GOAL` planned with the defaults, without and with ``leg_length=LEG_LENGTH``."""
+    R0, Rd = (so3.from_rpy(*a) for a in LIMITS_GOAL)
+    return plan(R0, Rd), plan(R0, Rd, leg_length=LEG_LENGTH)
+
+
 def plan_far_goal():
     """:data:`FAR_GOAL` planned by :func:`nonholo.plan` with its defaults."""
     return plan(so3.from_rpy(*FAR_GOAL[0]), so3.from_rpy(*FAR_GOAL[1]))
@@ -153,6 +167,14 @@ def write_figures(solved: list[Solved], outdir: Path, progress=_log) -> list[Pat
         progress(f"      note: the far goal took the {far.route} route ({far.reason[:120]}); no global_route figure")
     (outdir / "plans").mkdir(parents=True, exist_ok=True)
     far.save(outdir / "plans" / "far_goal.json")
+    free, limited = plan_limits_goal()
+    if free.success and limited.success:
+        save(figures.leg_limits_figure(free, limited), "leg_limits")
+        limited.save(outdir / "plans" / "leg_limits.json")
+        limited.to_csv(outdir / "plans" / "leg_limits.csv", rate=100)
+        progress("      wrote plans/leg_limits.json and plans/leg_limits.csv")
+    else:
+        progress(f"      note: the stroke-limits goal was not solved ({limited.reason[:120]}); no leg_limits figure")
     ex3 = [s for s in solved if s.example.number == 3 and len(s.result.R)]
     if ex3:
         gif = outdir / "example3_animation.gif"

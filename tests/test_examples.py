@@ -57,7 +57,8 @@ def test_reproduce_writes_summary_and_figures(tmp_path, capsys):
     stems = ["singular_set", "singular_set_slices", "normal_form", "mechanism_platform",
              "mechanism_platform_raised", "mechanism_attitude"] + [
         f"example{k}_{what}" for k in (1, 2, 3) for what in
-        ("mechanism", "overview", "convergence", "controls", "rpy", "leg_lengths", "delta")] + ["global_route"]
+        ("mechanism", "overview", "convergence", "controls", "rpy", "leg_lengths", "delta")] + ["global_route",
+                                                                                         "leg_limits"]
     for stem in stems:
         for ext in ("png", "pdf"):
             assert (tmp_path / f"{stem}.{ext}").stat().st_size > 5000, stem
@@ -67,3 +68,7 @@ def test_reproduce_writes_summary_and_figures(tmp_path, capsys):
     assert again.success and again.terminal_error <= 1e-10
     far = PlanResult.load(tmp_path / "plans" / "far_goal.json")
     assert far.success and far.route == "global"
+    limited = PlanResult.load(tmp_path / "plans" / "leg_limits.json")
+    assert limited.success and limited.options["leg_length"] == [1.2, 2.0]
+    head = (tmp_path / "plans" / "leg_limits.csv").read_text().splitlines()
+    assert head[0] == "t,l1,l2,dl1_dt,dl2_dt,u1,u2,qx,qy,qz,qw,delta" and len(head) == 1 + 101
