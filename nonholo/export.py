@@ -21,8 +21,8 @@ the rows agree with the plan's samples wherever they coincide.
 from __future__ import annotations
 
 import csv
+import io
 import math
-from pathlib import Path
 
 import numpy as np
 from scipy.spatial.transform import Rotation
@@ -116,15 +116,12 @@ def trajectory_table(result, rate: float = DEFAULT_RATE) -> dict[str, np.ndarray
     return cols
 
 
-def write_csv(result, path, rate: float = DEFAULT_RATE) -> Path:
-    """Write :func:`trajectory_table` as CSV (a header row, then one row per sample; floats
-    with ``repr`` precision). The table is built before the file is opened, so bad
-    arguments leave no file behind."""
+def csv_text(result, rate: float = DEFAULT_RATE) -> str:
+    """:func:`trajectory_table` as CSV text: a header row, then one row per sample (floats
+    with ``repr`` precision)."""
     cols = trajectory_table(result, rate)
-    path = Path(path)
-    rows = np.column_stack(list(cols.values()))
-    with open(path, "w", newline="", encoding="utf-8") as f:
-        w = csv.writer(f)
-        w.writerow(list(cols))
-        w.writerows([repr(float(x)) for x in row] for row in rows)
-    return path
+    out = io.StringIO()
+    w = csv.writer(out, lineterminator="\n")
+    w.writerow(list(cols))
+    w.writerows([repr(float(x)) for x in row] for row in np.column_stack(list(cols.values())))
+    return out.getvalue()

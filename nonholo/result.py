@@ -289,8 +289,13 @@ class PlanResult:
         """Write the motion sampled at ``rate`` Hz as CSV for an actuator controller: ``t``,
         leg lengths ``l_i`` and speeds ``dl_i_dt`` (geometry units), inputs ``u_i``, the
         orientation as a unit quaternion ``qx, qy, qz, qw`` (scalar last) and ``delta``
-        (see :mod:`nonholo.export`). A failed plan raises ``ValueError``."""
-        return export.write_csv(self, path, rate)
+        (see :mod:`nonholo.export`). A failed plan or a bad ``rate`` raises ``ValueError``
+        before anything is written; the file is written atomically, like :meth:`save`."""
+        path = Path(path)
+        text = export.csv_text(self, rate)
+        target = Path(os.path.realpath(path)) if path.is_symlink() else path
+        _write_atomic(target, text.encode("utf-8"))
+        return path
 
     @classmethod
     def load(cls, path) -> "PlanResult":

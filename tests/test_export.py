@@ -100,3 +100,14 @@ def test_cli_csv_that_cannot_be_written_exits_3(tmp_path, capsys):
     assert main(["plan", "--from", "0.5", "1.2", "-0.5", "--to", "1.0", "0.9", "-0.5", "--quiet",
                  "--csv", str(out)]) == 3
     assert str(out) in capsys.readouterr().err
+
+
+def test_to_csv_replaces_a_file_whole_or_not_at_all(plan1, tmp_path):
+    path = tmp_path / "m.csv"
+    path.write_text("old")
+    with pytest.raises(ValueError, match="rate"):
+        plan1.to_csv(path, rate=-1)
+    assert path.read_text() == "old"
+    plan1.to_csv(path, rate=10)
+    text = path.read_text()
+    assert text.startswith("t,l1,") and text.count("\n") == 12 and "\r" not in text
