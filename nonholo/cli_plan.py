@@ -134,7 +134,7 @@ def run(args) -> int:
     why = _plot_format_error(args.plot) if args.plot else None
     if why is None and args.csv:
         try:
-            export.sample_times(1.0, args.csv_rate)
+            export.check_rate(args.csv_rate)
         except ValueError as exc:
             why = f"--csv-rate: {exc}"
     if why:

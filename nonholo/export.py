@@ -37,10 +37,16 @@ DEFAULT_RATE = 100.0
 MAX_ROWS = 10_000_000
 
 
-def sample_times(T: float, rate: float) -> np.ndarray:
-    """``t_k = k / rate`` on ``[0, T]``, and ``T`` itself if it is not one of them."""
+def check_rate(rate) -> float:
+    """``rate`` if it is a positive, finite number of samples per second, else ``ValueError``."""
     if not is_number(rate) or not math.isfinite(rate) or rate <= 0:
         raise ValueError(f"rate must be a positive number of samples per second, got {rate!r}")
+    return float(rate)
+
+
+def sample_times(T: float, rate: float) -> np.ndarray:
+    """``t_k = k / rate`` on ``[0, T]``, and ``T`` itself if it is not one of them."""
+    rate = check_rate(rate)
     n = math.floor(T * rate * (1 + 1e-12)) + 1
     if n > MAX_ROWS:
         raise ValueError(f"rate = {rate:g} Hz gives {n} rows over T = {T:g} s (at most {MAX_ROWS})")

@@ -66,26 +66,29 @@ class LegLimits:
         """The least clearance over the stack ``R`` (negative: a leg left its stroke)."""
         return float(self.clearances(mechanism, R).min())
 
+    def _worst(self, mechanism, R) -> tuple[int, int, int, float]:
+        """``(node, leg, bound, clearance)`` of the least clearance over the stack ``R``
+        (``leg`` from 1; ``bound`` 0: the lower limit, 1: the upper)."""
+        c = self.clearances(mechanism, R)
+        n, j = np.unravel_index(int(np.argmin(c)), c.shape)
+        return int(n), int(j) // 2 + 1, int(j) % 2, float(c[n, j])
+
     def violation(self, mechanism, R, what: str) -> str | None:
         """Why the orientation ``R`` (3, 3) is outside the limits (``what``: e.g. ``"the
-        start"``), naming the leg and by how much; ``None`` inside."""
-        lengths = mechanism.leg_lengths(np.asarray(R, dtype=float))
-        for i, length in enumerate(lengths):
-            if length < self.lo:
-                return (f"{what} is outside the legs' stroke: leg {i + 1} is {length:.4g} long, "
-                        f"{self.lo - length:.3g} below leg_length's lower end {self.lo:g}")
-            if length > self.hi:
-                return (f"{what} is outside the legs' stroke: leg {i + 1} is {length:.4g} long, "
-                        f"{length - self.hi:.3g} above leg_length's upper end {self.hi:g}")
-        return None
+        start"``), naming the leg that is out the most and by how much; ``None`` inside."""
+        _, leg, bound, c = self._worst(mechanism, R)
+        if c >= 0.0:
+            return None
+        length = float(mechanism.leg_lengths(np.asarray(R, dtype=float))[leg - 1])
+        side, end, limit = (("below", "lower", self.lo), ("above", "upper", self.hi))[bound]
+        return (f"{what} is outside the legs' stroke: leg {leg} is {length:.4g} long, "
+                f"{-c:.3g} {side} leg_length's {end} end {limit:g}")
 
     def describe(self, mechanism, R, times=None) -> str:
         """Where the stack ``R`` leaves the limits the most (for a failure's reason)."""
-        c = self.clearances(mechanism, R)
-        n, j = np.unravel_index(int(np.argmin(c)), c.shape)
-        leg, bound = j // 2 + 1, ("lower", "upper")[j % 2]
+        n, leg, bound, c = self._worst(mechanism, R)
         when = f" at t ≈ {times[n]:.4g} s" if times is not None else ""
-        return (f"leg {leg} passes its {bound} stroke limit by {-c[n, j]:.3g}{when} "
+        return (f"leg {leg} passes its {('lower', 'upper')[bound]} stroke limit by {-c:.3g}{when} "
                 f"(leg_length = ({self.lo:g}, {self.hi:g}))")
 
     def clearance_terms(self, mechanism, R, threshold: float = BARRIER_CLEARANCE):

@@ -76,6 +76,20 @@ class Geometry:
         return out[0] if R.ndim == 2 else out
 
 
+def _on_stack(into, R, shape: tuple) -> np.ndarray:
+    """A generated ``NAME_into(R, out)`` (plain arithmetic on the entries of ``R``) filling
+    ``shape``: on one ``R`` (3, 3), or on a stack (n, 3, 3) at once, evaluated on ``(3, 3,
+    n)`` into ``shape + (n,)``; shape ``shape`` or ``(n,) + shape``."""
+    R = np.asarray(R, dtype=float)
+    if R.ndim == 2:
+        out = np.empty(shape)
+        into(R, out)
+        return out
+    out = np.empty((*shape, R.shape[0]))
+    into(R.transpose(1, 2, 0), out)
+    return np.moveaxis(out, -1, 0)
+
+
 @dataclass(frozen=True)
 class Frame:
     """The desingularised input frame of a mechanism: ``ω = N(R) w``, ``u = W(R) w``."""
@@ -148,25 +162,15 @@ class Mechanism:
         u = np.asarray(u, dtype=float)
         one = R.ndim == 2
         Rs, us = (R[None], u[None]) if one else (R, u)
-        L = np.stack([self.L(Ri) for Ri in Rs])
+        L = _on_stack(self.module.L_into, Rs, (3, self.n_inputs))
         out = np.einsum("nkj,nji,ni->nk", self.leg_gradients(Rs), L, us)
         return out[0] if one else out
 
     def _legs(self, function: str, R, tail: tuple) -> np.ndarray:
-        """The generated leg function ``function`` (``f(R, out)``, plain arithmetic on the
-        entries of ``R``) on one ``R`` or a stack (evaluated on ``(3, 3, n)`` at once)."""
+        """The generated leg function ``function`` on one ``R`` or a stack (:func:`_on_stack`)."""
         if not self.has_legs:
             raise ValueError(f"mechanism {self.name!r} has no legs")
-        into = getattr(self.module, function)
-        R = np.asarray(R, dtype=float)
-        k = len(self.geometry.bases)
-        if R.ndim == 2:
-            out = np.empty((k, *tail))
-            into(R, out)
-            return out
-        out = np.empty((k, *tail, R.shape[0]))
-        into(R.transpose(1, 2, 0), out)
-        return np.moveaxis(out, -1, 0)
+        return _on_stack(getattr(self.module, function), R, (len(self.geometry.bases), *tail))
 
     def delta_samples(self, R) -> np.ndarray | None:
         """``Δ(R[n])`` for a stack ``R`` of shape ``(n, 3, 3)``; ``None`` without a singular set."""

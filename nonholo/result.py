@@ -713,26 +713,22 @@ class _Validation:
             _fail("controls", f"have {par.n_inputs} inputs, mechanism {mech.name!r} has {mech.n_inputs}")
         if par.T != r.T:
             _fail("T", f"is {r.T!r}, the controls are defined on [0, {par.T!r}]")
-        if stitched:
+        hops = r.hops                   # the route's stitched control: the controls, or their record
+        if hops is not None:
+            where = "controls" if stitched else "stitched"
             if not r.success or r.replay_steps is None:
                 _fail("route", "is 'global', which only a certified success has")
-            if not np.array_equal(par.waypoints[0], r.R0):
-                _fail("R0", "differs from the stitched controls' first waypoint")
+            if hops.T != r.T:
+                _fail(where, f"is defined on [0, {hops.T!r}], the plan on [0, {r.T!r}]")
+            if not np.array_equal(hops.waypoints[0], r.R0):
+                _fail("R0", f"differs from the first waypoint of the stitched controls ({where!r})")
+            for i, piece in enumerate(hops.pieces):
+                self.piece(piece, mech, f"{where}.pieces[{i}]", None, None)
+        if stitched:
             if r.steps % par.grid:
                 _fail("steps", f"({r.steps}) must be a multiple of the stitched controls' grid ({par.grid})")
-            for i, piece in enumerate(par.pieces):
-                self.piece(piece, mech, f"controls.pieces[{i}]", None, None)
         else:
             self.piece(par, mech, "controls", r.steps, r.R0)
-        if r.stitched is not None:
-            if not r.success or r.replay_steps is None:
-                _fail("route", "is 'global', which only a certified success has")
-            if r.stitched.T != r.T:
-                _fail("stitched", f"is defined on [0, {r.stitched.T!r}], the plan on [0, {r.T!r}]")
-            if not np.array_equal(r.stitched.waypoints[0], r.R0):
-                _fail("R0", "differs from the stitched route's first waypoint")
-            for i, piece in enumerate(r.stitched.pieces):
-                self.piece(piece, mech, f"stitched.pieces[{i}]", None, None)
         return mech
 
     def piece(self, par, mech, where: str, steps: int | None, R0) -> None:
