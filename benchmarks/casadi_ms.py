@@ -30,7 +30,9 @@ Minimise ``int_0^T |u|^2 dt`` subject to the dynamics, ``R(0) = R0``,
 (enforced at the shooting nodes, optionally also at the integrator substeps);
 optionally the legs' stroke ``lo <= l_i(R) <= hi`` at the nodes, with the
 paper's leg lengths ``l_1^2 = a^2 + b^2 - 2ab r22``, ``l_2^2 = a^2 + b^2 - 2ab r11``
-(``a = LEG_A``, ``b = LEG_B``, the drawing dimensions of ``nonholo``'s platform).
+(``a = LEG_A``, ``b = LEG_B``, the drawing dimensions of ``nonholo``'s platform),
+and their speeds ``|dl_i/dt| = 2ab |u_i| / l_i <= v`` (the inputs are the scaled
+rates ``u_i = d(l_i^2)/dt / (4ab)``) at both ends of every interval.
 It is transcribed by multiple shooting on a uniform grid of ``N`` intervals
 with piecewise-constant controls and solved by IPOPT with exact Hessians; see
 :func:`solve`.
@@ -230,12 +232,13 @@ def _build(
     verbose: bool,
     path_at_substeps: bool,
     stroke: bool = False,
+    speed: bool = False,
 ) -> _Problem:
     step = make_step_function(substeps)
 
-    # Parameters: R0 (9), Rd (9), T, sign(Delta(R0)), delta_min, lo^2, hi^2.
-    p = ca.MX.sym("p", 23)
-    x0, xd, T, sgn, dmin, lo2, hi2 = p[0:9], p[9:18], p[18], p[19], p[20], p[21], p[22]
+    # Parameters: R0 (9), Rd (9), T, sign(Delta(R0)), delta_min, lo^2, hi^2, v_max^2.
+    p = ca.MX.sym("p", 24)
+    x0, xd, T, sgn, dmin, lo2, hi2, v2 = p[0:9], p[9:18], p[18], p[19], p[20], p[21], p[22], p[23]
     H = T / N
 
     # Decision variables interleaved as [u_0, x_1, u_1, x_2, ..., u_{N-1}, x_N]
@@ -267,6 +270,12 @@ def _build(
             g.append(ca.vertcat(sq - lo2, hi2 - sq))
             lbg += [0.0] * 4
             ubg += [np.inf] * 4
+        if speed:  # (2ab u_i)^2 <= v^2 l_i^2 at both ends of interval k (u_k is constant on it)
+            for Xe in ((_mat(x0) if k == 0 else _mat(X[:, k - 1])), _mat(X[:, k])):
+                sq = LEG_A**2 + LEG_B**2 - 2 * LEG_A * LEG_B * ca.vertcat(Xe[1, 1], Xe[0, 0])
+                g.append(v2 * sq - (2 * LEG_A * LEG_B * U[:, k]) ** 2)
+                lbg += [0.0] * 2
+                ubg += [np.inf] * 2
 
     # Terminal constraint: E = Rd^T R(T) is a rotation (guaranteed by the
     # dynamics); vee(E - E^T) = 0 leaves E in {I} U {rotations by pi}; the
@@ -384,6 +393,7 @@ def solve(
     path_at_substeps: bool = False,
     reuse_solver: bool = True,
     leg_length=None,
+    leg_speed=None,
 ) -> CasadiResult:
     """Plan a minimum-energy motion from ``R0`` to ``Rd`` in time ``T``.
 
@@ -409,6 +419,9 @@ def solve(
         between nodes, where ``|w| ~ |u| / |Delta|`` becomes large.
     leg_length : ``(lo, hi)``: keep both legs' lengths (:func:`leg_lengths`)
         within it at every node; ``None``: no stroke constraint.
+    leg_speed : ``v``: keep both legs' speeds ``|dl_i/dt| = 2ab|u_i|/l_i <= v``
+        at both ends of every interval (``u`` is constant on it); ``None``: no
+        speed constraint.
     reuse_solver : the NLP is parametric in ``(R0, Rd, T, delta_min)``; when
         True a solver built earlier for the same ``(N, substeps, max_iter,
         tol, verbose, path_at_substeps)`` is reused and ``build_seconds`` is 0.
@@ -443,11 +456,12 @@ def solve(
 
     # --- build (or reuse) the NLP -------------------------------------------
     stroke = leg_length is not None
-    key = (N, substeps, int(max_iter), float(tol), bool(verbose), bool(path_at_substeps), stroke)
+    speed = leg_speed is not None
+    key = (N, substeps, int(max_iter), float(tol), bool(verbose), bool(path_at_substeps), stroke, speed)
     t_build = time.perf_counter()
     prob = _CACHE.get(key) if reuse_solver else None
     if prob is None:
-        prob = _build(N, substeps, max_iter, tol, verbose, path_at_substeps, stroke)
+        prob = _build(N, substeps, max_iter, tol, verbose, path_at_substeps, stroke, speed)
         if reuse_solver:
             _CACHE[key] = prob
         build_seconds = time.perf_counter() - t_build
@@ -476,7 +490,8 @@ def solve(
     w0[prob.idx_u] = U0
     w0[prob.idx_x] = X0.T
     lo, hi = leg_length if stroke else (0.0, np.inf)
-    p = np.concatenate([R0.reshape(9), Rd.reshape(9), [T, sgn, delta_min, lo**2, min(hi**2, 1e300)]])
+    v2 = float(leg_speed) ** 2 if speed else 0.0
+    p = np.concatenate([R0.reshape(9), Rd.reshape(9), [T, sgn, delta_min, lo**2, min(hi**2, 1e300), v2]])
 
     # --- solve -----------------------------------------------------------------
     t_solve = time.perf_counter()

@@ -7,6 +7,8 @@ The numeric kinematics come from generated modules (``nonholo.generated``, writt
   (:mod:`nonholo.planner`);
 - ``nonholo.simulate(R0, controls, T, ...)`` → :class:`~nonholo.simulation.Trajectory`
   (:mod:`nonholo.simulation`);
+- ``nonholo.retime(result, leg_speed, T=None)``: a plan re-timed so that no leg moves
+  faster than ``leg_speed`` (:mod:`nonholo.retime`);
 - :class:`~nonholo.mechanism.Mechanism`: a mechanism's numeric kinematics
   (``Mechanism.from_symbolic`` builds one from a derivation); ``nonholo.mechanism_named``
   looks one up by name, :func:`nonholo.catalog.names` lists them.
@@ -17,6 +19,7 @@ from .catalog import get as mechanism_named  # noqa: E402
 from .mechanism import Mechanism  # noqa: E402
 from .planner import plan  # noqa: E402
 from .result import PlanResult  # noqa: E402
+from .retime import retime  # noqa: E402
 from .simulation import simulate  # noqa: E402
 
-__all__ = ["plan", "simulate", "PlanResult", "Mechanism", "mechanism_named"]
+__all__ = ["plan", "simulate", "retime", "PlanResult", "Mechanism", "mechanism_named"]

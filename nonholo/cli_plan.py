@@ -44,7 +44,8 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
                    metavar=("PHI", "THETA", "PSI"), help="initial orientation, RPY angles (rad)")
     p.add_argument("--to", dest="goal", nargs=3, type=float, required=True,
                    metavar=("PHI", "THETA", "PSI"), help="goal orientation, RPY angles (rad)")
-    p.add_argument("--T", type=float, default=1.0, help="time horizon in s (default 1)")
+    p.add_argument("--T", type=_horizon, default=1.0,
+                   help="time horizon in s (default 1), or 'min' for the least time under --leg-speed")
     p.add_argument("--method", choices=planner.METHODS, default="parametric",
                    help="Fourier controls (parametric) or piecewise constant (nonparametric)")
     p.add_argument("--harmonics", type=int, default=2, help="Fourier harmonics K (default 2)")
@@ -65,6 +66,9 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
                         "global: only the hops")
     p.add_argument("--leg-length", nargs=2, type=float, default=None, metavar=("LO", "HI"),
                    help="keep every leg's length within [LO, HI] (a platform's geometry units)")
+    p.add_argument("--leg-speed", type=float, default=None, metavar="V",
+                   help="keep every leg's speed |dl/dt| <= V (geometry units per second): the plan "
+                        "is re-timed, in the least time with --T min")
     p.add_argument("--out", default=None, help="write the result as JSON to this file")
     p.add_argument("--plot", default=None, help="write a figure (u, RPY, Δ against t) to this file")
     p.add_argument("--csv", default=None,
@@ -75,6 +79,16 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     p.add_argument("--quiet", action="store_true", help="print the summary only")
     p.set_defaults(func=run)
     return p
+
+
+def _horizon(text: str) -> float | None:
+    """``--T``: a number of seconds, or ``min`` (``None``: the least time)."""
+    if text.strip().lower() == "min":
+        return None
+    try:
+        return float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected seconds or 'min', got {text!r}") from None
 
 
 def _fmt(x, spec: str) -> str:
@@ -147,7 +161,7 @@ def run(args) -> int:
             R0, Rd, T=args.T, method=args.method, harmonics=args.harmonics, grid=args.grid,
             strategy=args.strategy, mechanism=args.mechanism, gamma=args.gamma, tol=args.tol,
             max_iter=args.max_iter, delta_min=args.delta_min, steps=args.steps, route=args.route,
-            leg_length=args.leg_length,
+            leg_length=args.leg_length, leg_speed=args.leg_speed,
             callback=None if args.quiet else _print_record)
     except ValueError as exc:
         _error(str(exc))
@@ -190,8 +204,8 @@ def run(args) -> int:
 
 def plot(res, path) -> None:
     """Figure of a :class:`~nonholo.result.PlanResult`: ``u(t)``, ``RPY(t)``, ``Δ(t)`` and,
-    for a mechanism with legs, the leg lengths against their stroke limits (if the plan had
-    them)."""
+    for a mechanism with legs, the leg lengths and speeds against their limits (if the plan
+    had them)."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -200,7 +214,7 @@ def plot(res, path) -> None:
     mech = catalog.get(res.mechanism)
     has_delta = res.delta is not None
     legs = mech.has_legs and len(res.R) > 0
-    rows = 2 + has_delta + legs
+    rows = 2 + has_delta + 2 * legs
     fig, axes = plt.subplots(rows, 1, sharex=True, figsize=(7, 2.4 * rows))
     tt = np.linspace(0.0, res.T, 1001)
     u = res.controls(tt)
@@ -233,6 +247,17 @@ def plot(res, path) -> None:
         for k, y in enumerate(res.options.get("leg_length") or ()):
             ax.axhline(y, color="r", ls="--", label="stroke limits" if k == 0 else None)
         ax.set_ylabel("leg length")
+        ax.legend(fontsize="small")
+        ax = axes[3 + has_delta]
+        speeds = mech.leg_speeds(res.R, res.u)
+        for i in range(speeds.shape[1]):
+            ax.plot(res.t, speeds[:, i], label=f"dl{i + 1}/dt")
+        v = res.options.get("leg_speed")
+        if v is not None:
+            for k, y in enumerate((v, -v)):
+                ax.axhline(y, color="r", ls="--", label="speed limit" if k == 0 else None)
+        ax.axhline(0.0, color="k", lw=0.5)
+        ax.set_ylabel("leg speed [1/s]")
         ax.legend(fontsize="small")
     axes[-1].set_xlabel("t [s]")
     fig.tight_layout()

@@ -29,6 +29,7 @@ from scipy.spatial.transform import Rotation
 
 from . import catalog
 from .checks import is_number
+from .retimed import Retimed
 from .simulation import DELTA_STOP
 
 #: Sample rate of :func:`trajectory_table` unless given (Hz).
@@ -56,21 +57,27 @@ def sample_times(T: float, rate: float) -> np.ndarray:
 
 def orientations(result, t: np.ndarray) -> np.ndarray:
     """``R(t)`` of a simulated plan: one CF4 step of the physical system from the stored
-    sample at or below each ``t`` (none where ``t`` is a sample time)."""
+    sample at or below each ``t`` (none where ``t`` is a sample time). A re-timed plan
+    (:class:`~nonholo.retimed.Retimed`) moves along its planned path: ``R(τ(t))``, stepped
+    in the planned time ``τ`` with the planned controls."""
     mech = catalog.get(result.mechanism)
     kern = mech.kernels(False)
     n_samples = len(result.t)
     if n_samples == 0 or t[-1] > result.t[-1] * (1 + 1e-12):
         raise ValueError("the plan's motion does not reach T (a failed plan): nothing to export")
-    h = result.T / result.steps
+    controls, T, asked = result.controls, result.T, t
+    if isinstance(result.parametrisation, Retimed):
+        controls, T = result.parametrisation.base, result.parametrisation.base.T
+        t = result.parametrisation.tau(t)[0]
+    h = T / result.steps
     idx = np.minimum(np.floor(t / h + 1e-9).astype(np.int64), n_samples - 1)
     s = t - idx * h
-    s[np.abs(s) <= 1e-12 * max(1.0, result.T)] = 0.0
+    s[np.abs(s) <= 1e-12 * max(1.0, T)] = 0.0
     sgn = 1.0
     if mech.has_singular_set:
         sgn = float(np.sign(mech.delta(result.R0)))
     starts = idx * h
-    U = np.stack([result.controls(starts), result.controls(starts + 0.5 * s), result.controls(starts + s)],
+    U = np.stack([controls(starts), controls(starts + 0.5 * s), controls(starts + s)],
                  axis=1).reshape(len(t), 3, mech.n_inputs)
     out = np.empty((len(t), 3, 3))
     step = np.empty((2, 3, 3))
@@ -79,7 +86,7 @@ def orientations(result, t: np.ndarray) -> np.ndarray:
         if s[k] > 0.0:
             done, _, _ = kern.forward(out[k].copy(), U[k:k + 1], s[k], sgn, DELTA_STOP, step)
             if done != 1:
-                raise ValueError(f"the motion runs into Δ = 0 at t ≈ {t[k]:g} s: not a plan to play back")
+                raise ValueError(f"the motion runs into Δ = 0 at t ≈ {asked[k]:g} s: not a plan to play back")
             out[k] = step[1]
     return out
 

@@ -33,6 +33,8 @@ from .planning.core import Options, Problem, Request, Strategy, build_result
 from .planning.paper import PaperStrategy
 from .planning.robust import RobustStrategy
 from .result import PlanResult
+from .retime import limit_speed
+from .retimed import check_leg_speed
 from .simulation import DEFAULT_STEPS
 
 METHODS = ("parametric", "nonparametric")
@@ -87,12 +89,17 @@ def default_steps(method: str, grid: int) -> int:
     return DEFAULT_STEPS
 
 
-def plan(R0, Rd, *, T: float = 1.0, method: str = "parametric", harmonics: int = 2,
+#: The planning horizon (s) of a plan asked for in the least time (``T=None``): the path is
+#: planned in this time, then re-timed (:mod:`nonholo.retime`).
+PLANNING_TIME = 1.0
+
+
+def plan(R0, Rd, *, T: float | None = 1.0, method: str = "parametric", harmonics: int = 2,
          grid: int = 100, u0=None, gamma: float | None = None, step: float = 1.0, tol: float = 1e-10,
          max_iter: int = 200, strategy="robust", mechanism="platform",
          delta_min: float = 1e-2, steps: int | None = None, newton_below: float = 1e-3,
          min_step: float = 1e-6, callback: Callable[[dict], object] | None = None,
-         route: str = "auto", leg_length=None) -> PlanResult:
+         route: str = "auto", leg_length=None, leg_speed=None) -> PlanResult:
     """Plan a control steering ``R0`` to ``Rd`` in time ``T`` (seconds).
 
     - ``mechanism``: a :class:`~nonholo.mechanism.Mechanism` or its name
@@ -119,6 +126,12 @@ def plan(R0, Rd, *, T: float = 1.0, method: str = "parametric", harmonics: int =
       units, :meth:`~nonholo.mechanism.Mechanism.leg_lengths`): every leg keeps ``lo ≤
       l_i(R(t)) ≤ hi`` along the certified motion (:mod:`nonholo.limits`); a start or goal
       outside fails at once, naming the leg. ``None`` (default): no limits.
+    - ``leg_speed``: ``v``, the legs' top speed (a platform's, geometry units per second):
+      every leg keeps ``|dl_i/dt| ≤ v``. The path is planned as without it (in
+      :data:`PLANNING_TIME` when ``T=None``), then re-timed (:mod:`nonholo.retime`): with
+      ``T=None`` in the least time — the fastest leg at ``v`` throughout; with a given
+      ``T`` only if the plan breaks the bound, and it fails saying the time needed if its
+      path cannot keep it within ``T``. ``None`` (default): no bound.
     - ``steps``: CF4 steps on ``[0, T]`` (default :func:`default_steps`).
     - ``callback(record)``: called after each accepted iteration of the local plan with the
       history record; returning a true value stops the run (and no global route is taken).
@@ -140,6 +153,25 @@ def plan(R0, Rd, *, T: float = 1.0, method: str = "parametric", harmonics: int =
     ``delta_min`` of it) returns at once a failed :class:`~nonholo.result.PlanResult`
     with the reason.
     """
+    mech = catalog.get(mechanism)
+    speed = check_leg_speed(leg_speed, mech)
+    if T is None and speed is None:
+        raise ValueError("T=None asks for the least time, which needs a leg_speed to bound")
+    result = plan_path(R0, Rd, T=PLANNING_TIME if T is None else T, method=method, harmonics=harmonics,
+                       grid=grid, u0=u0, gamma=gamma, step=step, tol=tol, max_iter=max_iter,
+                       strategy=strategy, mechanism=mech, delta_min=delta_min, steps=steps,
+                       newton_below=newton_below, min_step=min_step, callback=callback, route=route,
+                       leg_length=leg_length)
+    return limit_speed(result, speed, T)
+
+
+def plan_path(R0, Rd, *, T: float = 1.0, method: str = "parametric", harmonics: int = 2,
+              grid: int = 100, u0=None, gamma: float | None = None, step: float = 1.0, tol: float = 1e-10,
+              max_iter: int = 200, strategy="robust", mechanism="platform",
+              delta_min: float = 1e-2, steps: int | None = None, newton_below: float = 1e-3,
+              min_step: float = 1e-6, callback: Callable[[dict], object] | None = None,
+              route: str = "auto", leg_length=None) -> PlanResult:
+    """:func:`plan` without a bound on the legs' speed: the path, in the time ``T``."""
     started = time.perf_counter()
     if route not in ROUTES:
         raise ValueError(f"unknown route {route!r}; known: {', '.join(ROUTES)}")
@@ -208,7 +240,7 @@ def plan(R0, Rd, *, T: float = 1.0, method: str = "parametric", harmonics: int =
         local_reason = outcome.reason
 
     def hop(Ra, Rb, T_hop, hop_delta_min):
-        return plan(Ra, Rb, T=T_hop, method=method, harmonics=harmonics, grid=grid, gamma=gamma, step=step,
+        return plan_path(Ra, Rb, T=T_hop, method=method, harmonics=harmonics, grid=grid, gamma=gamma, step=step,
                     tol=tol, max_iter=max_iter, strategy=global_route.hop_strategy(cls), mechanism=mech,
                     delta_min=hop_delta_min,
                     steps=steps, newton_below=newton_below, min_step=min_step, route="local",

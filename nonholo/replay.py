@@ -14,7 +14,7 @@ from functools import lru_cache
 
 import numpy as np
 
-from . import catalog, so3, stages, stitched
+from . import catalog, retimed, so3, stages, stitched
 from .checks import check_times
 from .controls import Controls, Fourier, PiecewiseConstant
 from .controls import from_dict as controls_from_dict
@@ -218,7 +218,10 @@ def _aligned_indices(steps: int, nodes: int):
 
 def from_dict(d: dict):
     """Inverse of ``to_dict`` for a parametrisation (:func:`nonholo.controls.from_dict`), a
-    :class:`FrameControls` or a :class:`~nonholo.stitched.Stitched` of them."""
+    :class:`FrameControls`, a :class:`~nonholo.stitched.Stitched` of them, or any of those
+    :class:`~nonholo.retimed.Retimed`."""
+    if d.get("kind") == retimed.Retimed.kind:
+        return retimed.from_dict(d, from_dict)
     if d.get("kind") == stitched.Stitched.kind:
         return stitched.from_dict(d, from_dict)
     if d.get("kind") == FrameControls.kind:

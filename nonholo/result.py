@@ -47,6 +47,7 @@ from .checks import MAX_STEPS, is_number
 from .controls import Controls, Fourier, PiecewiseConstant
 from .limits import LegLimits
 from .replay import FrameControls, from_dict
+from .retimed import Retimed
 from .stitched import Stitched
 
 FORMAT = "nonholo.plan/3"
@@ -144,7 +145,9 @@ class PlanResult:
         """A global route's stitched control (the hops' controls, the route's waypoints and
         hand-overs): the controls themselves, or the record :attr:`stitched` of a smoothed
         route; ``None`` for a local plan."""
-        return self.parametrisation if isinstance(self.parametrisation, Stitched) else self.stitched
+        par = self.parametrisation
+        par = par.base if isinstance(par, Retimed) else par
+        return par if isinstance(par, Stitched) else self.stitched
 
     @property
     def params(self) -> np.ndarray:
@@ -372,7 +375,8 @@ _METHOD_OF_KIND = {"fourier": "parametric", "piecewise_constant": "nonparametric
 _CONTROL_FIELDS = {"fourier": ("kind", "T", "harmonics", "coeffs"),
                    "piecewise_constant": ("kind", "T", "grid", "values"),
                    "frame": ("kind", "T", "mechanism", "steps", "R0", "frame"),
-                   "stitched": ("kind", "T", "pieces", "waypoints")}
+                   "stitched": ("kind", "T", "pieces", "waypoints"),
+                   "retimed": ("kind", "T", "leg_speed", "nodes", "mechanism", "R0", "base")}
 
 #: stored samples ``R`` against the controls replayed from ``R0`` by the planning
 #: integrator (largest entry difference, ≈ rad), and ``terminal_error`` against
@@ -384,6 +388,9 @@ REPLAY_TOL = 1e-9
 VALUE_RTOL = 1e-12
 #: ``t`` against the integrator's step points ``k T/steps``, relative to ``T``
 TIME_RTOL = 1e-12
+#: the legs' speeds at the samples of a success against its ``leg_speed``, relative (the
+#: re-timing's spline moves them off the bound by less)
+SPEED_RTOL = 1e-6
 #: ``R0``, ``Rd`` and the samples ``R``: ``|RᵀR − I| ≤`` this (as :func:`nonholo.plan` accepts)
 ROTATION_TOL = 1e-9
 
@@ -547,10 +554,20 @@ def _physical(d, mech, where: str) -> None:
         _parametrisation(d, where, m)
 
 
-def _controls(d, mech, where: str = "controls") -> Controls | FrameControls | Stitched:
+def _controls(d, mech, where: str = "controls", timed: bool = True) -> Controls | FrameControls | Stitched | Retimed:
     """The ``controls`` field (or another field ``where`` holding controls) of a plan of
-    mechanism ``mech``, checked, as an object."""
-    if isinstance(d, dict) and d.get("kind") == Stitched.kind:
+    mechanism ``mech``, checked, as an object (``timed``: may be re-timed)."""
+    if isinstance(d, dict) and d.get("kind") == Retimed.kind and timed:
+        _fields(d, _CONTROL_FIELDS["retimed"], where)
+        for key in ("T", "leg_speed"):
+            if _number(d, key, where=f"{where}.") <= 0:
+                _fail(f"{where}.{key}", f"must be positive, got {d[key]}")
+        _integer(d, "nodes", 2, where=f"{where}.")
+        if _string(d, "mechanism", where=f"{where}.") != mech.name:
+            _fail(f"{where}.mechanism", f"is {d['mechanism']!r}, but the plan's 'mechanism' is {mech.name!r}")
+        _rotation(_array(d["R0"], f"{where}.R0", (3, 3)), f"{where}.R0")
+        _controls(d["base"], mech, f"{where}.base", timed=False)
+    elif isinstance(d, dict) and d.get("kind") == Stitched.kind:
         _fields(d, _CONTROL_FIELDS["stitched"], where)
         if _number(d, "T", where=f"{where}.") <= 0:
             _fail(f"{where}.T", f"must be positive, got {d['T']}")
@@ -692,6 +709,9 @@ class _Validation:
         except ValueError as exc:
             _fail("mechanism", f"is unknown: {exc}")
         par = r.parametrisation
+        if isinstance(par, Retimed):
+            self.retimed(par, mech)
+            par = par.base
         if r.route not in ROUTES:
             _fail("route", f"must be one of {', '.join(map(repr, ROUTES))}, got {_short(r.route)}")
         stitched = isinstance(par, Stitched)
@@ -711,15 +731,15 @@ class _Validation:
             _fail("method", f"must be one of {', '.join(map(repr, _METHOD_OF_KIND.values()))}, got {r.method!r}")
         if par.n_inputs != mech.n_inputs:
             _fail("controls", f"have {par.n_inputs} inputs, mechanism {mech.name!r} has {mech.n_inputs}")
-        if par.T != r.T:
-            _fail("T", f"is {r.T!r}, the controls are defined on [0, {par.T!r}]")
+        if r.parametrisation.T != r.T:
+            _fail("T", f"is {r.T!r}, the controls are defined on [0, {r.parametrisation.T!r}]")
         hops = r.hops                   # the route's stitched control: the controls, or their record
         if hops is not None:
             where = "controls" if stitched else "stitched"
             if not r.success or r.replay_steps is None:
                 _fail("route", "is 'global', which only a certified success has")
-            if hops.T != r.T:
-                _fail(where, f"is defined on [0, {hops.T!r}], the plan on [0, {r.T!r}]")
+            if hops.T != par.T:
+                _fail(where, f"is defined on [0, {hops.T!r}], the plan on [0, {par.T!r}]")
             if not np.array_equal(hops.waypoints[0], r.R0):
                 _fail("R0", f"differs from the first waypoint of the stitched controls ({where!r})")
             for i, piece in enumerate(hops.pieces):
@@ -730,6 +750,20 @@ class _Validation:
         else:
             self.piece(par, mech, "controls", r.steps, r.R0)
         return mech
+
+    def retimed(self, par: Retimed, mech) -> None:
+        """Re-timed controls: of a certified success's path, from its ``R0``, of its
+        mechanism, under the ``leg_speed`` the options record."""
+        r = self.r
+        if r.replay_steps is None:
+            _fail("controls", "are re-timed, which only the path of a certified plan can be")
+        if par.mechanism.name != r.mechanism:
+            _fail("mechanism", f"is {r.mechanism!r}, the re-timed controls are of {par.mechanism.name!r}")
+        if not np.array_equal(par.R0, r.R0):
+            _fail("R0", "differs from the re-timed controls' R0")
+        if r.options.get("leg_speed") != par.leg_speed:
+            _fail("options", f"record leg_speed = {_short(r.options.get('leg_speed'))}, the controls "
+                             f"are re-timed for {par.leg_speed!r}")
 
     def piece(self, par, mech, where: str, steps: int | None, R0) -> None:
         """One piece of physical controls against the plan's ``method``, ``strategy``,
@@ -782,13 +816,23 @@ class _Validation:
             _fail("delta", f"must be null: mechanism {mech.name!r} has no singular set")
         if n > r.steps + 1:
             _fail("t", f"has {n} samples, more than the {r.steps + 1} step points of {r.steps} steps")
-        expected = np.arange(n) * (r.T / r.steps)
+        par = r.parametrisation
+        if isinstance(par, Retimed):
+            # the planned step points, at their re-timed instants
+            tau = np.arange(n) * (par.base.T / r.steps)
+            if n == r.steps + 1:
+                tau[-1] = par.base.T
+            expected = par.time(tau)
+            expected[0] = 0.0
+        else:
+            expected = np.arange(n) * (r.T / r.steps)
         if n == r.steps + 1:
             expected[-1] = r.T
         if n and np.max(np.abs(r.t - expected)) > TIME_RTOL * r.T:
             k = int(np.argmax(np.abs(r.t - expected)))
-            _fail("t", f"must hold the integrator's step points k·T/steps: t[{k}] = {r.t[k]!r}, "
-                       f"expected {expected[k]!r}")
+            what = ("the re-timed instants of the step points" if isinstance(par, Retimed)
+                    else "the integrator's step points k·T/steps")
+            _fail("t", f"must hold {what}: t[{k}] = {r.t[k]!r}, expected {expected[k]!r}")
         if n:
             err = np.max(np.abs(np.einsum("nji,njk->nik", r.R, r.R) - np.eye(3)), axis=(1, 2))
             k = int(np.argmax(err))
@@ -822,6 +866,9 @@ class _Validation:
         frame controls."""
         r = self.r
         par = r.parametrisation
+        if isinstance(par, Retimed):
+            par = par.base             # the same path: replayed as planned
+        T = par.T
         frame = isinstance(par, FrameControls) and r.replay_steps is None
         if mech.has_singular_set:
             self.sign = float(np.sign(mech.delta(r.R0)))
@@ -834,14 +881,14 @@ class _Validation:
                 _fail("replay_steps", f"is set, but the trajectory stops at t = {r.t[-1]:.6g} s < T")
             M = r.replay_steps
             U = np.ascontiguousarray(stages.stage_table(par, M))
-            R_M, done, dmin = certify.replay(r.R0, par, r.T, mech, M, self.sign, U)
+            R_M, done, dmin = certify.replay(r.R0, par, T, mech, M, self.sign, U)
             Rs = R_M[::M // r.steps]
             done //= M // r.steps
         else:
             kern = mech.kernels(frame=frame)
             U = np.ascontiguousarray(stages.stage_table(par.frame if frame else par, r.steps)[:n - 1])
             Rs = np.empty((n, 3, 3))
-            done, dmin, _ = kern.forward(np.ascontiguousarray(r.R0, dtype=float), U, r.T / r.steps,
+            done, dmin, _ = kern.forward(np.ascontiguousarray(r.R0, dtype=float), U, T / r.steps,
                                          self.sign, -np.inf, Rs)
         if done < n - 1:
             _fail("R", f"goes on to t = {r.t[-1]:.6g} s, but the controls replayed from R0 stop at "
@@ -856,7 +903,7 @@ class _Validation:
                        f"(tolerance {REPLAY_TOL:g})")
         self.dmin = float(dmin)
         if r.replay_steps is not None:
-            R_half = certify.replay(r.R0, par, r.T, mech, M // 2, self.sign, stages.halve(U))[0]
+            R_half = certify.replay(r.R0, par, T, mech, M // 2, self.sign, stages.halve(U))[0]
             est = certify.richardson(R_M[-1], R_half[-1])
             if not r.error_bound >= est * (1.0 - 1e-9):
                 _fail("error_bound", f"({r.error_bound:.3g}) is below the replay's own error "
@@ -915,3 +962,10 @@ class _Validation:
                     _fail("options", f"has a bad leg_length: {exc}")
                 if limits.least_clearance(mech, r.R) < -VALUE_RTOL * limits.hi:
                     _fail("success", f"is true, but {limits.describe(mech, r.R, r.t)}")
+            speed = r.options.get("leg_speed")
+            if speed is not None:
+                if not is_number(speed) or not speed > 0:
+                    _fail("options", f"has a bad leg_speed: {_short(speed)}")
+                fastest = float(np.max(np.abs(mech.leg_speeds(r.R, r.u))))
+                if fastest > speed * (1.0 + SPEED_RTOL):
+                    _fail("success", f"is true, but a leg moves at {fastest:.6g} > leg_speed = {speed:g}")

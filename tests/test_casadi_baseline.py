@@ -86,3 +86,24 @@ def test_goal_across_singular_surface_is_rejected(monkeypatch):
     monkeypatch.setattr(cms, "solve_ivp", forbidden)
     with pytest.raises(ValueError, match="unreachable"):
         cms.solve(R0, Rd_bad)
+
+
+def test_leg_speed_bound_holds_at_the_nodes_and_binds(result):
+    """With ``leg_speed`` the baseline's legs keep ``|dl_i/dt| ≤ v`` at both ends of every
+    interval (speeds from the generated geometry: ``G_i(R) L(R) u``), and the bound binds
+    when the unbounded minimum-energy motion is faster."""
+    platform = catalog.get("platform")
+
+    def fastest(res):
+        u = np.repeat(res.u, 2, axis=0)
+        R = np.repeat(res.R_nodes, 2, axis=0)[1:-1]            # both ends of every interval
+        return np.abs(platform.leg_speeds(R, u)).max()
+
+    free = fastest(result)
+    v = 0.95 * free
+    bounded = cms.solve(R0, RD, T=1.0, delta_min=DELTA_MIN, leg_speed=v)
+    assert bounded.success, bounded.status
+    assert fastest(bounded) <= v * (1 + 1e-6)
+    assert fastest(bounded) >= v * (1 - 1e-3)
+    RT = cms.resimulate(R0, bounded.controls, 1.0, breakpoints=bounded.t_grid)
+    assert cms.terminal_error(RT, RD) <= 1e-8
