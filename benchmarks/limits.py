@@ -34,6 +34,7 @@ import time
 import numpy as np
 
 from nonholo import catalog, planner, so3, verify
+from nonholo.retime import retime
 
 from . import goalset
 from .report import RESULTS_DIR, Report
@@ -44,6 +45,11 @@ LIMITS = (1.2, 2.0)
 DELTA_MIN = 1e-2
 #: The re-simulated motion must end this close to the goal (rad).
 SUCCESS_TOL = 1e-8
+#: The legs' speed bound of the re-timing section (geometry units per second) and its goals.
+LEG_SPEED = 0.5
+SPEED_GOALS = 20
+#: The given time of the speed comparison, over the path's least time.
+STRETCH = 1.25
 #: The example used to warm each solver up.
 WARMUP = ((0.5, 1.2, -0.5), (1.0, 0.9, -0.5))
 
@@ -119,6 +125,90 @@ def run_casadi(goals, limits) -> list[dict]:
     return out
 
 
+def speed_goals(count: int) -> list[dict]:
+    """``count`` reachable goals of ``goals.json``, spread over the file (both bands)."""
+    reachable = [g for g in goalset.load_goals() if g["band"] != "across"]
+    picked = reachable[::max(1, len(reachable) // count)][:count]
+    return [{**g, "R0": np.array(g["R0"]), "Rd": np.array(g["Rd"])} for g in picked]
+
+
+def speed_check(R0, controls, breakpoints, T: float, v: float) -> dict:
+    """DOP853 with a dense path: the end orientation, the largest leg speed over ``v`` minus
+    1, and the least — over the samples not on a breakpoint — of the fastest leg's speed
+    over ``v`` (1 when the fastest leg is at the bound throughout)."""
+    mech = catalog.get("platform")
+    t, R, d = verify.resimulate_path(R0, controls, T, mech, breakpoints, samples=4001)
+    fastest = np.abs(mech.leg_speeds(R, controls(t))).max(axis=1) / v
+    away = np.ones(len(t), bool) if breakpoints is None else (
+        np.min(np.abs(t[:, None] - np.asarray(breakpoints)[None, :]), axis=1) > 1e-9)
+    return {"R_T": R[-1], "excess": float(fastest.max() - 1.0), "least": float(fastest[away].min()),
+            "least_delta": float(np.min(np.sign(mech.delta(R0)) * d))}
+
+
+def run_retiming(goals, v: float) -> list[dict]:
+    """Every goal planned by :func:`nonholo.plan`, then re-timed in the least time
+    (:func:`nonholo.retime`), the re-timing timed alone (after a warm-up call); each
+    re-timed plan re-simulated by DOP853 against the plan's own end and the bound."""
+    plans = [planner.plan(g["R0"], g["Rd"], T=g["T"], delta_min=DELTA_MIN) for g in goals]
+    retime(plans[0], v)
+    out = []
+    for g, res in zip(goals, plans):
+        if not res.success:
+            out.append({"id": g["id"], "planned": False, "reason": res.reason[-200:]})
+            continue
+        t = time.perf_counter()
+        fast = retime(res, v)
+        wall = time.perf_counter() - t
+        c = speed_check(g["R0"], fast.controls, fast.breakpoints, fast.T, v)
+        out.append({"id": g["id"], "planned": True, "seconds": wall, "seconds_ms": 1e3 * wall, "T_planned": res.T, "T_least": fast.T,
+                    "excess": c["excess"], "least": c["least"],
+                    "end_vs_plan": verify.terminal_error(c["R_T"], res.R[-1]),
+                    "final_error": verify.terminal_error(c["R_T"], g["Rd"])})
+    return out
+
+
+def run_speed_peers(goals, v: float, stretch: float, least: dict, casadi: bool) -> list[dict]:
+    """``plan(R0, Rd, T, leg_speed=v)`` and, if ``casadi``, the baseline with the same bound,
+    in ``T = stretch ×`` the goal's least time under ``v`` (``least``: by goal id);
+    re-simulated by DOP853: *solved* = final error ≤ SUCCESS_TOL, sgnΔ ≥ delta_min and no
+    leg faster than ``v (1 + 1e-6)`` at the samples (the baseline's piecewise-constant
+    controls are bounded at its nodes only: between them its speeds are checked too)."""
+    out = []
+    solvers = [("nonholo", None)]
+    if casadi:
+        from . import casadi_ms
+
+        kw = {"N": 40, "substeps": 2, "delta_min": DELTA_MIN, "path_at_substeps": True, "leg_speed": v}
+        casadi_ms.solve(so3.from_rpy(*WARMUP[0]), so3.from_rpy(*WARMUP[1]), T=2.0, **kw)
+        solvers.append(("casadi", lambda g, T: casadi_ms.solve(g["R0"], g["Rd"], T=T, **kw)))
+    planner.plan(so3.from_rpy(*WARMUP[0]), so3.from_rpy(*WARMUP[1]), T=2.0, leg_speed=v)
+    for g in goals:
+        if g["id"] not in least:
+            continue
+        T = stretch * least[g["id"]]
+        for name, call in solvers:
+            t = time.perf_counter()
+            if call is None:
+                res = planner.plan(g["R0"], g["Rd"], T=T, delta_min=DELTA_MIN, leg_speed=v)
+                claimed, controls, bps, reason = res.success, res.controls, res.breakpoints, res.reason
+            else:
+                res = call(g, T)
+                claimed, controls, bps, reason = res.success, res.controls, res.t_grid, res.status
+            wall = time.perf_counter() - t
+            c, solved = None, False
+            if claimed:
+                try:
+                    c = speed_check(g["R0"], controls, bps, T, v)
+                    solved = (verify.terminal_error(c["R_T"], g["Rd"]) <= SUCCESS_TOL and c["excess"] <= 1e-6
+                              and c["least_delta"] >= DELTA_MIN)
+                except (RuntimeError, ValueError, FloatingPointError):
+                    c = None
+            out.append({"solver": name, "id": g["id"], "T": T, "seconds": wall, "claimed": bool(claimed),
+                        "solved": solved, "reason": reason[-200:],
+                        "excess": None if c is None else c["excess"]})
+    return out
+
+
 def _ms(x) -> str:
     return "–" if x is None else f"{1e3 * x:.1f}"
 
@@ -130,11 +220,58 @@ def summary(records: list[dict]) -> list:
             _ms(float(np.median(ts))), _ms(float(np.quantile(ts, 0.95))), _ms(max(ts))]
 
 
+def speed_section(rep: Report, timed: list[dict], peers: list[dict], v: float) -> None:
+    rep.heading("Leg speeds: re-timing")
+    done = [r for r in timed if r["planned"]]
+    rep.paragraph(
+        f"{len(timed)} reachable goals of `benchmarks/goals.json`, spread over the file, planned by `plan` "
+        f"(defaults) and re-timed by `nonholo.retime(result, leg_speed={v:g})` in the least time "
+        f"({len(done)} planned). Each re-timed plan re-simulated by DOP853 (rtol = atol = 1e-13, dense path, "
+        "4001 samples and every step): *largest speed* = the largest |dl_i/dt| over v, minus 1; *fastest leg "
+        "at least* = the least, over the samples off the breakpoints, of the fastest leg's speed over v; "
+        "*end vs plan* = the angle between the re-timed motion's end and the plan's certified end.")
+    if done:
+        worst = max(abs(r["excess"]) for r in done)
+        rows = [["median", *(_fmt(float(np.median([r[k] for r in done])), f) for k, f in _SPEED_COLS)],
+                ["worst", _fmt(max(r["T_planned"] for r in done), ".3g"),
+                 _fmt(max(r["T_least"] for r in done), ".4g"), _fmt(max(r["seconds"] for r in done) * 1e3, ".2f"),
+                 _fmt(max(r["excess"] for r in done), ".2e"), _fmt(min(r["least"] for r in done), ".7f"),
+                 _fmt(max(r["end_vs_plan"] for r in done), ".2e"), _fmt(max(r["final_error"] for r in done), ".2e")]]
+        rep.table(["", "T planned [s]", "least T [s]", "re-timing [ms]", "largest speed / v − 1",
+                   "fastest leg at least [v]", "end vs plan [rad]", "final error [rad]"], rows)
+        ok = sum(abs(r["excess"]) <= 1e-6 and r["end_vs_plan"] <= 1e-10 for r in done)
+        rep.paragraph(f"Largest |dl_i/dt| equal to v within 1e-6 relative and end within 1e-10 rad of the "
+                      f"plan's: **{ok} of {len(done)}** (largest |deviation| {worst:.2e}).")
+    if peers:
+        rep.heading("Leg speeds: a given time", level=3)
+        rep.paragraph(
+            f"The same goals in T = {STRETCH:g} × the least time found above, every leg at most v = {v:g}: "
+            "`plan(R0, Rd, T=T, leg_speed=v)` (the path planned in T, re-timed if its legs are too fast) and "
+            "the CasADi baseline (minimum energy, 40 intervals, 2 substeps, the bound at both ends of every "
+            "interval). *solved* = re-simulated final error ≤ 1e-8 rad, sgnΔ ≥ 0.01 and no leg faster than "
+            "v (1 + 1e-6) at any sample (the baseline is bounded at its nodes only).")
+        by = {}
+        for r in peers:
+            by.setdefault(r["solver"], []).append(r)
+        rep.table(["solver", "goals", "claimed", "solved", "false claims", "median ms", "p95 ms", "max ms"],
+                  [[name, *summary(rs)] for name, rs in by.items()])
+
+
+_SPEED_COLS = (("T_planned", ".3g"), ("T_least", ".4g"), ("seconds_ms", ".2f"), ("excess", ".2e"),
+               ("least", ".7f"), ("end_vs_plan", ".2e"), ("final_error", ".2e"))
+
+
+def _fmt(x, spec: str) -> str:
+    return format(x, spec)
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(prog="python -m benchmarks.limits", description=__doc__.splitlines()[0])
     ap.add_argument("--lo", type=float, default=LIMITS[0])
     ap.add_argument("--hi", type=float, default=LIMITS[1])
     ap.add_argument("--no-casadi", action="store_true", help="leave CasADi out (e.g. not installed)")
+    ap.add_argument("--leg-speed", type=float, default=LEG_SPEED, help="the legs' speed bound")
+    ap.add_argument("--speed-goals", type=int, default=SPEED_GOALS, help="goals re-timed")
     args = ap.parse_args(argv)
     limits = (args.lo, args.hi)
     goals = goals_inside(limits)
@@ -187,9 +324,17 @@ def main(argv=None) -> int:
                     "–" if not r["check"] else f"{r['check']['final_error']:.2g}",
                     "–" if not r["check"] else f"{r['check']['least_clearance']:.3g}", r["reason"][-160:]]
                    for r in missed])
+    v = args.leg_speed
+    timed = run_retiming(speed_goals(args.speed_goals), v)
+    _log("re-timing done")
+    least = {r["id"]: r["T_least"] for r in timed if r["planned"]}
+    peers = run_speed_peers(speed_goals(args.speed_goals), v, STRETCH, least, not args.no_casadi)
+    _log("speed peers done")
+    speed_section(rep, timed, peers, v)
     rep.write()
     (RESULTS_DIR / "limits.json").write_text(json.dumps(
-        {"limits": limits, "records": records}, indent=1, default=float))
+        {"limits": limits, "records": records, "leg_speed": v, "retiming": timed, "speed_peers": peers},
+        indent=1, default=float))
     return 0
 
 
