@@ -3,7 +3,7 @@ CasADi/IPOPT with the same limits, on ``benchmarks/goals.json``.
 
 Run::
 
-    python -m benchmarks.limits [--lo 1.2 --hi 2.0]
+    python -m benchmarks.limits [--lo 1.2 --hi 2.0] [--leg-speed 0.5] [--no-casadi]
 
 The goals: the platform's reachable goals of ``benchmarks/goals.json`` whose start and
 goal both have every leg inside ``[lo, hi]``. Solvers, each timed per call after one
@@ -20,8 +20,16 @@ warm-up call (numba compiled, the NLP built):
 Every claimed success is re-simulated by DOP853 (rtol = atol = 1e-13) with a dense path
 (:func:`nonholo.verify.resimulate_path`): *solved* = final error ≤ 1e-8 rad, ``sgnΔ ≥
 delta_min`` and every leg inside ``[lo, hi]`` at every point of the path, the leg lengths
-computed from the platform's numeric geometry (``|R tip_i − base_i|``). Writes
-``benchmarks/results/limits.md`` and ``limits.json``.
+computed from the platform's numeric geometry (``|R tip_i − base_i|``).
+
+Then the legs' speeds (:func:`run_retiming`, :func:`run_speed_peers`): goals planned and
+re-timed by :func:`nonholo.retime` in the least time under ``--leg-speed``, each re-timed
+motion re-simulated against the bound and the plan's end; and the same goals in a given
+time by ``plan(..., leg_speed=...)`` and the CasADi baseline with the same bound. And the
+least energy (:func:`run_energy`): ``plan(..., objective="energy")`` against the
+baseline's fine setting on every reachable goal, in the same run.
+
+Writes ``benchmarks/results/limits.md`` and ``limits.json``.
 """
 from __future__ import annotations
 
@@ -34,6 +42,7 @@ import time
 import numpy as np
 
 from nonholo import catalog, planner, so3, verify
+from nonholo.planning import energy
 from nonholo.retime import retime
 
 from . import goalset
@@ -209,6 +218,82 @@ def run_speed_peers(goals, v: float, stretch: float, least: dict, casadi: bool) 
     return out
 
 
+def controls_energy(controls, breakpoints, T: float) -> float:
+    """``∫_0^T |u|² dt`` by 8-point Gauss–Legendre between consecutive breakpoints (exact for
+    piecewise-constant controls)."""
+    x, w = np.polynomial.legendre.leggauss(8)
+    b = np.unique(np.concatenate([[0.0, T], [] if breakpoints is None else np.asarray(breakpoints, float)]))
+    a, c = b[:-1], b[1:]
+    t = (0.5 * (a + c))[:, None] + (0.5 * (c - a))[:, None] * x[None, :]
+    u = np.asarray(controls(t.ravel())).reshape(len(a), len(x), -1)
+    return float(np.sum(0.5 * (c - a)[:, None] * w[None, :] * np.sum(u ** 2, axis=2)))
+
+
+def run_energy(goals, casadi: bool) -> list[dict]:
+    """``plan(R0, Rd, T, objective="energy")`` and the CasADi baseline's fine setting (minimum
+    energy, 40 intervals, 8 substeps, Δ at the substeps: ``casadi-fine`` of
+    :mod:`benchmarks.compare`) on every goal, timed per call after a warm-up call, each
+    claimed success re-simulated by DOP853 (dense path): *solved* = final error ≤
+    SUCCESS_TOL and sgnΔ ≥ delta_min; the energy of the returned controls by quadrature."""
+    solvers = [("nonholo energy", lambda g: planner.plan(g["R0"], g["Rd"], T=g["T"], delta_min=DELTA_MIN,
+                                                          objective="energy"))]
+    if casadi:
+        from . import casadi_ms
+
+        kw = {"N": 40, "substeps": 8, "delta_min": DELTA_MIN, "path_at_substeps": True, "max_iter": 500,
+              "tol": 1e-10}
+        solvers.append(("casadi-fine", lambda g: casadi_ms.solve(g["R0"], g["Rd"], T=g["T"], **kw)))
+    out = []
+    for name, call in solvers:
+        call({"R0": so3.from_rpy(*WARMUP[0]), "Rd": so3.from_rpy(*WARMUP[1]), "T": 1.0})
+        for g in goals:
+            t = time.perf_counter()
+            try:
+                res = call(g)
+            except ValueError as exc:
+                out.append({"solver": name, "id": g["id"], "seconds": time.perf_counter() - t,
+                            "claimed": False, "solved": False, "reason": str(exc)[-200:], "energy": None})
+                continue
+            wall = time.perf_counter() - t
+            bps = res.breakpoints if name.startswith("nonholo") else res.t_grid
+            c = check(g, res.controls, bps, res.T, (0.0, math.inf)) if res.success else None
+            solved = c is not None and c["final_error"] <= SUCCESS_TOL and c["least_delta"] >= DELTA_MIN
+            out.append({"solver": name, "id": g["id"], "seconds": wall, "claimed": bool(res.success),
+                        "solved": solved, "energy": controls_energy(res.controls, bps, res.T) if solved else None,
+                        "reason": (res.reason if name.startswith("nonholo") else res.status)[-200:]})
+        _log(f"{name} done")
+    return out
+
+
+def energy_section(rep: Report, records: list[dict], n_goals: int) -> None:
+    rep.heading("Minimum energy")
+    by = {}
+    for r in records:
+        by.setdefault(r["solver"], []).append(r)
+    rep.paragraph(
+        f"The {n_goals} reachable goals of `benchmarks/goals.json` (bands near and far), no stroke or speed "
+        "limits: `plan(R0, Rd, T, objective=\"energy\")` (the default plan, then its energy lowered on "
+        f"{energy.ENERGY_GRID} piecewise-constant intervals) against the CasADi baseline's fine setting "
+        "(`casadi-fine` of `benchmarks/compare.py`: minimum energy, 40 intervals, 8 substeps). Both timed per "
+        "call after a warm-up call, in this run; every claimed success re-simulated by DOP853 (dense path): "
+        f"*solved* = final error ≤ {SUCCESS_TOL:g} rad and sgnΔ ≥ {DELTA_MIN:g}; energy ∫|u|² dt of the "
+        "returned controls by Gauss–Legendre quadrature between their breakpoints.")
+    rep.table(["solver", "goals", "claimed", "solved", "false claims", "median ms", "p95 ms", "max ms"],
+              [[name, *summary(rs)] for name, rs in by.items()])
+    if "casadi-fine" in by:
+        ours = {r["id"]: r for r in by["nonholo energy"]}
+        both = [(ours[r["id"]]["energy"], r["energy"]) for r in by["casadi-fine"]
+                if r["solved"] and ours[r["id"]]["solved"]]
+        ratio = np.array([a / b for a, b in both])
+        med = {k: float(np.median([r["seconds"] for r in by[k]])) for k in by}
+        lower = int(np.sum(ratio <= 1.0 + 1e-9))
+        rep.table(["goals both solve", "median energy ratio", "min", "max", "ratio ≤ 1", "median time ratio"],
+                  [[len(both), f"{np.median(ratio):.6f}", f"{ratio.min():.6f}", f"{ratio.max():.6f}",
+                    f"{lower} of {len(both)}", f"{med['casadi-fine'] / med['nonholo energy']:.1f}×"]])
+        rep.paragraph("Energy ratio: nonholo's over casadi-fine's, per goal both solve; time ratio: casadi-fine's "
+                      "median wall time over nonholo's (every goal, same run).")
+
+
 def _ms(x) -> str:
     return "–" if x is None else f"{1e3 * x:.1f}"
 
@@ -331,9 +416,14 @@ def main(argv=None) -> int:
     peers = run_speed_peers(speed_goals(args.speed_goals), v, STRETCH, least, not args.no_casadi)
     _log("speed peers done")
     speed_section(rep, timed, peers, v)
+    reachable = [{**g, "R0": np.array(g["R0"]), "Rd": np.array(g["Rd"])}
+                 for g in goalset.load_goals() if g["band"] != "across"]
+    lowered = run_energy(reachable, not args.no_casadi)
+    energy_section(rep, lowered, len(reachable))
     rep.write()
     (RESULTS_DIR / "limits.json").write_text(json.dumps(
-        {"limits": limits, "records": records, "leg_speed": v, "retiming": timed, "speed_peers": peers},
+        {"limits": limits, "records": records, "leg_speed": v, "retiming": timed, "speed_peers": peers,
+         "energy": lowered},
         indent=1, default=float))
     return 0
 

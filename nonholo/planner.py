@@ -27,6 +27,7 @@ from . import catalog, so3, stages
 from .checks import MAX_STEPS, check_count, check_time
 from .controls import Controls, Fourier, PiecewiseConstant, paper_initial
 from .limits import LegLimits
+from .planning import energy
 from .planning import route as global_route
 from .planning.certification import certified
 from .planning.core import Options, Problem, Request, Strategy, build_result
@@ -40,6 +41,9 @@ from .simulation import DEFAULT_STEPS
 METHODS = ("parametric", "nonparametric")
 #: The routes :func:`plan` takes to a goal.
 ROUTES = ("auto", "local", "global")
+
+#: What :func:`plan` optimises once the goal is reached: nothing, or the energy ∫|u|² dt.
+OBJECTIVES = (None, "energy")
 
 #: The strategies :func:`plan` knows by name.
 STRATEGIES: dict[str, type[Strategy]] = {"paper": PaperStrategy, "robust": RobustStrategy}
@@ -99,7 +103,7 @@ def plan(R0, Rd, *, T: float | None = 1.0, method: str = "parametric", harmonics
          max_iter: int = 200, strategy="robust", mechanism="platform",
          delta_min: float = 1e-2, steps: int | None = None, newton_below: float = 1e-3,
          min_step: float = 1e-6, callback: Callable[[dict], object] | None = None,
-         route: str = "auto", leg_length=None, leg_speed=None) -> PlanResult:
+         route: str = "auto", leg_length=None, leg_speed=None, objective: str | None = None) -> PlanResult:
     """Plan a control steering ``R0`` to ``Rd`` in time ``T`` (seconds).
 
     - ``mechanism``: a :class:`~nonholo.mechanism.Mechanism` or its name
@@ -132,6 +136,11 @@ def plan(R0, Rd, *, T: float | None = 1.0, method: str = "parametric", harmonics
       ``T=None`` in the least time — the fastest leg at ``v`` throughout; with a given
       ``T`` only if the plan breaks the bound, and it fails saying the time needed if its
       path cannot keep it within ``T``. ``None`` (default): no bound.
+    - ``objective``: ``None`` (default): the plan as found; ``"energy"``: then the energy
+      ``∫|u|² dt`` of its physical inputs lowered with the goal, ``delta_min`` and the
+      stroke kept (:mod:`nonholo.planning.energy`: piecewise-constant inputs on
+      :data:`~nonholo.planning.energy.ENERGY_GRID` intervals, method ``"nonparametric"``
+      in the result).
     - ``steps``: CF4 steps on ``[0, T]`` (default :func:`default_steps`).
     - ``callback(record)``: called after each accepted iteration of the local plan with the
       history record; returning a true value stops the run (and no global route is taken).
@@ -157,11 +166,13 @@ def plan(R0, Rd, *, T: float | None = 1.0, method: str = "parametric", harmonics
     speed = check_leg_speed(leg_speed, mech)
     if T is None and speed is None:
         raise ValueError("T=None asks for the least time, which needs a leg_speed to bound")
+    if objective not in OBJECTIVES:
+        raise ValueError(f"unknown objective {objective!r}; known: None, 'energy'")
     result = plan_path(R0, Rd, T=PLANNING_TIME if T is None else T, method=method, harmonics=harmonics,
                        grid=grid, u0=u0, gamma=gamma, step=step, tol=tol, max_iter=max_iter,
                        strategy=strategy, mechanism=mech, delta_min=delta_min, steps=steps,
                        newton_below=newton_below, min_step=min_step, callback=callback, route=route,
-                       leg_length=leg_length)
+                       leg_length=leg_length, objective=objective)
     return limit_speed(result, speed, T)
 
 
@@ -170,7 +181,7 @@ def plan_path(R0, Rd, *, T: float = 1.0, method: str = "parametric", harmonics: 
               max_iter: int = 200, strategy="robust", mechanism="platform",
               delta_min: float = 1e-2, steps: int | None = None, newton_below: float = 1e-3,
               min_step: float = 1e-6, callback: Callable[[dict], object] | None = None,
-              route: str = "auto", leg_length=None) -> PlanResult:
+              route: str = "auto", leg_length=None, objective: str | None = None) -> PlanResult:
     """:func:`plan` without a bound on the legs' speed: the path, in the time ``T``."""
     started = time.perf_counter()
     if route not in ROUTES:
@@ -236,7 +247,8 @@ def plan_path(R0, Rd, *, T: float = 1.0, method: str = "parametric", harmonics: 
         if outcome.success and outcome.certificate is None:
             outcome = certified(outcome, problem, options)
         if outcome.success or route == "local" or outcome.stopped:
-            return build_result(request, outcome, outcome.success, outcome.reason, problem)
+            result = build_result(request, outcome, outcome.success, outcome.reason, problem)
+            return energy.improve(request, result) if objective == "energy" else result
         local_reason = outcome.reason
 
     def hop(Ra, Rb, T_hop, hop_delta_min):
@@ -256,4 +268,5 @@ def plan_path(R0, Rd, *, T: float = 1.0, method: str = "parametric", harmonics: 
         return build_result(request, outcome, False,
                             f"{local_reason}; the global route failed too: {steered.reason}", problem)
     smoothed = steered.smoothed or smooth(steered.controls, steered.certify_seconds)
-    return global_route.build_result(request, steered, local_reason, smoothed)
+    result = global_route.build_result(request, steered, local_reason, smoothed)
+    return energy.improve(request, result) if objective == "energy" else result
