@@ -1242,6 +1242,43 @@ def leg_limits_figure(free, limited, title: str | None = None) -> Figure:
 
 
 @_styled
+def motion_quality_figure(plain, cheap, fast, title: str | None = None) -> Figure:
+    """Two refinements of one plan ``plain``: the inputs of ``cheap`` (``objective="energy"``,
+    solid) against ``plain``'s (dashed), with their energies ``∫|u|² dt``; and the legs'
+    speeds of ``fast`` (``plain`` re-timed in the least time under
+    ``fast.options["leg_speed"]``, solid) against ``plain``'s (dashed), with the bound."""
+    mech = catalog.get(plain.mechanism)
+    fig = Figure(figsize=(12.0, 4.4), layout="constrained")
+    left, right = fig.add_subplot(1, 2, 1), fig.add_subplot(1, 2, 2)
+    for res, ls, what in ((plain, "--", "as planned"), (cheap, "-", "least energy")):
+        t = np.linspace(0.0, res.T, 2001)
+        u = res.controls(t)
+        e = float(np.trapezoid(np.sum(u ** 2, axis=1), t))
+        for j in range(u.shape[1]):
+            left.plot(t, u[:, j], color=PAIR_COLORS[j], ls=ls, lw=1.4,
+                      label=f"$u_{j + 1}$, {what} (∫|u|² dt = {e:.4f})" if j == 0 else f"$u_{j + 1}$")
+    left.set_xlabel("time t [s]")
+    left.set_ylabel("input u [1/s]")
+    left.legend(fontsize=8, loc="best")
+    left.set_title("plan(..., objective=\"energy\")")
+    v = fast.options["leg_speed"]
+    for res, ls, what in ((plain, "--", "as planned"), (fast, "-", "re-timed")):
+        speeds = mech.leg_speeds(res.R, res.u)
+        for j in range(speeds.shape[1]):
+            right.plot(res.t, speeds[:, j], color=PAIR_COLORS[j], ls=ls, lw=1.4,
+                       label=f"$dl_{j + 1}/dt$, {what} (T = {res.T:.3g} s)")
+    for y in (v, -v):
+        right.axhline(y, color="0.35", lw=1.2, ls=":")
+    right.axhline(0.0, color="k", lw=0.5)
+    right.set_xlabel("time t [s]")
+    right.set_ylabel("leg speed (geometry units / s)")
+    right.legend(fontsize=8, loc="best")
+    right.set_title(f"nonholo.retime(..., leg_speed={v:g}): the least time")
+    fig.suptitle(title or f"{mech.name}: one path, its least energy and its least time", fontsize=11)
+    return fig
+
+
+@_styled
 def example_overview_figure(results, title: str = "", geometry=None, tol: float | None = None,
                             threshold: float | None = 1e-2) -> Figure:
     """One example in a 2 × 3 grid: convergence, controls ``u_1, u_2`` [1/s] (scaled leg

@@ -9,6 +9,9 @@
 - ``leg_limits``: a goal (:data:`LIMITS_GOAL`) planned without and with the legs' stroke
   limits :data:`LEG_LENGTH` (figure; ``plans/leg_limits.json`` and ``plans/leg_limits.csv``,
   the motion for an actuator controller);
+- ``motion_quality``: the same goal's default plan, its least-energy plan
+  (``objective="energy"``) and the plan re-timed in the least time under the legs' speed
+  bound :data:`LEG_SPEED` (figure; ``plans/least_time.json`` and ``plans/least_time.csv``);
 - ``plans/example<k>_<method>.json``: every planned result (reload with
   :meth:`nonholo.result.PlanResult.load`);
 - ``summary.json``: one object per (example, method) with ``example``, ``method``,
@@ -31,6 +34,7 @@ import numpy as np
 from . import examples as _examples
 from . import catalog, figures, so3, verify
 from .planner import STRATEGIES, plan
+from .retime import retime
 
 DEFAULT_OUTDIR = Path("paper_figures")
 #: Re-simulated terminal error required of Examples 1 and 2 (rad).
@@ -44,6 +48,9 @@ FAR_GOAL = ((-1.918, 0.336, -2.521), (1.433, -0.813, 1.324))
 #: and ``.csv``).
 LIMITS_GOAL = ((0.5, 1.2, -0.5), (-0.4527, 1.4094, -1.3638))
 LEG_LENGTH = (1.2, 2.0)
+#: The legs' speed bound the same goal's default plan is re-timed under (figure
+#: ``motion_quality``, ``plans/least_time.json`` and ``.csv``), geometry units per second.
+LEG_SPEED = 0.5
 
 
 def strongest_strategy() -> str:
@@ -124,6 +131,13 @@ def plan_limits_goal():
     return plan(R0, Rd), plan(R0, Rd, leg_length=LEG_LENGTH)
 
 
+def plan_quality(free):
+    """:data:`LIMITS_GOAL` planned with ``objective="energy"``, and ``free`` (its default plan)
+    re-timed in the least time under :data:`LEG_SPEED`."""
+    R0, Rd = (so3.from_rpy(*a) for a in LIMITS_GOAL)
+    return plan(R0, Rd, objective="energy"), retime(free, LEG_SPEED)
+
+
 def plan_far_goal():
     """:data:`FAR_GOAL` planned by :func:`nonholo.plan` with its defaults."""
     return plan(so3.from_rpy(*FAR_GOAL[0]), so3.from_rpy(*FAR_GOAL[1]))
@@ -175,6 +189,12 @@ def write_figures(solved: list[Solved], outdir: Path, progress=_log) -> list[Pat
         progress("      wrote plans/leg_limits.json and plans/leg_limits.csv")
     else:
         progress(f"      note: the stroke-limits goal was not solved ({limited.reason[:120]}); no leg_limits figure")
+    if free.success:
+        cheap, fast = plan_quality(free)
+        save(figures.motion_quality_figure(free, cheap, fast), "motion_quality")
+        fast.save(outdir / "plans" / "least_time.json")
+        fast.to_csv(outdir / "plans" / "least_time.csv", rate=100)
+        progress("      wrote plans/least_time.json and plans/least_time.csv")
     ex3 = [s for s in solved if s.example.number == 3 and len(s.result.R)]
     if ex3:
         gif = outdir / "example3_animation.gif"
