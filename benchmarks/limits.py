@@ -267,9 +267,7 @@ def run_energy(goals, casadi: bool) -> list[dict]:
 
 def energy_section(rep: Report, records: list[dict], n_goals: int) -> None:
     rep.heading("Minimum energy")
-    by = {}
-    for r in records:
-        by.setdefault(r["solver"], []).append(r)
+    by = by_solver(records)
     rep.paragraph(
         f"The {n_goals} reachable goals of `benchmarks/goals.json` (bands near and far), no stroke or speed "
         "limits: `plan(R0, Rd, T, objective=\"energy\")` (the default plan, then its energy lowered on "
@@ -292,6 +290,14 @@ def energy_section(rep: Report, records: list[dict], n_goals: int) -> None:
                     f"{lower} of {len(both)}", f"{med['casadi-fine'] / med['nonholo energy']:.1f}×"]])
         rep.paragraph("Energy ratio: nonholo's over casadi-fine's, per goal both solve; time ratio: casadi-fine's "
                       "median wall time over nonholo's (every goal, same run).")
+
+
+def by_solver(records: list[dict]) -> dict[str, list[dict]]:
+    """The records grouped by their ``solver``, in order of appearance."""
+    by: dict[str, list[dict]] = {}
+    for r in records:
+        by.setdefault(r["solver"], []).append(r)
+    return by
 
 
 def _ms(x) -> str:
@@ -335,9 +341,7 @@ def speed_section(rep: Report, timed: list[dict], peers: list[dict], v: float) -
             "the CasADi baseline (minimum energy, 40 intervals, 2 substeps, the bound at both ends of every "
             "interval). *solved* = re-simulated final error ≤ 1e-8 rad, sgnΔ ≥ 0.01 and no leg faster than "
             "v (1 + 1e-6) at any sample (the baseline is bounded at its nodes only).")
-        by = {}
-        for r in peers:
-            by.setdefault(r["solver"], []).append(r)
+        by = by_solver(peers)
         rep.table(["solver", "goals", "claimed", "solved", "false claims", "median ms", "p95 ms", "max ms"],
                   [[name, *summary(rs)] for name, rs in by.items()])
 
@@ -383,9 +387,7 @@ def main(argv=None) -> int:
         "with its defaults; `casadi`: `benchmarks.casadi_ms.solve` (minimum energy, 40 intervals, 2 substeps, "
         "Δ at the substeps) with the stroke constraint at its nodes; `nonholo (no limits)`: `plan` without "
         "limits (its *solved* ignores the limits: see the line below the table).")
-    by = {}
-    for r in records:
-        by.setdefault(r["solver"], []).append(r)
+    by = by_solver(records)
     rows = []
     for name, rs in by.items():
         if name == "nonholo (no limits)":
