@@ -1,4 +1,4 @@
-"""Command line: ``nonholo derive | audit | mechanisms | plan | reproduce``."""
+"""Command line: ``nonholo derive | audit | mechanisms | plan | reproduce | sweep | atlas``."""
 from __future__ import annotations
 
 import argparse
@@ -7,7 +7,7 @@ import sys
 import time
 from pathlib import Path
 
-from . import catalog, cli_plan, cli_reproduce
+from . import catalog, cli_plan, cli_reproduce, cli_sweep
 
 
 def _derive(args) -> int:
@@ -74,6 +74,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     cli_plan.add_parser(sub)
     cli_reproduce.add_parser(sub)
+    cli_sweep.add_parsers(sub)
     return parser
 
 

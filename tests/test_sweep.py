@@ -1,0 +1,200 @@
+"""Sweeps (nonholo/sweep.py, nonholo/problems.py, nonholo/atlas.py, ``nonholo sweep``):
+parallel runs equal serial ones, nothing is lost when a sweep is killed, bad problem files
+are refused before anything runs, a Dask cluster of separate processes gives the same rows."""
+import json
+import os
+import shutil
+import signal
+import subprocess
+import sys
+import time
+
+import numpy as np
+import pyarrow.parquet as pq
+import pytest
+
+from benchmarks import goalset
+from nonholo import atlas, problems, so3, sweep
+from nonholo.result import PlanResult
+
+
+def pair_rows(count, offset=0):
+    pairs = goalset.uniform_pairs("platform", offset + count)[offset:]
+    return [{"start": p["R0"], "goal": p["Rd"], "label": p["id"]} for p in pairs]
+
+
+@pytest.fixture(scope="module")
+def serial(tmp_path_factory):
+    rows = pair_rows(24)
+    out = tmp_path_factory.mktemp("serial") / "serial.parquet"
+    return rows, sweep.sweep(rows, out, workers=1, progress=False)
+
+
+def test_local_workers_give_the_serial_rows(serial, tmp_path):
+    rows, table = serial
+    assert table.column("index").to_pylist() == list(range(len(rows)))
+    par = sweep.sweep(rows, tmp_path / "par.parquet", workers=2, progress=False)
+    assert sweep.comparable(par) == sweep.comparable(table)
+    assert not sweep.parts_dir(tmp_path / "par.parquet").exists()
+    # a row's plan is the plan, checked like a plan file
+    first = table.to_pylist()[0]
+    res = sweep.plan_of(first)
+    assert isinstance(res, PlanResult) and res.success == first["success"]
+    np.testing.assert_array_equal(res.R0, np.asarray(rows[0]["start"]))
+
+
+def test_a_finished_sweep_is_not_run_again(serial, tmp_path, monkeypatch):
+    rows, _ = serial
+    out = tmp_path / "r.parquet"
+    first = sweep.sweep(rows[:4], out, workers=1, progress=False)
+
+    def forbidden(batch):
+        raise AssertionError("a finished sweep ran again")
+
+    monkeypatch.setattr(sweep, "solve_batch", forbidden)
+    assert sweep.sweep(rows[:4], out, workers=1, progress=False).equals(first)
+    with pytest.raises(ValueError, match="other results"):
+        sweep.sweep(rows[1:5], out, workers=1, progress=False)
+
+
+def test_a_problem_that_raises_is_recorded_and_the_sweep_goes_on(tmp_path):
+    rows = pair_rows(3)
+    rows[1] = {**rows[1], "options": {"harmonics": -1}}
+    table = sweep.sweep(rows, tmp_path / "r.parquet", workers=1, progress=False).to_pylist()
+    assert table[1]["error"].startswith("ValueError: harmonics") and table[1]["plan"] is None
+    assert not table[1]["success"]
+    assert table[0]["error"] is None and table[2]["error"] is None and table[0]["plan"] is not None
+
+
+@pytest.mark.parametrize("line, match", [
+    ('{"goal": I}', r"row 1, column 'start': is missing"),
+    ('{"start": I, "goal": [[1, 0], [0, 1]]}', r"row 1, column 'goal': must be a 3×3 rotation matrix, got shape \(2, 2\)"),
+    ('{"start": I, "goal": [[1, 0, 0], [0, 1, 0], [0, 0, 2]]}', r"row 1, column 'goal': "),
+    ('{"start": I, "goal": G, "mechanism": "nosuch"}', r"row 1, column 'mechanism': unknown mechanism 'nosuch'"),
+    ('{"start": I, "goal": G, "options": {"speed": 1}}', r"row 1, column 'options.speed': is not an option"),
+    ('{"start": I, "goal": G, "colour": "red"}', r"row 1, column 'colour': is not a column"),
+    ('{"start": I, "goal": G', r"row 1: is not JSON"),
+    ('', r"row 1: is blank"),
+])
+def test_bad_problem_files_name_the_row_and_column_before_anything_runs(tmp_path, line, match, monkeypatch):
+    good = pair_rows(1)[0]
+    text = json.dumps(problems.as_json(problems.check_row(good, 0)))
+    I = json.dumps(np.asarray(good["start"]).tolist())
+    G = json.dumps(np.asarray(good["goal"]).tolist())
+    path = tmp_path / "p.jsonl"
+    path.write_text(text + "\n" + line.replace("I", I).replace("G", G) + "\n" + text + "\n")
+    monkeypatch.setattr(sweep, "solve_batch", lambda batch: pytest.fail("a problem ran"))
+    with pytest.raises(ValueError, match=match):
+        sweep.sweep(path, tmp_path / "r.parquet", workers=1, progress=False)
+    assert not (tmp_path / "r.parquet").exists() and not sweep.parts_dir(tmp_path / "r.parquet").exists()
+    # the command line: exit status 2, the same message
+    run = subprocess.run([sys.executable, "-m", "nonholo.cli", "sweep", str(path), "--out",
+                          str(tmp_path / "r.parquet")], capture_output=True, text=True)
+    assert run.returncode == 2 and "row 1" in run.stderr
+
+
+def test_a_killed_sweep_resumes_without_losing_or_repeating_a_row(tmp_path):
+    # problems slow enough (a fine grid) that the sweep is killed half-way
+    rows = [{**r, "options": {"steps": 3200, "harmonics": 4}} for r in pair_rows(16)]
+    table = sweep.sweep(rows, tmp_path / "serial.parquet", workers=1, progress=False)
+    path = problems.write(tmp_path / "p.jsonl", rows)
+    out = tmp_path / "r.parquet"
+    cmd = [sys.executable, "-m", "nonholo.cli", "sweep", str(path), "--out", str(out), "--workers", "1",
+           "--batch", "1", "--quiet"]
+    proc = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
+    parts = sweep.parts_dir(out)
+    deadline = time.monotonic() + 300
+    while time.monotonic() < deadline and len(list(parts.glob("part-*.parquet"))) < 3:
+        assert proc.poll() is None, proc.stderr.read()
+        time.sleep(0.01)
+    proc.send_signal(signal.SIGKILL)
+    proc.wait()
+    kept = [pq.read_table(p) for p in parts.glob("part-*.parquet")]
+    assert kept and not out.exists()
+    done = sum(t.num_rows for t in kept)
+    assert 0 < done < len(rows)
+    subprocess.run(cmd, check=True, capture_output=True)
+    resumed = sweep.load(out)
+    assert resumed.column("index").to_pylist() == list(range(len(rows)))
+    assert sweep.comparable(resumed) == sweep.comparable(table)
+    assert not parts.exists()
+
+
+def test_a_resumed_sweep_refuses_other_problems(tmp_path):
+    out = tmp_path / "r.parquet"
+    parts = sweep.parts_dir(out)
+    parts.mkdir()
+    (parts / "sweep.json").write_text(json.dumps({"fingerprint": "0" * 64, "problems": 2}))
+    with pytest.raises(ValueError, match="other problems"):
+        sweep.sweep(pair_rows(2), out, workers=1, progress=False)
+
+
+@pytest.mark.skipif(shutil.which("dask") is None, reason="the dask command-line tools are not installed")
+def test_a_dask_cluster_of_separate_processes_gives_the_serial_rows(serial, tmp_path):
+    """``dask scheduler`` and two ``dask worker`` processes on 127.0.0.1."""
+    from distributed import Client
+
+    rows, table = serial
+    rows = rows[:8]
+    file = tmp_path / "scheduler.json"
+    env = {**os.environ, "DASK_DISTRIBUTED__WORKER__DAEMON": "False"}
+    procs = [subprocess.Popen(["dask", "scheduler", "--host", "127.0.0.1", "--port", "0", "--no-dashboard",
+                               "--scheduler-file", str(file)], env=env,
+                              stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)]
+    try:
+        deadline = time.monotonic() + 60
+        while not file.exists() and time.monotonic() < deadline:
+            time.sleep(0.1)
+        address = json.loads(file.read_text())["address"]
+        for _ in range(2):
+            procs.append(subprocess.Popen(["dask", "worker", address, "--nthreads", "1", "--no-dashboard",
+                                           "--host", "127.0.0.1"], env=env,
+                                          stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL))
+        with Client(address, timeout="60s") as client:
+            client.wait_for_workers(2, timeout=120)
+            got = sweep.sweep(rows, tmp_path / "dask.parquet", client=client, progress=False)
+        assert sweep.comparable(got) == sweep.comparable(table)[:8]
+        # the command line takes the scheduler's address
+        path = problems.write(tmp_path / "p.jsonl", rows)
+        subprocess.run([sys.executable, "-m", "nonholo.cli", "sweep", str(path), "--out",
+                        str(tmp_path / "cli.parquet"), "--scheduler", address, "--quiet"], check=True)
+        assert sweep.comparable(sweep.load(tmp_path / "cli.parquet")) == sweep.comparable(table)[:8]
+        with Client(address, timeout="30s") as client:
+            client.shutdown()
+    finally:
+        for p in procs:
+            if p.poll() is None:
+                p.terminate()
+        for p in procs:
+            try:
+                p.wait(timeout=30)
+            except subprocess.TimeoutExpired:
+                p.kill()
+
+
+def test_atlas_maps_from_a_small_sweep(tmp_path):
+    rows = atlas.problems(n=4, settings=("paper", "default"))
+    assert len(rows) == 2 * 16
+    table = sweep.sweep(rows, tmp_path / "a.parquet", workers=1, progress=False)
+    a = atlas.Atlas(table)
+    assert a.settings == ["paper", "default"] and a.n == 4
+    # unreachable exactly where Δ(goal) has the other sign than Δ(start), or is within delta_min of 0
+    from nonholo import catalog
+
+    mech = catalog.get("platform")
+    sign0 = np.sign(mech.delta(so3.from_rpy(*atlas.START)))
+    phi, theta = atlas.grid_angles(4)
+    for j, th in enumerate(theta):
+        for i, ph in enumerate(phi):
+            d = mech.delta(so3.from_rpy(ph, th, atlas.START[2]))
+            assert (a.outcome[0, 0, j, i] == "unreachable") == (np.sign(d) != sign0 or abs(d) < 1e-2)
+    # the default solves at least what the paper's algorithm solves here
+    assert a.count("default", "solved") >= a.count("paper", "solved")
+    for q in atlas.QUANTITIES:
+        fig = atlas.atlas_figure(table, q)
+        assert len(fig.axes) >= 2
+    run = subprocess.run([sys.executable, "-m", "nonholo.cli", "atlas", str(tmp_path / "a.parquet"), "--out",
+                          str(tmp_path / "figs")], capture_output=True, text=True)
+    assert run.returncode == 0, run.stderr
+    assert all((tmp_path / "figs" / f"atlas_{q}.{ext}").stat().st_size > 0
+               for q in atlas.QUANTITIES for ext in ("png", "pdf"))
