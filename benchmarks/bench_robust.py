@@ -67,6 +67,7 @@ from nonholo import examples, planner, so3, verify
 from nonholo.planning.robust import RobustStrategy
 
 from .report import Report
+from .sweeps import plan_all
 
 RESIM_TOL = 1e-8
 DELTA_MIN = 1e-2
@@ -239,12 +240,21 @@ def check(res, R0, Rd, T) -> dict:
     return out
 
 
-def run(strategy, goals: list[dict]) -> list[dict]:
+def run(strategy, goals: list[dict], name: str = "") -> list[dict]:
+    """``plan(..., strategy=strategy, route="local")`` on every goal, timed one by one: through
+    :func:`benchmarks.sweeps.plan_all` for a strategy given by name (the ingredient
+    strategies, classes, are not problems a sweep can hold: a plain loop)."""
+    if isinstance(strategy, str):
+        planned = plan_all(f"bench_robust-{name or strategy}", goals,
+                           {"strategy": strategy, "delta_min": DELTA_MIN, "route": "local"})
+    else:
+        planned = []
+        for g in goals:
+            t = time.perf_counter()
+            res = planner.plan(g["R0"], g["Rd"], T=g["T"], strategy=strategy, delta_min=DELTA_MIN, route="local")
+            planned.append((time.perf_counter() - t, res))
     rows = []
-    for g in goals:
-        t = time.perf_counter()
-        res = planner.plan(g["R0"], g["Rd"], T=g["T"], strategy=strategy, delta_min=DELTA_MIN, route="local")
-        wall = time.perf_counter() - t
+    for g, (wall, res) in zip(goals, planned):
         restarts = max([h.get("attempt", 0) for h in res.history] or [0])
         rows.append({"id": g["id"], "band": g["band"], "wall": wall, "iterations": res.iterations,
                      "restarts": restarts, "reason": res.reason, **check(res, g["R0"], g["Rd"], g["T"])})
@@ -393,7 +403,7 @@ def main(argv=None) -> None:
                            if any(g["band"] == b for g in gs))
         rows = []
         for n in names:
-            results[n][set_name] = run(VARIANTS[n], gs)
+            results[n][set_name] = run(VARIANTS[n], gs, f"{n}-{set_name}")
             rows += band_rows(n, results[n][set_name])
         detail.append((f"{set_name} ({counts})", rows))
     if args.ingredients:

@@ -250,11 +250,17 @@ class NonholoSolver:
             raise
         self.warmup_seconds = time.perf_counter() - t0
 
+    def prepare(self, goals: list[dict]) -> None:
+        """Plan every goal now, through :func:`benchmarks.sweeps.plan_all` (timed one by one,
+        resumable); :meth:`run` then reads the plans."""
+        from .sweeps import plan_all
+
+        planned = plan_all(f"compare-{self.name}", goals,
+                           {"strategy": self.strategy, "delta_min": DELTA_MIN, "route": "local"})
+        self.planned = {g["id"]: p for g, p in zip(goals, planned)}
+
     def run(self, goal: dict) -> dict:
-        t0 = time.perf_counter()
-        res = self.planner.plan(goal["R0"], goal["Rd"], T=goal["T"], strategy=self.strategy,
-                                delta_min=DELTA_MIN, route="local")
-        wall = time.perf_counter() - t0
+        wall, res = self.planned.pop(goal["id"])
         rec = {"wall_seconds": wall, "solver_seconds": getattr(res, "seconds", None),
                "solver_success": bool(res.success), "reason": res.reason,
                "iterations": int(res.iterations),
@@ -681,6 +687,10 @@ def main(argv=None) -> int:
         _log(f"{name}: warm-up {solver.warmup_seconds:.2f} s"
              + (f" (NLP build {solver.build_seconds:.2f} s)" if getattr(solver, "build_seconds", None) else ""))
 
+    for name, solver in solvers.items():
+        if hasattr(solver, "prepare"):
+            _log(f"{name}: planning every goal ...")
+            solver.prepare(goals)
     records = []
     for i, goal in enumerate(goals, 1):
         recs = []

@@ -50,6 +50,7 @@ from nonholo import catalog, roadmap, verify
 
 from . import goalset
 from .report import RESULTS_DIR, Report
+from .sweeps import plan_all
 
 #: Mechanisms of the set: those with a singular set.
 MECHANISMS = ("platform", "platform_raised")
@@ -96,21 +97,15 @@ def _record(solver, mechanism, pair, wall, claimed, checked, **extra) -> dict:
 
 
 def run_nonholo(mechanism: str, pairs: list[dict], route: str = "auto", label: str = "nonholo") -> list[dict]:
-    """``plan()`` on every pair, timed; every claimed success checked afterwards by RK4
+    """``plan()`` on every pair (through :func:`benchmarks.sweeps.plan_all`: timed one by one,
+    resumable), every claimed success checked afterwards by RK4
     (:func:`benchmarks.certify.check_successes`), and by DOP853 with its dense path too
     for every :data:`DOP853_EVERY`-th success and every :data:`DOP853_EVERY_GLOBAL`-th one
     by the global route."""
-    import nonholo
-
     from .certify import check_successes
 
-    timed = []
-    for i, p in enumerate(pairs, 1):
-        t = time.perf_counter()
-        res = nonholo.plan(p["R0"], p["Rd"], T=p["T"], mechanism=mechanism, delta_min=DELTA_MIN, route=route)
-        timed.append((time.perf_counter() - t, res))
-        if i % 250 == 0:
-            _log(f"  {label} {mechanism}: {i}/{len(pairs)} planned")
+    timed = plan_all(f"random-{label}-{mechanism}", pairs, {"delta_min": DELTA_MIN, "route": route},
+                     mechanism=mechanism)
     results = [res for _, res in timed]
     rk4 = check_successes(results, pairs)
     out, routed = [], 0
