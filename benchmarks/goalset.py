@@ -407,11 +407,31 @@ def load_goals(path=None) -> list[dict]:
     return [_arrays(g) for g in data["goals"]]
 
 
+def write_problems(path, goals: list[dict], mechanism: str = "platform") -> Path:
+    """``goals`` (of this module: ``R0``, ``Rd``, ``T``, ``id``) as a problem table for
+    :func:`nonholo.sweep.sweep` (JSON Lines, :mod:`nonholo.problems`), labelled by id."""
+    from nonholo import problems
+
+    return problems.write(path, [{"start": g["R0"], "goal": g["Rd"], "mechanism": g.get("mechanism", mechanism),
+                                  "options": {"T": g["T"]}, "label": g["id"]} for g in goals])
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(prog="python -m benchmarks.goalset", description=__doc__.split("\n")[0])
     ap.add_argument("--out", type=Path, default=DEFAULT_PATH, help="output file (default: %(default)s)")
     ap.add_argument("--seed", type=int, default=SEED, help="random seed (default: %(default)s)")
+    ap.add_argument("--problems", type=Path, default=None, metavar="FILE",
+                    help="instead: write a goal set as a problem table for `nonholo sweep` (JSON Lines): "
+                         "benchmarks/goals.json's goals, or with --uniform N the first N uniform random pairs")
+    ap.add_argument("--uniform", type=int, default=None, metavar="N", help="with --problems: N uniform random pairs")
+    ap.add_argument("--mechanism", default="platform", help="with --uniform: the mechanism (default platform)")
     args = ap.parse_args(argv)
+    if args.problems is not None:
+        goals = (uniform_pairs(args.mechanism, args.uniform, args.seed) if args.uniform
+                 else [g for g in load_goals()])
+        write_problems(args.problems, goals, args.mechanism)
+        print(f"wrote {args.problems}: {len(goals)} problems", file=sys.stderr)
+        return 0
     t0 = time.perf_counter()
     data = generate(args.seed, progress=True)
     args.out.write_text(json.dumps(data, indent=1, allow_nan=False) + "\n")

@@ -1,0 +1,84 @@
+"""Throughput of :func:`nonholo.sweep.sweep` on one and on two local workers (and on a
+local Dask cluster of two worker processes), the same problems in the same run.
+
+Run::
+
+    python -m benchmarks.sweep_scaling [--pairs 2000] [--no-dask]
+
+The problems: the first ``--pairs`` uniform random pairs of the platform
+(:func:`benchmarks.goalset.uniform_pairs`, the whole problem domain, every pair
+reachable), ``plan()`` with its defaults. Each sweep writes its own results file in a
+temporary directory; its wall time is the whole ``sweep()`` call (checking the problems,
+starting the workers, writing every batch and the final file). After one untimed warm-up
+sweep of 8 other pairs (numba loaded), the order is: one worker (in this process), two
+local worker processes, then a Dask ``LocalCluster`` of two single-threaded worker
+processes. Every run's rows must equal the one-worker run's (all columns but the wall
+times, :func:`nonholo.sweep.comparable`). Writes ``benchmarks/results/sweep.md``.
+"""
+from __future__ import annotations
+
+import argparse
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+from nonholo.sweep import comparable, sweep
+
+from . import goalset
+from .report import Report
+from .sweeps import problems_of
+
+
+def _log(msg: str) -> None:
+    print(msg, file=sys.stderr, flush=True)
+
+
+def timed(label: str, rows, directory: Path, **kwargs):
+    t = time.perf_counter()
+    table = sweep(rows, directory / f"{label}.parquet", progress=False, **kwargs)
+    wall = time.perf_counter() - t
+    _log(f"{label}: {len(rows)} plans in {wall:.1f} s")
+    return wall, table
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(prog="python -m benchmarks.sweep_scaling", description=__doc__.splitlines()[0])
+    ap.add_argument("--pairs", type=int, default=2000)
+    ap.add_argument("--no-dask", action="store_true", help="leave the Dask cluster out")
+    args = ap.parse_args(argv)
+    pairs = goalset.uniform_pairs("platform", args.pairs + 8)
+    rows, warm = problems_of(pairs[8:]), problems_of(pairs[:8])
+    runs = {}
+    with tempfile.TemporaryDirectory() as tmp:
+        tmp = Path(tmp)
+        sweep(warm, tmp / "warm.parquet", workers=1, progress=False)
+        runs["1 local worker"] = timed("one", rows, tmp, workers=1)
+        runs["2 local workers"] = timed("two", rows, tmp, workers=2)
+        if not args.no_dask:
+            from distributed import Client, LocalCluster
+
+            with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None) as cluster, \
+                    Client(cluster) as client:
+                client.run(lambda: __import__("nonholo.planner"))
+                runs["Dask LocalCluster, 2 workers"] = timed("dask", rows, tmp, client=client)
+        reference = comparable(runs["1 local worker"][1])
+        same = {k: comparable(t) == reference for k, (_, t) in runs.items()}
+    solved = sum(r["success"] for r in reference)
+    rep = Report("sweep.md", "Sweeps: throughput on one and two workers", "benchmarks.sweep_scaling", argv,
+                 extra_packages=("pyarrow", "distributed"))
+    rep.paragraph(
+        f"The first {len(rows)} uniform random platform pairs (`benchmarks.goalset.uniform_pairs`), `plan()` with "
+        "its defaults, swept by `nonholo.sweep.sweep` into a Parquet file; wall time of the whole call "
+        "(problems checked, workers started, every batch and the final file written), after an untimed "
+        f"warm-up sweep; in this order, one run each. Solved: {solved} of {len(rows)}.")
+    one = runs["1 local worker"][0]
+    rep.table(["run", "wall [s]", "plans / s", "throughput / one worker's", "rows equal to one worker's"],
+              [[k, f"{w:.1f}", f"{len(rows) / w:.1f}", f"{one / w:.2f}×", "yes" if same[k] else "NO"]
+               for k, (w, _) in runs.items()])
+    rep.write()
+    return 0 if all(same.values()) else 1
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
