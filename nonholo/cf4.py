@@ -81,6 +81,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from . import effort
 from .generated import cf4_kernels as kernels_inlined
 from .jit import jit
 from .kernels import exp_times, inv33
@@ -560,8 +561,24 @@ def _compile(module, frame: bool, templates, tag: str, cache: bool) -> Kernels:
         if template.__name__ == "frame_inputs" and not frame:
             continue
         bindings[template.__name__] = _specialise(template, bindings, tag, cache)
+    frame_kernel = bindings.get("frame_inputs")
     kern = Kernels(name=module.NAME, frame=frame, n_inputs=module.N_INPUTS,
-                   has_singular_set=module.HAS_SINGULAR_SET, forward=bindings["forward"],
-                   forward_variational=bindings["forward_variational"],
-                   frame_inputs=bindings.get("frame_inputs"))
+                   has_singular_set=module.HAS_SINGULAR_SET,
+                   forward=_metered(bindings["forward"], effort.FORWARD_WEIGHT, 1),
+                   forward_variational=_metered(bindings["forward_variational"], 1.0, 1),
+                   frame_inputs=None if frame_kernel is None else _metered(frame_kernel, effort.FORWARD_WEIGHT, 1))
     return kern
+
+
+def _metered(kernel, weight: float, counted: int):
+    """``kernel`` counting its effort (:mod:`nonholo.effort`): ``weight`` per element of its
+    argument number ``counted`` (the stage table's steps; ``frame_inputs``' node indices)."""
+
+    def run(*args):
+        effort.add(weight * len(args[counted]))
+        return kernel(*args)
+
+    run.__name__ = run.__qualname__ = getattr(kernel, "__name__", "kernel")
+    run.__doc__ = kernel.__doc__
+    run.kernel = kernel
+    return run

@@ -23,7 +23,7 @@ import time
 
 import numpy as np
 
-from . import catalog, so3, stages
+from . import catalog, effort, so3, stages
 from .checks import MAX_STEPS, check_count, check_time
 from .controls import Controls, Fourier, PiecewiseConstant, paper_initial
 from .limits import LegLimits
@@ -184,6 +184,7 @@ def plan_path(R0, Rd, *, T: float = 1.0, method: str = "parametric", harmonics: 
               route: str = "auto", leg_length=None, objective: str | None = None) -> PlanResult:
     """:func:`plan` without a bound on the legs' speed: the path, in the time ``T``."""
     started = time.perf_counter()
+    started_effort = effort.seconds()
     if route not in ROUTES:
         raise ValueError(f"unknown route {route!r}; known: {', '.join(ROUTES)}")
     mech = catalog.get(mechanism)
@@ -259,11 +260,11 @@ def plan_path(R0, Rd, *, T: float = 1.0, method: str = "parametric", harmonics: 
                     leg_length=leg_length)
 
     def smooth(stitched, reserve):
-        return global_route.smooth(request, stitched, cls, deadline=started + global_route.TIME_BUDGET,
+        return global_route.smooth(request, stitched, cls, deadline=started_effort + global_route.TIME_BUDGET,
                                    reserve=reserve)
 
     steered = global_route.steer(mech, R0, Rd, T, hop, tol=tol, delta_min=delta_min, sign=problem.sign,
-                                 started=started, leg_limits=leg_limits, rescue=smooth)
+                                 started=started_effort, leg_limits=leg_limits, rescue=smooth)
     if steered.controls is None and steered.smoothed is None:
         return build_result(request, outcome, False,
                             f"{local_reason}; the global route failed too: {steered.reason}", problem)

@@ -46,7 +46,7 @@ from typing import Callable
 
 import numpy as np
 
-from .. import certify, roadmap, so3
+from .. import certify, effort, roadmap, so3
 from ..certify import Certificate
 from ..controls import Fourier, PiecewiseConstant
 from ..mechanism import Mechanism
@@ -70,15 +70,16 @@ MAX_REPAIRS = 2
 HOP_DELTA_MIN = 0.05
 #: The stitched control's certified replay is at most this many times finer than its hops'.
 STITCHED_REFINEMENT = 8
-#: Wall-clock seconds after the start of :func:`nonholo.plan` (the local attempt included)
+#: Seconds of effort (:mod:`nonholo.effort`: integration counted in steps, seconds of the
+#: reference machine) after the start of :func:`nonholo.plan` (the local attempt included)
 #: after which the global route tries no further hop, and no smoothing is started or
-#: continued.
+#: continued. Effort, not wall time: a plan does not depend on the machine's speed or load.
 TIME_BUDGET = 2.5
 #: Harmonics of the smooth re-plan of a stitched control (method ``"parametric"``), tried
 #: in turn: the guess must follow the hops' controls, which jump at the hand-overs, well
 #: enough to stay in the route's corridor (fewer harmonics leave it more often than not).
 SMOOTHING_HARMONICS = (16, 32)
-#: Wall-clock seconds the smoothing may take (within :data:`TIME_BUDGET`): most routes
+#: Seconds of effort the smoothing may take (within :data:`TIME_BUDGET`): most routes
 #: smooth in a fraction of this; the rest keep their stitched control.
 SMOOTHING_TIME = 0.5
 
@@ -93,7 +94,7 @@ class Steered:
     hops: list = field(default_factory=list)
     reason: str = ""
     path: np.ndarray | None = None
-    #: wall-clock seconds the stitched control's last certification took
+    #: seconds of effort the stitched control's last certification took
     certify_seconds: float = 0.0
     #: the stitched control of a route whose hops all succeeded but whose stitched control
     #: was not certified (``controls`` is then ``None``)
@@ -145,12 +146,12 @@ def smooth(request: Request, stitched: Stitched, strategy: type, deadline: float
            reserve: float = 0.0) -> tuple[Outcome, Problem] | None:
     """The route's motion re-planned as one control (see the module): the certified outcome
     and its problem, or ``None`` when no guess of :func:`smoothing_guesses` converged to a
-    certified plan in time. ``deadline``: a :func:`time.perf_counter` reading by which the
-    smoothing must be done; ``reserve``: seconds kept for the certification after a
+    certified plan in time. ``deadline``: an :func:`nonholo.effort.seconds` reading by which the
+    smoothing must be done; ``reserve``: seconds of effort kept for the certification after a
     descent converges (about what the stitched control's took), which cannot be
     interrupted. Nothing is tried unless :data:`SMOOTHING_TIME` and ``reserve`` fit before
     ``deadline``; a descent stops at its first iteration past :data:`SMOOTHING_TIME`."""
-    now = time.perf_counter()
+    now = effort.seconds()
     if now + SMOOTHING_TIME + reserve > deadline:
         return None
     deadline = now + SMOOTHING_TIME
@@ -159,10 +160,10 @@ def smooth(request: Request, stitched: Stitched, strategy: type, deadline: float
     frame = solver.frame(request.mechanism)
 
     def out_of_time(record) -> bool:
-        return time.perf_counter() > deadline
+        return effort.seconds() > deadline
 
     for guess in smoothing_guesses(stitched, request.method, request.harmonics, request.grid, request.steps):
-        if time.perf_counter() > deadline:
+        if effort.seconds() > deadline:
             return None
         problem = Problem(request.R0, request.Rd, request.T, request.mechanism, request.method, request.steps,
                           opts.delta_min, frame=frame, leg_limits=request.leg_limits)
@@ -190,9 +191,9 @@ def steer(mechanism: Mechanism, R0, Rd, T: float, local: Callable, *, tol: float
     """The route ``R0 → Rd`` steered hop by hop (see the module) along the path of the
     first cost of :data:`nonholo.roadmap.CONDITIONING_POWERS`, then along the path of the
     next (one not tried yet) while the route fails. ``local(R_start, R_goal, T, delta_min)`` plans one
-    hop (a :class:`~nonholo.result.PlanResult`); ``budget``: seconds (wall clock, default
+    hop (a :class:`~nonholo.result.PlanResult`); ``budget``: seconds of effort (default
     :data:`TIME_BUDGET`) after
-    ``started`` (a :func:`time.perf_counter` reading; default: now) after which no further
+    ``started`` (an :func:`nonholo.effort.seconds` reading; default: now) after which no further
     hop is tried. ``leg_limits``: stroke limits (:class:`~nonholo.limits.LegLimits`) the
     path of orientations and the stitched replay keep (``local`` keeps them in each hop).
     ``rescue(draft, seconds)``: called when a path's hops all succeed but their stitched
@@ -201,7 +202,7 @@ def steer(mechanism: Mechanism, R0, Rd, T: float, local: Callable, *, tol: float
     (``Steered.smoothed``) — one smooth control is often far better conditioned than the
     product of its hops'."""
     if started is None:
-        started = time.perf_counter()
+        started = effort.seconds()
     if budget is None:
         budget = TIME_BUDGET
     steered, tried = None, []
@@ -218,7 +219,7 @@ def steer(mechanism: Mechanism, R0, Rd, T: float, local: Callable, *, tol: float
                               deadline=started + budget, leg_limits=leg_limits)
         if steered.controls is None and steered.draft is not None and rescue is not None:
             steered.smoothed = rescue(steered.draft, steered.certify_seconds)
-        if steered.controls is not None or steered.smoothed is not None or time.perf_counter() > started + budget:
+        if steered.controls is not None or steered.smoothed is not None or effort.seconds() > started + budget:
             break
     return steered
 
@@ -234,7 +235,7 @@ def _steer_path(mechanism: Mechanism, path, Rd, T: float, local: Callable, *, to
     while targets:
         if len(hops) + len(targets) > MAX_PIECES:
             return Steered(None, None, hops, f"the route needs more than {MAX_PIECES} hops", path)
-        if time.perf_counter() > deadline:
+        if effort.seconds() > deadline:
             return Steered(None, None, hops, f"the route ran out of its time after {len(hops)} "
                                              f"hops ({len(targets)} to go)", path)
         res = local(R, targets[0], T_hop, hop_delta_min(mechanism, R, targets[0], delta_min))
@@ -253,11 +254,11 @@ def _steer_path(mechanism: Mechanism, path, Rd, T: float, local: Callable, *, to
         stitched = _stitch(T, hops, R0)
         k = len(hops)
         M = k * max(h.replay_steps for h in hops)
-        clock = time.perf_counter()
+        clock = effort.seconds()
         cert = certify.measure(R0, Rd, T, mechanism, stitched, M, tol, delta_min, sign,
                                max_steps=min(certify.MAX_REPLAY_STEPS, STITCHED_REFINEMENT * M),
                                leg_limits=leg_limits)
-        clock = time.perf_counter() - clock
+        clock = effort.seconds() - clock
         if cert.passed or not cert.correctable or repair == MAX_REPAIRS:
             break
         # the last hop again, from where the stitched replay enters it

@@ -1,0 +1,39 @@
+"""The global route's budget is effort (nonholo/effort.py), not wall time: a plan does not
+depend on how fast the machine runs it."""
+import json
+import time
+
+import numpy as np
+
+from nonholo import catalog, effort, planner, stages
+from nonholo.controls import Fourier
+from test_route import far_pair
+
+
+def test_kernels_count_their_steps():
+    mech = catalog.get("platform")
+    kern = mech.kernels(False)
+    u = Fourier(1.0, [[0.1, 0.0, 0.0], [0.2, 0.0, 0.0]])
+    U = np.ascontiguousarray(stages.stage_table(u, 400))
+    before = effort.seconds()
+    kern.forward(np.eye(3) @ np.diag([1.0, -1.0, -1.0]), U, 1 / 400, 1.0, -np.inf, np.empty((401, 3, 3)))
+    assert effort.seconds() - before == effort.FORWARD_WEIGHT * 400 / effort.STEPS_PER_SECOND
+
+
+def test_a_global_route_is_the_same_on_a_slow_clock(monkeypatch):
+    p = far_pair()
+    first = planner.plan(p["R0"], p["Rd"])
+    assert first.route == "global" and first.success
+    real = time.perf_counter
+    slow = {"t": real()}
+
+    def crawling():                 # every reading ten seconds later than the last
+        slow["t"] += 10.0
+        return slow["t"]
+
+    monkeypatch.setattr(time, "perf_counter", crawling)
+    again = planner.plan(p["R0"], p["Rd"])
+    monkeypatch.setattr(time, "perf_counter", real)
+    a, b = first.to_dict(), again.to_dict()
+    a.pop("seconds"), b.pop("seconds")
+    assert json.dumps(a) == json.dumps(b)
