@@ -81,8 +81,14 @@ def solve(index: int, row: dict) -> dict:
 
 
 def solve_batch(batch: list[tuple[int, dict]]) -> list[dict]:
-    """:func:`solve` on every ``(index, row)`` of ``batch`` (the unit of work of a worker)."""
-    return [solve(i, row) for i, row in batch]
+    """:func:`solve` on every ``(index, row)`` of ``batch`` (the unit of work of a worker),
+    with the BLAS libraries held to one thread: the workers are the parallelism (a planner's
+    small matrices gain nothing from BLAS threads, which only take cores from the other
+    workers)."""
+    from threadpoolctl import threadpool_limits
+
+    with threadpool_limits(limits=1, user_api="blas"):
+        return [solve(i, row) for i, row in batch]
 
 
 def plan_of(row) -> PlanResult | None:
