@@ -78,7 +78,7 @@ BANDS = ("near", "far", "beyond")
 # Variants: one ingredient at a time
 # --------------------------------------------------------------------------------------
 
-class _InU(RobustStrategy):
+class InU(RobustStrategy):
     """The default strategy in the physical inputs ``u``."""
 
     name = "bench:robust-in-u"
@@ -87,7 +87,7 @@ class _InU(RobustStrategy):
         return False
 
 
-class _W(RobustStrategy):
+class W(RobustStrategy):
     """Frame coordinates, the default loop only, no barrier."""
 
     name = "bench:w"
@@ -97,14 +97,14 @@ class _W(RobustStrategy):
         yield "loop", start.controls
 
 
-class _WBarrier(_W):
+class WBarrier(W):
     """Frame coordinates, the default loop only, with the null-space barrier."""
 
     name = "bench:w+barrier"
     barrier = True
 
 
-class _WDrift(RobustStrategy):
+class WDrift(RobustStrategy):
     """Frame coordinates, the drift guess only, no barrier."""
 
     name = "bench:w+drift"
@@ -114,7 +114,7 @@ class _WDrift(RobustStrategy):
         yield next(iter(super().attempts(problem, start)))
 
 
-class _WDriftRestarts(RobustStrategy):
+class WDriftRestarts(RobustStrategy):
     """Frame coordinates, the drift guess and the restarts (stall detection, deterministic
     then random guesses), no barrier."""
 
@@ -122,7 +122,7 @@ class _WDriftRestarts(RobustStrategy):
     barrier = False
 
 
-class _Gamma05(RobustStrategy):
+class Gamma05(RobustStrategy):
     """The default strategy with the paper's ``γ = 0.5`` (flow steps ask for half the error)."""
 
     name = "bench:robust-gamma-0.5"
@@ -130,9 +130,9 @@ class _Gamma05(RobustStrategy):
 
 
 #: label -> the ``strategy`` argument of :func:`nonholo.plan` (a name or a Strategy subclass)
-VARIANTS = {"paper": "paper", "w": _W, "w+barrier": _WBarrier, "w+drift": _WDrift,
-            "w+drift+rest.": _WDriftRestarts, "robust": "robust", "robust γ=0.5": _Gamma05,
-            "robust in u": _InU}
+VARIANTS = {"paper": "paper", "w": W, "w+barrier": WBarrier, "w+drift": WDrift,
+            "w+drift+rest.": WDriftRestarts, "robust": "robust", "robust γ=0.5": Gamma05,
+            "robust in u": InU}
 
 
 # --------------------------------------------------------------------------------------
@@ -241,18 +241,13 @@ def check(res, R0, Rd, T) -> dict:
 
 
 def run(strategy, goals: list[dict], name: str = "") -> list[dict]:
-    """``plan(..., strategy=strategy, route="local")`` on every goal, timed one by one: through
-    :func:`benchmarks.sweeps.plan_all` for a strategy given by name (the ingredient
-    strategies, classes, are not problems a sweep can hold: a plain loop)."""
-    if isinstance(strategy, str):
-        planned = plan_all(f"bench_robust-{name or strategy}", goals,
-                           {"strategy": strategy, "delta_min": DELTA_MIN, "route": "local"})
-    else:
-        planned = []
-        for g in goals:
-            t = time.perf_counter()
-            res = planner.plan(g["R0"], g["Rd"], T=g["T"], strategy=strategy, delta_min=DELTA_MIN, route="local")
-            planned.append((time.perf_counter() - t, res))
+    """``plan(..., strategy=strategy, route="local")`` on every goal, through
+    :func:`benchmarks.sweeps.plan_all` (timed one by one, resumable); a Strategy subclass
+    goes into the problem table by its import path (``"module:Class"``)."""
+    if not isinstance(strategy, str):           # a Strategy subclass: by its import path
+        strategy = f"{strategy.__module__}:{strategy.__qualname__}"
+    planned = plan_all(f"bench_robust-{name or strategy}", goals,
+                       {"strategy": strategy, "delta_min": DELTA_MIN, "route": "local"})
     rows = []
     for g, (wall, res) in zip(goals, planned):
         restarts = max([h.get("attempt", 0) for h in res.history] or [0])

@@ -19,6 +19,7 @@ timings of the strategies: ``benchmarks/results/`` (``bench_robust.md``,
 """
 from __future__ import annotations
 
+import importlib
 import time
 
 import numpy as np
@@ -50,12 +51,24 @@ STRATEGIES: dict[str, type[Strategy]] = {"paper": PaperStrategy, "robust": Robus
 
 
 def strategy_class(strategy) -> type[Strategy]:
-    """The :class:`~nonholo.planning.core.Strategy` subclass ``strategy`` or the one of that
-    name in :data:`STRATEGIES` (``ValueError`` lists them)."""
+    """The :class:`~nonholo.planning.core.Strategy` subclass ``strategy``, the one of that
+    name in :data:`STRATEGIES`, or one given by its import path ``"package.module:Class"``
+    (so that a problem table, JSON, can name any strategy); ``ValueError`` lists them."""
     if isinstance(strategy, type) and issubclass(strategy, Strategy):
         return strategy
     if isinstance(strategy, str) and strategy in STRATEGIES:
         return STRATEGIES[strategy]
+    if isinstance(strategy, str) and ":" in strategy:
+        module, _, qualname = strategy.partition(":")
+        try:
+            found = importlib.import_module(module)
+            for part in qualname.split("."):
+                found = getattr(found, part)
+        except (ImportError, AttributeError, ValueError) as exc:
+            raise ValueError(f"strategy {strategy!r} cannot be imported: {exc}") from None
+        if isinstance(found, type) and issubclass(found, Strategy):
+            return found
+        raise ValueError(f"strategy {strategy!r} is not a Strategy subclass")
     raise ValueError(f"unknown strategy {strategy!r}; known: {', '.join(STRATEGIES)} "
                      "(or pass a Strategy subclass)")
 
@@ -110,7 +123,8 @@ def plan(R0, Rd, *, T: float | None = 1.0, method: str = "parametric", harmonics
       (:func:`nonholo.catalog.names`).
     - ``strategy``: ``"robust"`` (default, :mod:`nonholo.planning.robust`) or ``"paper"``
       (the appendix's algorithm, :mod:`nonholo.planning.paper`), or a
-      :class:`~nonholo.planning.core.Strategy` subclass.
+      :class:`~nonholo.planning.core.Strategy` subclass, itself or by its import path
+      ``"package.module:Class"`` (:func:`strategy_class`).
     - ``method``: ``"parametric"`` (Fourier series with ``harmonics`` = K) or
       ``"nonparametric"`` (piecewise constant on ``grid`` equal intervals) — of the
       physical inputs ``u`` (``"paper"``) or of the frame coordinates ``w`` (``"robust"``;

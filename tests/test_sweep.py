@@ -198,3 +198,19 @@ def test_atlas_maps_from_a_small_sweep(tmp_path):
     assert run.returncode == 0, run.stderr
     assert all((tmp_path / "figs" / f"atlas_{q}.{ext}").stat().st_size > 0
                for q in atlas.QUANTITIES for ext in ("png", "pdf"))
+
+
+def test_a_strategy_class_goes_into_a_problem_table_by_its_import_path(tmp_path):
+    """``options.strategy = "package.module:Class"``: any Strategy subclass, in JSON."""
+    from benchmarks import bench_robust
+    from nonholo import planner
+
+    assert planner.strategy_class("benchmarks.bench_robust:WBarrier") is bench_robust.WBarrier
+    for bad in ("benchmarks.bench_robust:Nothing", "no.such.module:X", "nonholo.planner:plan"):
+        with pytest.raises(ValueError, match="strategy"):
+            planner.strategy_class(bad)
+    rows = [{**r, "options": {"strategy": "benchmarks.bench_robust:WBarrier", "route": "local"}}
+            for r in pair_rows(2)]
+    table = sweep.sweep(rows, tmp_path / "r.parquet", workers=1, progress=False).to_pylist()
+    assert [r["strategy"] for r in table] == [bench_robust.WBarrier.name] * 2
+    assert all(r["error"] is None for r in table)
