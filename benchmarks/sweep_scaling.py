@@ -1,5 +1,5 @@
 """Throughput of :func:`nonholo.sweep.sweep` on one and on two local workers (and on a
-local Dask cluster of two worker processes), the same problems in the same run.
+Dask cluster of a scheduler and two worker processes), the same problems in the same run.
 
 Run::
 
@@ -11,14 +11,17 @@ reachable), ``plan()`` with its defaults. Each sweep writes its own results file
 temporary directory; its wall time is the whole ``sweep()`` call (checking the problems,
 starting the workers, writing every batch and the final file). After one untimed warm-up
 sweep of 8 other pairs (numba loaded), the order is: one worker (in this process), two
-local worker processes, then a Dask ``LocalCluster`` of two single-threaded worker
-processes; then the machine's ceiling (:func:`machine_ceiling`). Every run's rows must
+local worker processes, then a Dask scheduler and two single-threaded workers started as
+separate processes on 127.0.0.1 by the ``dask`` command-line tools (:func:`dask_cluster`); then the machine's ceiling (:func:`machine_ceiling`). Every run's rows must
 equal the one-worker run's (all columns but the wall times,
 :func:`nonholo.sweep.comparable`). Writes ``benchmarks/results/sweep.md``.
 """
 from __future__ import annotations
 
 import argparse
+import contextlib
+import json
+import subprocess
 import sys
 import tempfile
 import time
@@ -33,6 +36,42 @@ from .sweeps import problems_of
 
 def _log(msg: str) -> None:
     print(msg, file=sys.stderr, flush=True)
+
+
+@contextlib.contextmanager
+def dask_cluster(directory: Path):
+    """``dask scheduler`` and two single-threaded ``dask worker`` processes on 127.0.0.1
+    (the command-line tools); yields the scheduler's address once both workers are in, and
+    shuts them down."""
+    from distributed import Client
+
+    file = directory / "scheduler.json"
+    quiet = {"stdout": subprocess.DEVNULL, "stderr": subprocess.DEVNULL}
+    procs = [subprocess.Popen(["dask", "scheduler", "--host", "127.0.0.1", "--port", "0", "--no-dashboard",
+                               "--scheduler-file", str(file)], **quiet)]
+    try:
+        deadline = time.monotonic() + 60
+        while not file.exists() and time.monotonic() < deadline:
+            time.sleep(0.1)
+        address = json.loads(file.read_text())["address"]
+        for _ in range(2):
+            procs.append(subprocess.Popen(["dask", "worker", address, "--nthreads", "1", "--no-dashboard",
+                                           "--host", "127.0.0.1"], **quiet))
+        with Client(address, timeout="60s") as client:
+            client.wait_for_workers(2, timeout=120)
+            client.run(lambda: __import__("nonholo.planner"))
+        yield address
+        with Client(address, timeout="30s") as client:
+            client.shutdown()
+    finally:
+        for p in procs:
+            if p.poll() is None:
+                p.terminate()
+        for p in procs:
+            try:
+                p.wait(timeout=30)
+            except subprocess.TimeoutExpired:
+                p.kill()
 
 
 def timed(label: str, rows, directory: Path, **kwargs):
@@ -85,12 +124,8 @@ def main(argv=None) -> int:
         runs["1 local worker"] = timed("one", rows, tmp, workers=1)
         runs["2 local workers"] = timed("two", rows, tmp, workers=2)
         if not args.no_dask:
-            from distributed import Client, LocalCluster
-
-            with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None) as cluster, \
-                    Client(cluster) as client:
-                client.run(lambda: __import__("nonholo.planner"))
-                runs["Dask LocalCluster, 2 workers"] = timed("dask", rows, tmp, client=client)
+            with dask_cluster(tmp) as address:
+                runs["Dask: scheduler + 2 workers (CLI processes)"] = timed("dask", rows, tmp, scheduler=address)
         ceiling = machine_ceiling()
         _log(f"two processes of a pure-Python loop: {ceiling:.2f}x one")
         reference = comparable(runs["1 local worker"][1])
