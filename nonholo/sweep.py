@@ -14,8 +14,10 @@ the plan's ``strategy``, ``method``, ``route``, ``T``, ``success``, ``terminal_e
 reload with :func:`plan_of`), and ``error``: the exception a problem raised (then the
 plan is null; a problem that raises is recorded, not fatal).
 
-While it runs, each batch is a Parquet file of its own in ``RESULTS.parts/`` (written in
-full, then renamed into place: a killed sweep leaves complete parts only) beside
+While it runs, each batch is a Parquet file of its own in ``RESULTS.parts/`` — written by
+the local worker that planned it, or by this process for a Dask cluster's (whose workers
+may not share its disk); in full, then renamed into place: a killed sweep leaves complete
+parts only — beside
 ``sweep.json``, the problem table's fingerprint. Started again with the same problems and
 ``out``, a sweep runs only the problems no part holds; at the end the parts become
 ``RESULTS`` (written atomically, the fingerprint in its metadata) and are removed. A
@@ -53,8 +55,8 @@ SCHEMA = pa.schema([
 TIMING = ("seconds",)
 #: The metadata key of a finished results file: the problems' fingerprint.
 FINGERPRINT_KEY = b"nonholo.sweep.fingerprint"
-#: Problems per batch at most (smaller batches near the end keep every worker busy).
-MAX_BATCH = 16
+#: Problems per batch at most (small batches keep every worker busy to the end).
+MAX_BATCH = 8
 
 
 def solve(index: int, row: dict) -> dict:
@@ -91,6 +93,14 @@ def solve_batch(batch: list[tuple[int, dict]]) -> list[dict]:
         return [solve(i, row) for i, row in batch]
 
 
+def solve_and_keep(batch: list[tuple[int, dict]], parts: str) -> list[int]:
+    """:func:`solve_batch`, its rows written as a part in the directory ``parts`` by the
+    worker itself (the parent then handles no plan); returns the indices done."""
+    rows = solve_batch(batch)
+    write_part(rows, Path(parts))
+    return [r["index"] for r in rows]
+
+
 def plan_of(row) -> PlanResult | None:
     """The :class:`~nonholo.result.PlanResult` of a results row (a dict, or the ``plan``
     JSON text), checked like a plan file; ``None`` for a problem that raised."""
@@ -120,6 +130,17 @@ def _table(rows: list[dict], metadata: dict | None = None) -> pa.Table:
     return pa.Table.from_pylist(rows, schema=schema)
 
 
+def write_part(rows: list[dict], parts: Path) -> Path:
+    """``rows`` as one part of a running sweep (atomically, named by its first index)."""
+    path = parts / f"part-{rows[0]['index']:09d}-{secrets.token_hex(3)}.parquet"
+    _write_table(_table(rows), path)
+    return path
+
+
+def _read_parts(parts: Path) -> list[pa.Table]:
+    return [pq.read_table(p, schema=SCHEMA) for p in sorted(parts.glob("part-*.parquet"))]
+
+
 def _fingerprint_of(path: Path) -> str | None:
     meta = pq.read_schema(path).metadata or {}
     value = meta.get(FINGERPRINT_KEY)
@@ -142,11 +163,12 @@ def _open_parts(out: Path, fingerprint: str, n: int) -> tuple[Path, list[pa.Tabl
     else:
         parts.mkdir(parents=True)
         manifest.write_text(json.dumps({"fingerprint": fingerprint, "problems": n}))
-    return parts, [pq.read_table(p, schema=SCHEMA) for p in sorted(parts.glob("part-*.parquet"))]
+    return parts, _read_parts(parts)
 
 
-def _finish(out: Path, parts: Path, tables: list[pa.Table], fingerprint: str, n: int) -> pa.Table:
+def _finish(out: Path, parts: Path, fingerprint: str, n: int) -> pa.Table:
     """All parts as one results file, sorted by index; the parts removed."""
+    tables = _read_parts(parts)
     table = pa.concat_tables(tables) if tables else _table([])
     index = table.column("index").to_pylist()
     if sorted(index) != list(range(n)):
@@ -203,13 +225,12 @@ def sweep(problems, out, *, workers: int | None = None, client=None, scheduler: 
             raise ValueError(f"{out} exists and holds other results: remove it, or choose another path")
     parts, tables = _open_parts(out, fingerprint, n)
     done = {i for t in tables for i in t.column("index").to_pylist()}
+    del tables
     todo = [i for i in range(n) if i not in done]
     bar = _progress_bar(n, len(done), progress)
 
     def keep(rows_done: list[dict]) -> None:
-        table = _table(rows_done)
-        _write_table(table, parts / f"part-{rows_done[0]['index']:09d}-{secrets.token_hex(3)}.parquet")
-        tables.append(table)
+        write_part(rows_done, parts)
         bar.update(len(rows_done))
 
     try:
@@ -217,10 +238,10 @@ def sweep(problems, out, *, workers: int | None = None, client=None, scheduler: 
             _run_dask(todo, rows, keep, client, scheduler, batch)
         elif todo:
             workers = (os.cpu_count() or 1) if workers is None else workers
-            _run_local(batches(todo, rows, workers, batch), keep, workers)
+            _run_local(batches(todo, rows, workers, batch), parts, bar.update, workers)
     finally:
         bar.close()
-    return _finish(out, parts, tables, fingerprint, n)
+    return _finish(out, parts, fingerprint, n)
 
 
 def _progress_bar(total: int, initial: int, show: bool):
@@ -229,24 +250,25 @@ def _progress_bar(total: int, initial: int, show: bool):
     return tqdm(total=total, initial=initial, unit="plan", disable=not show, smoothing=0.1)
 
 
-def _run_local(work: list, keep, workers: int) -> None:
-    """The batches in this process (``workers=1``) or on local worker processes; the first
-    batch always here, so that the workers — forked where the platform allows — start
-    with the kernels compiled."""
-    keep(solve_batch(work[0]))
+def _run_local(work: list, parts: Path, done, workers: int) -> None:
+    """The batches in this process (``workers=1``) or on local worker processes, each
+    written as a part by whoever planned it (:func:`solve_and_keep`; ``done(count)`` after
+    each); the first batch always here, so that the workers — forked where the platform
+    allows — start with the kernels compiled."""
+    done(len(solve_and_keep(work[0], str(parts))))
     rest = work[1:]
     if not rest:
         return
     if workers == 1:
         for batch in rest:
-            keep(solve_batch(batch))
+            done(len(solve_and_keep(batch, str(parts))))
         return
     methods = multiprocessing.get_all_start_methods()
     context = multiprocessing.get_context("fork" if "fork" in methods else None)
     with ProcessPoolExecutor(max_workers=workers, mp_context=context) as pool:
-        futures = [pool.submit(solve_batch, batch) for batch in rest]
+        futures = [pool.submit(solve_and_keep, batch, str(parts)) for batch in rest]
         for future in local_completed(futures):
-            keep(future.result())
+            done(len(future.result()))
 
 
 def _run_dask(todo: list[int], rows: list[dict], keep, client, scheduler, size: int | None) -> None:
