@@ -2,7 +2,6 @@
 parallel runs equal serial ones, nothing is lost when a sweep is killed, bad problem files
 are refused before anything runs, a Dask cluster of separate processes gives the same rows."""
 import json
-import os
 import shutil
 import signal
 import subprocess
@@ -131,27 +130,16 @@ def test_a_resumed_sweep_refuses_other_problems(tmp_path):
 
 @pytest.mark.skipif(shutil.which("dask") is None, reason="the dask command-line tools are not installed")
 def test_a_dask_cluster_of_separate_processes_gives_the_serial_rows(serial, tmp_path):
-    """``dask scheduler`` and two ``dask worker`` processes on 127.0.0.1."""
+    """``dask scheduler`` and two ``dask worker`` processes on 127.0.0.1 (started and shut
+    down by the benchmark's :func:`benchmarks.sweep_scaling.dask_cluster`)."""
     from distributed import Client
+
+    from benchmarks.sweep_scaling import dask_cluster
 
     rows, table = serial
     rows = rows[:8]
-    file = tmp_path / "scheduler.json"
-    env = {**os.environ, "DASK_DISTRIBUTED__WORKER__DAEMON": "False"}
-    procs = [subprocess.Popen(["dask", "scheduler", "--host", "127.0.0.1", "--port", "0", "--no-dashboard",
-                               "--scheduler-file", str(file)], env=env,
-                              stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)]
-    try:
-        deadline = time.monotonic() + 60
-        while not file.exists() and time.monotonic() < deadline:
-            time.sleep(0.1)
-        address = json.loads(file.read_text())["address"]
-        for _ in range(2):
-            procs.append(subprocess.Popen(["dask", "worker", address, "--nthreads", "1", "--no-dashboard",
-                                           "--host", "127.0.0.1"], env=env,
-                                          stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL))
+    with dask_cluster(tmp_path) as address:
         with Client(address, timeout="60s") as client:
-            client.wait_for_workers(2, timeout=120)
             got = sweep.sweep(rows, tmp_path / "dask.parquet", client=client, progress=False)
         assert sweep.comparable(got) == sweep.comparable(table)[:8]
         # the command line takes the scheduler's address
@@ -159,17 +147,6 @@ def test_a_dask_cluster_of_separate_processes_gives_the_serial_rows(serial, tmp_
         subprocess.run([sys.executable, "-m", "nonholo.cli", "sweep", str(path), "--out",
                         str(tmp_path / "cli.parquet"), "--scheduler", address, "--quiet"], check=True)
         assert sweep.comparable(sweep.load(tmp_path / "cli.parquet")) == sweep.comparable(table)[:8]
-        with Client(address, timeout="30s") as client:
-            client.shutdown()
-    finally:
-        for p in procs:
-            if p.poll() is None:
-                p.terminate()
-        for p in procs:
-            try:
-                p.wait(timeout=30)
-            except subprocess.TimeoutExpired:
-                p.kill()
 
 
 def test_atlas_maps_from_a_small_sweep(tmp_path):
