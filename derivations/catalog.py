@@ -12,6 +12,8 @@ import sympy as sp
 from .mechanism import (Mechanism, PlatformGeometry, a, b, body_rate_mechanism, paper_platform,
                         platform_mechanism, rho)
 from .so3 import e1, e2, e3
+from .state_space import StateMechanism
+from .vehicles import kinematic_car, rolling_ball
 
 #: A second placement of the platform's legs and disk. The paper's legs are radial at
 #: the identity (base and platform joints on one line through O), which makes the
@@ -25,7 +27,7 @@ RAISED_GEOMETRY = PlatformGeometry(
     contact=tuple(rho * (e1 + e2) / sp.sqrt(2)), axle=tuple((e1 - e2) / sp.sqrt(2)),
 )
 
-MECHANISMS: dict[str, Callable[[], Mechanism]] = {
+MECHANISMS: dict[str, Callable[[], Mechanism | StateMechanism]] = {
     "platform": paper_platform,
     "platform_raised": lambda: platform_mechanism(
         "platform_raised", RAISED_GEOMETRY,
@@ -33,10 +35,13 @@ MECHANISMS: dict[str, Callable[[], Mechanism]] = {
     "attitude": lambda: body_rate_mechanism(
         "attitude", (1, 0, 0), (0, 1, 0),
         "rigid body steered by two body-fixed angular rates about e1 and e2"),
+    # state beyond SO(3) (derivations/vehicles.py)
+    "rolling_ball": rolling_ball,
+    "car": kinematic_car,
 }
 
 
-def get(name: str) -> Mechanism:
+def get(name: str) -> Mechanism | StateMechanism:
     """The mechanism called ``name`` (``KeyError`` lists the known names)."""
     try:
         return MECHANISMS[name]()

@@ -22,6 +22,8 @@ from sympy.printing.numpy import NumPyPrinter
 from . import catalog, singularity
 from .mechanism import Mechanism, a, b, input_map, leg_length_squared, leg_rate_row, rho
 from .so3 import r
+from .state_space import StateMechanism
+from .state_space import Q_matrix as state_Q_matrix
 from .variational import Q_matrix, inputs
 
 GENERATED_DIR = Path(__file__).resolve().parent.parent / "nonholo" / "generated"
@@ -212,6 +214,64 @@ def mechanism_module(mechanism: Mechanism) -> str:
     return "\n\n".join(parts)
 
 
+def _state_unpack(mechanism: StateMechanism) -> dict[sp.Symbol, str]:
+    """``r_ij`` (with orientation) and the coordinates, read from ``R`` and ``q``."""
+    rotation = _rotation_unpack() if mechanism.orientation else {}
+    return rotation | {x: f"q[{c}]" for c, x in enumerate(mechanism.coordinates)}
+
+
+def codegen_state_field(mechanism: StateMechanism, name: str, G: sp.Matrix, doc: str) -> str:
+    """``NAME(R, q) -> (d, m)`` and its derivative ``QNAME(R, q, v) -> (d, d)`` (the ``Q``
+    of :mod:`derivations.state_space` for the field ``G``)."""
+    m = mechanism.n_inputs
+    v = sp.Matrix(sp.symbols(f"v1:{m + 1}", real=True))
+    unpack = _state_unpack(mechanism)
+    d = G.shape[0]
+    Q = state_Q_matrix(mechanism, G, v)
+    return (_function(name, "R, q", unpack, list(G), (d, m), doc)
+            + "\n\n" +
+            _function(f"Q{name}", "R, q, v", unpack | {v[k]: f"v[{k}]" for k in range(m)}, list(Q),
+                      (d, d), f"Q{name}(R, q, v) s = d/de {name}(exp(e[s_R]) R, q + e s_q) v at e = 0 "
+                      "(s = (s_R, s_q))."))
+
+
+def state_module(mechanism: StateMechanism) -> str:
+    """The generated module of a mechanism on ``SO(3) × Rᵏ`` or ``Rᵏ``: the field ``G``
+    (``q̇ = G u``, rows ``(ω, ẋ)``), its ``QG`` (the variational matrix), ``delta`` (if
+    any), and the desingularised field ``N`` with ``QN`` and ``W`` (if any); every function
+    takes the orientation ``R`` (ignored without one) and the coordinates ``q``."""
+    doc = f"Numeric kinematics of the mechanism {mechanism.name!r}: {mechanism.description}."
+    parts = [HEADER.format(doc=doc, sympy_version=sp.__version__,
+                           source=f"mechanism {mechanism.name!r} (derivations/catalog.py)")]
+    names = tuple(str(x) for x in mechanism.coordinates)
+    parts.append(f"NAME = {mechanism.name!r}\n"
+                 f"DESCRIPTION = {mechanism.description!r}\n"
+                 f"INPUTS = {mechanism.inputs!r}\n"
+                 f"N_INPUTS = {mechanism.n_inputs}\n"
+                 f"STATE_SPACE = {mechanism.state_space!r}\n"
+                 f"ORIENTATION = {mechanism.orientation}\n"
+                 f"COORDINATES = {names!r}\n"
+                 f"UNITS = {tuple(mechanism.units)!r}\n"
+                 f"ANGLES = {tuple(bool(a) for a in mechanism.angles)!r}\n"
+                 f"HAS_SINGULAR_SET = {mechanism.delta is not None}\n"
+                 "HAS_LEGS = False\n")
+    unpack = _state_unpack(mechanism)
+    if mechanism.delta is not None:
+        parts.append(_function("delta", "R, q", unpack, [mechanism.delta], None,
+                               f"Δ = {sp.sstr(mechanism.delta)}; G is singular where Δ = 0."))
+    rows = "(ω, dq/dt)" if mechanism.orientation else "dq/dt"
+    parts.append(codegen_state_field(mechanism, "G", mechanism.field,
+                                     f"G(R, q): the state's rates per unit input, rows {rows}."))
+    parts.append(f"HAS_FRAME = {mechanism.frame is not None}\n")
+    if mechanism.frame is not None:
+        m = mechanism.n_inputs
+        parts.append(codegen_state_field(mechanism, "N", mechanism.frame,
+                                         "N(R, q): the desingularised field, rates = N(R, q) w."))
+        parts.append(_function("W", "R, q", unpack, list(mechanism.frame_inputs), (m, m),
+                               "W(R, q): physical inputs u = W w for the rates N(R, q) w."))
+    return "\n\n".join(parts)
+
+
 def singularity_module() -> str:
     """The generated module of the platform's singular set in RPY coordinates."""
     doc = "The platform's singularity function in RPY coordinates and its normal form."
@@ -305,9 +365,19 @@ def cf4_kernels_module() -> str:
     return "\n\n".join(parts)
 
 
+def module_of(mechanism: Mechanism | StateMechanism) -> str:
+    """The generated module of a mechanism on SO(3) (:func:`mechanism_module`) or beyond
+    (:func:`state_module`)."""
+    if isinstance(mechanism, StateMechanism):
+        return state_module(mechanism)
+    return mechanism_module(mechanism)
+
+
 def generated_files() -> dict[str, str]:
     """File name → source of every generated module."""
-    files = {f"{name}.py": mechanism_module(catalog.get(name)) for name in catalog.MECHANISMS}
+    files = {}
+    for name in catalog.MECHANISMS:
+        files[f"{name}.py"] = module_of(catalog.get(name))
     files["platform_singularity.py"] = singularity_module()
     files["cf4_kernels.py"] = cf4_kernels_module()
     files["__init__.py"] = ('"""Numeric modules generated by `nonholo derive`; do not edit."""\n'

@@ -35,6 +35,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from . import kernels, stages
+from . import state as states
 
 #: Factor on the asymptotic Richardson estimate ``|R_M − R_{M/2}|/15`` of the error of ``R_M``.
 SAFETY = 2.0
@@ -65,7 +66,9 @@ class Certificate:
     certified for the ``tol`` and ``delta_min`` it was measured against; ``reason``: why not;
     ``correctable``: only the replay's terminal error is too large (the replay is accurate,
     well conditioned and clear of ``Δ = 0``). ``l``: the replay's ``l_T``; ``R``: its nodes
-    (``M + 1``).
+    (``M + 1``); ``q``: their coordinates (``(M + 1, k)``, a state beyond SO(3)); ``errors``:
+    the norms of the rotation and coordinate parts of ``l`` (:mod:`nonholo.state`).
+    Beyond SO(3) the errors and bounds are in the stacked metric of :mod:`nonholo.state`.
     """
 
     replay_steps: int
@@ -79,6 +82,8 @@ class Certificate:
     l: np.ndarray
     R: np.ndarray
     U: np.ndarray | None = None
+    q: np.ndarray | None = None
+    errors: tuple[float, float] | None = None
 
     def inputs_at(self, steps: int) -> np.ndarray:
         """The replayed inputs ``u(t_n)`` at the ``steps + 1`` points ``t_n = nT/steps``
@@ -93,29 +98,36 @@ class Certificate:
         return self.terminal_error + self.error_bound
 
 
-def replay(R0, par, T: float, mechanism, steps: int, sign: float = 1.0, U=None):
+def replay(R0, par, T: float, mechanism, steps: int, sign: float = 1.0, U=None, q0=None):
     """The physical inputs ``par`` (controls or :class:`~nonholo.replay.FrameControls`)
     replayed on ``dR/dt = [L(R) u] R`` from ``R0`` with ``steps`` CF4 steps (``U``: their
-    stage table, if already known).
+    stage table, if already known); beyond SO(3), on the mechanism's system from
+    ``(R0, q0)``.
 
-    Returns ``(R, done, min_delta)``: the nodes ``(steps + 1, 3, 3)``, the steps completed
-    (fewer where the angular velocity became non-finite) and the least ``sign·Δ`` over the
-    evaluation points.
+    Returns ``(R, done, min_delta, q)``: the nodes ``(steps + 1, 3, 3)``, the steps
+    completed (fewer where the angular velocity became non-finite), the least ``sign·Δ``
+    over the evaluation points and the nodes' coordinates ``(steps + 1, k)``.
     """
     U = np.ascontiguousarray(stages.stage_table(par, steps) if U is None else U)
-    Rs = np.empty((steps + 1, 3, 3))
-    done, dmin, _ = mechanism.kernels(frame=False).forward(
-        np.ascontiguousarray(R0, dtype=float), U, T / steps, sign, -np.inf, Rs)
-    return Rs, int(done), float(dmin)
+    Rs, Qs = states.buffers(mechanism, steps)
+    q0 = np.ascontiguousarray(states.NO_COORDINATES if q0 is None else q0, dtype=float)
+    done, dmin, _ = states.forward(mechanism, mechanism.kernels(frame=False),
+                                   np.ascontiguousarray(R0, dtype=float), q0, U, T / steps, sign,
+                                   -np.inf, Rs, Qs)
+    return Rs, int(done), float(dmin), Qs
 
 
-def richardson(R_fine: np.ndarray, R_coarse: np.ndarray) -> float:
+def richardson(R_fine: np.ndarray, R_coarse: np.ndarray, mechanism=None, q_fine=None,
+               q_coarse=None) -> float:
     """The error estimate of the ``M``-step endpoint ``R_fine`` from the ``M/2``-step
-    ``R_coarse``: :data:`SAFETY` ``·|log(R_fine R_coarseᵀ)|/15`` (rad)."""
+    ``R_coarse``: :data:`SAFETY` ``·|log(R_fine R_coarseᵀ)|/15`` (rad); beyond SO(3) the
+    distance of the states (:func:`nonholo.state.distance`)."""
+    if mechanism is not None and mechanism.beyond_so3:
+        return SAFETY * states.distance(mechanism, R_fine, q_fine, R_coarse, q_coarse) / 15.0
     return SAFETY * float(kernels.log_error(np.ascontiguousarray(R_fine), np.ascontiguousarray(R_coarse))[1]) / 15.0
 
 
-def sensitivity(R0, par, T: float, mechanism, steps: int, U=None, sign: float | None = None):
+def sensitivity(R0, par, T: float, mechanism, steps: int, U=None, sign: float | None = None, q0=None):
     """``(G, R_T)`` on one grid: ``G = max_n |Φ(T, t_n)|_F`` of the physical system along
     ``par``'s motion (the amplification of a perturbation at ``t_n`` by ``T``; ``inf`` if
     the variational replay runs into ``Δ = 0``) and the replay's endpoint ``R_T``, from the
@@ -123,24 +135,31 @@ def sensitivity(R0, par, T: float, mechanism, steps: int, U=None, sign: float | 
     on ``steps`` CF4 steps (``U``: their stage table, if known). The nodes of ``R`` are
     those of :func:`replay` on the same steps. ``G`` is only as good as the grid resolves
     ``Φ``, which may take a finer grid than ``R_T`` does: :func:`resolved_sensitivity`.
+    Beyond SO(3) (``q0``): ``Φ`` of the stacked variation, ``d × d``, and ``R_T`` the
+    endpoint ``(R_T, q_T)``.
     """
     if U is None:
         U = stages.stage_table(par, steps)
     kern = mechanism.kernels(frame=False)
-    m = mechanism.n_inputs
+    m, d = mechanism.n_inputs, mechanism.n_rates
     R = np.ascontiguousarray(R0, dtype=float)
+    q = np.ascontiguousarray(states.NO_COORDINATES if q0 is None else q0, dtype=float)
     if sign is None:
-        sign = float(np.sign(mechanism.delta(R))) if mechanism.has_singular_set else 1.0
-    Rs, Zs = np.empty((steps + 1, 3, 3)), np.empty((steps + 1, 3, 3))
-    n, _, _ = kern.forward_variational(R, np.ascontiguousarray(U), T / steps, sign, 0.0, _NO_INDEX,
-                                       np.zeros((steps, 3, 0)), 0, 0, Rs, Zs, np.empty((3, 0)),
-                                       np.empty((3, 3)), np.empty((0, 3 * m)), True)
+        sign = (float(np.sign(mechanism.delta_samples(R[None], q[None])[0]))
+                if mechanism.has_singular_set else 1.0)
+    Rs, Qs = states.buffers(mechanism, steps)
+    Zs = np.empty((steps + 1, d, d))
+    n, _, _ = states.forward_variational(
+        mechanism, kern, R, q, np.ascontiguousarray(U), T / steps, sign, 0.0,
+        (_NO_INDEX, np.zeros((steps, 3, 0)), 0, 0), Rs, Qs, Zs, np.empty((d, 0)),
+        np.empty((d, d)), np.empty((0, d * m)), True)
     if n < steps:
         return float("inf"), None
     with np.errstate(all="ignore"):
-        Phi = np.linalg.solve(Zs[-1], Zs.transpose(1, 0, 2).reshape(3, -1))   # Φ(T, t_n) side by side
-        G = float(np.sqrt(np.max(np.sum(Phi.reshape(3, -1, 3) ** 2, axis=(0, 2)))))
-    return (G if np.isfinite(G) else float("inf")), Rs[-1]
+        Phi = np.linalg.solve(Zs[-1], Zs.transpose(1, 0, 2).reshape(d, -1))   # Φ(T, t_n) side by side
+        G = float(np.sqrt(np.max(np.sum(Phi.reshape(d, -1, d) ** 2, axis=(0, 2)))))
+    end = (Rs[-1], Qs[-1]) if mechanism.beyond_so3 else Rs[-1]
+    return (G if np.isfinite(G) else float("inf")), end
 
 
 def agree(G_coarse: float, G_fine: float) -> bool:
@@ -150,7 +169,7 @@ def agree(G_coarse: float, G_fine: float) -> bool:
 
 
 def resolved_sensitivity(R0, par, T: float, mechanism, steps: int, U=None, sign: float | None = None,
-                         limit: float = np.inf, max_steps: int | None = None):
+                         limit: float = np.inf, max_steps: int | None = None, q0=None):
     """The sensitivity of ``par``'s motion resolved: ``G`` on ``steps/2`` and ``steps`` CF4
     steps (``steps`` alone where the controls' grid forbids ``steps/2``), the grid doubled
     until the last two agree (:func:`agree`) — a coarse grid can miss a fast growth of
@@ -178,7 +197,7 @@ def resolved_sensitivity(R0, par, T: float, mechanism, steps: int, U=None, sign:
     R_T = None
     k = first
     while True:
-        G, R_k = sensitivity(R0, par, T, mechanism, k, tables.get(k), sign)
+        G, R_k = sensitivity(R0, par, T, mechanism, k, tables.get(k), sign, q0)
         grids[k] = G
         if k == steps:
             R_T = R_k
@@ -194,7 +213,7 @@ _NO_INDEX = np.zeros((0, 3, 0), np.int64)
 
 def measure(R0, Rd, T: float, mechanism, par, steps: int, tol: float, delta_min: float,
             sign: float = 1.0, G: float | None = None, R_half=None,
-            max_steps: int | None = None, leg_limits=None) -> Certificate:
+            max_steps: int | None = None, leg_limits=None, q0=None, qd=None) -> Certificate:
     """The certificate of the physical controls ``par`` (see the module): replays on
     ``steps/2``·2ᵏ and ``steps``·2ᵏ CF4 steps, ``k`` the least with an error estimate
     below ``ERROR_FRACTION · tol``, or ``k = 0`` when the sensitivity already rules the
@@ -203,7 +222,9 @@ def measure(R0, Rd, T: float, mechanism, par, steps: int, tol: float, delta_min:
     ``G``: the sensitivity, ``R_half``: the endpoint of the ``steps/2`` replay, if already
     known; ``max_steps``: the finest replay (default :data:`MAX_REPLAY_STEPS`);
     ``leg_limits``: stroke limits (:class:`~nonholo.limits.LegLimits`) every node of the
-    replay must keep."""
+    replay must keep. ``q0``, ``qd``: the start's and goal's coordinates of a state beyond
+    SO(3) (``R_half`` is then the pair ``(R, q)``)."""
+    beyond = mechanism.beyond_so3
     has_delta = mechanism.has_singular_set
     cap = MAX_REPLAY_STEPS if max_steps is None else max_steps
     M = steps
@@ -219,28 +240,39 @@ def measure(R0, Rd, T: float, mechanism, par, steps: int, tol: float, delta_min:
         limit = SENSITIVITY_FRACTION * tol / REPLAY_PERTURBATION
         if quarter:
             G, resolved, grids, _ = resolved_sensitivity(R0, par, T, mechanism, M // 4, stages.halve(U),
-                                                         sign, limit, cap)
+                                                         sign, limit, cap, q0)
         else:
-            G, resolved, grids, R_T = resolved_sensitivity(R0, par, T, mechanism, M // 2, U, sign, limit, cap)
+            G, resolved, grids, R_T = resolved_sensitivity(R0, par, T, mechanism, M // 2, U, sign, limit,
+                                                           cap, q0)
             if R_half is None:
                 R_half = R_T
     if R_half is None:
-        R_half = replay(R0, par, T, mechanism, M // 2, sign, stages.halve(U))[0][-1]
+        half = replay(R0, par, T, mechanism, M // 2, sign, stages.halve(U), q0)
+        R_half = (half[0][-1], half[3][-1]) if beyond else half[0][-1]
     # a sensitivity that already rules the plan out is not worth a finer replay
     hopeless = not resolved or not G * REPLAY_PERTURBATION <= SENSITIVITY_FRACTION * tol
     while True:
         if U is None:
             U = np.ascontiguousarray(stages.stage_table(par, M))
-        R, done, dmin = replay(R0, par, T, mechanism, M, sign, U)
+        R, done, dmin, q = replay(R0, par, T, mechanism, M, sign, U, q0)
         if done < M:
             return _failed(M, G, R, has_delta, dmin, f"the physical replay ({M} steps) produced a "
-                           f"non-finite angular velocity at t ≈ {done * T / M:.4g} s")
-        est = richardson(R[-1], R_half)
+                           f"non-finite angular velocity at t ≈ {done * T / M:.4g} s", mechanism.n_rates)
+        if beyond:
+            est = richardson(R[-1], R_half[0], mechanism, q[-1], R_half[1])
+        else:
+            est = richardson(R[-1], R_half)
         if hopeless or not est > ERROR_FRACTION * tol or 2 * M > cap:
             break
-        R_half, M, U = R[-1], 2 * M, None
-    l, err = kernels.log_error(R[-1], np.ascontiguousarray(Rd, dtype=float))
-    err = float(err)
+        R_half, M, U = ((R[-1], q[-1]) if beyond else R[-1]), 2 * M, None
+    if beyond:
+        l, rot, coord = states.error(mechanism, R[-1], q[-1], Rd, qd)
+        err = float(np.hypot(rot, coord))
+        errors = (rot, coord)
+    else:
+        l, err = kernels.log_error(R[-1], np.ascontiguousarray(Rd, dtype=float))
+        err = float(err)
+        errors = (err, 0.0)
     bound = est + G * REPLAY_PERTURBATION
     dmin = dmin if has_delta else None
     reason = ""
@@ -268,10 +300,11 @@ def measure(R0, Rd, T: float, mechanism, par, steps: int, tol: float, delta_min:
         reason = (f"the physical replay ({M} steps) ends {err:.3g} rad from the goal "
                   f"(+ error bound {bound:.2g} > tol = {tol:g})")
         correctable = True
-    return Certificate(M, err, bound, dmin, G, not reason, reason, correctable, l, R, U)
+    return Certificate(M, err, bound, dmin, G, not reason, reason, correctable, l, R, U,
+                       q if beyond else None, errors)
 
 
-def _failed(M, G, R, has_delta, dmin, reason) -> Certificate:
+def _failed(M, G, R, has_delta, dmin, reason, rates: int = 3) -> Certificate:
     return Certificate(M, float("inf"), float("inf"), dmin if has_delta else None, G, False, reason,
-                       False, np.full(3, np.nan), R)
+                       False, np.full(rates, np.nan), R)
 

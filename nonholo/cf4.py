@@ -490,23 +490,23 @@ _TEMPLATES = (zstage, kernels_inlined.forward, kernels_inlined.forward_variation
 _WRITTEN = (cf4_stage, cf4_step, zstage, forward, forward_variational, frame_inputs)
 
 
-def _specialise(template, bindings: dict, tag: str, cache: bool):
-    """A compiled copy of ``template`` whose globals are this module's with the system's
-    names bound (``bindings``)."""
-    f = types.FunctionType(template.__code__, {**globals(), **bindings}, template.__name__)
+def specialise(template, namespace: dict, bindings: dict, tag: str, cache: bool):
+    """A compiled copy of ``template`` whose globals are ``namespace`` (a kernel module's
+    globals) with the system's names bound (``bindings``)."""
+    f = types.FunctionType(template.__code__, {**namespace, **bindings}, template.__name__)
     f.__qualname__ = f"{template.__name__}__{tag}"        # its own cache entry
-    f.__module__ = __name__
+    f.__module__ = namespace["__name__"]
     f.__doc__ = template.__doc__
     return jit(f, cache=cache)
 
 
 def system_tag(module, frame: bool) -> str:
     """The cache name of a system: mechanism, system and a hash of the generated source."""
-    src = inspect.getsource(module) if _importable(module) else module.SOURCE
+    src = inspect.getsource(module) if importable(module) else module.SOURCE
     return f"{module.NAME}{'_frame' if frame else ''}_{hashlib.sha256(src.encode()).hexdigest()[:12]}"
 
 
-def _importable(module) -> bool:
+def importable(module) -> bool:
     """Whether ``module`` can be re-imported by name (a cached kernel refers to it by name)."""
     return sys.modules.get(getattr(module, "__name__", None)) is module
 
@@ -540,7 +540,7 @@ def compile_system(module, frame: bool = False, inlined: bool = True) -> Kernels
     if tag in _COMPILED:
         _BY_MODULE[module, frame] = _COMPILED[tag]
         return _COMPILED[tag]
-    kern = _compile(module, frame, _TEMPLATES, tag, _importable(module))
+    kern = _compile(module, frame, _TEMPLATES, tag, importable(module))
     _COMPILED[tag] = _BY_MODULE[module, frame] = kern
     return kern
 
@@ -560,17 +560,17 @@ def _compile(module, frame: bool, templates, tag: str, cache: bool) -> Kernels:
     for template in templates:
         if template.__name__ == "frame_inputs" and not frame:
             continue
-        bindings[template.__name__] = _specialise(template, bindings, tag, cache)
+        bindings[template.__name__] = specialise(template, globals(), bindings, tag, cache)
     frame_kernel = bindings.get("frame_inputs")
     kern = Kernels(name=module.NAME, frame=frame, n_inputs=module.N_INPUTS,
                    has_singular_set=module.HAS_SINGULAR_SET,
-                   forward=_metered(bindings["forward"], effort.FORWARD_WEIGHT, 1),
-                   forward_variational=_metered(bindings["forward_variational"], 1.0, 1),
-                   frame_inputs=None if frame_kernel is None else _metered(frame_kernel, effort.FORWARD_WEIGHT, 1))
+                   forward=metered(bindings["forward"], effort.FORWARD_WEIGHT, 1),
+                   forward_variational=metered(bindings["forward_variational"], 1.0, 1),
+                   frame_inputs=None if frame_kernel is None else metered(frame_kernel, effort.FORWARD_WEIGHT, 1))
     return kern
 
 
-def _metered(kernel, weight: float, counted: int):
+def metered(kernel, weight: float, counted: int):
     """``kernel`` counting its effort (:mod:`nonholo.effort`): ``weight`` per element of its
     argument number ``counted`` (the stage table's steps; ``frame_inputs``' node indices)."""
 

@@ -262,6 +262,11 @@ def pinv_step(J, l, scale):
     return scaled_back(J, y, scale)
 
 
+#: relative cut-off of the singular values of ``J S`` for ``d ≠ 3`` rows: the square root of
+#: :func:`pinv_step`'s cut-off on the eigenvalues of ``J S² Jᵀ``
+PINV_RCOND = 1e-7
+
+
 def min_norm_step(J, l, scale):
     """``x = S (J S)^# l`` with ``S = diag(scale)``: the least ``|S^{-1} x|`` minimising ``|J x − l|``.
 
@@ -273,5 +278,9 @@ def min_norm_step(J, l, scale):
     (The fallback is called from here rather than from the compiled code so that it is
     compiled only by a run that needs it.)
     """
+    if J.shape[0] != 3:
+        # a state beyond SO(3) (d rows): the pseudo-inverse of J S by NumPy's SVD
+        JS = J * scale
+        return scale * (np.linalg.pinv(JS, rcond=PINV_RCOND) @ l)
     x, ok = cholesky_step(J, l, scale)
     return x if ok else pinv_step(J, l, scale)

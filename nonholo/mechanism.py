@@ -18,6 +18,13 @@ in ``derivations/``) provides
 each matrix also as ``NAME_into(..., out)`` for the compiled integrator
 (:meth:`Mechanism.kernels`). Nothing downstream depends on which mechanism it is;
 :mod:`nonholo.catalog` looks mechanisms up by name.
+
+A mechanism whose state goes beyond SO(3) — ``(R, q) ∈ SO(3) × Rᵏ`` or ``q ∈ Rᵏ``
+(:mod:`derivations.state_space`) — has instead the stacked field ``G(R, q)`` (rows
+``(ω, q̇)``; ``q̇`` only without orientation), its variational matrix ``QG(R, q, v)``,
+``delta(R, q)`` and the frame ``N(R, q)``, ``QN``, ``W``; its ``L`` and ``Q`` are ``None``
+and its kernels are those of :mod:`nonholo.cf4_product`. :attr:`Mechanism.state_space`
+tells the kinds apart (``"SO(3)"``, ``"SO(3)xR^k"``, ``"R^k"``).
 """
 from __future__ import annotations
 
@@ -27,7 +34,7 @@ from typing import Callable
 
 import numpy as np
 
-from . import cf4
+from . import cf4, cf4_product
 
 
 @dataclass(frozen=True)
@@ -120,6 +127,31 @@ class Mechanism:
     geometry: Geometry | None
     module: types.ModuleType = field(repr=False)
     state_space: str = "SO(3)"
+    #: names, units and angle flags of the coordinates ``q`` (a state beyond SO(3))
+    coordinates: tuple[str, ...] = ()
+    units: tuple[str, ...] = ()
+    angles: tuple[bool, ...] = ()
+    #: the stacked field ``G(R, q)`` (a state beyond SO(3); ``None`` on SO(3))
+    G: Callable | None = None
+
+    @property
+    def orientation(self) -> bool:
+        """Whether the state includes an orientation ``R``."""
+        return self.state_space.startswith("SO(3)")
+
+    @property
+    def beyond_so3(self) -> bool:
+        """Whether the state has coordinates ``q`` besides (or instead of) ``R``."""
+        return self.state_space != "SO(3)"
+
+    @property
+    def n_coordinates(self) -> int:
+        return len(self.coordinates)
+
+    @property
+    def n_rates(self) -> int:
+        """``d``: the dimension of a state variation ``s = (s_R, s_q)`` (rows of ``G``)."""
+        return (3 if self.orientation else 0) + self.n_coordinates
 
     @property
     def n_inputs(self) -> int:
@@ -138,6 +170,8 @@ class Mechanism:
         desingularised ``ω = N(R) w``); see :func:`nonholo.cf4.compile_system`."""
         if frame and not self.has_frame:
             raise ValueError(f"mechanism {self.name!r} has no desingularised frame N(R)")
+        if self.beyond_so3:
+            return cf4_product.compile_system(self.module, frame)
         return cf4.compile_system(self.module, frame)
 
     @property
@@ -172,17 +206,34 @@ class Mechanism:
             raise ValueError(f"mechanism {self.name!r} has no legs")
         return _on_stack(getattr(self.module, function), R, (len(self.geometry.bases), *tail))
 
-    def delta_samples(self, R) -> np.ndarray | None:
-        """``Δ(R[n])`` for a stack ``R`` of shape ``(n, 3, 3)``; ``None`` without a singular set."""
+    def delta_samples(self, R, q=None) -> np.ndarray | None:
+        """``Δ(R[n])`` (``Δ(R[n], q[n])`` beyond SO(3), ``q`` of shape ``(n, k)``) for a stack
+        ``R`` of shape ``(n, 3, 3)``; ``None`` without a singular set."""
         if self.delta is None:
             return None
         R = np.asarray(R, dtype=float)
-        # the generated Δ is plain arithmetic on entries R[i, j]: evaluate it on (3, 3, n)
-        return np.asarray(self.delta(R.transpose(1, 2, 0)), dtype=float).reshape(R.shape[0])
+        # the generated Δ is plain arithmetic on entries R[i, j] (and q[c]): evaluate it
+        # on (3, 3, n) (and (k, n))
+        if self.beyond_so3:
+            value = self.delta(R.transpose(1, 2, 0), np.asarray(q, dtype=float).T)
+        else:
+            value = self.delta(R.transpose(1, 2, 0))
+        return np.broadcast_to(np.asarray(value, dtype=float), (R.shape[0],)).copy()
+
+    def rates(self, R, q, u) -> np.ndarray:
+        """The stacked rates ``G(R, q) u`` (``(ω, q̇)``) of a state beyond SO(3)."""
+        return self.G(np.asarray(R, dtype=float), np.asarray(q, dtype=float)) @ np.asarray(u, dtype=float)
 
     @classmethod
     def from_module(cls, module: types.ModuleType) -> "Mechanism":
         """The mechanism of a generated module."""
+        if hasattr(module, "STATE_SPACE"):
+            frame = Frame(module.N, module.QN, module.W) if module.HAS_FRAME else None
+            return cls(name=module.NAME, description=module.DESCRIPTION, inputs=tuple(module.INPUTS),
+                       L=None, Q=None, delta=module.delta if module.HAS_SINGULAR_SET else None,
+                       frame=frame, geometry=None, module=module, state_space=module.STATE_SPACE,
+                       coordinates=tuple(module.COORDINATES), units=tuple(module.UNITS),
+                       angles=tuple(module.ANGLES), G=module.G)
         frame = Frame(module.N, module.QN, module.W) if getattr(module, "HAS_FRAME", False) else None
         geometry = getattr(module, "GEOMETRY", None)
         return cls(name=module.NAME, description=module.DESCRIPTION, inputs=tuple(module.INPUTS),
@@ -201,7 +252,7 @@ class Mechanism:
         """
         from derivations import codegen        # SymPy: imported only when asked for
 
-        source = codegen.mechanism_module(mechanism)
+        source = codegen.module_of(mechanism)
         module = types.ModuleType(f"nonholo_symbolic_{mechanism.name}")
         module.SOURCE = source
         exec(compile(source, f"<generated module of mechanism {mechanism.name!r}>", "exec"),

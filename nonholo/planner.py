@@ -24,7 +24,8 @@ import time
 
 import numpy as np
 
-from . import catalog, effort, so3, stages
+from . import catalog, effort, stages
+from . import state as states
 from .checks import MAX_STEPS, check_count, check_time
 from .controls import Controls, Fourier, PiecewiseConstant, paper_initial
 from .limits import LegLimits
@@ -119,6 +120,13 @@ def plan(R0, Rd, *, T: float | None = 1.0, method: str = "parametric", harmonics
          route: str = "auto", leg_length=None, leg_speed=None, objective: str | None = None) -> PlanResult:
     """Plan a control steering ``R0`` to ``Rd`` in time ``T`` (seconds).
 
+    - ``R0``, ``Rd``: start and goal — rotation matrices for a mechanism on SO(3); for one
+      whose state goes beyond SO(3) (:attr:`~nonholo.mechanism.Mechanism.state_space`)
+      vectors of its coordinates (``"R^k"``) or pairs ``(R, q)`` (``"SO(3)xR^k"``), see
+      :mod:`nonholo.state`. There the error is the stacked ``(l, q_T − q_d)`` and the
+      result reports it by part (``errors``); strategies ``"paper"`` and ``"robust"`` plan
+      in the physical inputs, and the global route, ``leg_length``, ``leg_speed`` and
+      ``objective`` are for SO(3) mechanisms only (``ValueError`` otherwise).
     - ``mechanism``: a :class:`~nonholo.mechanism.Mechanism` or its name
       (:func:`nonholo.catalog.names`).
     - ``strategy``: ``"robust"`` (default, :mod:`nonholo.planning.robust`) or ``"paper"``
@@ -209,15 +217,28 @@ def plan_path(R0, Rd, *, T: float = 1.0, method: str = "parametric", harmonics: 
     T = check_time(T)
     harmonics = check_count(harmonics, "harmonics")
     grid = check_count(grid, "grid")
-    R0 = so3.check_rotation(R0, "R0")
-    Rd = so3.check_rotation(Rd, "Rd")
+    R0, q0 = states.parse(mech, R0, "R0")
+    Rd, qd = states.parse(mech, Rd, "Rd")
+    if mech.beyond_so3:
+        if route == "global":
+            raise ValueError(f"route 'global' plans over SO(3); mechanism {mech.name!r} has the state "
+                             f"space {mech.state_space} (use route 'local' or 'auto')")
+        if objective is not None:
+            raise ValueError(f"objective {objective!r} is for mechanisms on SO(3); {mech.name!r} has "
+                             f"the state space {mech.state_space}")
+
+    def delta_at(R, q) -> float:
+        return float(mech.delta_samples(R[None], q[None])[0])
+
     if gamma is None:
         gamma = cls.default_gamma
     options = Options(gamma=gamma, step=step, tol=tol, max_iter=max_iter,
                       newton_below=newton_below, min_step=min_step, delta_min=delta_min)
-    if mech.has_singular_set and float(mech.delta(R0)) == 0.0:
+    if mech.has_singular_set and delta_at(R0, q0) == 0.0:
         raise ValueError("R0 lies on the singular surface Δ(R) = 0, where L(R) is undefined "
-                         "(e.g. the identity); start from an orientation with Δ(R0) ≠ 0")
+                         "(e.g. the identity); start from an orientation with Δ(R0) ≠ 0"
+                         if not mech.beyond_so3 else
+                         f"R0 lies on the singular set Δ = 0 of {mech.name!r}, where G is undefined")
     steps = check_count(default_steps(method, grid) if steps is None else steps, "steps", maximum=MAX_STEPS)
     if method == "parametric" and 2 * harmonics > steps:
         raise ValueError(f"harmonics = {harmonics} is more than the integrator's steps = {steps} "
@@ -226,11 +247,11 @@ def plan_path(R0, Rd, *, T: float = 1.0, method: str = "parametric", harmonics: 
     stages.check_steps(controls, steps)
     request = Request(mechanism=mech, method=method, strategy=cls.name, T=T, R0=R0, Rd=Rd, steps=steps,
                       options=options, harmonics=harmonics, grid=grid, controls=controls, started=started,
-                      leg_limits=leg_limits)
+                      leg_limits=leg_limits, **({"q0": q0, "qd": qd} if mech.beyond_so3 else {}))
 
     # goals that cannot be reached: decided before anything is simulated (or compiled)
     if mech.has_singular_set:
-        d0, dd = float(mech.delta(R0)), float(mech.delta(Rd))
+        d0, dd = delta_at(R0, q0), delta_at(Rd, qd)
         refusal = None
         if dd == 0.0:
             refusal = ("the goal lies on the singular surface Δ = 0 (Δ(Rd) = 0): unreachable with "
@@ -253,7 +274,7 @@ def plan_path(R0, Rd, *, T: float = 1.0, method: str = "parametric", harmonics: 
 
     solver = cls(options)
     problem = Problem(R0, Rd, T, mech, method, steps, options.delta_min, frame=solver.frame(mech),
-                      leg_limits=leg_limits)
+                      leg_limits=leg_limits, q0=q0, qd=qd)
     start = solver.initial(problem, controls, u0 is not None)
     if route == "global":
         outcome, local_reason = None, "not tried (route 'global')"
@@ -261,7 +282,7 @@ def plan_path(R0, Rd, *, T: float = 1.0, method: str = "parametric", harmonics: 
         outcome = solver.solve(problem, start, callback)
         if outcome.success and outcome.certificate is None:
             outcome = certified(outcome, problem, options)
-        if outcome.success or route == "local" or outcome.stopped:
+        if outcome.success or route == "local" or outcome.stopped or mech.beyond_so3:
             result = build_result(request, outcome, outcome.success, outcome.reason, problem)
             return energy.improve(request, result) if objective == "energy" else result
         local_reason = outcome.reason

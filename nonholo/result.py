@@ -48,6 +48,9 @@ from .controls import Controls, Fourier, PiecewiseConstant
 from .limits import LegLimits
 from .replay import FrameControls, from_dict
 from .retimed import Retimed
+from .state import distance as state_distance
+from .state import forward as states_forward
+from .state import public as public_state
 from .stitched import Stitched
 
 FORMAT = "nonholo.plan/3"
@@ -101,6 +104,13 @@ class PlanResult:
       the stitched control of the route it was planned from (its hops, waypoints and
       hand-overs; a record: the certificate is the smooth control's); ``None`` otherwise.
       :attr:`hops` gives a global route's stitched control either way.
+    - ``q``, ``q0``, ``qd``, ``errors`` (a mechanism whose state goes beyond SO(3), else
+      ``None``): the coordinates at the samples ``(n, k)``, of the start and of the goal,
+      and the terminal error by part, ``{"rotation": rad, "coordinates": units}``
+      (:mod:`nonholo.state`; ``terminal_error`` is then the norm of the stacked error,
+      which bounds both). ``R`` is the identity throughout for a state without
+      orientation. :attr:`start`, :attr:`goal` and :meth:`state` give states as
+      :func:`nonholo.plan` takes them.
     """
 
     success: bool
@@ -128,6 +138,29 @@ class PlanResult:
     replay_steps: int | None = None
     route: str = "local"
     stitched: Stitched | None = None
+    q: np.ndarray | None = None
+    q0: np.ndarray | None = None
+    qd: np.ndarray | None = None
+    errors: dict | None = None
+
+    @property
+    def start(self):
+        """The start as :func:`nonholo.plan` takes it (``R0``, ``q0`` or ``(R0, q0)``)."""
+        return self._public(self.R0, self.q0)
+
+    @property
+    def goal(self):
+        """The goal as :func:`nonholo.plan` takes it."""
+        return self._public(self.Rd, self.qd)
+
+    def state(self, k: int = -1):
+        """Sample ``k`` of the trajectory as :func:`nonholo.plan` takes a state."""
+        return self._public(self.R[k], None if self.q is None else self.q[k])
+
+    def _public(self, R, q):
+        if q is None:
+            return R
+        return public_state(catalog.get(self.mechanism), R, q)
 
     # -- controls ----------------------------------------------------------------------
     def controls(self, t) -> np.ndarray:
@@ -184,6 +217,8 @@ class PlanResult:
             "replay_steps": None if self.replay_steps is None else int(self.replay_steps),
             "route": self.route,
             **({} if self.stitched is None else {"stitched": self.stitched.to_dict()}),
+            **({} if self.q0 is None else {"q0": arr(self.q0), "qd": arr(self.qd), "q": arr(self.q),
+                                           "errors": self.errors}),
             "R0": arr(self.R0),
             "Rd": arr(self.Rd),
             "controls": self.parametrisation.to_dict(),
@@ -252,7 +287,8 @@ class PlanResult:
             options=dict(options), sensitivity=_number(d, "sensitivity", null=True),
             error_bound=_number(d, "error_bound", null=True),
             replay_steps=None if d["replay_steps"] is None else _integer(d, "replay_steps", minimum=2),
-            route=_string(d, "route"), stitched=stitched)
+            route=_string(d, "route"), stitched=stitched,
+            **({} if not mech.beyond_so3 else _coordinates(d, mech)))
         _Validation(res, legacy=d["format"] == FORMAT_1).run()
         return res
 
@@ -368,7 +404,8 @@ _REQUIRED = ("format", "success", "reason", "terminal_error", "min_delta", "iter
              "mechanism", "method", "strategy", "T", "steps", "seconds", "R0", "Rd", "controls",
              "t", "R", "u", "delta")
 #: fields the first files of the format did not have (absent: ``{}`` and ``null``)
-_OPTIONAL = ("options", "sensitivity", "error_bound", "replay_steps", "route", "stitched")
+_OPTIONAL = ("options", "sensitivity", "error_bound", "replay_steps", "route", "stitched",
+             "q0", "qd", "q", "errors")
 #: the planner's methods, by the kind of the parametrisation each plans with
 _METHOD_OF_KIND = {"fourier": "parametric", "piecewise_constant": "nonparametric"}
 #: the fields of each kind of ``controls``
@@ -397,6 +434,19 @@ ROTATION_TOL = 1e-9
 
 def _fail(field: str, message: str):
     raise ValueError(f"invalid plan: {field!r} {message}")
+
+
+def _coordinates(d: dict, mech) -> dict:
+    """The coordinate fields of a plan of a mechanism whose state goes beyond SO(3)."""
+    k = mech.n_coordinates
+    missing = [key for key in ("q0", "qd", "q") if key not in d]
+    if missing:
+        _fail(missing[0], f"is missing: mechanism {mech.name!r} has coordinates ({', '.join(mech.coordinates)})")
+    errors = d.get("errors")
+    if errors is not None and not (isinstance(errors, dict) and all(is_number(v) for v in errors.values())):
+        _fail("errors", "must be an object of numbers or null")
+    return {"q0": _array(d["q0"], "q0", (k,)), "qd": _array(d["qd"], "qd", (k,)),
+            "q": _array(d["q"], "q", (None, k)), "errors": errors}
 
 
 def _short(x) -> str:
@@ -658,6 +708,8 @@ class _Validation:
             return
         if not np.array_equal(r.R[0], r.R0):
             _fail("R", "starts elsewhere than R0 (R[0] != R0)")
+        if mech.beyond_so3 and not np.array_equal(r.q[0], r.q0):
+            _fail("q", "starts elsewhere than q0 (q[0] != q0)")
         self.replay(mech, n)
         self.values(mech, n, complete)
 
@@ -805,7 +857,18 @@ class _Validation:
         n = r.t.shape[0] if r.t.ndim == 1 else -1
         if n < 0:
             _fail("t", f"must have shape (n,), got {r.t.shape}")
-        for key, shape in (("R", (n, 3, 3)), ("u", (n, mech.n_inputs))):
+        if mech.beyond_so3:
+            if r.q is None or r.q0 is None or r.qd is None:
+                _fail("q", f"must be set: mechanism {mech.name!r} has coordinates")
+            arrays["q"] = r.q
+            for key in ("q", "q0", "qd"):
+                if not np.all(np.isfinite(getattr(r, key))):
+                    _fail(key, "has non-finite entries (NaN or infinity)")
+        elif r.q is not None or r.q0 is not None or r.qd is not None:
+            _fail("q", f"must be null: mechanism {mech.name!r} has no coordinates")
+        for key, shape in (("R", (n, 3, 3)), ("u", (n, mech.n_inputs)), ("q", (n, mech.n_coordinates))):
+            if key not in arrays:
+                continue
             if arrays[key].shape != shape:
                 _fail(key, f"must have shape {shape} (n = {n} samples in t), got {arrays[key].shape}")
         if mech.has_singular_set:
@@ -870,8 +933,9 @@ class _Validation:
             par = par.base             # the same path: replayed as planned
         T = par.T
         frame = isinstance(par, FrameControls) and r.replay_steps is None
+        q0 = r.q0 if mech.beyond_so3 else None
         if mech.has_singular_set:
-            self.sign = float(np.sign(mech.delta(r.R0)))
+            self.sign = float(np.sign(mech.delta_samples(r.R0[None], None if q0 is None else q0[None])[0]))
             if self.sign == 0.0:
                 _fail("R0", "lies on the singular surface Δ = 0")
         else:
@@ -881,15 +945,16 @@ class _Validation:
                 _fail("replay_steps", f"is set, but the trajectory stops at t = {r.t[-1]:.6g} s < T")
             M = r.replay_steps
             U = np.ascontiguousarray(stages.stage_table(par, M))
-            R_M, done, dmin = certify.replay(r.R0, par, T, mech, M, self.sign, U)
-            Rs = R_M[::M // r.steps]
+            R_M, done, dmin, Q_M = certify.replay(r.R0, par, T, mech, M, self.sign, U, q0)
+            Rs, Qs = R_M[::M // r.steps], Q_M[::M // r.steps]
             done //= M // r.steps
         else:
             kern = mech.kernels(frame=frame)
             U = np.ascontiguousarray(stages.stage_table(par.frame if frame else par, r.steps)[:n - 1])
-            Rs = np.empty((n, 3, 3))
-            done, dmin, _ = kern.forward(np.ascontiguousarray(r.R0, dtype=float), U, T / r.steps,
-                                         self.sign, -np.inf, Rs)
+            Rs, Qs = np.empty((n, 3, 3)), np.empty((n, mech.n_coordinates))
+            done, dmin, _ = states_forward(mech, kern, np.ascontiguousarray(r.R0, dtype=float),
+                                           np.zeros(0) if q0 is None else np.ascontiguousarray(q0),
+                                           U, T / r.steps, self.sign, -np.inf, Rs, Qs)
         if done < n - 1:
             _fail("R", f"goes on to t = {r.t[-1]:.6g} s, but the controls replayed from R0 stop at "
                        f"t = {r.t[done]:.6g} s (non-finite angular velocity)")
@@ -901,10 +966,16 @@ class _Validation:
             _fail("R", f"disagrees with the controls replayed from R0 (the {system} of "
                        f"{mech.name!r}, {steps} steps): by {dev[k]:.3g} at t = {r.t[k]:.6g} s "
                        f"(tolerance {REPLAY_TOL:g})")
+        if mech.beyond_so3:
+            dev = np.max(np.abs(Qs - r.q), axis=1)
+            k = int(np.argmax(dev))
+            if not dev[k] <= REPLAY_TOL:
+                _fail("q", f"disagrees with the controls replayed from (R0, q0) by {dev[k]:.3g} at "
+                           f"t = {r.t[k]:.6g} s (tolerance {REPLAY_TOL:g})")
         self.dmin = float(dmin)
         if r.replay_steps is not None:
-            R_half = certify.replay(r.R0, par, T, mech, M // 2, self.sign, stages.halve(U))[0]
-            est = certify.richardson(R_M[-1], R_half[-1])
+            R_half, _, _, Q_half = certify.replay(r.R0, par, T, mech, M // 2, self.sign, stages.halve(U), q0)
+            est = certify.richardson(R_M[-1], R_half[-1], mech, Q_M[-1], Q_half[-1])
             if not r.error_bound >= est * (1.0 - 1e-9):
                 _fail("error_bound", f"({r.error_bound:.3g}) is below the replay's own error "
                                      f"estimate ({est:.3g} rad with {M} steps)")
@@ -917,16 +988,21 @@ class _Validation:
         if not dev <= VALUE_RTOL * max(1.0, float(np.max(np.abs(u)))):
             _fail("u", f"disagrees with controls(t) by {dev:.3g}")
         if mech.has_singular_set:
-            d = mech.delta_samples(r.R)
+            d = mech.delta_samples(r.R, r.q)
             dev = np.max(np.abs(d - r.delta))
             if not dev <= VALUE_RTOL * max(1.0, float(np.max(np.abs(d)))):
                 _fail("delta", f"disagrees with Δ(R) of the samples by {dev:.3g}")
         if complete:
             if r.terminal_error is None:
                 _fail("terminal_error", "is null, but the trajectory reaches T")
-            err = float(kernels.log_error(np.ascontiguousarray(r.R[-1]), np.ascontiguousarray(r.Rd))[1])
+            if mech.beyond_so3:
+                err = state_distance(mech, r.R[-1], r.q[-1], r.Rd, r.qd)
+                what = "the distance of the last sample from the goal"
+            else:
+                err = float(kernels.log_error(np.ascontiguousarray(r.R[-1]), np.ascontiguousarray(r.Rd))[1])
+                what = "|log(R[-1] Rdᵀ)|"
             if not abs(err - r.terminal_error) <= REPLAY_TOL:
-                _fail("terminal_error", f"is {r.terminal_error:.6g}, but |log(R[-1] Rdᵀ)| = {err:.6g}")
+                _fail("terminal_error", f"is {r.terminal_error:.6g}, but {what} = {err:.6g}")
         elif r.terminal_error is not None:
             _fail("terminal_error", f"must be null: the trajectory stops at t = {r.t[-1]:.6g} s < T")
         if mech.has_singular_set:

@@ -188,7 +188,7 @@ def _speed_spline(base, R0, mech, nodes: int) -> tuple[PPoly, np.ndarray]:
     T = base.T
     U = np.ascontiguousarray(stages.stage_table(base, nodes))
     sign = float(np.sign(mech.delta(R0))) if mech.has_singular_set else 1.0
-    Rs, done, _ = certify.replay(np.asarray(R0, dtype=float), base, T, mech, nodes, sign, U)
+    Rs, done, _, _ = certify.replay(np.asarray(R0, dtype=float), base, T, mech, nodes, sign, U)
     if done < nodes:
         raise ValueError("the planned motion runs into a non-finite angular velocity: not re-timed")
     tau = np.arange(nodes + 1) * (T / nodes)

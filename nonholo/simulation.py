@@ -23,9 +23,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from . import catalog, stages
+from . import state as states
 from .checks import MAX_STEPS, check_count, check_time
 from .controls import Controls
-from .so3 import check_rotation
 
 #: Default number of CF4 steps on ``[0, T]``: chosen so that on the examples of MODEL.md
 #: (``T = 1``) the endpoint is within the planner's 1e-10 rad of a DOP853 solution
@@ -56,7 +56,8 @@ class Trajectory:
     piecewise-constant controls the value on ``[t_n, t_{n+1})``), ``delta`` shape ``(n,)``
     (``Δ(R(t_n))``, ``None`` for mechanisms without a singular set). ``min_delta`` is the
     least ``|Δ|`` over every point where the integrator evaluated ``L`` (``None`` without a
-    singular set).
+    singular set). ``q`` ``(n, k)``: the coordinates of a state beyond SO(3) (``None`` on
+    SO(3); ``R`` is then the identity throughout for a state without orientation).
     """
 
     t: np.ndarray
@@ -67,6 +68,7 @@ class Trajectory:
     mechanism: str
     T: float
     steps: int
+    q: np.ndarray | None = None
 
     @property
     def R_T(self) -> np.ndarray:
@@ -125,25 +127,28 @@ def stage_table(controls, T: float, steps: int, n_inputs: int) -> np.ndarray:
     return np.ascontiguousarray(U, dtype=float)
 
 
-def _sign_of_delta(kern, mech, R0) -> float:
+def _sign_of_delta(kern, mech, R0, q0) -> float:
     if not kern.has_singular_set:
         return 1.0
-    d0 = float(mech.delta(R0))
+    d0 = float(mech.delta_samples(R0[None], q0[None])[0])
     if d0 == 0.0:
-        raise ValueError("R0 lies on the singular surface Δ(R) = 0, where L(R) is undefined")
+        raise ValueError("R0 lies on the singular surface Δ(R) = 0, where L(R) is undefined"
+                         if not mech.beyond_so3 else
+                         "the start lies on the singular set Δ = 0, where G is undefined")
     return float(np.sign(d0))
 
 
-def _trajectory(mech, Rs, U, T, steps, n, dmin, sgn) -> Trajectory:
+def _trajectory(mech, Rs, U, T, steps, n, dmin, sgn, Qs=None) -> Trajectory:
     h = T / steps
     t = np.arange(n + 1) * h
     if n == steps:
         t[-1] = T
     u = np.concatenate([U[:n, 0], U[steps - 1:steps, 2]]) if n == steps else U[:n + 1, 0]
     R = Rs[:n + 1].copy()
-    return Trajectory(t=t, R=R, u=u.copy(), delta=mech.delta_samples(R),
+    q = None if Qs is None or not mech.beyond_so3 else Qs[:n + 1].copy()
+    return Trajectory(t=t, R=R, u=u.copy(), delta=mech.delta_samples(R, q),
                       min_delta=(float(dmin) if mech.has_singular_set else None),
-                      mechanism=mech.name, T=T, steps=steps)
+                      mechanism=mech.name, T=T, steps=steps, q=q)
 
 
 def _stopped(mech, n, t_stop, dmin, sgn, traj) -> SingularTrajectoryError:
@@ -158,31 +163,34 @@ def _stopped(mech, n, t_stop, dmin, sgn, traj) -> SingularTrajectoryError:
 
 
 def _setup(R0, controls, T, mechanism, steps):
-    """Checked inputs of a simulation: the mechanism, ``R0``, ``T``, ``steps``, its kernels,
-    ``sgn Δ(R0)`` and the controls' stage table."""
+    """Checked inputs of a simulation: the mechanism, the start ``(R0, q0)``
+    (:func:`nonholo.state.parse`), ``T``, ``steps``, its kernels, ``sgn Δ`` at the start and
+    the controls' stage table."""
     mech = catalog.get(mechanism)
-    R0 = check_rotation(R0, "R0")
+    R0, q0 = states.parse(mech, R0, "R0")
     T = check_time(T)
     steps = check_count(steps, "steps", maximum=MAX_STEPS)
     kern = mech.kernels()
-    sgn = _sign_of_delta(kern, mech, R0)
-    return mech, R0, T, steps, kern, sgn, stage_table(controls, T, steps, mech.n_inputs)
+    sgn = _sign_of_delta(kern, mech, R0, q0)
+    return mech, (R0, q0), T, steps, kern, sgn, stage_table(controls, T, steps, mech.n_inputs)
 
 
 def simulate(R0, controls, T: float, *, mechanism="platform",
              steps: int = DEFAULT_STEPS) -> Trajectory:
     """Solve ``dR/dt = [L(R) u(t)] R``, ``R(0) = R0`` on ``[0, T]`` with ``steps`` CF4 steps.
 
-    ``controls``: a :class:`~nonholo.controls.Controls`, a
+    ``R0``: the start — a rotation matrix, or for a mechanism whose state goes beyond
+    SO(3) its coordinates ``q0`` or the pair ``(R0, q0)`` (:func:`nonholo.state.parse`;
+    the trajectory's ``q`` holds the coordinates). ``controls``: a :class:`~nonholo.controls.Controls`, a
     :class:`~nonholo.replay.FrameControls` or a vectorised ``u(t)``; ``mechanism``: a
     :class:`~nonholo.mechanism.Mechanism` or its name.
     Raises ``ValueError`` for a bad ``R0``/``T``/``steps``/controls and
     :class:`SingularTrajectoryError` if the motion runs into ``Δ = 0``.
     """
-    mech, R0, T, steps, kern, sgn, U = _setup(R0, controls, T, mechanism, steps)
-    Rs = np.empty((steps + 1, 3, 3))
-    n, dmin, t_stop = kern.forward(R0, U, T / steps, sgn, DELTA_STOP, Rs)
-    traj = _trajectory(mech, Rs, U, T, steps, n, dmin, sgn)
+    mech, (R0, q0), T, steps, kern, sgn, U = _setup(R0, controls, T, mechanism, steps)
+    Rs, Qs = states.buffers(mech, steps)
+    n, dmin, t_stop = states.forward(mech, kern, R0, q0, U, T / steps, sgn, DELTA_STOP, Rs, Qs)
+    traj = _trajectory(mech, Rs, U, T, steps, n, dmin, sgn, Qs)
     if n < steps:
         raise _stopped(mech, n, t_stop, dmin, sgn, traj)
     return traj
@@ -200,22 +208,23 @@ def variational(R0, controls, T: float, *, mechanism="platform",
     first order. For grid controls the columns ``(j, i)`` of ``J`` are the
     ``G_j = ∫_{I_j} Φ(T,t) B(t) dt`` of the nonparametric update.
     """
-    mech, R0, T, steps, kern, sgn, U = _setup(R0, controls, T, mechanism, steps)
+    mech, (R0, q0), T, steps, kern, sgn, U = _setup(R0, controls, T, mechanism, steps)
+    d = mech.n_rates
     linear = isinstance(controls, Controls)
     if linear:
-        Bidx, Bval, stride_b, stride_i = stages.sparse_basis(controls, steps)
-        J = np.empty((3, controls.params.size))
+        basis = stages.sparse_basis(controls, steps)
+        J = np.empty((d, controls.params.size))
     else:
         # no parameters: an empty basis (the kernel then skips the Jacobian)
-        Bidx, Bval, stride_b, stride_i = np.zeros((steps, 3, 0), np.int64), np.zeros((steps, 3, 0)), 0, 0
-        J = np.empty((3, 0))
-    Rs = np.empty((steps + 1, 3, 3))
-    Zs = np.empty((steps + 1, 3, 3))
-    M = np.empty((3, 3))
-    n, dmin, t_stop = kern.forward_variational(R0, U, T / steps, sgn, DELTA_STOP, Bidx, Bval,
-                                               stride_b, stride_i, Rs, Zs, J, M,
-                                               np.empty((0, 3 * mech.n_inputs)), True)
-    traj = _trajectory(mech, Rs, U, T, steps, n, dmin, sgn)
+        basis = (np.zeros((steps, 3, 0), np.int64), np.zeros((steps, 3, 0)), 0, 0)
+        J = np.empty((d, 0))
+    Rs, Qs = states.buffers(mech, steps)
+    Zs = np.empty((steps + 1, d, d))
+    M = np.empty((d, d))
+    n, dmin, t_stop = states.forward_variational(mech, kern, R0, q0, U, T / steps, sgn, DELTA_STOP,
+                                                 basis, Rs, Qs, Zs, J, M,
+                                                 np.empty((0, d * mech.n_inputs)), True)
+    traj = _trajectory(mech, Rs, U, T, steps, n, dmin, sgn, Qs)
     if n < steps:
         raise _stopped(mech, n, t_stop, dmin, sgn, traj)
     return Variational(trajectory=traj, Z=Zs, M=M, J=J if linear else None)

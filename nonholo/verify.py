@@ -216,3 +216,82 @@ def resimulate_rk4(R0, controls, T: float, mechanism="platform", steps: int = RK
     if single:
         return RT[0], None if dmin is None else float(dmin[0])
     return RT, dmin
+
+
+# --------------------------------------------------------------------------------------
+# States beyond SO(3): the models written out by hand, from their definitions
+# --------------------------------------------------------------------------------------
+
+
+def rolling_ball_rates(R, p, v, radius: float = 1.0):
+    """The ball rolling on the plane z = 0 without slipping or spinning (MODEL.md): the
+    centre moves with ``ṗ = v`` and the spatial angular velocity is ``ω = (e₃ × v)/ρ``.
+    Returns ``(ω, ṗ)``."""
+    return np.array([-v[1], v[0], 0.0]) / radius, np.asarray(v, dtype=float)
+
+
+def car_rates(R, x, u, wheelbase: float = 1.0):
+    """The kinematic car ``x = (x, y, θ, φ)``, ``u = (v, φ̇)`` (MODEL.md): ``ẋ = v cos θ``,
+    ``ẏ = v sin θ``, ``θ̇ = (v/ℓ) tan φ``, ``φ̇ = u₂``. Returns ``(ω = 0, ẋ)``."""
+    _, _, th, ph = x
+    v, dphi = u
+    return np.zeros(3), np.array([v * np.cos(th), v * np.sin(th), v * np.tan(ph) / wheelbase, dphi])
+
+
+#: The hand-written models of the mechanisms beyond SO(3), and their singularity
+#: functions (``None``: no singular set), by mechanism name.
+MODELS = {"rolling_ball": (rolling_ball_rates, None),
+          "car": (car_rates, lambda R, x: np.cos(x[3]))}
+
+
+def resimulate_state(start, controls, T: float, mechanism, breakpoints=None, samples: int = 2001,
+                     *, rtol: float = RTOL, atol: float = ATOL):
+    """The motion of a mechanism whose state goes beyond SO(3) by DOP853 on its hand-written
+    model (:data:`MODELS`; nothing generated is used), from ``start`` (as
+    :func:`nonholo.plan` takes it), with dense output on ``samples`` uniform times.
+
+    Returns ``(t, R, q, delta)``: times, orientations ``(n, 3, 3)`` (the identity without
+    orientation), coordinates ``(n, k)`` and the model's ``Δ`` there (``None`` without a
+    singular set); the last sample is the endpoint at ``T``.
+    """
+    from . import state as states
+
+    mech = catalog.get(mechanism)
+    rates, delta_of = MODELS[mech.name]
+    R0, q0 = states.parse(mech, start, "start")
+    m, k = mech.n_inputs, mech.n_coordinates
+    grid = np.linspace(0.0, float(T), int(samples))
+    ts, Ys = [], []
+    y = np.concatenate([R0.ravel(), q0])
+    for a, b in _segments(float(T), controls, breakpoints):
+        u = _input(controls, a, b, m)
+
+        def f(t, y, u=u):
+            R = y[:9].reshape(3, 3)
+            w, qdot = rates(R, y[9:], u(t))
+            return np.concatenate([(so3.hat(w) @ R).ravel(), qdot])
+
+        sol = solve_ivp(f, (a, b), y, method="DOP853", rtol=rtol, atol=atol, dense_output=True)
+        if not sol.success or not np.all(np.isfinite(sol.y)):
+            raise RuntimeError(f"DOP853 failed on [{a:g}, {b:g}]: {sol.message}")
+        inside = grid[(grid >= a) & (grid <= b)]
+        ts.append(np.concatenate([sol.t, inside]))
+        Ys.append(sol.y if not inside.size else np.concatenate([sol.y, sol.sol(inside)], axis=1))
+        y = sol.y[:, -1]
+    t = np.concatenate(ts)
+    Y = np.concatenate(Ys, axis=1).T
+    order = np.argsort(t, kind="stable")
+    t, Y = t[order], Y[order]
+    R, q = Y[:, :9].reshape(-1, 3, 3), Y[:, 9:9 + k]
+    delta = None if delta_of is None else np.array([delta_of(r, x) for r, x in zip(R, q)])
+    return t, R, q, delta
+
+
+def state_errors(mechanism, R_T, q_T, Rd, qd) -> dict:
+    """The terminal error by part of an independently re-simulated endpoint:
+    ``{"rotation": rad, "coordinates": units}`` (angles wrapped, :mod:`nonholo.state`)."""
+    from . import state as states
+
+    mech = catalog.get(mechanism)
+    _, rot, coord = states.error(mech, R_T, q_T, Rd, qd)
+    return states.error_parts(mech, rot, coord)

@@ -13,6 +13,7 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from nonholo import catalog, examples, so3, verify
+from nonholo.generated import MECHANISMS as GENERATED_MECHANISMS
 from nonholo.controls import Fourier, paper_initial
 
 
@@ -179,3 +180,8 @@ def check_into_forms(module, rotations, rng):
             np.testing.assert_array_equal(out, want, err_msg=f"{module.NAME}.{name}_into")
             assert np.all(np.isfinite(out)), name
     return tuple(forms)
+
+
+#: The package's mechanisms whose state is an orientation alone (the rest, e.g. the
+#: rolling ball and the car, are tested by ``tests/test_state_spaces.py``).
+SO3_MECHANISMS = tuple(n for n in GENERATED_MECHANISMS if not catalog.get(n).beyond_so3)

@@ -2,13 +2,13 @@
 compiled integrator calls) and the allocating ``NAME(...)`` (what everything else calls)."""
 import numpy as np
 import pytest
-from conftest import check_into_forms, random_rotations
+from conftest import check_into_forms, random_rotations, SO3_MECHANISMS
 
 from nonholo import catalog
 from nonholo.generated import MECHANISMS
 
 
-@pytest.mark.parametrize("name", MECHANISMS)
+@pytest.mark.parametrize("name", SO3_MECHANISMS)
 def test_into_forms_fill_out_with_the_allocating_result(name):
     mech = catalog.get(name)
     rng = np.random.default_rng(sum(map(ord, name)))
@@ -22,7 +22,7 @@ def test_into_forms_fill_out_with_the_allocating_result(name):
         assert (mech.frame.N, mech.frame.QN, mech.frame.W) == (mech.module.N, mech.module.QN, mech.module.W)
 
 
-@pytest.mark.parametrize("name", MECHANISMS)
+@pytest.mark.parametrize("name", SO3_MECHANISMS)
 def test_delta_samples_is_delta_on_a_stack(name):
     mech = catalog.get(name)
     Rs = np.stack(random_rotations(30, np.random.default_rng(11), delta=None))

@@ -2,7 +2,7 @@
 points (:meth:`nonholo.Mechanism.kernels`)."""
 import numpy as np
 import pytest
-from conftest import example
+from conftest import example, SO3_MECHANISMS
 
 from nonholo import catalog, kernels, stages
 from nonholo.controls import Fourier
@@ -94,7 +94,7 @@ def test_inv33_and_exp_times():
 
 # -- the integrator kernels of a mechanism ------------------------------------------------------
 
-@pytest.mark.parametrize("name", catalog.names())
+@pytest.mark.parametrize("name", SO3_MECHANISMS)
 def test_kernels_of_a_mechanism(name):
     mech = catalog.get(name)
     plain = mech.kernels()

@@ -37,6 +37,7 @@ from typing import Callable, ClassVar
 import numpy as np
 
 from .. import kernels, stages
+from .. import state as states
 from ..checks import check_count
 from ..controls import Controls
 from ..certify import Certificate
@@ -89,10 +90,10 @@ class Evaluation:
     """
 
     __slots__ = ("params", "parametrisation", "complete", "steps_done", "t_stop", "min_delta",
-                 "min_clearance", "R", "l", "error", "J", "Z", "Wd", "_controls")
+                 "min_clearance", "R", "q", "l", "error", "errors", "J", "Z", "Wd", "_controls")
 
     def __init__(self, params, parametrisation, complete, steps_done, t_stop, min_delta, R,
-                 controls=None):
+                 controls=None, q=None):
         self.params = params
         self.parametrisation = parametrisation
         self.complete = complete
@@ -101,6 +102,10 @@ class Evaluation:
         self.min_delta = min_delta
         self.min_clearance = None
         self.R = R
+        #: the coordinates at the nodes, ``(n, k)`` (``k = 0`` on SO(3))
+        self.q = np.zeros((len(R), 0)) if q is None else q
+        #: ``(rotation, coordinates)``: the norms of the two parts of ``l`` (:mod:`nonholo.state`)
+        self.errors = None
         self.l = self.error = self.J = self.Z = self.Wd = None
         self._controls = controls
 
@@ -115,6 +120,10 @@ class Evaluation:
     def R_T(self) -> np.ndarray | None:
         return self.R[-1] if self.complete else None
 
+    @property
+    def q_T(self) -> np.ndarray | None:
+        return self.q[-1] if self.complete else None
+
 
 class Problem:
     """``R0 → R_d`` in time ``T`` for one mechanism, with the integrator's buffers.
@@ -124,38 +133,59 @@ class Problem:
     in the desingularised frame coordinates ``w`` (``dR/dt = [N(R) w] R``; ``Δ`` is still
     monitored): ``λ`` then parametrises ``w``. ``leg_limits``: the legs' stroke limits
     (:class:`~nonholo.limits.LegLimits`) an admissible trajectory keeps at every node, or
-    ``None``.
+    ``None``. ``q0``, ``qd``: the coordinates of start and goal of a mechanism whose state
+    goes beyond SO(3) (:mod:`nonholo.state`; ``R0 = Rd = I`` without orientation); then
+    ``l_T`` is the stacked error ``(l, δq)`` and ``J`` has ``d`` rows.
     """
 
     def __init__(self, R0, Rd, T: float, mechanism: Mechanism, method: str, steps: int,
-                 delta_min: float, frame: bool = False, leg_limits: LegLimits | None = None):
+                 delta_min: float, frame: bool = False, leg_limits: LegLimits | None = None,
+                 q0=None, qd=None):
         self.mechanism = mechanism
         self.leg_limits = leg_limits
         self.frame = frame
         self.kernels = mechanism.kernels(frame)
         self.R0 = np.ascontiguousarray(R0, dtype=float)
         self.Rd = np.ascontiguousarray(Rd, dtype=float)
+        self.q0 = np.ascontiguousarray(states.NO_COORDINATES if q0 is None else q0, dtype=float)
+        self.qd = np.ascontiguousarray(states.NO_COORDINATES if qd is None else qd, dtype=float)
         self.T = T
         self.method = method
         self.steps = steps
         self.h = T / steps
         self.delta_min = delta_min
         self.has_delta = mechanism.has_singular_set
-        self.delta0 = float(mechanism.delta(self.R0)) if self.has_delta else None
-        self.deltad = float(mechanism.delta(self.Rd)) if self.has_delta else None
+        self.delta0 = self.delta_at(self.R0, self.q0) if self.has_delta else None
+        self.deltad = self.delta_at(self.Rd, self.qd) if self.has_delta else None
         self.sign = float(np.sign(self.delta0)) if self.has_delta else 1.0
-        self._Rs = np.empty((steps + 1, 3, 3))
-        self._Zs = np.empty((steps + 1, 3, 3))
-        self._M = np.empty((3, 3))
+        d = mechanism.n_rates
+        self._Rs, self._Qs = states.buffers(mechanism, steps)
+        self._Zs = np.empty((steps + 1, d, d))
+        self._M = np.empty((d, d))
         self._U = np.empty((steps, 3, mechanism.n_inputs))
-        self._Wd = np.empty((3 * steps, 3 * mechanism.n_inputs))
+        self._Wd = np.empty((3 * steps, d * mechanism.n_inputs))
         self.parametrisation: Controls | None = None
         self.evaluations = 0
+
+    def delta_at(self, R, q) -> float:
+        """``Δ`` at one state."""
+        return float(self.mechanism.delta_samples(np.asarray(R)[None], np.asarray(q)[None])[0])
+
+    def error_of(self, R, q) -> tuple[np.ndarray, float, float]:
+        """The terminal error of the state ``(R, q)``: :func:`nonholo.state.error` from the goal."""
+        return states.error(self.mechanism, R, q, self.Rd, self.qd)
+
+    def forward(self, U, h: float, stop: float):
+        """The motion of the stage table ``U`` with steps ``h`` (no variational system):
+        ``(R nodes, q nodes, steps done)``."""
+        Rs, Qs = states.buffers(self.mechanism, U.shape[0])
+        n, _, _ = states.forward(self.mechanism, self.kernels, self.R0, self.q0, U, h, self.sign, stop, Rs, Qs)
+        return Rs, Qs, int(n)
 
     def refined(self, steps: int) -> "Problem":
         """The same problem on a grid of ``steps`` integrator steps."""
         return Problem(self.R0, self.Rd, self.T, self.mechanism, self.method, steps, self.delta_min,
-                       self.frame, self.leg_limits)
+                       self.frame, self.leg_limits, self.q0, self.qd)
 
     def use(self, controls: Controls) -> None:
         """Interpret parameter vectors passed to :meth:`evaluate` in ``controls``' parametrisation."""
@@ -177,19 +207,30 @@ class Problem:
             given, x = x, x.params
         stop = self.delta_min if delta_stop is None else delta_stop
         U = self._fill(x, self._U)
-        J = np.empty((3, self.n_params))
-        n, dmin, t_stop = self.kernels.forward_variational(
-            self.R0, U, self.h, self.sign, stop, *self.stage_basis, self._Rs, self._Zs, J, self._M,
-            self._Wd, full)
+        J = np.empty((self.mechanism.n_rates, self.n_params))
+        n, dmin, t_stop = states.forward_variational(
+            self.mechanism, self.kernels, self.R0, self.q0, U, self.h, self.sign, stop, self.stage_basis,
+            self._Rs, self._Qs, self._Zs, J, self._M, self._Wd, full)
         self.evaluations += 1
         complete = n == self.steps
+        if complete and self.mechanism.beyond_so3 and not np.all(np.isfinite(J)):
+            # the variational system overflowed (Φ(T, 0) does not exist in floating point):
+            # a motion no step can be taken from
+            complete, n, t_stop = False, n - 1, self.T
         ev = Evaluation(x, self.parametrisation, complete, int(n), None if complete else float(t_stop),
-                        float(dmin) if self.has_delta else None, self._Rs[:n + 1].copy(), given)
+                        float(dmin) if self.has_delta else None, self._Rs[:n + 1].copy(), given,
+                        self._Qs[:n + 1].copy())
         if self.leg_limits is not None:
             ev.min_clearance = self.leg_limits.least_clearance(self.mechanism, ev.R)
         if complete:
-            ev.l, err = kernels.log_error(self._Rs[n], self.Rd)
-            ev.error = float(err)
+            if self.mechanism.beyond_so3:
+                ev.l, rot, coord = self.error_of(self._Rs[n], self._Qs[n])
+                ev.error = float(np.hypot(rot, coord))
+                ev.errors = (rot, coord)
+            else:
+                ev.l, err = kernels.log_error(self._Rs[n], self.Rd)
+                ev.error = float(err)
+                ev.errors = (ev.error, 0.0)
             ev.J = J
             if full:
                 ev.Z = self._Zs.copy()
@@ -396,6 +437,8 @@ class Request:
     controls: Controls          # the physical initial control
     started: float              # time.perf_counter() when the call began
     leg_limits: LegLimits | None = None
+    q0: np.ndarray | None = None   # coordinates of start and goal (a state beyond SO(3))
+    qd: np.ndarray | None = None
 
     def recorded_options(self) -> dict:
         """The options a result records: :class:`Options`, ``harmonics``, ``grid`` and, when
@@ -425,12 +468,16 @@ def build_result(request: Request, outcome: Outcome | None, success: bool, reaso
     else:
         par = ev.controls
     R = ev.R if ev is not None else np.empty((0, 3, 3))
+    q = ev.q if ev is not None else np.empty((0, mech.n_coordinates))
     terminal_error = None if ev is None else ev.error
+    errors = None if ev is None else ev.errors
     min_delta = None if ev is None else ev.min_delta
     u = None
     if cert is not None:
         R = cert.R[::cert.replay_steps // n_steps]
-        terminal_error, min_delta = cert.terminal_error, cert.min_delta
+        if mech.beyond_so3:
+            q = cert.q[::cert.replay_steps // n_steps]
+        terminal_error, min_delta, errors = cert.terminal_error, cert.min_delta, cert.errors
         if cert.U is not None and getattr(par, "grid", None) is None:
             # smooth controls: u(t_n) is the replay's stage value (grid controls: controls(t)
             # decides which side of a jump a grid point's rounding falls on)
@@ -440,11 +487,14 @@ def build_result(request: Request, outcome: Outcome | None, success: bool, reaso
         terminal_error=terminal_error, min_delta=min_delta,
         iterations=0 if outcome is None else outcome.iterations,
         history=[] if outcome is None else outcome.history,
-        t=t, R=R, u=par(t).reshape(n, mech.n_inputs) if u is None else u, delta=mech.delta_samples(R),
+        t=t, R=R, u=par(t).reshape(n, mech.n_inputs) if u is None else u, delta=mech.delta_samples(R, q),
         parametrisation=par, mechanism=mech.name, method=request.method, strategy=request.strategy,
         T=T, R0=request.R0, Rd=request.Rd, steps=n_steps,
         seconds=time.perf_counter() - request.started,
         options=request.recorded_options(),
         sensitivity=None if outcome is None or outcome.certificate is None else outcome.certificate.sensitivity,
         error_bound=None if cert is None else cert.error_bound,
-        replay_steps=None if cert is None else cert.replay_steps)
+        replay_steps=None if cert is None else cert.replay_steps,
+        **({} if not mech.beyond_so3 else {
+            "q": q, "q0": request.q0, "qd": request.qd,
+            "errors": None if errors is None else states.error_parts(mech, *errors)}))

@@ -63,6 +63,7 @@ from typing import Iterator
 import numpy as np
 
 from .. import kernels, so3, stages
+from .. import state as states
 from ..controls import Controls, Fourier, PiecewiseConstant, fourier_basis
 from ..limits import BARRIER_CLEARANCE
 from ..simulation import DELTA_STOP, SingularTrajectoryError, simulate
@@ -103,15 +104,31 @@ def to_frame(problem: Problem, controls: Controls) -> Controls:
     return PiecewiseConstant(problem.T, values)
 
 
-def spatial_gradient_delta(mechanism, R: np.ndarray, eps: float = 1e-6) -> np.ndarray:
+def spatial_gradient_delta(mechanism, R: np.ndarray, eps: float = 1e-6, q=None) -> np.ndarray:
     """``∇Δ`` at each ``R[n]``: ``Δ(exp([s]) R) = Δ(R) + ∇Δ·s + O(|s|²)`` (central differences
-    of the generated ``Δ``, error ``O(ε²)``), shape ``(n, 3)``."""
-    g = np.empty((len(R), 3))
-    for k in range(3):
-        e = np.zeros(3)
-        e[k] = eps
-        g[:, k] = (mechanism.delta_samples(so3.exp(e) @ R)
-                   - mechanism.delta_samples(so3.exp(-e) @ R)) / (2.0 * eps)
+    of the generated ``Δ``, error ``O(ε²)``), shape ``(n, 3)``; beyond SO(3), at each state
+    ``(R[n], q[n])`` along the stacked variation ``s = (s_R, s_q)``, shape ``(n, d)``."""
+    if not mechanism.beyond_so3:
+        g = np.empty((len(R), 3))
+        for k in range(3):
+            e = np.zeros(3)
+            e[k] = eps
+            g[:, k] = (mechanism.delta_samples(so3.exp(e) @ R)
+                       - mechanism.delta_samples(so3.exp(-e) @ R)) / (2.0 * eps)
+        return g
+    r = 3 if mechanism.orientation else 0
+    g = np.empty((len(R), mechanism.n_rates))
+    for k in range(mechanism.n_rates):
+        if k < r:
+            e = np.zeros(3)
+            e[k] = eps
+            plus, minus = (mechanism.delta_samples(so3.exp(e) @ R, q),
+                           mechanism.delta_samples(so3.exp(-e) @ R, q))
+        else:
+            dq = np.zeros(mechanism.n_coordinates)
+            dq[k - r] = eps
+            plus, minus = mechanism.delta_samples(R, q + dq), mechanism.delta_samples(R, q - dq)
+        g[:, k] = (plus - minus) / (2.0 * eps)
     return g
 
 
@@ -131,14 +148,15 @@ def barrier_gradient(problem: Problem, ev: Evaluation, d0: float) -> np.ndarray 
     if not ev.complete or ev.Z is None:
         return None
     N, h, m = problem.steps, problem.h, problem.mechanism.n_inputs
-    a = np.zeros((N + 1, 3))
+    D = problem.mechanism.n_rates
+    a = np.zeros((N + 1, D))
     any_active = False
     if problem.has_delta:
-        d = problem.sign * problem.mechanism.delta_samples(ev.R)
+        d = problem.sign * problem.mechanism.delta_samples(ev.R, ev.q)
         active = d < d0
         active[0] = False
         if active.any():
-            grad = spatial_gradient_delta(problem.mechanism, ev.R[active])
+            grad = spatial_gradient_delta(problem.mechanism, ev.R[active], q=ev.q[active])
             a[active] = (h * problem.sign * (-1.0 / d[active]))[:, None] * grad
             any_active = True
     if problem.leg_limits is not None:
@@ -153,7 +171,7 @@ def barrier_gradient(problem: Problem, ev: Evaluation, d0: float) -> np.ndarray 
     mu = np.linalg.solve(np.transpose(ev.Z, (0, 2, 1)), a[:, :, None])[:, :, 0]    # a_n Z_n^{-1}
     nu = np.cumsum(mu[::-1], axis=0)[::-1]                  # Σ_{n ≥ k} μ_n
     nu = nu[1:]                                              # Σ_{n > k} μ_n, k = 0 … N−1
-    v = np.einsum("ni,ncik->nck", nu, ev.Wd.reshape(N, 3, 3, m)).reshape(3 * N, m)
+    v = np.einsum("ni,ncik->nck", nu, ev.Wd.reshape(N, 3, D, m)).reshape(3 * N, m)
     return _contract(problem, v)
 
 
@@ -225,7 +243,9 @@ class RobustStrategy(Strategy):
     max_sensitivity = 100.0
 
     def frame(self, mechanism) -> bool:
-        return mechanism.has_frame
+        # beyond SO(3) the physical inputs are planned (the barrier keeps Δ away) and the
+        # frame is not used yet
+        return mechanism.has_frame and not mechanism.beyond_so3
 
     def initial(self, problem, controls, given):
         """In frame coordinates: ``u0`` (physical) converted by :func:`to_frame`; without
@@ -243,8 +263,13 @@ class RobustStrategy(Strategy):
         """The initial controls tried in turn: ``start``'s, then other loops and drifts."""
         first = start.controls
         T, m = problem.T, first.n_inputs
-        l0 = kernels.log_rotation(problem.Rd @ problem.R0.T)
-        frame = problem.mechanism.frame.N(problem.R0) if problem.frame else problem.mechanism.L(problem.R0)
+        mech = problem.mechanism
+        if mech.beyond_so3:
+            l0 = states.offset(mech, problem.R0, problem.q0, problem.Rd, problem.qd)
+            frame = mech.G(problem.R0, problem.q0)
+        else:
+            l0 = kernels.log_rotation(problem.Rd @ problem.R0.T)
+            frame = mech.frame.N(problem.R0) if problem.frame else mech.L(problem.R0)
         drift = np.linalg.lstsq(frame, l0, rcond=None)[0] / T
         K = first.harmonics if isinstance(first, Fourier) else None
         if start.given:
@@ -321,9 +346,9 @@ class RobustStrategy(Strategy):
         """Richardson estimate of the integrator's error at ``R(T)`` for ``ev``'s control:
         ``16/15`` of the distance between the endpoints with ``N`` and ``2N`` CF4 steps (rad)."""
         N2 = 2 * problem.steps
-        Rs = np.empty((N2 + 1, 3, 3))
-        problem.kernels.forward(problem.R0, stages.stage_table(ev.controls, N2), 0.5 * problem.h,
-                                problem.sign, -np.inf, Rs)
+        Rs, Qs, _ = problem.forward(stages.stage_table(ev.controls, N2), 0.5 * problem.h, -np.inf)
+        if problem.mechanism.beyond_so3:
+            return states.distance(problem.mechanism, Rs[N2], Qs[N2], ev.R[-1], ev.q[-1]) * 16.0 / 15.0
         return float(kernels.log_error(Rs[N2], ev.R[-1])[1]) * 16.0 / 15.0
 
     def refine(self, problem: Problem, ev: Evaluation, attempt: int, it0: int, history: list,

@@ -1,0 +1,87 @@
+"""Two classic non-holonomic mechanisms beyond SO(3), derived from their rolling constraints.
+
+- :func:`rolling_ball`: a ball of radius ρ rolling without slipping or spinning on the
+  plane z = 0; state ``(R, p) ∈ SO(3) × R²``, inputs ``v = ṗ``.
+- :func:`kinematic_car`: the kinematic car with the steering angle as a state,
+  ``x = (x, y, θ, φ) ∈ R⁴``, inputs ``(v, φ̇)``; singular where ``cos φ = 0``.
+
+Each is built as the platform is (:mod:`derivations.mechanism`): the constraints are
+written as linear equations in the unknown rates, solved symbolically, and the
+determinant of the constraint matrix gives the singularity function.
+"""
+from __future__ import annotations
+
+import sympy as sp
+
+from .mechanism import input_map
+from .so3 import e3
+from .state_space import StateMechanism
+
+
+def rolling_ball(radius=1) -> StateMechanism:
+    """The ball rolling on the plane z = 0 (radius ``radius``, centre at height ρ).
+
+    Unknown: the spatial angular velocity ``ω``. Constraints, for the input ``v = ṗ``
+    (``ṗ = (v₁, v₂, 0)``): the contact point ``p − ρ e₃`` does not slip,
+    ``ṗ + ω × (−ρ e₃) = 0`` (its vertical component is ``0 = 0``), and the ball does
+    not spin about the vertical, ``ω · e₃ = 0``. Solved: ``ω = (e₃ × ṗ)/ρ``.
+    """
+    rho = sp.Integer(radius) if isinstance(radius, int) else sp.nsimplify(radius)
+    p1, p2 = sp.symbols("p1 p2", real=True)
+    v = sp.Matrix(sp.symbols("v1:3", real=True))
+    w = sp.Matrix(sp.symbols("omega1:4", real=True))
+    pdot = sp.Matrix([v[0], v[1], 0])
+    slip = pdot + w.cross(-rho * e3)
+    equations = [slip[0], slip[1], w.dot(e3)]
+    C, rhs = sp.linear_eq_to_matrix(equations, list(w))
+    solution = C.LUsolve(rhs)
+    Omega = sp.Matrix(solution).jacobian(v).applyfunc(sp.simplify)
+    return StateMechanism(
+        name="rolling_ball",
+        description=f"ball of radius {rho} rolling without slipping or spinning on the plane z = 0",
+        inputs=("v1 = dp1/dt", "v2 = dp2/dt"),
+        coordinates=(p1, p2), units=("radius", "radius"), angles=(False, False),
+        Omega=Omega, X=sp.eye(2),
+        derivation={"constraint_matrix": C, "constraint_rhs": rhs, "radius": rho},
+    )
+
+
+def kinematic_car(wheelbase=1) -> StateMechanism:
+    """The kinematic car with steering angle ``φ`` as a state (wheelbase ``ℓ``).
+
+    Unknown: ``(ẋ, ẏ, θ̇)`` of the rear axle's midpoint ``(x, y)`` and the heading ``θ``.
+    Constraints: the rear wheels roll along the heading at the speed ``v``
+    (``ẋ cos θ + ẏ sin θ = v``) without side slip (``−ẋ sin θ + ẏ cos θ = 0``); the front
+    wheels, at ``(x, y) + ℓ (cos θ, sin θ)`` and turned by ``φ``, do not slip sideways
+    either. The steering angle is driven directly, ``φ̇ = u₂``. The constraint matrix's
+    determinant is ``ℓ cos φ``: ``Δ = cos φ``, and ``θ̇ = v tan φ / ℓ`` blows up where it
+    vanishes. The desingularised field scales the first column by ``cos φ``
+    (``w₁ = v / cos φ``... in physical terms ``v = w₁ cos φ``): finite everywhere and, with
+    ``ℓ = 1``, orthonormal.
+    """
+    ell = sp.Integer(wheelbase) if isinstance(wheelbase, int) else sp.nsimplify(wheelbase)
+    x, y, th, ph = sp.symbols("x y theta phi", real=True)
+    v, u2 = sp.symbols("v u2", real=True)
+    xd, yd, thd = sp.symbols("xdot ydot thetadot", real=True)
+    front = (xd - ell * sp.sin(th) * thd, yd + ell * sp.cos(th) * thd)
+    equations = [xd * sp.cos(th) + yd * sp.sin(th) - v,
+                 -xd * sp.sin(th) + yd * sp.cos(th),
+                 -front[0] * sp.sin(th + ph) + front[1] * sp.cos(th + ph)]
+    C, rhs = sp.linear_eq_to_matrix(equations, [xd, yd, thd])
+    det = sp.simplify(sp.trigsimp(sp.expand_trig(C.det())))
+    delta = sp.simplify(det / ell)
+    rates = C.LUsolve(rhs).applyfunc(lambda e: sp.simplify(sp.trigsimp(sp.expand_trig(e))))
+    first = sp.Matrix([*rates, 0]).diff(v).applyfunc(sp.simplify)
+    X = sp.Matrix.hstack(first, sp.Matrix([0, 0, 0, 1]))
+    frame = sp.Matrix.hstack((first * delta).applyfunc(sp.simplify), sp.Matrix([0, 0, 0, 1]))
+    return StateMechanism(
+        name="car",
+        description=f"kinematic car with the steering angle as a state (wheelbase {ell})",
+        inputs=("v = rear-axle speed", "u2 = dphi/dt"),
+        coordinates=(x, y, th, ph), units=("wheelbase", "wheelbase", "rad", "rad"),
+        angles=(False, False, True, True),
+        X=X, delta=delta, frame=frame,
+        frame_inputs=input_map(X, frame).applyfunc(sp.simplify),
+        derivation={"constraint_matrix": C, "constraint_rhs": rhs, "determinant": det,
+                    "wheelbase": ell},
+    )

@@ -1,0 +1,180 @@
+"""Mechanisms whose state goes beyond SO(3): the rolling ball (SO(3) × R²) and the car (R⁴).
+
+Derivation against the definitions, generated code against the symbolic source and
+finite differences, kernels against DOP853 and finite differences, plans re-simulated
+independently on hand-written models (:mod:`nonholo.verify`), save/load, bad input.
+"""
+import numpy as np
+import pytest
+import sympy as sp
+
+import nonholo
+from derivations import catalog as symbolic
+from derivations import state_space
+from nonholo import catalog, so3, stages, verify
+from nonholo import state as states
+from nonholo.controls import Fourier
+
+NAMES = ("rolling_ball", "car")
+rng = np.random.default_rng(7)
+
+
+def random_state(mech):
+    R = so3.exp(rng.normal(size=3)) if mech.orientation else np.eye(3)
+    q = rng.uniform(-1.0, 1.0, mech.n_coordinates)
+    return R, q
+
+
+def test_derived_from_constraints():
+    """The ball's ω is e₃ × v; the car's rates are the textbook ones with Δ = cos φ."""
+    ball, car = symbolic.get("rolling_ball"), symbolic.get("car")
+    v = sp.Matrix(sp.symbols("v1:3", real=True))
+    assert sp.simplify(ball.Omega * v - sp.Matrix([0, 0, 1]).cross(sp.Matrix([v[0], v[1], 0]))) == sp.zeros(3, 1)
+    x, y, th, ph = car.coordinates
+    assert sp.simplify(car.X[:, 0] - sp.Matrix([sp.cos(th), sp.sin(th), sp.tan(ph), 0])) == sp.zeros(4, 1)
+    assert sp.simplify(car.delta - sp.cos(ph)) == 0
+    # the frame spans the same rates and is finite: N = G W
+    assert sp.simplify(car.frame - car.X * car.frame_inputs) == sp.zeros(4, 2)
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_generated_matches_symbolic(name):
+    sym, mech = symbolic.get(name), catalog.get(name)
+    for _ in range(3):
+        R, q = random_state(mech)
+        subs = {c: float(v) for c, v in zip(sym.coordinates, q)}
+        if sym.orientation:
+            from derivations.so3 import r
+            subs |= {r[i, j]: R[i, j] for i in range(3) for j in range(3)}
+        G = np.array(sym.field.subs(subs).evalf(), dtype=float)
+        assert np.allclose(mech.G(R, q), G, atol=1e-13)
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_variational_matrix_against_finite_differences(name):
+    """QG s = d/dε G(exp(ε[s_R]) R, q + ε s_q) v (central differences)."""
+    mech = catalog.get(name)
+    mod = mech.module
+    for _ in range(3):
+        R, q = random_state(mech)
+        v = rng.normal(size=2)
+        s = rng.normal(size=mech.n_rates)
+        eps = 1e-6
+        r = 3 if mech.orientation else 0
+
+        def moved(e):
+            Rm = so3.exp(e * s[:3]) @ R if r else R
+            return mod.G(Rm, q + e * s[r:]) @ v
+
+        fd = (moved(eps) - moved(-eps)) / (2 * eps)
+        assert np.allclose(mod.QG(R, q, v) @ s, fd, atol=1e-7)
+
+
+def _table(T, N, m=2):
+    ts = stages.stage_times(T, N)
+    return np.stack([0.8 * np.sin(2 * np.pi * ts) + 0.3, 0.7 * np.cos(2 * np.pi * ts)], axis=-1)
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_kernel_against_dop853_and_jacobian_against_finite_differences(name):
+    mech = catalog.get(name)
+    R0, q0 = random_state(mech)
+    q0[-1] = 0.2 if name == "car" else q0[-1]
+    T, N = 1.0, 200
+    f = Fourier(T, rng.normal(scale=0.5, size=(2, 5)))
+    start = states.public(mech, R0, q0)
+    tr = nonholo.simulate(start, f, T, mechanism=mech, steps=N)
+    _, R, q, _ = verify.resimulate_state(start, f, T, mech.name)
+    assert np.abs(tr.R[-1] - R[-1]).max() < 1e-8 and np.abs(tr.q[-1] - q[-1]).max() < 1e-8
+    var = nonholo.simulation.variational(start, f, T, mechanism=mech, steps=N)
+    eps = 1e-6
+    fd = np.empty_like(var.J)
+    for c in range(f.params.size):
+        ends = []
+        for sgn in (1, -1):
+            p = f.params.copy()
+            p[c] += sgn * eps
+            t2 = nonholo.simulate(start, f.with_params(p), T, mechanism=mech, steps=N)
+            ends.append(states.error(mech, t2.R[-1], t2.q[-1], tr.R[-1], tr.q[-1])[0])
+        fd[:, c] = (ends[0] - ends[1]) / (2 * eps)
+    assert np.allclose(var.J, fd, atol=1e-7)
+
+
+def _independent(result):
+    t, R, q, delta = verify.resimulate_state(result.start, result.controls, result.T,
+                                             result.mechanism, result.breakpoints)
+    errors = verify.state_errors(result.mechanism, R[-1], q[-1], result.Rd, result.qd)
+    return errors, delta
+
+
+@pytest.mark.parametrize("strategy", ["robust", "paper"])
+def test_ball_reorients_in_place(strategy):
+    """Same position, rotated by π/2 about a horizontal axis."""
+    R0 = so3.from_rpy(0.3, -0.2, 0.1)
+    Rd = so3.exp(np.array([np.pi / 2, 0.0, 0.0])) @ R0
+    res = nonholo.plan((R0, [0.5, -0.5]), (Rd, [0.5, -0.5]), mechanism="rolling_ball", strategy=strategy)
+    assert res.success, res.reason
+    errors, _ = _independent(res)
+    assert errors["rotation"] < 1e-8 and errors["coordinates"] < 1e-8
+    assert set(res.errors) == {"rotation", "coordinates"} and max(res.errors.values()) <= 1e-10
+
+
+def test_car_parks_sideways():
+    """Parallel parking: move 1 sideways, same heading and steering."""
+    res = nonholo.plan([0, 0, 0, 0], [0, 1, 0, 0], mechanism="car")
+    assert res.success, res.reason
+    errors, delta = _independent(res)
+    assert errors["coordinates"] < 1e-8
+    assert np.abs(delta).min() >= 1e-2 and res.min_delta >= 1e-2
+    assert res.q.shape == (res.steps + 1, 4) and np.allclose(res.R, np.eye(3))
+
+
+def test_car_random_goals_are_certified_and_confirmed():
+    r = np.random.default_rng(3)
+    for _ in range(3):
+        q0 = np.array([*r.uniform(-2, 2, 2), r.uniform(-np.pi, np.pi), r.uniform(-0.5, 0.5)])
+        qd = np.array([*r.uniform(-2, 2, 2), r.uniform(-np.pi, np.pi), r.uniform(-0.5, 0.5)])
+        res = nonholo.plan(q0, qd, mechanism="car")
+        assert res.success, res.reason
+        errors, delta = _independent(res)
+        assert errors["coordinates"] < 1e-8 and np.abs(delta).min() >= 1e-2
+
+
+def test_save_load_keeps_the_coordinates(tmp_path):
+    res = nonholo.plan([0, 0, 0, 0.1], [1, 0.5, 0.3, 0.0], mechanism="car")
+    path = res.save(tmp_path / "car.json")
+    back = nonholo.PlanResult.load(path)
+    assert back == res and np.array_equal(back.q, res.q) and back.errors == res.errors
+    assert np.array_equal(back.goal, res.goal)
+    text = path.read_text().replace('"q0": [\n  0.0', '"q0": [\n  0.25', 1)
+    assert text != path.read_text()
+    (tmp_path / "bad.json").write_text(text)
+    with pytest.raises(ValueError, match="q"):
+        nonholo.PlanResult.load(tmp_path / "bad.json")
+
+
+def test_wrong_kind_of_state_says_what_is_expected():
+    with pytest.raises(ValueError, match=r"R0 must be a pair \(R, q\)"):
+        nonholo.plan(np.eye(3), (np.eye(3), [0, 0]), mechanism="rolling_ball")
+    with pytest.raises(ValueError, match="Rd must be a vector of its 4 coordinates"):
+        nonholo.plan([0, 0, 0, 0], (np.eye(3), [0, 0, 0, 0]), mechanism="car")
+    with pytest.raises(ValueError, match="expected \\(4,\\)"):
+        nonholo.plan([0, 0, 0], [0, 1, 0, 0], mechanism="car")
+    with pytest.raises(ValueError, match="rotation matrix"):
+        nonholo.plan((np.eye(3), [0, 0]), np.eye(3), mechanism="platform")
+    with pytest.raises(ValueError, match="route 'global'"):
+        nonholo.plan([0, 0, 0, 0], [0, 1, 0, 0], mechanism="car", route="global")
+
+
+def test_goal_across_the_singular_set_is_refused():
+    res = nonholo.plan([0, 0, 0, 0.2], [0, 1, 0, 2.0], mechanism="car")
+    assert not res.success and "across" in res.reason and res.iterations == 0
+
+
+def test_state_space_derivation_is_shared():
+    """The SO(3) block of the product variational matrix is eq. (12)'s Q (rolling ball: [ω])."""
+    ball = symbolic.get("rolling_ball")
+    A = state_space.A_matrix(ball)
+    u = sp.Matrix(sp.symbols("u1:3", real=True))
+    from derivations.so3 import hat
+    assert sp.simplify(A[:3, :3] - hat(ball.Omega * u)) == sp.zeros(3, 3)
