@@ -156,7 +156,10 @@ def sensitivity(R0, par, T: float, mechanism, steps: int, U=None, sign: float | 
     if n < steps:
         return float("inf"), None
     with np.errstate(all="ignore"):
-        Phi = np.linalg.solve(Zs[-1], Zs.transpose(1, 0, 2).reshape(d, -1))   # Φ(T, t_n) side by side
+        try:
+            Phi = np.linalg.solve(Zs[-1], Zs.transpose(1, 0, 2).reshape(d, -1))   # Φ(T, t_n) side by side
+        except np.linalg.LinAlgError:       # Z(T) overflowed to a singular matrix
+            return float("inf"), None
         G = float(np.sqrt(np.max(np.sum(Phi.reshape(d, -1, d) ** 2, axis=(0, 2)))))
     end = (Rs[-1], Qs[-1]) if mechanism.beyond_so3 else Rs[-1]
     return (G if np.isfinite(G) else float("inf")), end
@@ -278,8 +281,8 @@ def measure(R0, Rd, T: float, mechanism, par, steps: int, tol: float, delta_min:
     reason = ""
     correctable = False
     if not np.isfinite(G):
-        reason = ("the physical replay's sensitivity is infinite (its variational system ran into "
-                  "Δ = 0): the endpoint cannot be certified")
+        reason = ("the physical replay's sensitivity is infinite (its variational system "
+                  + ("ran into Δ = 0" if has_delta else "overflowed") + "): the endpoint cannot be certified")
     elif not resolved:
         found = ", ".join(f"{g:.3g} on {k} steps" for k, g in grids.items())
         reason = (f"the physical replay's sensitivity max|Φ(T,t)| is not resolved ({found}): "

@@ -32,7 +32,7 @@ from pathlib import Path
 import numpy as np
 
 from . import examples as _examples
-from . import catalog, figures, so3, verify
+from . import catalog, figures, so3, state_figures, verify
 from .planner import STRATEGIES, plan
 from .retime import retime
 
@@ -111,12 +111,25 @@ def solve_all(progress=_log) -> list[Solved]:
     return solved
 
 
+#: The classic problems of the mechanisms beyond SO(3) (start, goal): the ball turned by
+#: π/2 about a horizontal axis in place, the car parked one wheelbase sideways.
+STATE_PROBLEMS = {
+    "rolling_ball": ((so3.from_rpy(0.4, -0.3, 0.2), (0.0, 0.0)),
+                     (so3.exp(np.array([np.pi / 2, 0.0, 0.0])) @ so3.from_rpy(0.4, -0.3, 0.2), (0.0, 0.0))),
+    "car": ((0.0, 0.0, 0.0, 0.0), (0.0, 1.0, 0.0, 0.0)),
+}
+
+
 def mechanism_cards():
     """``(figure, stem)`` of every mechanism: the platforms at a regular pose with their
     singular sets, the others with a planned motion (RPY(0.1, 0.2, 0.3) → RPY(0.8, -0.4, 0.5))."""
     for name in catalog.names():
         mech = catalog.get(name)
-        if mech.geometry is not None:
+        if mech.beyond_so3:
+            start, goal = STATE_PROBLEMS[name]
+            draw = state_figures.ball_figure if mech.orientation else state_figures.car_figure
+            yield draw(plan(start, goal, mechanism=name)), f"mechanism_{name}"
+        elif mech.geometry is not None:
             R = np.eye(3) if abs(float(mech.delta(np.eye(3)))) > 0.1 else _examples.get(1).R_start
             psi = float(so3.as_rpy(R)[2])
             yield figures.mechanism_card_figure(name, R=R, psi_slice=psi), f"mechanism_{name}"

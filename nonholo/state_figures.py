@@ -1,0 +1,95 @@
+"""Figures of plans whose state goes beyond SO(3): the rolling ball's contact path on the
+plane with its orientation, and the car's path with its body drawn along it.
+
+Each function takes a successful :class:`~nonholo.result.PlanResult` of the mechanism and
+returns a Matplotlib figure (the caller saves or shows it).
+"""
+from __future__ import annotations
+
+import matplotlib.pyplot as plt
+import numpy as np
+from matplotlib.patches import Polygon
+
+
+def _check(result, mechanism: str):
+    if result.mechanism != mechanism:
+        raise ValueError(f"result must be a plan of mechanism {mechanism!r}, got {result.mechanism!r}")
+    if result.q is None or not len(result.q):
+        raise ValueError("result has no trajectory to draw")
+
+
+def ball_figure(result, frames: int = 9):
+    """The ball's contact path on the plane z = 0 (left), with the ball's body axes
+    ``R e₁``, ``R e₂`` projected on the plane at ``frames`` instants; right, the angle
+    turned (``|log(R(t) R0ᵀ)|``) and the inputs against time."""
+    _check(result, "rolling_ball")
+    from .so3 import log
+
+    p, R, t = result.q, result.R, result.t
+    fig, (ax, bx) = plt.subplots(1, 2, figsize=(10, 4.5), gridspec_kw={"width_ratios": [1.1, 1]})
+    ax.plot(p[:, 0], p[:, 1], color="0.3", lw=1.5, label="contact point")
+    ax.plot(*p[0], "o", color="tab:green", label="start")
+    ax.plot(*result.qd, "x", color="tab:red", ms=10, mew=2, label="goal")
+    span = max(np.ptp(p[:, 0]), np.ptp(p[:, 1]), 0.5)
+    size = 0.12 * span
+    for k in np.linspace(0, len(t) - 1, frames).astype(int):
+        for axis, colour in ((0, "tab:blue"), (1, "tab:orange")):
+            d = R[k][:2, axis] * size
+            ax.annotate("", xy=p[k] + d, xytext=p[k], arrowprops={"arrowstyle": "->", "color": colour, "lw": 1})
+    ax.plot([], [], color="tab:blue", label="R e₁ (projected)")
+    ax.plot([], [], color="tab:orange", label="R e₂ (projected)")
+    ax.set_aspect("equal")
+    ax.margins(0.15)
+    ax.set_xlabel("p₁")
+    ax.set_ylabel("p₂")
+    ax.set_title("contact path on the plane")
+    ax.legend(fontsize=8, loc="upper center", bbox_to_anchor=(0.5, -0.18), ncol=3)
+    turned = [np.linalg.norm(log(Rk @ result.R0.T)) for Rk in R]
+    bx.plot(t, turned, color="k", label="angle turned |log(R R0ᵀ)| (rad)")
+    bx.plot(t, result.u[:, 0], color="tab:blue", lw=1, label="v₁ = dp₁/dt")
+    bx.plot(t, result.u[:, 1], color="tab:orange", lw=1, label="v₂ = dp₂/dt")
+    bx.set_xlabel("t (s)")
+    bx.set_title("orientation and inputs")
+    bx.legend(fontsize=8)
+    fig.tight_layout()
+    return fig
+
+
+def _body(x, y, th, length=1.0, width=0.5):
+    """Corners of the car's body: the rear axle at ``(x, y)``, the front at ``length``."""
+    c, s = np.cos(th), np.sin(th)
+    pts = np.array([[-0.2, -width / 2], [length + 0.2, -width / 2], [length + 0.2, width / 2], [-0.2, width / 2]])
+    return pts @ np.array([[c, s], [-s, c]]) + np.array([x, y])
+
+
+def car_figure(result, frames: int = 8):
+    """The car's path (the rear axle's midpoint) with its body and front wheels drawn at
+    ``frames`` instants (left); right, ``θ``, ``φ`` and the inputs against time."""
+    _check(result, "car")
+    q, t = result.q, result.t
+    fig, (ax, bx) = plt.subplots(1, 2, figsize=(10, 4.5), gridspec_kw={"width_ratios": [1.1, 1]})
+    ax.plot(q[:, 0], q[:, 1], color="0.3", lw=1.5, label="rear axle")
+    for j, k in enumerate(np.linspace(0, len(t) - 1, frames).astype(int)):
+        x, y, th, ph = q[k]
+        shade = plt.cm.viridis(j / max(frames - 1, 1))
+        ax.add_patch(Polygon(_body(x, y, th), closed=True, fill=False, ec=shade, lw=1))
+        fx, fy = x + np.cos(th), y + np.sin(th)
+        d = 0.18 * np.array([np.cos(th + ph), np.sin(th + ph)])
+        ax.plot([fx - d[0], fx + d[0]], [fy - d[1], fy + d[1]], color=shade, lw=2.5)
+    ax.plot(*q[0, :2], "o", color="tab:green", label="start")
+    ax.plot(*result.qd[:2], "x", color="tab:red", ms=10, mew=2, label="goal")
+    ax.set_aspect("equal")
+    ax.margins(0.25)
+    ax.set_xlabel("x (wheelbases)")
+    ax.set_ylabel("y (wheelbases)")
+    ax.set_title("path, body and front wheels")
+    ax.legend(fontsize=8, loc="best")
+    bx.plot(t, q[:, 2], color="k", label="θ (rad)")
+    bx.plot(t, q[:, 3], color="tab:purple", label="φ (rad)")
+    bx.plot(t, result.u[:, 0], color="tab:blue", lw=1, label="v")
+    bx.plot(t, result.u[:, 1], color="tab:orange", lw=1, label="dφ/dt")
+    bx.set_xlabel("t (s)")
+    bx.set_title("heading, steering and inputs")
+    bx.legend(fontsize=8)
+    fig.tight_layout()
+    return fig
