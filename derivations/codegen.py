@@ -290,7 +290,7 @@ def singularity_module() -> str:
 #: the kernels that call it.
 CF4_SOURCE = GENERATED_DIR.parent / "cf4.py"
 #: Functions whose calls are expanded in place, and the kernels written with them.
-CF4_INLINED = ("cf4_step", "cf4_stage", "zpredict")
+CF4_INLINED = ("cf4_step", "cf4_stage", "cf4_close", "zpredict")
 CF4_KERNELS = ("forward", "forward_variational", "frame_inputs")
 
 

@@ -140,6 +140,20 @@ def cf4_stage(ax, ay, az, base, Y, v, sgn, delta_stop, dmin, B, F, E):
     return ok, dmin
 
 
+@jit
+def cf4_close(F1, F2, F3, F4, h12, R, E, Rh, Rn):
+    """CF4's two closing exponentials: ``Rn = exp(h/12 (−ω1 + 2ω2 + 2ω3 + 3ω4)) exp(h/12 (3ω1
+    + 2ω2 + 2ω3 − ω4)) R`` from the stage angular velocities ``F1 … F4`` (the first three
+    entries of each; ``h12 = h/12``; ``E``, ``Rh``: scratch). Shared by :func:`cf4_step` and
+    the product group's step (:mod:`nonholo.cf4_product`)."""
+    exp_times(h12 * (3.0 * F1[0] + 2.0 * F2[0] + 2.0 * F3[0] - F4[0]),
+              h12 * (3.0 * F1[1] + 2.0 * F2[1] + 2.0 * F3[1] - F4[1]),
+              h12 * (3.0 * F1[2] + 2.0 * F2[2] + 2.0 * F3[2] - F4[2]), R, E, Rh)
+    exp_times(h12 * (-F1[0] + 2.0 * F2[0] + 2.0 * F3[0] + 3.0 * F4[0]),
+              h12 * (-F1[1] + 2.0 * F2[1] + 2.0 * F3[1] + 3.0 * F4[1]),
+              h12 * (-F1[2] + 2.0 * F2[2] + 2.0 * F3[2] + 3.0 * F4[2]), Rh, E, Rn)
+
+
 def cf4_step(R, Rn, v0, v1, v2, h, sgn, delta_stop, dmin, Y2, Y3, Y4, Rh, E,
              B1, B2, B3, B4, F1, F2, F3, F4):
     """One CF4 step of length ``h`` from ``R`` into ``Rn`` (see the module docstring).
@@ -177,12 +191,7 @@ def cf4_step(R, Rn, v0, v1, v2, h, sgn, delta_stop, dmin, Y2, Y3, Y4, Rh, E,
         if not ok:
             stop = 1.0
             break
-        exp_times(h12 * (3.0 * F1[0] + 2.0 * F2[0] + 2.0 * F3[0] - F4[0]),
-                  h12 * (3.0 * F1[1] + 2.0 * F2[1] + 2.0 * F3[1] - F4[1]),
-                  h12 * (3.0 * F1[2] + 2.0 * F2[2] + 2.0 * F3[2] - F4[2]), R, E, Rh)
-        exp_times(h12 * (-F1[0] + 2.0 * F2[0] + 2.0 * F3[0] + 3.0 * F4[0]),
-                  h12 * (-F1[1] + 2.0 * F2[1] + 2.0 * F3[1] + 3.0 * F4[1]),
-                  h12 * (-F1[2] + 2.0 * F2[2] + 2.0 * F3[2] + 3.0 * F4[2]), Rh, E, Rn)
+        cf4_close(F1, F2, F3, F4, h12, R, E, Rh, Rn)
         d = sgn * delta(Rn)
         dmin = min(dmin, d)
         if not d >= delta_stop:

@@ -132,12 +132,7 @@ def product_step(R, q, Rn, qn, v0, v1, v2, h, sgn, delta_stop, dmin, Y2, Y3, Y4,
             stop = 1.0
             break
         if ROTATION:
-            exp_times(h12 * (3.0 * F1[0] + 2.0 * F2[0] + 2.0 * F3[0] - F4[0]),
-                      h12 * (3.0 * F1[1] + 2.0 * F2[1] + 2.0 * F3[1] - F4[1]),
-                      h12 * (3.0 * F1[2] + 2.0 * F2[2] + 2.0 * F3[2] - F4[2]), R, E, Rh)
-            exp_times(h12 * (-F1[0] + 2.0 * F2[0] + 2.0 * F3[0] + 3.0 * F4[0]),
-                      h12 * (-F1[1] + 2.0 * F2[1] + 2.0 * F3[1] + 3.0 * F4[1]),
-                      h12 * (-F1[2] + 2.0 * F2[2] + 2.0 * F3[2] + 3.0 * F4[2]), Rh, E, Rn)
+            cf4.cf4_close(F1, F2, F3, F4, h12, R, E, Rh, Rn)
         h6 = h / 6.0
         for i in range(q.shape[0]):
             j = OFFSET + i
