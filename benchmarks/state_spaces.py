@@ -3,7 +3,7 @@
 
 Run::
 
-    python -m benchmarks.state_spaces [--goals 50] [--seed 2014] [--no-peer]
+    python -m benchmarks.state_spaces [--goals 50] [--far 30] [--seed 2014] [--no-peer]
 
 Problems (fixed seed):
 
@@ -14,6 +14,14 @@ Problems (fixed seed):
 - ``car`` (state ``(x, y, θ, φ)``): ``--goals`` random pairs with ``|x|, |y| ≤ 2``, any
   ``θ``, ``|φ| ≤ 0.5`` at both ends; plus the parallel parking (move 1 sideways, same
   heading and steering).
+- ``car, far`` (``--far`` pairs): start and goal with ``|x|, |y| ≤ 30``, any ``θ``, ``|φ| ≤
+  1.4`` — goals up to 85 car lengths away, near the singular set ``cos φ = 0``, where the
+  local planner alone mostly fails and the global route (the straight path of states, hop
+  by hop, :mod:`nonholo.state_path`) takes over. Planned with ``tol = 1e-8``: a car's
+  sensitivity grows like the square of its distance (a steering error turns the heading,
+  which displaces the end), about 10³ at 50 lengths, which the certificate does not
+  accept at 1e-10 (:mod:`nonholo.certify`). Run with the default route ``"auto"`` and
+  with route ``"local"``, to show what the route adds.
 
 Every plan is :func:`nonholo.plan` with its defaults (``T = 1``, strategy ``"robust"``),
 timed per call after one warm-up call (numba compiled). Every claimed success is
@@ -44,6 +52,7 @@ from nonholo import so3, verify
 from .report import RESULTS_DIR, Report
 
 TOL = 1e-8
+FAR_TOL = 1e-8
 COS_MIN = 1e-2
 
 
@@ -84,6 +93,15 @@ def car_problems(n: int, seed: int) -> list[dict]:
     return out
 
 
+def car_far_problems(n: int, seed: int) -> list[dict]:
+    rng = np.random.default_rng(seed + 2)
+
+    def draw():
+        return np.array([*rng.uniform(-30, 30, 2), rng.uniform(-np.pi, np.pi), rng.uniform(-1.4, 1.4)])
+
+    return [{"name": f"car-far-{i:02d}", "start": draw(), "goal": draw()} for i in range(n)]
+
+
 def check(mechanism: str, res) -> dict:
     """Re-simulate a claimed success independently (see the module)."""
     t, R, q, delta = verify.resimulate_state(res.start, res.controls, res.T, mechanism, res.breakpoints)
@@ -93,14 +111,14 @@ def check(mechanism: str, res) -> dict:
     return {"errors": errors, "min_abs_delta": least, "confirmed": bool(ok)}
 
 
-def run_nonholo(mechanism: str, problems: list[dict], progress=True) -> list[dict]:
-    nonholo.plan(problems[0]["start"], problems[0]["goal"], mechanism=mechanism)       # warm-up
+def run_nonholo(mechanism: str, problems: list[dict], progress=True, **options) -> list[dict]:
+    nonholo.plan(problems[0]["start"], problems[0]["goal"], mechanism=mechanism, route="local")  # warm-up
     rows = []
     for i, p in enumerate(problems):
         t0 = time.perf_counter()
-        res = nonholo.plan(p["start"], p["goal"], mechanism=mechanism)
+        res = nonholo.plan(p["start"], p["goal"], mechanism=mechanism, **options)
         seconds = time.perf_counter() - t0
-        row = {"name": p["name"], "claimed": bool(res.success), "seconds": seconds,
+        row = {"name": p["name"], "claimed": bool(res.success), "seconds": seconds, "route": res.route,
                "reason": "" if res.success else res.reason[:300]}
         row.update(check(mechanism, res) if res.success else {"confirmed": False})
         rows.append(row)
@@ -136,6 +154,7 @@ def summary(rows: list[dict]) -> tuple:
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--goals", type=int, default=50)
+    ap.add_argument("--far", type=int, default=30)
     ap.add_argument("--seed", type=int, default=2014)
     ap.add_argument("--no-peer", action="store_true", help="skip python-control")
     args = ap.parse_args(argv)
@@ -148,11 +167,17 @@ def main(argv=None) -> int:
     results["car"] = run_nonholo("car", car)
     if not args.no_peer:
         results["car (python-control flatsys)"] = run_peer(car)
+    far = car_far_problems(args.far, args.seed) if args.far else []
+    if far:
+        results["car, far"] = run_nonholo("car", far, tol=FAR_TOL)
+        results["car, far (route local)"] = run_nonholo("car", far, tol=FAR_TOL, route="local")
     rep.paragraph(f"Problems: {len(ball)} rolling-ball goals ({args.goals} random and the reorientation "
                   f"in place) and {len(car)} car goals ({args.goals} random and the parallel parking), "
                   f"seed {args.seed}. *Solved*: re-simulated by DOP853 on the hand-written model with both "
                   f"parts of the terminal error ≤ {TOL:g} and, for the car, |cos φ| ≥ {COS_MIN:g} along the "
-                  "dense path. Times per call after a warm-up; medians of this run.")
+                  "dense path. Times per call after a warm-up; medians of this run."
+                  + (f" Far car pairs: {len(far)} (|x|, |y| ≤ 30, |φ| ≤ 1.4), planned with tol = {FAR_TOL:g}, "
+                     "by the default route and by the local planner alone." if far else ""))
     rows = []
     for label, res in results.items():
         solved, claimed, false, med, p95, mx, worst = summary(res)
@@ -160,6 +185,10 @@ def main(argv=None) -> int:
                      f"{med:.1f}", f"{p95:.1f}", f"{mx:.1f}", f"{worst:.1e}"])
     rep.table(["solver", "solved", "claimed", "false claims", "median ms", "p95 ms", "max ms",
                "largest error of the solved"], rows)
+    if far:
+        routed = sum(r["confirmed"] and r["route"] == "global" for r in results["car, far"])
+        rep.paragraph(f"Of the far car pairs solved by the default route, {routed} were reached by the "
+                      "global route (the local planner having failed).")
     if "car (python-control flatsys)" in results:
         ours = {r["name"]: r for r in results["car"]}
         both = [r for r in results["car (python-control flatsys)"] if r["confirmed"] and ours[r["name"]]["confirmed"]]

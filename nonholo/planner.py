@@ -168,7 +168,8 @@ def plan(R0, Rd, *, T: float | None = 1.0, method: str = "parametric", harmonics
       history record; returning a true value stops the run (and no global route is taken).
     - ``route``: ``"auto"`` (default) plans from ``R0`` to ``Rd`` and, if that fails, takes
       the global route (:mod:`nonholo.planning.route`): hops along a path of orientations
-      through the start's component, clear of ``Δ = 0``, each planned like a local plan,
+      through the start's component, clear of ``Δ = 0`` (beyond SO(3): along the straight
+      path of states, :mod:`nonholo.state_path`), each planned like a local plan,
       stitched into one control, then re-planned where it can as one smooth control from
       the stitched one (the result's ``stitched`` keeps the hops); ``"local"`` plans from
       ``R0`` to ``Rd`` only (the strategy alone); ``"global"`` takes only the global route.
@@ -219,13 +220,9 @@ def plan_path(R0, Rd, *, T: float = 1.0, method: str = "parametric", harmonics: 
     grid = check_count(grid, "grid")
     R0, q0 = states.parse(mech, R0, "R0")
     Rd, qd = states.parse(mech, Rd, "Rd")
-    if mech.beyond_so3:
-        if route == "global":
-            raise ValueError(f"route 'global' plans over SO(3); mechanism {mech.name!r} has the state "
-                             f"space {mech.state_space} (use route 'local' or 'auto')")
-        if objective is not None:
-            raise ValueError(f"objective {objective!r} is for mechanisms on SO(3); {mech.name!r} has "
-                             f"the state space {mech.state_space}")
+    if mech.beyond_so3 and objective is not None:
+        raise ValueError(f"objective {objective!r} is for mechanisms on SO(3); {mech.name!r} has "
+                         f"the state space {mech.state_space}")
 
     def delta_at(R, q) -> float:
         return float(mech.delta_samples(R[None], q[None])[0])
@@ -282,24 +279,26 @@ def plan_path(R0, Rd, *, T: float = 1.0, method: str = "parametric", harmonics: 
         outcome = solver.solve(problem, start, callback)
         if outcome.success and outcome.certificate is None:
             outcome = certified(outcome, problem, options)
-        if outcome.success or route == "local" or outcome.stopped or mech.beyond_so3:
+        if outcome.success or route == "local" or outcome.stopped:
             result = build_result(request, outcome, outcome.success, outcome.reason, problem)
             return energy.improve(request, result) if objective == "energy" else result
         local_reason = outcome.reason
 
-    def hop(Ra, Rb, T_hop, hop_delta_min):
-        return plan_path(Ra, Rb, T=T_hop, method=method, harmonics=harmonics, grid=grid, gamma=gamma, step=step,
-                    tol=tol, max_iter=max_iter, strategy=global_route.hop_strategy(cls), mechanism=mech,
-                    delta_min=hop_delta_min,
-                    steps=steps, newton_below=newton_below, min_step=min_step, route="local",
-                    leg_length=leg_length)
+    def hop(a, b, T_hop, hop_delta_min):
+        return plan_path(states.public(mech, *a), states.public(mech, *b), T=T_hop, method=method,
+                         harmonics=harmonics, grid=grid, gamma=gamma, step=step, tol=tol, max_iter=max_iter,
+                         strategy=global_route.hop_strategy(cls, global_route.max_hop_sensitivity(mech)),
+                         mechanism=mech, delta_min=hop_delta_min, steps=steps, newton_below=newton_below,
+                         min_step=min_step, route="local", leg_length=leg_length)
+
+    route_started, budget = global_route.time_budget(mech, started_effort)
 
     def smooth(stitched, reserve):
-        return global_route.smooth(request, stitched, cls, deadline=started_effort + global_route.TIME_BUDGET,
-                                   reserve=reserve)
+        return global_route.smooth(request, stitched, cls, deadline=route_started + budget, reserve=reserve)
 
     steered = global_route.steer(mech, R0, Rd, T, hop, tol=tol, delta_min=delta_min, sign=problem.sign,
-                                 started=started_effort, leg_limits=leg_limits, rescue=smooth)
+                                 started=route_started, budget=budget, leg_limits=leg_limits, rescue=smooth,
+                                 **({"q0": q0, "qd": qd} if mech.beyond_so3 else {}))
     if steered.controls is None and steered.smoothed is None:
         return build_result(request, outcome, False,
                             f"{local_reason}; the global route failed too: {steered.reason}", problem)

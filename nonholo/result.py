@@ -618,7 +618,7 @@ def _controls(d, mech, where: str = "controls", timed: bool = True) -> Controls 
         _rotation(_array(d["R0"], f"{where}.R0", (3, 3)), f"{where}.R0")
         _controls(d["base"], mech, f"{where}.base", timed=False)
     elif isinstance(d, dict) and d.get("kind") == Stitched.kind:
-        _fields(d, _CONTROL_FIELDS["stitched"], where)
+        _fields(d, _CONTROL_FIELDS["stitched"] + (("coordinates",) if mech.beyond_so3 else ()), where)
         if _number(d, "T", where=f"{where}.") <= 0:
             _fail(f"{where}.T", f"must be positive, got {d['T']}")
         pieces = d["pieces"]
@@ -629,6 +629,8 @@ def _controls(d, mech, where: str = "controls", timed: bool = True) -> Controls 
         W = _array(d["waypoints"], f"{where}.waypoints", (len(pieces) + 1, 3, 3))
         for i, R in enumerate(W):
             _rotation(R, f"{where}.waypoints[{i}]")
+        if mech.beyond_so3:
+            _array(d["coordinates"], f"{where}.coordinates", (len(pieces) + 1, mech.n_coordinates))
     else:
         _physical(d, mech, where)
     try:

@@ -15,7 +15,10 @@ the integrator's steps equal: a stage table of ``steps`` steps (a multiple of ``
 the pieces' tables of ``steps/k`` steps each, scaled.
 
 ``waypoints`` (``(k + 1, 3, 3)``) are the orientations the pieces were planned between
-(the route); the motion passes within the planner's tolerance of the inner ones.
+(the route); the motion passes within the planner's tolerance of the inner ones. A
+mechanism whose state goes beyond SO(3) (:mod:`nonholo.state`) adds the waypoints'
+``coordinates`` (``(k + 1, n)``; its waypoint orientations are the identity without
+orientation).
 """
 from __future__ import annotations
 
@@ -34,7 +37,7 @@ class Stitched:
 
     kind = "stitched"
 
-    def __init__(self, T: float, pieces, waypoints):
+    def __init__(self, T: float, pieces, waypoints, coordinates=None):
         self.T = check_time(T)
         pieces = list(pieces)
         if not pieces:
@@ -49,8 +52,16 @@ class Stitched:
         for i, R in enumerate(W):
             so3.check_rotation(R, f"waypoints[{i}]")
         W.setflags(write=False)
+        if coordinates is not None:
+            C = np.array(coordinates, dtype=float)
+            if C.ndim != 2 or C.shape[0] != len(pieces) + 1 or not np.all(np.isfinite(C)):
+                raise ValueError(f"coordinates must be finite with shape ({len(pieces) + 1}, n) for "
+                                 f"{len(pieces)} pieces, got {C.shape}")
+            C.setflags(write=False)
+            coordinates = C
         self.pieces = tuple(pieces)
         self.waypoints = W
+        self.coordinates = coordinates
 
     # -- the slots ------------------------------------------------------------------------
     @property
@@ -137,13 +148,16 @@ class Stitched:
     # -- description ----------------------------------------------------------------------
     def to_dict(self) -> dict:
         return {"kind": self.kind, "T": self.T, "pieces": [p.to_dict() for p in self.pieces],
-                "waypoints": self.waypoints.tolist()}
+                "waypoints": self.waypoints.tolist(),
+                **({} if self.coordinates is None else {"coordinates": self.coordinates.tolist()})}
 
     def __eq__(self, other) -> bool:
         return (type(self) is type(other) and self.T == other.T
                 and len(self.pieces) == len(other.pieces)
                 and all(a == b for a, b in zip(self.pieces, other.pieces))
-                and np.array_equal(self.waypoints, other.waypoints))
+                and np.array_equal(self.waypoints, other.waypoints)
+                and (self.coordinates is None) == (other.coordinates is None)
+                and (self.coordinates is None or np.array_equal(self.coordinates, other.coordinates)))
 
     __hash__ = None
 
@@ -156,5 +170,5 @@ def from_dict(d: dict, piece_from_dict=controls_from_dict) -> Stitched:
     pieces = d.get("pieces")
     if not isinstance(pieces, list):
         raise ValueError("a stitched control's 'pieces' must be a list")
-    return Stitched(d["T"], [piece_from_dict(p) for p in pieces], d["waypoints"])
+    return Stitched(d["T"], [piece_from_dict(p) for p in pieces], d["waypoints"], d.get("coordinates"))
 

@@ -165,8 +165,64 @@ def test_wrong_kind_of_state_says_what_is_expected():
         nonholo.plan([0, 0, 0], [0, 1, 0, 0], mechanism="car")
     with pytest.raises(ValueError, match="rotation matrix"):
         nonholo.plan((np.eye(3), [0, 0]), np.eye(3), mechanism="platform")
-    with pytest.raises(ValueError, match="route 'global'"):
-        nonholo.plan([0, 0, 0, 0], [0, 1, 0, 0], mechanism="car", route="global")
+    with pytest.raises(ValueError, match="objective 'energy' is for mechanisms on SO\\(3\\)"):
+        nonholo.plan([0, 0, 0, 0], [0, 1, 0, 0], mechanism="car", objective="energy")
+
+
+def test_far_car_goal_is_reached_by_the_global_route(tmp_path):
+    """A goal 40 car lengths away that the local planner alone does not reach: the global
+    route steers the straight path of states hop by hop, and DOP853 confirms the plan."""
+    start, goal = [28.031, -9.619, -1.535, -0.27], [11.942, 26.89, 2.611, 0.018]
+    local = nonholo.plan(start, goal, mechanism="car", tol=1e-8, route="local")
+    assert not local.success
+    res = nonholo.plan(start, goal, mechanism="car", tol=1e-8)
+    assert res.success and res.route == "global", res.reason
+    hops = res.hops
+    assert hops.n_pieces >= 5 and hops.coordinates.shape == (hops.n_pieces + 1, 4)
+    np.testing.assert_allclose(hops.coordinates[0], start)
+    np.testing.assert_allclose(hops.coordinates[-1], goal)
+    t, R, q, delta = verify.resimulate_state(res.start, res.controls, res.T, "car", res.breakpoints)
+    assert verify.state_errors("car", R[-1], q[-1], res.Rd, res.qd)["coordinates"] <= 1e-8
+    assert np.min(np.abs(delta)) >= 1e-2
+    path = tmp_path / "far.json"
+    res.save(path)
+    back = nonholo.PlanResult.load(path)
+    assert back.hops == hops and back.route == "global"
+
+
+def test_far_ball_goal_by_the_global_route():
+    """Without a singular set the straight path is not checked; route 'global' steers it."""
+    start = (so3.exp(np.array([0.3, -1.0, 0.4])), np.zeros(2))
+    goal = (so3.exp(np.array([-1.2, 0.5, 0.8])), np.array([6.0, -4.0]))
+    res = nonholo.plan(start, goal, mechanism="rolling_ball", route="global")
+    assert res.success and res.route == "global", res.reason
+    t, R, q, _ = verify.resimulate_state(res.start, res.controls, res.T, "rolling_ball", res.breakpoints)
+    errors = verify.state_errors("rolling_ball", R[-1], q[-1], res.Rd, res.qd)
+    assert max(errors.values()) <= 1e-8
+
+
+def test_stitched_coordinates_are_checked():
+    from nonholo.stitched import Stitched
+    piece = Fourier(1.0, np.zeros((2, 3)))
+    with pytest.raises(ValueError, match="coordinates must be finite with shape \\(3, n\\)"):
+        Stitched(2.0, [piece, piece], [np.eye(3)] * 3, np.zeros((2, 4)))
+    s = Stitched(2.0, [piece, piece], [np.eye(3)] * 3, np.zeros((3, 4)))
+    assert s != Stitched(2.0, [piece, piece], [np.eye(3)] * 3)
+
+
+def test_resimulation_takes_the_ends_inputs_from_inside():
+    """A fast smooth control: DOP853 on the hand-written car agrees with a fine CF4 replay
+    (an input sampled a nudge inside the ends would be off by u'·ε, far above this)."""
+    k = np.arange(1, 33)
+    coefficients = np.zeros((2, 65))
+    coefficients[0, 0] = 20.0
+    coefficients[:, 1:33] = np.array([[30.0], [1.0]]) / k * np.cos(k)
+    coefficients[:, 33:] = np.array([[30.0], [1.0]]) / k * np.sin(3 * k)
+    control = Fourier(1.0, coefficients)
+    start = np.array([0.0, 0.0, 0.0, 0.3])
+    _, _, q, _ = verify.resimulate_state(start, control, 1.0, "car")
+    fine = nonholo.simulate(start, control, T=1.0, mechanism="car", steps=40000)
+    assert np.max(np.abs(q[-1] - fine.q[-1])) <= 1e-10
 
 
 def test_goal_across_the_singular_set_is_refused():

@@ -30,6 +30,12 @@ ill-conditioned: it multiplies its hops' sensitivities — is smoothed the same 
 the next path is tried: one smooth control along the same corridor is often far better
 conditioned, and its own certificate decides.
 
+States beyond SO(3) (:mod:`nonholo.state`). For a mechanism whose state is ``(R, q)`` or
+``q``, the path is the straight path of states (:func:`nonholo.state_path.straight_path`,
+hops of at most :data:`nonholo.state_path.MAX_HOP`, checked clear of ``Δ = 0``), a failed
+hop is split at its straight midpoint, and the hops, stitching, certification and
+smoothing are the same, on the stacked state and its error.
+
 The stitched motion is played open loop, so its sensitivity is the product of its hops'
 transition matrices: each amplifies errors by a factor that grows with ``∫ |ω| dt /
 |Δ|``. Paths are therefore the cheapest in ``∫ ds / |Δ|^p`` rather than the shortest,
@@ -46,7 +52,8 @@ from typing import Callable
 
 import numpy as np
 
-from .. import certify, effort, roadmap, so3
+from .. import certify, effort, roadmap, so3, state_path
+from .. import state as states
 from ..certify import Certificate
 from ..controls import Fourier, PiecewiseConstant
 from ..mechanism import Mechanism
@@ -104,18 +111,77 @@ class Steered:
     smoothed: tuple | None = None
 
 
-def _stitch(T: float, hops: list, R0) -> Stitched:
-    return Stitched(T, [h.parametrisation for h in hops], [R0] + [h.Rd for h in hops])
+def _stitch(mechanism: Mechanism, T: float, hops: list, start) -> Stitched:
+    R0, q0 = start
+    coordinates = [q0] + [h.qd for h in hops] if mechanism.beyond_so3 else None
+    return Stitched(T, [h.parametrisation for h in hops], [R0] + [h.Rd for h in hops], coordinates)
+
+
+def _end(mechanism: Mechanism, res: PlanResult) -> tuple:
+    """Where a hop's result ends, as a state ``(R, q)``."""
+    return res.R_T, (res.q[-1] if mechanism.beyond_so3 else states.NO_COORDINATES)
+
+
+def _length(mechanism: Mechanism, a, b) -> float:
+    """The length of the hop ``a → b``: rad on SO(3), the stacked error's norm beyond."""
+    if mechanism.beyond_so3:
+        return state_path.length(mechanism, a, b)
+    return so3.distance(a[0], b[0])
+
+
+def _midpoint(mechanism: Mechanism, a, b) -> tuple:
+    """The midpoint of the hop ``a → b``: the geodesic's on SO(3), the straight path's beyond."""
+    if mechanism.beyond_so3:
+        return state_path.midpoint(mechanism, a, b)
+    return roadmap.geodesic(a[0], b[0], [0.5])[0], states.NO_COORDINATES
+
+
+def _paths(mechanism: Mechanism, start, goal, delta_min: float, leg_limits):
+    """The paths :func:`steer` tries in turn, lists of states ``(R, q)`` (``None`` for none):
+    the roadmap's of every cost of :data:`nonholo.roadmap.CONDITIONING_POWERS` on SO(3), the
+    straight path of states beyond."""
+    if mechanism.beyond_so3:
+        yield state_path.straight_path(mechanism, start, goal, delta_min=delta_min)
+        return
+    for power in roadmap.CONDITIONING_POWERS:
+        path = roadmap.orientation_path(mechanism, start[0], goal[0], delta_min=delta_min, power=power,
+                                        legs=leg_limits)
+        yield None if path is None else [(R, states.NO_COORDINATES) for R in path]
+
+
+def _no_path(mechanism: Mechanism, leg_limits) -> str:
+    if mechanism.beyond_so3:
+        return (f"the straight path of states comes within delta_min of the singular set Δ = 0 of "
+                f"{mechanism.name!r}")
+    within = "" if leg_limits is None else " and inside the legs' stroke limits"
+    return f"no path of orientations clear of Δ = 0{within} joins the start and the goal on the roadmap"
+
+
+def time_budget(mechanism: Mechanism, plan_started: float) -> tuple[float, float]:
+    """When the route's clock starts and its budget, seconds of effort: from the start of
+    :func:`nonholo.plan` and :data:`TIME_BUDGET` on SO(3); beyond SO(3), from now (the
+    local attempt at a far goal can take the whole of that) and
+    :data:`nonholo.state_path.TIME_BUDGET`."""
+    if mechanism.beyond_so3:
+        return effort.seconds(), state_path.TIME_BUDGET
+    return plan_started, TIME_BUDGET
+
+
+def max_hop_sensitivity(mechanism: Mechanism) -> float:
+    """The largest sensitivity of a hop the route keeps (a larger one is split):
+    :data:`MAX_HOP_SENSITIVITY` on SO(3), :data:`nonholo.state_path.MAX_HOP_SENSITIVITY`
+    beyond (see there why it is larger)."""
+    return state_path.MAX_HOP_SENSITIVITY if mechanism.beyond_so3 else MAX_HOP_SENSITIVITY
 
 
 @lru_cache(maxsize=8)
-def hop_strategy(cls: type) -> type:
+def hop_strategy(cls: type, limit: float = MAX_HOP_SENSITIVITY) -> type:
     """The strategy ``cls`` for hops: where it weighs the conditioning of its plans
-    (``max_sensitivity``), it keeps searching until a hop's is below
-    :data:`MAX_HOP_SENSITIVITY`."""
+    (``max_sensitivity``), it keeps searching until a hop's is below ``limit``
+    (:func:`max_hop_sensitivity`)."""
     if not hasattr(cls, "max_sensitivity"):
         return cls
-    return type(cls.__name__, (cls,), {"max_sensitivity": MAX_HOP_SENSITIVITY, "__module__": cls.__module__})
+    return type(cls.__name__, (cls,), {"max_sensitivity": limit, "__module__": cls.__module__})
 
 
 @lru_cache(maxsize=8)
@@ -166,7 +232,8 @@ def smooth(request: Request, stitched: Stitched, strategy: type, deadline: float
         if effort.seconds() > deadline:
             return None
         problem = Problem(request.R0, request.Rd, request.T, request.mechanism, request.method, request.steps,
-                          opts.delta_min, frame=frame, leg_limits=request.leg_limits)
+                          opts.delta_min, frame=frame, leg_limits=request.leg_limits, q0=request.q0,
+                          qd=request.qd)
         outcome = solver.solve(problem, Start(guess, True), out_of_time)
         if outcome.success and outcome.certificate is None:
             outcome = certified(outcome, problem, opts)
@@ -175,23 +242,27 @@ def smooth(request: Request, stitched: Stitched, strategy: type, deadline: float
     return None
 
 
-def hop_delta_min(mechanism: Mechanism, Ra, Rb, delta_min: float) -> float:
-    """The ``delta_min`` of a hop ``Ra → Rb``: :data:`HOP_DELTA_MIN`, or half the least
-    ``|Δ|`` of its ends if that is less, never below the run's ``delta_min`` (which is
-    all a mechanism without a singular set has)."""
+def hop_delta_min(mechanism: Mechanism, a, b, delta_min: float) -> float:
+    """The ``delta_min`` of a hop between the states ``a → b`` (pairs ``(R, q)``):
+    :data:`HOP_DELTA_MIN`, or half the least ``|Δ|`` of its ends if that is less, never
+    below the run's ``delta_min`` (which is all a mechanism without a singular set has)."""
     if not mechanism.has_singular_set:
         return delta_min
-    ends = min(abs(float(mechanism.delta(Ra))), abs(float(mechanism.delta(Rb))))
+    R = np.stack([a[0], b[0]])
+    q = np.stack([a[1], b[1]]) if mechanism.beyond_so3 else None
+    ends = float(np.min(np.abs(mechanism.delta_samples(R, q))))
     return max(delta_min, min(HOP_DELTA_MIN, 0.5 * ends))
 
 
 def steer(mechanism: Mechanism, R0, Rd, T: float, local: Callable, *, tol: float, delta_min: float,
           sign: float, budget: float | None = None, started: float | None = None,
-          leg_limits=None, rescue: Callable | None = None) -> Steered:
+          leg_limits=None, rescue: Callable | None = None, q0=None, qd=None) -> Steered:
     """The route ``R0 → Rd`` steered hop by hop (see the module) along the path of the
     first cost of :data:`nonholo.roadmap.CONDITIONING_POWERS`, then along the path of the
-    next (one not tried yet) while the route fails. ``local(R_start, R_goal, T, delta_min)`` plans one
-    hop (a :class:`~nonholo.result.PlanResult`); ``budget``: seconds of effort (default
+    next (one not tried yet) while the route fails; beyond SO(3) (``q0``, ``qd``: the
+    coordinates of start and goal), along the straight path of states.
+    ``local(start, goal, T, delta_min)`` plans one hop between two states ``(R, q)`` (a
+    :class:`~nonholo.result.PlanResult`); ``budget``: seconds of effort (default
     :data:`TIME_BUDGET`) after
     ``started`` (an :func:`nonholo.effort.seconds` reading; default: now) after which no further
     hop is tried. ``leg_limits``: stroke limits (:class:`~nonholo.limits.LegLimits`) the
@@ -206,16 +277,15 @@ def steer(mechanism: Mechanism, R0, Rd, T: float, local: Callable, *, tol: float
     if budget is None:
         budget = TIME_BUDGET
     steered, tried = None, []
-    for power in roadmap.CONDITIONING_POWERS:
-        path = roadmap.orientation_path(mechanism, R0, Rd, delta_min=delta_min, power=power, legs=leg_limits)
+    start = (np.asarray(R0, dtype=float), states.NO_COORDINATES if q0 is None else q0)
+    goal = (np.asarray(Rd, dtype=float), states.NO_COORDINATES if qd is None else qd)
+    for path in _paths(mechanism, start, goal, delta_min, leg_limits):
         if path is None:
-            within = "" if leg_limits is None else " and inside the legs' stroke limits"
-            return Steered(None, None, reason=f"no path of orientations clear of Δ = 0{within} joins the "
-                                              "start and the goal on the roadmap")
-        if any(q.shape == path.shape and np.array_equal(q, path) for q in tried):
+            return Steered(None, None, reason=_no_path(mechanism, leg_limits))
+        if any(_same_path(p, path) for p in tried):
             continue        # steering is deterministic: the same path fails the same way
         tried.append(path)
-        steered = _steer_path(mechanism, path, Rd, T, local, tol=tol, delta_min=delta_min, sign=sign,
+        steered = _steer_path(mechanism, path, goal, T, local, tol=tol, delta_min=delta_min, sign=sign,
                               deadline=started + budget, leg_limits=leg_limits)
         if steered.controls is None and steered.draft is not None and rescue is not None:
             steered.smoothed = rescue(steered.draft, steered.certify_seconds)
@@ -224,53 +294,64 @@ def steer(mechanism: Mechanism, R0, Rd, T: float, local: Callable, *, tol: float
     return steered
 
 
-def _steer_path(mechanism: Mechanism, path, Rd, T: float, local: Callable, *, tol: float, delta_min: float,
-                sign: float, deadline: float, leg_limits=None) -> Steered:
-    """:func:`steer` along one path of orientations (``path[0]`` the start)."""
-    R0 = path[0]
+def _same_path(a: list, b: list) -> bool:
+    return len(a) == len(b) and all(np.array_equal(x[0], y[0]) and np.array_equal(x[1], y[1])
+                                    for x, y in zip(a, b))
+
+
+def _steer_path(mechanism: Mechanism, path: list, goal, T: float, local: Callable, *, tol: float,
+                delta_min: float, sign: float, deadline: float, leg_limits=None) -> Steered:
+    """:func:`steer` along one path of states ``(R, q)`` (``path[0]`` the start)."""
+    start = path[0]
+    (R0, q0), (Rd, qd) = start, goal
+    beyond = mechanism.beyond_so3
     T_hop = T / (len(path) - 1)
     targets = list(path[1:])
     hops = []
-    R = np.asarray(R0, dtype=float)
+    here = (np.asarray(R0, dtype=float), q0)
+    waypoints = np.stack([p[0] for p in path])
     while targets:
         if len(hops) + len(targets) > MAX_PIECES:
-            return Steered(None, None, hops, f"the route needs more than {MAX_PIECES} hops", path)
+            return Steered(None, None, hops, f"the route needs more than {MAX_PIECES} hops", waypoints)
         if effort.seconds() > deadline:
             return Steered(None, None, hops, f"the route ran out of its time after {len(hops)} "
-                                             f"hops ({len(targets)} to go)", path)
-        res = local(R, targets[0], T_hop, hop_delta_min(mechanism, R, targets[0], delta_min))
-        if res.success and res.sensitivity <= MAX_HOP_SENSITIVITY:
+                                             f"hops ({len(targets)} to go)", waypoints)
+        res = local(here, targets[0], T_hop, hop_delta_min(mechanism, here, targets[0], delta_min))
+        if res.success and res.sensitivity <= max_hop_sensitivity(mechanism):
             hops.append(res)
-            R = res.R_T
+            here = _end(mechanism, res)
             targets.pop(0)
             continue
-        length = so3.distance(R, targets[0])
+        length = _length(mechanism, here, targets[0])
         if length / 2 < MIN_HOP:
             why = res.reason if not res.success else f"sensitivity {res.sensitivity:.3g}"
-            return Steered(None, None, hops, f"hop {len(hops) + 1} ({length:.3g} rad) failed: {why}", path)
-        targets.insert(0, roadmap.geodesic(R, targets[0], [0.5])[0])
+            unit = "" if beyond else " rad"
+            return Steered(None, None, hops, f"hop {len(hops) + 1} ({length:.3g}{unit}) failed: {why}", waypoints)
+        targets.insert(0, _midpoint(mechanism, here, targets[0]))
     cert = None
+    ends = {"q0": q0, "qd": qd} if beyond else {}
     for repair in range(MAX_REPAIRS + 1):
-        stitched = _stitch(T, hops, R0)
+        stitched = _stitch(mechanism, T, hops, start)
         k = len(hops)
         M = k * max(h.replay_steps for h in hops)
         clock = effort.seconds()
         cert = certify.measure(R0, Rd, T, mechanism, stitched, M, tol, delta_min, sign,
                                max_steps=min(certify.MAX_REPLAY_STEPS, STITCHED_REFINEMENT * M),
-                               leg_limits=leg_limits)
+                               leg_limits=leg_limits, **ends)
         clock = effort.seconds() - clock
         if cert.passed or not cert.correctable or repair == MAX_REPAIRS:
             break
         # the last hop again, from where the stitched replay enters it
-        entry = cert.R[(k - 1) * (cert.replay_steps // k)]
-        res = local(entry, Rd, hops[-1].T, hop_delta_min(mechanism, entry, Rd, delta_min))
+        i = (k - 1) * (cert.replay_steps // k)
+        entry = (cert.R[i], cert.q[i] if beyond else states.NO_COORDINATES)
+        res = local(entry, goal, hops[-1].T, hop_delta_min(mechanism, entry, goal, delta_min))
         if not res.success:
             break
         hops[-1] = res
     if not cert.passed:
-        return Steered(None, cert, hops, f"the stitched control is not certified: {cert.reason}", path, clock,
-                       draft=stitched)
-    return Steered(stitched, cert, hops, "", path, clock)
+        return Steered(None, cert, hops, f"the stitched control is not certified: {cert.reason}", waypoints,
+                       clock, draft=stitched)
+    return Steered(stitched, cert, hops, "", waypoints, clock)
 
 
 def build_result(request: Request, steered: Steered, local_reason: str,
@@ -283,8 +364,9 @@ def build_result(request: Request, steered: Steered, local_reason: str,
     mech, T, cert = request.mechanism, request.T, steered.certificate
     hops = steered.hops
     history = [{**rec, "hop": i} for i, h in enumerate(hops) for rec in h.history]
-    route = (f"the global route: {len(hops)} hops through a path of orientations clear of Δ = 0, "
-             f"stitched (the local planner: {local_reason})")
+    through = ("a straight path of states" + (" clear of Δ = 0" if mech.has_singular_set else "")
+               if mech.beyond_so3 else "a path of orientations clear of Δ = 0")
+    route = f"the global route: {len(hops)} hops through {through}, stitched (the local planner: {local_reason})"
     if smoothed is not None:
         outcome, problem = smoothed
         res = build_local_result(request, outcome, True, outcome.reason, problem)
@@ -300,15 +382,20 @@ def build_result(request: Request, steered: Steered, local_reason: str,
     t = np.arange(n) * (T / steps)
     t[-1] = T
     R = cert.R[::cert.replay_steps // steps]
+    q = cert.q[::cert.replay_steps // steps] if mech.beyond_so3 else None
+    unit = "" if mech.beyond_so3 else " rad"
     reason = (f"reached by {route}; certified: the physical replay ({cert.replay_steps} steps) ends "
-              f"{cert.terminal_error:.2g} rad from the goal, error bound {cert.error_bound:.2g} rad")
+              f"{cert.terminal_error:.2g}{unit} from the goal, error bound {cert.error_bound:.2g}{unit}")
     return PlanResult(
         success=True, reason=reason, terminal_error=cert.terminal_error, min_delta=cert.min_delta,
         iterations=sum(h.iterations for h in hops), history=history,
-        t=t, R=R, u=par(t).reshape(n, mech.n_inputs), delta=mech.delta_samples(R),
+        t=t, R=R, u=par(t).reshape(n, mech.n_inputs), delta=mech.delta_samples(R, q),
         parametrisation=par, mechanism=mech.name, method=request.method, strategy=request.strategy,
         T=T, R0=request.R0, Rd=request.Rd, steps=steps,
         seconds=time.perf_counter() - request.started,
         options=request.recorded_options(),
         sensitivity=cert.sensitivity, error_bound=cert.error_bound, replay_steps=cert.replay_steps,
-        route="global")
+        route="global",
+        **({} if not mech.beyond_so3 else {
+            "q": q, "q0": request.q0, "qd": request.qd,
+            "errors": None if cert.errors is None else states.error_parts(mech, *cert.errors)}))
