@@ -18,8 +18,10 @@ from .so3 import e3
 from .state_space import StateMechanism
 
 
-def rolling_ball(radius=1) -> StateMechanism:
+def rolling_ball(radius=1, name: str = "rolling_ball") -> StateMechanism:
     """The ball rolling on the plane z = 0 (radius ``radius``, centre at height ρ).
+
+    ``name``: the mechanism's name (a variant of another radius needs its own).
 
     Unknown: the spatial angular velocity ``ω``. Constraints, for the input ``v = ṗ``
     (``ṗ = (v₁, v₂, 0)``): the contact point ``p − ρ e₃`` does not slip,
@@ -37,7 +39,7 @@ def rolling_ball(radius=1) -> StateMechanism:
     solution = C.LUsolve(rhs)
     Omega = sp.Matrix(solution).jacobian(v).applyfunc(sp.simplify)
     return StateMechanism(
-        name="rolling_ball",
+        name=name,
         description=f"ball of radius {rho} rolling without slipping or spinning on the plane z = 0",
         inputs=("v1 = dp1/dt", "v2 = dp2/dt"),
         coordinates=(p1, p2), units=("radius", "radius"), angles=(False, False),
@@ -46,8 +48,9 @@ def rolling_ball(radius=1) -> StateMechanism:
     )
 
 
-def kinematic_car(wheelbase=1) -> StateMechanism:
-    """The kinematic car with steering angle ``φ`` as a state (wheelbase ``ℓ``).
+def kinematic_car(wheelbase=1, name: str = "car") -> StateMechanism:
+    """The kinematic car with steering angle ``φ`` as a state (wheelbase ``ℓ``; ``name``:
+    the mechanism's name, which a variant of another wheelbase needs its own of).
 
     Unknown: ``(ẋ, ẏ, θ̇)`` of the rear axle's midpoint ``(x, y)`` and the heading ``θ``.
     Constraints: the rear wheels roll along the heading at the speed ``v``
@@ -75,7 +78,7 @@ def kinematic_car(wheelbase=1) -> StateMechanism:
     X = sp.Matrix.hstack(first, sp.Matrix([0, 0, 0, 1]))
     frame = sp.Matrix.hstack((first * delta).applyfunc(sp.simplify), sp.Matrix([0, 0, 0, 1]))
     return StateMechanism(
-        name="car",
+        name=name,
         description=f"kinematic car with the steering angle as a state (wheelbase {ell})",
         inputs=("v = rear-axle speed", "u2 = dphi/dt"),
         coordinates=(x, y, th, ph), units=("wheelbase", "wheelbase", "rad", "rad"),

@@ -277,10 +277,11 @@ def forward_variational(R0, q0, U, h, sgn, delta_stop, Bidx, Bval, stride_b, str
                         + np.dot(K4, K4.T))
     Zs[N] = Z
     finite = np.all(np.isfinite(Z))
+    Zi = np.empty((D, D))                  # one C-contiguous array for both branches
     if not finite or np.linalg.det(Z) == 0.0:
-        Zi = np.full((D, D), np.nan)       # Φ(T, 0) does not exist (the motion blew up)
+        Zi[:, :] = np.nan                  # Φ(T, 0) does not exist (the motion blew up)
     else:
-        Zi = np.linalg.inv(Z)
+        Zi[:, :] = np.linalg.inv(Z)
     if dense:
         nb = Bval.shape[2]
         A = np.dot(Wd.T, Bval.reshape((3 * N, nb)))        # (d·m, nb)

@@ -249,19 +249,22 @@ def plan_path(R0, Rd, *, T: float = 1.0, method: str = "parametric", harmonics: 
     # goals that cannot be reached: decided before anything is simulated (or compiled)
     if mech.has_singular_set:
         d0, dd = delta_at(R0, q0), delta_at(Rd, qd)
+        # the singular surface of SO(3) (Δ(R)); beyond SO(3), Δ's zero set in the state space
+        where, at0, atd = (("surface", "Δ(R0)", "Δ(Rd)") if not mech.beyond_so3 else
+                           (f"set of {mech.name!r}", "Δ at the start", "Δ at the goal"))
         refusal = None
         if dd == 0.0:
-            refusal = ("the goal lies on the singular surface Δ = 0 (Δ(Rd) = 0): unreachable with "
+            refusal = (f"the goal lies on the singular {where} Δ = 0 ({atd} = 0): unreachable with "
                        "bounded inputs")
         elif np.sign(dd) != np.sign(d0):
-            refusal = (f"the goal lies across the singular surface Δ = 0 (Δ(R0) = {d0:.4g}, "
-                       f"Δ(Rd) = {dd:.4g}): no motion can cross it, unreachable")
+            refusal = (f"the goal lies across the singular {where} Δ = 0 ({at0} = {d0:.4g}, "
+                       f"{atd} = {dd:.4g}): no motion can cross it, unreachable")
         elif abs(dd) < options.delta_min:
             refusal = (f"the goal lies within delta_min = {options.delta_min:g} of the singular "
-                       f"surface (|Δ(Rd)| = {abs(dd):.3g})")
+                       f"{where} (|{atd}| = {abs(dd):.3g})")
         elif abs(d0) < options.delta_min:
             refusal = (f"the start lies within delta_min = {options.delta_min:g} of the singular "
-                       f"surface (|Δ(R0)| = {abs(d0):.3g})")
+                       f"{where} (|{at0}| = {abs(d0):.3g})")
         if refusal is not None:
             return build_result(request, None, False, refusal)
     if leg_limits is not None:

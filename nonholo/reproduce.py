@@ -113,6 +113,10 @@ def solve_all(progress=_log) -> list[Solved]:
 
 #: The classic problems of the mechanisms beyond SO(3) (start, goal): the ball turned by
 #: π/2 about a horizontal axis in place, the car parked one wheelbase sideways.
+#: Options of each such card's plan: the ball's default plan rolls 12 radii out and back;
+#: the paper's strategy with four harmonics finds one within 2 radii (a fraction of the
+#: default's energy ∫|v|² dt), the motion one wants to see.
+STATE_OPTIONS = {"rolling_ball": {"strategy": "paper", "harmonics": 4}, "car": {}}
 STATE_PROBLEMS = {
     "rolling_ball": ((so3.from_rpy(0.4, -0.3, 0.2), (0.0, 0.0)),
                      (so3.exp(np.array([np.pi / 2, 0.0, 0.0])) @ so3.from_rpy(0.4, -0.3, 0.2), (0.0, 0.0))),
@@ -128,7 +132,7 @@ def mechanism_cards():
         if mech.beyond_so3:
             start, goal = STATE_PROBLEMS[name]
             draw = state_figures.ball_figure if mech.orientation else state_figures.car_figure
-            yield draw(plan(start, goal, mechanism=name)), f"mechanism_{name}"
+            yield draw(plan(start, goal, mechanism=name, **STATE_OPTIONS[name])), f"mechanism_{name}"
         elif mech.geometry is not None:
             R = np.eye(3) if abs(float(mech.delta(np.eye(3)))) > 0.1 else _examples.get(1).R_start
             psi = float(so3.as_rpy(R)[2])

@@ -20,15 +20,18 @@ def _check(result, mechanism: str):
 
 def ball_figure(result, frames: int = 9):
     """The ball's contact path on the plane z = 0 (left), with the ball's body axes
-    ``R e₁``, ``R e₂`` projected on the plane at ``frames`` instants; right, the angle
-    turned (``|log(R(t) R0ᵀ)|``) and the inputs against time."""
+    ``R e₁``, ``R e₂`` projected on the plane at ``frames`` instants; right, the angles
+    from the start and to the goal (``|log(R(t) R0ᵀ)|``, ``|log(R(t) R_dᵀ)|``) and the
+    inputs against time."""
     _check(result, "rolling_ball")
     from .so3 import log
 
     p, R, t = result.q, result.R, result.t
-    fig, (ax, bx) = plt.subplots(1, 2, figsize=(10, 4.5), gridspec_kw={"width_ratios": [1.1, 1]})
+    fig = plt.figure(figsize=(10, 4.8))
+    grid = fig.add_gridspec(2, 2, width_ratios=[1.1, 1])
+    ax = fig.add_subplot(grid[:, 0])
     ax.plot(p[:, 0], p[:, 1], color="0.3", lw=1.5, label="contact point")
-    ax.plot(*p[0], "o", color="tab:green", label="start")
+    ax.plot(*p[0], "o", color="tab:green", ms=8, label="start")
     ax.plot(*result.qd, "x", color="tab:red", ms=10, mew=2, label="goal")
     span = max(np.ptp(p[:, 0]), np.ptp(p[:, 1]), 0.5)
     size = 0.12 * span
@@ -38,19 +41,24 @@ def ball_figure(result, frames: int = 9):
             ax.annotate("", xy=p[k] + d, xytext=p[k], arrowprops={"arrowstyle": "->", "color": colour, "lw": 1})
     ax.plot([], [], color="tab:blue", label="R e₁ (projected)")
     ax.plot([], [], color="tab:orange", label="R e₂ (projected)")
-    ax.set_aspect("equal")
+    ax.set_aspect("equal", adjustable="datalim")
     ax.margins(0.15)
-    ax.set_xlabel("p₁")
-    ax.set_ylabel("p₂")
+    ax.set_xlabel("p₁ (radii)")
+    ax.set_ylabel("p₂ (radii)")
     ax.set_title("contact path on the plane")
-    ax.legend(fontsize=8, loc="upper center", bbox_to_anchor=(0.5, -0.18), ncol=3)
-    turned = [np.linalg.norm(log(Rk @ result.R0.T)) for Rk in R]
-    bx.plot(t, turned, color="k", label="angle turned |log(R R0ᵀ)| (rad)")
-    bx.plot(t, result.u[:, 0], color="tab:blue", lw=1, label="v₁ = dp₁/dt")
-    bx.plot(t, result.u[:, 1], color="tab:orange", lw=1, label="v₂ = dp₂/dt")
-    bx.set_xlabel("t (s)")
-    bx.set_title("orientation and inputs")
-    bx.legend(fontsize=8)
+    ax.legend(fontsize=8, loc="best")
+    angles = fig.add_subplot(grid[0, 1])
+    angles.plot(t, [np.linalg.norm(log(Rk @ result.R0.T)) for Rk in R], color="tab:green", label="from the start")
+    angles.plot(t, [np.linalg.norm(log(Rk @ result.Rd.T)) for Rk in R], color="tab:red", label="to the goal")
+    angles.set_ylabel("angle (rad)")
+    angles.set_title("orientation and inputs")
+    angles.legend(fontsize=8)
+    inputs = fig.add_subplot(grid[1, 1], sharex=angles)
+    inputs.plot(t, result.u[:, 0], color="tab:blue", lw=1, label="v₁ = dp₁/dt")
+    inputs.plot(t, result.u[:, 1], color="tab:orange", lw=1, label="v₂ = dp₂/dt")
+    inputs.set_xlabel("t (s)")
+    inputs.set_ylabel("input (radii/s)")
+    inputs.legend(fontsize=8)
     fig.tight_layout()
     return fig
 
@@ -67,7 +75,9 @@ def car_figure(result, frames: int = 8):
     ``frames`` instants (left); right, ``θ``, ``φ`` and the inputs against time."""
     _check(result, "car")
     q, t = result.q, result.t
-    fig, (ax, bx) = plt.subplots(1, 2, figsize=(10, 4.5), gridspec_kw={"width_ratios": [1.1, 1]})
+    fig = plt.figure(figsize=(10, 4.8))
+    grid = fig.add_gridspec(2, 2, width_ratios=[1.1, 1])
+    ax = fig.add_subplot(grid[:, 0])
     ax.plot(q[:, 0], q[:, 1], color="0.3", lw=1.5, label="rear axle")
     for j, k in enumerate(np.linspace(0, len(t) - 1, frames).astype(int)):
         x, y, th, ph = q[k]
@@ -76,20 +86,25 @@ def car_figure(result, frames: int = 8):
         fx, fy = x + np.cos(th), y + np.sin(th)
         d = 0.18 * np.array([np.cos(th + ph), np.sin(th + ph)])
         ax.plot([fx - d[0], fx + d[0]], [fy - d[1], fy + d[1]], color=shade, lw=2.5)
-    ax.plot(*q[0, :2], "o", color="tab:green", label="start")
+    ax.plot(*q[0, :2], "o", color="tab:green", ms=8, label="start")
     ax.plot(*result.qd[:2], "x", color="tab:red", ms=10, mew=2, label="goal")
-    ax.set_aspect("equal")
-    ax.margins(0.25)
+    ax.set_aspect("equal", adjustable="datalim")
+    ax.margins(0.2)
     ax.set_xlabel("x (wheelbases)")
     ax.set_ylabel("y (wheelbases)")
-    ax.set_title("path, body and front wheels")
+    ax.set_title("path, body and front wheels (dark → light)")
     ax.legend(fontsize=8, loc="best")
-    bx.plot(t, q[:, 2], color="k", label="θ (rad)")
-    bx.plot(t, q[:, 3], color="tab:purple", label="φ (rad)")
-    bx.plot(t, result.u[:, 0], color="tab:blue", lw=1, label="v")
-    bx.plot(t, result.u[:, 1], color="tab:orange", lw=1, label="dφ/dt")
-    bx.set_xlabel("t (s)")
-    bx.set_title("heading, steering and inputs")
-    bx.legend(fontsize=8)
+    angles = fig.add_subplot(grid[0, 1])
+    angles.plot(t, q[:, 2], color="k", label="heading θ")
+    angles.plot(t, q[:, 3], color="tab:purple", label="steering φ")
+    angles.set_ylabel("angle (rad)")
+    angles.set_title("heading, steering and inputs")
+    angles.legend(fontsize=8)
+    inputs = fig.add_subplot(grid[1, 1], sharex=angles)
+    inputs.plot(t, result.u[:, 0], color="tab:blue", lw=1, label="v (wheelbases/s)")
+    inputs.plot(t, result.u[:, 1], color="tab:orange", lw=1, label="dφ/dt (rad/s)")
+    inputs.set_xlabel("t (s)")
+    inputs.set_ylabel("input")
+    inputs.legend(fontsize=8)
     fig.tight_layout()
     return fig

@@ -246,9 +246,13 @@ def test_figures_draw_the_plans(tmp_path):
 
     for name, draw in (("rolling_ball", state_figures.ball_figure), ("car", state_figures.car_figure)):
         start, goal = reproduce.STATE_PROBLEMS[name]
-        res = nonholo.plan(start, goal, mechanism=name)
+        res = nonholo.plan(start, goal, mechanism=name, **reproduce.STATE_OPTIONS[name])
         fig = draw(res)
-        assert len(fig.axes) == 2 and len(fig.axes[0].lines) >= 3
+        path, angles, inputs = fig.axes
+        assert len(path.lines) >= 3 and len(angles.lines) == 2 and len(inputs.lines) == 2
+        np.testing.assert_array_equal(path.lines[0].get_xydata(), res.q[:, :2])
+        if name == "rolling_ball":      # the angle to the goal ends at 0
+            assert angles.lines[1].get_ydata()[-1] < 1e-8
         fig.savefig(tmp_path / f"{name}.png")
         assert (tmp_path / f"{name}.png").stat().st_size > 10_000
     with pytest.raises(ValueError, match="rolling_ball"):
