@@ -18,6 +18,24 @@ def _check(result, mechanism: str):
         raise ValueError("result has no trajectory to draw")
 
 
+def _time_panels(fig, grid, result, title: str, angles: list, inputs: tuple, input_unit: str):
+    """The right column of a state figure: ``angles`` (``(values, colour, label)`` each,
+    rad) above the two inputs (labelled ``inputs``) against time; then the layout."""
+    top = fig.add_subplot(grid[0, 1])
+    for values, colour, label in angles:
+        top.plot(result.t, values, color=colour, label=label)
+    top.set_ylabel("angle (rad)")
+    top.set_title(title)
+    top.legend(fontsize=8)
+    bottom = fig.add_subplot(grid[1, 1], sharex=top)
+    for j, (colour, label) in enumerate(zip(("tab:blue", "tab:orange"), inputs)):
+        bottom.plot(result.t, result.u[:, j], color=colour, lw=1, label=label)
+    bottom.set_xlabel("t (s)")
+    bottom.set_ylabel(input_unit)
+    bottom.legend(fontsize=8)
+    fig.tight_layout()
+
+
 def ball_figure(result, frames: int = 9):
     """The ball's contact path on the plane z = 0 (left), with the ball's body axes
     ``R e₁``, ``R e₂`` projected on the plane at ``frames`` instants; right, the angles
@@ -47,19 +65,10 @@ def ball_figure(result, frames: int = 9):
     ax.set_ylabel("p₂ (radii)")
     ax.set_title("contact path on the plane")
     ax.legend(fontsize=8, loc="best")
-    angles = fig.add_subplot(grid[0, 1])
-    angles.plot(t, [np.linalg.norm(log(Rk @ result.R0.T)) for Rk in R], color="tab:green", label="from the start")
-    angles.plot(t, [np.linalg.norm(log(Rk @ result.Rd.T)) for Rk in R], color="tab:red", label="to the goal")
-    angles.set_ylabel("angle (rad)")
-    angles.set_title("orientation and inputs")
-    angles.legend(fontsize=8)
-    inputs = fig.add_subplot(grid[1, 1], sharex=angles)
-    inputs.plot(t, result.u[:, 0], color="tab:blue", lw=1, label="v₁ = dp₁/dt")
-    inputs.plot(t, result.u[:, 1], color="tab:orange", lw=1, label="v₂ = dp₂/dt")
-    inputs.set_xlabel("t (s)")
-    inputs.set_ylabel("input (radii/s)")
-    inputs.legend(fontsize=8)
-    fig.tight_layout()
+    _time_panels(fig, grid, result, "orientation and inputs",
+                 [([np.linalg.norm(log(Rk @ result.R0.T)) for Rk in R], "tab:green", "from the start"),
+                  ([np.linalg.norm(log(Rk @ result.Rd.T)) for Rk in R], "tab:red", "to the goal")],
+                 ("v₁ = dp₁/dt", "v₂ = dp₂/dt"), "input (radii/s)")
     return fig
 
 
@@ -94,17 +103,7 @@ def car_figure(result, frames: int = 8):
     ax.set_ylabel("y (wheelbases)")
     ax.set_title("path, body and front wheels (dark → light)")
     ax.legend(fontsize=8, loc="best")
-    angles = fig.add_subplot(grid[0, 1])
-    angles.plot(t, q[:, 2], color="k", label="heading θ")
-    angles.plot(t, q[:, 3], color="tab:purple", label="steering φ")
-    angles.set_ylabel("angle (rad)")
-    angles.set_title("heading, steering and inputs")
-    angles.legend(fontsize=8)
-    inputs = fig.add_subplot(grid[1, 1], sharex=angles)
-    inputs.plot(t, result.u[:, 0], color="tab:blue", lw=1, label="v (wheelbases/s)")
-    inputs.plot(t, result.u[:, 1], color="tab:orange", lw=1, label="dφ/dt (rad/s)")
-    inputs.set_xlabel("t (s)")
-    inputs.set_ylabel("input")
-    inputs.legend(fontsize=8)
-    fig.tight_layout()
+    _time_panels(fig, grid, result, "heading, steering and inputs",
+                 [(q[:, 2], "k", "heading θ"), (q[:, 3], "tab:purple", "steering φ")],
+                 ("v (wheelbases/s)", "dφ/dt (rad/s)"), "input")
     return fig
