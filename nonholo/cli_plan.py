@@ -5,7 +5,10 @@ Example::
     nonholo plan --from 0.5 1.2 -0.5 --to 1.0 0.9 -0.5 --T 1 --harmonics 2 --out plan.json --plot plan.png
 
 Orientations are given as RPY angles ``φ ϑ ψ`` in radians, ``RPY(φ, ϑ, ψ) =
-R(Z, φ) R(Y, ϑ) R(X, ψ)``. The strategy is ``robust`` unless ``--strategy paper`` asks for
+R(Z, φ) R(Y, ϑ) R(X, ψ)``. A mechanism whose state goes beyond SO(3) takes its coordinates
+(``nonholo plan --mechanism car --from 0 0 0 0 --to 0 1 0 0``: ``x y θ φ``), after the RPY
+angles if it has an orientation too (``rolling_ball``: ``φ ϑ ψ p1 p2``); ``nonholo
+mechanisms`` lists each one's state. The strategy is ``robust`` unless ``--strategy paper`` asks for
 the appendix's algorithm as published (see :mod:`nonholo.robust`). One line is printed per accepted iteration (iteration, error
 ``|l_T|`` in rad, the step ``γh``, least ``|Δ|`` along the trajectory), then a summary;
 then the result is written to ``--out`` and the figure to ``--plot`` (each even if the
@@ -30,6 +33,7 @@ from pathlib import Path
 import numpy as np
 
 from . import catalog, export, planner, so3
+from . import state as states
 
 #: exit status of ``nonholo plan`` (see the module docstring)
 EXIT_SUCCESS, EXIT_FAILED, EXIT_BAD_INPUT, EXIT_WRITE_FAILED = 0, 1, 2, 3
@@ -40,10 +44,11 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     p = subparsers.add_parser(
         "plan", help="plan a motion R0 -> Rd (Jacobian algorithm of Tchoń & Jakubiak)",
         description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("--from", dest="start", nargs=3, type=float, required=True,
-                   metavar=("PHI", "THETA", "PSI"), help="initial orientation, RPY angles (rad)")
-    p.add_argument("--to", dest="goal", nargs=3, type=float, required=True,
-                   metavar=("PHI", "THETA", "PSI"), help="goal orientation, RPY angles (rad)")
+    p.add_argument("--from", dest="start", nargs="+", type=float, required=True, metavar="X",
+                   help="the start: RPY angles φ ϑ ψ (rad) of the orientation, then the coordinates "
+                        "of a mechanism whose state has them (see the description)")
+    p.add_argument("--to", dest="goal", nargs="+", type=float, required=True, metavar="X",
+                   help="the goal, as --from")
     p.add_argument("--T", type=_horizon, default=1.0,
                    help="time horizon in s (default 1), or 'min' for the least time under --leg-speed")
     p.add_argument("--method", choices=planner.METHODS, default="parametric",
@@ -97,6 +102,13 @@ def _fmt(x, spec: str) -> str:
     return "n/a" if x is None else format(x, spec)
 
 
+def _error_text(res, spec: str) -> str:
+    """The terminal error in words: ``|l_T|`` in rad, or by part beyond SO(3)."""
+    if res.errors is None:
+        return f"|l_T| = {_fmt(res.terminal_error, spec)} rad"
+    return ", ".join(f"{part} {_fmt(value, spec)}" for part, value in res.errors.items())
+
+
 def _say(text: str) -> None:
     """Print a line of output at once; if the reader has closed stdout (``| head -1``),
     send this and all later output to the null device instead of failing."""
@@ -145,6 +157,19 @@ def _plot_format_error(path) -> str | None:
     return None
 
 
+def state_of(mechanism, values, flag: str):
+    """The state ``values`` (numbers given to ``flag``) of ``mechanism`` as :func:`nonholo.plan`
+    takes it (see the module): ``ValueError`` naming ``flag`` and what it needs otherwise."""
+    mech = catalog.get(mechanism)
+    names = (["φ", "ϑ", "ψ"] if mech.orientation else []) + list(mech.coordinates)
+    if len(values) != len(names):
+        raise ValueError(f"{flag} takes {len(names)} numbers for mechanism {mech.name!r} "
+                         f"({' '.join(names)}), got {len(values)}")
+    R = so3.from_rpy(*values[:3]) if mech.orientation else states.IDENTITY
+    q = np.array(values[3:] if mech.orientation else values, dtype=float)
+    return states.public(mech, R, q)
+
+
 def run(args) -> int:
     """Run the ``plan`` sub-command for parsed ``args``; returns the exit status."""
     why = _plot_format_error(args.plot) if args.plot else None
@@ -157,8 +182,8 @@ def run(args) -> int:
         _error(why)
         return EXIT_BAD_INPUT
     try:
-        R0 = so3.from_rpy(*args.start)
-        Rd = so3.from_rpy(*args.goal)
+        R0 = state_of(args.mechanism, args.start, "--from")
+        Rd = state_of(args.mechanism, args.goal, "--to")
         res = planner.plan(
             R0, Rd, T=args.T, method=args.method, harmonics=args.harmonics, grid=args.grid,
             strategy=args.strategy, mechanism=args.mechanism, gamma=args.gamma, tol=args.tol,
@@ -169,7 +194,7 @@ def run(args) -> int:
         _error(str(exc))
         return EXIT_BAD_INPUT
     _say(f"{'success' if res.success else 'FAILED'}: {res.reason}")
-    _say(f"terminal error |l_T| = {_fmt(res.terminal_error, '.3e')} rad, min |Δ| = "
+    _say(f"terminal error {_error_text(res, '.3e')}, min |Δ| = "
          f"{_fmt(res.min_delta, '.4f')}, {res.iterations} iterations, {res.seconds * 1e3:.1f} ms "
          f"({res.mechanism}, {res.method}/{res.strategy}, {res.route} route, T = {res.T:g} s, "
          f"{res.steps} steps)")
@@ -205,9 +230,9 @@ def run(args) -> int:
 
 
 def plot(res, path) -> None:
-    """Figure of a :class:`~nonholo.result.PlanResult`: ``u(t)``, ``RPY(t)``, ``Δ(t)`` and,
-    for a mechanism with legs, the leg lengths and speeds against their limits (if the plan
-    had them)."""
+    """Figure of a :class:`~nonholo.result.PlanResult`: ``u(t)``, ``RPY(t)`` (with an
+    orientation), the coordinates ``q(t)`` (beyond SO(3)), ``Δ(t)`` and, for a mechanism
+    with legs, the leg lengths and speeds against their limits (if the plan had them)."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -216,33 +241,44 @@ def plot(res, path) -> None:
     mech = catalog.get(res.mechanism)
     has_delta = res.delta is not None
     legs = mech.has_legs and len(res.R) > 0
-    rows = 2 + has_delta + 2 * legs
+    rows = 1 + mech.orientation + mech.beyond_so3 + has_delta + 2 * legs
     fig, axes = plt.subplots(rows, 1, sharex=True, figsize=(7, 2.4 * rows))
+    row = iter(axes[1:])
     tt = np.linspace(0.0, res.T, 1001)
     u = res.controls(tt)
     for i in range(u.shape[1]):
         axes[0].plot(tt, u[:, i], label=mech.inputs[i])
     axes[0].set_ylabel("input u [1/s]")
     axes[0].legend(fontsize="small")
-    axes[0].set_title(f"{res.mechanism}, {res.method}/{res.strategy}: |l_T| = "
-                      f"{_fmt(res.terminal_error, '.2e')} rad")
-    if len(res.R):
-        rpy = np.array([so3.as_rpy(R) for R in res.R])
-        for k, name in enumerate(("φ (Z)", "ϑ (Y)", "ψ (X)")):
-            line, = axes[1].plot(res.t, rpy[:, k], label=name)
-            axes[1].axhline(so3.as_rpy(res.Rd)[k], color=line.get_color(), ls=":", lw=0.8)
-        axes[1].legend(fontsize="small", title="dotted: goal", title_fontsize="small")
-    axes[1].set_ylabel("RPY angles [rad]")
+    axes[0].set_title(f"{res.mechanism}, {res.method}/{res.strategy}: " + _error_text(res, ".2e"))
+    if mech.orientation:
+        ax = next(row)
+        if len(res.R):
+            rpy = np.array([so3.as_rpy(R) for R in res.R])
+            for k, name in enumerate(("φ (Z)", "ϑ (Y)", "ψ (X)")):
+                line, = ax.plot(res.t, rpy[:, k], label=name)
+                ax.axhline(so3.as_rpy(res.Rd)[k], color=line.get_color(), ls=":", lw=0.8)
+            ax.legend(fontsize="small", title="dotted: goal", title_fontsize="small")
+        ax.set_ylabel("RPY angles [rad]")
+    if mech.beyond_so3:
+        ax = next(row)
+        if len(res.q):
+            for k, name in enumerate(mech.coordinates):
+                line, = ax.plot(res.t, res.q[:, k], label=f"{name} [{mech.units[k]}]")
+                ax.axhline(res.qd[k], color=line.get_color(), ls=":", lw=0.8)
+            ax.legend(fontsize="small", title="dotted: goal", title_fontsize="small")
+        ax.set_ylabel("coordinates")
     if has_delta:
-        axes[2].plot(res.t, res.delta, label="Δ(R(t)) at the integrator's steps")
+        ax = next(row)
+        ax.plot(res.t, res.delta, label="Δ at the integrator's steps")
         dmin = res.options.get("delta_min", 0.0)
         sgn = np.sign(res.delta[0]) if len(res.delta) else 1.0
-        axes[2].axhline(sgn * dmin, color="r", ls="--", label=f"threshold {sgn * dmin:+g}")
-        axes[2].axhline(0.0, color="k", lw=0.5)
-        axes[2].set_ylabel("Δ [-]")
-        axes[2].legend(fontsize="small")
+        ax.axhline(sgn * dmin, color="r", ls="--", label=f"threshold {sgn * dmin:+g}")
+        ax.axhline(0.0, color="k", lw=0.5)
+        ax.set_ylabel("Δ [-]")
+        ax.legend(fontsize="small")
     if legs:
-        ax = axes[2 + has_delta]
+        ax = next(row)
         lengths = mech.leg_lengths(res.R)
         for i in range(lengths.shape[1]):
             ax.plot(res.t, lengths[:, i], label=f"l{i + 1}")
@@ -250,7 +286,7 @@ def plot(res, path) -> None:
             ax.axhline(y, color="r", ls="--", label="stroke limits" if k == 0 else None)
         ax.set_ylabel("leg length")
         ax.legend(fontsize="small")
-        ax = axes[3 + has_delta]
+        ax = next(row)
         speeds = mech.leg_speeds(res.R, res.u)
         for i in range(speeds.shape[1]):
             ax.plot(res.t, speeds[:, i], label=f"dl{i + 1}/dt")

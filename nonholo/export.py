@@ -14,6 +14,10 @@ Columns, one row per sample time ``t_k = k / rate`` (and ``T``):
   see a jump);
 - ``delta``: ``Δ(R(t))``, for a mechanism with a singular set.
 
+A mechanism whose state goes beyond SO(3) (:mod:`nonholo.state`) has its coordinates as
+columns named as the mechanism names them (the car's ``x, y, theta, phi``), after the
+inputs; the quaternion only if it has an orientation; ``delta`` is ``Δ(R(t), q(t))``.
+
 ``R(t)`` between the plan's samples is one CF4 step of the physical system from the sample
 below (the integrator's own local approximation, ``O(h⁵)`` from the replayed motion), so
 the rows agree with the plan's samples wherever they coincide.
@@ -28,6 +32,7 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from . import catalog
+from . import state as states
 from .checks import is_number
 from .retimed import Retimed
 from .simulation import DELTA_STOP
@@ -55,11 +60,11 @@ def sample_times(T: float, rate: float) -> np.ndarray:
     return t if abs(t[-1] - T) <= 1e-12 * max(1.0, T) else np.append(t, T)
 
 
-def orientations(result, t: np.ndarray) -> np.ndarray:
-    """``R(t)`` of a simulated plan: one CF4 step of the physical system from the stored
-    sample at or below each ``t`` (none where ``t`` is a sample time). A re-timed plan
-    (:class:`~nonholo.retimed.Retimed`) moves along its planned path: ``R(τ(t))``, stepped
-    in the planned time ``τ`` with the planned controls."""
+def states_at(result, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``(R(t), q(t))`` of a simulated plan: one CF4 step of the physical system from the
+    stored sample at or below each ``t`` (none where ``t`` is a sample time); ``q`` has no
+    columns on SO(3). A re-timed plan (:class:`~nonholo.retimed.Retimed`) moves along its
+    planned path: ``R(τ(t))``, stepped in the planned time ``τ`` with the planned controls."""
     mech = catalog.get(result.mechanism)
     kern = mech.kernels(False)
     n_samples = len(result.t)
@@ -73,22 +78,25 @@ def orientations(result, t: np.ndarray) -> np.ndarray:
     idx = np.minimum(np.floor(t / h + 1e-9).astype(np.int64), n_samples - 1)
     s = t - idx * h
     s[np.abs(s) <= 1e-12 * max(1.0, T)] = 0.0
+    q0 = states.NO_COORDINATES if result.q0 is None else np.asarray(result.q0, dtype=float)
+    Q = np.zeros((n_samples, 0)) if result.q is None else np.asarray(result.q, dtype=float)
     sgn = 1.0
     if mech.has_singular_set:
-        sgn = float(np.sign(mech.delta(result.R0)))
+        sgn = float(np.sign(mech.delta_samples(np.asarray(result.R0)[None], q0[None])[0]))
     starts = idx * h
     U = np.stack([controls(starts), controls(starts + 0.5 * s), controls(starts + s)],
                  axis=1).reshape(len(t), 3, mech.n_inputs)
-    out = np.empty((len(t), 3, 3))
-    step = np.empty((2, 3, 3))
+    out, out_q = np.empty((len(t), 3, 3)), np.empty((len(t), Q.shape[1]))
+    step, step_q = states.buffers(mech, 1)
     for k in range(len(t)):
-        out[k] = result.R[idx[k]]
+        out[k], out_q[k] = result.R[idx[k]], Q[idx[k]]
         if s[k] > 0.0:
-            done, _, _ = kern.forward(out[k].copy(), U[k:k + 1], s[k], sgn, DELTA_STOP, step)
+            done, _, _ = states.forward(mech, kern, out[k].copy(), out_q[k].copy(), U[k:k + 1], s[k], sgn,
+                                        DELTA_STOP, step, step_q)
             if done != 1:
                 raise ValueError(f"the motion runs into Δ = 0 at t ≈ {asked[k]:g} s: not a plan to play back")
-            out[k] = step[1]
-    return out
+            out[k], out_q[k] = step[1], step_q[1]
+    return out, out_q
 
 
 def continuous_quaternions(R: np.ndarray) -> np.ndarray:
@@ -109,7 +117,7 @@ def trajectory_table(result, rate: float = DEFAULT_RATE) -> dict[str, np.ndarray
         raise ValueError(f"the plan failed ({result.reason}): not exported")
     mech = catalog.get(result.mechanism)
     t = sample_times(result.T, rate)
-    R = orientations(result, t)
+    R, q = states_at(result, t)
     u = np.asarray(result.controls(t), dtype=float).reshape(len(t), mech.n_inputs)
     cols: dict[str, np.ndarray] = {"t": t}
     if mech.has_legs:
@@ -121,11 +129,14 @@ def trajectory_table(result, rate: float = DEFAULT_RATE) -> dict[str, np.ndarray
             cols[f"dl{i + 1}_dt"] = speeds[:, i]
     for i in range(mech.n_inputs):
         cols[f"u{i + 1}"] = u[:, i]
-    q = continuous_quaternions(R)
-    for i, name in enumerate(("qx", "qy", "qz", "qw")):
+    for i, name in enumerate(mech.coordinates):
         cols[name] = q[:, i]
+    if mech.orientation:
+        quaternion = continuous_quaternions(R)
+        for i, name in enumerate(("qx", "qy", "qz", "qw")):
+            cols[name] = quaternion[:, i]
     if mech.has_singular_set:
-        cols["delta"] = mech.delta_samples(R)
+        cols["delta"] = mech.delta_samples(R, q if mech.beyond_so3 else None)
     return cols
 
 

@@ -324,5 +324,7 @@ def test_cli_nonparametric_and_failures(tmp_path, capsys):
     assert cli(["--from", "0", "0", "0", "--to", *goal1]) == 2
     assert "singular surface" in capsys.readouterr().err
     assert cli(["--from", *start1, "--to", *goal1, "--strategy", "magic"]) == 2
+    assert cli(["--from", *start1[:2], "--to", *goal1]) == 2
+    assert "--from takes 3 numbers for mechanism 'platform' (φ ϑ ψ), got 2" in capsys.readouterr().err
     with pytest.raises(SystemExit):
-        cli(["--from", *start1[:2], "--to", *goal1])
+        cli(["--from", "--to", *goal1])

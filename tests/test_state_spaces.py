@@ -257,3 +257,43 @@ def test_figures_draw_the_plans(tmp_path):
         assert (tmp_path / f"{name}.png").stat().st_size > 10_000
     with pytest.raises(ValueError, match="rolling_ball"):
         state_figures.ball_figure(res)
+
+
+def test_command_line_plans_states(tmp_path, capsys):
+    """``nonholo plan`` takes a car's coordinates and a ball's RPY angles then position; the
+    plan file, CSV (coordinates as columns) and figure are written."""
+    import argparse
+    import csv
+
+    from nonholo import cli_plan
+
+    def cli(argv):
+        parser = argparse.ArgumentParser(prog="nonholo")
+        cli_plan.add_parser(parser.add_subparsers(dest="command"))
+        return cli_plan.run(parser.parse_args(["plan", *argv]))
+
+    out, table, fig = tmp_path / "car.json", tmp_path / "car.csv", tmp_path / "car.png"
+    assert cli(["--mechanism", "car", "--from", "0", "0", "0", "0", "--to", "0", "1", "0", "0", "--quiet",
+                "--out", str(out), "--csv", str(table), "--plot", str(fig)]) == 0
+    assert "terminal error coordinates" in capsys.readouterr().out
+    res = nonholo.PlanResult.load(out)
+    np.testing.assert_array_equal(res.goal, [0, 1, 0, 0])
+    rows = list(csv.DictReader(table.open()))
+    assert list(rows[0]) == ["t", "u1", "u2", "x", "y", "theta", "phi", "delta"]
+    last = rows[-1]
+    assert abs(float(last["t"]) - 1.0) < 1e-12 and abs(float(last["y"]) - 1.0) < 1e-9
+    assert abs(float(last["delta"]) - np.cos(float(last["phi"]))) < 1e-12
+    middle = rows[len(rows) // 2]         # a CSV row between stored samples: CF4 from the one below
+    t, R, q, _ = verify.resimulate_state(res.start, res.controls, res.T, "car", samples=len(rows))
+    np.testing.assert_allclose([float(middle[k]) for k in ("x", "y", "theta", "phi")],
+                               q[np.argmin(np.abs(t - float(middle["t"])))], atol=1e-8)
+    assert fig.stat().st_size > 10_000
+
+    ball = tmp_path / "ball.csv"
+    assert cli(["--mechanism", "rolling_ball", "--from", "0.4", "-0.3", "0.2", "0", "0",
+                "--to", "1.0", "0.2", "0.1", "1", "0.5", "--quiet", "--csv", str(ball)]) == 0
+    header = ball.read_text().splitlines()[0].split(",")
+    assert header == ["t", "u1", "u2", "p1", "p2", "qx", "qy", "qz", "qw"]
+    capsys.readouterr()
+    assert cli(["--mechanism", "car", "--from", "0", "0", "0", "--to", "0", "1", "0", "0"]) == 2
+    assert "--from takes 4 numbers for mechanism 'car' (x y theta phi), got 3" in capsys.readouterr().err
