@@ -235,6 +235,26 @@ def roadmap(mechanism, clearance: float) -> Roadmap:
     return Roadmap(mechanism, clearance)
 
 
+def via_nodes(mechanism, R0, Rd, count: int, legs=None) -> np.ndarray:
+    """Up to ``count`` nodes of the mechanism's roadmap (default clearance) in the start's
+    component (with stroke limits ``legs``, at least :data:`LEG_CLEARANCE` inside them), in
+    the order they were sampled — Haar-uniform, so a random order fixed by the roadmap's
+    seed: intermediate orientations for a route of two legs (the last stage of
+    :func:`nonholo.planning.route.steer`). ``(k, 3, 3)``; none without a singular set, or
+    where ``R0`` and ``Rd`` lie on different sides of ``Δ = 0``."""
+    mech = catalog.get(mechanism)
+    if not mech.has_singular_set:
+        return np.empty((0, 3, 3))
+    sign = float(np.sign(mech.delta(R0)))
+    if sign == 0.0 or np.sign(mech.delta(Rd)) != sign:
+        return np.empty((0, 3, 3))
+    rm = roadmap(mech, default_clearance(mech))
+    nodes = rm.R[rm.sign == sign]
+    if legs is not None:
+        nodes = nodes[legs.clearances(mech, nodes).min(axis=1) >= LEG_CLEARANCE]
+    return nodes[:count]
+
+
 def default_clearance(mechanism) -> float:
     """:data:`CLEARANCE_QUANTILE` of ``|Δ|`` over Haar-uniform orientations (fixed seed)."""
     return _clearance(catalog.get(mechanism))

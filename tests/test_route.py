@@ -318,3 +318,39 @@ def test_a_stitched_control_too_ill_conditioned_to_certify_is_rescued_by_smoothi
     assert res.terminal_error + res.error_bound <= res.options["tol"]
     RT = verify.resimulate(p["R0"], res.controls, res.T, "platform", res.breakpoints)
     assert verify.terminal_error(RT, p["Rd"]) <= 1e-8
+
+
+def test_a_goal_whose_routes_are_all_too_ill_conditioned_takes_two_legs(tmp_path):
+    """Far pair ``band-platform_raised-1.8-pi-0000``: the stitched controls of the roadmap's
+    paths, and their smooth re-plans, are all too ill-conditioned to certify (sensitivity
+    above 7e3); the route's last stage reaches the goal by two legs through a roadmap node,
+    certified, and DOP853 confirms it."""
+    p = {q["id"]: q for q in goalset.band_pairs("platform_raised", 500)}["band-platform_raised-1.8-pi-0000"]
+    local = planner.plan(p["R0"], p["Rd"], mechanism="platform_raised", route="local")
+    assert not local.success
+    res = planner.plan(p["R0"], p["Rd"], mechanism="platform_raised")
+    assert res.success and res.route == "global", res.reason
+    assert "two legs through an intermediate orientation" in res.reason
+    legs = res.hops
+    assert legs.n_pieces == 2
+    assert any(np.array_equal(legs.waypoints[1], R)
+               for R in roadmap.via_nodes("platform_raised", p["R0"], p["Rd"], route.VIA_CANDIDATES))
+    assert res.terminal_error + res.error_bound <= res.options["tol"]
+    RT = verify.resimulate(p["R0"], res.controls, res.T, "platform_raised", res.breakpoints)
+    assert verify.terminal_error(RT, p["Rd"]) <= 1e-8
+    res.save(tmp_path / "two_legs.json")
+    from nonholo import PlanResult
+    assert PlanResult.load(tmp_path / "two_legs.json").hops == legs
+
+
+def test_via_nodes_keep_the_start_component():
+    mech = catalog.get("platform")
+    R0, Rd = so3.from_rpy(0.5, 1.2, -0.5), so3.from_rpy(1.0, 0.9, -0.5)
+    nodes = roadmap.via_nodes(mech, R0, Rd, 20)
+    assert len(nodes) == 20
+    assert np.all(np.sign(mech.delta_samples(nodes)) == np.sign(mech.delta(R0)))
+    assert np.all(np.abs(mech.delta_samples(nodes)) >= roadmap.default_clearance(mech))
+    across = so3.from_rpy(-1.0, 0.9, -0.5)
+    assert np.sign(mech.delta(across)) != np.sign(mech.delta(R0))
+    assert len(roadmap.via_nodes(mech, R0, across, 20)) == 0
+    assert len(roadmap.via_nodes("attitude", R0, Rd, 20)) == 0

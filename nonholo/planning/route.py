@@ -30,6 +30,14 @@ ill-conditioned: it multiplies its hops' sensitivities — is smoothed the same 
 the next path is tried: one smooth control along the same corridor is often far better
 conditioned, and its own certificate decides.
 
+Two legs, last. Where no path's stitched control is certified (typically each too
+ill-conditioned: many hops of moderate sensitivity multiply), :func:`steer` tries routes of
+two legs through one intermediate orientation ``R_m``, a roadmap node of the component
+(:func:`nonholo.roadmap.via_nodes`): the leg ``R_m → R_d`` first (reaching the goal is the
+hard part), then ``R_0 → R_m``, each planned as a whole without the hops' sensitivity cap
+(two legs multiply only two) and with a few initial guesses only
+(:func:`quick_strategy`), stitched and certified as above, within :data:`VIA_TIME` more.
+
 States beyond SO(3) (:mod:`nonholo.state`). For a mechanism whose state is ``(R, q)`` or
 ``q``, the path is the straight path of states (:func:`nonholo.state_path.straight_path`,
 hops of at most :data:`nonholo.state_path.MAX_HOP`, checked clear of ``Δ = 0``), a failed
@@ -45,6 +53,7 @@ steered again along the path of the next cost :data:`nonholo.roadmap.CONDITIONIN
 """
 from __future__ import annotations
 
+import itertools
 import time
 from dataclasses import dataclass, field, replace
 from functools import lru_cache
@@ -82,6 +91,15 @@ STITCHED_REFINEMENT = 8
 #: after which the global route tries no further hop, and no smoothing is started or
 #: continued. Effort, not wall time: a plan does not depend on the machine's speed or load.
 TIME_BUDGET = 2.5
+#: Intermediate orientations the route's last stage tries at most (:func:`steer`):
+#: roadmap nodes in their random sampling order (:func:`nonholo.roadmap.via_nodes`).
+VIA_CANDIDATES = 64
+#: Seconds of effort the last stage may take beyond :data:`TIME_BUDGET`.
+VIA_TIME = 0.75
+#: Initial guesses a leg of the last stage tries (:func:`quick_strategy`): a leg that the
+#: first ones do not solve is skipped for the next candidate, which is cheaper than
+#: insisting.
+VIA_ATTEMPTS = 2
 #: Harmonics of the smooth re-plan of a stitched control (method ``"parametric"``), tried
 #: in turn: the guess must follow the hops' controls, which jump at the hand-overs, well
 #: enough to stay in the route's corridor (fewer harmonics leave it more often than not).
@@ -109,6 +127,8 @@ class Steered:
     #: the route re-planned as one smooth control (:func:`smooth`), when ``steer`` was
     #: given a ``rescue`` that succeeded on the ``draft``
     smoothed: tuple | None = None
+    #: whether the route is the last stage's two legs through an intermediate orientation
+    two_legs: bool = False
 
 
 def _stitch(mechanism: Mechanism, T: float, hops: list, start) -> Stitched:
@@ -185,6 +205,20 @@ def hop_strategy(cls: type, limit: float = MAX_HOP_SENSITIVITY) -> type:
 
 
 @lru_cache(maxsize=8)
+def quick_strategy(cls: type) -> type:
+    """The strategy ``cls`` trying only its first :data:`VIA_ATTEMPTS` initial guesses (a
+    strategy without several, :meth:`attempts`, as it is): the legs of the route's last
+    stage."""
+    if not hasattr(cls, "attempts"):
+        return cls
+
+    def attempts(self, problem, start):
+        return itertools.islice(cls.attempts(self, problem, start), VIA_ATTEMPTS)
+
+    return type(cls.__name__, (cls,), {"attempts": attempts, "__module__": cls.__module__})
+
+
+@lru_cache(maxsize=8)
 def smoothing_strategy(cls: type) -> type:
     """The strategy ``cls`` descending from the given initial control alone (a strategy
     with several initial guesses, :meth:`attempts`, tries only that one): a smooth re-plan
@@ -256,7 +290,8 @@ def hop_delta_min(mechanism: Mechanism, a, b, delta_min: float) -> float:
 
 def steer(mechanism: Mechanism, R0, Rd, T: float, local: Callable, *, tol: float, delta_min: float,
           sign: float, budget: float | None = None, started: float | None = None,
-          leg_limits=None, rescue: Callable | None = None, q0=None, qd=None) -> Steered:
+          leg_limits=None, rescue: Callable | None = None, q0=None, qd=None,
+          leg: Callable | None = None) -> Steered:
     """The route ``R0 → Rd`` steered hop by hop (see the module) along the path of the
     first cost of :data:`nonholo.roadmap.CONDITIONING_POWERS`, then along the path of the
     next (one not tried yet) while the route fails; beyond SO(3) (``q0``, ``qd``: the
@@ -271,7 +306,9 @@ def steer(mechanism: Mechanism, R0, Rd, T: float, local: Callable, *, tol: float
     control is not certified (``seconds``: what its certification took); a smooth re-plan
     from it (:func:`smooth`: an ``(outcome, problem)``, or ``None``) ends the search
     (``Steered.smoothed``) — one smooth control is often far better conditioned than the
-    product of its hops'."""
+    product of its hops'. ``leg(start, goal, T, delta_min, quick)``: plans a leg of the last
+    stage (see the module) with the run's strategy, without the hops' cap, ``quick``: with
+    :func:`quick_strategy`; without it (or beyond SO(3)) there is no last stage."""
     if started is None:
         started = effort.seconds()
     if budget is None:
@@ -291,6 +328,11 @@ def steer(mechanism: Mechanism, R0, Rd, T: float, local: Callable, *, tol: float
             steered.smoothed = rescue(steered.draft, steered.certify_seconds)
         if steered.controls is not None or steered.smoothed is not None or effort.seconds() > started + budget:
             break
+    if steered.controls is None and steered.smoothed is None and leg is not None and not mechanism.beyond_so3:
+        two_legs = _via(mechanism, start, goal, T, leg, tol=tol, delta_min=delta_min, sign=sign,
+                        deadline=max(effort.seconds(), started + budget) + VIA_TIME, leg_limits=leg_limits)
+        if two_legs is not None:
+            return two_legs
     return steered
 
 
@@ -328,6 +370,17 @@ def _steer_path(mechanism: Mechanism, path: list, goal, T: float, local: Callabl
             unit = "" if beyond else " rad"
             return Steered(None, None, hops, f"hop {len(hops) + 1} ({length:.3g}{unit}) failed: {why}", waypoints)
         targets.insert(0, _midpoint(mechanism, here, targets[0]))
+    return _certify_hops(mechanism, start, goal, T, hops, local, tol=tol, delta_min=delta_min, sign=sign,
+                         leg_limits=leg_limits, waypoints=waypoints)
+
+
+def _certify_hops(mechanism: Mechanism, start, goal, T: float, hops: list, local: Callable, *, tol: float,
+                  delta_min: float, sign: float, leg_limits, waypoints) -> Steered:
+    """The hops' controls stitched and certified as a whole from ``start`` to ``goal``; where
+    the replay misses the goal by a correctable error, the last hop is planned again by
+    ``local`` from where the stitched replay enters it (at most :data:`MAX_REPAIRS` times)."""
+    (R0, q0), (Rd, qd) = start, goal
+    beyond = mechanism.beyond_so3
     cert = None
     ends = {"q0": q0, "qd": qd} if beyond else {}
     for repair in range(MAX_REPAIRS + 1):
@@ -354,6 +407,32 @@ def _steer_path(mechanism: Mechanism, path: list, goal, T: float, local: Callabl
     return Steered(stitched, cert, hops, "", waypoints, clock)
 
 
+def _via(mechanism: Mechanism, start, goal, T: float, leg: Callable, *, tol: float, delta_min: float,
+         sign: float, deadline: float, leg_limits=None) -> Steered | None:
+    """The route's last stage (see the module): two legs ``start → R_m → goal`` through the
+    first roadmap node ``R_m`` (:func:`nonholo.roadmap.via_nodes`) whose stitched control is
+    certified, by ``deadline`` (an :func:`nonholo.effort.seconds` reading); ``None`` if none
+    is. The legs keep the run's ``delta_min``, as one local plan does."""
+    def repair(a, b, T_leg, leg_delta_min):
+        return leg(a, b, T_leg, leg_delta_min, False)
+
+    for Rm in roadmap.via_nodes(mechanism, start[0], goal[0], VIA_CANDIDATES, leg_limits):
+        if effort.seconds() > deadline:
+            return None
+        middle = (Rm, states.NO_COORDINATES)
+        second = leg(middle, goal, T / 2, delta_min, True)
+        if not second.success:
+            continue
+        first = leg(start, middle, T / 2, delta_min, True)
+        if not first.success:
+            continue
+        steered = _certify_hops(mechanism, start, goal, T, [first, second], repair, tol=tol, delta_min=delta_min,
+                                sign=sign, leg_limits=leg_limits, waypoints=np.stack([start[0], Rm, goal[0]]))
+        if steered.controls is not None:
+            return replace(steered, two_legs=True)
+    return None
+
+
 def build_result(request: Request, steered: Steered, local_reason: str,
                  smoothed: tuple[Outcome, Problem] | None = None) -> PlanResult:
     """The :class:`~nonholo.result.PlanResult` of a certified global route: the hops'
@@ -367,6 +446,9 @@ def build_result(request: Request, steered: Steered, local_reason: str,
     through = ("a straight path of states" + (" clear of Δ = 0" if mech.has_singular_set else "")
                if mech.beyond_so3 else "a path of orientations clear of Δ = 0")
     route = f"the global route: {len(hops)} hops through {through}, stitched (the local planner: {local_reason})"
+    if steered.two_legs:
+        route = ("the global route: two legs through an intermediate orientation (a roadmap node; no "
+                 f"path's hops were certified), stitched (the local planner: {local_reason})")
     if smoothed is not None:
         outcome, problem = smoothed
         res = build_local_result(request, outcome, True, outcome.reason, problem)
