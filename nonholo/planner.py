@@ -287,19 +287,19 @@ def plan_path(R0, Rd, *, T: float = 1.0, method: str = "parametric", harmonics: 
             return energy.improve(request, result) if objective == "energy" else result
         local_reason = outcome.reason
 
-    def hop(a, b, T_hop, hop_delta_min):
-        return plan_path(states.public(mech, *a), states.public(mech, *b), T=T_hop, method=method,
+    def part(a, b, T_part, part_delta_min, part_strategy):
+        """One part of the global route, ``a → b`` (states ``(R, q)``), planned locally."""
+        return plan_path(states.public(mech, *a), states.public(mech, *b), T=T_part, method=method,
                          harmonics=harmonics, grid=grid, gamma=gamma, step=step, tol=tol, max_iter=max_iter,
-                         strategy=global_route.hop_strategy(cls, global_route.max_hop_sensitivity(mech)),
-                         mechanism=mech, delta_min=hop_delta_min, steps=steps, newton_below=newton_below,
-                         min_step=min_step, route="local", leg_length=leg_length)
+                         strategy=part_strategy, mechanism=mech, delta_min=part_delta_min, steps=steps,
+                         newton_below=newton_below, min_step=min_step, route="local", leg_length=leg_length)
+
+    def hop(a, b, T_hop, hop_delta_min):
+        return part(a, b, T_hop, hop_delta_min,
+                    global_route.hop_strategy(cls, global_route.max_hop_sensitivity(mech)))
 
     def leg(a, b, T_leg, leg_delta_min, quick):
-        return plan_path(states.public(mech, *a), states.public(mech, *b), T=T_leg, method=method,
-                         harmonics=harmonics, grid=grid, gamma=gamma, step=step, tol=tol, max_iter=max_iter,
-                         strategy=global_route.quick_strategy(cls) if quick else cls, mechanism=mech,
-                         delta_min=leg_delta_min, steps=steps, newton_below=newton_below, min_step=min_step,
-                         route="local", leg_length=leg_length)
+        return part(a, b, T_leg, leg_delta_min, global_route.quick_strategy(cls) if quick else cls)
 
     route_started, budget = global_route.time_budget(mech, started_effort)
 
@@ -307,7 +307,8 @@ def plan_path(R0, Rd, *, T: float = 1.0, method: str = "parametric", harmonics: 
         return global_route.smooth(request, stitched, cls, deadline=route_started + budget, reserve=reserve)
 
     steered = global_route.steer(mech, R0, Rd, T, hop, tol=tol, delta_min=delta_min, sign=problem.sign,
-                                 started=route_started, budget=budget, leg_limits=leg_limits, rescue=smooth, leg=leg,
+                                 started=route_started, budget=budget, leg_limits=leg_limits, rescue=smooth,
+                                 leg=leg,
                                  **({"q0": q0, "qd": qd} if mech.beyond_so3 else {}))
     if steered.controls is None and steered.smoothed is None:
         return build_result(request, outcome, False,
