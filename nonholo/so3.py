@@ -100,8 +100,9 @@ def check_rotation(R, name: str = "R", tol: float = 1e-9) -> np.ndarray:
         raise ValueError(f"{name} must have shape (3, 3), got {A.shape}")
     if not np.all(np.isfinite(A)):
         raise ValueError(f"{name} has non-finite entries (NaN or inf)")
-    err = np.max(np.abs(A.T @ A - np.eye(3)))
-    if err > tol:
+    with np.errstate(over="ignore", invalid="ignore"):     # huge entries: err = inf, refused below
+        err = np.max(np.abs(A.T @ A - np.eye(3)))
+    if not err <= tol:
         raise ValueError(f"{name} is not orthonormal: max |RᵀR - I| = {err:.3g} > {tol:g}")
     if np.linalg.det(A) < 0:
         raise ValueError(f"{name} is a reflection (det = -1), not a rotation")
