@@ -18,6 +18,29 @@ def _check(result, mechanism: str):
         raise ValueError("result has no trajectory to draw")
 
 
+def _layout():
+    """A state figure's figure, its 2×2 grid and the path panel (the left column)."""
+    fig = plt.figure(figsize=(10, 4.8))
+    grid = fig.add_gridspec(2, 2, width_ratios=[1.1, 1])
+    return fig, grid, fig.add_subplot(grid[:, 0])
+
+
+def _mark_ends(ax, result):
+    """The start and the goal on the path panel (the first two coordinates)."""
+    ax.plot(*result.q[0, :2], "o", color="tab:green", ms=8, label="start")
+    ax.plot(*result.qd[:2], "x", color="tab:red", ms=10, mew=2, label="goal")
+
+
+def _finish_path(ax, xlabel: str, ylabel: str, title: str, margin: float):
+    """The path panel to scale (equal axes), labelled, with its legend."""
+    ax.set_aspect("equal", adjustable="datalim")
+    ax.margins(margin)
+    ax.set_xlabel(xlabel)
+    ax.set_ylabel(ylabel)
+    ax.set_title(title)
+    ax.legend(fontsize=8, loc="best")
+
+
 def _time_panels(fig, grid, result, title: str, angles: list, inputs: tuple, input_unit: str):
     """The right column of a state figure: ``angles`` (``(values, colour, label)`` each,
     rad) above the two inputs (labelled ``inputs``) against time; then the layout."""
@@ -45,12 +68,9 @@ def ball_figure(result, frames: int = 9):
     from .so3 import log
 
     p, R, t = result.q, result.R, result.t
-    fig = plt.figure(figsize=(10, 4.8))
-    grid = fig.add_gridspec(2, 2, width_ratios=[1.1, 1])
-    ax = fig.add_subplot(grid[:, 0])
+    fig, grid, ax = _layout()
     ax.plot(p[:, 0], p[:, 1], color="0.3", lw=1.5, label="contact point")
-    ax.plot(*p[0], "o", color="tab:green", ms=8, label="start")
-    ax.plot(*result.qd, "x", color="tab:red", ms=10, mew=2, label="goal")
+    _mark_ends(ax, result)
     span = max(np.ptp(p[:, 0]), np.ptp(p[:, 1]), 0.5)
     size = 0.12 * span
     for k in np.linspace(0, len(t) - 1, frames).astype(int):
@@ -59,12 +79,7 @@ def ball_figure(result, frames: int = 9):
             ax.annotate("", xy=p[k] + d, xytext=p[k], arrowprops={"arrowstyle": "->", "color": colour, "lw": 1})
     ax.plot([], [], color="tab:blue", label="R e₁ (projected)")
     ax.plot([], [], color="tab:orange", label="R e₂ (projected)")
-    ax.set_aspect("equal", adjustable="datalim")
-    ax.margins(0.15)
-    ax.set_xlabel("p₁ (radii)")
-    ax.set_ylabel("p₂ (radii)")
-    ax.set_title("contact path on the plane")
-    ax.legend(fontsize=8, loc="best")
+    _finish_path(ax, "p₁ (radii)", "p₂ (radii)", "contact path on the plane", 0.15)
     _time_panels(fig, grid, result, "orientation and inputs",
                  [([np.linalg.norm(log(Rk @ result.R0.T)) for Rk in R], "tab:green", "from the start"),
                   ([np.linalg.norm(log(Rk @ result.Rd.T)) for Rk in R], "tab:red", "to the goal")],
@@ -84,9 +99,7 @@ def car_figure(result, frames: int = 8):
     ``frames`` instants (left); right, ``θ``, ``φ`` and the inputs against time."""
     _check(result, "car")
     q, t = result.q, result.t
-    fig = plt.figure(figsize=(10, 4.8))
-    grid = fig.add_gridspec(2, 2, width_ratios=[1.1, 1])
-    ax = fig.add_subplot(grid[:, 0])
+    fig, grid, ax = _layout()
     ax.plot(q[:, 0], q[:, 1], color="0.3", lw=1.5, label="rear axle")
     for j, k in enumerate(np.linspace(0, len(t) - 1, frames).astype(int)):
         x, y, th, ph = q[k]
@@ -95,14 +108,8 @@ def car_figure(result, frames: int = 8):
         fx, fy = x + np.cos(th), y + np.sin(th)
         d = 0.18 * np.array([np.cos(th + ph), np.sin(th + ph)])
         ax.plot([fx - d[0], fx + d[0]], [fy - d[1], fy + d[1]], color=shade, lw=2.5)
-    ax.plot(*q[0, :2], "o", color="tab:green", ms=8, label="start")
-    ax.plot(*result.qd[:2], "x", color="tab:red", ms=10, mew=2, label="goal")
-    ax.set_aspect("equal", adjustable="datalim")
-    ax.margins(0.2)
-    ax.set_xlabel("x (wheelbases)")
-    ax.set_ylabel("y (wheelbases)")
-    ax.set_title("path, body and front wheels (dark → light)")
-    ax.legend(fontsize=8, loc="best")
+    _mark_ends(ax, result)
+    _finish_path(ax, "x (wheelbases)", "y (wheelbases)", "path, body and front wheels (dark → light)", 0.2)
     _time_panels(fig, grid, result, "heading, steering and inputs",
                  [(q[:, 2], "k", "heading θ"), (q[:, 3], "tab:purple", "steering φ")],
                  ("v (wheelbases/s)", "dφ/dt (rad/s)"), "input")
