@@ -52,7 +52,7 @@ FIRST_PLAN = r"""
 import json, sys, time
 t0 = time.perf_counter()
 import nonholo
-from nonholo import so3
+from nonholo.spaces import so3
 t1 = time.perf_counter()
 kw = {} if sys.argv[1] == "default" else {"strategy": sys.argv[1]}
 res = nonholo.plan(so3.from_rpy(0.5, 1.2, -0.5), so3.from_rpy(1.0, 0.9, -0.5), **kw)
@@ -122,7 +122,9 @@ def _median_interleaved(fns: dict, repeat: int, number: int) -> dict:
 
 
 def plan_times(report: Report, repeat: int) -> None:
-    from nonholo import planner, so3, verify
+    from nonholo.planning import api as planner
+    from nonholo.spaces import so3
+    from nonholo.certify import resimulate as verify
 
     report.heading('plan() after warm-up (strategy "paper")')
     report.paragraph(
@@ -152,8 +154,10 @@ def plan_times(report: Report, repeat: int) -> None:
 
 
 def discretisation(report: Report) -> None:
-    from nonholo import planner, so3, verify
-    from nonholo.simulation import simulate
+    from nonholo.planning import api as planner
+    from nonholo.spaces import so3
+    from nonholo.certify import resimulate as verify
+    from nonholo.motion.simulation import simulate
 
     counts = (100, 200, 400, 800)
     report.heading("Discretisation error of N CF4 steps")
@@ -175,7 +179,11 @@ def discretisation(report: Report) -> None:
 
 
 def iteration_cost(report: Report, repeat: int) -> None:
-    from nonholo import catalog, kernels, planner, so3, stages
+    from nonholo.model import catalog
+    from nonholo.numerics import kernels
+    from nonholo.planning import api as planner
+    from nonholo.spaces import so3
+    from nonholo.controls import stages
     from nonholo.planning.core import Problem, record, step_scale
 
     report.heading("One iteration vs one bare forward simulation")

@@ -6,13 +6,13 @@
 
 Measures, per strategy, goal set and band (``near``: geodesic distance 0.2–0.8 rad, ``far``:
 0.8–1.8 rad): the success rate, the median and maximum wall time of
-:func:`nonholo.planner.plan` with ``route="local"`` (the strategy alone; after JIT warm-up), the median number of iterations and how
+:func:`nonholo.planning.api.plan` with ``route="local"`` (the strategy alone; after JIT warm-up), the median number of iterations and how
 many goals needed a restart (an initial guess after the first); the rejection time of
 the goals across ``Δ = 0`` (median/max of the full ``plan`` call); and Example 3 with the
 "other" parking goal.
 
 Success = the planner reports success AND the planned physical control
-``result.controls(t)``, re-simulated by :func:`nonholo.verify.resimulate_path` (SciPy
+``result.controls(t)``, re-simulated by :func:`nonholo.certify.resimulate.resimulate_path` (SciPy
 DOP853, ``rtol = atol = 1e-13``, on ``dR/dt = [L(R) u] R``), ends within 1e-8 rad of
 ``Rd`` AND keeps ``sgn(Δ(R0))·Δ ≥ 1e-2`` on the dense re-simulated path (2001 samples
 plus every DOP853 step).
@@ -28,8 +28,8 @@ random pairs in one component of ``Δ ≠ 0`` with ``|Δ| ≥ 0.05`` at both end
 distance band (:func:`random_pairs`; ``beyond``: ≥ 1.8 rad) — reachable, but not
 necessarily by a motion as simple as those that generated the other sets.
 
-Strategies (``--ingredients``), built from the ingredients of :mod:`nonholo.planning.robust`
-(each a :class:`~nonholo.planning.robust.RobustStrategy` subclass passed to
+Strategies (``--ingredients``), built from the ingredients of :mod:`nonholo.planning.strategy_robust`
+(each a :class:`~nonholo.planning.strategy_robust.RobustStrategy` subclass passed to
 :func:`nonholo.plan` as ``strategy=``):
 
 - ``paper``: the appendix's algorithm in the physical inputs ``u`` (Euclidean minimum
@@ -52,7 +52,7 @@ names another file in ``benchmarks/results/``), echoed to standard output: markd
 tables of the measurements above (with ``--ingredients`` first a summary, the success
 rate of every strategy on every set and band), headed by the date, the git commit, the
 machine and the command (:mod:`benchmarks.report`). The design the ingredients belong to is described in
-:mod:`nonholo.planning.robust`.
+:mod:`nonholo.planning.strategy_robust`.
 """
 from __future__ import annotations
 
@@ -63,8 +63,11 @@ import time
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from nonholo import examples, planner, so3, verify
-from nonholo.planning.robust import RobustStrategy
+from nonholo.paper import examples
+from nonholo.planning import api as planner
+from nonholo.spaces import so3
+from nonholo.certify import resimulate as verify
+from nonholo.planning.strategy_robust import RobustStrategy
 
 from .report import Report
 from .sweeps import plan_all

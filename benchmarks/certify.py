@@ -11,13 +11,13 @@ in one component (:func:`benchmarks.goalset.uniform_pairs`: same sign of ``Δ``,
 
 Check: every plan that claims success has its physical controls ``result.controls``
 re-simulated by the classical RK4 on the nine entries of ``R``
-(:func:`nonholo.verify.resimulate_rk4`, no Lie-group integrator, no frame coordinates) on
+(:func:`nonholo.certify.resimulate.resimulate_rk4`, no Lie-group integrator, no frame coordinates) on
 ``S`` and ``2S`` steps, ``S ≥`` :data:`RK4_STEPS` a multiple of the plan's steps (so
 steps are aligned with every breakpoint); the ``2S`` endpoint is the check, ``|R_2S −
 R_S|`` the checker's own error scale. A claimed success *misses* when the check ends more
 than :data:`MISS` rad from the goal or comes closer than ``delta_min`` to ``Δ = 0`` at its
 nodes. A sample of the successes is also integrated by SciPy's DOP853
-(:func:`nonholo.verify.resimulate`) to confirm the checker.
+(:func:`nonholo.certify.resimulate.resimulate`) to confirm the checker.
 
 With ``--baseline REV`` the script also times ``plan`` on the reachable goals of
 ``benchmarks/goals.json`` with the code of git revision ``REV`` (a temporary worktree, run
@@ -40,7 +40,9 @@ import numpy as np
 
 from benchmarks import goalset
 from benchmarks.report import Report
-from nonholo import catalog, planner, verify
+from nonholo.model import catalog
+from nonholo.planning import api as planner
+from nonholo.certify import resimulate as verify
 
 MECHANISMS = ("platform", "platform_raised", "attitude")
 #: every strategy and method, default options
@@ -280,7 +282,7 @@ def main(argv=None) -> None:
         f"Uniform random pairs in one component (`benchmarks.goalset.uniform_pairs`, seed "
         f"{goalset.SEED}): {args.pairs} per mechanism with every strategy and method at default "
         f"options, the first {args.edge_pairs} with odd but legal options. Every claimed success "
-        f"is re-simulated by RK4 on the entries of R (`nonholo.verify.resimulate_rk4`, S and 2S "
+        f"is re-simulated by RK4 on the entries of R (`nonholo.certify.resimulate.resimulate_rk4`, S and 2S "
         f"steps, S ≥ {RK4_STEPS} aligned with the plan's steps). *misses*: the RK4 endpoint is "
         f"more than {MISS:g} rad from the goal; *near Δ = 0*: the RK4 nodes come closer than "
         "delta_min; *checker*: max |R_2S − R_S| (the check's own error scale); *error bound*: the "
@@ -293,7 +295,7 @@ def main(argv=None) -> None:
     if dop:
         diff = max(abs(r["dop853"] - r["miss"]) for r in dop)
         worst = max(r["dop853"] for r in dop)
-        report.paragraph(f"DOP853 (`nonholo.verify.resimulate`, rtol = atol = 1e-13) on {len(dop)} of the "
+        report.paragraph(f"DOP853 (`nonholo.certify.resimulate.resimulate`, rtol = atol = 1e-13) on {len(dop)} of the "
                          f"successes: worst endpoint error {worst:.1e} rad; largest difference from the "
                          f"RK4 check {diff:.1e} rad.")
     if args.baseline:

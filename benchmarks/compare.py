@@ -12,7 +12,7 @@ further peer (:mod:`benchmarks.random_set`, ``global.md``); what follows is the 
 
 Solvers (all with ``T`` from the goal, ``delta_min = 0.01``):
 
-- ``robust``, ``paper``: :func:`nonholo.planner.plan` with ``strategy="robust"`` /
+- ``robust``, ``paper``: :func:`nonholo.planning.api.plan` with ``strategy="robust"`` /
   ``"paper"`` and ``route="local"`` (the strategy alone; defaults otherwise: parametric,
   ``harmonics = 2``, ``tol = 1e-10``). A
   strategy that the installed planner does not know is reported as unavailable.
@@ -35,7 +35,7 @@ Protocol
   initial-guess rollout; IPOPT's own time is recorded too). Goals run one after the
   other in one process.
 - Verification, the same for every solver: the returned control is re-simulated by
-  :func:`nonholo.verify.resimulate` (SciPy DOP853, ``rtol = atol = 1e-13``, the
+  :func:`nonholo.certify.resimulate.resimulate` (SciPy DOP853, ``rtol = atol = 1e-13``, the
   generated ``L``; breakpoints at the CasADi grid for piecewise-constant controls) →
   terminal error ``|log(R_T R_dᵀ)|``. The least ``sgn(Δ(R0)) Δ`` along the motion is
   taken on a dense path from :func:`resimulate_path` (the same integrator settings with
@@ -63,10 +63,10 @@ Outputs (``benchmarks/results/``, or ``--out DIR``)
   ``solver_seconds`` (the solver's own timer; IPOPT only for CasADi),
   ``solver_success``, ``reason`` (planner reason / IPOPT status / exception text),
   ``iterations``, ``solver_terminal_error``, ``solver_min_delta`` (as the solver reports
-  them), ``controls`` (the returned control, ``nonholo.controls`` dict format) and, for
+  them), ``controls`` (the returned control, ``nonholo.controls.parametrisations`` dict format) and, for
   reachable goals, the verification: ``terminal_error``, ``resim_message``,
   ``min_delta``, ``path_ok``, ``path_vs_verify`` (max entry difference between the
-  dense path's endpoint and ``nonholo.verify.resimulate``), ``energy``,
+  dense path's endpoint and ``nonholo.certify.resimulate.resimulate``), ``energy``,
   ``verify_seconds``, ``success``; for ``"across"`` goals ``rejected``. Infinite values
   are written as the string ``"inf"``, missing ones as ``null``.
 - ``compare.png``: success rate per band and solver; wall time per goal (log scale)
@@ -85,10 +85,12 @@ from pathlib import Path
 import numpy as np
 from scipy.integrate import solve_ivp
 
-from nonholo import catalog, so3
+from nonholo.model import catalog
+from nonholo.spaces import so3
 
 from .goalset import load_goals
-from .report import RESULTS_DIR, command as command_line, header_lines, machine_info, utc_now
+from .report import RESULTS_DIR, header_lines, machine_info, utc_now
+from .report import command as command_line
 
 DELTA_MIN = 1e-2
 SUCCESS_TOL = 1e-8
@@ -130,7 +132,7 @@ def _segments(T: float, breakpoints) -> list[tuple[float, float]]:
 
 def resimulate_path(R0, controls, T: float, breakpoints=None, mechanism: str = "platform",
                     samples: int = PATH_SAMPLES, rtol: float = RTOL, atol: float = ATOL) -> dict:
-    """Dense re-simulation of ``dR/dt = [L(R) u(t)] R`` (DOP853, as :func:`nonholo.verify.resimulate`).
+    """Dense re-simulation of ``dR/dt = [L(R) u(t)] R`` (DOP853, as :func:`nonholo.certify.resimulate.resimulate`).
 
     Each interval between ``breakpoints`` is integrated separately with the control
     evaluated strictly inside it. Returns a dict: ``ok`` (reached ``T`` with finite
@@ -193,8 +195,8 @@ def control_energy(controls, T: float, breakpoints=None, pieces: int = ENERGY_PI
 
 
 def verify_solution(goal: dict, controls, breakpoints) -> dict:
-    """Terminal error (nonholo.verify.resimulate), least sgnΔ on the dense path, energy."""
-    from nonholo import verify
+    """Terminal error (nonholo.certify.resimulate.resimulate), least sgnΔ on the dense path, energy."""
+    from nonholo.certify import resimulate as verify
 
     R0, Rd, T = goal["R0"], goal["Rd"], goal["T"]
     out = {}
@@ -230,12 +232,12 @@ class Unavailable(Exception):
 
 class NonholoSolver:
     def __init__(self, name: str, strategy: str):
-        from nonholo import planner
+        from nonholo.planning import api as planner
 
         self.name = name
         self.strategy = strategy
         self.planner = planner
-        self.config = {"function": "nonholo.planner.plan", "strategy": strategy,
+        self.config = {"function": "nonholo.planning.api.plan", "strategy": strategy,
                        "delta_min": DELTA_MIN}
         self.warmup_seconds = None
 
@@ -441,7 +443,7 @@ def write_markdown(path: Path, meta: dict, summary: dict, ratios: dict, records:
                 line += f" (of which NLP build {info['build_seconds']:.2f} s, excluded from all solve times)"
         L.append(line)
     L.append("")
-    L.append("Success = re-simulated terminal error ≤ 1e-8 rad (nonholo.verify.resimulate, DOP853, "
+    L.append("Success = re-simulated terminal error ≤ 1e-8 rad (nonholo.certify.resimulate.resimulate, DOP853, "
              "rtol = atol = 1e-13) and least sgn(Δ(R0))·Δ ≥ 0.01 on the dense re-simulated path. "
              "Wall time: the solver call only, after warm-up, all runs (successful or not). "
              "Terminal error and least Δ: medians over all runs; energy ∫|u|² dt: median over "
@@ -732,7 +734,7 @@ def main(argv=None) -> int:
         "goal_counts": counts,
         "solvers": meta_solvers,
         "criteria": {"terminal_error_max": SUCCESS_TOL, "min_delta": DELTA_MIN,
-                     "resimulation": "nonholo.verify.resimulate (DOP853, rtol=atol=1e-13)",
+                     "resimulation": "nonholo.certify.resimulate.resimulate (DOP853, rtol=atol=1e-13)",
                      "dense_path_samples": PATH_SAMPLES},
         "total_seconds": total,
     }

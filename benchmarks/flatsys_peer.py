@@ -14,7 +14,7 @@ of degree 7 (``fs.PolyFamily(8)``): enough coefficients for the end conditions o
 outputs and their first two derivatives; no cost (the flat interpolation itself).
 
 The peer's trajectory is re-simulated by SciPy's DOP853 (rtol = atol = 1e-13) on the
-hand-written model :func:`nonholo.verify.car_rates` with ``φ(t) = δ(t)`` taken from the
+hand-written model :func:`nonholo.certify.resimulate.car_rates` with ``φ(t) = δ(t)`` taken from the
 peer, the same model and tolerances that confirm nonholo's plans.
 """
 from __future__ import annotations
@@ -24,7 +24,7 @@ import time
 import numpy as np
 from scipy.integrate import solve_ivp
 
-from nonholo import verify
+from nonholo.certify import resimulate as verify
 
 WHEELBASE = 1.0
 BASIS_SIZE = 8
@@ -103,7 +103,7 @@ def solve(q0, qd, T: float = 1.0, *, tol: float = 1e-8, samples: int = 2001) -> 
 
 def resimulate(q0, inputs, T: float, *, samples: int = 2001, rtol: float = 1e-13, atol: float = 1e-13):
     """``(t, q)``: the peer's inputs ``inputs(t) = (v, δ)`` played on the hand-written car
-    (:func:`nonholo.verify.car_rates`) from ``q0`` with ``φ(t) = δ(t)``, by DOP853 with dense
+    (:func:`nonholo.certify.resimulate.car_rates`) from ``q0`` with ``φ(t) = δ(t)``, by DOP853 with dense
     output on ``samples`` uniform times; ``q`` ``(samples, 4)``."""
     q0 = _state(q0, "q0")
 

@@ -8,7 +8,7 @@ reproduces the file.
 How the goals are made
 ----------------------
 System: ``dR/dt = [L(R) u] R`` with the generated ``L`` of the mechanism ``"platform"``
-(:func:`nonholo.catalog.get`), ``Δ(R) = r12 r31 + r21 r32``. ``SO(3) \\ {Δ = 0}`` has
+(:func:`nonholo.model.catalog.get`), ``Δ(R) = r12 r31 + r21 r32``. ``SO(3) \\ {Δ = 0}`` has
 two components and no motion crosses ``Δ = 0``.
 
 - Starts: :data:`N_STARTS` orientations, half with ``Δ > 0`` and half with ``Δ < 0``,
@@ -56,7 +56,7 @@ with every ``goal`` an object:
 - ``generating_controls``: the control that produced ``Rd`` (``null`` for ``"across"``):
   ``{"kind": "fourier", "T", "harmonics", "coeffs"}`` with ``coeffs`` of shape
   ``(2, 2K+1)`` ordered ``(λ_i0, λ_i1 (sin ωt), λ_i2 (cos ωt), …)`` — the format of
-  :func:`nonholo.controls.from_dict`.
+  :func:`nonholo.controls.parametrisations.from_dict`.
 
 Floats are written with full (``repr``) precision. :func:`load_goals` returns the list
 of goals with ``R0``, ``Rd`` and the coefficients as NumPy arrays.
@@ -73,7 +73,8 @@ from pathlib import Path
 import numpy as np
 from scipy.integrate import solve_ivp
 
-from nonholo import catalog, so3
+from nonholo.model import catalog
+from nonholo.spaces import so3
 
 FORMAT = "nonholo.goalset/1"
 DEFAULT_PATH = Path(__file__).resolve().parent / "goals.json"
@@ -409,8 +410,8 @@ def load_goals(path=None) -> list[dict]:
 
 def write_problems(path, goals: list[dict], mechanism: str = "platform") -> Path:
     """``goals`` (of this module: ``R0``, ``Rd``, ``T``, ``id``) as a problem table for
-    :func:`nonholo.sweep.sweep` (JSON Lines, :mod:`nonholo.problems`), labelled by id."""
-    from nonholo import problems
+    :func:`nonholo.batch.sweep.sweep` (JSON Lines, :mod:`nonholo.io.problems`), labelled by id."""
+    from nonholo.io import problems
 
     return problems.write(path, [{"start": g["R0"], "goal": g["Rd"], "mechanism": g.get("mechanism", mechanism),
                                   "options": {"T": g["T"]}, "label": g["id"]} for g in goals])

@@ -18,12 +18,12 @@ warm-up call (numba compiled, the NLP built):
   limits bind.
 
 Every claimed success is re-simulated by DOP853 (rtol = atol = 1e-13) with a dense path
-(:func:`nonholo.verify.resimulate_path`): *solved* = final error ≤ 1e-8 rad, ``sgnΔ ≥
+(:func:`nonholo.certify.resimulate.resimulate_path`): *solved* = final error ≤ 1e-8 rad, ``sgnΔ ≥
 delta_min`` and every leg inside ``[lo, hi]`` at every point of the path, the leg lengths
 computed from the platform's numeric geometry (``|R tip_i − base_i|``).
 
 Then the legs' speeds (:func:`run_retiming`, :func:`run_speed_peers`): goals planned and
-re-timed by :func:`nonholo.retime` in the least time under ``--leg-speed``, each re-timed
+re-timed by :func:`nonholo.planning.retime` in the least time under ``--leg-speed``, each re-timed
 motion re-simulated against the bound and the plan's end; and the same goals in a given
 time by ``plan(..., leg_speed=...)`` and the CasADi baseline with the same bound. And the
 least energy (:func:`run_energy`): ``plan(..., objective="energy")`` against the
@@ -41,9 +41,12 @@ import time
 
 import numpy as np
 
-from nonholo import catalog, planner, so3, verify
+from nonholo.model import catalog
+from nonholo.planning import api as planner
+from nonholo.spaces import so3
+from nonholo.certify import resimulate as verify
 from nonholo.planning import energy
-from nonholo.retime import retime
+from nonholo.planning.retime import retime
 
 from . import goalset
 from .report import RESULTS_DIR, Report
@@ -156,7 +159,7 @@ def speed_check(R0, controls, breakpoints, T: float, v: float) -> dict:
 
 def run_retiming(goals, v: float) -> list[dict]:
     """Every goal planned by :func:`nonholo.plan`, then re-timed in the least time
-    (:func:`nonholo.retime`), the re-timing timed alone (after a warm-up call); each
+    (:func:`nonholo.planning.retime`), the re-timing timed alone (after a warm-up call); each
     re-timed plan re-simulated by DOP853 against the plan's own end and the bound."""
     plans = [planner.plan(g["R0"], g["Rd"], T=g["T"], delta_min=DELTA_MIN) for g in goals]
     retime(plans[0], v)

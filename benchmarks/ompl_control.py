@@ -19,7 +19,7 @@ OMPL's random generator is seeded once per process (:data:`SEED`; OMPL allows no
 so a run of several problems is reproducible only as a whole, in the same order.
 
 :func:`solve` returns a :class:`Solution`; its ``controls`` (piecewise constant, with
-``breakpoints``) are what :func:`nonholo.verify.resimulate` replays independently.
+``breakpoints``) are what :func:`nonholo.certify.resimulate.resimulate` replays independently.
 """
 from __future__ import annotations
 
@@ -29,7 +29,8 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from nonholo import catalog, so3
+from nonholo.model import catalog
+from nonholo.spaces import so3
 
 #: Rotation angle (rad) of the goal region.
 GOAL_RADIUS = 0.05
@@ -111,7 +112,8 @@ class Planner:
     """One OMPL control set-up for a mechanism, reused across problems."""
 
     def __init__(self, mechanism="platform", delta_min: float = 1e-2, budget: float = BUDGET):
-        from ompl import base as ob, control as oc
+        from ompl import base as ob
+        from ompl import control as oc
 
         _seed_once()
         self.mechanism = catalog.get(mechanism)

@@ -20,9 +20,9 @@ Solvers:
   kinematics as the propagator, a 0.05 rad goal region, 5 s).
 
 Verification, independent of the planners: the returned control re-simulated by SciPy's
-DOP853 (:func:`nonholo.verify.resimulate`, ``rtol = atol = 1e-13``, stopping at its
+DOP853 (:func:`nonholo.certify.resimulate.resimulate`, ``rtol = atol = 1e-13``, stopping at its
 breakpoints) → final error ``|log(R_T R_dᵀ)|``, and the least ``sgn(Δ(R0)) Δ`` on a dense
-DOP853 path (:func:`nonholo.verify.resimulate_path`) — for the peers' solutions, every
+DOP853 path (:func:`nonholo.certify.resimulate.resimulate_path`) — for the peers' solutions, every
 tenth ``nonholo`` success and every fourth by the global route; every ``nonholo`` success
 is also re-simulated by classical RK4 on the nine entries of ``R``
 (:func:`benchmarks.certify.check_successes`: ``S`` and ``2S`` steps, DOP853 where they
@@ -46,10 +46,12 @@ from pathlib import Path
 
 import numpy as np
 
-from nonholo import catalog, roadmap, verify
+from nonholo.model import catalog
+from nonholo.planning import roadmap
+from nonholo.certify import resimulate as verify
 
 from . import goalset
-from .report import RESULTS_DIR, Report
+from .report import Report
 from .sweeps import plan_all
 
 #: Mechanisms of the set: those with a singular set.
@@ -73,7 +75,7 @@ def _log(msg: str) -> None:
 
 def check(mechanism, R0, Rd, T: float, controls, breakpoints) -> dict:
     """Final error and least ``sgn(Δ(R0)) Δ`` of ``controls`` re-simulated by DOP853 with
-    a dense path (:func:`nonholo.verify.resimulate_path`; a failed integration counts as
+    a dense path (:func:`nonholo.certify.resimulate.resimulate_path`; a failed integration counts as
     reaching ``Δ = 0``, infinitely far from the goal)."""
     mech = catalog.get(mechanism)
     try:
@@ -128,7 +130,7 @@ def run_nonholo(mechanism: str, pairs: list[dict], route: str = "auto", label: s
 def run_casadi(pairs: list[dict]) -> list[dict]:
     """:mod:`benchmarks.casadi_ms` with the settings of :mod:`benchmarks.compare`'s
     ``casadi`` (its NLP built once, on Example 1, before anything is timed)."""
-    from nonholo import so3
+    from nonholo.spaces import so3
 
     from . import casadi_ms
 

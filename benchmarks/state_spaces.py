@@ -17,16 +17,16 @@ Problems (fixed seed):
 - ``car, far`` (``--far`` pairs): start and goal with ``|x|, |y| ≤ 30``, any ``θ``, ``|φ| ≤
   1.4`` — goals up to 85 car lengths away, near the singular set ``cos φ = 0``, where the
   local planner alone mostly fails and the global route (the straight path of states, hop
-  by hop, :mod:`nonholo.state_path`) takes over. Planned with ``tol = 1e-8``: a car's
+  by hop, :mod:`nonholo.planning.state_path`) takes over. Planned with ``tol = 1e-8``: a car's
   sensitivity grows like the square of its distance (a steering error turns the heading,
   which displaces the end), about 10³ at 50 lengths, which the certificate does not
-  accept at 1e-10 (:mod:`nonholo.certify`). Run with the default route ``"auto"`` and
+  accept at 1e-10 (:mod:`nonholo.certify.certificate`). Run with the default route ``"auto"`` and
   with route ``"local"``, to show what the route adds.
 
 Every plan is :func:`nonholo.plan` with its defaults (``T = 1``, strategy ``"robust"``),
 timed per call after one warm-up call (numba compiled). Every claimed success is
 re-simulated by SciPy's DOP853 (rtol = atol = 1e-13) on the model written out by hand
-(:func:`nonholo.verify.resimulate_state`, nothing generated): *solved* = both parts of
+(:func:`nonholo.certify.resimulate.resimulate_state`, nothing generated): *solved* = both parts of
 the re-simulated terminal error ≤ 1e-8 (rotation in rad, coordinates in the mechanism's
 units, angles wrapped) and, for the car, ``|cos φ| ≥ 1e-2`` along the dense path.
 
@@ -47,7 +47,8 @@ import time
 import numpy as np
 
 import nonholo
-from nonholo import so3, verify
+from nonholo.spaces import so3
+from nonholo.certify import resimulate as verify
 
 from .report import RESULTS_DIR, Report
 

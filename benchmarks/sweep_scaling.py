@@ -1,4 +1,4 @@
-"""Throughput of :func:`nonholo.sweep.sweep` on one and on two local workers (and on a
+"""Throughput of :func:`nonholo.batch.sweep.sweep` on one and on two local workers (and on a
 Dask cluster of a scheduler and two worker processes), the same problems in the same run.
 
 Run::
@@ -14,7 +14,7 @@ sweep of 8 other pairs (numba loaded), the order is: one worker (in this process
 local worker processes, then a Dask scheduler and two single-threaded workers started as
 separate processes on 127.0.0.1 by the ``dask`` command-line tools (:func:`dask_cluster`); then the machine's ceiling (:func:`machine_ceiling`). Every run's rows must
 equal the one-worker run's (all columns but the wall times,
-:func:`nonholo.sweep.comparable`). Writes ``benchmarks/results/sweep.md``.
+:func:`nonholo.batch.sweep.comparable`). Writes ``benchmarks/results/sweep.md``.
 """
 from __future__ import annotations
 
@@ -27,7 +27,7 @@ import tempfile
 import time
 from pathlib import Path
 
-from nonholo.sweep import comparable, sweep
+from nonholo.batch.sweep import comparable, sweep
 
 from . import goalset
 from .report import Report
@@ -59,7 +59,7 @@ def dask_cluster(directory: Path):
                                            "--host", "127.0.0.1"], **quiet))
         with Client(address, timeout="60s") as client:
             client.wait_for_workers(2, timeout=120)
-            client.run(lambda: __import__("nonholo.planner"))
+            client.run(lambda: __import__("nonholo.planning.api"))
         yield address
         with Client(address, timeout="30s") as client:
             client.shutdown()
@@ -135,7 +135,7 @@ def main(argv=None) -> int:
                  extra_packages=("pyarrow", "distributed"))
     rep.paragraph(
         f"The first {len(rows)} uniform random platform pairs (`benchmarks.goalset.uniform_pairs`), `plan()` with "
-        "its defaults, swept by `nonholo.sweep.sweep` into a Parquet file; wall time of the whole call "
+        "its defaults, swept by `nonholo.batch.sweep.sweep` into a Parquet file; wall time of the whole call "
         "(problems checked, workers started, every batch and the final file written), after an untimed "
         f"warm-up sweep; in this order, one run each. Solved: {solved} of {len(rows)}.")
     one = runs["1 local worker"][0]

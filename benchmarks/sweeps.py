@@ -1,4 +1,4 @@
-"""The benchmarks' calls of :func:`nonholo.plan`, made through :func:`nonholo.sweep.sweep`.
+"""The benchmarks' calls of :func:`nonholo.plan`, made through :func:`nonholo.batch.sweep.sweep`.
 
 :func:`plan_all` turns a list of goals into a problem table and sweeps it in this process,
 one problem after another (``workers=1``: each plan timed alone, as a plain loop times
@@ -14,7 +14,7 @@ import sys
 import tempfile
 from pathlib import Path
 
-from nonholo.sweep import plan_of, sweep
+from nonholo.batch.sweep import plan_of, sweep
 
 from .report import RESULTS_DIR, git_revision
 

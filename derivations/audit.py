@@ -219,8 +219,10 @@ def check_eq_8() -> Finding:
 
 def _numeric_variational():
     """Example 1's initial control (Fourier, K = 2) with the numeric variational system."""
-    from nonholo import examples, simulation, so3 as nso3
-    from nonholo.controls import Fourier
+    from nonholo.controls.parametrisations import Fourier
+    from nonholo.motion import simulation
+    from nonholo.paper import examples
+    from nonholo.spaces import so3 as nso3
 
     ex = examples.get(1)
     controls = Fourier.fit(ex.initial_control, ex.T, ex.harmonics)
@@ -265,7 +267,7 @@ def check_eq_10_11() -> Finding:
     # Φ(T,t) = Φ(T,0) Φ(t,0)^{-1}; d/dt Φ(t,0)^{-1} = -Φ(t,0)^{-1} A
     d_inv = -Phi_t0.inv() * (A * Phi_t0) * Phi_t0.inv()
     ok1 = (Phi * Phi_t0 * d_inv + Phi * Phi_t0 * Phi_t0.inv() * A).applyfunc(sp.cancel).is_zero_matrix
-    from nonholo import verify
+    from nonholo.certify import resimulate as verify
 
     ex, controls, var, _ = _numeric_variational()
     M_lyap = verify.mobility_lyapunov(ex.R_start, controls, ex.T)

@@ -9,8 +9,16 @@ from collections.abc import Callable
 
 import sympy as sp
 
-from .mechanism import (Mechanism, PlatformGeometry, a, b, body_rate_mechanism, paper_platform,
-                        platform_mechanism, rho)
+from .mechanism import (
+    Mechanism,
+    PlatformGeometry,
+    a,
+    b,
+    body_rate_mechanism,
+    paper_platform,
+    platform_mechanism,
+    rho,
+)
 from .so3 import e1, e2, e3
 from .state_space import StateMechanism
 from .vehicles import kinematic_car, rolling_ball

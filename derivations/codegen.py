@@ -22,8 +22,8 @@ from sympy.printing.numpy import NumPyPrinter
 from . import catalog, singularity
 from .mechanism import Mechanism, a, b, input_map, leg_length_squared, leg_rate_row, rho
 from .so3 import r
-from .state_space import StateMechanism
 from .state_space import Q_matrix as state_Q_matrix
+from .state_space import StateMechanism
 from .variational import Q_matrix, inputs
 
 GENERATED_DIR = Path(__file__).resolve().parent.parent / "nonholo" / "generated"
@@ -288,7 +288,7 @@ def singularity_module() -> str:
 
 #: The integrator's source: one CF4 step (``cf4_step``, with its stages ``cf4_stage``) and
 #: the kernels that call it.
-CF4_SOURCE = GENERATED_DIR.parent / "cf4.py"
+CF4_SOURCE = GENERATED_DIR.parent / "integrate" / "cf4.py"
 #: Functions whose calls are expanded in place, and the kernels written with them.
 CF4_INLINED = ("cf4_step", "cf4_stage", "cf4_close", "zpredict")
 CF4_KERNELS = ("forward", "forward_variational", "frame_inputs")
@@ -350,14 +350,14 @@ def _expand(body: list, functions: dict) -> list:
 
 
 def cf4_kernels_module() -> str:
-    """``nonholo/generated/cf4_kernels.py``: the kernels of ``nonholo/cf4.py`` with every call
+    """``nonholo/generated/cf4_kernels.py``: the kernels of ``nonholo/integrate/cf4.py`` with every call
     of the CF4 step (and of its stages) expanded in place — one function per kernel, as
-    the compiler needs it to keep the step's arrays in registers (see :mod:`nonholo.cf4`)."""
+    the compiler needs it to keep the step's arrays in registers (see :mod:`nonholo.integrate.cf4`)."""
     tree = ast.parse(CF4_SOURCE.read_text())
     defs = {node.name: node for node in tree.body if isinstance(node, ast.FunctionDef)}
     functions = {name: defs[name] for name in CF4_INLINED}
-    parts = [HEADER.format(doc="The CF4 kernels of nonholo/cf4.py with the step inlined (see nonholo.cf4).",
-                           sympy_version=sp.__version__, source="nonholo/cf4.py")]
+    parts = [HEADER.format(doc="The CF4 kernels of nonholo/integrate/cf4.py with the step inlined (see nonholo.integrate.cf4).",
+                           sympy_version=sp.__version__, source="nonholo/integrate/cf4.py")]
     for name in CF4_KERNELS:
         fn = defs[name]
         fn.body = _expand(fn.body, functions)

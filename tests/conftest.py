@@ -1,6 +1,6 @@
 """Helpers shared by the test modules (plain functions: ``from conftest import example``).
 
-- :func:`example`: ``(R0, Rd)`` of an example of MODEL.md, from :mod:`nonholo.examples`;
+- :func:`example`: ``(R0, Rd)`` of an example of MODEL.md, from :mod:`nonholo.paper.examples`;
 - :func:`check_solution`: a planner result confirmed by an independent DOP853 re-simulation;
 - :func:`verified`: the same check as the robust-strategy benchmark (dense path, ``|Δ|``);
 - :func:`reachable_goals`, :func:`paper_reachable_goals`: goals reachable by construction;
@@ -12,13 +12,16 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from nonholo import catalog, examples, so3, verify
+from nonholo.certify import resimulate as verify
+from nonholo.controls.parametrisations import Fourier, paper_initial
 from nonholo.generated import MECHANISMS as GENERATED_MECHANISMS
-from nonholo.controls import Fourier, paper_initial
+from nonholo.model import catalog
+from nonholo.paper import examples
+from nonholo.spaces import so3
 
 
 def example(k: int) -> tuple[np.ndarray, np.ndarray]:
-    """``(R0, Rd)`` of example ``k`` of MODEL.md (:func:`nonholo.examples.get`)."""
+    """``(R0, Rd)`` of example ``k`` of MODEL.md (:func:`nonholo.paper.examples.get`)."""
     ex = examples.get(k)
     return ex.R_start, ex.R_goal
 
@@ -109,7 +112,7 @@ def paper_reachable_goals(count: int, seed: int = 0):
     condition another ~18 % of goals fail at once because the default initial control
     itself runs into Δ = 0.
     """
-    from nonholo import simulation as S
+    from nonholo.motion import simulation as S
 
     mech = catalog.get("platform")
     u0 = Fourier.fit(paper_initial(1.0), 1.0, 2)
@@ -144,10 +147,12 @@ def random_rotations(n, rng, min_abs_delta=0.05, delta=platform_delta):
 
 def forbid_simulation(monkeypatch):
     """Make every way into the integrator fail the test: compiling or fetching kernels
-    (:meth:`nonholo.Mechanism.kernels`, :func:`nonholo.cf4.compile_system`) and building a
+    (:meth:`nonholo.Mechanism.kernels`, :func:`nonholo.integrate.cf4.compile_system`) and building a
     planning :class:`~nonholo.planning.core.Problem`. Raises ``AssertionError`` (not a
     ``ValueError``), so a ``pytest.raises(ValueError)`` around the call does not swallow it."""
-    from nonholo import cf4, mechanism, planner
+    from nonholo.integrate import cf4
+    from nonholo.model import mechanism
+    from nonholo.planning import api as planner
     from nonholo.planning import core
 
     def forbidden(*args, **kwargs):

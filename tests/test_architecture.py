@@ -1,7 +1,9 @@
 """The package's import structure, from its source (``ast``, nothing is imported):
 
-- the import graph of the ``nonholo.*`` modules has no cycle;
-- no module imports a private name (``_x``) from another ``nonholo`` module.
+- the subpackages form ordered layers (:data:`LAYERS`): no import from a lower layer to a
+  higher one, hence no cycle between layers; the import graph has no cycle at all;
+- no module imports a private name (``_x``) from another ``nonholo`` module;
+- ``derivations`` (SymPy) imports nothing from ``nonholo``; no two modules share a name.
 
 Every ``import``/``from … import`` statement counts, wherever it is (module level, inside a
 function, under ``if TYPE_CHECKING``), relative or absolute. ``from P import x`` is an
@@ -117,11 +119,11 @@ def cycles(edges: dict[str, set[str]]) -> list[list[str]]:
 
 def test_resolution_of_relative_imports():
     assert resolve("nonholo.planning.core", 2, None) == "nonholo"
-    assert resolve("nonholo.planning.core", 2, "kernels") == "nonholo.kernels"
-    assert resolve("nonholo.planning.core", 1, "paper") == "nonholo.planning.paper"
+    assert resolve("nonholo.planning.core", 2, "numerics") == "nonholo.numerics"
+    assert resolve("nonholo.planning.core", 1, "strategy_paper") == "nonholo.planning.strategy_paper"
     assert resolve("nonholo.planning", 1, "core") == "nonholo.planning.core"       # a package's own
-    assert resolve("nonholo.catalog", 1, "generated") == "nonholo.generated"
-    assert resolve("nonholo", 1, "catalog") == "nonholo.catalog"
+    assert resolve("nonholo.model.catalog", 2, "generated") == "nonholo.generated"
+    assert resolve("nonholo", 1, "model") == "nonholo.model"
 
 
 def test_cycle_finder():
@@ -132,11 +134,10 @@ def test_cycle_finder():
 def test_the_graph_sees_every_form_of_import():
     """Known imports of the package, one of each form."""
     edges = graph()
-    assert "nonholo.kernels" in edges["nonholo.planning.core"]          # from .. import kernels
-    assert "nonholo.replay" in edges["nonholo.planning.core"]           # from ..replay import X
-    assert "nonholo.generated" in edges["nonholo.catalog"]              # from .generated import X
-    assert "nonholo.planning.core" in edges["nonholo.planner"]          # from .planning.core import X
-    assert "nonholo.cf4" in edges["nonholo.mechanism"]                  # from . import cf4
+    assert "nonholo.numerics.kernels" in edges["nonholo.planning.core"]   # from ..numerics import kernels
+    assert "nonholo.motion.frame_controls" in edges["nonholo.planning.core"]   # from ..x.y import X
+    assert "nonholo.generated" in edges["nonholo.model.catalog"]           # from ..generated import X
+    assert "nonholo.planning.core" in edges["nonholo.planning.api"]        # from .core import X
     # imports inside functions count too
     inner = [(m, t) for m in MODULES for node in ast.walk(ast.parse(MODULES[m].read_text()))
              if isinstance(node, ast.FunctionDef)
@@ -146,11 +147,73 @@ def test_the_graph_sees_every_form_of_import():
         assert t in edges[m] or any(x.startswith(t + ".") for x in edges[m]), (m, t)
 
 
+def test_layer_of_every_module():
+    assert layer("nonholo.numerics.jit") == "numerics"
+    assert layer("nonholo.planning.core") == "planning"
+    assert layer("nonholo") == "nonholo"
+    assert LAYERS.index("numerics") < LAYERS.index("planning") < LAYERS.index("cli")
+
+
 # -- the package ----------------------------------------------------------------------------
 
+#: The subpackages from the bottom up: a module may import from its own layer and the layers
+#: below it, never from a layer above (``nonholo`` itself, the public face, is the top).
+LAYERS = ("generated", "numerics", "spaces", "integrate", "controls", "model", "motion", "certify",
+          "io", "planning", "viz", "batch", "paper", "cli", "nonholo")
+
+#: At most this many modules directly in ``nonholo/`` besides the subpackages.
+MAX_TOP_MODULES = 12
+
+
+def layer(module: str) -> str:
+    parts = module.split(".")
+    return parts[1] if len(parts) > 1 else "nonholo"
+
+
 def test_every_module_is_parsed():
-    assert {"nonholo", "nonholo.catalog", "nonholo.mechanism", "nonholo.cf4", "nonholo.planning.core",
-            "nonholo.planning.robust", "nonholo.generated.platform"} <= set(MODULES)
+    assert {"nonholo", "nonholo.model.catalog", "nonholo.model.mechanism", "nonholo.integrate.cf4",
+            "nonholo.planning.core", "nonholo.planning.strategy_robust",
+            "nonholo.generated.platform"} <= set(MODULES)
+
+
+def test_every_module_is_in_a_layer():
+    unknown = sorted(m for m in MODULES if layer(m) not in LAYERS)
+    assert not unknown, f"modules outside the layers {LAYERS}: {unknown}"
+
+
+def test_no_import_from_a_lower_layer_to_a_higher_one():
+    upward = [f"{m} ({layer(m)}) imports {t} ({layer(t)})"
+              for m, targets in graph().items() for t in sorted(targets)
+              if LAYERS.index(layer(t)) > LAYERS.index(layer(m))]
+    assert not upward, "imports from a lower layer to a higher one:\n" + "\n".join(upward)
+
+
+def test_few_modules_directly_in_the_package():
+    top = [p.name for p in (ROOT / PACKAGE).glob("*.py") if p.name != "__init__.py"]
+    assert len(top) <= MAX_TOP_MODULES, top
+
+
+def test_no_two_modules_share_a_name():
+    """No two modules of ``nonholo`` and ``derivations`` have the same file name (``__init__``
+    and the generated modules, named after their mechanisms, aside)."""
+    files = [p for tree in (PACKAGE, "derivations") for p in (ROOT / tree).rglob("*.py")
+             if p.name != "__init__.py" and "generated" not in p.parts]
+    seen = {}
+    for p in files:
+        seen.setdefault(p.stem, []).append(str(p.relative_to(ROOT)))
+    twice = {k: v for k, v in seen.items() if len(v) > 1}
+    assert not twice, twice
+
+
+def test_derivations_import_nothing_from_the_package():
+    found = []
+    for path in sorted((ROOT / "derivations").rglob("*.py")):
+        for node in ast.walk(ast.parse(path.read_text())):
+            names = ([a.name for a in node.names] if isinstance(node, ast.Import)
+                     else [node.module or ""] if isinstance(node, ast.ImportFrom) and not node.level else [])
+            found += [f"{path.name}:{node.lineno}: {n}" for n in names
+                      if n == PACKAGE or n.startswith(PACKAGE + ".")]
+    assert not found, "derivations import nonholo:\n" + "\n".join(found)
 
 
 def test_no_import_cycle():

@@ -4,13 +4,13 @@ import json
 import pytest
 
 from derivations import audit, paper
-from nonholo.cli import main
+from nonholo.cli.entry import main
 
 
 @pytest.fixture(scope="module")
 def audit_json():
-    import io
     import contextlib
+    import io
     buf = io.StringIO()
     with contextlib.redirect_stdout(buf):
         assert main(["audit", "--json"]) == 0

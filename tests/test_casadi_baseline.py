@@ -10,7 +10,8 @@ import pytest
 pytest.importorskip("casadi")
 from conftest import example  # noqa: E402
 
-from nonholo import catalog, so3  # noqa: E402
+from nonholo.model import catalog
+from nonholo.spaces import so3  # noqa: E402
 
 
 def _load_module():

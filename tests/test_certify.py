@@ -1,4 +1,4 @@
-"""Certified success (nonholo/certify.py, nonholo/planning/certification.py): no plan claims a
+"""Certified success (nonholo/certify/certificate.py, nonholo/planning/certification.py): no plan claims a
 goal that an independent re-simulation of its physical controls does not reach."""
 from __future__ import annotations
 
@@ -10,9 +10,14 @@ import pytest
 from conftest import example
 
 from benchmarks import goalset
-from nonholo import catalog, certify, planner, replay, verify
+from nonholo.certify import certificate as certify
+from nonholo.certify import resimulate as verify
+from nonholo.model import catalog
+from nonholo.motion import frame_controls as replay
+from nonholo.motion import playback
+from nonholo.motion.simulation import variational
+from nonholo.planning import api as planner
 from nonholo.planning.core import Outcome, Strategy
-from nonholo.simulation import variational
 
 MISS = 1e-8
 DATA = Path(__file__).parent / "data"
@@ -140,7 +145,7 @@ def test_the_error_bound_covers_the_replays_error():
             if not res.success:
                 continue
             mech = catalog.get(res.mechanism)
-            fine = certify.replay(R0, res.parametrisation, res.T, mech, 16 * res.replay_steps)[0][-1]
+            fine = playback.replay(R0, res.parametrisation, res.T, mech, 16 * res.replay_steps)[0][-1]
             assert verify.terminal_error(fine, res.R_T) <= res.error_bound
 
 

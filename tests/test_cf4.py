@@ -5,9 +5,11 @@ import pytest
 from conftest import example
 
 from derivations import codegen
-from nonholo import catalog, cf4, stages
-from nonholo.controls import Fourier, PiecewiseConstant
+from nonholo.controls import stages
+from nonholo.controls.parametrisations import Fourier, PiecewiseConstant
 from nonholo.generated import cf4_kernels
+from nonholo.integrate import cf4
+from nonholo.model import catalog
 
 
 def test_generated_kernels_are_fresh():

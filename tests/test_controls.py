@@ -3,13 +3,14 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-
 from conftest import example
 
-from nonholo import catalog, replay, stages
-from nonholo import controls as C
-from nonholo.replay import FrameControls
-from nonholo.stages import stage_values
+from nonholo.controls import parametrisations as C
+from nonholo.controls import stages
+from nonholo.controls.stages import stage_values
+from nonholo.model import catalog
+from nonholo.motion import frame_controls as replay
+from nonholo.motion.frame_controls import FrameControls
 
 T = 1.7
 
@@ -251,7 +252,7 @@ def test_fine_fourier_stage_tables_by_fft_against_direct_sums():
     precision), better than the sines-and-cosines basis does."""
     import mpmath as mp
 
-    from nonholo import stages
+    from nonholo.controls import stages
 
     rng = np.random.default_rng(11)
     K, steps = 32, 2 * stages.FFT_ABOVE

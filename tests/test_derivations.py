@@ -4,14 +4,16 @@ import shutil
 import numpy as np
 import pytest
 import sympy as sp
-from conftest import random_rotations as _random_rotations, SO3_MECHANISMS
+from conftest import SO3_MECHANISMS
+from conftest import random_rotations as _random_rotations
 
 from derivations import catalog, codegen, singularity
-from derivations.mechanism import constraint_matrix, PAPER_GEOMETRY, paper_platform
+from derivations.mechanism import PAPER_GEOMETRY, constraint_matrix, paper_platform
 from derivations.so3 import r
 from derivations.variational import Q_matrix, inputs
-from nonholo import catalog as numeric, so3
 from nonholo.generated import platform_singularity as gen_sing
+from nonholo.model import catalog as numeric
+from nonholo.spaces import so3
 
 RNG = np.random.default_rng(2014)
 N_POINTS = 120
@@ -106,12 +108,12 @@ def test_attitude_A_vanishes():
 
 
 def test_derive_check_passes_on_committed_tree(capsys):
-    from nonholo.cli import main
+    from nonholo.cli.entry import main
     assert main(["derive", "--check"]) == 0
 
 
 def test_derive_check_fails_on_altered_copy(tmp_path, capsys):
-    from nonholo.cli import main
+    from nonholo.cli.entry import main
     copy = tmp_path / "generated"
     shutil.copytree(codegen.GENERATED_DIR, copy)
     target = copy / "platform.py"

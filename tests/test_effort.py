@@ -1,14 +1,17 @@
-"""The global route's budget is effort (nonholo/effort.py), not wall time: a plan does not
+"""The global route's budget is effort (nonholo/numerics/effort.py), not wall time: a plan does not
 depend on how fast the machine runs it."""
 import json
 import time
 
 import numpy as np
 import pytest
-
-from nonholo import catalog, effort, planner, stages
-from nonholo.controls import Fourier
 from test_route import far_pair
+
+from nonholo.controls import stages
+from nonholo.controls.parametrisations import Fourier
+from nonholo.model import catalog
+from nonholo.numerics import effort
+from nonholo.planning import api as planner
 
 
 def test_kernels_count_their_steps():

@@ -7,11 +7,14 @@ import numpy as np
 import pytest
 
 from benchmarks import goalset
-from nonholo import catalog, planner, so3, verify
-from nonholo.controls import PiecewiseConstant
+from nonholo.certify import resimulate as verify
+from nonholo.controls.parametrisations import PiecewiseConstant
+from nonholo.io.result import PlanResult
+from nonholo.model import catalog
+from nonholo.motion.simulation import variational
+from nonholo.planning import api as planner
 from nonholo.planning import energy
-from nonholo.result import PlanResult
-from nonholo.simulation import variational
+from nonholo.spaces import so3
 
 PLATFORM = catalog.get("platform")
 GOALS = {g["id"]: g for g in goalset.load_goals()}

@@ -4,8 +4,10 @@ import json
 import numpy as np
 import pytest
 
-from nonholo import catalog, examples, so3
-from nonholo.cli import main
+from nonholo.cli.entry import main
+from nonholo.model import catalog
+from nonholo.paper import examples
+from nonholo.spaces import so3
 
 delta = catalog.get("platform").delta
 
@@ -63,7 +65,7 @@ def test_reproduce_writes_summary_and_figures(tmp_path, capsys):
         for ext in ("png", "pdf"):
             assert (tmp_path / f"{stem}.{ext}").stat().st_size > 5000, stem
     assert (tmp_path / "example3_animation.gif").stat().st_size > 10000
-    from nonholo.result import PlanResult
+    from nonholo.io.result import PlanResult
     again = PlanResult.load(tmp_path / "plans" / "example1_parametric.json")
     assert again.success and again.terminal_error <= 1e-10
     far = PlanResult.load(tmp_path / "plans" / "far_goal.json")

@@ -1,4 +1,4 @@
-"""The CSV an actuator controller plays back (nonholo/export.py, ``PlanResult.to_csv``,
+"""The CSV an actuator controller plays back (nonholo/io/csv_export.py, ``PlanResult.to_csv``,
 ``nonholo plan --csv``), against independent computations: DOP853, the geometry, finite
 differences in time."""
 import csv
@@ -8,8 +8,12 @@ import pytest
 from conftest import example
 from scipy.spatial.transform import Rotation
 
-from nonholo import catalog, export, planner, so3, verify
-from nonholo.cli import main
+from nonholo.certify import resimulate as verify
+from nonholo.cli.entry import main
+from nonholo.io import csv_export as export
+from nonholo.model import catalog
+from nonholo.planning import api as planner
+from nonholo.spaces import so3
 
 
 def read(path):

@@ -8,15 +8,17 @@ matplotlib.use("Agg")
 
 import numpy as np
 import pytest
+from conftest import example
 from matplotlib.figure import Figure
 from PIL import Image
 from scipy.integrate import solve_ivp
 from scipy.spatial.transform import Rotation
 
-from conftest import example
-
-from nonholo import catalog, examples, figures, so3
-from nonholo.mechanism import Geometry
+from nonholo.model import catalog
+from nonholo.model.mechanism import Geometry
+from nonholo.paper import examples
+from nonholo.spaces import so3
+from nonholo.viz import figures
 
 RNG = np.random.default_rng(7)
 PLATFORM = catalog.get("platform")
@@ -211,7 +213,7 @@ def test_animation(results, tmp_path):
 
 
 def test_mechanism_delta_rpy_matches_the_analytic_form():
-    from nonholo import figures as F
+    from nonholo.viz import figures as F
     rng = np.random.default_rng(5)
     a = rng.uniform(-3, 3, size=(3, 7, 5))
     np.testing.assert_allclose(F.mechanism_delta_rpy("platform", *a), F.delta_rpy(*a), atol=1e-14)
@@ -222,7 +224,7 @@ def test_mechanism_delta_rpy_matches_the_analytic_form():
 
 @pytest.mark.parametrize("name", ["platform", "platform_raised"])
 def test_mechanism_card(name):
-    from nonholo import figures as F
+    from nonholo.viz import figures as F
     fig = F.mechanism_card_figure(name)
     assert len(fig.axes) == 3  # schematic, slice, colour bar
     assert "[" in fig.axes[1].get_xlabel()

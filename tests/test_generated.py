@@ -2,10 +2,9 @@
 compiled integrator calls) and the allocating ``NAME(...)`` (what everything else calls)."""
 import numpy as np
 import pytest
-from conftest import check_into_forms, random_rotations, SO3_MECHANISMS
+from conftest import SO3_MECHANISMS, check_into_forms, random_rotations
 
-from nonholo import catalog
-from nonholo.generated import MECHANISMS
+from nonholo.model import catalog
 
 
 @pytest.mark.parametrize("name", SO3_MECHANISMS)

@@ -11,8 +11,9 @@ try:
 except ImportError:  # run from outside the repository root
     sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1]))
     from benchmarks import goalset
-from nonholo import so3, verify  # noqa: E402
-from nonholo.controls import from_dict  # noqa: E402
+from nonholo.certify import resimulate as verify  # noqa: E402
+from nonholo.controls.parametrisations import from_dict  # noqa: E402
+from nonholo.spaces import so3
 
 RAW = json.loads(goalset.DEFAULT_PATH.read_text()) if goalset.DEFAULT_PATH.exists() else None
 pytestmark = pytest.mark.skipif(RAW is None, reason="run `python -m benchmarks.goalset` first")
@@ -76,7 +77,7 @@ def test_stored_data_consistent(goals):
 
 
 def test_generating_controls_reach_the_goals(goals):
-    """The stored controls, re-simulated independently (nonholo.verify, DOP853 1e-13), reach Rd."""
+    """The stored controls, re-simulated independently (nonholo.certify.resimulate, DOP853 1e-13), reach Rd."""
     reach = [g for g in goals if g["band"] != "across"]
     for g in reach:
         c = from_dict({**g["generating_controls"], "coeffs": g["generating_controls"]["coeffs"].tolist()})
@@ -113,7 +114,7 @@ def test_load_goals_arrays(goals):
 def test_band_pairs_fill_every_band_from_the_uniform_stream(mechanism):
     """Each band holds the requested number of pairs in one component, each at the distance
     its band says; the pairs are those of the uniform stream (same seed), in draw order."""
-    from nonholo import catalog
+    from nonholo.model import catalog
 
     mech = catalog.get(mechanism)
     pairs = goalset.band_pairs(mechanism, 12)

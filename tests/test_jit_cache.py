@@ -7,7 +7,7 @@ from pathlib import Path
 SIMULATE = """
 import numpy as np
 from nonholo import simulate, so3
-from nonholo.controls import Fourier
+from nonholo.controls.parametrisations import Fourier
 tr = simulate(so3.from_rpy(0.1, 0.2, 0.3), Fourier(1.0, [[0.3, 0, 0], [0, 0.2, 0]]), 1.0,
               mechanism="attitude", steps=50)
 print(repr(float(tr.R_T[0, 1])))

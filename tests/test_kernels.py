@@ -1,12 +1,14 @@
-"""The small compiled numerics of :mod:`nonholo.kernels` and the integrator kernels' entry
+"""The small compiled numerics of :mod:`nonholo.numerics.kernels` and the integrator kernels' entry
 points (:meth:`nonholo.Mechanism.kernels`)."""
 import numpy as np
 import pytest
-from conftest import example, SO3_MECHANISMS
+from conftest import SO3_MECHANISMS, example
 
-from nonholo import catalog, kernels, stages
-from nonholo.controls import Fourier
-from nonholo.replay import FrameControls
+from nonholo.controls import stages
+from nonholo.controls.parametrisations import Fourier
+from nonholo.model import catalog
+from nonholo.motion.frame_controls import FrameControls
+from nonholo.numerics import kernels
 
 
 def numpy_min_norm(J, l, scale):
@@ -77,7 +79,7 @@ def test_scaled_gram_and_back():
 
 
 def test_inv33_and_exp_times():
-    from nonholo import so3
+    from nonholo.spaces import so3
 
     rng = np.random.default_rng(9)
     Z = rng.normal(size=(3, 3))

@@ -5,8 +5,9 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from nonholo import catalog, so3
 from nonholo.generated import MECHANISMS
+from nonholo.model import catalog
+from nonholo.spaces import so3
 
 PLATFORMS = [n for n in MECHANISMS if catalog.get(n).has_legs]
 

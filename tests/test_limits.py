@@ -1,12 +1,16 @@
-"""Stroke limits of the legs (``plan(..., leg_length=(lo, hi))``, nonholo/limits.py): plans
+"""Stroke limits of the legs (``plan(..., leg_length=(lo, hi))``, nonholo/model/limits.py): plans
 re-simulated independently (DOP853, dense path) stay inside them."""
 import numpy as np
 import pytest
 
 from benchmarks import goalset
-from nonholo import catalog, certify, planner, so3, verify
-from nonholo.limits import LegLimits
-from nonholo.result import PlanResult
+from nonholo.certify import certificate as certify
+from nonholo.certify import resimulate as verify
+from nonholo.io.result import PlanResult
+from nonholo.model import catalog
+from nonholo.model.limits import LegLimits
+from nonholo.planning import api as planner
+from nonholo.spaces import so3
 
 PLATFORM = catalog.get("platform")
 LIMITS = (1.2, 2.0)
@@ -113,7 +117,7 @@ def test_leg_clearance_barrier_terms_against_finite_differences():
 
 
 def test_cli_leg_length_and_its_figure(tmp_path, capsys):
-    from nonholo.cli import main
+    from nonholo.cli.main.entry import main
 
     args = ["plan", "--from", "0.5", "1.2", "-0.5", "--to", "1.0", "0.9", "-0.5", "--quiet"]
     out, png = tmp_path / "p.json", tmp_path / "p.png"

@@ -3,12 +3,15 @@ import zlib
 
 import numpy as np
 import pytest
-from conftest import example, reachable_goals, SO3_MECHANISMS
+from conftest import SO3_MECHANISMS, example, reachable_goals
 
-from nonholo import Mechanism, catalog, mechanism_named, plan, simulation, verify
-from nonholo.cli import main
-from nonholo.controls import Fourier
+from nonholo import Mechanism, mechanism_named, plan
+from nonholo.certify import resimulate as verify
+from nonholo.cli.entry import main
+from nonholo.controls.parametrisations import Fourier
 from nonholo.generated import MECHANISMS
+from nonholo.model import catalog
+from nonholo.motion import simulation
 
 
 def test_mechanism_names():
@@ -54,7 +57,7 @@ def test_cli_plan_with_mechanism(tmp_path, capsys):
     status = main(["plan", "--mechanism", "attitude", "--from", "0.1", "0.2", "0.3",
                    "--to", "0.4", "-0.1", "0.2", "--out", str(out), "--quiet"])
     assert status == 0
-    from nonholo.result import PlanResult
+    from nonholo.io.result import PlanResult
     r = PlanResult.load(out)
     assert r.mechanism == "attitude" and r.success
 

@@ -15,14 +15,24 @@ import pytest
 import sympy as sp
 from conftest import check_into_forms, check_solution, random_rotations, reachable_goals
 
-from derivations.mechanism import (PAPER_GEOMETRY, PlatformGeometry, constraint_matrix, input_map,
-                                   platform_mechanism, rho)
+from derivations.mechanism import (
+    PAPER_GEOMETRY,
+    PlatformGeometry,
+    constraint_matrix,
+    input_map,
+    platform_mechanism,
+    rho,
+)
 from derivations.so3 import e1, e2, e3, r
 from derivations.variational import Q_matrix, inputs
-from nonholo import Mechanism, catalog, figures, plan, simulate, so3, verify
-from nonholo.cli import main
-from nonholo.controls import Fourier
-from nonholo.result import PlanResult
+from nonholo import Mechanism, plan, simulate
+from nonholo.certify import resimulate as verify
+from nonholo.cli.entry import main
+from nonholo.controls.parametrisations import Fourier
+from nonholo.io.result import PlanResult
+from nonholo.model import catalog
+from nonholo.spaces import so3
+from nonholo.viz import figures
 
 NAME = "test_moved_disk"
 G = PAPER_GEOMETRY
@@ -206,7 +216,7 @@ def test_figures_draw_a_mechanism_outside_the_catalog(moved, goal):
     """The Δ panel of a plan with a Mechanism nobody added draws the plan's own Δ(t)."""
     import matplotlib
     matplotlib.use("Agg")
-    from nonholo import figures
+    from nonholo.viz import figures
 
     R0, Rd = goal
     res = plan(R0, Rd, mechanism=moved)

@@ -23,8 +23,10 @@ import numpy as np
 import pytest
 from conftest import example, example_rpy_args
 
-from nonholo import cli_plan, planner, so3
-from nonholo.result import PlanResult
+from nonholo.cli import plan_command as cli_plan
+from nonholo.io.result import PlanResult
+from nonholo.planning import api as planner
+from nonholo.spaces import so3
 
 # -- plans of every kind (computed once) -----------------------------------------------------
 
@@ -153,7 +155,7 @@ def test_cli_documents_its_exit_statuses():
 def test_cli_output_closed_by_its_reader_is_not_an_error(tmp_path, reader):
     start, goal = example_rpy_args(1)
     out = tmp_path / "plan.json"
-    cmd = " ".join([sys.executable, "-m", "nonholo.cli", "plan", "--from", *start, "--to", *goal,
+    cmd = " ".join([sys.executable, "-m", "nonholo.cli.entry", "plan", "--from", *start, "--to", *goal,
                     "--strategy", "paper", "--out", str(out)])
     proc = subprocess.run(["bash", "-c", f'{cmd} | {reader}; exit "${{PIPESTATUS[0]}}"'],
                           capture_output=True, text=True, timeout=600)

@@ -10,16 +10,24 @@ import json
 
 import numpy as np
 import pytest
-from conftest import check_solution, example, example_rpy_args, forbid_simulation, paper_reachable_goals
+from conftest import (
+    check_solution,
+    example,
+    example_rpy_args,
+    forbid_simulation,
+    paper_reachable_goals,
+)
 
-from nonholo import cli_plan, kernels, planner, so3
-from nonholo import controls as C
-from nonholo import simulation as S
-from nonholo.result import FORMAT
+from nonholo.cli import plan_command as cli_plan
+from nonholo.controls import parametrisations as C
+from nonholo.io.result import FORMAT, PlanResult
+from nonholo.motion import simulation as S
+from nonholo.motion.frame_controls import FrameControls
+from nonholo.numerics import kernels
+from nonholo.planning import api as planner
 from nonholo.planning.core import Outcome, Strategy, descend, record
-from nonholo.planning.paper import PaperStrategy
-from nonholo.replay import FrameControls
-from nonholo.result import PlanResult
+from nonholo.planning.strategy_paper import PaperStrategy
+from nonholo.spaces import so3
 
 METHODS = planner.METHODS
 STRATEGIES = ("paper", "robust")

@@ -1,5 +1,5 @@
-"""Re-timing under a bound on the legs' speeds (``plan(..., leg_speed=v)``, ``nonholo.retime``,
-nonholo/retimed.py): checked against independent DOP853 re-simulations of the re-timed
+"""Re-timing under a bound on the legs' speeds (``plan(..., leg_speed=v)``, ``nonholo.planning.retime``,
+nonholo/motion/retimed.py): checked against independent DOP853 re-simulations of the re-timed
 controls and an independent quadrature of the least time."""
 import json
 from dataclasses import replace
@@ -8,10 +8,13 @@ import numpy as np
 import pytest
 
 import nonholo
-from nonholo import catalog, planner, so3, verify
-from nonholo.result import PlanResult
-from nonholo.retime import retime, time_map
-from nonholo.retimed import Retimed
+from nonholo.certify import resimulate as verify
+from nonholo.io.result import PlanResult
+from nonholo.model import catalog
+from nonholo.motion.retimed import Retimed
+from nonholo.planning import api as planner
+from nonholo.planning.retime import retime, time_map
+from nonholo.spaces import so3
 
 PLATFORM = catalog.get("platform")
 R0 = so3.from_rpy(0.3, 0.2, 0.6)

@@ -10,13 +10,16 @@ import numpy as np
 import pytest
 from conftest import example, forbid_simulation, verified
 
-from nonholo import catalog
-from nonholo import controls as C
-from nonholo import examples, planner, so3, verify
-from nonholo.planning import robust
+from nonholo.certify import resimulate as verify
+from nonholo.controls import parametrisations as C
+from nonholo.io.result import PlanResult
+from nonholo.model import catalog
+from nonholo.motion.frame_controls import FrameControls
+from nonholo.paper import examples
+from nonholo.planning import api as planner
+from nonholo.planning import strategy_robust as robust
 from nonholo.planning.core import Problem, Start
-from nonholo.replay import FrameControls
-from nonholo.result import PlanResult
+from nonholo.spaces import so3
 
 PLATFORM = catalog.get("platform")
 DATA = Path(__file__).parent / "data"
@@ -172,7 +175,7 @@ def test_physical_u0_is_converted_to_frame_coordinates():
     u0 = C.Fourier(1.0, [[0.1, 0.2, 0.0, 0.05, 0.0], [0.0, 0.0, 0.25, 0.0, -0.05]])
     problem = Problem(R0, R0, 1.0, PLATFORM, "parametric", 400, 1e-2, frame=True)
     w0 = robust.to_frame(problem, u0)
-    from nonholo.simulation import simulate
+    from nonholo.motion.simulation import simulate
 
     R_u = simulate(R0, u0, 1.0).R_T
     R_w = FrameControls(w0, R0, "platform", 400).nodes[-1]
@@ -220,7 +223,7 @@ def test_paper_strategy_unchanged():
     assert len(fx["runs"]) == 4
     for run in fx["runs"]:
         ex = fx["examples"][str(run["example"])]
-        R0, Rd = example(run["example"])        # the recorded problem is nonholo.examples'
+        R0, Rd = example(run["example"])        # the recorded problem is nonholo.paper.examples'
         np.testing.assert_array_equal(so3.from_rpy(*ex["R0_rpy"]), R0)
         np.testing.assert_array_equal(so3.from_rpy(*ex["Rd_rpy"]), Rd)
         res = planner.plan(R0, Rd, method=run["method"], strategy="paper")
@@ -239,7 +242,7 @@ def test_sensitivity_is_reported_and_used():
     R0, Rd = example(1)
     res = planner.plan(R0, Rd)
     assert np.sqrt(3.0) - 1e-9 <= res.sensitivity <= robust.RobustStrategy.max_sensitivity
-    from nonholo.simulation import variational
+    from nonholo.motion.simulation import variational
 
     Phi = variational(R0, res.parametrisation, 1.0).Phi
     assert res.sensitivity == pytest.approx(np.sqrt(np.max(np.sum(Phi ** 2, axis=(1, 2)))), rel=1e-5)

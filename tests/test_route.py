@@ -1,16 +1,22 @@
-"""The global route's parts: paths of orientations on the roadmap (nonholo/roadmap.py) and
-stitched controls (nonholo/stitched.py)."""
+"""The global route's parts: paths of orientations on the roadmap (nonholo/planning/roadmap.py) and
+stitched controls (nonholo/controls/stitched.py)."""
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
 from benchmarks import goalset
-from nonholo import catalog, planner, replay, roadmap, simulation, so3, stages, verify
-from nonholo.controls import Fourier
-from nonholo.planning import route
-from nonholo.replay import FrameControls
-from nonholo.stitched import Stitched
+from nonholo.certify import resimulate as verify
+from nonholo.controls import stages
+from nonholo.controls.parametrisations import Fourier
+from nonholo.controls.stitched import Stitched
+from nonholo.model import catalog
+from nonholo.motion import frame_controls as replay
+from nonholo.motion import simulation
+from nonholo.motion.frame_controls import FrameControls
+from nonholo.planning import api as planner
+from nonholo.planning import roadmap, route
+from nonholo.spaces import so3
 
 
 def dense_delta(mech, path, step=0.005):
@@ -199,7 +205,7 @@ def test_plan_files_keep_the_smoothed_route_honest():
     """``stitched`` only with a one-piece control on a global route, of the plan's T and R0."""
     from dataclasses import replace
 
-    from nonholo.result import FORMAT_2, PlanResult
+    from nonholo.io.result import FORMAT_2, PlanResult
 
     p = far_pair()
     res = planner.plan(p["R0"], p["Rd"])
@@ -249,7 +255,7 @@ def test_plan_files_keep_the_route_honest(tmp_path):
     """A file may not relabel a local plan as global (or back), nor carry a route in format 2."""
     import json
 
-    from nonholo.result import FORMAT_2, PlanResult
+    from nonholo.io.result import FORMAT_2, PlanResult
 
     p = goalset.uniform_pairs("platform", 3)[0]
     res = planner.plan(p["R0"], p["Rd"])
@@ -269,8 +275,8 @@ def test_plan_files_keep_the_route_honest(tmp_path):
 def test_cli_takes_the_route(tmp_path, capsys):
     import argparse
 
-    from nonholo import cli_plan
-    from nonholo.result import PlanResult
+    from nonholo.cli.main import plan_command as cli_plan
+    from nonholo.io.result import PlanResult
 
     def cli(argv):
         parser = argparse.ArgumentParser(prog="nonholo")

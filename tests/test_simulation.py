@@ -3,14 +3,17 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-
 from conftest import example, platform_delta
 
-from nonholo import catalog, kernels, so3, stages, verify
-from nonholo import controls as C
-from nonholo import simulation as S
+from nonholo.certify import resimulate as verify
+from nonholo.controls import parametrisations as C
+from nonholo.controls import stages
+from nonholo.model import catalog
+from nonholo.motion import simulation as S
+from nonholo.motion.frame_controls import FrameControls
+from nonholo.numerics import kernels
 from nonholo.planning.core import Problem
-from nonholo.replay import FrameControls
+from nonholo.spaces import so3
 
 
 def initial(T=1.0):

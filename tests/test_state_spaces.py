@@ -2,7 +2,7 @@
 
 Derivation against the definitions, generated code against the symbolic source and
 finite differences, kernels against DOP853 and finite differences, plans re-simulated
-independently on hand-written models (:mod:`nonholo.verify`), save/load, bad input.
+independently on hand-written models (:mod:`nonholo.certify.resimulate`), save/load, bad input.
 """
 import numpy as np
 import pytest
@@ -11,9 +11,12 @@ import sympy as sp
 import nonholo
 from derivations import catalog as symbolic
 from derivations import state_space
-from nonholo import catalog, so3, stages, verify
-from nonholo import state as states
-from nonholo.controls import Fourier
+from nonholo.certify import resimulate as verify
+from nonholo.controls import stages
+from nonholo.controls.parametrisations import Fourier
+from nonholo.model import catalog
+from nonholo.spaces import so3
+from nonholo.spaces import state as states
 
 NAMES = ("rolling_ball", "car")
 rng = np.random.default_rng(7)
@@ -86,7 +89,7 @@ def test_kernel_against_dop853_and_jacobian_against_finite_differences(name):
     tr = nonholo.simulate(start, f, T, mechanism=mech, steps=N)
     _, R, q, _ = verify.resimulate_state(start, f, T, mech.name)
     assert np.abs(tr.R[-1] - R[-1]).max() < 1e-8 and np.abs(tr.q[-1] - q[-1]).max() < 1e-8
-    var = nonholo.simulation.variational(start, f, T, mechanism=mech, steps=N)
+    var = nonholo.motion.simulation.variational(start, f, T, mechanism=mech, steps=N)
     eps = 1e-6
     fd = np.empty_like(var.J)
     for c in range(f.params.size):
@@ -202,7 +205,7 @@ def test_far_ball_goal_by_the_global_route():
 
 
 def test_stitched_coordinates_are_checked():
-    from nonholo.stitched import Stitched
+    from nonholo.controls.stitched import Stitched
     piece = Fourier(1.0, np.zeros((2, 3)))
     with pytest.raises(ValueError, match="coordinates must be finite with shape \\(3, n\\)"):
         Stitched(2.0, [piece, piece], [np.eye(3)] * 3, np.zeros((2, 4)))
@@ -242,7 +245,8 @@ def test_state_space_derivation_is_shared():
 def test_figures_draw_the_plans(tmp_path):
     import matplotlib
     matplotlib.use("Agg")
-    from nonholo import reproduce, state_figures
+    from nonholo.paper import reproduce
+    from nonholo.viz import state_figures
 
     for name, draw in (("rolling_ball", state_figures.ball_figure), ("car", state_figures.car_figure)):
         start, goal = reproduce.STATE_PROBLEMS[name]
@@ -265,7 +269,7 @@ def test_command_line_plans_states(tmp_path, capsys):
     import argparse
     import csv
 
-    from nonholo import cli_plan
+    from nonholo.cli.main import plan_command as cli_plan
 
     def cli(argv):
         parser = argparse.ArgumentParser(prog="nonholo")

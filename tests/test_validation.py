@@ -2,11 +2,12 @@
 OverflowError, a bare TypeError, a huge allocation or an out-of-bounds read."""
 import numpy as np
 import pytest
+from conftest import example
 from scipy.spatial.transform import Rotation
 
-from conftest import example
-from nonholo import plan, platform, simulate
-from nonholo.controls import Fourier
+from nonholo import plan, simulate
+from nonholo.controls.parametrisations import Fourier
+from nonholo.model import platform
 
 R0, RD = example(1)
 

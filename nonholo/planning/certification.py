@@ -1,4 +1,4 @@
-"""Certifying a converged plan (:mod:`nonholo.certify`), correcting it where that is all it needs.
+"""Certifying a converged plan (:mod:`nonholo.certify.certificate`), correcting it where that is all it needs.
 
 A plan converged on the planner's grid ends within ``tol`` of the goal *on that grid*; its
 physical controls, replayed accurately, may end a discretisation error away (for strategy
@@ -15,10 +15,10 @@ from __future__ import annotations
 
 from dataclasses import replace
 
-from .. import certify as replay_certificate
-from .. import kernels
-from ..certify import Certificate
-from ..replay import FrameControls
+from ..certify import certificate as replay_certificate
+from ..certify.certificate import Certificate
+from ..motion.frame_controls import FrameControls
+from ..numerics import kernels
 from .core import Evaluation, Options, Outcome, Problem, step_scale
 
 #: Newton corrections on the replayed endpoint at most.
@@ -27,7 +27,7 @@ MAX_CORRECTIONS = 4
 
 def physical(problem: Problem, ev: Evaluation):
     """The physical inputs of ``ev``'s control: the control itself, or for a plan in frame
-    coordinates the :class:`~nonholo.replay.FrameControls` along ``ev``'s nodes."""
+    coordinates the :class:`~nonholo.motion.frame_controls.FrameControls` along ``ev``'s nodes."""
     if not problem.frame:
         return ev.controls
     return FrameControls(ev.controls, problem.R0, problem.mechanism, problem.steps, nodes=ev.R)

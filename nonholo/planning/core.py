@@ -4,11 +4,11 @@ the step loop of the θ-flow, its step control, and the result builder.
 Problem: steer ``dR/dt = [L(R) u] R`` (spatial form) from ``R(0) = R0`` to ``R(T) = R_d``
 (Tchoń & Jakubiak, appendix eqs. (4)–(11)). Along a family of controls ``u_θ`` the error
 ``e = log(R_T R_dᵀ) = [l_T]`` is asked to decay as ``dl_T/dθ = −γ l_T`` (4)–(5); with
-``s_T = P(l_T) dl_T/dθ`` (7), ``P`` the left Jacobian of SO(3) (:func:`nonholo.so3.dexp`)
+``s_T = P(l_T) dl_T/dθ`` (7), ``P`` the left Jacobian of SO(3) (:func:`nonholo.spaces.so3.dexp`)
 and ``P(l) l = l``, this asks for ``s_T = −γ l_T``, ``s_T = J ∂λ/∂θ`` with the Jacobian
 ``J = ∂s_T/∂λ`` of the variational system (9)–(10) (:meth:`Problem.evaluate`). Its
 minimum-norm solution in a diagonal metric ``W`` is the update (11):
-``Δλ = −γh W^{-1/2} (J W^{-1/2})^# l_T`` (:func:`nonholo.kernels.min_norm_step`).
+``Δλ = −γh W^{-1/2} (J W^{-1/2})^# l_T`` (:func:`nonholo.numerics.kernels.min_norm_step`).
 
 Step loop (:func:`descend`). The θ-flow is integrated by explicit Euler steps
 ``θ → θ + h``. A step is accepted only if the new trajectory reaches ``T`` with
@@ -36,15 +36,16 @@ from typing import Callable, ClassVar
 
 import numpy as np
 
-from .. import kernels, stages
-from .. import state as states
-from ..checks import check_count
-from ..controls import Controls
-from ..certify import Certificate
-from ..limits import LegLimits
-from ..mechanism import Mechanism
-from ..replay import FrameControls
-from ..result import PlanResult
+from ..certify.certificate import Certificate
+from ..controls import stages
+from ..controls.parametrisations import Controls
+from ..io.result import PlanResult
+from ..model.limits import LegLimits
+from ..model.mechanism import Mechanism
+from ..motion.frame_controls import FrameControls
+from ..numerics import kernels
+from ..numerics.checks import check_count
+from ..spaces import state as states
 
 
 @dataclass(frozen=True)
@@ -80,11 +81,11 @@ class Evaluation:
     stops early where ``sgnΔ < delta_stop`` or ``ω`` is not finite). ``min_delta``: least
     ``sgn(Δ(R0))·Δ`` over the integrator's evaluation points (= least ``|Δ|`` unless the
     motion crossed ``Δ = 0``; ``None`` without a singular set). ``min_clearance``: least
-    clearance of the nodes from the legs' stroke limits (:mod:`nonholo.limits`; ``None``
+    clearance of the nodes from the legs' stroke limits (:mod:`nonholo.model.limits`; ``None``
     without limits). ``l``, ``error``, ``J``
     only when complete; ``Z`` (``Z(t_n) = Φ(t_n, 0)^{-1}`` at every node, ``(N+1, 3, 3)``)
     and ``Wd`` (the kernel's stage weights, ``(3N, 3m)``, see
-    :func:`nonholo.cf4.forward_variational`) only when the evaluation was asked for
+    :func:`nonholo.integrate.cf4.forward_variational`) only when the evaluation was asked for
     them (``full``): with them the sensitivity of ``R(t_n)`` to ``λ`` is
     ``s_n = Z_n^{-1} Σ_{stages r before t_n} W_r ∂U_r/∂λ``.
     """
@@ -104,14 +105,14 @@ class Evaluation:
         self.R = R
         #: the coordinates at the nodes, ``(n, k)`` (``k = 0`` on SO(3))
         self.q = np.zeros((len(R), 0)) if q is None else q
-        #: ``(rotation, coordinates)``: the norms of the two parts of ``l`` (:mod:`nonholo.state`)
+        #: ``(rotation, coordinates)``: the norms of the two parts of ``l`` (:mod:`nonholo.spaces.state`)
         self.errors = None
         self.l = self.error = self.J = self.Z = self.Wd = None
         self._controls = controls
 
     @property
     def controls(self) -> Controls:
-        """The evaluated control as a :class:`~nonholo.controls.Controls` (validated)."""
+        """The evaluated control as a :class:`~nonholo.controls.parametrisations.Controls` (validated)."""
         if self._controls is None:
             self._controls = self.parametrisation.with_params(self.params)
         return self._controls
@@ -132,9 +133,9 @@ class Problem:
     error ``l_T`` and the Jacobian ``J = ∂s_T/∂λ``. ``frame=True`` integrates the system
     in the desingularised frame coordinates ``w`` (``dR/dt = [N(R) w] R``; ``Δ`` is still
     monitored): ``λ`` then parametrises ``w``. ``leg_limits``: the legs' stroke limits
-    (:class:`~nonholo.limits.LegLimits`) an admissible trajectory keeps at every node, or
+    (:class:`~nonholo.model.limits.LegLimits`) an admissible trajectory keeps at every node, or
     ``None``. ``q0``, ``qd``: the coordinates of start and goal of a mechanism whose state
-    goes beyond SO(3) (:mod:`nonholo.state`; ``R0 = Rd = I`` without orientation); then
+    goes beyond SO(3) (:mod:`nonholo.spaces.state`; ``R0 = Rd = I`` without orientation); then
     ``l_T`` is the stacked error ``(l, δq)`` and ``J`` has ``d`` rows.
     """
 
@@ -172,7 +173,7 @@ class Problem:
         return float(self.mechanism.delta_samples(np.asarray(R)[None], np.asarray(q)[None])[0])
 
     def error_of(self, R, q) -> tuple[np.ndarray, float, float]:
-        """The terminal error of the state ``(R, q)``: :func:`nonholo.state.error` from the goal."""
+        """The terminal error of the state ``(R, q)``: :func:`nonholo.spaces.state.error` from the goal."""
         return states.error(self.mechanism, R, q, self.Rd, self.qd)
 
     def forward(self, U, h: float, stop: float):
@@ -195,7 +196,7 @@ class Problem:
         self.n_params = controls.params.size
 
     def evaluate(self, x, delta_stop: float | None = None, full: bool = False) -> Evaluation:
-        """Simulate a control: a :class:`~nonholo.controls.Controls` (which becomes the
+        """Simulate a control: a :class:`~nonholo.controls.parametrisations.Controls` (which becomes the
         parametrisation, see :meth:`use`) or a flat parameter vector ``λ`` in the current
         parametrisation. Stops early where ``sgnΔ < delta_stop`` (default ``delta_min``).
         ``full``: keep ``Z(t_n)`` at every node and the stage weights (:attr:`Evaluation.Z`,
@@ -275,7 +276,7 @@ def step_scale(problem: Problem, controls: Controls) -> np.ndarray:
 
 
 def record(iteration: int, ev: Evaluation, step: float, phase: str, rejected: int, **extra) -> dict:
-    """One entry of a result's ``history`` (see :class:`~nonholo.result.PlanResult`)."""
+    """One entry of a result's ``history`` (see :class:`~nonholo.io.result.PlanResult`)."""
     return {"iteration": iteration, "error": ev.error, "step": step,
             "min_delta": ev.min_delta, "phase": phase, "rejected": rejected, **extra}
 
@@ -390,7 +391,7 @@ class Outcome:
 
 
 class Strategy(ABC):
-    """A way of following the θ-flow (see :data:`nonholo.planner.STRATEGIES`).
+    """A way of following the θ-flow (see :data:`nonholo.planning.api.STRATEGIES`).
 
     :meth:`frame` chooses the coordinates of the planned control (physical inputs ``u``
     of ``dR/dt = [L(R) u] R``, or frame coordinates ``w`` of ``dR/dt = [N(R) w] R``);
@@ -449,7 +450,7 @@ class Request:
 
 def build_result(request: Request, outcome: Outcome | None, success: bool, reason: str,
                  problem: Problem | None = None) -> PlanResult:
-    """The :class:`~nonholo.result.PlanResult` of a run (``outcome=None``: nothing simulated).
+    """The :class:`~nonholo.io.result.PlanResult` of a run (``outcome=None``: nothing simulated).
     A success's samples are those of its certified replay."""
     mech, T = request.mechanism, request.T
     ev = outcome.evaluation if outcome is not None else None

@@ -29,9 +29,9 @@ from dataclasses import replace
 
 import numpy as np
 
-from ..controls import PiecewiseConstant
+from ..controls.parametrisations import PiecewiseConstant
+from ..io.result import PlanResult
 from .certification import certified
-from ..result import PlanResult
 from .core import Evaluation, Options, Outcome, Problem, Request, build_result, record
 
 #: Intervals of the piecewise-constant controls the energy is lowered over (the plan's

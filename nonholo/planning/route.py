@@ -1,8 +1,8 @@
 """The global route: a goal the local planner cannot reach, reached hop by hop along a path
 of orientations through the start's component.
 
-:func:`steer` takes the path of :func:`nonholo.roadmap.orientation_path` (hops of at most
-:data:`nonholo.roadmap.MAX_HOP` rad, clear of ``Δ = 0``) and plans each hop with the
+:func:`steer` takes the path of :func:`nonholo.planning.roadmap.orientation_path` (hops of at most
+:data:`nonholo.planning.roadmap.MAX_HOP` rad, clear of ``Δ = 0``) and plans each hop with the
 local planner (``local(R_start, R_goal, T, delta_min)``: :func:`nonholo.plan` with the
 run's strategy (:func:`hop_strategy`) and options, route ``"local"``, ``delta_min`` of
 :func:`hop_delta_min`), from where the previous hop's certified replay ended, so that no
@@ -10,21 +10,21 @@ hop's error carries into the next. A hop that fails, or whose sensitivity exceed
 :data:`MAX_HOP_SENSITIVITY`, is split at its geodesic midpoint (down to :data:`MIN_HOP`
 rad, at most :data:`MAX_PIECES` pieces in all). The hops' physical controls are stitched
 into one control on ``[0, T]``, an equal time share each
-(:class:`~nonholo.stitched.Stitched`); the stitched control is then certified as a whole
-(:func:`nonholo.certify.measure`). Where that replay misses the goal
+(:class:`~nonholo.controls.stitched.Stitched`); the stitched control is then certified as a whole
+(:func:`nonholo.certify.certificate.measure`). Where that replay misses the goal
 by more than ``tol`` allows, the last hop is planned again from where the stitched replay
 enters it.
 
 Smoothing. The stitched control jumps where one hop hands over to the next. Once it is
 certified, :func:`smooth` re-plans the whole motion as one control of the run's
 parametrisation, with the stitched control as the initial guess: its planned coordinates
-(:meth:`~nonholo.stitched.Stitched.planned`; the frame coordinates ``w`` for strategy
+(:meth:`~nonholo.controls.stitched.Stitched.planned`; the frame coordinates ``w`` for strategy
 ``"robust"``, smooth between hand-overs even where ``u`` is large near ``Δ = 0``)
 projected on :data:`SMOOTHING_HARMONICS` harmonics (or on the run's grid), then the
 strategy's descent from that guess alone (:func:`smoothing_strategy`). The guess starts
 close to the goal along the route's corridor, so the descent is short. Where it
 converges and is certified, the smooth control is the plan's and the stitched one is kept
-as its record (:attr:`nonholo.result.PlanResult.stitched`); otherwise the plan is the
+as its record (:attr:`nonholo.io.result.PlanResult.stitched`); otherwise the plan is the
 stitched control. A stitched control that is *not* certified — typically too
 ill-conditioned: it multiplies its hops' sensitivities — is smoothed the same way before
 the next path is tried: one smooth control along the same corridor is often far better
@@ -33,14 +33,14 @@ conditioned, and its own certificate decides.
 Two legs, last. Where no path's stitched control is certified (typically each too
 ill-conditioned: many hops of moderate sensitivity multiply), :func:`steer` tries routes of
 two legs through one intermediate orientation ``R_m``, a roadmap node of the component
-(:func:`nonholo.roadmap.via_nodes`): the leg ``R_m → R_d`` first (reaching the goal is the
+(:func:`nonholo.planning.roadmap.via_nodes`): the leg ``R_m → R_d`` first (reaching the goal is the
 hard part), then ``R_0 → R_m``, each planned as a whole without the hops' sensitivity cap
 (two legs multiply only two) and with a few initial guesses only
 (:func:`quick_strategy`), stitched and certified as above, within :data:`VIA_TIME` more.
 
-States beyond SO(3) (:mod:`nonholo.state`). For a mechanism whose state is ``(R, q)`` or
-``q``, the path is the straight path of states (:func:`nonholo.state_path.straight_path`,
-hops of at most :data:`nonholo.state_path.MAX_HOP`, checked clear of ``Δ = 0``), a failed
+States beyond SO(3) (:mod:`nonholo.spaces.state`). For a mechanism whose state is ``(R, q)`` or
+``q``, the path is the straight path of states (:func:`nonholo.planning.state_path.straight_path`,
+hops of at most :data:`nonholo.planning.state_path.MAX_HOP`, checked clear of ``Δ = 0``), a failed
 hop is split at its straight midpoint, and the hops, stitching, certification and
 smoothing are the same, on the stacked state and its error.
 
@@ -48,7 +48,7 @@ The stitched motion is played open loop, so its sensitivity is the product of it
 transition matrices: each amplifies errors by a factor that grows with ``∫ |ω| dt /
 |Δ|``. Paths are therefore the cheapest in ``∫ ds / |Δ|^p`` rather than the shortest,
 and where the stitched control is still too ill-conditioned to certify, the route is
-steered again along the path of the next cost :data:`nonholo.roadmap.CONDITIONING_POWERS`
+steered again along the path of the next cost :data:`nonholo.planning.roadmap.CONDITIONING_POWERS`
 (within :data:`TIME_BUDGET`).
 """
 from __future__ import annotations
@@ -61,13 +61,16 @@ from typing import Callable
 
 import numpy as np
 
-from .. import certify, effort, roadmap, so3, state_path
-from .. import state as states
-from ..certify import Certificate
-from ..controls import Fourier, PiecewiseConstant
-from ..mechanism import Mechanism
-from ..result import PlanResult
-from ..stitched import Stitched
+from ..certify import certificate as certify
+from ..certify.certificate import Certificate
+from ..controls.parametrisations import Fourier, PiecewiseConstant
+from ..controls.stitched import Stitched
+from ..io.result import PlanResult
+from ..model.mechanism import Mechanism
+from ..numerics import effort
+from ..spaces import so3
+from ..spaces import state as states
+from . import roadmap, state_path
 from .certification import certified
 from .core import Outcome, Problem, Request, Start
 from .core import build_result as build_local_result
@@ -86,13 +89,13 @@ MAX_REPAIRS = 2
 HOP_DELTA_MIN = 0.05
 #: The stitched control's certified replay is at most this many times finer than its hops'.
 STITCHED_REFINEMENT = 8
-#: Seconds of effort (:mod:`nonholo.effort`: integration counted in steps, seconds of the
+#: Seconds of effort (:mod:`nonholo.numerics.effort`: integration counted in steps, seconds of the
 #: reference machine) after the start of :func:`nonholo.plan` (the local attempt included)
 #: after which the global route tries no further hop, and no smoothing is started or
 #: continued. Effort, not wall time: a plan does not depend on the machine's speed or load.
 TIME_BUDGET = 2.5
 #: Intermediate orientations the route's last stage tries at most (:func:`steer`):
-#: roadmap nodes in their random sampling order (:func:`nonholo.roadmap.via_nodes`).
+#: roadmap nodes in their random sampling order (:func:`nonholo.planning.roadmap.via_nodes`).
 VIA_CANDIDATES = 64
 #: Seconds of effort the last stage may take beyond :data:`TIME_BUDGET`.
 VIA_TIME = 0.75
@@ -158,7 +161,7 @@ def _midpoint(mechanism: Mechanism, a, b) -> tuple:
 
 def _paths(mechanism: Mechanism, start, goal, delta_min: float, leg_limits):
     """The paths :func:`steer` tries in turn, lists of states ``(R, q)`` (``None`` for none):
-    the roadmap's of every cost of :data:`nonholo.roadmap.CONDITIONING_POWERS` on SO(3), the
+    the roadmap's of every cost of :data:`nonholo.planning.roadmap.CONDITIONING_POWERS` on SO(3), the
     straight path of states beyond."""
     if mechanism.beyond_so3:
         yield state_path.straight_path(mechanism, start, goal, delta_min=delta_min)
@@ -181,7 +184,7 @@ def time_budget(mechanism: Mechanism, plan_started: float) -> tuple[float, float
     """When the route's clock starts and its budget, seconds of effort: from the start of
     :func:`nonholo.plan` and :data:`TIME_BUDGET` on SO(3); beyond SO(3), from now (the
     local attempt at a far goal can take the whole of that) and
-    :data:`nonholo.state_path.TIME_BUDGET`."""
+    :data:`nonholo.planning.state_path.TIME_BUDGET`."""
     if mechanism.beyond_so3:
         return effort.seconds(), state_path.TIME_BUDGET
     return plan_started, TIME_BUDGET
@@ -189,7 +192,7 @@ def time_budget(mechanism: Mechanism, plan_started: float) -> tuple[float, float
 
 def max_hop_sensitivity(mechanism: Mechanism) -> float:
     """The largest sensitivity of a hop the route keeps (a larger one is split):
-    :data:`MAX_HOP_SENSITIVITY` on SO(3), :data:`nonholo.state_path.MAX_HOP_SENSITIVITY`
+    :data:`MAX_HOP_SENSITIVITY` on SO(3), :data:`nonholo.planning.state_path.MAX_HOP_SENSITIVITY`
     beyond (see there why it is larger)."""
     return state_path.MAX_HOP_SENSITIVITY if mechanism.beyond_so3 else MAX_HOP_SENSITIVITY
 
@@ -246,7 +249,7 @@ def smooth(request: Request, stitched: Stitched, strategy: type, deadline: float
            reserve: float = 0.0) -> tuple[Outcome, Problem] | None:
     """The route's motion re-planned as one control (see the module): the certified outcome
     and its problem, or ``None`` when no guess of :func:`smoothing_guesses` converged to a
-    certified plan in time. ``deadline``: an :func:`nonholo.effort.seconds` reading by which the
+    certified plan in time. ``deadline``: an :func:`nonholo.numerics.effort.seconds` reading by which the
     smoothing must be done; ``reserve``: seconds of effort kept for the certification after a
     descent converges (about what the stitched control's took), which cannot be
     interrupted. Nothing is tried unless :data:`SMOOTHING_TIME` and ``reserve`` fit before
@@ -293,14 +296,14 @@ def steer(mechanism: Mechanism, R0, Rd, T: float, local: Callable, *, tol: float
           leg_limits=None, rescue: Callable | None = None, q0=None, qd=None,
           leg: Callable | None = None) -> Steered:
     """The route ``R0 → Rd`` steered hop by hop (see the module) along the path of the
-    first cost of :data:`nonholo.roadmap.CONDITIONING_POWERS`, then along the path of the
+    first cost of :data:`nonholo.planning.roadmap.CONDITIONING_POWERS`, then along the path of the
     next (one not tried yet) while the route fails; beyond SO(3) (``q0``, ``qd``: the
     coordinates of start and goal), along the straight path of states.
     ``local(start, goal, T, delta_min)`` plans one hop between two states ``(R, q)`` (a
-    :class:`~nonholo.result.PlanResult`); ``budget``: seconds of effort (default
+    :class:`~nonholo.io.result.PlanResult`); ``budget``: seconds of effort (default
     :data:`TIME_BUDGET`) after
-    ``started`` (an :func:`nonholo.effort.seconds` reading; default: now) after which no further
-    hop is tried. ``leg_limits``: stroke limits (:class:`~nonholo.limits.LegLimits`) the
+    ``started`` (an :func:`nonholo.numerics.effort.seconds` reading; default: now) after which no further
+    hop is tried. ``leg_limits``: stroke limits (:class:`~nonholo.model.limits.LegLimits`) the
     path of orientations and the stitched replay keep (``local`` keeps them in each hop).
     ``rescue(draft, seconds)``: called when a path's hops all succeed but their stitched
     control is not certified (``seconds``: what its certification took); a smooth re-plan
@@ -410,8 +413,8 @@ def _certify_hops(mechanism: Mechanism, start, goal, T: float, hops: list, local
 def _via(mechanism: Mechanism, start, goal, T: float, leg: Callable, *, tol: float, delta_min: float,
          sign: float, deadline: float, leg_limits=None) -> Steered | None:
     """The route's last stage (see the module): two legs ``start → R_m → goal`` through the
-    first roadmap node ``R_m`` (:func:`nonholo.roadmap.via_nodes`) whose stitched control is
-    certified, by ``deadline`` (an :func:`nonholo.effort.seconds` reading); ``None`` if none
+    first roadmap node ``R_m`` (:func:`nonholo.planning.roadmap.via_nodes`) whose stitched control is
+    certified, by ``deadline`` (an :func:`nonholo.numerics.effort.seconds` reading); ``None`` if none
     is. The legs keep the run's ``delta_min``, as one local plan does."""
     def repair(a, b, T_leg, leg_delta_min):
         return leg(a, b, T_leg, leg_delta_min, False)
@@ -435,7 +438,7 @@ def _via(mechanism: Mechanism, start, goal, T: float, leg: Callable, *, tol: flo
 
 def build_result(request: Request, steered: Steered, local_reason: str,
                  smoothed: tuple[Outcome, Problem] | None = None) -> PlanResult:
-    """The :class:`~nonholo.result.PlanResult` of a certified global route: the hops'
+    """The :class:`~nonholo.io.result.PlanResult` of a certified global route: the hops'
     histories one after another (each record tagged with its ``hop``), then, if the route
     was ``smoothed`` (:func:`smooth`), the smooth re-plan's (tagged ``"hop": None``) and
     that plan with the stitched control as its record; otherwise the stitched control and

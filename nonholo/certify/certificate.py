@@ -1,0 +1,296 @@
+"""The certificate of a plan: its physical controls replayed, with a bound on the replay's error.
+
+A planner judges its control on its own fixed-step trajectory — in the frame coordinates
+``w`` for strategy ``"robust"``, on a grid chosen for the Jacobian, not for the endpoint.
+What a plan promises is about the *physical* inputs it returns, ``u(t) =
+result.controls(t)``, played on ``dR/dt = [L(R) u] R`` from ``R0``. :func:`measure` replays
+them with CF4 on ``M/2`` and ``M`` steps (aligned with the plan's steps, so no step
+straddles a breakpoint) and bounds the error of the ``M``-step endpoint by
+
+    ``error_bound = SAFETY · |log(R_M(T) R_{M/2}(T)ᵀ)| / 15  +  G · REPLAY_PERTURBATION``
+
+— the Richardson estimate of a fourth-order method (asymptotic: hence the safety factor),
+doubling ``M`` until it is below ``ERROR_FRACTION · tol`` (at most :data:`MAX_REPLAY_STEPS`),
+plus what an error of :data:`REPLAY_PERTURBATION` rad anywhere along the motion (a careful
+independent replay's own accuracy) becomes at ``T`` under the *sensitivity*
+``G = max_t |Φ(T, t)|_F`` of the physical system along the motion (:func:`sensitivity`,
+on grids refined until two agree: :func:`resolved_sensitivity`).
+A plan is certified when the replay's terminal error plus that bound is at most ``tol`` and
+the replay keeps ``sgnΔ ≥ delta_min`` at every point where it evaluates ``L``: then any
+accurate re-simulation of the returned controls ends within ``tol`` of the goal. An
+infinite ``G`` (the variational replay ran into ``Δ = 0``) or one so large that
+``G · REPLAY_PERTURBATION`` alone exceeds ``SENSITIVITY_FRACTION · tol`` makes a plan
+uncertifiable: its endpoint then depends on perturbations below any replay's accuracy. So
+does a ``G`` that no grid up to :data:`MAX_REPLAY_STEPS` resolves.
+
+:class:`Certificate` holds the numbers a :class:`~nonholo.io.result.PlanResult` stores
+(``replay_steps``, ``terminal_error``, ``error_bound``, ``min_delta``, ``sensitivity``);
+:func:`nonholo.motion.playback.replay` is the replay itself, which :meth:`~nonholo.io.result.PlanResult.validate`
+repeats when a plan is loaded.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..controls import stages
+from ..motion.playback import replay
+from ..numerics import kernels
+from ..spaces import state as states
+
+#: Factor on the asymptotic Richardson estimate ``|R_M − R_{M/2}|/15`` of the error of ``R_M``.
+SAFETY = 2.0
+#: The replay is refined until its error estimate is below this fraction of ``tol``.
+ERROR_FRACTION = 0.25
+#: The finest replay (CF4 steps on ``[0, T]``): beyond it a plan is not certified.
+MAX_REPLAY_STEPS = 204800
+#: Error (rad) anywhere along the motion that any replay may make — DOP853 at ``rtol =
+#: 1e-13`` — and that reaches ``T`` amplified by the sensitivity ``G``.
+REPLAY_PERTURBATION = 1e-13
+#: A motion whose ``G · REPLAY_PERTURBATION`` exceeds this fraction of ``tol`` is too
+#: ill-conditioned to certify (the rest of ``tol`` is left to the replay's own error and
+#: its distance from the goal).
+SENSITIVITY_FRACTION = 0.5
+#: Sensitivities on grids a factor 2 apart agree (``Φ`` is resolved) when they differ by
+#: at most this fraction of the larger.
+SENSITIVITY_AGREEMENT = 0.25
+
+
+@dataclass(frozen=True)
+class Certificate:
+    """The physical controls of a plan replayed (see the module).
+
+    ``replay_steps``: CF4 steps of the certified replay ``R_M``; ``terminal_error``:
+    ``|log(R_M(T) R_dᵀ)|`` (rad); ``error_bound``: bound on ``|R(T) − R_M(T)|`` of the exact
+    motion (rad); ``min_delta``: least ``sgn(Δ(R0))·Δ`` over the replay's evaluation points
+    (``None`` without a singular set); ``sensitivity``: ``G``; ``passed``: the plan is
+    certified for the ``tol`` and ``delta_min`` it was measured against; ``reason``: why not;
+    ``correctable``: only the replay's terminal error is too large (the replay is accurate,
+    well conditioned and clear of ``Δ = 0``). ``l``: the replay's ``l_T``; ``R``: its nodes
+    (``M + 1``); ``q``: their coordinates (``(M + 1, k)``, a state beyond SO(3)); ``errors``:
+    the norms of the rotation and coordinate parts of ``l`` (:mod:`nonholo.spaces.state`).
+    Beyond SO(3) the errors and bounds are in the stacked metric of :mod:`nonholo.spaces.state`.
+    """
+
+    replay_steps: int
+    terminal_error: float
+    error_bound: float
+    min_delta: float | None
+    sensitivity: float
+    passed: bool
+    reason: str
+    correctable: bool
+    l: np.ndarray
+    R: np.ndarray
+    U: np.ndarray | None = None
+    q: np.ndarray | None = None
+    errors: tuple[float, float] | None = None
+
+    def inputs_at(self, steps: int) -> np.ndarray:
+        """The replayed inputs ``u(t_n)`` at the ``steps + 1`` points ``t_n = nT/steps``
+        (``steps`` dividing :attr:`replay_steps`), from the replay's stage table: each
+        node's start-of-step value, the last step's end value at ``T``."""
+        r = self.replay_steps // steps
+        return np.concatenate([self.U[::r, 0], self.U[-1:, 2]])
+
+    @property
+    def certified_error(self) -> float:
+        """``terminal_error + error_bound``: how far the exact motion may end from the goal."""
+        return self.terminal_error + self.error_bound
+
+
+def richardson(R_fine: np.ndarray, R_coarse: np.ndarray, mechanism=None, q_fine=None,
+               q_coarse=None) -> float:
+    """The error estimate of the ``M``-step endpoint ``R_fine`` from the ``M/2``-step
+    ``R_coarse``: :data:`SAFETY` ``·|log(R_fine R_coarseᵀ)|/15`` (rad); beyond SO(3) the
+    distance of the states (:func:`nonholo.spaces.state.distance`)."""
+    if mechanism is not None and mechanism.beyond_so3:
+        return SAFETY * states.distance(mechanism, R_fine, q_fine, R_coarse, q_coarse) / 15.0
+    return SAFETY * float(kernels.log_error(np.ascontiguousarray(R_fine), np.ascontiguousarray(R_coarse))[1]) / 15.0
+
+
+def sensitivity(R0, par, T: float, mechanism, steps: int, U=None, sign: float | None = None, q0=None):
+    """``(G, R_T)`` on one grid: ``G = max_n |Φ(T, t_n)|_F`` of the physical system along
+    ``par``'s motion (the amplification of a perturbation at ``t_n`` by ``T``; ``inf`` if
+    the variational replay runs into ``Δ = 0``) and the replay's endpoint ``R_T``, from the
+    variational system of the physical inputs (as :func:`nonholo.motion.simulation.variational`)
+    on ``steps`` CF4 steps (``U``: their stage table, if known). The nodes of ``R`` are
+    those of :func:`replay` on the same steps. ``G`` is only as good as the grid resolves
+    ``Φ``, which may take a finer grid than ``R_T`` does: :func:`resolved_sensitivity`.
+    Beyond SO(3) (``q0``): ``Φ`` of the stacked variation, ``d × d``, and ``R_T`` the
+    endpoint ``(R_T, q_T)``.
+    """
+    if U is None:
+        U = stages.stage_table(par, steps)
+    kern = mechanism.kernels(frame=False)
+    m, d = mechanism.n_inputs, mechanism.n_rates
+    R = np.ascontiguousarray(R0, dtype=float)
+    q = np.ascontiguousarray(states.NO_COORDINATES if q0 is None else q0, dtype=float)
+    if sign is None:
+        sign = (float(np.sign(mechanism.delta_samples(R[None], q[None])[0]))
+                if mechanism.has_singular_set else 1.0)
+    Rs, Qs = states.buffers(mechanism, steps)
+    Zs = np.empty((steps + 1, d, d))
+    n, _, _ = states.forward_variational(
+        mechanism, kern, R, q, np.ascontiguousarray(U), T / steps, sign, 0.0,
+        (_NO_INDEX, np.zeros((steps, 3, 0)), 0, 0), Rs, Qs, Zs, np.empty((d, 0)),
+        np.empty((d, d)), np.empty((0, d * m)), True)
+    if n < steps:
+        return float("inf"), None
+    with np.errstate(all="ignore"):
+        try:
+            Phi = np.linalg.solve(Zs[-1], Zs.transpose(1, 0, 2).reshape(d, -1))   # Φ(T, t_n) side by side
+        except np.linalg.LinAlgError:       # Z(T) overflowed to a singular matrix
+            return float("inf"), None
+        G = float(np.sqrt(np.max(np.sum(Phi.reshape(d, -1, d) ** 2, axis=(0, 2)))))
+    end = (Rs[-1], Qs[-1]) if mechanism.beyond_so3 else Rs[-1]
+    return (G if np.isfinite(G) else float("inf")), end
+
+
+def agree(G_coarse: float, G_fine: float) -> bool:
+    """Two sensitivities on grids a factor 2 apart agree: within :data:`SENSITIVITY_AGREEMENT`
+    of the larger."""
+    return abs(G_fine - G_coarse) <= SENSITIVITY_AGREEMENT * max(G_fine, G_coarse)
+
+
+def resolved_sensitivity(R0, par, T: float, mechanism, steps: int, U=None, sign: float | None = None,
+                         limit: float = np.inf, max_steps: int | None = None, q0=None):
+    """The sensitivity of ``par``'s motion resolved: ``G`` on ``steps/2`` and ``steps`` CF4
+    steps (``steps`` alone where the controls' grid forbids ``steps/2``), the grid doubled
+    until the last two agree (:func:`agree`) — a coarse grid can miss a fast growth of
+    ``Φ`` almost entirely (a motion near ``Δ = 0`` with large inputs; ``tests/test_certify.py``
+    keeps one) while its endpoint looks converged. Stops early when both exceed
+    ``limit`` (too ill-conditioned either way) or one is infinite, and at
+    :data:`MAX_REPLAY_STEPS` (or ``max_steps``).
+
+    ``U``: the stage table of ``2·steps`` steps, if known. Returns ``(G, resolved, grids,
+    R_T)``: the larger of the last two, whether they agree (or exceed ``limit``), the
+    sensitivities by grid, and the endpoint of the ``steps``-step replay.
+    """
+    try:
+        first = stages.check_steps(par, steps // 2) if steps % 2 == 0 else steps
+    except ValueError:
+        first = steps
+    tables = {}
+    if U is not None:
+        tables[2 * steps] = U
+        tables[steps] = stages.halve(U)
+        if first != steps:
+            tables[first] = stages.halve(tables[steps])
+    cap = MAX_REPLAY_STEPS if max_steps is None else max_steps
+    grids: dict[int, float] = {}
+    R_T = None
+    k = first
+    while True:
+        G, R_k = sensitivity(R0, par, T, mechanism, k, tables.get(k), sign, q0)
+        grids[k] = G
+        if k == steps:
+            R_T = R_k
+        last = list(grids.values())[-2:]
+        resolved = not np.isfinite(G) or (len(last) == 2 and (agree(*last) or min(last) > limit))
+        if resolved or 2 * k > cap:
+            return max(last), resolved, grids, R_T
+        k *= 2
+
+
+_NO_INDEX = np.zeros((0, 3, 0), np.int64)
+
+
+def measure(R0, Rd, T: float, mechanism, par, steps: int, tol: float, delta_min: float,
+            sign: float = 1.0, G: float | None = None, R_half=None,
+            max_steps: int | None = None, leg_limits=None, q0=None, qd=None) -> Certificate:
+    """The certificate of the physical controls ``par`` (see the module): replays on
+    ``steps/2``·2ᵏ and ``steps``·2ᵏ CF4 steps, ``k`` the least with an error estimate
+    below ``ERROR_FRACTION · tol``, or ``k = 0`` when the sensitivity already rules the
+    plan out (infinite, unresolved or too large for ``tol``). ``steps`` must be even and a
+    multiple of the controls' grid and of a :class:`~nonholo.motion.frame_controls.FrameControls`' steps.
+    ``G``: the sensitivity, ``R_half``: the endpoint of the ``steps/2`` replay, if already
+    known; ``max_steps``: the finest replay (default :data:`MAX_REPLAY_STEPS`);
+    ``leg_limits``: stroke limits (:class:`~nonholo.model.limits.LegLimits`) every node of the
+    replay must keep. ``q0``, ``qd``: the start's and goal's coordinates of a state beyond
+    SO(3) (``R_half`` is then the pair ``(R, q)``)."""
+    beyond = mechanism.beyond_so3
+    has_delta = mechanism.has_singular_set
+    cap = MAX_REPLAY_STEPS if max_steps is None else max_steps
+    M = steps
+    U = np.ascontiguousarray(stages.stage_table(par, M))
+    resolved, grids = True, {}
+    if G is None:
+        # on M/8 and M/4 steps where the controls allow it (cheap; the replay on M/2 then
+        # comes from the forward kernel), else on M/4 and M/2 or M/2 and M
+        try:
+            quarter = M % 4 == 0 and stages.check_steps(par, M // 4) == M // 4
+        except ValueError:
+            quarter = False
+        limit = SENSITIVITY_FRACTION * tol / REPLAY_PERTURBATION
+        if quarter:
+            G, resolved, grids, _ = resolved_sensitivity(R0, par, T, mechanism, M // 4, stages.halve(U),
+                                                         sign, limit, cap, q0)
+        else:
+            G, resolved, grids, R_T = resolved_sensitivity(R0, par, T, mechanism, M // 2, U, sign, limit,
+                                                           cap, q0)
+            if R_half is None:
+                R_half = R_T
+    if R_half is None:
+        half = replay(R0, par, T, mechanism, M // 2, sign, stages.halve(U), q0)
+        R_half = (half[0][-1], half[3][-1]) if beyond else half[0][-1]
+    # a sensitivity that already rules the plan out is not worth a finer replay
+    hopeless = not resolved or not G * REPLAY_PERTURBATION <= SENSITIVITY_FRACTION * tol
+    while True:
+        if U is None:
+            U = np.ascontiguousarray(stages.stage_table(par, M))
+        R, done, dmin, q = replay(R0, par, T, mechanism, M, sign, U, q0)
+        if done < M:
+            return _failed(M, G, R, has_delta, dmin, f"the physical replay ({M} steps) produced a "
+                           f"non-finite angular velocity at t ≈ {done * T / M:.4g} s", mechanism.n_rates)
+        if beyond:
+            est = richardson(R[-1], R_half[0], mechanism, q[-1], R_half[1])
+        else:
+            est = richardson(R[-1], R_half)
+        if hopeless or not est > ERROR_FRACTION * tol or 2 * M > cap:
+            break
+        R_half, M, U = ((R[-1], q[-1]) if beyond else R[-1]), 2 * M, None
+    if beyond:
+        l, rot, coord = states.error(mechanism, R[-1], q[-1], Rd, qd)
+        err = float(np.hypot(rot, coord))
+        errors = (rot, coord)
+    else:
+        l, err = kernels.log_error(R[-1], np.ascontiguousarray(Rd, dtype=float))
+        err = float(err)
+        errors = (err, 0.0)
+    bound = est + G * REPLAY_PERTURBATION
+    dmin = dmin if has_delta else None
+    reason = ""
+    correctable = False
+    if not np.isfinite(G):
+        reason = ("the physical replay's sensitivity is infinite (its variational system "
+                  + ("ran into Δ = 0" if has_delta else "overflowed") + "): the endpoint cannot be certified")
+    elif not resolved:
+        found = ", ".join(f"{g:.3g} on {k} steps" for k, g in grids.items())
+        reason = (f"the physical replay's sensitivity max|Φ(T,t)| is not resolved ({found}): "
+                  f"the endpoint's conditioning is unknown")
+    elif G * REPLAY_PERTURBATION > SENSITIVITY_FRACTION * tol:
+        reason = (f"the motion is too ill-conditioned for tol = {tol:g}: its sensitivity "
+                  f"max|Φ(T,t)| = {G:.3g} amplifies an error of {REPLAY_PERTURBATION:g} rad (a careful "
+                  f"replay's) to {G * REPLAY_PERTURBATION:.2g} rad")
+    elif est > ERROR_FRACTION * tol:
+        reason = (f"the replay's integration error is still ~{est:.2g} rad with {M} steps "
+                  f"(the most certified: {cap}); more than {ERROR_FRACTION:g}·tol")
+    elif has_delta and dmin < delta_min:
+        reason = (f"the physical replay comes within {dmin:.4g} of Δ = 0 (delta_min = {delta_min:g})")
+    elif leg_limits is not None and leg_limits.least_clearance(mechanism, R) < 0.0:
+        reason = (f"the physical replay leaves the legs' stroke: "
+                  f"{leg_limits.describe(mechanism, R, np.arange(M + 1) * (T / M))}")
+    elif err + bound > tol:
+        reason = (f"the physical replay ({M} steps) ends {err:.3g} rad from the goal "
+                  f"(+ error bound {bound:.2g} > tol = {tol:g})")
+        correctable = True
+    return Certificate(M, err, bound, dmin, G, not reason, reason, correctable, l, R, U,
+                       q if beyond else None, errors)
+
+
+def _failed(M, G, R, has_delta, dmin, reason, rates: int = 3) -> Certificate:
+    return Certificate(M, float("inf"), float("inf"), dmin if has_delta else None, G, False, reason,
+                       False, np.full(rates, np.nan), R)
+

@@ -1,0 +1,96 @@
+"""Command line: ``nonholo derive | audit | mechanisms | plan | reproduce | sweep | atlas``."""
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import time
+from pathlib import Path
+
+from ..model import catalog
+from . import plan_command as cli_plan
+from . import reproduce_command as cli_reproduce
+from . import sweep_command as cli_sweep
+
+
+def _derive(args) -> int:
+    from derivations import codegen
+
+    t0 = time.perf_counter()
+    outdir = Path(args.dir) if args.dir else codegen.GENERATED_DIR
+    if args.check:
+        stale = codegen.check(outdir)
+        for path, diff in stale:
+            print(f"stale: {path}", file=sys.stderr)
+            if args.verbose:
+                print(diff, file=sys.stderr)
+        if stale:
+            print("generated code differs from a fresh derivation: run `nonholo derive`",
+                  file=sys.stderr)
+            return 1
+        print(f"generated modules are up to date ({time.perf_counter() - t0:.1f} s)")
+        return 0
+    for path in codegen.write(outdir):
+        print(f"wrote {path}")
+    print(f"done in {time.perf_counter() - t0:.1f} s")
+    return 0
+
+
+def _audit(args) -> int:
+    from derivations import audit
+
+    findings = audit.run()
+    if args.json:
+        print(json.dumps([{"equation": f.equation, "verdict": f.verdict, "note": f.note}
+                          for f in findings], indent=2, ensure_ascii=False))
+    else:
+        print(audit.format_table(findings))
+    return 0
+
+
+def _mechanisms(args) -> int:
+    for name in catalog.names():
+        m = catalog.get(name)
+        singular = "singular set Δ = 0" if m.has_singular_set else "no singular set"
+        state = "" if not m.beyond_so3 else f"state {m.state_space}: " + " ".join(
+            (["φ", "ϑ", "ψ"] if m.orientation else []) + list(m.coordinates)) + ", "
+        print(f"{name:<16} {m.description} ({state}{m.n_inputs} inputs, {singular})")
+    return 0
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="nonholo", description="Motion planning of non-holonomic systems on SO(3).")
+    sub = parser.add_subparsers(dest="command", required=True)
+
+    p = sub.add_parser("derive", help="derive the kinematics symbolically and write nonholo/generated")
+    p.add_argument("--check", action="store_true",
+                   help="only compare the committed modules with a fresh derivation (exit 1 if stale)")
+    p.add_argument("-v", "--verbose", action="store_true", help="print the diff of stale files")
+    p.add_argument("--dir", help="generated-modules directory (default: nonholo/generated)")
+    p.set_defaults(func=_derive)
+
+    p = sub.add_parser("audit", help="hold the appendix formulas against the derivation")
+    p.add_argument("--json", action="store_true", help="print a JSON list instead of a table")
+    p.set_defaults(func=_audit)
+
+    p = sub.add_parser("mechanisms", help="list the mechanisms")
+    p.set_defaults(func=_mechanisms)
+
+    cli_plan.add_parser(sub)
+    cli_reproduce.add_parser(sub)
+    cli_sweep.add_parsers(sub)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = build_parser().parse_args(argv)
+    try:
+        return args.func(args)
+    except BrokenPipeError:            # the reader closed stdout (``| head``): not an error
+        cli_plan.discard_stdout()
+        return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,308 @@
+"""``nonholo plan``: plan a motion from the command line.
+
+Example::
+
+    nonholo plan --from 0.5 1.2 -0.5 --to 1.0 0.9 -0.5 --T 1 --harmonics 2 --out plan.json --plot plan.png
+
+Orientations are given as RPY angles ``φ ϑ ψ`` in radians, ``RPY(φ, ϑ, ψ) =
+R(Z, φ) R(Y, ϑ) R(X, ψ)``. A mechanism whose state goes beyond SO(3) takes its coordinates
+(``nonholo plan --mechanism car --from 0 0 0 0 --to 0 1 0 0``: ``x y θ φ``), after the RPY
+angles if it has an orientation too (``rolling_ball``: ``φ ϑ ψ p1 p2``); ``nonholo
+mechanisms`` lists each one's state. The strategy is ``robust`` unless ``--strategy paper`` asks for
+the appendix's algorithm as published (see :mod:`nonholo.robust`). One line is printed per accepted iteration (iteration, error
+``|l_T|`` in rad, the step ``γh``, least ``|Δ|`` along the trajectory), then a summary;
+then the result is written to ``--out`` and the figure to ``--plot`` (each even if the
+other cannot be written; a plan file is replaced only once the new one is complete).
+Output closed early by its reader (``nonholo plan ... | head -1``) is not an error: the
+rest is discarded and the files are still written.
+
+``--csv`` writes a successful plan's motion for an actuator controller
+(:mod:`nonholo.io.csv_export`), sampled at ``--csv-rate`` Hz.
+
+Exit status: 0 on success, 1 if the planner failed, 2 on bad input, 3 if ``--out``,
+``--plot`` or ``--csv`` could not be written (whatever the planner's outcome; one line on stderr names
+the file and the error).
+"""
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+from pathlib import Path
+
+import numpy as np
+
+from ..io import csv_export as export
+from ..model import catalog
+from ..planning import api as planner
+from ..spaces import so3
+from ..spaces import state as states
+
+#: exit status of ``nonholo plan`` (see the module docstring)
+EXIT_SUCCESS, EXIT_FAILED, EXIT_BAD_INPUT, EXIT_WRITE_FAILED = 0, 1, 2, 3
+
+
+def add_parser(subparsers) -> argparse.ArgumentParser:
+    """Add the ``plan`` sub-command to an ``argparse`` sub-parsers object."""
+    p = subparsers.add_parser(
+        "plan", help="plan a motion R0 -> Rd (Jacobian algorithm of Tchoń & Jakubiak)",
+        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("--from", dest="start", nargs="+", type=float, required=True, metavar="X",
+                   help="the start: RPY angles φ ϑ ψ (rad) of the orientation, then the coordinates "
+                        "of a mechanism whose state has them (see the description)")
+    p.add_argument("--to", dest="goal", nargs="+", type=float, required=True, metavar="X",
+                   help="the goal, as --from")
+    p.add_argument("--T", type=_horizon, default=1.0,
+                   help="time horizon in s (default 1), or 'min' for the least time under --leg-speed")
+    p.add_argument("--method", choices=planner.METHODS, default="parametric",
+                   help="Fourier controls (parametric) or piecewise constant (nonparametric)")
+    p.add_argument("--harmonics", type=int, default=2, help="Fourier harmonics K (default 2)")
+    p.add_argument("--grid", type=int, default=100, help="intervals of the nonparametric grid (default 100)")
+    p.add_argument("--strategy", default="robust",
+                   help=f"planning strategy: {', '.join(planner.STRATEGIES)} (default: robust)")
+    p.add_argument("--mechanism", default="platform",
+                   help=f"mechanism ({', '.join(catalog.names())}; see `nonholo mechanisms`)")
+    p.add_argument("--gamma", type=float, default=None,
+                   help="decay rate γ of the θ-flow (default: the strategy's, 1 robust, 0.5 paper)")
+    p.add_argument("--tol", type=float, default=1e-10, help="stop when |l_T| <= tol (rad)")
+    p.add_argument("--max-iter", type=int, default=200, help="maximum number of iterations")
+    p.add_argument("--delta-min", type=float, default=1e-2, help="keep |Δ| >= this along the motion")
+    p.add_argument("--steps", type=int, default=None, help="integrator steps on [0, T]")
+    p.add_argument("--route", choices=planner.ROUTES, default="auto",
+                   help="auto: one plan from start to goal and, if that fails, hops along a path "
+                        "of orientations clear of Δ = 0 (default); local: the one plan only; "
+                        "global: only the hops")
+    p.add_argument("--leg-length", nargs=2, type=float, default=None, metavar=("LO", "HI"),
+                   help="keep every leg's length within [LO, HI] (a platform's geometry units)")
+    p.add_argument("--leg-speed", type=float, default=None, metavar="V",
+                   help="keep every leg's speed |dl/dt| <= V (geometry units per second): the plan "
+                        "is re-timed, in the least time with --T min")
+    p.add_argument("--objective", choices=("energy",), default=None,
+                   help="then lower the energy ∫|u|² dt with the goal and limits kept")
+    p.add_argument("--out", default=None, help="write the result as JSON to this file")
+    p.add_argument("--plot", default=None, help="write a figure (u, RPY, Δ against t) to this file")
+    p.add_argument("--csv", default=None,
+                   help="write the motion as CSV for an actuator controller (t, leg lengths and "
+                        "speeds, u, quaternion qx qy qz qw, delta; only for a successful plan)")
+    p.add_argument("--csv-rate", type=float, default=export.DEFAULT_RATE,
+                   help=f"samples per second of --csv (default {export.DEFAULT_RATE:g})")
+    p.add_argument("--quiet", action="store_true", help="print the summary only")
+    p.set_defaults(func=run)
+    return p
+
+
+def _horizon(text: str) -> float | None:
+    """``--T``: a number of seconds, or ``min`` (``None``: the least time)."""
+    if text.strip().lower() == "min":
+        return None
+    try:
+        return float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected seconds or 'min', got {text!r}") from None
+
+
+def _fmt(x, spec: str) -> str:
+    return "n/a" if x is None else format(x, spec)
+
+
+def _error_text(res, spec: str) -> str:
+    """The terminal error in words: ``|l_T|`` in rad, or by part beyond SO(3)."""
+    if res.errors is None:
+        return f"|l_T| = {_fmt(res.terminal_error, spec)} rad"
+    return ", ".join(f"{part} {_fmt(value, spec)}" for part, value in res.errors.items())
+
+
+def _say(text: str) -> None:
+    """Print a line of output at once; if the reader has closed stdout (``| head -1``),
+    send this and all later output to the null device instead of failing."""
+    try:
+        print(text, flush=True)
+    except BrokenPipeError:
+        discard_stdout()
+
+
+def discard_stdout() -> None:
+    # the descriptor itself is redirected: what is still buffered, and the flush at exit,
+    # then go to the null device too (no "Exception ignored ... BrokenPipeError")
+    try:
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+        os.close(devnull)
+    except (OSError, ValueError, AttributeError):   # no real descriptor behind sys.stdout
+        sys.stdout = open(os.devnull, "w")
+
+
+def _error(text: str) -> None:
+    """One line on stderr."""
+    print(f"nonholo plan: error: {' '.join(text.split())}", file=sys.stderr, flush=True)
+
+
+def _cannot_write(path, exc: Exception) -> None:
+    why = exc.strerror if isinstance(exc, OSError) and exc.strerror else str(exc)
+    _error(f"cannot write {path}: {why}")
+
+
+def _print_record(rec: dict) -> None:
+    _say(f"iter {rec['iteration']:4d}  |l_T| = {_fmt(rec['error'], '.3e')}  "
+         f"step = {rec['step']:<8.4g} min|Δ| = {_fmt(rec['min_delta'], '.4f')}  {rec['phase']}")
+
+
+def _plot_format_error(path) -> str | None:
+    """Why matplotlib cannot write a figure to ``path`` (its extension), or ``None``."""
+    suffix = Path(path).suffix[1:].lower()
+    if not suffix:
+        return None                                  # matplotlib's default format
+    from matplotlib.backend_bases import FigureCanvasBase
+
+    known = FigureCanvasBase.get_supported_filetypes()
+    if suffix not in known:
+        return f"--plot {path}: unknown figure format {suffix!r}; known: {', '.join(sorted(known))}"
+    return None
+
+
+def state_of(mechanism, values, flag: str):
+    """The state ``values`` (numbers given to ``flag``) of ``mechanism`` as :func:`nonholo.plan`
+    takes it (see the module): ``ValueError`` naming ``flag`` and what it needs otherwise."""
+    mech = catalog.get(mechanism)
+    names = (["φ", "ϑ", "ψ"] if mech.orientation else []) + list(mech.coordinates)
+    if len(values) != len(names):
+        raise ValueError(f"{flag} takes {len(names)} numbers for mechanism {mech.name!r} "
+                         f"({' '.join(names)}), got {len(values)}")
+    R = so3.from_rpy(*values[:3]) if mech.orientation else states.IDENTITY
+    q = np.array(values[3:] if mech.orientation else values, dtype=float)
+    return states.public(mech, R, q)
+
+
+def run(args) -> int:
+    """Run the ``plan`` sub-command for parsed ``args``; returns the exit status."""
+    why = _plot_format_error(args.plot) if args.plot else None
+    if why is None and args.csv:
+        try:
+            export.check_rate(args.csv_rate)
+        except ValueError as exc:
+            why = f"--csv-rate: {exc}"
+    if why:
+        _error(why)
+        return EXIT_BAD_INPUT
+    try:
+        R0 = state_of(args.mechanism, args.start, "--from")
+        Rd = state_of(args.mechanism, args.goal, "--to")
+        res = planner.plan(
+            R0, Rd, T=args.T, method=args.method, harmonics=args.harmonics, grid=args.grid,
+            strategy=args.strategy, mechanism=args.mechanism, gamma=args.gamma, tol=args.tol,
+            max_iter=args.max_iter, delta_min=args.delta_min, steps=args.steps, route=args.route,
+            leg_length=args.leg_length, leg_speed=args.leg_speed, objective=args.objective,
+            callback=None if args.quiet else _print_record)
+    except ValueError as exc:
+        _error(str(exc))
+        return EXIT_BAD_INPUT
+    _say(f"{'success' if res.success else 'FAILED'}: {res.reason}")
+    _say(f"terminal error {_error_text(res, '.3e')}, min |Δ| = "
+         f"{_fmt(res.min_delta, '.4f')}, {res.iterations} iterations, {res.seconds * 1e3:.1f} ms "
+         f"({res.mechanism}, {res.method}/{res.strategy}, {res.route} route, T = {res.T:g} s, "
+         f"{res.steps} steps)")
+    status = EXIT_SUCCESS if res.success else EXIT_FAILED
+    if args.out:
+        try:
+            res.save(args.out)
+        except (OSError, ValueError) as exc:     # ValueError: a number JSON cannot hold
+            _cannot_write(args.out, exc)
+            status = EXIT_WRITE_FAILED
+        else:
+            _say(f"wrote {args.out}")
+    if args.plot:
+        try:
+            plot(res, args.plot)
+        except OSError as exc:
+            _cannot_write(args.plot, exc)
+            status = EXIT_WRITE_FAILED
+        else:
+            _say(f"wrote {args.plot}")
+    if args.csv:
+        if not res.success:
+            _say(f"{args.csv} not written: a failed plan is not a motion to play back")
+        else:
+            try:
+                res.to_csv(args.csv, rate=args.csv_rate)
+            except (OSError, ValueError) as exc:
+                _cannot_write(args.csv, exc)
+                status = EXIT_WRITE_FAILED
+            else:
+                _say(f"wrote {args.csv}")
+    return status
+
+
+def plot(res, path) -> None:
+    """Figure of a :class:`~nonholo.io.result.PlanResult`: ``u(t)``, ``RPY(t)`` (with an
+    orientation), the coordinates ``q(t)`` (beyond SO(3)), ``Δ(t)`` and, for a mechanism
+    with legs, the leg lengths and speeds against their limits (if the plan had them)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    mech = catalog.get(res.mechanism)
+    has_delta = res.delta is not None
+    legs = mech.has_legs and len(res.R) > 0
+    rows = 1 + mech.orientation + mech.beyond_so3 + has_delta + 2 * legs
+    fig, axes = plt.subplots(rows, 1, sharex=True, figsize=(7, 2.4 * rows))
+    row = iter(axes[1:])
+    tt = np.linspace(0.0, res.T, 1001)
+    u = res.controls(tt)
+    for i in range(u.shape[1]):
+        axes[0].plot(tt, u[:, i], label=mech.inputs[i])
+    axes[0].set_ylabel("input u [1/s]")
+    axes[0].legend(fontsize="small")
+    axes[0].set_title(f"{res.mechanism}, {res.method}/{res.strategy}: " + _error_text(res, ".2e"))
+    if mech.orientation:
+        ax = next(row)
+        if len(res.R):
+            rpy = np.array([so3.as_rpy(R) for R in res.R])
+            for k, name in enumerate(("φ (Z)", "ϑ (Y)", "ψ (X)")):
+                line, = ax.plot(res.t, rpy[:, k], label=name)
+                ax.axhline(so3.as_rpy(res.Rd)[k], color=line.get_color(), ls=":", lw=0.8)
+            ax.legend(fontsize="small", title="dotted: goal", title_fontsize="small")
+        ax.set_ylabel("RPY angles [rad]")
+    if mech.beyond_so3:
+        ax = next(row)
+        if len(res.q):
+            for k, name in enumerate(mech.coordinates):
+                line, = ax.plot(res.t, res.q[:, k], label=f"{name} [{mech.units[k]}]")
+                ax.axhline(res.qd[k], color=line.get_color(), ls=":", lw=0.8)
+            ax.legend(fontsize="small", title="dotted: goal", title_fontsize="small")
+        ax.set_ylabel("coordinates")
+    if has_delta:
+        ax = next(row)
+        ax.plot(res.t, res.delta, label="Δ at the integrator's steps")
+        dmin = res.options.get("delta_min", 0.0)
+        sgn = np.sign(res.delta[0]) if len(res.delta) else 1.0
+        ax.axhline(sgn * dmin, color="r", ls="--", label=f"threshold {sgn * dmin:+g}")
+        ax.axhline(0.0, color="k", lw=0.5)
+        ax.set_ylabel("Δ [-]")
+        ax.legend(fontsize="small")
+    if legs:
+        ax = next(row)
+        lengths = mech.leg_lengths(res.R)
+        for i in range(lengths.shape[1]):
+            ax.plot(res.t, lengths[:, i], label=f"l{i + 1}")
+        for k, y in enumerate(res.options.get("leg_length") or ()):
+            ax.axhline(y, color="r", ls="--", label="stroke limits" if k == 0 else None)
+        ax.set_ylabel("leg length")
+        ax.legend(fontsize="small")
+        ax = next(row)
+        speeds = mech.leg_speeds(res.R, res.u)
+        for i in range(speeds.shape[1]):
+            ax.plot(res.t, speeds[:, i], label=f"dl{i + 1}/dt")
+        v = res.options.get("leg_speed")
+        if v is not None:
+            for k, y in enumerate((v, -v)):
+                ax.axhline(y, color="r", ls="--", label="speed limit" if k == 0 else None)
+        ax.axhline(0.0, color="k", lw=0.5)
+        ax.set_ylabel("leg speed [1/s]")
+        ax.legend(fontsize="small")
+    axes[-1].set_xlabel("t [s]")
+    fig.tight_layout()
+    try:
+        fig.savefig(path, dpi=100)
+    finally:
+        plt.close(fig)

@@ -1,0 +1,19 @@
+"""``nonholo reproduce``: the project's main job (see :mod:`nonholo.paper.reproduce`)."""
+from __future__ import annotations
+
+import os
+
+
+def add_parser(subparsers) -> None:
+    p = subparsers.add_parser(
+        "reproduce", help="check the derivation, audit, solve the examples, write paper_figures/")
+    p.add_argument("--out", default="paper_figures", help="output directory (default: paper_figures)")
+    p.add_argument("--no-audit", action="store_true", help="skip printing the audit")
+    p.add_argument("--no-figures", action="store_true", help="skip the figures")
+    p.set_defaults(func=run)
+
+
+def run(args) -> int:
+    os.environ.setdefault("MPLBACKEND", "Agg")
+    from ..paper.reproduce import run as _run
+    return _run(args.out, audit=not args.no_audit, draw=not args.no_figures)

@@ -1,0 +1,101 @@
+"""``nonholo sweep`` and ``nonholo atlas``: many plans at once, and maps of them.
+
+Examples::
+
+    nonholo sweep problems.jsonl --out results.parquet --workers 2
+    nonholo sweep problems.jsonl --out results.parquet --scheduler tcp://127.0.0.1:8786
+    nonholo atlas --problems atlas.jsonl --grid 31
+    nonholo sweep atlas.jsonl --out atlas.parquet
+    nonholo atlas atlas.parquet --out paper_figures
+
+``sweep`` plans every problem of a JSON Lines file (:mod:`nonholo.io.problems`) and writes one
+row per problem to a Parquet file as results arrive (:mod:`nonholo.batch.sweep`); run again with
+the same arguments it finishes what an interrupted run left. ``atlas --problems`` writes
+an atlas's problems (:func:`nonholo.batch.atlas.problems`); ``atlas RESULTS`` draws the maps of
+their sweep (``atlas_success``, ``atlas_iterations``, ``atlas_time``, PNG and PDF).
+
+Exit status: 0 done, 2 bad input (a bad problem file names the row and column).
+"""
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+from ..io import problems as problem_table
+
+
+def add_parsers(subparsers) -> None:
+    p = subparsers.add_parser("sweep", help="plan every problem of a JSON Lines file, in parallel, into Parquet",
+                              description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("problems", help="JSON Lines file: one problem per line (start, goal, mechanism, options)")
+    p.add_argument("--out", required=True, help="results file (Parquet); resumed if a run was interrupted")
+    p.add_argument("--workers", type=int, default=None, help="local worker processes (default: one per core)")
+    p.add_argument("--scheduler", default=None,
+                   help="run on a Dask distributed cluster: its scheduler's address, e.g. tcp://HOST:8786")
+    p.add_argument("--batch", type=int, default=None,
+                   help="problems per unit of work, each written as it finishes (default: automatic)")
+    p.add_argument("--quiet", action="store_true", help="no progress bar")
+    p.set_defaults(func=run_sweep)
+
+    p = subparsers.add_parser("atlas", help="write an atlas's problems, or draw the maps of their sweep",
+                              description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("results", nargs="?", help="results of a sweep of atlas problems (Parquet)")
+    p.add_argument("--out", default="paper_figures", help="directory of the figures (default paper_figures)")
+    p.add_argument("--problems", default=None, metavar="FILE",
+                   help="instead of drawing: write an atlas's problems to FILE (JSON Lines)")
+    p.add_argument("--grid", type=int, default=31, help="goals per side of each slice (default 31)")
+    p.add_argument("--psi", type=float, nargs="+", default=None,
+                   help="the slices ψ (rad; default: the start's)")
+    p.add_argument("--start", type=float, nargs=3, default=None, metavar=("PHI", "THETA", "PSI"),
+                   help="the start, RPY angles (rad; default Example 1's)")
+    p.set_defaults(func=run_atlas)
+
+
+def _error(message: str) -> int:
+    print(f"nonholo: error: {message}", file=sys.stderr)
+    return 2
+
+
+def run_sweep(args) -> int:
+    from ..batch.sweep import sweep
+
+    try:
+        table = sweep(args.problems, args.out, workers=args.workers, scheduler=args.scheduler,
+                      progress=not args.quiet, batch=args.batch)
+    except (ValueError, OSError) as exc:
+        return _error(str(exc))
+    rows = table.select(["success", "error"]).to_pylist()
+    solved = sum(r["success"] for r in rows)
+    raised = sum(r["error"] is not None for r in rows)
+    print(f"{len(rows)} problems: {solved} solved, {len(rows) - solved - raised} not, {raised} raised; "
+          f"wrote {args.out}")
+    return 0
+
+
+def run_atlas(args) -> int:
+    from ..batch import atlas
+    from ..viz import figures
+
+    if args.problems:
+        start = tuple(args.start) if args.start else atlas.START
+        psi = tuple(args.psi) if args.psi else (start[2],)
+        try:
+            rows = atlas.problems(n=args.grid, psi=psi, start=start)
+            problem_table.write(args.problems, rows)
+        except (ValueError, OSError) as exc:
+            return _error(str(exc))
+        print(f"wrote {len(rows)} problems to {args.problems}")
+        return 0
+    if not args.results:
+        return _error("give the results of a sweep to draw, or --problems FILE to write an atlas's problems")
+    from ..batch.sweep import load
+
+    try:
+        table = load(args.results)
+        for q in atlas.QUANTITIES:
+            for path in figures.save_figure(atlas.atlas_figure(table, q), f"atlas_{q}", Path(args.out)):
+                print(f"wrote {path}")
+    except (ValueError, OSError) as exc:
+        return _error(str(exc))
+    return 0

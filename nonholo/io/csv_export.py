@@ -1,0 +1,151 @@
+"""A planned motion as a table an actuator controller can play back (CSV).
+
+Columns, one row per sample time ``t_k = k / rate`` (and ``T``):
+
+- ``t`` (s);
+- ``l1 … lk``, ``dl1_dt … dlk_dt``: the leg lengths and leg speeds, in the units of the
+  mechanism's geometry (per second), for a mechanism with legs
+  (:meth:`nonholo.model.mechanism.Mechanism.leg_lengths`, ``dl_i/dt = G_i(R) L(R) u``);
+- ``u1 … um``: the planned inputs ``u(t)`` (``controls(t)``: the scaled leg rates of a
+  platform, 1/s);
+- ``qx, qy, qz, qw``: the orientation ``R(t)`` as a unit quaternion, scalar last (as
+  :class:`scipy.spatial.transform.Rotation`), its sign kept continuous from row to row
+  (``q`` and ``−q`` are the same orientation; a player interpolating quaternions must not
+  see a jump);
+- ``delta``: ``Δ(R(t))``, for a mechanism with a singular set.
+
+A mechanism whose state goes beyond SO(3) (:mod:`nonholo.spaces.state`) has its coordinates as
+columns named as the mechanism names them (the car's ``x, y, theta, phi``), after the
+inputs; the quaternion only if it has an orientation; ``delta`` is ``Δ(R(t), q(t))``.
+
+``R(t)`` between the plan's samples is one CF4 step of the physical system from the sample
+below (the integrator's own local approximation, ``O(h⁵)`` from the replayed motion), so
+the rows agree with the plan's samples wherever they coincide.
+"""
+from __future__ import annotations
+
+import csv
+import io
+import math
+
+import numpy as np
+from scipy.spatial.transform import Rotation
+
+from ..model import catalog
+from ..motion.retimed import Retimed
+from ..motion.simulation import DELTA_STOP
+from ..numerics.checks import is_number
+from ..spaces import state as states
+
+#: Sample rate of :func:`trajectory_table` unless given (Hz).
+DEFAULT_RATE = 100.0
+#: Rows at most (a rate so high that the table would be larger is refused).
+MAX_ROWS = 10_000_000
+
+
+def check_rate(rate) -> float:
+    """``rate`` if it is a positive, finite number of samples per second, else ``ValueError``."""
+    if not is_number(rate) or not math.isfinite(rate) or rate <= 0:
+        raise ValueError(f"rate must be a positive number of samples per second, got {rate!r}")
+    return float(rate)
+
+
+def sample_times(T: float, rate: float) -> np.ndarray:
+    """``t_k = k / rate`` on ``[0, T]``, and ``T`` itself if it is not one of them."""
+    rate = check_rate(rate)
+    n = math.floor(T * rate * (1 + 1e-12)) + 1
+    if n > MAX_ROWS:
+        raise ValueError(f"rate = {rate:g} Hz gives {n} rows over T = {T:g} s (at most {MAX_ROWS})")
+    t = np.arange(n) / rate
+    return t if abs(t[-1] - T) <= 1e-12 * max(1.0, T) else np.append(t, T)
+
+
+def states_at(result, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``(R(t), q(t))`` of a simulated plan: one CF4 step of the physical system from the
+    stored sample at or below each ``t`` (none where ``t`` is a sample time); ``q`` has no
+    columns on SO(3). A re-timed plan (:class:`~nonholo.motion.retimed.Retimed`) moves along its
+    planned path: ``R(τ(t))``, stepped in the planned time ``τ`` with the planned controls."""
+    mech = catalog.get(result.mechanism)
+    kern = mech.kernels(False)
+    n_samples = len(result.t)
+    if n_samples == 0 or t[-1] > result.t[-1] * (1 + 1e-12):
+        raise ValueError("the plan's motion does not reach T (a failed plan): nothing to export")
+    controls, T, asked = result.controls, result.T, t
+    if isinstance(result.parametrisation, Retimed):
+        controls, T = result.parametrisation.base, result.parametrisation.base.T
+        t = result.parametrisation.tau(t)[0]
+    h = T / result.steps
+    idx = np.minimum(np.floor(t / h + 1e-9).astype(np.int64), n_samples - 1)
+    s = t - idx * h
+    s[np.abs(s) <= 1e-12 * max(1.0, T)] = 0.0
+    q0 = states.NO_COORDINATES if result.q0 is None else np.asarray(result.q0, dtype=float)
+    Q = np.zeros((n_samples, 0)) if result.q is None else np.asarray(result.q, dtype=float)
+    sgn = 1.0
+    if mech.has_singular_set:
+        sgn = float(np.sign(mech.delta_samples(np.asarray(result.R0)[None], q0[None])[0]))
+    starts = idx * h
+    U = np.stack([controls(starts), controls(starts + 0.5 * s), controls(starts + s)],
+                 axis=1).reshape(len(t), 3, mech.n_inputs)
+    out, out_q = np.empty((len(t), 3, 3)), np.empty((len(t), Q.shape[1]))
+    step, step_q = states.buffers(mech, 1)
+    for k in range(len(t)):
+        out[k], out_q[k] = result.R[idx[k]], Q[idx[k]]
+        if s[k] > 0.0:
+            done, _, _ = states.forward(mech, kern, out[k].copy(), out_q[k].copy(), U[k:k + 1], s[k], sgn,
+                                        DELTA_STOP, step, step_q)
+            if done != 1:
+                raise ValueError(f"the motion runs into Δ = 0 at t ≈ {asked[k]:g} s: not a plan to play back")
+            out[k], out_q[k] = step[1], step_q[1]
+    return out, out_q
+
+
+def continuous_quaternions(R: np.ndarray) -> np.ndarray:
+    """Unit quaternions ``(x, y, z, w)`` of ``R`` (n, 3, 3), each with the sign nearer the
+    previous one's."""
+    q = Rotation.from_matrix(R).as_quat()
+    for k in range(1, len(q)):
+        if np.dot(q[k], q[k - 1]) < 0.0:
+            q[k] = -q[k]
+    return q
+
+
+def trajectory_table(result, rate: float = DEFAULT_RATE) -> dict[str, np.ndarray]:
+    """The columns of the module docstring, in order, for ``result`` (a successful
+    :class:`~nonholo.io.result.PlanResult`) sampled at ``rate`` Hz. A failed plan is refused
+    (``ValueError`` with its reason): it is not a motion to play on a machine."""
+    if not result.success:
+        raise ValueError(f"the plan failed ({result.reason}): not exported")
+    mech = catalog.get(result.mechanism)
+    t = sample_times(result.T, rate)
+    R, q = states_at(result, t)
+    u = np.asarray(result.controls(t), dtype=float).reshape(len(t), mech.n_inputs)
+    cols: dict[str, np.ndarray] = {"t": t}
+    if mech.has_legs:
+        lengths = mech.leg_lengths(R)
+        speeds = mech.leg_speeds(R, u)
+        for i in range(lengths.shape[1]):
+            cols[f"l{i + 1}"] = lengths[:, i]
+        for i in range(speeds.shape[1]):
+            cols[f"dl{i + 1}_dt"] = speeds[:, i]
+    for i in range(mech.n_inputs):
+        cols[f"u{i + 1}"] = u[:, i]
+    for i, name in enumerate(mech.coordinates):
+        cols[name] = q[:, i]
+    if mech.orientation:
+        quaternion = continuous_quaternions(R)
+        for i, name in enumerate(("qx", "qy", "qz", "qw")):
+            cols[name] = quaternion[:, i]
+    if mech.has_singular_set:
+        cols["delta"] = mech.delta_samples(R, q if mech.beyond_so3 else None)
+    return cols
+
+
+def csv_text(result, rate: float = DEFAULT_RATE) -> str:
+    """:func:`trajectory_table` as CSV text: a header row, then one row per sample (floats
+    with ``repr`` precision)."""
+    cols = trajectory_table(result, rate)
+    out = io.StringIO()
+    w = csv.writer(out, lineterminator="\n")
+    w.writerow(list(cols))
+    w.writerows([repr(float(x)) for x in row] for row in np.column_stack(list(cols.values())))
+    return out.getvalue()

@@ -1,0 +1,146 @@
+"""Tables of planning problems: the JSON Lines format :func:`nonholo.batch.sweep.sweep` runs.
+
+One problem per line, a JSON object::
+
+    {"start": [[...], [...], [...]], "goal": [[...], [...], [...]],
+     "mechanism": "platform", "options": {"T": 1.0, "strategy": "paper"}}
+
+``start`` and ``goal`` are what :func:`nonholo.plan` takes as ``R0`` and ``Rd`` (3×3
+rotation matrices, nested lists); ``mechanism`` (a name, :func:`nonholo.model.catalog.names`;
+default ``"platform"``) and ``options`` (keyword arguments of :func:`nonholo.plan`
+that JSON can hold, :data:`OPTIONS`) are optional; so is ``label``, free text carried
+into the results (e.g. a goal's name). In Python the same rows are dicts (``start`` and
+``goal`` may be arrays).
+
+:func:`check` validates a whole table before anything runs and names the row (from 0, the
+line of the file) and the column of the first problem it finds; :func:`fingerprint`
+identifies a table, so that a sweep resumed with another one is refused.
+"""
+from __future__ import annotations
+
+import hashlib
+import json
+from pathlib import Path
+
+import numpy as np
+
+from ..model import catalog
+from ..numerics.checks import is_number
+from ..spaces import so3
+
+#: The columns a problem may have; ``start`` and ``goal`` are required.
+COLUMNS = ("start", "goal", "mechanism", "options", "label")
+#: The keyword arguments of :func:`nonholo.plan` a problem's ``options`` may set (those
+#: JSON can hold; ``u0`` and ``callback`` cannot).
+OPTIONS = ("T", "method", "harmonics", "grid", "gamma", "step", "tol", "max_iter", "strategy",
+           "delta_min", "steps", "newton_below", "min_step", "route", "leg_length", "leg_speed",
+           "objective")
+
+
+def _fail(row: int, column: str | None, message: str):
+    where = f"row {row}" + ("" if column is None else f", column {column!r}")
+    raise ValueError(f"problem {where}: {message}")
+
+
+def _rotation(value, row: int, column: str) -> np.ndarray:
+    try:
+        R = np.array(value, dtype=float)
+    except (TypeError, ValueError, OverflowError):
+        _fail(row, column, "must be a 3×3 rotation matrix (nested lists of numbers)")
+    if R.shape != (3, 3):
+        _fail(row, column, f"must be a 3×3 rotation matrix, got shape {R.shape}")
+    try:
+        return so3.check_rotation(R, column)
+    except ValueError as exc:
+        _fail(row, column, str(exc))
+
+
+def check_row(d, row: int) -> dict:
+    """One problem, checked: ``{"start", "goal", "mechanism", "options", "label"}`` with
+    rotation matrices as arrays, the mechanism's name and a dict of options."""
+    if not isinstance(d, dict):
+        _fail(row, None, f"must be an object with columns {', '.join(COLUMNS)}, got {type(d).__name__}")
+    unknown = [k for k in d if k not in COLUMNS]
+    if unknown:
+        _fail(row, str(unknown[0]), f"is not a column (known: {', '.join(COLUMNS)})")
+    for key in ("start", "goal"):
+        if key not in d:
+            _fail(row, key, "is missing")
+    start = _rotation(d["start"], row, "start")
+    goal = _rotation(d["goal"], row, "goal")
+    name = d.get("mechanism", "platform")
+    if not isinstance(name, str):
+        _fail(row, "mechanism", f"must be a mechanism's name, got {name!r}")
+    if name not in catalog.names():
+        _fail(row, "mechanism", f"unknown mechanism {name!r} (known: {', '.join(catalog.names())})")
+    options = d.get("options", {})
+    if not isinstance(options, dict):
+        _fail(row, "options", f"must be an object of plan() options, got {type(options).__name__}")
+    for key, value in options.items():
+        if key not in OPTIONS:
+            _fail(row, f"options.{key}", f"is not an option of plan() (known: {', '.join(OPTIONS)})")
+        if not _json_value(value):
+            _fail(row, f"options.{key}", f"must be a number, string, boolean, null or list, got {value!r}")
+    label = d.get("label")
+    if label is not None and not isinstance(label, str):
+        _fail(row, "label", f"must be text, got {label!r}")
+    return {"start": start, "goal": goal, "mechanism": name, "options": dict(options), "label": label}
+
+
+def _json_value(x) -> bool:
+    if x is None or isinstance(x, (bool, str)) or is_number(x):
+        return not (is_number(x) and not np.isfinite(x))
+    if isinstance(x, (list, tuple)):
+        return all(_json_value(v) for v in x)
+    return False
+
+
+def check(rows) -> list[dict]:
+    """Every row checked (:func:`check_row`); ``ValueError`` naming the first bad one."""
+    rows = list(rows)
+    if not rows:
+        raise ValueError("the problem table is empty")
+    return [check_row(d, i) for i, d in enumerate(rows)]
+
+
+def read(path) -> list[dict]:
+    """The problems of a JSON Lines file, checked (blank lines are not allowed: every line
+    is a row, numbered from 0)."""
+    rows = []
+    with open(path, encoding="utf-8-sig") as f:
+        for i, line in enumerate(f):
+            if not line.strip():
+                _fail(i, None, "is blank (one JSON object per line)")
+            try:
+                rows.append(json.loads(line))
+            except json.JSONDecodeError as exc:
+                _fail(i, None, f"is not JSON: {exc.msg} at character {exc.pos}")
+    if not rows:
+        raise ValueError(f"{path}: no problems (an empty file)")
+    return check(rows)
+
+
+def as_json(problem: dict) -> dict:
+    """A checked problem as a JSON-able row (the inverse of :func:`check_row`)."""
+    out = {"start": np.asarray(problem["start"]).tolist(), "goal": np.asarray(problem["goal"]).tolist(),
+           "mechanism": problem["mechanism"], "options": problem["options"]}
+    if problem.get("label") is not None:
+        out["label"] = problem["label"]
+    return out
+
+
+def write(path, rows) -> Path:
+    """Write problems (dicts as :func:`check_row` takes them) as JSON Lines, checked first."""
+    lines = [json.dumps(as_json(p), separators=(",", ":")) for p in check(rows)]
+    path = Path(path)
+    path.write_text("\n".join(lines) + "\n", encoding="utf-8")
+    return path
+
+
+def fingerprint(problems: list[dict]) -> str:
+    """A SHA-256 of the checked problems' canonical JSON: the identity of a table."""
+    h = hashlib.sha256()
+    for p in problems:
+        h.update(json.dumps(as_json(p), sort_keys=True, separators=(",", ":")).encode())
+        h.update(b"\n")
+    return h.hexdigest()

@@ -1,0 +1,105 @@
+"""Stroke limits of a platform's legs: ``lo ≤ l_i(R) ≤ hi`` for every leg ``i``.
+
+A motion is kept inside the limits the way it is kept clear of ``Δ = 0``: a trajectory
+is admissible only if every node's *clearances* ``c = l_i − lo`` and ``c = hi − l_i``
+are non-negative (:meth:`LegLimits.least_clearance`), the certified replay checks the same
+on its finer grid, and the strategy ``"robust"`` adds a null-space barrier on the
+clearances below :data:`BARRIER_CLEARANCE` (:meth:`LegLimits.clearance_terms`). Lengths
+are in the units of the mechanism's geometry (:meth:`nonholo.model.mechanism.Mechanism.leg_lengths`).
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..numerics.checks import is_number
+
+#: The barrier of strategy ``"robust"`` acts on clearances below this (geometry units).
+BARRIER_CLEARANCE = 0.05
+
+
+@dataclass(frozen=True)
+class LegLimits:
+    """Every leg's length within ``[lo, hi]`` (geometry units)."""
+
+    lo: float
+    hi: float
+
+    @classmethod
+    def from_argument(cls, value, mechanism) -> "LegLimits | None":
+        """``leg_length`` as :func:`nonholo.plan` takes it: ``None`` (no limits) or ``(lo,
+        hi)`` with ``0 ≤ lo < hi`` finite, for a mechanism with legs; ``ValueError`` naming
+        the argument otherwise."""
+        if value is None:
+            return None
+        if not mechanism.has_legs:
+            raise ValueError(f"leg_length: mechanism {mechanism.name!r} has no legs (only platforms do)")
+        try:
+            if isinstance(value, (str, bytes)):
+                raise TypeError
+            lo, hi = value
+        except (TypeError, ValueError):
+            raise ValueError(f"leg_length must be a pair (lo, hi), got {value!r}") from None
+        for name, x in (("lo", lo), ("hi", hi)):
+            if not is_number(x) or not math.isfinite(x) or x < 0:
+                raise ValueError(f"leg_length: {name} must be a finite number >= 0, got {x!r}")
+        if not lo < hi:
+            raise ValueError(f"leg_length: lo must be below hi, got ({lo!r}, {hi!r})")
+        return cls(float(lo), float(hi))
+
+    def as_tuple(self) -> tuple[float, float]:
+        return (self.lo, self.hi)
+
+    # -- clearances --------------------------------------------------------------------------
+    def clearances(self, mechanism, R) -> np.ndarray:
+        """``(l_i − lo, hi − l_i)`` for every leg, shape ``(n, 2k)`` for a stack ``R`` (n, 3, 3)
+        (column ``2i``: leg ``i + 1`` above ``lo``, ``2i + 1``: below ``hi``)."""
+        lengths = mechanism.leg_lengths(np.asarray(R, dtype=float).reshape(-1, 3, 3))
+        out = np.empty((lengths.shape[0], 2 * lengths.shape[1]))
+        out[:, 0::2] = lengths - self.lo
+        out[:, 1::2] = self.hi - lengths
+        return out
+
+    def least_clearance(self, mechanism, R) -> float:
+        """The least clearance over the stack ``R`` (negative: a leg left its stroke)."""
+        return float(self.clearances(mechanism, R).min())
+
+    def _worst(self, mechanism, R) -> tuple[int, int, int, float]:
+        """``(node, leg, bound, clearance)`` of the least clearance over the stack ``R``
+        (``leg`` from 1; ``bound`` 0: the lower limit, 1: the upper)."""
+        c = self.clearances(mechanism, R)
+        n, j = np.unravel_index(int(np.argmin(c)), c.shape)
+        return int(n), int(j) // 2 + 1, int(j) % 2, float(c[n, j])
+
+    def violation(self, mechanism, R, what: str) -> str | None:
+        """Why the orientation ``R`` (3, 3) is outside the limits (``what``: e.g. ``"the
+        start"``), naming the leg that is out the most and by how much; ``None`` inside."""
+        _, leg, bound, c = self._worst(mechanism, R)
+        if c >= 0.0:
+            return None
+        length = float(mechanism.leg_lengths(np.asarray(R, dtype=float))[leg - 1])
+        side, end, limit = (("below", "lower", self.lo), ("above", "upper", self.hi))[bound]
+        return (f"{what} is outside the legs' stroke: leg {leg} is {length:.4g} long, "
+                f"{-c:.3g} {side} leg_length's {end} end {limit:g}")
+
+    def describe(self, mechanism, R, times=None) -> str:
+        """Where the stack ``R`` leaves the limits the most (for a failure's reason)."""
+        n, leg, bound, c = self._worst(mechanism, R)
+        when = f" at t ≈ {times[n]:.4g} s" if times is not None else ""
+        return (f"leg {leg} passes its {('lower', 'upper')[bound]} stroke limit by {-c:.3g}{when} "
+                f"(leg_length = ({self.lo:g}, {self.hi:g}))")
+
+    def clearance_terms(self, mechanism, R, threshold: float = BARRIER_CLEARANCE):
+        """The active terms of a log barrier ``Σ −log(c/c₀)`` on the clearances of the
+        nodes ``R`` (n, 3, 3): ``(nodes, c, ∇c)`` for every clearance ``c < threshold``
+        (``∇c``: rows with ``dc = ∇c · s`` along ``∂R = [s] R``), or ``None``."""
+        c = self.clearances(mechanism, R)
+        nodes, cols = np.nonzero(c < threshold)
+        if nodes.size == 0:
+            return None
+        G = mechanism.leg_gradients(np.asarray(R)[nodes])               # (a, k, 3)
+        rows = G[np.arange(nodes.size), cols // 2]
+        rows[cols % 2 == 1] *= -1.0                                        # hi − l_i decreases with l_i
+        return nodes, c[nodes, cols], rows

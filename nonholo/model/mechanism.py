@@ -1,0 +1,263 @@
+"""The numeric :class:`Mechanism`: everything the planners, the simulator and the figures
+need to know about one mechanism, built from its generated module.
+
+A mechanism on SO(3) is a driftless system ``dR/dt = [L(R) u] R`` (spatial angular
+velocity ``ω = L(R) u``, ``u`` its ``m`` inputs). Its generated module
+(``nonholo/generated/<name>.py``, written by ``nonholo derive`` from the SymPy derivation
+in ``derivations/``) provides
+
+- ``L(R)`` (3×m) and ``Q(R, u)`` (3×3, ``(∂L/∂θ) u = Q s`` for ``∂R/∂θ = [s] R``, eq. (12));
+- ``delta(R)``, the singularity function, where ``L`` blows up on ``Δ = 0`` (else none);
+- the desingularised frame, when the derivation gives one: ``N(R)`` (3×m, orthonormal
+  columns spanning the admissible angular velocities), ``QN(R, w)`` (its ``Q``) and
+  ``W(R) = (N(R)ᵀ L(R))^{-1}`` (physical inputs ``u = W(R) w`` of ``ω = N(R) w``);
+- ``GEOMETRY``, the joint points of a two-leg platform, for drawings, and its legs'
+  lengths ``leg_lengths(R)`` (``l_i = |R tip_i − base_i|``) with their derivative rows
+  ``leg_gradients(R)`` (``dl_i = G_i s`` along ``∂R = [s] R``), when ``HAS_LEGS``;
+
+each matrix also as ``NAME_into(..., out)`` for the compiled integrator
+(:meth:`Mechanism.kernels`). Nothing downstream depends on which mechanism it is;
+:mod:`nonholo.model.catalog` looks mechanisms up by name.
+
+A mechanism whose state goes beyond SO(3) — ``(R, q) ∈ SO(3) × Rᵏ`` or ``q ∈ Rᵏ``
+(:mod:`derivations.state_space`) — has instead the stacked field ``G(R, q)`` (rows
+``(ω, q̇)``; ``q̇`` only without orientation), its variational matrix ``QG(R, q, v)``,
+``delta(R, q)`` and the frame ``N(R, q)``, ``QN``, ``W``; its ``L`` and ``Q`` are ``None``
+and its kernels are those of :mod:`nonholo.integrate.cf4_product`. :attr:`Mechanism.state_space`
+tells the kinds apart (``"SO(3)"``, ``"SO(3)xR^k"``, ``"R^k"``).
+"""
+from __future__ import annotations
+
+import types
+from dataclasses import dataclass, field
+from typing import Callable
+
+import numpy as np
+
+from ..integrate import cf4, cf4_product
+
+
+@dataclass(frozen=True)
+class Geometry:
+    """Numeric geometry of a two-leg platform with one rolling disk (the symbolic one is
+    ``derivations.mechanism.PlatformGeometry``): base joints ``base_i`` (world frame),
+    platform joints ``tip_i`` (platform frame, world position ``R tip_i``), the disk's
+    contact point ``contact`` on the sphere and its unit axle direction ``axle`` (world).
+    Lengths in the units of the derivation's drawing dimensions; the sphere's radius is
+    ``|contact|``."""
+
+    base1: np.ndarray
+    tip1: np.ndarray
+    base2: np.ndarray
+    tip2: np.ndarray
+    contact: np.ndarray
+    axle: np.ndarray
+
+    FIELDS = ("base1", "tip1", "base2", "tip2", "contact", "axle")
+
+    @classmethod
+    def from_mapping(cls, data) -> "Geometry":
+        """From a mapping of the six fields to 3-vectors (the generated ``GEOMETRY``)."""
+        vals = {k: np.array(data[k], dtype=float) for k in cls.FIELDS}
+        vals["axle"] = vals["axle"] / np.linalg.norm(vals["axle"])
+        return cls(**vals)
+
+    @property
+    def radius(self) -> float:
+        return float(np.linalg.norm(self.contact))
+
+    @property
+    def bases(self) -> tuple[np.ndarray, np.ndarray]:
+        return self.base1, self.base2
+
+    @property
+    def tips(self) -> tuple[np.ndarray, np.ndarray]:
+        return self.tip1, self.tip2
+
+    def leg_lengths(self, R) -> np.ndarray:
+        """``l_i = |R tip_i − base_i|``: shape (2,) for one ``R``, (n, 2) for a stack (n, 3, 3)."""
+        R = np.asarray(R, dtype=float)
+        Rs = R[None] if R.ndim == 2 else R
+        out = np.stack([np.linalg.norm(Rs @ tip - base, axis=-1)
+                        for base, tip in zip(self.bases, self.tips)], axis=-1)
+        return out[0] if R.ndim == 2 else out
+
+
+def _on_stack(into, R, shape: tuple) -> np.ndarray:
+    """A generated ``NAME_into(R, out)`` (plain arithmetic on the entries of ``R``) filling
+    ``shape``: on one ``R`` (3, 3), or on a stack (n, 3, 3) at once, evaluated on ``(3, 3,
+    n)`` into ``shape + (n,)``; shape ``shape`` or ``(n,) + shape``."""
+    R = np.asarray(R, dtype=float)
+    if R.ndim == 2:
+        out = np.empty(shape)
+        into(R, out)
+        return out
+    out = np.empty((*shape, R.shape[0]))
+    into(R.transpose(1, 2, 0), out)
+    return np.moveaxis(out, -1, 0)
+
+
+@dataclass(frozen=True)
+class Frame:
+    """The desingularised input frame of a mechanism: ``ω = N(R) w``, ``u = W(R) w``."""
+
+    N: Callable
+    QN: Callable
+    W: Callable
+
+
+@dataclass(frozen=True, eq=False)
+class Mechanism:
+    """Numeric kinematics of one mechanism (see the module docstring).
+
+    ``delta`` is ``None`` without a singular set; ``frame`` is ``None`` without a
+    desingularised frame; ``geometry`` is ``None`` for a mechanism that is not a
+    two-leg platform. ``state_space`` names the state (``"SO(3)"``: an orientation ``R``).
+    ``module`` is the generated module the numbers come from (the integrator compiles
+    its ``*_into`` functions).
+    """
+
+    name: str
+    description: str
+    inputs: tuple[str, ...]
+    L: Callable
+    Q: Callable
+    delta: Callable | None
+    frame: Frame | None
+    geometry: Geometry | None
+    module: types.ModuleType = field(repr=False)
+    state_space: str = "SO(3)"
+    #: names, units and angle flags of the coordinates ``q`` (a state beyond SO(3))
+    coordinates: tuple[str, ...] = ()
+    units: tuple[str, ...] = ()
+    angles: tuple[bool, ...] = ()
+    #: the stacked field ``G(R, q)`` (a state beyond SO(3); ``None`` on SO(3))
+    G: Callable | None = None
+
+    @property
+    def orientation(self) -> bool:
+        """Whether the state includes an orientation ``R``."""
+        return self.state_space.startswith("SO(3)")
+
+    @property
+    def beyond_so3(self) -> bool:
+        """Whether the state has coordinates ``q`` besides (or instead of) ``R``."""
+        return self.state_space != "SO(3)"
+
+    @property
+    def n_coordinates(self) -> int:
+        return len(self.coordinates)
+
+    @property
+    def n_rates(self) -> int:
+        """``d``: the dimension of a state variation ``s = (s_R, s_q)`` (rows of ``G``)."""
+        return (3 if self.orientation else 0) + self.n_coordinates
+
+    @property
+    def n_inputs(self) -> int:
+        return len(self.inputs)
+
+    @property
+    def has_singular_set(self) -> bool:
+        return self.delta is not None
+
+    @property
+    def has_frame(self) -> bool:
+        return self.frame is not None
+
+    def kernels(self, frame: bool = False) -> cf4.Kernels:
+        """The compiled integrator kernels of ``ω = L(R) u`` (or, ``frame=True``, of the
+        desingularised ``ω = N(R) w``); see :func:`nonholo.integrate.cf4.compile_system`."""
+        if frame and not self.has_frame:
+            raise ValueError(f"mechanism {self.name!r} has no desingularised frame N(R)")
+        if self.beyond_so3:
+            return cf4_product.compile_system(self.module, frame)
+        return cf4.compile_system(self.module, frame)
+
+    @property
+    def has_legs(self) -> bool:
+        """Whether the mechanism has legs whose lengths the derivation gives (a platform)."""
+        return bool(getattr(self.module, "HAS_LEGS", False))
+
+    def leg_lengths(self, R) -> np.ndarray:
+        """``l_i(R) = |R tip_i − base_i|`` (the generated ``leg_lengths``, in the units of
+        :attr:`geometry`): shape ``(k,)`` for one ``R``, ``(n, k)`` for a stack ``(n, 3, 3)``."""
+        return self._legs("leg_lengths_into", R, ())
+
+    def leg_gradients(self, R) -> np.ndarray:
+        """Rows ``G_i(R)`` with ``dl_i = G_i s`` along ``∂R = [s] R``: shape ``(k, 3)`` for one
+        ``R``, ``(n, k, 3)`` for a stack."""
+        return self._legs("leg_gradients_into", R, (3,))
+
+    def leg_speeds(self, R, u) -> np.ndarray:
+        """``dl_i/dt = G_i(R) L(R) u`` for inputs ``u`` at ``R``: shape ``(k,)`` for one ``R``
+        and ``u`` (m,), ``(n, k)`` for stacks ``(n, 3, 3)`` and ``(n, m)``."""
+        R = np.asarray(R, dtype=float)
+        u = np.asarray(u, dtype=float)
+        one = R.ndim == 2
+        Rs, us = (R[None], u[None]) if one else (R, u)
+        L = _on_stack(self.module.L_into, Rs, (3, self.n_inputs))
+        out = np.einsum("nkj,nji,ni->nk", self.leg_gradients(Rs), L, us)
+        return out[0] if one else out
+
+    def _legs(self, function: str, R, tail: tuple) -> np.ndarray:
+        """The generated leg function ``function`` on one ``R`` or a stack (:func:`_on_stack`)."""
+        if not self.has_legs:
+            raise ValueError(f"mechanism {self.name!r} has no legs")
+        return _on_stack(getattr(self.module, function), R, (len(self.geometry.bases), *tail))
+
+    def delta_samples(self, R, q=None) -> np.ndarray | None:
+        """``Δ(R[n])`` (``Δ(R[n], q[n])`` beyond SO(3), ``q`` of shape ``(n, k)``) for a stack
+        ``R`` of shape ``(n, 3, 3)``; ``None`` without a singular set."""
+        if self.delta is None:
+            return None
+        R = np.asarray(R, dtype=float)
+        # the generated Δ is plain arithmetic on entries R[i, j] (and q[c]): evaluate it
+        # on (3, 3, n) (and (k, n))
+        if self.beyond_so3:
+            value = self.delta(R.transpose(1, 2, 0), np.asarray(q, dtype=float).T)
+        else:
+            value = self.delta(R.transpose(1, 2, 0))
+        return np.broadcast_to(np.asarray(value, dtype=float), (R.shape[0],)).copy()
+
+    def rates(self, R, q, u) -> np.ndarray:
+        """The stacked rates ``G(R, q) u`` (``(ω, q̇)``) of a state beyond SO(3)."""
+        return self.G(np.asarray(R, dtype=float), np.asarray(q, dtype=float)) @ np.asarray(u, dtype=float)
+
+    @classmethod
+    def from_module(cls, module: types.ModuleType) -> "Mechanism":
+        """The mechanism of a generated module."""
+        if hasattr(module, "STATE_SPACE"):
+            frame = Frame(module.N, module.QN, module.W) if module.HAS_FRAME else None
+            return cls(name=module.NAME, description=module.DESCRIPTION, inputs=tuple(module.INPUTS),
+                       L=None, Q=None, delta=module.delta if module.HAS_SINGULAR_SET else None,
+                       frame=frame, geometry=None, module=module, state_space=module.STATE_SPACE,
+                       coordinates=tuple(module.COORDINATES), units=tuple(module.UNITS),
+                       angles=tuple(module.ANGLES), G=module.G)
+        frame = Frame(module.N, module.QN, module.W) if getattr(module, "HAS_FRAME", False) else None
+        geometry = getattr(module, "GEOMETRY", None)
+        return cls(name=module.NAME, description=module.DESCRIPTION, inputs=tuple(module.INPUTS),
+                   L=module.L, Q=module.Q, delta=module.delta if module.HAS_SINGULAR_SET else None,
+                   frame=frame, geometry=None if geometry is None else Geometry.from_mapping(geometry),
+                   module=module)
+
+    @classmethod
+    def from_symbolic(cls, mechanism) -> "Mechanism":
+        """The numeric mechanism of a symbolic ``derivations.mechanism.Mechanism``, in one
+        call: its module is generated (as ``nonholo derive`` would write it) and loaded
+        in this process. Its kernels are compiled on first use and not cached on disk
+        (the module exists only in this process); to add a mechanism for good, put it in
+        ``derivations/catalog.py`` and run ``nonholo derive``. To look it up by name,
+        :func:`nonholo.model.catalog.add` it.
+        """
+        from derivations import codegen  # SymPy: imported only when asked for
+
+        source = codegen.module_of(mechanism)
+        module = types.ModuleType(f"nonholo_symbolic_{mechanism.name}")
+        module.SOURCE = source
+        exec(compile(source, f"<generated module of mechanism {mechanism.name!r}>", "exec"),
+             module.__dict__)
+        return cls.from_module(module)
+
+    def __repr__(self) -> str:
+        return f"Mechanism({self.name!r}: {self.description})"

@@ -1,0 +1,318 @@
+"""Controls re-timed so that no leg moves faster than a bound: the fastest re-timing of a path.
+
+The mechanisms are driftless (``dR/dt = [L(R) u] R``): for a planned control ``u(τ)`` on
+``[0, T]`` and an increasing map ``τ(t)`` from ``[0, T̃]`` onto ``[0, T]``, the control
+
+    ``ũ(t) = u(τ(t)) · dτ/dt``
+
+moves along the same orientations, ``R̃(t) = R(τ(t))``, only faster or slower. Each leg's
+speed is scaled the same way: ``dl_i/dt = s_i(τ) dτ/dt`` with ``s_i(τ) = dl_i/dτ`` of the
+planned motion. Under a bound ``|dl_i/dt| ≤ v`` the fastest re-timing has
+
+    ``dτ/dt = 1/ρ(τ)``,  ``ρ(τ) = max_i |s_i(τ)| / v``,  ``T̃ = ∫_0^T ρ(τ) dτ``:
+
+at every instant the fastest leg moves at ``v``, and no re-timing of the path takes less
+than ``T̃`` (:attr:`TimeMap.minimum_time`). A longer ``T`` is met by ``dτ/dt = 1/(cρ)``,
+``c = T/T̃ ≥ 1``: the fastest leg then moves at ``v/c`` throughout.
+
+How :class:`TimeMap` builds ``τ(t)``:
+
+- the planned control is replayed from ``R0`` on ``nodes`` CF4 steps (a multiple of its
+  grid, so jumps fall on nodes) and ``s_i`` evaluated at every node, from each side where
+  the control jumps;
+- each ``s_i`` is interpolated by a quintic spline ``S_i`` between consecutive jumps
+  (:data:`DEGREE`), and ``ρ = max_i |S_i| / v`` *exactly*: its kinks, where the fastest leg
+  changes, are the roots of ``S_a ∓ S_b``, found as polynomial roots, so between knots and
+  kinks ``ρ`` is one quintic;
+- ``t(τ) = c ∫ ρ`` is integrated piece by piece by 3-point Gauss–Legendre (exact for
+  quintics) and inverted by Newton's method inside a piece (``dt/dτ = cρ > 0``), to
+  round-off.
+
+So the ``dτ/dt = 1/(cρ(τ(t)))`` that scales ``u`` is the derivative of the very map at which
+``u`` is read: the re-timed control moves along the planned path to round-off, whatever
+the spline's own error, which only moves the fastest leg's speed off ``v`` between nodes
+(by the spline's interpolation error, ``O(h⁶)`` in the node spacing ``h``).
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from scipy.interpolate import PPoly, make_interp_spline
+
+from ..controls import stages
+from ..model import catalog
+from ..numerics.checks import check_count, check_time, check_times, is_number
+from ..spaces import so3
+from . import playback
+
+#: Nodes of the replay that samples the legs' speeds, at least (rounded up to a multiple of
+#: the controls' grid): the spline's error in ``ρ`` is ``O((T/nodes)⁶)``.
+RETIME_NODES = 1200
+#: Newton steps that invert ``t(τ)`` inside a piece, at most (quadratic convergence from
+#: the linear interpolant: round-off after 3–5; they stop there).
+NEWTON_STEPS = 8
+#: A motion whose fastest leg is slower than this fraction of its peak somewhere stands
+#: (almost) still there: ``dτ/dt = 1/ρ`` would be unbounded.
+STANDSTILL = 1e-9
+#: Two inputs differing by more than this (relative to the largest input) at a node: the
+#: control jumps there (the splines of ``s_i`` are broken at it).
+JUMP_RTOL = 1e-12
+#: Degree of the splines of the legs' speeds: C⁴ between jumps, so that an accurate
+#: integrator of the re-timed controls (DOP853, order 8) is not slowed or misled at their
+#: knots; the 3-point Gauss rule integrates ``ρ`` exactly on each piece.
+DEGREE = 5
+
+_GAUSS_X, _GAUSS_W = np.polynomial.legendre.leggauss(3)
+
+
+def check_leg_speed(value, mechanism) -> float | None:
+    """``leg_speed`` as :func:`nonholo.plan` takes it: ``None`` (no bound) or a positive
+    finite speed (the geometry's length units per second), for a mechanism with legs;
+    ``ValueError`` naming the argument otherwise."""
+    if value is None:
+        return None
+    if not mechanism.has_legs:
+        raise ValueError(f"leg_speed: mechanism {mechanism.name!r} has no legs (only platforms do)")
+    if not is_number(value) or not math.isfinite(value) or value <= 0:
+        raise ValueError(f"leg_speed must be a positive finite speed (length units per second), got {value!r}")
+    return float(value)
+
+
+def node_count(controls, nodes: int) -> int:
+    """``nodes`` rounded up to a multiple of the controls' grid (1 for smooth controls)."""
+    g = getattr(controls, "grid", None) or 1
+    return -(-nodes // g) * g
+
+
+class TimeMap:
+    """``t(τ)`` and its inverse for controls ``base`` (physical, on ``[0, T]``) played from
+    ``R0`` with every leg at most ``leg_speed`` fast (see the module).
+
+    ``T``: the re-timed duration, ``None`` for the least (:attr:`minimum_time`); a ``T``
+    below it raises ``ValueError`` saying the time needed.
+    """
+
+    def __init__(self, base, R0, mechanism, leg_speed: float, T: float | None = None,
+                 nodes: int = RETIME_NODES):
+        mech = catalog.get(mechanism)
+        self.leg_speed = check_leg_speed(leg_speed, mech)
+        if self.leg_speed is None:
+            raise ValueError("leg_speed must be a positive finite speed, got None")
+        self.nodes = node_count(base, check_count(nodes, "nodes", minimum=2))
+        self.T_base = base.T
+        self._spline, jumps = _speed_spline(base, R0, mech, self.nodes)
+        x = self._spline.x
+        peak = float(np.max(np.abs(self._spline.c[-1])))      # |s_i| at the nodes
+        if not peak > 0.0:
+            raise ValueError("the planned motion never moves a leg: nothing to re-time")
+        kinks = _kinks(self._spline)
+        self.edges = np.unique(np.concatenate([x, kinks]))
+        self.kinks = np.setdiff1d(kinks, x)
+        self.jumps = jumps
+        a, b = self.edges[:-1], self.edges[1:]
+        mid, half = 0.5 * (a + b), 0.5 * (b - a)
+        rho_q = self.ratio(mid[:, None] + half[:, None] * _GAUSS_X[None, :])
+        least = float(np.min(self.ratio(self.edges[:-1])))
+        if not least > STANDSTILL * peak / self.leg_speed or not np.min(rho_q) > 0.0:
+            raise ValueError("the planned motion stands still somewhere (every leg at rest): "
+                             "its re-timing under a speed bound is not defined there")
+        pieces = half * (rho_q @ _GAUSS_W)
+        self._cumulative = np.concatenate([[0.0], np.cumsum(pieces)])
+        self.minimum_time = float(self._cumulative[-1])
+        if T is None:
+            self.scale = 1.0
+        else:
+            T = check_time(T)
+            if T < self.minimum_time * (1.0 - 1e-12):
+                raise ValueError(f"T = {T:.6g} s is too short: the path needs at least "
+                                 f"{self.minimum_time:.6g} s with every leg at most "
+                                 f"{self.leg_speed:g} fast")
+            self.scale = max(T / self.minimum_time, 1.0)
+        self.T = self.minimum_time * self.scale if T is None else T
+        self._t_edges = self._cumulative * self.scale
+        self._t_edges[-1] = self.T
+
+    # -- ρ -----------------------------------------------------------------------------------
+    def ratio(self, tau) -> np.ndarray:
+        """``ρ(τ) = max_i |S_i(τ)| / v``: the planned motion's fastest leg speed over the bound."""
+        tau = np.asarray(tau, dtype=float)
+        return np.max(np.abs(self._spline(tau)), axis=-1) / self.leg_speed
+
+    @property
+    def peak_ratio(self) -> float:
+        """``max ρ`` over the nodes and kinks: above 1, the planned motion breaks the bound."""
+        return float(np.max(self.ratio(self.edges)))
+
+    # -- the map -----------------------------------------------------------------------------
+    def time(self, tau) -> np.ndarray:
+        """``t(τ) = c ∫_0^τ ρ`` (vectorised)."""
+        tau = np.clip(np.asarray(tau, dtype=float), 0.0, self.T_base)
+        p = self._piece(tau, self.edges)
+        return self._t_edges[p] + self.scale * self._integral(self.edges[p], tau)
+
+    def tau(self, t) -> tuple[np.ndarray, np.ndarray]:
+        """``(τ(t), dτ/dt)`` for times ``t`` of the re-timed motion (vectorised)."""
+        t = np.clip(check_times(t), 0.0, self.T)
+        p = self._piece(t, self._t_edges)
+        a, b = self.edges[p], self.edges[p + 1]
+        ta, tb = self._t_edges[p], self._t_edges[p + 1]
+        tau = a + (b - a) * np.where(tb > ta, (t - ta) / np.where(tb > ta, tb - ta, 1.0), 0.0)
+        done = 4.0 * np.finfo(float).eps * self.T_base
+        for _ in range(NEWTON_STEPS):
+            f = ta + self.scale * self._integral(a, tau) - t
+            new = np.clip(tau - f / (self.scale * self.ratio(tau)), a, b)
+            moved = np.max(np.abs(new - tau), initial=0.0)
+            tau = new
+            if moved <= done:
+                break
+        if self.jumps.size:
+            # at a jump the controls take their value after it (as grid controls do at a grid
+            # point): τ rounded to either side of one is put on it, so that u and ρ agree
+            j = np.clip(np.searchsorted(self.jumps, tau), 1, self.jumps.size) - 1
+            for near in (self.jumps[j], self.jumps[np.minimum(j + 1, self.jumps.size - 1)]):
+                tau = np.where(np.abs(tau - near) <= 16.0 * done, near, tau)
+        return tau, 1.0 / (self.scale * self.ratio(tau))
+
+    def _piece(self, x, edges) -> np.ndarray:
+        return np.clip(np.searchsorted(edges, x, side="right") - 1, 0, len(self.edges) - 2)
+
+    def _integral(self, a, tau) -> np.ndarray:
+        """``∫_a^τ ρ`` for ``a ≤ τ`` inside one piece (exact: ``ρ`` is a quintic there)."""
+        half = 0.5 * (tau - a)
+        pts = (a + half)[..., None] + half[..., None] * _GAUSS_X
+        return half * (self.ratio(pts) @ _GAUSS_W)
+
+
+def _speed_spline(base, R0, mech, nodes: int) -> tuple[PPoly, np.ndarray]:
+    """The legs' speeds ``s_i(τ)`` of ``base`` played from ``R0``: splines of degree
+    :data:`DEGREE` through their values at ``nodes`` CF4 nodes, broken where the control
+    jumps (one PPoly with values of shape ``(k,)``), and the jumps' times."""
+    T = base.T
+    U = np.ascontiguousarray(stages.stage_table(base, nodes))
+    sign = float(np.sign(mech.delta(R0))) if mech.has_singular_set else 1.0
+    Rs, done, _, _ = playback.replay(np.asarray(R0, dtype=float), base, T, mech, nodes, sign, U)
+    if done < nodes:
+        raise ValueError("the planned motion runs into a non-finite angular velocity: not re-timed")
+    tau = np.arange(nodes + 1) * (T / nodes)
+    tau[-1] = T
+    right = mech.leg_speeds(Rs[:-1], U[:, 0])          # s_i at the start of each step
+    left = mech.leg_speeds(Rs[1:], U[:, 2])            # … and at its end
+    scale = max(float(np.max(np.abs(U))), 1e-300)
+    jump = np.flatnonzero(np.max(np.abs(U[1:, 0] - U[:-1, 2]), axis=1) > JUMP_RTOL * scale) + 1
+    bounds = np.concatenate([[0], jump, [nodes]])
+    coeffs, knots = [], []
+    for j0, j1 in zip(bounds[:-1], bounds[1:]):
+        x = tau[j0:j1 + 1]
+        y = np.concatenate([right[j0:j1], left[j1 - 1:j1]])
+        k = min(DEGREE, len(x) - 1)
+        legs = [PPoly.from_spline(make_interp_spline(x, y[:, i], k=k)) for i in range(y.shape[1])]
+        real = np.diff(legs[0].x) > 0                   # the B-spline's end knots repeat
+        c = np.zeros((DEGREE + 1, int(real.sum()), y.shape[1]))
+        for i, leg in enumerate(legs):
+            c[DEGREE - k:, :, i] = leg.c[:, real]
+        coeffs.append(c)
+        knots.append(legs[0].x[:-1][real])
+    knots.append([T])
+    return PPoly(np.concatenate(coeffs, axis=1), np.concatenate(knots)), tau[jump]
+
+
+def _kinks(spline: PPoly) -> np.ndarray:
+    """Where two legs are equally fast, ``|S_a| = |S_b|``: the roots of ``S_a ∓ S_b``."""
+    k = spline.c.shape[-1]
+    roots = []
+    for a in range(k):
+        for b in range(a + 1, k):
+            for sign in (-1.0, 1.0):
+                diff = PPoly(spline.c[..., a] + sign * spline.c[..., b], spline.x)
+                r = diff.roots(discontinuity=False, extrapolate=False)
+                roots.append(r[np.isfinite(r)])
+    return np.unique(np.concatenate(roots)) if roots else np.empty(0)
+
+
+class Retimed:
+    """Physical controls ``base`` (on ``[0, T_base]``) played from ``R0`` re-timed so that
+    every leg moves at most ``leg_speed`` fast: ``ũ(t) = u(τ(t)) dτ/dt`` on ``[0, T]``
+    (:class:`TimeMap`; ``T=None``: the least time).
+
+    Evaluates like a control (``u = self(t)``, vectorised); :meth:`tau` maps its times to
+    the planned ones, :meth:`time` back. ``breakpoints``: the re-timed images of the base
+    controls' breakpoints and of the instants where the fastest leg changes (``ũ`` has a
+    kink there).
+    """
+
+    kind = "retimed"
+
+    def __init__(self, base, R0, mechanism, leg_speed: float, T: float | None = None,
+                 nodes: int = RETIME_NODES):
+        if isinstance(base, Retimed):
+            raise ValueError("base is re-timed already: re-time its own base instead")
+        self.mechanism = catalog.get(mechanism)
+        R = np.array(so3.check_rotation(R0, "R0"), dtype=float)
+        R.setflags(write=False)
+        self.R0 = R
+        self.base = base
+        self.map = TimeMap(base, R, self.mechanism, leg_speed, T, nodes)
+        self.T = self.map.T
+
+    @property
+    def leg_speed(self) -> float:
+        return self.map.leg_speed
+
+    @property
+    def n_inputs(self) -> int:
+        return self.base.n_inputs
+
+    @property
+    def params(self) -> np.ndarray:
+        """The base controls' parameters."""
+        return self.base.params
+
+    @property
+    def grid(self) -> None:
+        """Re-timed jumps fall anywhere: no grid to align steps with."""
+        return None
+
+    def tau(self, t) -> tuple[np.ndarray, np.ndarray]:
+        """``(τ(t), dτ/dt)``: the planned time at re-timed times ``t``."""
+        return self.map.tau(t)
+
+    def time(self, tau) -> np.ndarray:
+        """The re-timed time of planned times ``τ``."""
+        return self.map.time(tau)
+
+    def __call__(self, t):
+        scalar = np.ndim(t) == 0
+        tau, rate = self.tau(np.reshape(t, -1))
+        u = np.asarray(self.base(tau), dtype=float).reshape(-1, self.n_inputs) * rate[:, None]
+        return u[0] if scalar else u.reshape(np.shape(t) + (self.n_inputs,))
+
+    @property
+    def breakpoints(self) -> np.ndarray:
+        b = getattr(self.base, "breakpoints", None)
+        inner = [self.map.kinks, self.map.jumps, [0.0, self.base.T]]
+        if b is not None:
+            inner.append(np.asarray(b, dtype=float))
+        out = self.time(np.unique(np.concatenate(inner)))
+        out[0], out[-1] = 0.0, self.T
+        return np.unique(out)
+
+    def to_dict(self) -> dict:
+        return {"kind": self.kind, "T": self.T, "leg_speed": self.leg_speed, "nodes": self.map.nodes,
+                "mechanism": self.mechanism.name, "R0": self.R0.tolist(), "base": self.base.to_dict()}
+
+    def __eq__(self, other) -> bool:
+        return type(self) is type(other) and self.to_dict() == other.to_dict()
+
+    __hash__ = None
+
+    def __repr__(self) -> str:
+        return (f"Retimed({self.base!r} on [0, {self.T:.6g}], every leg at most "
+                f"{self.leg_speed:g} fast)")
+
+
+def from_dict(d: dict, base_from_dict) -> Retimed:
+    """Inverse of :meth:`Retimed.to_dict` (``base_from_dict`` reads the base controls); the
+    time map is rebuilt by the same computation."""
+    return Retimed(base_from_dict(d["base"]), d["R0"], d["mechanism"], d["leg_speed"], T=d["T"],
+                   nodes=d["nodes"])

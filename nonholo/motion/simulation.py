@@ -1,0 +1,232 @@
+"""Simulation of ``dR/dt = [L(R) u] R`` on SO(3) and of its variational system (9).
+
+Conventions: spatial angular velocity ``ω = L(R) u`` (``dR/dt = [ω] R``), time in
+seconds, rotations as 3×3 matrices. Variations are spatial too: ``∂R/∂θ = [s] R``.
+
+The integrator is the 4th-order commutator-free Lie-group method CF4 with a fixed step
+``h = T/steps`` (see :mod:`nonholo.integrate.cf4`): ``R`` is updated by products of Rodrigues
+exponentials, so ``|RᵀR − I|`` stays at round-off level. Its discretisation error
+against DOP853 is measured by ``python -m benchmarks.bench_plan``
+(``benchmarks/results/bench_plan.md``).
+
+The variational system ``ds/dt = A s + B ∂u/∂θ``, ``A = Q(R, u) + [L(R) u]``, ``B = L(R)``
+is integrated alongside through ``Z(t) = Φ(t, 0)^{-1}``: :func:`variational` returns
+``Φ(T, t_n) = Z(T)^{-1} Z(t_n)``, the mobility matrix
+``M(T) = ∫ Φ(T,t) B Bᵀ Φ(T,t)ᵀ dt`` (by quadrature; :func:`nonholo.certify.resimulate.mobility_lyapunov`
+solves the Lyapunov equation instead), and for a parametrised control ``u = u(λ)`` the
+Jacobian ``J = ∂s_T/∂λ = ∫ Φ(T,t) B(t) ∂u/∂λ(t) dt``.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..controls import stages
+from ..controls.parametrisations import Controls
+from ..model import catalog
+from ..numerics.checks import MAX_STEPS, check_count, check_time
+from ..spaces import state as states
+
+#: Default number of CF4 steps on ``[0, T]``: chosen so that on the examples of MODEL.md
+#: (``T = 1``) the endpoint is within the planner's 1e-10 rad of a DOP853 solution
+#: (``benchmarks/results/bench_plan.md``). The method has order 4: the error grows like
+#: ``(h |ω|)⁴``, so larger inputs need more steps.
+DEFAULT_STEPS = 400
+
+#: ``simulate`` stops (with :class:`SingularTrajectoryError`) where ``|Δ|`` falls below this.
+DELTA_STOP = 1e-9
+
+
+class SingularTrajectoryError(ValueError):
+    """The trajectory reached the singular surface ``Δ = 0`` (or ``ω`` became non-finite).
+
+    ``trajectory`` holds the part simulated before that happened.
+    """
+
+    def __init__(self, message: str, trajectory: "Trajectory"):
+        super().__init__(message)
+        self.trajectory = trajectory
+
+
+@dataclass(frozen=True)
+class Trajectory:
+    """Samples of a simulated motion at ``t_n = n T/steps``.
+
+    ``R`` has shape ``(n, 3, 3)``, ``u`` shape ``(n, m)`` (the inputs at ``t_n``, with
+    piecewise-constant controls the value on ``[t_n, t_{n+1})``), ``delta`` shape ``(n,)``
+    (``Δ(R(t_n))``, ``None`` for mechanisms without a singular set). ``min_delta`` is the
+    least ``|Δ|`` over every point where the integrator evaluated ``L`` (``None`` without a
+    singular set). ``q`` ``(n, k)``: the coordinates of a state beyond SO(3) (``None`` on
+    SO(3); ``R`` is then the identity throughout for a state without orientation).
+    """
+
+    t: np.ndarray
+    R: np.ndarray
+    u: np.ndarray
+    delta: np.ndarray | None
+    min_delta: float | None
+    mechanism: str
+    T: float
+    steps: int
+    q: np.ndarray | None = None
+
+    @property
+    def R_T(self) -> np.ndarray:
+        """The endpoint ``R(T)``."""
+        return self.R[-1]
+
+
+@dataclass(frozen=True)
+class Variational:
+    """The trajectory with the variational system (9) along it (see :func:`variational`).
+
+    ``Z[n] = Φ(t_n, 0)^{-1}``; ``M`` is the mobility matrix ``M(T)``; ``J`` the Jacobian
+    ``∂s_T/∂λ`` (3 × len(λ)) of parametrised controls (``None`` for a plain ``u(t)``).
+    """
+
+    trajectory: Trajectory
+    Z: np.ndarray
+    M: np.ndarray
+    J: np.ndarray | None
+
+    @property
+    def Phi(self) -> np.ndarray:
+        """``Φ(T, t_n)`` for every sample, shape ``(n, 3, 3)``."""
+        return np.linalg.inv(self.Z[-1]) @ self.Z          # Φ(T, 0) Φ(t_n, 0)^{-1}
+
+
+def stage_table(controls, T: float, steps: int, n_inputs: int) -> np.ndarray:
+    """The integrator's input table ``U`` (``(steps, 3, m)``, see :mod:`nonholo.numerics.kernels`).
+
+    ``controls`` is a :class:`~nonholo.controls.parametrisations.Controls` or a
+    :class:`~nonholo.motion.frame_controls.FrameControls` (its ``T`` must equal ``T``) or a vectorised function ``u(t)``, ``t (n,) -> (n, m)``, evaluated at the stage times (use
+    a ``Controls`` for discontinuous inputs: it keeps each step on one side of a jump).
+    """
+    T = check_time(T)
+    steps = check_count(steps, "steps", maximum=MAX_STEPS)
+    if hasattr(controls, "stage_table") or isinstance(controls, Controls):
+        if controls.T != T:
+            raise ValueError(f"the controls are defined on [0, {controls.T:g}], not on [0, {T:g}]")
+        U = stages.stage_table(controls, steps)
+    elif callable(controls):
+        t = stages.stage_times(T, steps).ravel()
+        U = np.asarray(controls(t), dtype=float)
+        if U.ndim == 1 and n_inputs == 1:
+            U = U[:, None]
+        if U.shape != (3 * steps, n_inputs):
+            raise ValueError(
+                f"controls(t) must return shape (len(t), {n_inputs}) for t of shape (n,); "
+                f"got {U.shape} for n = {3 * steps}")
+        U = U.reshape(steps, 3, n_inputs)
+    else:
+        raise ValueError("controls must be a nonholo.controls.parametrisations.Controls or a function u(t)")
+    if U.shape[2] != n_inputs:
+        raise ValueError(f"the controls have {U.shape[2]} inputs, the mechanism has {n_inputs}")
+    if not np.all(np.isfinite(U)):
+        raise ValueError("the controls have non-finite values")
+    return np.ascontiguousarray(U, dtype=float)
+
+
+def _sign_of_delta(kern, mech, R0, q0) -> float:
+    if not kern.has_singular_set:
+        return 1.0
+    d0 = float(mech.delta_samples(R0[None], q0[None])[0])
+    if d0 == 0.0:
+        raise ValueError("R0 lies on the singular surface Δ(R) = 0, where L(R) is undefined"
+                         if not mech.beyond_so3 else
+                         "the start lies on the singular set Δ = 0, where G is undefined")
+    return float(np.sign(d0))
+
+
+def _trajectory(mech, Rs, U, T, steps, n, dmin, sgn, Qs=None) -> Trajectory:
+    h = T / steps
+    t = np.arange(n + 1) * h
+    if n == steps:
+        t[-1] = T
+    u = np.concatenate([U[:n, 0], U[steps - 1:steps, 2]]) if n == steps else U[:n + 1, 0]
+    R = Rs[:n + 1].copy()
+    q = None if Qs is None or not mech.beyond_so3 else Qs[:n + 1].copy()
+    return Trajectory(t=t, R=R, u=u.copy(), delta=mech.delta_samples(R, q),
+                      min_delta=(float(dmin) if mech.has_singular_set else None),
+                      mechanism=mech.name, T=T, steps=steps, q=q)
+
+
+def _stopped(mech, n, t_stop, dmin, sgn, traj) -> SingularTrajectoryError:
+    if mech.has_singular_set and dmin <= 0.0:
+        why = ("reaches the singular surface Δ = 0 (Δ changes sign between two integrator "
+               "points: |ω| ~ 1/|Δ| blows up there)")
+    elif mech.has_singular_set and dmin < DELTA_STOP:
+        why = f"reaches the singular surface Δ = 0 (|Δ| = {dmin:.3g})"
+    else:
+        why = "produces a non-finite angular velocity"
+    return SingularTrajectoryError(f"the trajectory {why} at t ≈ {t_stop:.6g} s", traj)
+
+
+def _setup(R0, controls, T, mechanism, steps):
+    """Checked inputs of a simulation: the mechanism, the start ``(R0, q0)``
+    (:func:`nonholo.spaces.state.parse`), ``T``, ``steps``, its kernels, ``sgn Δ`` at the start and
+    the controls' stage table."""
+    mech = catalog.get(mechanism)
+    R0, q0 = states.parse(mech, R0, "R0")
+    T = check_time(T)
+    steps = check_count(steps, "steps", maximum=MAX_STEPS)
+    kern = mech.kernels()
+    sgn = _sign_of_delta(kern, mech, R0, q0)
+    return mech, (R0, q0), T, steps, kern, sgn, stage_table(controls, T, steps, mech.n_inputs)
+
+
+def simulate(R0, controls, T: float, *, mechanism="platform",
+             steps: int = DEFAULT_STEPS) -> Trajectory:
+    """Solve ``dR/dt = [L(R) u(t)] R``, ``R(0) = R0`` on ``[0, T]`` with ``steps`` CF4 steps.
+
+    ``R0``: the start — a rotation matrix, or for a mechanism whose state goes beyond
+    SO(3) its coordinates ``q0`` or the pair ``(R0, q0)`` (:func:`nonholo.spaces.state.parse`;
+    the trajectory's ``q`` holds the coordinates). ``controls``: a :class:`~nonholo.controls.parametrisations.Controls`, a
+    :class:`~nonholo.motion.frame_controls.FrameControls` or a vectorised ``u(t)``; ``mechanism``: a
+    :class:`~nonholo.model.mechanism.Mechanism` or its name.
+    Raises ``ValueError`` for a bad ``R0``/``T``/``steps``/controls and
+    :class:`SingularTrajectoryError` if the motion runs into ``Δ = 0``.
+    """
+    mech, (R0, q0), T, steps, kern, sgn, U = _setup(R0, controls, T, mechanism, steps)
+    Rs, Qs = states.buffers(mech, steps)
+    n, dmin, t_stop = states.forward(mech, kern, R0, q0, U, T / steps, sgn, DELTA_STOP, Rs, Qs)
+    traj = _trajectory(mech, Rs, U, T, steps, n, dmin, sgn, Qs)
+    if n < steps:
+        raise _stopped(mech, n, t_stop, dmin, sgn, traj)
+    return traj
+
+
+def variational(R0, controls, T: float, *, mechanism="platform",
+                steps: int = DEFAULT_STEPS) -> Variational:
+    """Simulate and integrate the variational system (9) along the motion.
+
+    Returns a :class:`Variational` with ``Φ(T, t_n)`` (``.Phi``), ``M(T)`` (``.M``) and,
+    when ``controls`` is a :class:`~nonholo.controls.parametrisations.Controls` linear in its parameters
+    (Fourier or grid controls),
+    ``J = ∂s_T/∂λ`` (``.J``):
+    for a change ``δλ`` of the parameters the endpoint moves to ``exp([J δλ]) R_T`` to
+    first order. For grid controls the columns ``(j, i)`` of ``J`` are the
+    ``G_j = ∫_{I_j} Φ(T,t) B(t) dt`` of the nonparametric update.
+    """
+    mech, (R0, q0), T, steps, kern, sgn, U = _setup(R0, controls, T, mechanism, steps)
+    d = mech.n_rates
+    linear = isinstance(controls, Controls)
+    if linear:
+        basis = stages.sparse_basis(controls, steps)
+        J = np.empty((d, controls.params.size))
+    else:
+        # no parameters: an empty basis (the kernel then skips the Jacobian)
+        basis = (np.zeros((steps, 3, 0), np.int64), np.zeros((steps, 3, 0)), 0, 0)
+        J = np.empty((d, 0))
+    Rs, Qs = states.buffers(mech, steps)
+    Zs = np.empty((steps + 1, d, d))
+    M = np.empty((d, d))
+    n, dmin, t_stop = states.forward_variational(mech, kern, R0, q0, U, T / steps, sgn, DELTA_STOP,
+                                                 basis, Rs, Qs, Zs, J, M,
+                                                 np.empty((0, d * mech.n_inputs)), True)
+    traj = _trajectory(mech, Rs, U, T, steps, n, dmin, sgn, Qs)
+    if n < steps:
+        raise _stopped(mech, n, t_stop, dmin, sgn, traj)
+    return Variational(trajectory=traj, Z=Zs, M=M, J=J if linear else None)
+

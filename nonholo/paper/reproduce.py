@@ -1,0 +1,280 @@
+"""The main job: check the generated code, audit the appendix, solve the examples, draw.
+
+``nonholo reproduce`` (see :func:`run`) writes into ``paper_figures/``:
+
+- the figures of the mechanism, its singular set and of every example (PNG and PDF);
+- an animation of the platform through Example 3 (GIF);
+- ``global_route``: a far goal (:data:`FAR_GOAL`) that the local planner misses, reached
+  by the global route (figure, and ``plans/far_goal.json``);
+- ``leg_limits``: a goal (:data:`LIMITS_GOAL`) planned without and with the legs' stroke
+  limits :data:`LEG_LENGTH` (figure; ``plans/leg_limits.json`` and ``plans/leg_limits.csv``,
+  the motion for an actuator controller);
+- ``motion_quality``: the same goal's default plan, its least-energy plan
+  (``objective="energy"``) and the plan re-timed in the least time under the legs' speed
+  bound :data:`LEG_SPEED` (figure; ``plans/least_time.json`` and ``plans/least_time.csv``);
+- ``plans/example<k>_<method>.json``: every planned result (reload with
+  :meth:`nonholo.io.result.PlanResult.load`);
+- ``summary.json``: one object per (example, method) with ``example``, ``method``,
+  ``strategy``, ``success``, ``iterations``, ``terminal_error`` (after independent
+  re-simulation with DOP853), ``planner_error`` (the planner's own ``|l_T|``),
+  ``min_delta``, ``seconds``, ``reason``; and ``summary.md``, the same as a table.
+
+The run fails (exit status 1) when the generated code is stale or Example 1 or 2 fails.
+"""
+from __future__ import annotations
+
+import json
+import sys
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from ..certify import resimulate as verify
+from ..model import catalog
+from ..planning.api import STRATEGIES, plan
+from ..planning.retime import retime
+from ..spaces import so3
+from ..viz import figures, state_figures
+from . import examples as _examples
+
+DEFAULT_OUTDIR = Path("paper_figures")
+#: Re-simulated terminal error required of Examples 1 and 2 (rad).
+RESIM_TOL = 1e-8
+#: A far goal (RPY of start and goal, rad; 2.76 rad apart) that the local planner misses
+#: and the global route reaches: the first pair of the 1.8–π band of
+#: ``benchmarks.goalset.band_pairs("platform", 500)``, rounded.
+FAR_GOAL = ((-1.918, 0.336, -2.521), (1.433, -0.813, 1.324))
+#: A goal (RPY angles of start and goal) whose plan without limits takes leg 1 below 1.2,
+#: planned again with :data:`LEG_LENGTH` (figure ``leg_limits``, ``plans/leg_limits.json``
+#: and ``.csv``).
+LIMITS_GOAL = ((0.5, 1.2, -0.5), (-0.4527, 1.4094, -1.3638))
+LEG_LENGTH = (1.2, 2.0)
+#: The legs' speed bound the same goal's default plan is re-timed under (figure
+#: ``motion_quality``, ``plans/least_time.json`` and ``.csv``), geometry units per second.
+LEG_SPEED = 0.5
+
+
+def strongest_strategy() -> str:
+    """``"robust"`` when the project has it, else ``"paper"``."""
+    return "robust" if "robust" in STRATEGIES else "paper"
+
+
+@dataclass
+class Solved:
+    example: _examples.Example
+    result: object  # PlanResult
+    resim_error: float | None
+
+    @property
+    def ok(self) -> bool:
+        return bool(self.result.success and self.resim_error is not None
+                    and self.resim_error <= RESIM_TOL)
+
+    def summary(self) -> dict:
+        r = self.result
+        return {"example": self.example.number, "method": r.method, "strategy": r.strategy,
+                "success": self.ok, "iterations": r.iterations,
+                "terminal_error": self.resim_error, "planner_error": r.terminal_error,
+                "min_delta": r.min_delta, "seconds": round(r.seconds, 4), "reason": r.reason}
+
+
+def _log(msg: str) -> None:
+    print(msg, file=sys.stderr, flush=True)
+
+
+def solve(example: _examples.Example, method: str, strategy: str) -> Solved:
+    """Plan one example with one method and re-simulate the plan independently."""
+    result = plan(example.R_start, example.R_goal, T=example.T, method=method,
+                  harmonics=example.harmonics, strategy=strategy)
+    resim = None
+    if len(result.R):
+        R_T = verify.resimulate(example.R_start, result.controls, example.T,
+                                mechanism=result.mechanism, breakpoints=result.breakpoints)
+        resim = verify.terminal_error(R_T, example.R_goal)
+    return Solved(example, result, resim)
+
+
+def solve_all(progress=_log) -> list[Solved]:
+    """Every example with each of its methods (Example 3: the strongest strategy)."""
+    jobs = [(ex, m, "paper" if ex.must_succeed else strongest_strategy())
+            for ex in _examples.examples() for m in ex.methods]
+    solved = []
+    for k, (ex, method, strategy) in enumerate(jobs, 1):
+        progress(f"[{k}/{len(jobs)}] {ex.title}: {method}, strategy {strategy} ...")
+        s = solve(ex, method, strategy)
+        r = s.result
+        err = "n/a" if s.resim_error is None else f"{s.resim_error:.2e}"
+        md = "n/a" if r.min_delta is None else f"{r.min_delta:.3f}"
+        progress(f"      {'ok' if s.ok else 'FAILED'}: {r.iterations} iterations, "
+                 f"re-simulated |l_T| = {err}, min |Δ| = {md}, {r.seconds:.3f} s"
+                 + ("" if s.ok else f" ({r.reason})"))
+        solved.append(s)
+    return solved
+
+
+#: The classic problems of the mechanisms beyond SO(3) (start, goal): the ball turned by
+#: π/2 about a horizontal axis in place, the car parked one wheelbase sideways.
+#: Options of each such card's plan: the ball's default plan rolls 12 radii out and back;
+#: the paper's strategy with four harmonics finds one within 2 radii (a fraction of the
+#: default's energy ∫|v|² dt), the motion one wants to see.
+STATE_OPTIONS = {"rolling_ball": {"strategy": "paper", "harmonics": 4}, "car": {}}
+STATE_PROBLEMS = {
+    "rolling_ball": ((so3.from_rpy(0.4, -0.3, 0.2), (0.0, 0.0)),
+                     (so3.exp(np.array([np.pi / 2, 0.0, 0.0])) @ so3.from_rpy(0.4, -0.3, 0.2), (0.0, 0.0))),
+    "car": ((0.0, 0.0, 0.0, 0.0), (0.0, 1.0, 0.0, 0.0)),
+}
+
+
+def mechanism_cards():
+    """``(figure, stem)`` of every mechanism: the platforms at a regular pose with their
+    singular sets, the others with a planned motion (RPY(0.1, 0.2, 0.3) → RPY(0.8, -0.4, 0.5))."""
+    for name in catalog.names():
+        mech = catalog.get(name)
+        if mech.beyond_so3:
+            start, goal = STATE_PROBLEMS[name]
+            draw = state_figures.ball_figure if mech.orientation else state_figures.car_figure
+            yield draw(plan(start, goal, mechanism=name, **STATE_OPTIONS[name])), f"mechanism_{name}"
+        elif mech.geometry is not None:
+            R = np.eye(3) if abs(float(mech.delta(np.eye(3)))) > 0.1 else _examples.get(1).R_start
+            psi = float(so3.as_rpy(R)[2])
+            yield figures.mechanism_card_figure(name, R=R, psi_slice=psi), f"mechanism_{name}"
+        else:
+            result = plan(so3.from_rpy(0.1, 0.2, 0.3), so3.from_rpy(0.8, -0.4, 0.5), mechanism=name)
+            yield figures.mechanism_card_figure(name, result=result), f"mechanism_{name}"
+
+
+def plan_limits_goal():
+    """:data:`LIMITS_GOAL` planned with the defaults, without and with ``leg_length=LEG_LENGTH``."""
+    R0, Rd = (so3.from_rpy(*a) for a in LIMITS_GOAL)
+    return plan(R0, Rd), plan(R0, Rd, leg_length=LEG_LENGTH)
+
+
+def plan_quality(free):
+    """:data:`LIMITS_GOAL` planned with ``objective="energy"``, and ``free`` (its default plan)
+    re-timed in the least time under :data:`LEG_SPEED`."""
+    R0, Rd = (so3.from_rpy(*a) for a in LIMITS_GOAL)
+    return plan(R0, Rd, objective="energy"), retime(free, LEG_SPEED)
+
+
+def plan_far_goal():
+    """:data:`FAR_GOAL` planned by :func:`nonholo.plan` with its defaults."""
+    return plan(so3.from_rpy(*FAR_GOAL[0]), so3.from_rpy(*FAR_GOAL[1]))
+
+
+def write_figures(solved: list[Solved], outdir: Path, progress=_log) -> list[Path]:
+    """All figures of the mechanism, the singular set and the examples."""
+    written: list[Path] = []
+
+    def save(fig, stem):
+        written.extend(figures.save_figure(fig, stem, outdir))
+        progress(f"      wrote {stem}.png/.pdf")
+
+    exs = _examples.examples()
+    for fig, stem in mechanism_cards():
+        save(fig, stem)
+    ex1 = _examples.get(1)  # its start and goal lie in the slice ψ = -0.5 drawn on the right
+    marks = {"Example 1 start": (*ex1.rpy_start[:2], "o"),
+             "Example 1 goal": (*ex1.rpy_goal[:2], "X")}
+    save(figures.singular_set_figure(psi_slice=ex1.rpy_start[2], marks=marks), "singular_set")
+    save(figures.singular_slices_figure(), "singular_set_slices")
+    save(figures.normal_form_figure(), "normal_form")
+    for ex in exs:
+        save(figures.mechanism_figure(ex.R_start, ex.R_goal, title=f"{ex.title}: start and goal"),
+             f"example{ex.number}_mechanism")
+        results = [s.result for s in solved if s.example.number == ex.number and len(s.result.R)]
+        if not results:
+            continue
+        stem = f"example{ex.number}"
+        save(figures.example_overview_figure(results, title=f"{ex.title} ({ex.description})"),
+             f"{stem}_overview")
+        save(figures.convergence_figure(results), f"{stem}_convergence")
+        save(figures.controls_figure(results), f"{stem}_controls")
+        save(figures.rpy_figure(results), f"{stem}_rpy")
+        save(figures.leg_lengths_figure(results), f"{stem}_leg_lengths")
+        save(figures.delta_figure(results), f"{stem}_delta")
+    far = plan_far_goal()
+    if far.route == "global":
+        save(figures.global_route_figure(far), "global_route")
+    else:
+        progress(f"      note: the far goal took the {far.route} route ({far.reason[:120]}); no global_route figure")
+    (outdir / "plans").mkdir(parents=True, exist_ok=True)
+    far.save(outdir / "plans" / "far_goal.json")
+    free, limited = plan_limits_goal()
+    if free.success and limited.success:
+        save(figures.leg_limits_figure(free, limited), "leg_limits")
+        limited.save(outdir / "plans" / "leg_limits.json")
+        limited.to_csv(outdir / "plans" / "leg_limits.csv", rate=100)
+        progress("      wrote plans/leg_limits.json and plans/leg_limits.csv")
+    else:
+        progress(f"      note: the stroke-limits goal was not solved ({limited.reason[:120]}); no leg_limits figure")
+    if free.success:
+        cheap, fast = plan_quality(free)
+        save(figures.motion_quality_figure(free, cheap, fast), "motion_quality")
+        fast.save(outdir / "plans" / "least_time.json")
+        fast.to_csv(outdir / "plans" / "least_time.csv", rate=100)
+        progress("      wrote plans/least_time.json and plans/least_time.csv")
+    ex3 = [s for s in solved if s.example.number == 3 and len(s.result.R)]
+    if ex3:
+        gif = outdir / "example3_animation.gif"
+        figures.animate_platform(ex3[0].result, gif)
+        written.append(gif)
+        progress(f"      wrote {gif.name}")
+    return written
+
+
+def summary_table(rows: list[dict]) -> str:
+    """Markdown table of the summary rows."""
+    head = ("| example | method | strategy | success | iterations | re-simulated ‖l_T‖ [rad] "
+            "| min \\|Δ\\| | time [s] |\n|---|---|---|---|---|---|---|---|")
+    lines = [head]
+    for r in rows:
+        err = "–" if r["terminal_error"] is None else f"{r['terminal_error']:.1e}"
+        md = "–" if r["min_delta"] is None else f"{r['min_delta']:.3f}"
+        lines.append(f"| {r['example']} | {r['method']} | {r['strategy']} | "
+                     f"{'yes' if r['success'] else 'no'} | {r['iterations']} | {err} | {md} | "
+                     f"{r['seconds']:.3f} |")
+    return "\n".join(lines)
+
+
+def run(outdir: Path = DEFAULT_OUTDIR, audit: bool = True, draw: bool = True) -> int:
+    """The whole job; returns the exit status."""
+    from derivations import audit as _audit
+    from derivations import codegen
+
+    t0 = time.perf_counter()
+    outdir = Path(outdir)
+    outdir.mkdir(parents=True, exist_ok=True)
+    _log("checking that the generated modules match a fresh derivation ...")
+    stale = codegen.check()
+    if stale:
+        for path, _ in stale:
+            _log(f"stale generated module: {path} (run `nonholo derive`)")
+        return 1
+    if audit:
+        _log("auditing the appendix against the derivation ...")
+        print(_audit.format_table(_audit.run()), flush=True)
+    _log("solving the examples ...")
+    solved = solve_all()
+    plans = outdir / "plans"
+    plans.mkdir(exist_ok=True)
+    for s in solved:
+        s.result.save(plans / f"example{s.example.number}_{s.result.method}.json")
+    rows = [s.summary() for s in solved]
+    (outdir / "summary.json").write_text(json.dumps(rows, indent=2) + "\n")
+    (outdir / "summary.md").write_text(summary_table(rows) + "\n")
+    print(summary_table(rows), flush=True)
+    if draw:
+        _log("drawing the figures ...")
+        write_figures(solved, outdir)
+    failed = [s for s in solved if s.example.must_succeed and not s.ok]
+    for s in solved:
+        if not s.example.must_succeed and not s.ok:
+            _log(f"note: {s.example.title} not solved by strategy {s.result.strategy!r}: "
+                 f"{s.result.reason}")
+    _log(f"done in {time.perf_counter() - t0:.1f} s; outputs in {outdir}/")
+    if failed:
+        _log("FAILED: " + ", ".join(f"{s.example.title} ({s.result.method})" for s in failed))
+        return 1
+    return 0

@@ -1,0 +1,81 @@
+"""Paths of states beyond SO(3) for the global route (:mod:`nonholo.planning.route`).
+
+A state is a pair ``(R, q)`` (:mod:`nonholo.spaces.state`). The straight path from ``a`` to ``b``
+moves the orientation along its geodesic and the coordinates along their difference
+(angles the short way round), both at constant rate:
+
+    ``R(s) = exp(s·log(R_b R_aᵀ)) R_a``,  ``q(s) = q_a + s·(q_b ⊖ q_a)``,  ``s ∈ [0, 1]``.
+
+It is the global route's path for mechanisms beyond SO(3): there the local planner's
+difficulty is distance (a car told to go 60 lengths away), not topology. The component
+of the start is then what the path must keep to: every sample of the path (:data:`SAMPLES_PER_HOP`
+a hop) keeps ``sgnΔ`` at least ``delta_min``, else there is no straight path. For the car
+(``Δ = cos φ``) the straight path is always clear when its ends are, since ``φ(s)`` stays
+between theirs; a mechanism whose component is not convex in its coordinates would need a
+roadmap of it, which this module does not build.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..spaces import state
+from . import roadmap
+
+#: The longest hop of a straight path, in the stacked error's norm (rad and the
+#: mechanism's units): goals this far are ones the local planner reaches reliably.
+MAX_HOP = 4.0
+#: The largest sensitivity of a hop the global route keeps beyond SO(3) (a larger one is
+#: split). On SO(3) a hop's sensitivity grows with its closeness to ``Δ = 0`` and the
+#: stitched motion multiplies its hops' (:data:`nonholo.planning.route.MAX_HOP_SENSITIVITY`);
+#: a straight path of states keeps away from ``Δ = 0`` by construction, and a hop's
+#: sensitivity grows with its length as a lever arm (a heading error ``δθ`` moves a car's
+#: end by about its distance times ``δθ``), which the stitched motion adds up rather than
+#: multiplies.
+MAX_HOP_SENSITIVITY = 100.0
+#: Seconds of effort (:mod:`nonholo.numerics.effort`) the global route may take beyond SO(3), from
+#: its start: a long straight path has many hops.
+TIME_BUDGET = 5.0
+#: Points of a hop at which the path's ``sgnΔ`` is checked.
+SAMPLES_PER_HOP = 16
+
+
+def interpolate(mechanism, a, b, s) -> list[tuple[np.ndarray, np.ndarray]]:
+    """The states of the straight path ``a → b`` (pairs ``(R, q)``) at the fractions ``s``."""
+    (Ra, qa), (Rb, qb) = a, b
+    s = np.atleast_1d(np.asarray(s, dtype=float))
+    if mechanism.orientation:
+        R = roadmap.geodesic(Ra, Rb, s)
+    else:
+        R = np.broadcast_to(state.IDENTITY, (s.size, 3, 3))
+    step = state.coordinate_difference(mechanism, qb, qa)
+    return [(np.array(R[i]), qa + s[i] * step) for i in range(s.size)]
+
+
+def midpoint(mechanism, a, b) -> tuple[np.ndarray, np.ndarray]:
+    """The state halfway along the straight path ``a → b``."""
+    return interpolate(mechanism, a, b, [0.5])[0]
+
+
+def length(mechanism, a, b) -> float:
+    """The straight path's length: the norm of the stacked error between its ends."""
+    return state.distance(mechanism, *a, *b)
+
+
+def straight_path(mechanism, a, b, *, delta_min: float, max_hop: float = MAX_HOP) -> list | None:
+    """The straight path ``a → b`` as its ends and inner points, hops of at most ``max_hop``
+    (``(R, q)`` pairs, ``a`` first, ``b`` last); ``None`` where a sample of it has ``sgnΔ <
+    delta_min`` (the sign of ``Δ`` at ``a``)."""
+    hops = max(1, math.ceil(length(mechanism, a, b) / max_hop))
+    if mechanism.has_singular_set:
+        s = np.linspace(0.0, 1.0, hops * SAMPLES_PER_HOP + 1)
+        points = interpolate(mechanism, a, b, s)
+        R = np.stack([p[0] for p in points])
+        q = np.stack([p[1] for p in points])
+        d = mechanism.delta_samples(R, q)
+        sign = np.sign(d[0])
+        if sign == 0.0 or not np.all(sign * d >= delta_min):
+            return None
+    inner = interpolate(mechanism, a, b, np.arange(1, hops) / hops) if hops > 1 else []
+    return [a, *inner, b]

@@ -1,0 +1,454 @@
+"""Strategy ``"robust"`` (the default of :func:`nonholo.plan`).
+
+The task is that of :mod:`nonholo.planning.core`: steer ``dR/dt = [L(R) u] R`` from ``R0`` to
+``R_d`` in time ``T`` while ``sgn(Δ(R0))·Δ ≥ delta_min`` along the motion (``|L| ~ 1/|Δ|``:
+on ``Δ = 0`` the legs lose control of the platform). Goals across ``Δ = 0`` are rejected
+by :func:`nonholo.plan` before anything is simulated. The appendix's θ-flow is
+kept — Euler steps ``λ ← λ − γh d`` with ``d`` the minimum-norm solution of ``J d = l_T``
+(``γ = 1`` unless the caller sets it, :attr:`RobustStrategy.default_gamma`: a step asks for
+the whole error, a damped Newton step), halved on rejection, full Newton steps once
+``|l_T| < newton_below``, a step accepted only if it reaches ``T`` with ``|Δ| ≥ delta_min``
+at every integrator point and lowers ``|l_T|`` — with these ingredients:
+
+1. **Frame coordinates.** The control planned is ``w`` in ``ω = N(R) w``, ``N(R)`` the
+   orthonormal frame of admissible angular velocities of the generated module (platform:
+   constant, ``ω = w_1 (−e_1 + e_2)/√2 + w_2 e_3``): the kernels integrate ``N`` and
+   ``QN`` (:meth:`nonholo.model.mechanism.Mechanism.kernels` with ``frame=True``), ``Δ`` is still monitored, and
+   the minimum norm is taken in ``w`` (Euclidean on its Fourier coefficients, L2 on the
+   grid). In the physical inputs the metric degenerates near ``Δ = 0`` — ``L ~ 1/Δ``
+   makes angular velocity cheap there, so minimum-norm steps steer into the singular
+   surface; in ``w`` every admissible ``ω`` costs its size. The physical leg rates are
+   ``u = W(R) w`` (``W = (NᵀL)^{-1}``, polynomial), evaluated along the planned motion by
+   :class:`~nonholo.motion.frame_controls.FrameControls`, which is what the result's ``controls(t)``
+   returns. Mechanisms without a frame are planned in ``u`` with the
+   other ingredients; for the attitude mechanism ``N = L`` and nothing changes but the
+   strategy's other ingredients.
+2. **Initial guesses, restarts.** First the drift guess: ``w = w̄ + 0.3 (sin ωt, cos ωt)``
+   with ``w̄ = N(R0)^# log(R_d R0ᵀ)/T`` (the admissible part of the geodesic; the loop
+   keeps the control regular — ``w ≡ const`` gives ``rank J = 2``). Then, when an attempt
+   fails (a step below ``min_step``), stalls (``|l_T|`` down by less than 3 % in 5 steps)
+   or uses its 60 steps: the loop alone, a larger loop (amplitude 1, phase π/2), the drift
+   guess with K+1 and K+2 harmonics, and 6 seeded random Fourier ``w`` (RMS 0.2–1.5 rad/s,
+   K and K+2 harmonics). A caller's ``u0`` (physical) is converted (:func:`to_frame`) and
+   tried first. ``max_iter`` bounds the accepted steps of all attempts together.
+3. **Null-space barrier.** On flow steps whose trajectory comes within ``d₀ = 0.1`` of
+   ``Δ = 0``, the step direction gets ``β|d| g/|g|`` (``β = 2``), ``g`` the projection on
+   the null space of ``J`` of the descent direction of ``φ = Σ_n h ψ(sgnΔ(R(t_n)))``,
+   ``ψ(d) = −log(d/d₀)`` below ``d₀``: ``l_T`` is unchanged to first order, the motion
+   moves away from the singular surface. ``∇φ`` needs the sensitivity of the
+   intermediate states, ``s_n = Z_n^{-1} ∫_0^{t_n} Z B P dt``, obtained in one backward
+   pass from the ``Z(t_n)`` and the stage weights the kernel stores
+   (:func:`barrier_gradient`).
+4. **Accuracy.** After convergence the integrator's error at ``R(T)`` is estimated by
+   Richardson (``N`` vs ``2N`` steps); above 1e-9 rad the grid is doubled (up to 6400
+   steps) and Newton steps re-converge (:meth:`RobustStrategy.refine`). Then the plan is
+   certified (:mod:`nonholo.planning.certification`): its physical inputs are replayed,
+   corrected if the replay misses, and a plan that cannot be certified counts as a failed
+   attempt — the next initial guess is tried.
+5. **Conditioning.** The certificate carries ``sensitivity = max_t |Φ(T,t)|_F`` of the
+   *physical* system along the plan (the factor by which an error at ``t`` is amplified
+   at ``T`` when ``u(t)`` is replayed open loop). A certified plan above
+   :attr:`RobustStrategy.max_sensitivity` is kept only if no later attempt converges to a
+   better-conditioned one (then the reason says so); one too ill-conditioned for ``tol``
+   is not certified at all.
+
+What each ingredient buys, and the strategy's speed and success rates, are measured by
+``python -m benchmarks.bench_robust`` (``benchmarks/results/bench_robust.md``; with
+``--ingredients``: ``bench_robust_ingredients.md``).
+"""
+from __future__ import annotations
+
+from typing import Iterator
+
+import numpy as np
+
+from ..controls import stages
+from ..controls.parametrisations import (
+    Controls,
+    Fourier,
+    PiecewiseConstant,
+    fourier_basis,
+)
+from ..model.limits import BARRIER_CLEARANCE
+from ..motion.simulation import DELTA_STOP, SingularTrajectoryError, simulate
+from ..numerics import kernels
+from ..spaces import so3
+from ..spaces import state as states
+from .certification import certify
+from .certification import note as certificate_note
+from .core import (
+    Evaluation,
+    Outcome,
+    Problem,
+    Start,
+    Strategy,
+    descend,
+    record,
+    step_scale,
+)
+
+#: Amplitude (rad/s) of the loop ``w = a (sin ωt, cos ωt)`` of the initial guesses.
+LOOP_AMPLITUDE = 0.3
+#: Random initial guesses (the last restarts): Fourier ``w`` with standard normal
+#: coefficients scaled to an RMS log-uniform in this range (rad/s), from this seed.
+RANDOM_RMS = (0.2, 1.5)
+RANDOM_SEED = 20140901
+
+
+def to_frame(problem: Problem, controls: Controls) -> Controls:
+    """The frame control ``w`` that reproduces the physical ``controls`` from ``problem.R0``.
+
+    ``w = N(R)ᵀ ω`` with ``ω = L(R) u`` along the physical motion (simulated with
+    ``problem.steps`` CF4 steps), projected on the parametrisation of ``controls``
+    (least squares on the Fourier basis; interval means on the grid). Raises
+    :class:`~nonholo.motion.simulation.SingularTrajectoryError` if the physical motion runs into
+    ``Δ = 0``.
+    """
+    mech = problem.mechanism
+    tr = simulate(problem.R0, controls, problem.T, mechanism=mech, steps=problem.steps)
+    N, L = mech.frame.N, mech.L
+    w = np.array([N(R).T @ (L(R) @ u) for R, u in zip(tr.R[:-1], tr.u[:-1])])
+    t = tr.t[:-1]
+    if isinstance(controls, Fourier):
+        phi = fourier_basis(t, problem.T, controls.harmonics)
+        coeffs = np.linalg.lstsq(phi, w, rcond=None)[0].T
+        return Fourier(problem.T, coeffs)
+    j = controls.interval(t)
+    values = np.zeros((controls.grid, controls.n_inputs))
+    np.add.at(values, j, w)
+    values /= np.bincount(j, minlength=controls.grid)[:, None]
+    return PiecewiseConstant(problem.T, values)
+
+
+def spatial_gradient_delta(mechanism, R: np.ndarray, eps: float = 1e-6, q=None) -> np.ndarray:
+    """``∇Δ`` at each ``R[n]``: ``Δ(exp([s]) R) = Δ(R) + ∇Δ·s + O(|s|²)`` (central differences
+    of the generated ``Δ``, error ``O(ε²)``), shape ``(n, 3)``; beyond SO(3), at each state
+    ``(R[n], q[n])`` along the stacked variation ``s = (s_R, s_q)``, shape ``(n, d)``."""
+    if not mechanism.beyond_so3:
+        g = np.empty((len(R), 3))
+        for k in range(3):
+            e = np.zeros(3)
+            e[k] = eps
+            g[:, k] = (mechanism.delta_samples(so3.exp(e) @ R)
+                       - mechanism.delta_samples(so3.exp(-e) @ R)) / (2.0 * eps)
+        return g
+    r = 3 if mechanism.orientation else 0
+    g = np.empty((len(R), mechanism.n_rates))
+    for k in range(mechanism.n_rates):
+        if k < r:
+            e = np.zeros(3)
+            e[k] = eps
+            plus, minus = (mechanism.delta_samples(so3.exp(e) @ R, q),
+                           mechanism.delta_samples(so3.exp(-e) @ R, q))
+        else:
+            dq = np.zeros(mechanism.n_coordinates)
+            dq[k - r] = eps
+            plus, minus = mechanism.delta_samples(R, q + dq), mechanism.delta_samples(R, q - dq)
+        g[:, k] = (plus - minus) / (2.0 * eps)
+    return g
+
+
+def barrier_gradient(problem: Problem, ev: Evaluation, d0: float) -> np.ndarray | None:
+    """Gradient in ``λ`` of the barrier ``φ = Σ_{n=1..N} h ψ(d_n)``, ``d_n = sgn(Δ(R0)) Δ(R(t_n))``,
+    ``ψ(d) = −log(d/d₀)`` for ``d < d₀`` and 0 above, plus the same barrier on the legs'
+    clearances from their stroke limits where the problem has them
+    (:meth:`nonholo.model.limits.LegLimits.clearance_terms`, below
+    :data:`nonholo.model.limits.BARRIER_CLEARANCE`); ``None`` if no node is that close.
+
+    ``ev`` must hold ``Z`` and the stage weights ``Wd`` (``full`` evaluation). The
+    sensitivity of a node is ``s_n = Z_n^{-1} S_n``, ``S_n = Σ_{stages r before t_n} W_r
+    ∂U_r/∂λ``; with ``a_n = h ψ'(d_n) sgn ∇Δ(R_n)`` (plus ``h ψ'(c) ∇c`` per active clearance) and ``μ_n = a_n Z_n^{-1}``,
+    ``∇φ = Σ_n μ_n S_n = Σ_r (ν_{n(r)} W_r) ∂U_r/∂λ`` where ``ν_k = Σ_{n > k} μ_n`` (suffix
+    sums) — one backward pass over the stored stages, no extra simulation.
+    """
+    if not ev.complete or ev.Z is None:
+        return None
+    N, h, m = problem.steps, problem.h, problem.mechanism.n_inputs
+    D = problem.mechanism.n_rates
+    a = np.zeros((N + 1, D))
+    any_active = False
+    if problem.has_delta:
+        d = problem.sign * problem.mechanism.delta_samples(ev.R, ev.q)
+        active = d < d0
+        active[0] = False
+        if active.any():
+            grad = spatial_gradient_delta(problem.mechanism, ev.R[active], q=ev.q[active])
+            a[active] = (h * problem.sign * (-1.0 / d[active]))[:, None] * grad
+            any_active = True
+    if problem.leg_limits is not None:
+        terms = problem.leg_limits.clearance_terms(problem.mechanism, ev.R)
+        if terms is not None:
+            nodes, c, rows = terms
+            keep = nodes > 0
+            np.add.at(a, nodes[keep], (h * (-1.0 / c[keep]))[:, None] * rows[keep])
+            any_active = any_active or bool(keep.any())
+    if not any_active:
+        return None
+    mu = np.linalg.solve(np.transpose(ev.Z, (0, 2, 1)), a[:, :, None])[:, :, 0]    # a_n Z_n^{-1}
+    nu = np.cumsum(mu[::-1], axis=0)[::-1]                  # Σ_{n ≥ k} μ_n
+    nu = nu[1:]                                              # Σ_{n > k} μ_n, k = 0 … N−1
+    v = np.einsum("ni,ncik->nck", nu, ev.Wd.reshape(N, 3, D, m)).reshape(3 * N, m)
+    return _contract(problem, v)
+
+
+def _contract(problem: Problem, v: np.ndarray) -> np.ndarray:
+    """``Σ_r Σ_k v[r, k] ∂U[r, k]/∂λ`` over the stage rows ``r = 3n + c`` (a vector in ``λ``)."""
+    Bidx, Bval, sb, si = problem.stage_basis
+    N, m = problem.steps, v.shape[1]
+    out = np.zeros(problem.n_params)
+    if Bidx.shape[0] == 0:                                  # dense basis
+        G = v.T @ Bval.reshape(3 * N, -1)                    # (m, nb)
+        cols = np.arange(G.shape[1])[None, :] * sb + np.arange(m)[:, None] * si
+        out[cols.ravel()] = G.ravel()
+        return out
+    nq = Bidx.shape[2]
+    cols = Bidx.reshape(3 * N, nq, 1) * sb + np.arange(m)[None, None, :] * si
+    np.add.at(out, cols.ravel(), (Bval.reshape(3 * N, nq, 1) * v[:, None, :]).ravel())
+    return out
+
+
+def _like(controls: Controls, func, T: float, harmonics: int | None = None) -> Controls:
+    """``func`` projected on the parametrisation of ``controls`` (``harmonics`` overrides K)."""
+    if isinstance(controls, Fourier):
+        return Fourier.fit(func, T, harmonics or controls.harmonics, controls.n_inputs)
+    return PiecewiseConstant.fit(func, T, controls.grid, controls.n_inputs)
+
+
+def _loop(T: float, m: int, amplitude: float, phase: float = 0.0, mean=None):
+    """``w_i(t) = mean_i + a sin(ωt + φ + iπ/2)``, ``ω = 2π/T``: a loop (plus a drift)."""
+    w = 2.0 * np.pi / T
+    shift = 0.5 * np.pi * np.arange(m) + phase
+    mean = np.zeros(m) if mean is None else np.asarray(mean, dtype=float)
+
+    def f(t):
+        t = np.asarray(t, dtype=float)
+        return mean + amplitude * np.sin(w * t[..., None] + shift)
+
+    return f
+
+
+class RobustStrategy(Strategy):
+    """Jacobian method in the desingularised frame coordinates, with restarts (see the module)."""
+
+    name = "robust"
+    #: ``γ = 1``: a flow step asks for the whole error (a damped Newton step with the
+    #: barrier term, halved on rejection); ``γ = 0.5`` is measured beside it by
+    #: ``python -m benchmarks.bench_robust --ingredients``
+    default_gamma = 1.0
+    #: accepted steps of one attempt before the next initial guess is tried
+    attempt_iterations = 60
+    #: refine the integrator's grid when the estimated discretisation error of ``R(T)``
+    #: exceeds this (rad; the acceptance of a plan re-simulated by DOP853 is 1e-8)
+    refine_above = 1e-9
+    #: finest grid of the refinement
+    max_steps = 6400
+    #: null-space barrier on ``Δ`` in the flow steps (see :meth:`direction`)
+    barrier = True
+    #: the barrier ``ψ(d) = −log(d/d₀)`` acts where ``d = sgn(Δ(R0)) Δ < d₀``
+    barrier_d0 = 0.1
+    #: size of the barrier term relative to the minimum-norm step (in the metric)
+    barrier_weight = 2.0
+    #: an attempt stops when ``|l_T|`` (above ``newton_below``) shrank by less than a factor
+    #: ``stall_ratio`` over the last ``stall_window`` accepted steps (0: never)
+    stall_window = 5
+    stall_ratio = 0.97
+    #: random initial guesses after the deterministic ones
+    random_guesses = 6
+    #: a certified plan whose physical sensitivity (:func:`nonholo.certify.certificate.sensitivity`)
+    #: exceeds this is kept only if no later attempt converges to a better-conditioned one
+    max_sensitivity = 100.0
+
+    def frame(self, mechanism) -> bool:
+        # beyond SO(3) the physical inputs are planned (the barrier keeps Δ away) and the
+        # frame is not used yet
+        return mechanism.has_frame and not mechanism.beyond_so3
+
+    def initial(self, problem, controls, given):
+        """In frame coordinates: ``u0`` (physical) converted by :func:`to_frame`; without
+        ``u0`` the default loop ``w = 0.3 (sin ωt, cos ωt)``."""
+        if not (given and problem.frame):
+            return Start(controls, given)
+        try:
+            return Start(to_frame(problem, controls), True)
+        except SingularTrajectoryError as exc:
+            return Start(_like(controls, _loop(problem.T, controls.n_inputs, LOOP_AMPLITUDE), problem.T),
+                         False, f"u0 not used ({exc})")
+
+    # -- initial guesses -----------------------------------------------------------------
+    def attempts(self, problem: Problem, start: Start) -> Iterator[tuple[str, Controls]]:
+        """The initial controls tried in turn: ``start``'s, then other loops and drifts."""
+        first = start.controls
+        T, m = problem.T, first.n_inputs
+        mech = problem.mechanism
+        if mech.beyond_so3:
+            l0 = states.offset(mech, problem.R0, problem.q0, problem.Rd, problem.qd)
+            frame = mech.G(problem.R0, problem.q0)
+        else:
+            l0 = kernels.log_rotation(problem.Rd @ problem.R0.T)
+            frame = mech.frame.N(problem.R0) if problem.frame else mech.L(problem.R0)
+        drift = np.linalg.lstsq(frame, l0, rcond=None)[0] / T
+        K = first.harmonics if isinstance(first, Fourier) else None
+        if start.given:
+            yield "u0", first
+        yield "drift", _like(first, _loop(T, m, LOOP_AMPLITUDE, 0.0, drift), T)
+        if not start.given:
+            yield "loop", first
+        yield "loop", _like(first, _loop(T, m, 1.0, 0.5 * np.pi), T)
+        if K is not None:
+            yield "harmonics", _like(first, _loop(T, m, LOOP_AMPLITUDE, 0.0, drift), T, K + 1)
+            yield "harmonics", _like(first, _loop(T, m, LOOP_AMPLITUDE, 0.5 * np.pi, drift), T, K + 2)
+        rng = np.random.default_rng(RANDOM_SEED)
+        for j in range(self.random_guesses):
+            Kj = (K or 2) + 2 * (j % 2)
+            c = rng.standard_normal((m, 2 * Kj + 1))
+            rms = np.exp(rng.uniform(*np.log(RANDOM_RMS)))
+            c *= rms / np.sqrt(np.sum(c[:, 0] ** 2) + 0.5 * np.sum(c[:, 1:] ** 2))
+            f = Fourier(T, c)
+            yield "random", f if K is not None else _like(first, f, T)
+
+    # -- one descent ----------------------------------------------------------------------
+    def wants_full(self, problem: Problem, ev: Evaluation) -> bool:
+        """Whether the next evaluations should keep ``Z`` and the stage weights (for the barrier)."""
+        return self.barrier and self.near_limits(problem, ev, 2.0)
+
+    def near_limits(self, problem: Problem, ev: Evaluation, factor: float = 1.0) -> bool:
+        """Whether ``ev``'s trajectory comes within ``factor`` times a barrier's reach of
+        ``Δ = 0`` (:attr:`barrier_d0`) or of the legs' stroke limits
+        (:data:`nonholo.model.limits.BARRIER_CLEARANCE`)."""
+        near_delta = problem.has_delta and ev.min_delta is not None and ev.min_delta < factor * self.barrier_d0
+        near_legs = ev.min_clearance is not None and ev.min_clearance < factor * BARRIER_CLEARANCE
+        return near_delta or near_legs
+
+    def direction(self, problem: Problem, ev: Evaluation, scale: np.ndarray,
+                  newton: bool = False) -> np.ndarray:
+        """The step direction (the step is ``−γh`` or ``−1`` times it).
+
+        ``d = S (J S)^# l`` (``S = diag(scale)``: minimum norm in the metric ``S^{-2}``).
+        On flow steps whose trajectory comes within :attr:`barrier_d0` of ``Δ = 0`` (and
+        :attr:`barrier` is on), plus the barrier term ``β |d|_S g/|g|_S`` (``β`` = :attr:`barrier_weight`) with ``g`` the
+        ``S^{-2}``-orthogonal projection of ``−S²∇φ`` on the null space of ``J``
+        (:func:`barrier_gradient`): it leaves ``l_T`` unchanged to first order and moves
+        the trajectory away from ``Δ = 0``.
+        """
+        d = kernels.min_norm_step(ev.J, ev.l, scale)
+        if newton or not self.barrier or not self.near_limits(problem, ev):
+            return d
+        full = ev if ev.Z is not None else problem.evaluate(ev.params, full=True)
+        g = barrier_gradient(problem, full, self.barrier_d0)
+        if g is None:
+            return d
+        g = scale * scale * g
+        null = g - kernels.min_norm_step(ev.J, ev.J @ g, scale)
+        size = np.linalg.norm(null / scale)
+        if not size > 0.0:
+            return d
+        return d + (self.barrier_weight * np.linalg.norm(d / scale) / size) * null
+
+    def descend(self, problem: Problem, ev: Evaluation, attempt: int, first: int, budget: int,
+                history: list, callback):
+        """Flow then Newton steps from the admissible ``ev`` (:func:`~nonholo.planning.core.descend`
+        with this strategy's direction, barrier evaluations and stall rule)."""
+        scale = step_scale(problem, ev.parametrisation)
+        d = descend(problem, ev, self.options, lambda ev, newton: self.direction(problem, ev, scale, newton),
+                    budget=budget, history=history, callback=callback, first=first,
+                    full=lambda ev: self.wants_full(problem, ev),
+                    stall=(self.stall_window, self.stall_ratio), tags={"attempt": attempt})
+        if d.status == "budget":
+            d.reason = f"{budget} steps taken with {d.reason}"
+        return d
+
+    # -- accuracy of the integrator -----------------------------------------------------
+    def discretisation_error(self, problem: Problem, ev: Evaluation) -> float:
+        """Richardson estimate of the integrator's error at ``R(T)`` for ``ev``'s control:
+        ``16/15`` of the distance between the endpoints with ``N`` and ``2N`` CF4 steps (rad)."""
+        N2 = 2 * problem.steps
+        Rs, Qs, _ = problem.forward(stages.stage_table(ev.controls, N2), 0.5 * problem.h, -np.inf)
+        if problem.mechanism.beyond_so3:
+            return states.distance(problem.mechanism, Rs[N2], Qs[N2], ev.R[-1], ev.q[-1]) * 16.0 / 15.0
+        return float(kernels.log_error(Rs[N2], ev.R[-1])[1]) * 16.0 / 15.0
+
+    def refine(self, problem: Problem, ev: Evaluation, attempt: int, it0: int, history: list,
+               callback) -> tuple[Problem, Evaluation, int, str]:
+        """Double the integrator's steps while the endpoint's discretisation error (see
+        :meth:`discretisation_error`) exceeds :attr:`refine_above`, re-converging with Newton
+        steps on each finer grid. Returns ``(problem, evaluation, accepted steps, note)``."""
+        opt = self.options
+        it = 0
+        note = ""
+        est = self.discretisation_error(problem, ev)
+        while est > self.refine_above and 2 * problem.steps <= self.max_steps:
+            fine = problem.refined(2 * problem.steps)
+            trial = fine.evaluate(ev.controls)
+            if not fine.admissible(trial):
+                return problem, ev, it, note
+            d = self.descend(fine, trial, attempt, it0 + it, 20, history, callback)
+            it += d.steps
+            trial = d.evaluation
+            if d.status == "stopped" or trial.error > opt.tol:
+                return problem, ev, it, note + f"refinement to {fine.steps} steps failed: {d.reason}"
+            note = (f"integrator refined to {fine.steps} steps (estimated discretisation error "
+                    f"{est:.2g} rad with {problem.steps})")
+            problem, ev = fine, trial
+            est = self.discretisation_error(problem, ev)
+        return problem, ev, it, note
+
+    def solve(self, problem, start, callback=None):
+        opt = self.options
+        history: list = []
+        it = 0
+        best: Evaluation | None = None
+        first_failure: Evaluation | None = None
+        converged = None        # best-conditioned converged plan above max_sensitivity
+        notes = []
+        tail = f"; {start.note}" if start.note else ""
+        for k, (label, w0) in enumerate(self.attempts(problem, start)):
+            if k and it >= opt.max_iter:
+                break
+            ev = problem.evaluate(w0, delta_stop=DELTA_STOP)
+            if not problem.admissible(ev):
+                notes.append(f"{label}: initial control not admissible ({problem.why_not(ev)})")
+                first_failure = first_failure or ev
+                continue
+            rec = record(it, ev, 0.0, "initial" if k == 0 else "restart", 0, attempt=k)
+            history.append(rec)
+            if callback is not None and callback(rec):
+                return Outcome(ev, False, "stopped by callback", history, it, stopped=True)
+            budget = min(self.attempt_iterations, opt.max_iter - it)
+            d = self.descend(problem, ev, k, it, budget, history, callback)
+            ev, why = d.evaluation, d.reason
+            it += d.steps
+            if d.status == "stopped":
+                return Outcome(ev, False, why, history, it, stopped=True)
+            if ev.error <= opt.tol:
+                why += f" (attempt {k + 1}: {label})" if k else ""
+                fine, ev, n, note = self.refine(problem, ev, k, it, history, callback)
+                it += n
+                why += f"; {note}" if note else ""
+                ev, cert, corrections = certify(fine, ev, opt)
+                if not cert.passed:
+                    notes.append(f"{label}: converged on the planner's grid, but not certified: {cert.reason}")
+                    continue
+                why += certificate_note(cert, corrections)
+                G = cert.sensitivity
+                if G <= self.max_sensitivity:
+                    return Outcome(ev, True, why + tail, history, it,
+                                   fine if fine is not problem else None, cert)
+                notes.append(f"{label}: converged with sensitivity {G:.3g} > {self.max_sensitivity:g}")
+                if converged is None or G < converged[0]:
+                    converged = (G, ev, fine, why, cert)
+                continue
+            notes.append(f"{label}: {why}")
+            if best is None or ev.error < best.error:
+                best = ev
+        if converged is not None:
+            G, ev, fine, why, cert = converged
+            why += (f"; sensitivity max|Φ(T,t)| = {G:.3g} > {self.max_sensitivity:g} (the best of "
+                    f"{sum('converged with' in x for x in notes)} converged attempts; an open-loop "
+                    "replay amplifies errors by that much)")
+            return Outcome(ev, True, why + tail, history, it, fine if fine is not problem else None, cert)
+        final = best if best is not None else first_failure
+        if final is None:
+            final = problem.evaluate(start.controls, delta_stop=DELTA_STOP)
+        reason = (f"no attempt converged within max_iter = {opt.max_iter} ({len(notes)} attempts): "
+                  + "; ".join(notes) + tail)
+        return Outcome(final, False, reason, history, it)

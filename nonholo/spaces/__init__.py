@@ -1,0 +1,1 @@
+"""nonholo.spaces."""

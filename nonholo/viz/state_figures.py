@@ -1,0 +1,116 @@
+"""Figures of plans whose state goes beyond SO(3): the rolling ball's contact path on the
+plane with its orientation, and the car's path with its body drawn along it.
+
+Each function takes a successful :class:`~nonholo.io.result.PlanResult` of the mechanism and
+returns a Matplotlib figure (the caller saves or shows it).
+"""
+from __future__ import annotations
+
+import matplotlib.pyplot as plt
+import numpy as np
+from matplotlib.patches import Polygon
+
+
+def _check(result, mechanism: str):
+    if result.mechanism != mechanism:
+        raise ValueError(f"result must be a plan of mechanism {mechanism!r}, got {result.mechanism!r}")
+    if result.q is None or not len(result.q):
+        raise ValueError("result has no trajectory to draw")
+
+
+def _layout():
+    """A state figure's figure, its 2×2 grid and the path panel (the left column)."""
+    fig = plt.figure(figsize=(10, 4.8))
+    grid = fig.add_gridspec(2, 2, width_ratios=[1.1, 1])
+    return fig, grid, fig.add_subplot(grid[:, 0])
+
+
+def _mark_ends(ax, result):
+    """The start and the goal on the path panel (the first two coordinates)."""
+    ax.plot(*result.q[0, :2], "o", color="tab:green", ms=8, label="start")
+    ax.plot(*result.qd[:2], "x", color="tab:red", ms=10, mew=2, label="goal")
+
+
+def _finish_path(ax, xlabel: str, ylabel: str, title: str, margin: float):
+    """The path panel to scale (equal axes), labelled, with its legend."""
+    ax.set_aspect("equal", adjustable="datalim")
+    ax.margins(margin)
+    ax.set_xlabel(xlabel)
+    ax.set_ylabel(ylabel)
+    ax.set_title(title)
+    ax.legend(fontsize=8, loc="best")
+
+
+def _time_panels(fig, grid, result, title: str, angles: list, inputs: tuple, input_unit: str):
+    """The right column of a state figure: ``angles`` (``(values, colour, label)`` each,
+    rad) above the two inputs (labelled ``inputs``) against time; then the layout."""
+    top = fig.add_subplot(grid[0, 1])
+    for values, colour, label in angles:
+        top.plot(result.t, values, color=colour, label=label)
+    top.set_ylabel("angle (rad)")
+    top.set_title(title)
+    top.legend(fontsize=8)
+    bottom = fig.add_subplot(grid[1, 1], sharex=top)
+    for j, (colour, label) in enumerate(zip(("tab:blue", "tab:orange"), inputs)):
+        bottom.plot(result.t, result.u[:, j], color=colour, lw=1, label=label)
+    bottom.set_xlabel("t (s)")
+    bottom.set_ylabel(input_unit)
+    bottom.legend(fontsize=8)
+    fig.tight_layout()
+
+
+def ball_figure(result, frames: int = 9):
+    """The ball's contact path on the plane z = 0 (left), with the ball's body axes
+    ``R e₁``, ``R e₂`` projected on the plane at ``frames`` instants; right, the angles
+    from the start and to the goal (``|log(R(t) R0ᵀ)|``, ``|log(R(t) R_dᵀ)|``) and the
+    inputs against time."""
+    _check(result, "rolling_ball")
+    from ..spaces.so3 import log
+
+    p, R, t = result.q, result.R, result.t
+    fig, grid, ax = _layout()
+    ax.plot(p[:, 0], p[:, 1], color="0.3", lw=1.5, label="contact point")
+    _mark_ends(ax, result)
+    span = max(np.ptp(p[:, 0]), np.ptp(p[:, 1]), 0.5)
+    size = 0.12 * span
+    for k in np.linspace(0, len(t) - 1, frames).astype(int):
+        for axis, colour in ((0, "tab:blue"), (1, "tab:orange")):
+            d = R[k][:2, axis] * size
+            ax.annotate("", xy=p[k] + d, xytext=p[k], arrowprops={"arrowstyle": "->", "color": colour, "lw": 1})
+    ax.plot([], [], color="tab:blue", label="R e₁ (projected)")
+    ax.plot([], [], color="tab:orange", label="R e₂ (projected)")
+    _finish_path(ax, "p₁ (radii)", "p₂ (radii)", "contact path on the plane", 0.15)
+    _time_panels(fig, grid, result, "orientation and inputs",
+                 [([np.linalg.norm(log(Rk @ result.R0.T)) for Rk in R], "tab:green", "from the start"),
+                  ([np.linalg.norm(log(Rk @ result.Rd.T)) for Rk in R], "tab:red", "to the goal")],
+                 ("v₁ = dp₁/dt", "v₂ = dp₂/dt"), "input (radii/s)")
+    return fig
+
+
+def _body(x, y, th, length=1.0, width=0.5):
+    """Corners of the car's body: the rear axle at ``(x, y)``, the front at ``length``."""
+    c, s = np.cos(th), np.sin(th)
+    pts = np.array([[-0.2, -width / 2], [length + 0.2, -width / 2], [length + 0.2, width / 2], [-0.2, width / 2]])
+    return pts @ np.array([[c, s], [-s, c]]) + np.array([x, y])
+
+
+def car_figure(result, frames: int = 8):
+    """The car's path (the rear axle's midpoint) with its body and front wheels drawn at
+    ``frames`` instants (left); right, ``θ``, ``φ`` and the inputs against time."""
+    _check(result, "car")
+    q, t = result.q, result.t
+    fig, grid, ax = _layout()
+    ax.plot(q[:, 0], q[:, 1], color="0.3", lw=1.5, label="rear axle")
+    for j, k in enumerate(np.linspace(0, len(t) - 1, frames).astype(int)):
+        x, y, th, ph = q[k]
+        shade = plt.cm.viridis(j / max(frames - 1, 1))
+        ax.add_patch(Polygon(_body(x, y, th), closed=True, fill=False, ec=shade, lw=1))
+        fx, fy = x + np.cos(th), y + np.sin(th)
+        d = 0.18 * np.array([np.cos(th + ph), np.sin(th + ph)])
+        ax.plot([fx - d[0], fx + d[0]], [fy - d[1], fy + d[1]], color=shade, lw=2.5)
+    _mark_ends(ax, result)
+    _finish_path(ax, "x (wheelbases)", "y (wheelbases)", "path, body and front wheels (dark → light)", 0.2)
+    _time_panels(fig, grid, result, "heading, steering and inputs",
+                 [(q[:, 2], "k", "heading θ"), (q[:, 3], "tab:purple", "steering φ")],
+                 ("v (wheelbases/s)", "dφ/dt (rad/s)"), "input")
+    return fig
