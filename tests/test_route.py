@@ -24,14 +24,14 @@ def dense_delta(mech, path, step=0.005):
     out = []
     for Ra, Rb in zip(path[:-1], path[1:]):
         k = max(2, int(np.ceil(so3.distance(Ra, Rb) / step)) + 1)
-        out.append(mech.delta_samples(roadmap.geodesic(Ra, Rb, np.linspace(0.0, 1.0, k))))
+        out.append(mech.delta_samples(so3.geodesic(Ra, Rb, np.linspace(0.0, 1.0, k))))
     return np.concatenate(out)
 
 
 def test_geodesic_ends_and_constant_speed():
     rng = np.random.default_rng(0)
     Ra, Rb = so3.exp(rng.normal(size=3)), so3.exp(rng.normal(size=3))
-    R = roadmap.geodesic(Ra, Rb, [0.0, 0.25, 0.5, 1.0])
+    R = so3.geodesic(Ra, Rb, [0.0, 0.25, 0.5, 1.0])
     np.testing.assert_allclose(R[0], Ra, atol=1e-12)
     np.testing.assert_allclose(R[-1], Rb, atol=1e-12)
     d = so3.distance(Ra, Rb)

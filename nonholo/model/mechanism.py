@@ -30,11 +30,14 @@ from __future__ import annotations
 
 import types
 from dataclasses import dataclass, field
+from functools import cached_property
 from typing import Callable
 
 import numpy as np
 
 from ..integrate import cf4, cf4_product
+from ..spaces.groups import Product
+from ..spaces.singular import NoSingularSet, SingularSet
 
 
 @dataclass(frozen=True)
@@ -133,6 +136,16 @@ class Mechanism:
     angles: tuple[bool, ...] = ()
     #: the stacked field ``G(R, q)`` (a state beyond SO(3); ``None`` on SO(3))
     G: Callable | None = None
+
+    @cached_property
+    def space(self) -> Product:
+        """The state space (:mod:`nonholo.spaces.groups`): ``SO(3)``, ``SO(3) × Rᵏ`` or ``Rᵏ``."""
+        return Product.of(self.state_space.startswith("SO(3)"), self.coordinates, self.units, self.angles)
+
+    @cached_property
+    def singular(self) -> SingularSet:
+        """The singular set ``Δ = 0`` (:class:`~nonholo.spaces.singular.NoSingularSet` without one)."""
+        return NoSingularSet() if self.delta is None else SingularSet(self.delta_samples)
 
     @property
     def orientation(self) -> bool:

@@ -61,25 +61,6 @@ LEG_CLEARANCE = 0.02
 EDGE_CHUNK = 4096
 
 
-def _turns(Ra: np.ndarray, Rb: np.ndarray) -> np.ndarray:
-    """``v_e = log(R_b R_aᵀ)`` (rotation vectors) for stacks ``Ra``, ``Rb`` of shape ``(E, 3, 3)``."""
-    a = Rotation.from_matrix(Ra)
-    return (Rotation.from_matrix(Rb) * a.inv()).as_rotvec()
-
-
-def _points(Ra: np.ndarray, v: np.ndarray, s: np.ndarray) -> np.ndarray:
-    """``exp(s·[v_e]) R_a[e]`` for every pair ``e`` and fraction ``s``: shape ``(E, S, 3, 3)``."""
-    E, S = len(v), len(s)
-    turn = Rotation.from_rotvec((v[:, None, :] * s[None, :, None]).reshape(-1, 3)).as_matrix()
-    return np.matmul(turn.reshape(E, S, 3, 3), np.asarray(Ra, dtype=float)[:, None])
-
-
-def geodesic(Ra, Rb, s) -> np.ndarray:
-    """``R(s) = exp(s·log(R_b R_aᵀ)) R_a`` for the fractions ``s`` (shape ``(n,)``): ``(n, 3, 3)``."""
-    Ra, Rb = np.asarray(Ra, dtype=float)[None], np.asarray(Rb, dtype=float)[None]
-    return _points(Ra, _turns(Ra, Rb), np.asarray(s, dtype=float))[0]
-
-
 def _angles(qa: np.ndarray, qb: np.ndarray) -> np.ndarray:
     """Geodesic angles between unit quaternions (rows), ``2 arccos |qa·qb|``."""
     return 2.0 * np.arccos(np.clip(np.abs(np.sum(qa * qb, axis=-1)), 0.0, 1.0))
@@ -91,10 +72,10 @@ def _profile(mech, sign: float, Ra: np.ndarray, Rb: np.ndarray, points: int | No
     ``(E, points)``, the geodesics' lengths ``(E,)`` and, with stroke limits ``legs``
     (:class:`~nonholo.model.limits.LegLimits`), the least clearance of each from them (``(E,)``;
     else ``None``)."""
-    v = _turns(Ra, Rb)
+    v = so3.turns(Ra, Rb)
     length = np.linalg.norm(v, axis=1)
     S = points or int(np.ceil(length.max() / RESOLUTION)) + 1
-    pts = _points(Ra, v, np.linspace(0.0, 1.0, S)).reshape(-1, 3, 3)
+    pts = so3.geodesic_points(Ra, v, np.linspace(0.0, 1.0, S)).reshape(-1, 3, 3)
     d = sign * mech.delta_samples(pts).reshape(len(Ra), S)
     within = None if legs is None else legs.clearances(mech, pts).reshape(len(Ra), -1).min(axis=1)
     return d, length, within

@@ -156,7 +156,7 @@ def _midpoint(mechanism: Mechanism, a, b) -> tuple:
     """The midpoint of the hop ``a → b``: the geodesic's on SO(3), the straight path's beyond."""
     if mechanism.beyond_so3:
         return state_path.midpoint(mechanism, a, b)
-    return roadmap.geodesic(a[0], b[0], [0.5])[0], states.NO_COORDINATES
+    return so3.geodesic(a[0], b[0], [0.5])[0], states.NO_COORDINATES
 
 
 def _paths(mechanism: Mechanism, start, goal, delta_min: float, leg_limits):

@@ -46,7 +46,7 @@ def interpolate(mechanism, a, b, s) -> list[tuple[np.ndarray, np.ndarray]]:
     (Ra, qa), (Rb, qb) = a, b
     s = np.atleast_1d(np.asarray(s, dtype=float))
     if mechanism.orientation:
-        R = roadmap.geodesic(Ra, Rb, s)
+        R = so3.geodesic(Ra, Rb, s)
     else:
         R = np.broadcast_to(state.IDENTITY, (s.size, 3, 3))
     step = state.coordinate_difference(mechanism, qb, qa)

@@ -107,3 +107,22 @@ def check_rotation(R, name: str = "R", tol: float = 1e-9) -> np.ndarray:
     if np.linalg.det(A) < 0:
         raise ValueError(f"{name} is a reflection (det = -1), not a rotation")
     return A
+
+
+def turns(Ra: np.ndarray, Rb: np.ndarray) -> np.ndarray:
+    """``v_e = log(R_b R_aᵀ)`` (rotation vectors) for stacks ``Ra``, ``Rb`` of shape ``(E, 3, 3)``."""
+    a = Rotation.from_matrix(Ra)
+    return (Rotation.from_matrix(Rb) * a.inv()).as_rotvec()
+
+
+def geodesicgeodesic_points(Ra: np.ndarray, v: np.ndarray, s: np.ndarray) -> np.ndarray:
+    """``exp(s·[v_e]) R_a[e]`` for every pair ``e`` and fraction ``s``: shape ``(E, S, 3, 3)``."""
+    E, S = len(v), len(s)
+    turn = Rotation.from_rotvec((v[:, None, :] * s[None, :, None]).reshape(-1, 3)).as_matrix()
+    return np.matmul(turn.reshape(E, S, 3, 3), np.asarray(Ra, dtype=float)[:, None])
+
+
+def geodesic(Ra, Rb, s) -> np.ndarray:
+    """``R(s) = exp(s·log(R_b R_aᵀ)) R_a`` for the fractions ``s`` (shape ``(n,)``): ``(n, 3, 3)``."""
+    Ra, Rb = np.asarray(Ra, dtype=float)[None], np.asarray(Rb, dtype=float)[None]
+    return geodesic_points(Ra, turns(Ra, Rb), np.asarray(s, dtype=float))[0]

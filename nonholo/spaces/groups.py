@@ -1,0 +1,364 @@
+"""State spaces as objects: :class:`SO3`, :class:`Euclidean` and their :class:`Product`.
+
+Conventions
+-----------
+- A *factor* (:class:`SO3`, :class:`Euclidean`) owns one part of a state: a rotation
+  matrix ``R`` (3×3) or ``k`` coordinates ``q``. It parses and describes the caller's form
+  of its part, takes differences (``log(R R_dᵀ)``, rad; ``q − q_d`` with angle coordinates
+  wrapped into ``(−π, π]``), distances, interpolates (the geodesic; the straight line,
+  angles the short way round), samples (Haar; a box) and writes JSON and command-line
+  numbers (RPY angles in rad; the coordinates).
+- A mechanism's space is a :class:`Product` of at most one :class:`SO3` and one
+  :class:`Euclidean` factor; its states are pairs ``(R, q)`` throughout the package: ``R``
+  is the identity, untouched, without an orientation, and ``q`` has shape ``(0,)`` without
+  coordinates (an SO(3) mechanism is the product with ``k = 0``). The terminal error is
+  the stacked vector ``e = (l, δq)`` of a variation ``s = (s_R, s_q)``; its parts are
+  reported by name (``"rotation"`` in rad, ``"coordinates"`` in the mechanism's units).
+- The caller's form of a state: a rotation matrix for SO(3), the ``k`` numbers for
+  ``Rᵏ``, the pair ``(R, q)`` for ``SO(3) × Rᵏ``; in JSON the same with nested lists
+  (``[R, q]`` for the pair).
+"""
+from __future__ import annotations
+
+import numpy as np
+from scipy.spatial.transform import Rotation
+
+from ..numerics import kernels
+from . import so3
+
+IDENTITY = np.eye(3)
+NO_COORDINATES = np.zeros(0)
+
+
+def wrap(angle):
+    """``angle`` wrapped into ``(−π, π]``."""
+    return np.pi - np.mod(np.pi - angle, 2.0 * np.pi)
+
+
+def _kind(value) -> str:
+    try:
+        shape = np.shape(value)
+    except ValueError:
+        return type(value).__name__
+    return f"an array of shape {shape}" if shape else type(value).__name__
+
+
+class SO3:
+    """The rotation group: states ``R`` (3×3), errors ``log(R R_dᵀ)`` (rad)."""
+
+    dim = 3
+    cli_names = ("φ", "ϑ", "ψ")
+    name = "SO(3)"
+
+    def describe(self) -> str:
+        return "a rotation matrix (3×3)"
+
+    def parse(self, value, name: str) -> np.ndarray:
+        """``value`` as a rotation matrix (``ValueError`` naming ``name`` otherwise)."""
+        if isinstance(value, tuple):
+            raise ValueError(f"{name} must be {self.describe()}, got a pair")
+        return so3.check_rotation(value, name)
+
+    def identity(self) -> np.ndarray:
+        return IDENTITY.copy()
+
+    def difference(self, R, Rd) -> np.ndarray:
+        """``l`` with ``[l] = log(R R_dᵀ)`` (rad)."""
+        return kernels.log_error(np.ascontiguousarray(R, dtype=float), np.ascontiguousarray(Rd, dtype=float))[0]
+
+    def error(self, R, Rd) -> tuple[np.ndarray, float]:
+        """``(l, |l|)`` of :meth:`difference`."""
+        l, err = kernels.log_error(np.ascontiguousarray(R, dtype=float), np.ascontiguousarray(Rd, dtype=float))
+        return l, float(err)
+
+    def distance(self, R1, R2) -> float:
+        return self.error(R1, R2)[1]
+
+    def interpolate(self, Ra, Rb, s) -> np.ndarray:
+        """The geodesic ``exp(s·log(R_b R_aᵀ)) R_a`` at the fractions ``s``: ``(n, 3, 3)``."""
+        return so3.geodesic(Ra, Rb, s)
+
+    def sample(self, rng: np.random.Generator, n: int) -> np.ndarray:
+        """``n`` rotations, uniform (Haar): ``(n, 3, 3)``."""
+        return Rotation.random(n, random_state=rng).as_matrix().reshape(n, 3, 3)
+
+    def to_json(self, R) -> list:
+        return np.asarray(R, dtype=float).tolist()
+
+    def from_json(self, value, name: str) -> np.ndarray:
+        return self.parse(value if not isinstance(value, tuple) else list(value), name)
+
+    def from_cli(self, numbers) -> np.ndarray:
+        """RPY angles ``(φ, ϑ, ψ)`` (rad) as a rotation."""
+        return so3.from_rpy(*np.asarray(numbers, dtype=float))
+
+    def to_cli(self, R) -> np.ndarray:
+        return so3.as_rpy(R)
+
+    def __repr__(self) -> str:
+        return "SO3()"
+
+    def __eq__(self, other) -> bool:
+        return isinstance(other, SO3)
+
+    def __hash__(self) -> int:
+        return hash("SO3")
+
+
+class Euclidean:
+    """``Rᵏ`` with named coordinates; the coordinates flagged in ``angles`` are taken
+    modulo ``2π`` by differences (wrapped into ``(−π, π]``) and interpolation."""
+
+    def __init__(self, k: int, *, names=None, units=None, angles=None, box: float = np.pi):
+        if int(k) != k or k < 0:
+            raise ValueError(f"k must be a whole number ≥ 0, got {k!r}")
+        self.dim = int(k)
+        self.names = tuple(names) if names is not None else tuple(f"q{i + 1}" for i in range(self.dim))
+        self.units = tuple(units) if units is not None else ("",) * self.dim
+        self.angles = tuple(bool(a) for a in angles) if angles is not None else (False,) * self.dim
+        for field, value in (("names", self.names), ("units", self.units), ("angles", self.angles)):
+            if len(value) != self.dim:
+                raise ValueError(f"{field} must have {self.dim} entries, got {len(value)}")
+        #: half-width of the box :meth:`sample` draws non-angle coordinates from
+        self.box = float(box)
+        self._wrapped = np.asarray(self.angles, dtype=bool)
+
+    @property
+    def name(self) -> str:
+        return f"R^{self.dim}"
+
+    @property
+    def cli_names(self) -> tuple[str, ...]:
+        return self.names
+
+    def describe(self) -> str:
+        return f"a vector of its {self.dim} coordinates ({', '.join(self.names)})"
+
+    def parse(self, value, name: str, want: str | None = None) -> np.ndarray:
+        """``value`` as ``k`` finite numbers (``ValueError`` naming ``name`` otherwise;
+        ``want`` says what the whole state should be)."""
+        want = want or f"{name} must be {self.describe()}"
+        try:
+            q = np.array(value, dtype=float)
+        except (TypeError, ValueError):
+            raise ValueError(f"{want}, got {_kind(value)}") from None
+        if q.shape != (self.dim,):
+            raise ValueError(f"{want}: {name} has shape {q.shape}, expected ({self.dim},)")
+        if not np.all(np.isfinite(q)):
+            raise ValueError(f"{name} must be finite, got {q}")
+        return q
+
+    def identity(self) -> np.ndarray:
+        return np.zeros(self.dim)
+
+    def difference(self, q, qd) -> np.ndarray:
+        """``q − q_d`` with the angle coordinates wrapped (works on stacks ``(n, k)``)."""
+        d = np.asarray(q, dtype=float) - np.asarray(qd, dtype=float)
+        if self._wrapped.any():
+            d[..., self._wrapped] = wrap(d[..., self._wrapped])
+        return d
+
+    def error(self, q, qd) -> tuple[np.ndarray, float]:
+        d = self.difference(q, qd)
+        return d, float(np.linalg.norm(d))
+
+    def distance(self, q1, q2) -> float:
+        return self.error(q1, q2)[1]
+
+    def interpolate(self, qa, qb, s) -> np.ndarray:
+        """``q_a + s·(q_b ⊖ q_a)`` at the fractions ``s``: ``(n, k)``."""
+        s = np.atleast_1d(np.asarray(s, dtype=float))
+        step = self.difference(qb, qa)
+        return np.asarray(qa, dtype=float)[None] + s[:, None] * step[None]
+
+    def sample(self, rng: np.random.Generator, n: int) -> np.ndarray:
+        """``n`` points, uniform in ``[−box, box]`` (angles in ``(−π, π]``): ``(n, k)``."""
+        half = np.where(self._wrapped, np.pi, self.box)
+        return rng.uniform(-1.0, 1.0, size=(n, self.dim)) * half
+
+    def to_json(self, q) -> list:
+        return np.asarray(q, dtype=float).tolist()
+
+    def from_json(self, value, name: str) -> np.ndarray:
+        return self.parse(value, name)
+
+    def from_cli(self, numbers) -> np.ndarray:
+        return np.asarray(numbers, dtype=float).copy()
+
+    def to_cli(self, q) -> np.ndarray:
+        return np.asarray(q, dtype=float).copy()
+
+    def __repr__(self) -> str:
+        return f"Euclidean({self.dim}, names={self.names!r}, angles={self.angles!r})"
+
+    def __eq__(self, other) -> bool:
+        return (isinstance(other, Euclidean) and (self.dim, self.names, self.angles)
+                == (other.dim, other.names, other.angles))
+
+    def __hash__(self) -> int:
+        return hash((self.dim, self.names, self.angles))
+
+
+class Product:
+    """``SO(3) × Rᵏ``, ``SO(3)`` (``k = 0``) or ``Rᵏ``: the state space of a mechanism,
+    states ``(R, q)`` (see the module docstring)."""
+
+    def __init__(self, rotation: SO3 | None = None, coordinates: Euclidean | None = None):
+        if rotation is None and coordinates is None:
+            raise ValueError("a product needs a rotation factor, a coordinate factor or both")
+        self.rotation = rotation
+        self.coordinates = coordinates if coordinates is not None else Euclidean(0)
+        self.factors = tuple(f for f in (rotation, coordinates) if f is not None and f.dim)
+        #: ``d``: rows of the stacked field ``G``; size of a variation ``s = (s_R, s_q)``
+        self.dim = (3 if rotation is not None else 0) + self.coordinates.dim
+
+    @classmethod
+    def of(cls, orientation: bool, names=(), units=None, angles=None) -> "Product":
+        """The space of a mechanism with (``orientation``) or without an orientation and the
+        coordinates ``names``."""
+        coords = Euclidean(len(names), names=names, units=units, angles=angles) if len(names) else None
+        return cls(SO3() if orientation else None, coords)
+
+    @property
+    def has_orientation(self) -> bool:
+        return self.rotation is not None
+
+    @property
+    def k(self) -> int:
+        """The number of coordinates ``q``."""
+        return self.coordinates.dim
+
+    @property
+    def name(self) -> str:
+        """``"SO(3)"``, ``"R^k"`` or ``"SO(3)xR^k"``."""
+        return "x".join(f.name for f in self.factors)
+
+    @property
+    def cli_names(self) -> tuple[str, ...]:
+        """The numbers of a state on the command line, in order."""
+        return tuple(n for f in self.factors for n in f.cli_names)
+
+    def describe(self) -> str:
+        if len(self.factors) == 1:
+            return self.factors[0].describe()
+        return (f"a pair (R, q): a rotation matrix R (3×3) and the {self.k} coordinates "
+                f"q = ({', '.join(self.coordinates.names)})")
+
+    # -- the caller's form ------------------------------------------------------------
+
+    def parse(self, value, name: str, owner: str = "") -> tuple[np.ndarray, np.ndarray]:
+        """The caller's state ``value`` (argument ``name``) as ``(R, q)``; ``ValueError``
+        saying what the space expects otherwise (``owner``: ``" for mechanism 'x'"``)."""
+        want = f"{name} must be {self.describe()}{owner}"
+        if self.rotation is None:
+            if isinstance(value, tuple) and len(value) == 2 and np.ndim(value[0]) == 2:
+                raise ValueError(f"{want}, got a pair (R, q): this mechanism has no orientation")
+            return IDENTITY.copy(), self.coordinates.parse(value, name, want)
+        if not self.k:
+            if isinstance(value, tuple):
+                raise ValueError(f"{want}, got a pair")
+            return self.rotation.parse(value, name), NO_COORDINATES
+        if not (isinstance(value, (tuple, list)) and len(value) == 2):
+            raise ValueError(f"{want}, got {_kind(value)}")
+        R = self.rotation.parse(np.asarray(value[0], dtype=float) if isinstance(value[0], list)
+                                else value[0], f"{name}[0] (the orientation)")
+        return R, self.coordinates.parse(value[1], f"{name}[1] (the coordinates)", want)
+
+    def public(self, R, q):
+        """The state ``(R, q)`` in the caller's form."""
+        if self.rotation is None:
+            return q
+        return (R, q) if self.k else R
+
+    # -- differences, distances, paths ----------------------------------------------
+
+    def error(self, R, q, Rd, qd) -> tuple[np.ndarray, dict]:
+        """``(e, parts)``: the stacked terminal error ``e = (l, δq)`` of ``(R, q)`` from
+        ``(R_d, q_d)`` and the norms of its parts by name (:meth:`parts`)."""
+        pieces, norms = [], []
+        if self.rotation is not None:
+            l, err = self.rotation.error(R, Rd)
+            pieces.append(l)
+            norms.append(err)
+        if self.k or self.rotation is None:
+            dq, err = self.coordinates.error(q, qd)
+            pieces.append(dq)
+            norms.append(err)
+        e = pieces[0] if len(pieces) == 1 else np.concatenate(pieces)
+        return e, self.parts(*norms)
+
+    def parts(self, *norms) -> dict:
+        """The error's part norms by name: ``{"rotation": rad, "coordinates": units}`` (the
+        parts the state has; an SO(3) state's only part is its rotation)."""
+        names = (["rotation"] if self.rotation is not None else []) + (
+            ["coordinates"] if self.k or self.rotation is None else [])
+        return {n: float(v) for n, v in zip(names, norms)}
+
+    def norm(self, parts: dict) -> float:
+        """``|e|`` from the norms of its parts."""
+        return float(np.hypot(parts.get("rotation", 0.0), parts.get("coordinates", 0.0)))
+
+    def distance(self, R, q, Rd, qd) -> float:
+        """``|e|`` of :meth:`error`."""
+        return self.norm(self.error(R, q, Rd, qd)[1])
+
+    def offset(self, R0, q0, Rd, qd) -> np.ndarray:
+        """The stacked displacement ``(log(R_d R0ᵀ), q_d ⊖ q0)`` from start to goal."""
+        return self.error(Rd, qd, R0, q0)[0]
+
+    def interpolate(self, a, b, s) -> list[tuple[np.ndarray, np.ndarray]]:
+        """The states ``(R, q)`` of the straight path ``a → b`` (geodesic × straight line) at
+        the fractions ``s``."""
+        (Ra, qa), (Rb, qb) = a, b
+        s = np.atleast_1d(np.asarray(s, dtype=float))
+        R = (self.rotation.interpolate(Ra, Rb, s) if self.rotation is not None
+             else np.broadcast_to(IDENTITY, (s.size, 3, 3)))
+        step = self.coordinates.difference(qb, qa)
+        return [(np.array(R[i]), qa + s[i] * step) for i in range(s.size)]
+
+    def sample(self, rng: np.random.Generator, n: int) -> list[tuple[np.ndarray, np.ndarray]]:
+        """``n`` states, uniform: Haar on SO(3) × the coordinates' box."""
+        R = self.rotation.sample(rng, n) if self.rotation is not None else np.broadcast_to(IDENTITY, (n, 3, 3))
+        q = self.coordinates.sample(rng, n)
+        return [(np.array(R[i]), q[i]) for i in range(n)]
+
+    # -- JSON and the command line --------------------------------------------------
+
+    def to_json(self, R, q):
+        """The state as JSON: a rotation as nested lists, coordinates as a list, the pair as
+        ``[R, q]``."""
+        if self.rotation is None:
+            return self.coordinates.to_json(q)
+        if not self.k:
+            return self.rotation.to_json(R)
+        return [self.rotation.to_json(R), self.coordinates.to_json(q)]
+
+    def from_json(self, value, name: str) -> tuple[np.ndarray, np.ndarray]:
+        """The state of :meth:`to_json`'s form (``ValueError`` naming ``name`` otherwise)."""
+        if self.rotation is not None and self.k and isinstance(value, list) and len(value) == 2:
+            value = (value[0], value[1])
+        return self.parse(value, name)
+
+    def from_cli(self, numbers) -> tuple[np.ndarray, np.ndarray]:
+        """The state of its command-line numbers (:attr:`cli_names`: RPY angles in rad, then
+        the coordinates)."""
+        numbers = np.asarray(numbers, dtype=float)
+        if numbers.shape != (len(self.cli_names),):
+            raise ValueError(f"a state takes {len(self.cli_names)} numbers "
+                             f"({' '.join(self.cli_names)}), got {numbers.size}")
+        r = 3 if self.rotation is not None else 0
+        R = self.rotation.from_cli(numbers[:3]) if r else IDENTITY.copy()
+        return R, self.coordinates.from_cli(numbers[r:])
+
+    def to_cli(self, R, q) -> np.ndarray:
+        parts = ([self.rotation.to_cli(R)] if self.rotation is not None else []) + [self.coordinates.to_cli(q)]
+        return np.concatenate(parts)
+
+    def __repr__(self) -> str:
+        return f"Product({', '.join(map(repr, self.factors))})"
+
+    def __eq__(self, other) -> bool:
+        return isinstance(other, Product) and (self.rotation, self.coordinates) == (other.rotation, other.coordinates)
+
+    def __hash__(self) -> int:
+        return hash((self.rotation, self.coordinates))
