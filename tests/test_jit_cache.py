@@ -6,7 +6,8 @@ from pathlib import Path
 
 SIMULATE = """
 import numpy as np
-from nonholo import simulate, so3
+from nonholo import simulate
+from nonholo.spaces import so3
 from nonholo.controls.parametrisations import Fourier
 tr = simulate(so3.from_rpy(0.1, 0.2, 0.3), Fourier(1.0, [[0.3, 0, 0], [0, 0.2, 0]]), 1.0,
               mechanism="attitude", steps=50)

@@ -117,7 +117,7 @@ def test_leg_clearance_barrier_terms_against_finite_differences():
 
 
 def test_cli_leg_length_and_its_figure(tmp_path, capsys):
-    from nonholo.cli.main.entry import main
+    from nonholo.cli import main
 
     args = ["plan", "--from", "0.5", "1.2", "-0.5", "--to", "1.0", "0.9", "-0.5", "--quiet"]
     out, png = tmp_path / "p.json", tmp_path / "p.png"

@@ -155,7 +155,7 @@ def test_cli_documents_its_exit_statuses():
 def test_cli_output_closed_by_its_reader_is_not_an_error(tmp_path, reader):
     start, goal = example_rpy_args(1)
     out = tmp_path / "plan.json"
-    cmd = " ".join([sys.executable, "-m", "nonholo.cli.entry", "plan", "--from", *start, "--to", *goal,
+    cmd = " ".join([sys.executable, "-m", "nonholo.cli", "plan", "--from", *start, "--to", *goal,
                     "--strategy", "paper", "--out", str(out)])
     proc = subprocess.run(["bash", "-c", f'{cmd} | {reader}; exit "${{PIPESTATUS[0]}}"'],
                           capture_output=True, text=True, timeout=600)

@@ -275,7 +275,7 @@ def test_plan_files_keep_the_route_honest(tmp_path):
 def test_cli_takes_the_route(tmp_path, capsys):
     import argparse
 
-    from nonholo.cli.main import plan_command as cli_plan
+    from nonholo.cli import plan_command as cli_plan
     from nonholo.io.result import PlanResult
 
     def cli(argv):

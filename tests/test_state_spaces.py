@@ -85,7 +85,7 @@ def test_kernel_against_dop853_and_jacobian_against_finite_differences(name):
     q0[-1] = 0.2 if name == "car" else q0[-1]
     T, N = 1.0, 200
     f = Fourier(T, rng.normal(scale=0.5, size=(2, 5)))
-    start = states.public(mech, R0, q0)
+    start = mech.space.public(R0, q0)
     tr = nonholo.simulate(start, f, T, mechanism=mech, steps=N)
     _, R, q, _ = verify.resimulate_state(start, f, T, mech.name)
     assert np.abs(tr.R[-1] - R[-1]).max() < 1e-8 and np.abs(tr.q[-1] - q[-1]).max() < 1e-8
@@ -98,7 +98,7 @@ def test_kernel_against_dop853_and_jacobian_against_finite_differences(name):
             p = f.params.copy()
             p[c] += sgn * eps
             t2 = nonholo.simulate(start, f.with_params(p), T, mechanism=mech, steps=N)
-            ends.append(states.error(mech, t2.R[-1], t2.q[-1], tr.R[-1], tr.q[-1])[0])
+            ends.append(mech.space.error(t2.R[-1], t2.q[-1], tr.R[-1], tr.q[-1])[0])
         fd[:, c] = (ends[0] - ends[1]) / (2 * eps)
     assert np.allclose(var.J, fd, atol=1e-7)
 
@@ -269,7 +269,7 @@ def test_command_line_plans_states(tmp_path, capsys):
     import argparse
     import csv
 
-    from nonholo.cli.main import plan_command as cli_plan
+    from nonholo.cli import plan_command as cli_plan
 
     def cli(argv):
         parser = argparse.ArgumentParser(prog="nonholo")

@@ -89,7 +89,7 @@ def test_bad_problem_files_name_the_row_and_column_before_anything_runs(tmp_path
         sweep.sweep(path, tmp_path / "r.parquet", workers=1, progress=False)
     assert not (tmp_path / "r.parquet").exists() and not sweep.parts_dir(tmp_path / "r.parquet").exists()
     # the command line: exit status 2, the same message
-    run = subprocess.run([sys.executable, "-m", "nonholo.cli.main.entry", "sweep", str(path), "--out",
+    run = subprocess.run([sys.executable, "-m", "nonholo.cli", "sweep", str(path), "--out",
                           str(tmp_path / "r.parquet")], capture_output=True, text=True)
     assert run.returncode == 2 and "row 1" in run.stderr
 
@@ -100,7 +100,7 @@ def test_a_killed_sweep_resumes_without_losing_or_repeating_a_row(tmp_path):
     table = sweep.sweep(rows, tmp_path / "serial.parquet", workers=1, progress=False)
     path = problems.write(tmp_path / "p.jsonl", rows)
     out = tmp_path / "r.parquet"
-    cmd = [sys.executable, "-m", "nonholo.cli.main.entry", "sweep", str(path), "--out", str(out), "--workers", "1",
+    cmd = [sys.executable, "-m", "nonholo.cli", "sweep", str(path), "--out", str(out), "--workers", "1",
            "--batch", "1", "--quiet"]
     proc = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
     parts = sweep.parts_dir(out)
@@ -146,7 +146,7 @@ def test_a_dask_cluster_of_separate_processes_gives_the_serial_rows(serial, tmp_
         assert sweep.comparable(got) == sweep.comparable(table)[:8]
         # the command line takes the scheduler's address
         path = problems.write(tmp_path / "p.jsonl", rows)
-        subprocess.run([sys.executable, "-m", "nonholo.cli.main.entry", "sweep", str(path), "--out",
+        subprocess.run([sys.executable, "-m", "nonholo.cli", "sweep", str(path), "--out",
                         str(tmp_path / "cli.parquet"), "--scheduler", address, "--quiet"], check=True)
         assert sweep.comparable(sweep.load(tmp_path / "cli.parquet")) == sweep.comparable(table)[:8]
 
@@ -172,7 +172,7 @@ def test_atlas_maps_from_a_small_sweep(tmp_path):
     for q in atlas.QUANTITIES:
         fig = atlas.atlas_figure(table, q)
         assert len(fig.axes) >= 2
-    run = subprocess.run([sys.executable, "-m", "nonholo.cli.main.entry", "atlas", str(tmp_path / "a.parquet"), "--out",
+    run = subprocess.run([sys.executable, "-m", "nonholo.cli", "atlas", str(tmp_path / "a.parquet"), "--out",
                           str(tmp_path / "figs")], capture_output=True, text=True)
     assert run.returncode == 0, run.stderr
     assert all((tmp_path / "figs" / f"atlas_{q}.{ext}").stat().st_size > 0

@@ -90,13 +90,13 @@ class Atlas:
         self.iterations = np.full(shape, np.nan)
         self.seconds = np.full(shape, np.nan)
         mech = catalog.get(self.mechanism)
-        sign0 = np.sign(mech.delta(so3.from_rpy(*self.start))) if mech.has_singular_set else 1.0
+        sign0 = np.sign(mech.delta(so3.from_rpy(*self.start))) if mech.singular.exists else 1.0
         for r, lab in keep:
             idx = (self.settings.index(lab["atlas"]), self.psi.index(lab["psi"]), lab["j"], lab["i"])
             problem = json.loads(r["problem"])
             dmin = problem["options"].get("delta_min", 1e-2)
             reachable = True
-            if mech.has_singular_set:
+            if mech.singular.exists:
                 d = float(mech.delta(np.array(problem["goal"])))
                 reachable = np.sign(d) == sign0 and abs(d) >= dmin
             self.outcome[idx] = "solved" if r["success"] else ("failed" if reachable else "unreachable")
@@ -139,7 +139,7 @@ def atlas_figure(table, quantity: str = "success") -> Figure:
                               cmap=ListedColormap([_SUCCESS_COLORS[2]]), vmin=0, vmax=2)
                 mesh = ax.pcolormesh(edges_phi, edges_theta, np.where(values > 0, values, np.nan),
                                      cmap="viridis", norm=norm)
-            if catalog.get(atlas.mechanism).has_singular_set:
+            if catalog.get(atlas.mechanism).singular.exists:
                 D = mechanism_delta_rpy(atlas.mechanism, fine_phi, fine_theta, psi)
                 ax.contour(fine_phi, fine_theta, D, levels=[0.0], colors="k", linewidths=1.6)
             if abs(psi - atlas.start[2]) < 1e-12:

@@ -36,8 +36,8 @@ import numpy as np
 
 from ..controls import stages
 from ..motion.playback import replay
-from ..numerics import kernels
 from ..spaces import state as states
+from ..spaces.groups import NO_COORDINATES
 
 #: Factor on the asymptotic Richardson estimate ``|R_M − R_{M/2}|/15`` of the error of ``R_M``.
 SAFETY = 2.0
@@ -68,9 +68,9 @@ class Certificate:
     certified for the ``tol`` and ``delta_min`` it was measured against; ``reason``: why not;
     ``correctable``: only the replay's terminal error is too large (the replay is accurate,
     well conditioned and clear of ``Δ = 0``). ``l``: the replay's ``l_T``; ``R``: its nodes
-    (``M + 1``); ``q``: their coordinates (``(M + 1, k)``, a state beyond SO(3)); ``errors``:
-    the norms of the rotation and coordinate parts of ``l`` (:mod:`nonholo.spaces.state`).
-    Beyond SO(3) the errors and bounds are in the stacked metric of :mod:`nonholo.spaces.state`.
+    (``M + 1``); ``q``: their coordinates (``(M + 1, k)``); ``errors``: the norms of the
+    parts of ``l`` by name (:meth:`nonholo.spaces.groups.Product.parts`). Errors and bounds
+    are in the stacked metric of :mod:`nonholo.spaces.groups`.
     """
 
     replay_steps: int
@@ -85,7 +85,7 @@ class Certificate:
     R: np.ndarray
     U: np.ndarray | None = None
     q: np.ndarray | None = None
-    errors: tuple[float, float] | None = None
+    errors: dict | None = None
 
     def inputs_at(self, steps: int) -> np.ndarray:
         """The replayed inputs ``u(t_n)`` at the ``steps + 1`` points ``t_n = nT/steps``
@@ -100,14 +100,11 @@ class Certificate:
         return self.terminal_error + self.error_bound
 
 
-def richardson(R_fine: np.ndarray, R_coarse: np.ndarray, mechanism=None, q_fine=None,
-               q_coarse=None) -> float:
-    """The error estimate of the ``M``-step endpoint ``R_fine`` from the ``M/2``-step
-    ``R_coarse``: :data:`SAFETY` ``·|log(R_fine R_coarseᵀ)|/15`` (rad); beyond SO(3) the
-    distance of the states (:func:`nonholo.spaces.state.distance`)."""
-    if mechanism is not None and mechanism.beyond_so3:
-        return SAFETY * states.distance(mechanism, R_fine, q_fine, R_coarse, q_coarse) / 15.0
-    return SAFETY * float(kernels.log_error(np.ascontiguousarray(R_fine), np.ascontiguousarray(R_coarse))[1]) / 15.0
+def richardson(fine, coarse, mechanism) -> float:
+    """The error estimate of the ``M``-step endpoint ``fine`` from the ``M/2``-step
+    ``coarse`` (states ``(R, q)``): :data:`SAFETY` times their distance (``|log(R_fine
+    R_coarseᵀ)|`` on SO(3), the stacked error's norm beyond) over 15."""
+    return SAFETY * mechanism.space.distance(*fine, *coarse) / 15.0
 
 
 def sensitivity(R0, par, T: float, mechanism, steps: int, U=None, sign: float | None = None, q0=None):
@@ -118,8 +115,7 @@ def sensitivity(R0, par, T: float, mechanism, steps: int, U=None, sign: float | 
     on ``steps`` CF4 steps (``U``: their stage table, if known). The nodes of ``R`` are
     those of :func:`replay` on the same steps. ``G`` is only as good as the grid resolves
     ``Φ``, which may take a finer grid than ``R_T`` does: :func:`resolved_sensitivity`.
-    Beyond SO(3) (``q0``): ``Φ`` of the stacked variation, ``d × d``, and ``R_T`` the
-    endpoint ``(R_T, q_T)``.
+    ``Φ`` is that of the stacked variation, ``d × d``, and the endpoint the state ``(R_T, q_T)``.
     """
     if U is None:
         U = stages.stage_table(par, steps)
@@ -128,8 +124,7 @@ def sensitivity(R0, par, T: float, mechanism, steps: int, U=None, sign: float | 
     R = np.ascontiguousarray(R0, dtype=float)
     q = np.ascontiguousarray(states.NO_COORDINATES if q0 is None else q0, dtype=float)
     if sign is None:
-        sign = (float(np.sign(mechanism.delta_samples(R[None], q[None])[0]))
-                if mechanism.has_singular_set else 1.0)
+        sign = mechanism.singular.sign(R, q)
     Rs, Qs = states.buffers(mechanism, steps)
     Zs = np.empty((steps + 1, d, d))
     n, _, _ = states.forward_variational(
@@ -144,8 +139,7 @@ def sensitivity(R0, par, T: float, mechanism, steps: int, U=None, sign: float | 
         except np.linalg.LinAlgError:       # Z(T) overflowed to a singular matrix
             return float("inf"), None
         G = float(np.sqrt(np.max(np.sum(Phi.reshape(d, -1, d) ** 2, axis=(0, 2)))))
-    end = (Rs[-1], Qs[-1]) if mechanism.beyond_so3 else Rs[-1]
-    return (G if np.isfinite(G) else float("inf")), end
+    return (G if np.isfinite(G) else float("inf")), (Rs[-1], Qs[-1])
 
 
 def agree(G_coarse: float, G_fine: float) -> bool:
@@ -208,10 +202,11 @@ def measure(R0, Rd, T: float, mechanism, par, steps: int, tol: float, delta_min:
     ``G``: the sensitivity, ``R_half``: the endpoint of the ``steps/2`` replay, if already
     known; ``max_steps``: the finest replay (default :data:`MAX_REPLAY_STEPS`);
     ``leg_limits``: stroke limits (:class:`~nonholo.model.limits.LegLimits`) every node of the
-    replay must keep. ``q0``, ``qd``: the start's and goal's coordinates of a state beyond
-    SO(3) (``R_half`` is then the pair ``(R, q)``)."""
-    beyond = mechanism.beyond_so3
-    has_delta = mechanism.has_singular_set
+    replay must keep. ``q0``, ``qd``: the start's and goal's coordinates (``R_half`` is the
+    state ``(R, q)``)."""
+    singular = mechanism.singular
+    q0 = np.ascontiguousarray(NO_COORDINATES if q0 is None else q0, dtype=float)
+    qd = NO_COORDINATES if qd is None else qd
     cap = MAX_REPLAY_STEPS if max_steps is None else max_steps
     M = steps
     U = np.ascontiguousarray(stages.stage_table(par, M))
@@ -234,7 +229,7 @@ def measure(R0, Rd, T: float, mechanism, par, steps: int, tol: float, delta_min:
                 R_half = R_T
     if R_half is None:
         half = replay(R0, par, T, mechanism, M // 2, sign, stages.halve(U), q0)
-        R_half = (half[0][-1], half[3][-1]) if beyond else half[0][-1]
+        R_half = (half[0][-1], half[3][-1])
     # a sensitivity that already rules the plan out is not worth a finer replay
     hopeless = not resolved or not G * REPLAY_PERTURBATION <= SENSITIVITY_FRACTION * tol
     while True:
@@ -242,30 +237,21 @@ def measure(R0, Rd, T: float, mechanism, par, steps: int, tol: float, delta_min:
             U = np.ascontiguousarray(stages.stage_table(par, M))
         R, done, dmin, q = replay(R0, par, T, mechanism, M, sign, U, q0)
         if done < M:
-            return _failed(M, G, R, has_delta, dmin, f"the physical replay ({M} steps) produced a "
+            return _failed(M, G, R, singular, dmin, f"the physical replay ({M} steps) produced a "
                            f"non-finite angular velocity at t ≈ {done * T / M:.4g} s", mechanism.n_rates)
-        if beyond:
-            est = richardson(R[-1], R_half[0], mechanism, q[-1], R_half[1])
-        else:
-            est = richardson(R[-1], R_half)
+        est = richardson((R[-1], q[-1]), R_half, mechanism)
         if hopeless or not est > ERROR_FRACTION * tol or 2 * M > cap:
             break
-        R_half, M, U = ((R[-1], q[-1]) if beyond else R[-1]), 2 * M, None
-    if beyond:
-        l, rot, coord = states.error(mechanism, R[-1], q[-1], Rd, qd)
-        err = float(np.hypot(rot, coord))
-        errors = (rot, coord)
-    else:
-        l, err = kernels.log_error(R[-1], np.ascontiguousarray(Rd, dtype=float))
-        err = float(err)
-        errors = (err, 0.0)
+        R_half, M, U = (R[-1], q[-1]), 2 * M, None
+    l, errors = mechanism.space.error(R[-1], q[-1], Rd, qd)
+    err = mechanism.space.norm(errors)
     bound = est + G * REPLAY_PERTURBATION
-    dmin = dmin if has_delta else None
+    dmin = singular.reported(dmin)
     reason = ""
     correctable = False
     if not np.isfinite(G):
         reason = ("the physical replay's sensitivity is infinite (its variational system "
-                  + ("ran into Δ = 0" if has_delta else "overflowed") + "): the endpoint cannot be certified")
+                  + ("ran into Δ = 0" if singular.exists else "overflowed") + "): the endpoint cannot be certified")
     elif not resolved:
         found = ", ".join(f"{g:.3g} on {k} steps" for k, g in grids.items())
         reason = (f"the physical replay's sensitivity max|Φ(T,t)| is not resolved ({found}): "
@@ -277,7 +263,7 @@ def measure(R0, Rd, T: float, mechanism, par, steps: int, tol: float, delta_min:
     elif est > ERROR_FRACTION * tol:
         reason = (f"the replay's integration error is still ~{est:.2g} rad with {M} steps "
                   f"(the most certified: {cap}); more than {ERROR_FRACTION:g}·tol")
-    elif has_delta and dmin < delta_min:
+    elif not singular.clear(dmin, delta_min):
         reason = (f"the physical replay comes within {dmin:.4g} of Δ = 0 (delta_min = {delta_min:g})")
     elif leg_limits is not None and leg_limits.least_clearance(mechanism, R) < 0.0:
         reason = (f"the physical replay leaves the legs' stroke: "
@@ -286,11 +272,10 @@ def measure(R0, Rd, T: float, mechanism, par, steps: int, tol: float, delta_min:
         reason = (f"the physical replay ({M} steps) ends {err:.3g} rad from the goal "
                   f"(+ error bound {bound:.2g} > tol = {tol:g})")
         correctable = True
-    return Certificate(M, err, bound, dmin, G, not reason, reason, correctable, l, R, U,
-                       q if beyond else None, errors)
+    return Certificate(M, err, bound, dmin, G, not reason, reason, correctable, l, R, U, q, errors)
 
 
-def _failed(M, G, R, has_delta, dmin, reason, rates: int = 3) -> Certificate:
-    return Certificate(M, float("inf"), float("inf"), dmin if has_delta else None, G, False, reason,
+def _failed(M, G, R, singular, dmin, reason, rates: int = 3) -> Certificate:
+    return Certificate(M, float("inf"), float("inf"), singular.reported(dmin), G, False, reason,
                        False, np.full(rates, np.nan), R)
 

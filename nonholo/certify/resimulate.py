@@ -147,7 +147,7 @@ def resimulate_path(R0, controls, T: float, mechanism="platform", breakpoints=No
     order = np.argsort(t, kind="stable")
     t, R = t[order], R[order]
     delta = None
-    if mech.has_singular_set:
+    if mech.singular.exists:
         delta = np.array([mech.delta(r) for r in R])
     return t, R, delta
 
@@ -210,9 +210,9 @@ def resimulate_rk4(R0, controls, T: float, mechanism="platform", steps: int = RK
     L_into = mech.module.L_into
     Y = np.ascontiguousarray(R.transpose(1, 2, 0))                             # (3, 3, P)
     B = np.empty((3, m, P))
-    has_delta = mech.has_singular_set
-    sign = np.sign(mech.module.delta(Y)) if has_delta else None
-    dmin = sign * mech.module.delta(Y) if has_delta else None
+    watched = mech.singular.exists
+    sign = np.sign(mech.module.delta(Y)) if watched else None
+    dmin = sign * mech.module.delta(Y) if watched else None
 
     def f(Y, u):
         L_into(Y, B)
@@ -230,10 +230,10 @@ def resimulate_rk4(R0, controls, T: float, mechanism="platform", steps: int = RK
             k3 = f(Y + 0.5 * h * k2, u1)
             k4 = f(Y + h * k3, u2)
             Y = Y + (h / 6.0) * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
-            if has_delta:
+            if watched:
                 dmin = np.fmin(dmin, sign * mech.module.delta(Y))
     RT = Y.transpose(2, 0, 1)
-    if has_delta:
+    if watched:
         dmin = np.where(np.isfinite(RT).all(axis=(1, 2)), dmin, -np.inf)
     if single:
         return RT[0], None if dmin is None else float(dmin[0])
@@ -276,11 +276,9 @@ def resimulate_state(start, controls, T: float, mechanism, breakpoints=None, sam
     orientation), coordinates ``(n, k)`` and the model's ``Δ`` there (``None`` without a
     singular set); the last sample is the endpoint at ``T``.
     """
-    from ..spaces import state as states
-
     mech = catalog.get(mechanism)
     rates, delta_of = MODELS[mech.name]
-    R0, q0 = states.parse(mech, start, "start")
+    R0, q0 = mech.parse_state(start, "start")
     m, k = mech.n_inputs, mech.n_coordinates
     grid = np.linspace(0.0, float(T), int(samples))
     ts, Ys = [], []
@@ -312,8 +310,4 @@ def resimulate_state(start, controls, T: float, mechanism, breakpoints=None, sam
 def state_errors(mechanism, R_T, q_T, Rd, qd) -> dict:
     """The terminal error by part of an independently re-simulated endpoint:
     ``{"rotation": rad, "coordinates": units}`` (angles wrapped, :mod:`nonholo.spaces.state`)."""
-    from ..spaces import state as states
-
-    mech = catalog.get(mechanism)
-    _, rot, coord = states.error(mech, R_T, q_T, Rd, qd)
-    return states.error_parts(mech, rot, coord)
+    return catalog.get(mechanism).space.error(R_T, q_T, Rd, qd)[1]

@@ -51,9 +51,9 @@ def _audit(args) -> int:
 def _mechanisms(args) -> int:
     for name in catalog.names():
         m = catalog.get(name)
-        singular = "singular set Δ = 0" if m.has_singular_set else "no singular set"
-        state = "" if not m.beyond_so3 else f"state {m.state_space}: " + " ".join(
-            (["φ", "ϑ", "ψ"] if m.orientation else []) + list(m.coordinates)) + ", "
+        singular = "singular set Δ = 0" if m.singular.exists else "no singular set"
+        state = "" if not m.space.k else f"state {m.state_space}: " + " ".join(
+            (["φ", "ϑ", "ψ"] if m.space.has_orientation else []) + list(m.coordinates)) + ", "
         print(f"{name:<16} {m.description} ({state}{m.n_inputs} inputs, {singular})")
     return 0
 

@@ -163,14 +163,12 @@ def _plot_format_error(path) -> str | None:
 def state_of(mechanism, values, flag: str):
     """The state ``values`` (numbers given to ``flag``) of ``mechanism`` as :func:`nonholo.plan`
     takes it (see the module): ``ValueError`` naming ``flag`` and what it needs otherwise."""
-    mech = catalog.get(mechanism)
-    names = (["φ", "ϑ", "ψ"] if mech.orientation else []) + list(mech.coordinates)
+    space = catalog.get(mechanism).space
+    names = space.cli_names
     if len(values) != len(names):
-        raise ValueError(f"{flag} takes {len(names)} numbers for mechanism {mech.name!r} "
+        raise ValueError(f"{flag} takes {len(names)} numbers for mechanism {catalog.get(mechanism).name!r} "
                          f"({' '.join(names)}), got {len(values)}")
-    R = so3.from_rpy(*values[:3]) if mech.orientation else states.IDENTITY
-    q = np.array(values[3:] if mech.orientation else values, dtype=float)
-    return states.public(mech, R, q)
+    return space.public(*space.from_cli(values))
 
 
 def run(args) -> int:
@@ -242,9 +240,9 @@ def plot(res, path) -> None:
     import matplotlib.pyplot as plt
 
     mech = catalog.get(res.mechanism)
-    has_delta = res.delta is not None
+    with_delta = res.delta is not None
     legs = mech.has_legs and len(res.R) > 0
-    rows = 1 + mech.orientation + mech.beyond_so3 + has_delta + 2 * legs
+    rows = 1 + len(mech.space.factors) + with_delta + 2 * legs
     fig, axes = plt.subplots(rows, 1, sharex=True, figsize=(7, 2.4 * rows))
     row = iter(axes[1:])
     tt = np.linspace(0.0, res.T, 1001)
@@ -254,7 +252,7 @@ def plot(res, path) -> None:
     axes[0].set_ylabel("input u [1/s]")
     axes[0].legend(fontsize="small")
     axes[0].set_title(f"{res.mechanism}, {res.method}/{res.strategy}: " + _error_text(res, ".2e"))
-    if mech.orientation:
+    if mech.space.has_orientation:
         ax = next(row)
         if len(res.R):
             rpy = np.array([so3.as_rpy(R) for R in res.R])
@@ -263,7 +261,7 @@ def plot(res, path) -> None:
                 ax.axhline(so3.as_rpy(res.Rd)[k], color=line.get_color(), ls=":", lw=0.8)
             ax.legend(fontsize="small", title="dotted: goal", title_fontsize="small")
         ax.set_ylabel("RPY angles [rad]")
-    if mech.beyond_so3:
+    if mech.space.k:
         ax = next(row)
         if len(res.q):
             for k, name in enumerate(mech.coordinates):
@@ -271,7 +269,7 @@ def plot(res, path) -> None:
                 ax.axhline(res.qd[k], color=line.get_color(), ls=":", lw=0.8)
             ax.legend(fontsize="small", title="dotted: goal", title_fontsize="small")
         ax.set_ylabel("coordinates")
-    if has_delta:
+    if with_delta:
         ax = next(row)
         ax.plot(res.t, res.delta, label="Δ at the integrator's steps")
         dmin = res.options.get("delta_min", 0.0)

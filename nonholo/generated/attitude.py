@@ -6,6 +6,7 @@ file differs from a fresh derivation.
 """
 import numpy
 
+
 NAME = 'attitude'
 DESCRIPTION = 'rigid body steered by two body-fixed angular rates about e1 and e2'
 INPUTS = ('u1 = body rate about b1', 'u2 = body rate about b2')

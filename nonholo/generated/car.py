@@ -6,6 +6,7 @@ file differs from a fresh derivation.
 """
 import numpy
 
+
 NAME = 'car'
 DESCRIPTION = 'kinematic car with the steering angle as a state (wheelbase 1)'
 INPUTS = ('v = rear-axle speed', 'u2 = dphi/dt')

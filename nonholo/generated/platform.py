@@ -6,6 +6,7 @@ file differs from a fresh derivation.
 """
 import numpy
 
+
 NAME = 'platform'
 DESCRIPTION = 'orienting platform of Tchon & Jakubiak (2014): two legs, a disk rolling at the pole'
 INPUTS = ('u1 = d(l1^2)/dt / (4 |A1| |B1|)', 'u2 = d(l2^2)/dt / (4 |A2| |B2|)')

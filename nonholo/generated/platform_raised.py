@@ -6,6 +6,7 @@ file differs from a fresh derivation.
 """
 import numpy
 
+
 NAME = 'platform_raised'
 DESCRIPTION = 'orienting platform with raised leg bases and the disk on the equator; identity regular'
 INPUTS = ('u1 = d(l1^2)/dt / (4 |A1| |B1|)', 'u2 = d(l2^2)/dt / (4 |A2| |B2|)')

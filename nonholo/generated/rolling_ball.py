@@ -6,6 +6,7 @@ file differs from a fresh derivation.
 """
 import numpy
 
+
 NAME = 'rolling_ball'
 DESCRIPTION = 'ball of radius 1 rolling without slipping or spinning on the plane z = 0'
 INPUTS = ('v1 = dp1/dt', 'v2 = dp2/dt')

@@ -81,7 +81,7 @@ def states_at(result, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     q0 = states.NO_COORDINATES if result.q0 is None else np.asarray(result.q0, dtype=float)
     Q = np.zeros((n_samples, 0)) if result.q is None else np.asarray(result.q, dtype=float)
     sgn = 1.0
-    if mech.has_singular_set:
+    if mech.singular.exists:
         sgn = float(np.sign(mech.delta_samples(np.asarray(result.R0)[None], q0[None])[0]))
     starts = idx * h
     U = np.stack([controls(starts), controls(starts + 0.5 * s), controls(starts + s)],
@@ -131,12 +131,12 @@ def trajectory_table(result, rate: float = DEFAULT_RATE) -> dict[str, np.ndarray
         cols[f"u{i + 1}"] = u[:, i]
     for i, name in enumerate(mech.coordinates):
         cols[name] = q[:, i]
-    if mech.orientation:
+    if mech.space.has_orientation:
         quaternion = continuous_quaternions(R)
         for i, name in enumerate(("qx", "qy", "qz", "qw")):
             cols[name] = quaternion[:, i]
-    if mech.has_singular_set:
-        cols["delta"] = mech.delta_samples(R, q if mech.beyond_so3 else None)
+    if mech.singular.exists:
+        cols["delta"] = mech.delta_samples(R, q if mech.space.k else None)
     return cols
 
 

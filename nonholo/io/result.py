@@ -54,9 +54,8 @@ from ..motion.retimed import Retimed
 from ..numerics import kernels
 from ..numerics.checks import MAX_STEPS, is_number
 from ..spaces import so3
-from ..spaces.state import distance as state_distance
+from ..spaces.groups import NO_COORDINATES
 from ..spaces.state import forward as states_forward
-from ..spaces.state import public as public_state
 from . import csv_export as export
 
 FORMAT = "nonholo.plan/3"
@@ -166,7 +165,7 @@ class PlanResult:
     def _public(self, R, q):
         if q is None:
             return R
-        return public_state(catalog.get(self.mechanism), R, q)
+        return catalog.get(self.mechanism).space.public(R, q)
 
     # -- controls ----------------------------------------------------------------------
     def controls(self, t) -> np.ndarray:
@@ -294,7 +293,7 @@ class PlanResult:
             error_bound=_number(d, "error_bound", null=True),
             replay_steps=None if d["replay_steps"] is None else _integer(d, "replay_steps", minimum=2),
             route=_string(d, "route"), stitched=stitched,
-            **({} if not mech.beyond_so3 else _coordinates(d, mech)))
+            **({} if not mech.space.k else _coordinates(d, mech)))
         _Validation(res, legacy=d["format"] == FORMAT_1).run()
         return res
 
@@ -624,7 +623,7 @@ def _controls(d, mech, where: str = "controls", timed: bool = True) -> Controls 
         _rotation(_array(d["R0"], f"{where}.R0", (3, 3)), f"{where}.R0")
         _controls(d["base"], mech, f"{where}.base", timed=False)
     elif isinstance(d, dict) and d.get("kind") == Stitched.kind:
-        _fields(d, _CONTROL_FIELDS["stitched"] + (("coordinates",) if mech.beyond_so3 else ()), where)
+        _fields(d, _CONTROL_FIELDS["stitched"] + (("coordinates",) if mech.space.k else ()), where)
         if _number(d, "T", where=f"{where}.") <= 0:
             _fail(f"{where}.T", f"must be positive, got {d['T']}")
         pieces = d["pieces"]
@@ -635,7 +634,7 @@ def _controls(d, mech, where: str = "controls", timed: bool = True) -> Controls 
         W = _array(d["waypoints"], f"{where}.waypoints", (len(pieces) + 1, 3, 3))
         for i, R in enumerate(W):
             _rotation(R, f"{where}.waypoints[{i}]")
-        if mech.beyond_so3:
+        if mech.space.k:
             _array(d["coordinates"], f"{where}.coordinates", (len(pieces) + 1, mech.n_coordinates))
     else:
         _physical(d, mech, where)
@@ -716,7 +715,7 @@ class _Validation:
             return
         if not np.array_equal(r.R[0], r.R0):
             _fail("R", "starts elsewhere than R0 (R[0] != R0)")
-        if mech.beyond_so3 and not np.array_equal(r.q[0], r.q0):
+        if mech.space.k and not np.array_equal(r.q[0], r.q0):
             _fail("q", "starts elsewhere than q0 (q[0] != q0)")
         self.replay(mech, n)
         self.values(mech, n, complete)
@@ -865,7 +864,7 @@ class _Validation:
         n = r.t.shape[0] if r.t.ndim == 1 else -1
         if n < 0:
             _fail("t", f"must have shape (n,), got {r.t.shape}")
-        if mech.beyond_so3:
+        if mech.space.k:
             if r.q is None or r.q0 is None or r.qd is None:
                 _fail("q", f"must be set: mechanism {mech.name!r} has coordinates")
             arrays["q"] = r.q
@@ -879,7 +878,7 @@ class _Validation:
                 continue
             if arrays[key].shape != shape:
                 _fail(key, f"must have shape {shape} (n = {n} samples in t), got {arrays[key].shape}")
-        if mech.has_singular_set:
+        if mech.singular.exists:
             if r.delta is None or r.delta.shape != (n,):
                 _fail("delta", f"must have shape ({n},): mechanism {mech.name!r} has a singular set, "
                                f"got {'null' if r.delta is None else r.delta.shape}")
@@ -941,13 +940,10 @@ class _Validation:
             par = par.base             # the same path: replayed as planned
         T = par.T
         frame = isinstance(par, FrameControls) and r.replay_steps is None
-        q0 = r.q0 if mech.beyond_so3 else None
-        if mech.has_singular_set:
-            self.sign = float(np.sign(mech.delta_samples(r.R0[None], None if q0 is None else q0[None])[0]))
-            if self.sign == 0.0:
-                _fail("R0", "lies on the singular surface Δ = 0")
-        else:
-            self.sign = 1.0
+        q0 = np.ascontiguousarray(r.q0 if mech.space.k else NO_COORDINATES, dtype=float)
+        self.sign = mech.singular.sign(r.R0, q0)
+        if self.sign == 0.0:
+            _fail("R0", "lies on the singular surface Δ = 0")
         if r.replay_steps is not None:
             if n != r.steps + 1:
                 _fail("replay_steps", f"is set, but the trajectory stops at t = {r.t[-1]:.6g} s < T")
@@ -961,7 +957,7 @@ class _Validation:
             U = np.ascontiguousarray(stages.stage_table(par.frame if frame else par, r.steps)[:n - 1])
             Rs, Qs = np.empty((n, 3, 3)), np.empty((n, mech.n_coordinates))
             done, dmin, _ = states_forward(mech, kern, np.ascontiguousarray(r.R0, dtype=float),
-                                           np.zeros(0) if q0 is None else np.ascontiguousarray(q0),
+                                           q0,
                                            U, T / r.steps, self.sign, -np.inf, Rs, Qs)
         if done < n - 1:
             _fail("R", f"goes on to t = {r.t[-1]:.6g} s, but the controls replayed from R0 stop at "
@@ -974,7 +970,7 @@ class _Validation:
             _fail("R", f"disagrees with the controls replayed from R0 (the {system} of "
                        f"{mech.name!r}, {steps} steps): by {dev[k]:.3g} at t = {r.t[k]:.6g} s "
                        f"(tolerance {REPLAY_TOL:g})")
-        if mech.beyond_so3:
+        if mech.space.k:
             dev = np.max(np.abs(Qs - r.q), axis=1)
             k = int(np.argmax(dev))
             if not dev[k] <= REPLAY_TOL:
@@ -983,7 +979,7 @@ class _Validation:
         self.dmin = float(dmin)
         if r.replay_steps is not None:
             R_half, _, _, Q_half = playback.replay(r.R0, par, T, mech, M // 2, self.sign, stages.halve(U), q0)
-            est = certify.richardson(R_M[-1], R_half[-1], mech, Q_M[-1], Q_half[-1])
+            est = certify.richardson((R_M[-1], Q_M[-1]), (R_half[-1], Q_half[-1]), mech)
             if not r.error_bound >= est * (1.0 - 1e-9):
                 _fail("error_bound", f"({r.error_bound:.3g}) is below the replay's own error "
                                      f"estimate ({est:.3g} rad with {M} steps)")
@@ -995,7 +991,7 @@ class _Validation:
         dev = np.max(np.abs(u - r.u))
         if not dev <= VALUE_RTOL * max(1.0, float(np.max(np.abs(u)))):
             _fail("u", f"disagrees with controls(t) by {dev:.3g}")
-        if mech.has_singular_set:
+        if mech.singular.exists:
             d = mech.delta_samples(r.R, r.q)
             dev = np.max(np.abs(d - r.delta))
             if not dev <= VALUE_RTOL * max(1.0, float(np.max(np.abs(d)))):
@@ -1003,8 +999,8 @@ class _Validation:
         if complete:
             if r.terminal_error is None:
                 _fail("terminal_error", "is null, but the trajectory reaches T")
-            if mech.beyond_so3:
-                err = state_distance(mech, r.R[-1], r.q[-1], r.Rd, r.qd)
+            if mech.space.k:
+                err = mech.space.distance(r.R[-1], r.q[-1], r.Rd, r.qd)
                 what = "the distance of the last sample from the goal"
             else:
                 err = float(kernels.log_error(np.ascontiguousarray(r.R[-1]), np.ascontiguousarray(r.Rd))[1])
@@ -1013,7 +1009,7 @@ class _Validation:
                 _fail("terminal_error", f"is {r.terminal_error:.6g}, but {what} = {err:.6g}")
         elif r.terminal_error is not None:
             _fail("terminal_error", f"must be null: the trajectory stops at t = {r.t[-1]:.6g} s < T")
-        if mech.has_singular_set:
+        if mech.singular.exists:
             if r.min_delta is None:
                 _fail("min_delta", f"is null, but mechanism {mech.name!r} has a singular set")
             tol = VALUE_RTOL * max(1.0, abs(r.min_delta))
@@ -1036,7 +1032,7 @@ class _Validation:
                 _fail("success", f"is true, but terminal_error + error_bound = "
                                  f"{r.terminal_error + bound:.3g} > tol = {tol:g}")
             dmin = r.options.get("delta_min")
-            if mech.has_singular_set and dmin is not None and r.min_delta < dmin:
+            if mech.singular.exists and dmin is not None and r.min_delta < dmin:
                 _fail("success", f"is true, but min_delta = {r.min_delta:.4g} < delta_min = {dmin:g}")
             stroke = r.options.get("leg_length")
             if stroke is not None:
@@ -1053,3 +1049,11 @@ class _Validation:
                 fastest = float(np.max(np.abs(mech.leg_speeds(r.R, r.u))))
                 if fastest > speed * (1.0 + SPEED_RTOL):
                     _fail("success", f"is true, but a leg moves at {fastest:.6g} > leg_speed = {speed:g}")
+
+
+def coordinate_fields(mechanism, q, q0, qd, errors) -> dict:
+    """A result's fields that hold coordinates (:class:`PlanResult`'s ``q``, ``q0``, ``qd``,
+    ``errors``): none for a mechanism whose state has none (an SO(3) mechanism)."""
+    if not mechanism.space.k:
+        return {}
+    return {"q": q, "q0": q0, "qd": qd, "errors": errors}

@@ -145,7 +145,14 @@ class Mechanism:
     @cached_property
     def singular(self) -> SingularSet:
         """The singular set ``Δ = 0`` (:class:`~nonholo.spaces.singular.NoSingularSet` without one)."""
-        return NoSingularSet() if self.delta is None else SingularSet(self.delta_samples)
+        if self.delta is None:
+            return NoSingularSet()
+        return SingularSet(self.delta_samples, on_rotations=not self.space.k, owner=self.name)
+
+    def parse_state(self, value, name: str):
+        """The caller's state ``value`` (argument ``name``) as ``(R, q)``
+        (:meth:`nonholo.spaces.groups.Product.parse`)."""
+        return self.space.parse(value, name, owner=f" for mechanism {self.name!r}")
 
     @property
     def orientation(self) -> bool:

@@ -190,7 +190,7 @@ def _speed_spline(base, R0, mech, nodes: int) -> tuple[PPoly, np.ndarray]:
     jumps (one PPoly with values of shape ``(k,)``), and the jumps' times."""
     T = base.T
     U = np.ascontiguousarray(stages.stage_table(base, nodes))
-    sign = float(np.sign(mech.delta(R0))) if mech.has_singular_set else 1.0
+    sign = float(np.sign(mech.delta(R0))) if mech.singular.exists else 1.0
     Rs, done, _, _ = playback.replay(np.asarray(R0, dtype=float), base, T, mech, nodes, sign, U)
     if done < nodes:
         raise ValueError("the planned motion runs into a non-finite angular velocity: not re-timed")

@@ -128,15 +128,11 @@ def stage_table(controls, T: float, steps: int, n_inputs: int) -> np.ndarray:
     return np.ascontiguousarray(U, dtype=float)
 
 
-def _sign_of_delta(kern, mech, R0, q0) -> float:
-    if not kern.has_singular_set:
-        return 1.0
-    d0 = float(mech.delta_samples(R0[None], q0[None])[0])
-    if d0 == 0.0:
-        raise ValueError("R0 lies on the singular surface Δ(R) = 0, where L(R) is undefined"
-                         if not mech.beyond_so3 else
-                         "the start lies on the singular set Δ = 0, where G is undefined")
-    return float(np.sign(d0))
+def _sign_of_delta(mech, R0, q0) -> float:
+    sign = mech.singular.sign(R0, q0)
+    if sign == 0.0:
+        raise ValueError(mech.singular.refusal)
+    return sign
 
 
 def _trajectory(mech, Rs, U, T, steps, n, dmin, sgn, Qs=None) -> Trajectory:
@@ -146,17 +142,17 @@ def _trajectory(mech, Rs, U, T, steps, n, dmin, sgn, Qs=None) -> Trajectory:
         t[-1] = T
     u = np.concatenate([U[:n, 0], U[steps - 1:steps, 2]]) if n == steps else U[:n + 1, 0]
     R = Rs[:n + 1].copy()
-    q = None if Qs is None or not mech.beyond_so3 else Qs[:n + 1].copy()
+    q = None if Qs is None or not mech.space.k else Qs[:n + 1].copy()
     return Trajectory(t=t, R=R, u=u.copy(), delta=mech.delta_samples(R, q),
-                      min_delta=(float(dmin) if mech.has_singular_set else None),
+                      min_delta=mech.singular.reported(dmin),
                       mechanism=mech.name, T=T, steps=steps, q=q)
 
 
 def _stopped(mech, n, t_stop, dmin, sgn, traj) -> SingularTrajectoryError:
-    if mech.has_singular_set and dmin <= 0.0:
+    if mech.singular.exists and dmin <= 0.0:
         why = ("reaches the singular surface Δ = 0 (Δ changes sign between two integrator "
                "points: |ω| ~ 1/|Δ| blows up there)")
-    elif mech.has_singular_set and dmin < DELTA_STOP:
+    elif mech.singular.exists and dmin < DELTA_STOP:
         why = f"reaches the singular surface Δ = 0 (|Δ| = {dmin:.3g})"
     else:
         why = "produces a non-finite angular velocity"
@@ -168,11 +164,11 @@ def _setup(R0, controls, T, mechanism, steps):
     (:func:`nonholo.spaces.state.parse`), ``T``, ``steps``, its kernels, ``sgn Δ`` at the start and
     the controls' stage table."""
     mech = catalog.get(mechanism)
-    R0, q0 = states.parse(mech, R0, "R0")
+    R0, q0 = mech.parse_state(R0, "R0")
     T = check_time(T)
     steps = check_count(steps, "steps", maximum=MAX_STEPS)
     kern = mech.kernels()
-    sgn = _sign_of_delta(kern, mech, R0, q0)
+    sgn = _sign_of_delta(mech, R0, q0)
     return mech, (R0, q0), T, steps, kern, sgn, stage_table(controls, T, steps, mech.n_inputs)
 
 

@@ -132,9 +132,9 @@ def mechanism_cards():
     singular sets, the others with a planned motion (RPY(0.1, 0.2, 0.3) → RPY(0.8, -0.4, 0.5))."""
     for name in catalog.names():
         mech = catalog.get(name)
-        if mech.beyond_so3:
+        if mech.space.k:
             start, goal = STATE_PROBLEMS[name]
-            draw = state_figures.ball_figure if mech.orientation else state_figures.car_figure
+            draw = state_figures.ball_figure if mech.space.has_orientation else state_figures.car_figure
             yield draw(plan(start, goal, mechanism=name, **STATE_OPTIONS[name])), f"mechanism_{name}"
         elif mech.geometry is not None:
             R = np.eye(3) if abs(float(mech.delta(np.eye(3)))) > 0.1 else _examples.get(1).R_start

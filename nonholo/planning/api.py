@@ -38,7 +38,6 @@ from ..motion.retimed import check_leg_speed
 from ..motion.simulation import DEFAULT_STEPS
 from ..numerics import effort
 from ..numerics.checks import MAX_STEPS, check_count, check_time
-from ..spaces import state as states
 from . import energy
 from . import route as global_route
 from .certification import certified
@@ -225,24 +224,19 @@ def plan_path(R0, Rd, *, T: float = 1.0, method: str = "parametric", harmonics: 
     T = check_time(T)
     harmonics = check_count(harmonics, "harmonics")
     grid = check_count(grid, "grid")
-    R0, q0 = states.parse(mech, R0, "R0")
-    Rd, qd = states.parse(mech, Rd, "Rd")
-    if mech.beyond_so3 and objective is not None:
+    R0, q0 = mech.parse_state(R0, "R0")
+    Rd, qd = mech.parse_state(Rd, "Rd")
+    if objective is not None and not energy.supports(mech):
         raise ValueError(f"objective {objective!r} is for mechanisms on SO(3); {mech.name!r} has "
-                         f"the state space {mech.state_space}")
-
-    def delta_at(R, q) -> float:
-        return float(mech.delta_samples(R[None], q[None])[0])
+                         f"the state space {mech.space.name}")
+    delta_at = mech.singular.value
 
     if gamma is None:
         gamma = cls.default_gamma
     options = Options(gamma=gamma, step=step, tol=tol, max_iter=max_iter,
                       newton_below=newton_below, min_step=min_step, delta_min=delta_min)
-    if mech.has_singular_set and delta_at(R0, q0) == 0.0:
-        raise ValueError("R0 lies on the singular surface Δ(R) = 0, where L(R) is undefined "
-                         "(e.g. the identity); start from an orientation with Δ(R0) ≠ 0"
-                         if not mech.beyond_so3 else
-                         f"R0 lies on the singular set Δ = 0 of {mech.name!r}, where G is undefined")
+    if delta_at(R0, q0) == 0.0:
+        raise ValueError(mech.singular.refusal)
     steps = check_count(default_steps(method, grid) if steps is None else steps, "steps", maximum=MAX_STEPS)
     if method == "parametric" and 2 * harmonics > steps:
         raise ValueError(f"harmonics = {harmonics} is more than the integrator's steps = {steps} "
@@ -251,14 +245,12 @@ def plan_path(R0, Rd, *, T: float = 1.0, method: str = "parametric", harmonics: 
     stages.check_steps(controls, steps)
     request = Request(mechanism=mech, method=method, strategy=cls.name, T=T, R0=R0, Rd=Rd, steps=steps,
                       options=options, harmonics=harmonics, grid=grid, controls=controls, started=started,
-                      leg_limits=leg_limits, **({"q0": q0, "qd": qd} if mech.beyond_so3 else {}))
+                      leg_limits=leg_limits, q0=q0, qd=qd)
 
     # goals that cannot be reached: decided before anything is simulated (or compiled)
-    if mech.has_singular_set:
+    if mech.singular.exists:
         d0, dd = delta_at(R0, q0), delta_at(Rd, qd)
-        # the singular surface of SO(3) (Δ(R)); beyond SO(3), Δ's zero set in the state space
-        where, at0, atd = (("surface", "Δ(R0)", "Δ(Rd)") if not mech.beyond_so3 else
-                           (f"set of {mech.name!r}", "Δ at the start", "Δ at the goal"))
+        where, at0, atd = mech.singular.where, mech.singular.at_start, mech.singular.at_goal
         refusal = None
         if dd == 0.0:
             refusal = (f"the goal lies on the singular {where} Δ = 0 ({atd} = 0): unreachable with "
@@ -296,7 +288,7 @@ def plan_path(R0, Rd, *, T: float = 1.0, method: str = "parametric", harmonics: 
 
     def part(a, b, T_part, part_delta_min, part_strategy):
         """One part of the global route, ``a → b`` (states ``(R, q)``), planned locally."""
-        return plan_path(states.public(mech, *a), states.public(mech, *b), T=T_part, method=method,
+        return plan_path(mech.space.public(*a), mech.space.public(*b), T=T_part, method=method,
                          harmonics=harmonics, grid=grid, gamma=gamma, step=step, tol=tol, max_iter=max_iter,
                          strategy=part_strategy, mechanism=mech, delta_min=part_delta_min, steps=steps,
                          newton_below=newton_below, min_step=min_step, route="local", leg_length=leg_length)
@@ -315,8 +307,7 @@ def plan_path(R0, Rd, *, T: float = 1.0, method: str = "parametric", harmonics: 
 
     steered = global_route.steer(mech, R0, Rd, T, hop, tol=tol, delta_min=delta_min, sign=problem.sign,
                                  started=route_started, budget=budget, leg_limits=leg_limits, rescue=smooth,
-                                 leg=leg,
-                                 **({"q0": q0, "qd": qd} if mech.beyond_so3 else {}))
+                                 leg=leg, q0=q0, qd=qd)
     if steered.controls is None and steered.smoothed is None:
         return build_result(request, outcome, False,
                             f"{local_reason}; the global route failed too: {steered.reason}", problem)

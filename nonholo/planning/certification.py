@@ -43,7 +43,7 @@ def certify(problem: Problem, ev: Evaluation, options: Options) -> tuple[Evaluat
         # planned in the physical inputs: the planner's trajectory is the replay on steps/2
         half = None
         if not problem.frame and steps == 2 * problem.steps:
-            half = (ev.R[-1], ev.q[-1]) if mech.beyond_so3 else ev.R[-1]
+            half = (ev.R[-1], ev.q[-1])
         return replay_certificate.measure(problem.R0, problem.Rd, problem.T, mech, physical(problem, ev),
                                           steps, options.tol, options.delta_min, problem.sign, G, half,
                                           leg_limits=problem.leg_limits, q0=problem.q0, qd=problem.qd)

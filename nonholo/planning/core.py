@@ -39,11 +39,10 @@ import numpy as np
 from ..certify.certificate import Certificate
 from ..controls import stages
 from ..controls.parametrisations import Controls
-from ..io.result import PlanResult
+from ..io.result import PlanResult, coordinate_fields
 from ..model.limits import LegLimits
 from ..model.mechanism import Mechanism
 from ..motion.frame_controls import FrameControls
-from ..numerics import kernels
 from ..numerics.checks import check_count
 from ..spaces import state as states
 
@@ -155,10 +154,8 @@ class Problem:
         self.steps = steps
         self.h = T / steps
         self.delta_min = delta_min
-        self.has_delta = mechanism.has_singular_set
-        self.delta0 = self.delta_at(self.R0, self.q0) if self.has_delta else None
-        self.deltad = self.delta_at(self.Rd, self.qd) if self.has_delta else None
-        self.sign = float(np.sign(self.delta0)) if self.has_delta else 1.0
+        self.singular = mechanism.singular
+        self.sign = self.singular.sign(self.R0, self.q0)
         d = mechanism.n_rates
         self._Rs, self._Qs = states.buffers(mechanism, steps)
         self._Zs = np.empty((steps + 1, d, d))
@@ -168,13 +165,10 @@ class Problem:
         self.parametrisation: Controls | None = None
         self.evaluations = 0
 
-    def delta_at(self, R, q) -> float:
-        """``Δ`` at one state."""
-        return float(self.mechanism.delta_samples(np.asarray(R)[None], np.asarray(q)[None])[0])
-
-    def error_of(self, R, q) -> tuple[np.ndarray, float, float]:
-        """The terminal error of the state ``(R, q)``: :func:`nonholo.spaces.state.error` from the goal."""
-        return states.error(self.mechanism, R, q, self.Rd, self.qd)
+    def error_of(self, R, q) -> tuple[np.ndarray, dict]:
+        """The terminal error of the state ``(R, q)`` from the goal and its parts
+        (:meth:`nonholo.spaces.groups.Product.error`)."""
+        return self.mechanism.space.error(R, q, self.Rd, self.qd)
 
     def forward(self, U, h: float, stop: float):
         """The motion of the stage table ``U`` with steps ``h`` (no variational system):
@@ -214,24 +208,18 @@ class Problem:
             self._Rs, self._Qs, self._Zs, J, self._M, self._Wd, full)
         self.evaluations += 1
         complete = n == self.steps
-        if complete and self.mechanism.beyond_so3 and not np.all(np.isfinite(J)):
+        if complete and not np.all(np.isfinite(J)):
             # the variational system overflowed (Φ(T, 0) does not exist in floating point):
             # a motion no step can be taken from
             complete, n, t_stop = False, n - 1, self.T
         ev = Evaluation(x, self.parametrisation, complete, int(n), None if complete else float(t_stop),
-                        float(dmin) if self.has_delta else None, self._Rs[:n + 1].copy(), given,
+                        self.singular.reported(dmin), self._Rs[:n + 1].copy(), given,
                         self._Qs[:n + 1].copy())
         if self.leg_limits is not None:
             ev.min_clearance = self.leg_limits.least_clearance(self.mechanism, ev.R)
         if complete:
-            if self.mechanism.beyond_so3:
-                ev.l, rot, coord = self.error_of(self._Rs[n], self._Qs[n])
-                ev.error = float(np.hypot(rot, coord))
-                ev.errors = (rot, coord)
-            else:
-                ev.l, err = kernels.log_error(self._Rs[n], self.Rd)
-                ev.error = float(err)
-                ev.errors = (ev.error, 0.0)
+            ev.l, ev.errors = self.error_of(self._Rs[n], self._Qs[n])
+            ev.error = self.mechanism.space.norm(ev.errors)
             ev.J = J
             if full:
                 ev.Z = self._Zs.copy()
@@ -241,12 +229,12 @@ class Problem:
     def admissible(self, ev: Evaluation) -> bool:
         """Complete, ``|Δ| ≥ delta_min`` along the whole trajectory and every node inside
         the legs' stroke limits (if any)."""
-        return (ev.complete and (not self.has_delta or ev.min_delta >= self.delta_min)
+        return (ev.complete and self.singular.clear(ev.min_delta, self.delta_min)
                 and (self.leg_limits is None or ev.min_clearance >= 0.0))
 
     def why_not(self, ev: Evaluation) -> str:
         """Why ``ev`` is not admissible."""
-        if self.has_delta and (ev.min_delta is None or ev.min_delta < self.delta_min):
+        if self.singular.exists and (ev.min_delta is None or not self.singular.clear(ev.min_delta, self.delta_min)):
             where = f" at t ≈ {ev.t_stop:.4g} s" if ev.t_stop is not None else ""
             if ev.min_delta <= 0.0:
                 return (f"the trajectory ran into the singular surface Δ = 0{where} (|ω| ~ 1/|Δ| "
@@ -476,8 +464,7 @@ def build_result(request: Request, outcome: Outcome | None, success: bool, reaso
     u = None
     if cert is not None:
         R = cert.R[::cert.replay_steps // n_steps]
-        if mech.beyond_so3:
-            q = cert.q[::cert.replay_steps // n_steps]
+        q = cert.q[::cert.replay_steps // n_steps]
         terminal_error, min_delta, errors = cert.terminal_error, cert.min_delta, cert.errors
         if cert.U is not None and getattr(par, "grid", None) is None:
             # smooth controls: u(t_n) is the replay's stage value (grid controls: controls(t)
@@ -496,6 +483,4 @@ def build_result(request: Request, outcome: Outcome | None, success: bool, reaso
         sensitivity=None if outcome is None or outcome.certificate is None else outcome.certificate.sensitivity,
         error_bound=None if cert is None else cert.error_bound,
         replay_steps=None if cert is None else cert.replay_steps,
-        **({} if not mech.beyond_so3 else {
-            "q": q, "q0": request.q0, "qd": request.qd,
-            "errors": None if errors is None else states.error_parts(mech, *errors)}))
+        **coordinate_fields(mech, q, request.q0, request.qd, errors))

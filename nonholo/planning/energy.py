@@ -48,6 +48,11 @@ ENERGY_RTOL = 1e-9
 MAX_HALVINGS = 12
 
 
+def supports(mechanism) -> bool:
+    """Whether the least-energy stage handles ``mechanism``: a state on SO(3) alone."""
+    return not mechanism.space.k
+
+
 def energy(ev: Evaluation, metric: np.ndarray) -> float:
     """``∫|u|² dt = Σ metric_k λ_k²`` of grid controls."""
     return float(np.dot(metric, ev.params ** 2))

@@ -111,7 +111,7 @@ class Roadmap:
 
     def __init__(self, mechanism, clearance: float, samples: int = ROADMAP_SAMPLES, seed: int = ROADMAP_SEED):
         mech = catalog.get(mechanism)
-        if not mech.has_singular_set:
+        if not mech.singular.exists:
             raise ValueError(f"mechanism {mech.name!r} has no singular set: it needs no roadmap")
         self.mechanism = mech
         self.clearance = float(clearance)
@@ -225,7 +225,7 @@ def via_nodes(mechanism, R0, Rd, count: int, legs=None) -> np.ndarray:
     :func:`nonholo.planning.route.steer`). ``(k, 3, 3)``; none without a singular set, or
     where ``R0`` and ``Rd`` lie on different sides of ``Δ = 0``."""
     mech = catalog.get(mechanism)
-    if not mech.has_singular_set:
+    if not mech.singular.exists:
         return np.empty((0, 3, 3))
     sign = float(np.sign(mech.delta(R0)))
     if sign == 0.0 or np.sign(mech.delta(Rd)) != sign:
@@ -270,7 +270,7 @@ def subdivide(path: np.ndarray, max_hop: float) -> np.ndarray:
     out = [path[0]]
     for Ra, Rb in zip(path[:-1], path[1:]):
         k = max(1, int(np.ceil(so3.distance(Ra, Rb) / max_hop)))
-        out.extend(geodesic(Ra, Rb, np.arange(1, k + 1) / k))
+        out.extend(so3.geodesic(Ra, Rb, np.arange(1, k + 1) / k))
     return np.array(out)
 
 
@@ -287,7 +287,7 @@ def orientation_path(mechanism, R0, Rd, *, delta_min: float = 1e-2, clearance: f
     mech = catalog.get(mechanism)
     R0 = so3.check_rotation(R0, "R0")
     Rd = so3.check_rotation(Rd, "Rd")
-    if not mech.has_singular_set:
+    if not mech.singular.exists:
         if legs is not None and not _survey(mech, 1.0, R0[None], Rd[None], -np.inf, legs=legs)[0][0]:
             return None
         return subdivide(np.stack([R0, Rd]), max_hop)

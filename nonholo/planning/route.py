@@ -65,11 +65,11 @@ from ..certify import certificate as certify
 from ..certify.certificate import Certificate
 from ..controls.parametrisations import Fourier, PiecewiseConstant
 from ..controls.stitched import Stitched
-from ..io.result import PlanResult
+from ..io.result import PlanResult, coordinate_fields
 from ..model.mechanism import Mechanism
 from ..numerics import effort
 from ..spaces import so3
-from ..spaces import state as states
+from ..spaces.groups import NO_COORDINATES
 from . import roadmap, state_path
 from .certification import certified
 from .core import Outcome, Problem, Request, Start
@@ -136,65 +136,95 @@ class Steered:
 
 def _stitch(mechanism: Mechanism, T: float, hops: list, start) -> Stitched:
     R0, q0 = start
-    coordinates = [q0] + [h.qd for h in hops] if mechanism.beyond_so3 else None
+    coordinates = [q0] + [h.qd for h in hops] if mechanism.space.k else None
     return Stitched(T, [h.parametrisation for h in hops], [R0] + [h.Rd for h in hops], coordinates)
 
 
-def _end(mechanism: Mechanism, res: PlanResult) -> tuple:
+def _end(res: PlanResult) -> tuple:
     """Where a hop's result ends, as a state ``(R, q)``."""
-    return res.R_T, (res.q[-1] if mechanism.beyond_so3 else states.NO_COORDINATES)
+    return res.R_T, (NO_COORDINATES if res.q is None else res.q[-1])
 
 
-def _length(mechanism: Mechanism, a, b) -> float:
-    """The length of the hop ``a → b``: rad on SO(3), the stacked error's norm beyond."""
-    if mechanism.beyond_so3:
-        return state_path.length(mechanism, a, b)
-    return so3.distance(a[0], b[0])
+class RoadmapPaths:
+    """The route's paths for a state on SO(3) alone: the roadmap's paths of orientations
+    (:mod:`nonholo.planning.roadmap`), hops measured in rad, the budget counted from the
+    start of :func:`nonholo.plan`."""
+
+    unit = " rad"
+    max_hop_sensitivity = MAX_HOP_SENSITIVITY
+
+    def __init__(self, mechanism: Mechanism):
+        self.mechanism = mechanism
+
+    def paths(self, start, goal, delta_min: float, leg_limits):
+        """The paths :func:`steer` tries in turn (lists of states ``(R, q)``, ``None`` for
+        none): the roadmap's of every cost of :data:`nonholo.planning.roadmap.CONDITIONING_POWERS`."""
+        for power in roadmap.CONDITIONING_POWERS:
+            path = roadmap.orientation_path(self.mechanism, start[0], goal[0], delta_min=delta_min,
+                                            power=power, legs=leg_limits)
+            yield None if path is None else [(R, NO_COORDINATES) for R in path]
+
+    def no_path(self, leg_limits) -> str:
+        within = "" if leg_limits is None else " and inside the legs' stroke limits"
+        return f"no path of orientations clear of Δ = 0{within} joins the start and the goal on the roadmap"
+
+    def length(self, a, b) -> float:
+        """The length of the hop ``a → b`` (rad)."""
+        return so3.distance(a[0], b[0])
+
+    def midpoint(self, a, b) -> tuple:
+        return self.mechanism.space.interpolate(a, b, [0.5])[0]
+
+    def time_budget(self, plan_started: float) -> tuple[float, float]:
+        """When the route's clock starts and its budget (seconds of effort)."""
+        return plan_started, TIME_BUDGET
+
+    def through(self) -> str:
+        return "a path of orientations clear of Δ = 0"
 
 
-def _midpoint(mechanism: Mechanism, a, b) -> tuple:
-    """The midpoint of the hop ``a → b``: the geodesic's on SO(3), the straight path's beyond."""
-    if mechanism.beyond_so3:
-        return state_path.midpoint(mechanism, a, b)
-    return so3.geodesic(a[0], b[0], [0.5])[0], states.NO_COORDINATES
+class StraightPaths(RoadmapPaths):
+    """The route's paths for a state with coordinates: the straight path of states
+    (:mod:`nonholo.planning.state_path`), hops measured in the stacked error's norm, the
+    budget counted from the route's own start (the local attempt at a far goal can take
+    the whole of :data:`TIME_BUDGET`)."""
 
+    unit = ""
+    max_hop_sensitivity = state_path.MAX_HOP_SENSITIVITY
 
-def _paths(mechanism: Mechanism, start, goal, delta_min: float, leg_limits):
-    """The paths :func:`steer` tries in turn, lists of states ``(R, q)`` (``None`` for none):
-    the roadmap's of every cost of :data:`nonholo.planning.roadmap.CONDITIONING_POWERS` on SO(3), the
-    straight path of states beyond."""
-    if mechanism.beyond_so3:
-        yield state_path.straight_path(mechanism, start, goal, delta_min=delta_min)
-        return
-    for power in roadmap.CONDITIONING_POWERS:
-        path = roadmap.orientation_path(mechanism, start[0], goal[0], delta_min=delta_min, power=power,
-                                        legs=leg_limits)
-        yield None if path is None else [(R, states.NO_COORDINATES) for R in path]
+    def paths(self, start, goal, delta_min: float, leg_limits):
+        yield state_path.straight_path(self.mechanism, start, goal, delta_min=delta_min)
 
-
-def _no_path(mechanism: Mechanism, leg_limits) -> str:
-    if mechanism.beyond_so3:
+    def no_path(self, leg_limits) -> str:
         return (f"the straight path of states comes within delta_min of the singular set Δ = 0 of "
-                f"{mechanism.name!r}")
-    within = "" if leg_limits is None else " and inside the legs' stroke limits"
-    return f"no path of orientations clear of Δ = 0{within} joins the start and the goal on the roadmap"
+                f"{self.mechanism.name!r}")
+
+    def length(self, a, b) -> float:
+        return state_path.length(self.mechanism, a, b)
+
+    def time_budget(self, plan_started: float) -> tuple[float, float]:
+        return effort.seconds(), state_path.TIME_BUDGET
+
+    def through(self) -> str:
+        return "a straight path of states" + (" clear of Δ = 0" if self.mechanism.singular.exists else "")
+
+
+def paths_for(mechanism: Mechanism) -> RoadmapPaths:
+    """The route's path provider for ``mechanism``'s space, chosen once: the roadmap of
+    orientations for a state on SO(3) alone, the straight path of states otherwise."""
+    return StraightPaths(mechanism) if mechanism.space.k else RoadmapPaths(mechanism)
 
 
 def time_budget(mechanism: Mechanism, plan_started: float) -> tuple[float, float]:
-    """When the route's clock starts and its budget, seconds of effort: from the start of
-    :func:`nonholo.plan` and :data:`TIME_BUDGET` on SO(3); beyond SO(3), from now (the
-    local attempt at a far goal can take the whole of that) and
-    :data:`nonholo.planning.state_path.TIME_BUDGET`."""
-    if mechanism.beyond_so3:
-        return effort.seconds(), state_path.TIME_BUDGET
-    return plan_started, TIME_BUDGET
+    """When the route's clock starts and its budget, seconds of effort (:func:`paths_for`)."""
+    return paths_for(mechanism).time_budget(plan_started)
 
 
 def max_hop_sensitivity(mechanism: Mechanism) -> float:
     """The largest sensitivity of a hop the route keeps (a larger one is split):
     :data:`MAX_HOP_SENSITIVITY` on SO(3), :data:`nonholo.planning.state_path.MAX_HOP_SENSITIVITY`
-    beyond (see there why it is larger)."""
-    return state_path.MAX_HOP_SENSITIVITY if mechanism.beyond_so3 else MAX_HOP_SENSITIVITY
+    with coordinates (see there why it is larger)."""
+    return paths_for(mechanism).max_hop_sensitivity
 
 
 @lru_cache(maxsize=8)
@@ -283,10 +313,10 @@ def hop_delta_min(mechanism: Mechanism, a, b, delta_min: float) -> float:
     """The ``delta_min`` of a hop between the states ``a → b`` (pairs ``(R, q)``):
     :data:`HOP_DELTA_MIN`, or half the least ``|Δ|`` of its ends if that is less, never
     below the run's ``delta_min`` (which is all a mechanism without a singular set has)."""
-    if not mechanism.has_singular_set:
+    if not mechanism.singular.exists:
         return delta_min
     R = np.stack([a[0], b[0]])
-    q = np.stack([a[1], b[1]]) if mechanism.beyond_so3 else None
+    q = np.stack([a[1], b[1]])
     ends = float(np.min(np.abs(mechanism.delta_samples(R, q))))
     return max(delta_min, min(HOP_DELTA_MIN, 0.5 * ends))
 
@@ -317,11 +347,12 @@ def steer(mechanism: Mechanism, R0, Rd, T: float, local: Callable, *, tol: float
     if budget is None:
         budget = TIME_BUDGET
     steered, tried = None, []
-    start = (np.asarray(R0, dtype=float), states.NO_COORDINATES if q0 is None else q0)
-    goal = (np.asarray(Rd, dtype=float), states.NO_COORDINATES if qd is None else qd)
-    for path in _paths(mechanism, start, goal, delta_min, leg_limits):
+    start = (np.asarray(R0, dtype=float), NO_COORDINATES if q0 is None else q0)
+    goal = (np.asarray(Rd, dtype=float), NO_COORDINATES if qd is None else qd)
+    provider = paths_for(mechanism)
+    for path in provider.paths(start, goal, delta_min, leg_limits):
         if path is None:
-            return Steered(None, None, reason=_no_path(mechanism, leg_limits))
+            return Steered(None, None, reason=provider.no_path(leg_limits))
         if any(_same_path(p, path) for p in tried):
             continue        # steering is deterministic: the same path fails the same way
         tried.append(path)
@@ -331,7 +362,7 @@ def steer(mechanism: Mechanism, R0, Rd, T: float, local: Callable, *, tol: float
             steered.smoothed = rescue(steered.draft, steered.certify_seconds)
         if steered.controls is not None or steered.smoothed is not None or effort.seconds() > started + budget:
             break
-    if steered.controls is None and steered.smoothed is None and leg is not None and not mechanism.beyond_so3:
+    if steered.controls is None and steered.smoothed is None and leg is not None and not mechanism.space.k:
         two_legs = _via(mechanism, start, goal, T, leg, tol=tol, delta_min=delta_min, sign=sign,
                         deadline=max(effort.seconds(), started + budget) + VIA_TIME, leg_limits=leg_limits)
         if two_legs is not None:
@@ -349,7 +380,7 @@ def _steer_path(mechanism: Mechanism, path: list, goal, T: float, local: Callabl
     """:func:`steer` along one path of states ``(R, q)`` (``path[0]`` the start)."""
     start = path[0]
     (R0, q0), (Rd, qd) = start, goal
-    beyond = mechanism.beyond_so3
+    provider = paths_for(mechanism)
     T_hop = T / (len(path) - 1)
     targets = list(path[1:])
     hops = []
@@ -364,15 +395,14 @@ def _steer_path(mechanism: Mechanism, path: list, goal, T: float, local: Callabl
         res = local(here, targets[0], T_hop, hop_delta_min(mechanism, here, targets[0], delta_min))
         if res.success and res.sensitivity <= max_hop_sensitivity(mechanism):
             hops.append(res)
-            here = _end(mechanism, res)
+            here = _end(res)
             targets.pop(0)
             continue
-        length = _length(mechanism, here, targets[0])
+        length = provider.length(here, targets[0])
         if length / 2 < MIN_HOP:
             why = res.reason if not res.success else f"sensitivity {res.sensitivity:.3g}"
-            unit = "" if beyond else " rad"
-            return Steered(None, None, hops, f"hop {len(hops) + 1} ({length:.3g}{unit}) failed: {why}", waypoints)
-        targets.insert(0, _midpoint(mechanism, here, targets[0]))
+            return Steered(None, None, hops, f"hop {len(hops) + 1} ({length:.3g}{provider.unit}) failed: {why}", waypoints)
+        targets.insert(0, provider.midpoint(here, targets[0]))
     return _certify_hops(mechanism, start, goal, T, hops, local, tol=tol, delta_min=delta_min, sign=sign,
                          leg_limits=leg_limits, waypoints=waypoints)
 
@@ -383,9 +413,7 @@ def _certify_hops(mechanism: Mechanism, start, goal, T: float, hops: list, local
     the replay misses the goal by a correctable error, the last hop is planned again by
     ``local`` from where the stitched replay enters it (at most :data:`MAX_REPAIRS` times)."""
     (R0, q0), (Rd, qd) = start, goal
-    beyond = mechanism.beyond_so3
     cert = None
-    ends = {"q0": q0, "qd": qd} if beyond else {}
     for repair in range(MAX_REPAIRS + 1):
         stitched = _stitch(mechanism, T, hops, start)
         k = len(hops)
@@ -393,13 +421,13 @@ def _certify_hops(mechanism: Mechanism, start, goal, T: float, hops: list, local
         clock = effort.seconds()
         cert = certify.measure(R0, Rd, T, mechanism, stitched, M, tol, delta_min, sign,
                                max_steps=min(certify.MAX_REPLAY_STEPS, STITCHED_REFINEMENT * M),
-                               leg_limits=leg_limits, **ends)
+                               leg_limits=leg_limits, q0=q0, qd=qd)
         clock = effort.seconds() - clock
         if cert.passed or not cert.correctable or repair == MAX_REPAIRS:
             break
         # the last hop again, from where the stitched replay enters it
         i = (k - 1) * (cert.replay_steps // k)
-        entry = (cert.R[i], cert.q[i] if beyond else states.NO_COORDINATES)
+        entry = (cert.R[i], cert.q[i])
         res = local(entry, goal, hops[-1].T, hop_delta_min(mechanism, entry, goal, delta_min))
         if not res.success:
             break
@@ -422,7 +450,7 @@ def _via(mechanism: Mechanism, start, goal, T: float, leg: Callable, *, tol: flo
     for Rm in roadmap.via_nodes(mechanism, start[0], goal[0], VIA_CANDIDATES, leg_limits):
         if effort.seconds() > deadline:
             return None
-        middle = (Rm, states.NO_COORDINATES)
+        middle = (Rm, NO_COORDINATES)
         second = leg(middle, goal, T / 2, delta_min, True)
         if not second.success:
             continue
@@ -446,8 +474,8 @@ def build_result(request: Request, steered: Steered, local_reason: str,
     mech, T, cert = request.mechanism, request.T, steered.certificate
     hops = steered.hops
     history = [{**rec, "hop": i} for i, h in enumerate(hops) for rec in h.history]
-    through = ("a straight path of states" + (" clear of Δ = 0" if mech.has_singular_set else "")
-               if mech.beyond_so3 else "a path of orientations clear of Δ = 0")
+    provider = paths_for(mech)
+    through = provider.through()
     route = f"the global route: {len(hops)} hops through {through}, stitched (the local planner: {local_reason})"
     if steered.two_legs:
         route = ("the global route: two legs through an intermediate orientation (a roadmap node; no "
@@ -467,8 +495,8 @@ def build_result(request: Request, steered: Steered, local_reason: str,
     t = np.arange(n) * (T / steps)
     t[-1] = T
     R = cert.R[::cert.replay_steps // steps]
-    q = cert.q[::cert.replay_steps // steps] if mech.beyond_so3 else None
-    unit = "" if mech.beyond_so3 else " rad"
+    q = cert.q[::cert.replay_steps // steps]
+    unit = provider.unit
     reason = (f"reached by {route}; certified: the physical replay ({cert.replay_steps} steps) ends "
               f"{cert.terminal_error:.2g}{unit} from the goal, error bound {cert.error_bound:.2g}{unit}")
     return PlanResult(
@@ -481,6 +509,4 @@ def build_result(request: Request, steered: Steered, local_reason: str,
         options=request.recorded_options(),
         sensitivity=cert.sensitivity, error_bound=cert.error_bound, replay_steps=cert.replay_steps,
         route="global",
-        **({} if not mech.beyond_so3 else {
-            "q": q, "q0": request.q0, "qd": request.qd,
-            "errors": None if cert.errors is None else states.error_parts(mech, *cert.errors)}))
+        **coordinate_fields(mech, q, request.q0, request.qd, cert.errors))

@@ -20,8 +20,6 @@ import math
 
 import numpy as np
 
-from ..spaces import state
-from . import roadmap
 
 #: The longest hop of a straight path, in the stacked error's norm (rad and the
 #: mechanism's units): goals this far are ones the local planner reaches reliably.
@@ -43,14 +41,7 @@ SAMPLES_PER_HOP = 16
 
 def interpolate(mechanism, a, b, s) -> list[tuple[np.ndarray, np.ndarray]]:
     """The states of the straight path ``a → b`` (pairs ``(R, q)``) at the fractions ``s``."""
-    (Ra, qa), (Rb, qb) = a, b
-    s = np.atleast_1d(np.asarray(s, dtype=float))
-    if mechanism.orientation:
-        R = so3.geodesic(Ra, Rb, s)
-    else:
-        R = np.broadcast_to(state.IDENTITY, (s.size, 3, 3))
-    step = state.coordinate_difference(mechanism, qb, qa)
-    return [(np.array(R[i]), qa + s[i] * step) for i in range(s.size)]
+    return mechanism.space.interpolate(a, b, s)
 
 
 def midpoint(mechanism, a, b) -> tuple[np.ndarray, np.ndarray]:
@@ -60,7 +51,7 @@ def midpoint(mechanism, a, b) -> tuple[np.ndarray, np.ndarray]:
 
 def length(mechanism, a, b) -> float:
     """The straight path's length: the norm of the stacked error between its ends."""
-    return state.distance(mechanism, *a, *b)
+    return mechanism.space.distance(*a, *b)
 
 
 def straight_path(mechanism, a, b, *, delta_min: float, max_hop: float = MAX_HOP) -> list | None:
@@ -68,7 +59,7 @@ def straight_path(mechanism, a, b, *, delta_min: float, max_hop: float = MAX_HOP
     (``(R, q)`` pairs, ``a`` first, ``b`` last); ``None`` where a sample of it has ``sgnΔ <
     delta_min`` (the sign of ``Δ`` at ``a``)."""
     hops = max(1, math.ceil(length(mechanism, a, b) / max_hop))
-    if mechanism.has_singular_set:
+    if mechanism.singular.exists:
         s = np.linspace(0.0, 1.0, hops * SAMPLES_PER_HOP + 1)
         points = interpolate(mechanism, a, b, s)
         R = np.stack([p[0] for p in points])

@@ -73,7 +73,6 @@ from ..model.limits import BARRIER_CLEARANCE
 from ..motion.simulation import DELTA_STOP, SingularTrajectoryError, simulate
 from ..numerics import kernels
 from ..spaces import so3
-from ..spaces import state as states
 from .certification import certify
 from .certification import note as certificate_note
 from .core import (
@@ -124,7 +123,7 @@ def spatial_gradient_delta(mechanism, R: np.ndarray, eps: float = 1e-6, q=None) 
     """``∇Δ`` at each ``R[n]``: ``Δ(exp([s]) R) = Δ(R) + ∇Δ·s + O(|s|²)`` (central differences
     of the generated ``Δ``, error ``O(ε²)``), shape ``(n, 3)``; beyond SO(3), at each state
     ``(R[n], q[n])`` along the stacked variation ``s = (s_R, s_q)``, shape ``(n, d)``."""
-    if not mechanism.beyond_so3:
+    if not mechanism.space.k:
         g = np.empty((len(R), 3))
         for k in range(3):
             e = np.zeros(3)
@@ -132,7 +131,7 @@ def spatial_gradient_delta(mechanism, R: np.ndarray, eps: float = 1e-6, q=None) 
             g[:, k] = (mechanism.delta_samples(so3.exp(e) @ R)
                        - mechanism.delta_samples(so3.exp(-e) @ R)) / (2.0 * eps)
         return g
-    r = 3 if mechanism.orientation else 0
+    r = 3 if mechanism.space.has_orientation else 0
     g = np.empty((len(R), mechanism.n_rates))
     for k in range(mechanism.n_rates):
         if k < r:
@@ -167,7 +166,7 @@ def barrier_gradient(problem: Problem, ev: Evaluation, d0: float) -> np.ndarray 
     D = problem.mechanism.n_rates
     a = np.zeros((N + 1, D))
     any_active = False
-    if problem.has_delta:
+    if problem.singular.exists:
         d = problem.sign * problem.mechanism.delta_samples(ev.R, ev.q)
         active = d < d0
         active[0] = False
@@ -261,7 +260,7 @@ class RobustStrategy(Strategy):
     def frame(self, mechanism) -> bool:
         # beyond SO(3) the physical inputs are planned (the barrier keeps Δ away) and the
         # frame is not used yet
-        return mechanism.has_frame and not mechanism.beyond_so3
+        return mechanism.has_frame and not mechanism.space.k
 
     def initial(self, problem, controls, given):
         """In frame coordinates: ``u0`` (physical) converted by :func:`to_frame`; without
@@ -280,8 +279,8 @@ class RobustStrategy(Strategy):
         first = start.controls
         T, m = problem.T, first.n_inputs
         mech = problem.mechanism
-        if mech.beyond_so3:
-            l0 = states.offset(mech, problem.R0, problem.q0, problem.Rd, problem.qd)
+        if mech.space.k:
+            l0 = mech.space.offset(problem.R0, problem.q0, problem.Rd, problem.qd)
             frame = mech.G(problem.R0, problem.q0)
         else:
             l0 = kernels.log_rotation(problem.Rd @ problem.R0.T)
@@ -315,7 +314,7 @@ class RobustStrategy(Strategy):
         """Whether ``ev``'s trajectory comes within ``factor`` times a barrier's reach of
         ``Δ = 0`` (:attr:`barrier_d0`) or of the legs' stroke limits
         (:data:`nonholo.model.limits.BARRIER_CLEARANCE`)."""
-        near_delta = problem.has_delta and ev.min_delta is not None and ev.min_delta < factor * self.barrier_d0
+        near_delta = problem.singular.exists and ev.min_delta is not None and ev.min_delta < factor * self.barrier_d0
         near_legs = ev.min_clearance is not None and ev.min_clearance < factor * BARRIER_CLEARANCE
         return near_delta or near_legs
 
@@ -363,9 +362,7 @@ class RobustStrategy(Strategy):
         ``16/15`` of the distance between the endpoints with ``N`` and ``2N`` CF4 steps (rad)."""
         N2 = 2 * problem.steps
         Rs, Qs, _ = problem.forward(stages.stage_table(ev.controls, N2), 0.5 * problem.h, -np.inf)
-        if problem.mechanism.beyond_so3:
-            return states.distance(problem.mechanism, Rs[N2], Qs[N2], ev.R[-1], ev.q[-1]) * 16.0 / 15.0
-        return float(kernels.log_error(Rs[N2], ev.R[-1])[1]) * 16.0 / 15.0
+        return problem.mechanism.space.distance(Rs[N2], Qs[N2], ev.R[-1], ev.q[-1]) * 16.0 / 15.0
 
     def refine(self, problem: Problem, ev: Evaluation, attempt: int, it0: int, history: list,
                callback) -> tuple[Problem, Evaluation, int, str]:

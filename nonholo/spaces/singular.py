@@ -15,8 +15,16 @@ class SingularSet:
 
     exists = True
 
-    def __init__(self, samples):
+    def __init__(self, samples, on_rotations: bool = True, owner: str = ""):
         self._samples = samples
+        #: how messages name the set, and ``Δ`` at the start and the goal
+        if on_rotations:
+            self.where, self.at_start, self.at_goal = "surface", "Δ(R0)", "Δ(Rd)"
+            self.refusal = ("R0 lies on the singular surface Δ(R) = 0, where L(R) is undefined "
+                            "(e.g. the identity); start from an orientation with Δ(R0) ≠ 0")
+        else:
+            self.where, self.at_start, self.at_goal = f"set of {owner!r}", "Δ at the start", "Δ at the goal"
+            self.refusal = f"R0 lies on the singular set Δ = 0 of {owner!r}, where G is undefined"
 
     def values(self, R, q=None) -> np.ndarray:
         """``Δ`` at every state of the stacks ``R`` ``(n, 3, 3)`` and ``q`` ``(n, k)``: ``(n,)``."""

@@ -115,7 +115,7 @@ def turns(Ra: np.ndarray, Rb: np.ndarray) -> np.ndarray:
     return (Rotation.from_matrix(Rb) * a.inv()).as_rotvec()
 
 
-def geodesicgeodesic_points(Ra: np.ndarray, v: np.ndarray, s: np.ndarray) -> np.ndarray:
+def geodesic_points(Ra: np.ndarray, v: np.ndarray, s: np.ndarray) -> np.ndarray:
     """``exp(s·[v_e]) R_a[e]`` for every pair ``e`` and fraction ``s``: shape ``(E, S, 3, 3)``."""
     E, S = len(v), len(s)
     turn = Rotation.from_rotvec((v[:, None, :] * s[None, :, None]).reshape(-1, 3)).as_matrix()

@@ -195,7 +195,7 @@ def delta_along(R, mechanism="platform") -> np.ndarray | None:
     """``Δ(R)`` for each rotation of a stack (n, 3, 3); ``None`` if the mechanism has no
     singular set."""
     mech = _mechanism(mechanism)
-    if mech is None or not mech.has_singular_set:
+    if mech is None or not mech.singular.exists:
         return None
     R = np.asarray(R, dtype=float)
     return np.array([float(mech.delta(Ri)) for Ri in R.reshape(-1, 3, 3)])
@@ -579,13 +579,13 @@ def mechanism_card_figure(mechanism: str, R=None, result=None, psi_slice: float 
     R = np.eye(3) if R is None else np.asarray(R, dtype=float)
     if mech.geometry is not None:
         draw_platform(ax, R, mechanism)
-        dtext = f",  Δ = {float(mech.delta(R)):+.3f}" if mech.has_singular_set else ""
+        dtext = f",  Δ = {float(mech.delta(R)):+.3f}" if mech.singular.exists else ""
         ax.set_title(f"{_rpy_text(R)}{dtext}")
     elif result is not None:
         plot_body_axes(ax, result)
         ax.set_title("paths of the body axes $R(t)e_k$")
     ax2 = fig.add_subplot(gs[1])
-    if mech.has_singular_set:
+    if mech.singular.exists:
         cs = _draw_slice(ax2, psi_slice, n=181, mechanism=mechanism)
         cb = fig.colorbar(cs, ax=ax2, shrink=0.9, ticks=np.linspace(-1, 1, 5))
         cb.set_label("Δ / max|Δ| [-]")
@@ -1035,7 +1035,7 @@ def leg_lengths_figure(results, geometry=None, title: str | None = None) -> Figu
 def _singular(results) -> bool:
     """Whether the results' mechanism has a singular set (the platform's by default)."""
     mech = _result_mechanism(results[0]) if results else _mechanism("platform")
-    return mech is None or mech.has_singular_set
+    return mech is None or mech.singular.exists
 
 
 def plot_delta(ax, results, threshold: float | None = 1e-2, labels=None) -> None:
