@@ -184,14 +184,14 @@ def iteration_cost(report: Report, repeat: int) -> None:
     from nonholo.planning import api as planner
     from nonholo.spaces import so3
     from nonholo.controls import stages
-    from nonholo.planning.core import Problem, record, step_scale
+    from nonholo.planning.core import Evaluator, record, step_scale
 
     report.heading("One iteration vs one bare forward simulation")
     report.paragraph(
         "Kernels called directly, µs of CPU time of the measuring thread per call; median and min over "
         f"{repeat} repeats of 20 calls, the three measurements interleaved. *forward*: the CF4 "
         "kernel alone on a precomputed stage table; *iteration*: what the strategy \"paper\" does "
-        "per accepted step — `Problem.evaluate` (stage table, CF4 with the variational system and "
+        "per accepted step — `Evaluator.evaluate` (stage table, CF4 with the variational system and "
         "the Jacobian, log error), the minimum-norm solve, the parameter update, the "
         "admissibility test and the history record; *kernel*: the stage table "
         "(`stages.stage_function`) and the variational kernel alone.")
@@ -204,7 +204,7 @@ def iteration_cost(report: Report, repeat: int) -> None:
             res = planner.plan(R0, Rd, method=method, strategy="paper")
             steps = res.steps
             par = res.parametrisation
-            prob = Problem(R0, Rd, 1.0, mech, method, steps, 1e-2)
+            prob = Evaluator(R0, Rd, 1.0, mech, method, steps, 1e-2)
             prob.use(par)
             params = par.params.copy()
             scale = step_scale(prob, par)

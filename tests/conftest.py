@@ -148,7 +148,7 @@ def random_rotations(n, rng, min_abs_delta=0.05, delta=platform_delta):
 def forbid_simulation(monkeypatch):
     """Make every way into the integrator fail the test: compiling or fetching kernels
     (:meth:`nonholo.Mechanism.kernels`, :func:`nonholo.integrate.cf4.compile_system`) and building a
-    planning :class:`~nonholo.planning.core.Problem`. Raises ``AssertionError`` (not a
+    planning :class:`~nonholo.planning.core.Evaluator`. Raises ``AssertionError`` (not a
     ``ValueError``), so a ``pytest.raises(ValueError)`` around the call does not swallow it."""
     from nonholo.integrate import cf4
     from nonholo.model import mechanism
@@ -160,8 +160,8 @@ def forbid_simulation(monkeypatch):
 
     monkeypatch.setattr(mechanism.Mechanism, "kernels", forbidden)
     monkeypatch.setattr(cf4, "compile_system", forbidden)
-    monkeypatch.setattr(core.Problem, "__init__", forbidden)
-    monkeypatch.setattr(planner, "Problem", forbidden)
+    monkeypatch.setattr(core.Evaluator, "__init__", forbidden)
+    monkeypatch.setattr(planner, "Evaluator", forbidden)
 
 
 def check_into_forms(module, rotations, rng):

@@ -18,7 +18,7 @@ from nonholo.motion.frame_controls import FrameControls
 from nonholo.paper import examples
 from nonholo.planning import api as planner
 from nonholo.planning import strategy_robust as robust
-from nonholo.planning.core import Problem, Start
+from nonholo.planning.core import Evaluator, Start
 from nonholo.spaces import so3
 
 PLATFORM = catalog.get("platform")
@@ -173,7 +173,7 @@ def test_physical_u0_is_converted_to_frame_coordinates():
     """``u0`` is physical: its frame version reproduces the same motion."""
     R0 = example(1)[0]
     u0 = C.Fourier(1.0, [[0.1, 0.2, 0.0, 0.05, 0.0], [0.0, 0.0, 0.25, 0.0, -0.05]])
-    problem = Problem(R0, R0, 1.0, PLATFORM, "parametric", 400, 1e-2, frame=True)
+    problem = Evaluator(R0, R0, 1.0, PLATFORM, "parametric", 400, 1e-2, frame=True)
     w0 = robust.to_frame(problem, u0)
     from nonholo.motion.simulation import simulate
 

@@ -12,7 +12,7 @@ from nonholo.model import catalog
 from nonholo.motion import simulation as S
 from nonholo.motion.frame_controls import FrameControls
 from nonholo.numerics import kernels
-from nonholo.planning.core import Problem
+from nonholo.planning.core import Evaluator
 from nonholo.spaces import so3
 
 
@@ -216,7 +216,7 @@ def test_frame_jacobian_matches_finite_differences(mechanism):
     """In frame coordinates (kernels bound to N, QN) J = ∂s_T/∂λ of the w-parameters."""
     R0, _ = example(2)
     w = bumpy(seed=5)
-    prob = Problem(R0, R0, 1.0, catalog.get(mechanism), "parametric", 400, 1e-2, frame=True)
+    prob = Evaluator(R0, R0, 1.0, catalog.get(mechanism), "parametric", 400, 1e-2, frame=True)
     ev = prob.evaluate(w)
     eps = 1e-6
     fd = np.empty_like(ev.J)

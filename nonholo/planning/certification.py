@@ -19,13 +19,13 @@ from ..certify import certificate as replay_certificate
 from ..certify.certificate import Certificate
 from ..motion.frame_controls import FrameControls
 from ..numerics import kernels
-from .core import Evaluation, Options, Outcome, Problem, step_scale
+from .core import Evaluation, Options, Outcome, Evaluator, step_scale
 
 #: Newton corrections on the replayed endpoint at most.
 MAX_CORRECTIONS = 4
 
 
-def physical(problem: Problem, ev: Evaluation):
+def physical(problem: Evaluator, ev: Evaluation):
     """The physical inputs of ``ev``'s control: the control itself, or for a plan in frame
     coordinates the :class:`~nonholo.motion.frame_controls.FrameControls` along ``ev``'s nodes."""
     if not problem.frame:
@@ -33,7 +33,7 @@ def physical(problem: Problem, ev: Evaluation):
     return FrameControls(ev.controls, problem.R0, problem.mechanism, problem.steps, nodes=ev.R)
 
 
-def certify(problem: Problem, ev: Evaluation, options: Options) -> tuple[Evaluation, Certificate, int]:
+def certify(problem: Evaluator, ev: Evaluation, options: Options) -> tuple[Evaluation, Certificate, int]:
     """The certificate of the converged (complete) ``ev``, after corrections where they
     help (see the module). Returns ``(evaluation, certificate, corrections)``: the
     evaluation the certificate belongs to, which is ``ev`` unless corrected."""
@@ -70,7 +70,7 @@ def certify(problem: Problem, ev: Evaluation, options: Options) -> tuple[Evaluat
     return ev, cert, corrections
 
 
-def certified(outcome: Outcome, problem: Problem, options: Options) -> Outcome:
+def certified(outcome: Outcome, problem: Evaluator, options: Options) -> Outcome:
     """``outcome`` (a success without a certificate) certified: with its certificate and the
     evaluation it belongs to, or turned into a failure whose reason says why."""
     prob = outcome.problem if outcome.problem is not None else problem

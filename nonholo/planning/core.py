@@ -1,12 +1,14 @@
-"""The planning core shared by every strategy: the problem, its evaluation, the options,
-the step loop of the θ-flow, its step control, and the result builder.
+"""The planning core shared by every strategy: the evaluator of a problem (its controls
+simulated with the variational system), the options, the step loop of the θ-flow, its
+step control, and the result builder. The problem itself is
+:class:`nonholo.planning.problem.Problem`.
 
-Problem: steer ``dR/dt = [L(R) u] R`` (spatial form) from ``R(0) = R0`` to ``R(T) = R_d``
+The task: steer ``dR/dt = [L(R) u] R`` (spatial form) from ``R(0) = R0`` to ``R(T) = R_d``
 (Tchoń & Jakubiak, appendix eqs. (4)–(11)). Along a family of controls ``u_θ`` the error
 ``e = log(R_T R_dᵀ) = [l_T]`` is asked to decay as ``dl_T/dθ = −γ l_T`` (4)–(5); with
 ``s_T = P(l_T) dl_T/dθ`` (7), ``P`` the left Jacobian of SO(3) (:func:`nonholo.spaces.so3.dexp`)
 and ``P(l) l = l``, this asks for ``s_T = −γ l_T``, ``s_T = J ∂λ/∂θ`` with the Jacobian
-``J = ∂s_T/∂λ`` of the variational system (9)–(10) (:meth:`Problem.evaluate`). Its
+``J = ∂s_T/∂λ`` of the variational system (9)–(10) (:meth:`Evaluator.evaluate`). Its
 minimum-norm solution in a diagonal metric ``W`` is the update (11):
 ``Δλ = −γh W^{-1/2} (J W^{-1/2})^# l_T`` (:func:`nonholo.numerics.kernels.min_norm_step`).
 
@@ -23,14 +25,14 @@ same minimum-norm solution — so the convergence is quadratic.
 
 A strategy (:class:`Strategy`) chooses the coordinates of the planned control, the
 initial guesses and the step direction; it keeps no state between runs — what it needs
-during a run lives in the :class:`Start` and :class:`Problem` it is given.
+during a run lives in the :class:`Start` and :class:`Evaluator` it is given.
 """
 from __future__ import annotations
 
 import math
 import time
 from abc import ABC, abstractmethod
-from dataclasses import asdict, dataclass, field
+from dataclasses import dataclass, field
 from functools import lru_cache
 from typing import Callable, ClassVar
 
@@ -125,8 +127,9 @@ class Evaluation:
         return self.q[-1] if self.complete else None
 
 
-class Problem:
-    """``R0 → R_d`` in time ``T`` for one mechanism, with the integrator's buffers.
+class Evaluator:
+    """A problem's controls simulated: ``R0 → R_d`` in time ``T`` for one mechanism, with the
+    integrator's buffers.
 
     :meth:`evaluate` simulates a control with the variational system and returns the
     error ``l_T`` and the Jacobian ``J = ∂s_T/∂λ``. ``frame=True`` integrates the system
@@ -177,9 +180,9 @@ class Problem:
         n, _, _ = states.forward(self.mechanism, self.kernels, self.R0, self.q0, U, h, self.sign, stop, Rs, Qs)
         return Rs, Qs, int(n)
 
-    def refined(self, steps: int) -> "Problem":
+    def refined(self, steps: int) -> "Evaluator":
         """The same problem on a grid of ``steps`` integrator steps."""
-        return Problem(self.R0, self.Rd, self.T, self.mechanism, self.method, steps, self.delta_min,
+        return Evaluator(self.R0, self.Rd, self.T, self.mechanism, self.method, steps, self.delta_min,
                        self.frame, self.leg_limits, self.q0, self.qd)
 
     def use(self, controls: Controls) -> None:
@@ -254,7 +257,7 @@ def _ones(p: int) -> np.ndarray:
     return a
 
 
-def step_scale(problem: Problem, controls: Controls) -> np.ndarray:
+def step_scale(problem: Evaluator, controls: Controls) -> np.ndarray:
     """``S = W^{-1/2}`` of the metric the minimum norm is taken in: Euclidean on Fourier
     coefficients (parametric form, ``J^#``), L2 in time on grid controls (nonparametric
     form, eq. (11): ``W = diag(h_j)``)."""
@@ -269,7 +272,7 @@ def record(iteration: int, ev: Evaluation, step: float, phase: str, rejected: in
             "min_delta": ev.min_delta, "phase": phase, "rejected": rejected, **extra}
 
 
-def backtrack(problem: Problem, ev: Evaluation, direction: np.ndarray, scale: float,
+def backtrack(problem: Evaluator, ev: Evaluation, direction: np.ndarray, scale: float,
               min_step: float, full: bool = False):
     """Step control of the θ-flow: halve ``scale`` until ``λ − scale·direction`` is
     admissible (reaches ``T`` with ``|Δ| ≥ delta_min``) and lowers ``|l_T|``.
@@ -303,7 +306,7 @@ class Descent:
     reason: str
 
 
-def descend(problem: Problem, ev: Evaluation, options: Options,
+def descend(problem: Evaluator, ev: Evaluation, options: Options,
             direction: Callable[[Evaluation, bool], np.ndarray], *, budget: int, history: list,
             callback=None, first: int = 0, full: Callable[[Evaluation], bool] | None = None,
             stall: tuple[int, float] | None = None, tags: dict | None = None) -> Descent:
@@ -370,7 +373,7 @@ class Outcome:
     iterations: int = 0
     #: the problem the final evaluation belongs to, when not the one :func:`nonholo.plan`
     #: built (e.g. a finer integrator grid)
-    problem: Problem | None = None
+    problem: Evaluator | None = None
     #: the certificate of a success (:mod:`nonholo.planning.certification`); a success
     #: without one is certified by :func:`nonholo.plan`
     certificate: Certificate | None = None
@@ -398,47 +401,21 @@ class Strategy(ABC):
         """Plan in the desingularised frame coordinates ``w`` (``False``: physical inputs)."""
         return False
 
-    def initial(self, problem: Problem, controls: Controls, given: bool) -> Start:
+    def initial(self, problem: Evaluator, controls: Controls, given: bool) -> Start:
         """The initial control in this strategy's coordinates, from the physical ``controls``
         (the default initial control, or the caller's ``u0`` when ``given``)."""
         return Start(controls, given)
 
     @abstractmethod
-    def solve(self, problem: Problem, start: Start,
+    def solve(self, problem: Evaluator, start: Start,
               callback: Callable[[dict], object] | None = None) -> Outcome:
         """Plan from ``start``; call ``callback(record)`` per accepted step."""
 
 
-@dataclass(frozen=True)
-class Request:
-    """What the caller of :func:`nonholo.plan` asked for (validated)."""
-
-    mechanism: Mechanism
-    R0: np.ndarray
-    Rd: np.ndarray
-    T: float
-    method: str
-    harmonics: int
-    grid: int
-    strategy: str
-    options: Options
-    steps: int
-    controls: Controls          # the physical initial control
-    started: float              # time.perf_counter() when the call began
-    leg_limits: LegLimits | None = None
-    q0: np.ndarray | None = None   # coordinates of start and goal (a state beyond SO(3))
-    qd: np.ndarray | None = None
-
-    def recorded_options(self) -> dict:
-        """The options a result records: :class:`Options`, ``harmonics``, ``grid`` and, when
-        set, ``leg_length``."""
-        extra = {} if self.leg_limits is None else {"leg_length": list(self.leg_limits.as_tuple())}
-        return {**asdict(self.options), "harmonics": self.harmonics, "grid": self.grid, **extra}
-
-
-def build_result(request: Request, outcome: Outcome | None, success: bool, reason: str,
-                 problem: Problem | None = None) -> PlanResult:
-    """The :class:`~nonholo.io.result.PlanResult` of a run (``outcome=None``: nothing simulated).
+def build_result(request, outcome: Outcome | None, success: bool, reason: str,
+                 problem: Evaluator | None = None) -> PlanResult:
+    """The :class:`~nonholo.io.result.PlanResult` of a run of ``request`` (a
+    :class:`~nonholo.planning.problem.Problem`; ``outcome=None``: nothing simulated).
     A success's samples are those of its certified replay."""
     mech, T = request.mechanism, request.T
     ev = outcome.evaluation if outcome is not None else None

@@ -32,7 +32,7 @@ import numpy as np
 from ..controls.parametrisations import PiecewiseConstant
 from ..io.result import PlanResult
 from .certification import certified
-from .core import Evaluation, Options, Outcome, Problem, Request, build_result, record
+from .core import Evaluation, Options, Outcome, Evaluator, build_result, record
 
 #: Intervals of the piecewise-constant controls the energy is lowered over (the plan's
 #: integrator steps are rounded up to a multiple of it).
@@ -68,7 +68,7 @@ def sqp_target(ev: Evaluation, inverse_metric: np.ndarray) -> tuple[np.ndarray, 
     return JW.T @ nu, nu
 
 
-def lower(problem: Problem, physical, options: Options, grid: int | None = None,
+def lower(problem: Evaluator, physical, options: Options, grid: int | None = None,
           deadline: float | None = None) -> tuple[Outcome | None, str]:
     """Lower the energy of the physical controls ``physical`` (any control of ``problem``'s
     mechanism that reaches its goal) on ``grid`` intervals (see the module).
@@ -134,7 +134,7 @@ def lower(problem: Problem, physical, options: Options, grid: int | None = None,
     return outcome, ""
 
 
-def improve(request: Request, result: PlanResult) -> PlanResult:
+def improve(request, result: PlanResult) -> PlanResult:
     """``result`` (a certified plan of ``request``) with its energy lowered by :func:`lower`,
     or as it was with a reason saying why not; ``options`` records the objective."""
     options = {**result.options, "objective": "energy"}
@@ -143,7 +143,7 @@ def improve(request: Request, result: PlanResult) -> PlanResult:
     mech = request.mechanism
     grid = ENERGY_GRID
     steps = -(-result.steps // grid) * grid
-    problem = Problem(request.R0, request.Rd, request.T, mech, "nonparametric", steps,
+    problem = Evaluator(request.R0, request.Rd, request.T, mech, "nonparametric", steps,
                       request.options.delta_min, frame=False, leg_limits=request.leg_limits)
     outcome, why = lower(problem, result.parametrisation, request.options, grid)
     if outcome is None:

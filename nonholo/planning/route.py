@@ -72,7 +72,7 @@ from ..spaces import so3
 from ..spaces.groups import NO_COORDINATES
 from . import roadmap, state_path
 from .certification import certified
-from .core import Outcome, Problem, Request, Start
+from .core import Outcome, Evaluator, Start
 from .core import build_result as build_local_result
 
 #: The shortest hop a failed hop is split into (rad).
@@ -275,8 +275,8 @@ def smoothing_guesses(stitched: Stitched, method: str, harmonics: int, grid: int
     return [Fourier.fit(stitched.planned, T, K, m) for K in SMOOTHING_HARMONICS if harmonics < K <= steps // 2]
 
 
-def smooth(request: Request, stitched: Stitched, strategy: type, deadline: float,
-           reserve: float = 0.0) -> tuple[Outcome, Problem] | None:
+def smooth(request, stitched: Stitched, strategy: type, deadline: float,
+           reserve: float = 0.0) -> tuple[Outcome, Evaluator] | None:
     """The route's motion re-planned as one control (see the module): the certified outcome
     and its problem, or ``None`` when no guess of :func:`smoothing_guesses` converged to a
     certified plan in time. ``deadline``: an :func:`nonholo.numerics.effort.seconds` reading by which the
@@ -298,7 +298,7 @@ def smooth(request: Request, stitched: Stitched, strategy: type, deadline: float
     for guess in smoothing_guesses(stitched, request.method, request.harmonics, request.grid, request.steps):
         if effort.seconds() > deadline:
             return None
-        problem = Problem(request.R0, request.Rd, request.T, request.mechanism, request.method, request.steps,
+        problem = Evaluator(request.R0, request.Rd, request.T, request.mechanism, request.method, request.steps,
                           opts.delta_min, frame=frame, leg_limits=request.leg_limits, q0=request.q0,
                           qd=request.qd)
         outcome = solver.solve(problem, Start(guess, True), out_of_time)
@@ -464,8 +464,8 @@ def _via(mechanism: Mechanism, start, goal, T: float, leg: Callable, *, tol: flo
     return None
 
 
-def build_result(request: Request, steered: Steered, local_reason: str,
-                 smoothed: tuple[Outcome, Problem] | None = None) -> PlanResult:
+def build_result(request, steered: Steered, local_reason: str,
+                 smoothed: tuple[Outcome, Evaluator] | None = None) -> PlanResult:
     """The :class:`~nonholo.io.result.PlanResult` of a certified global route: the hops'
     histories one after another (each record tagged with its ``hop``), then, if the route
     was ``smoothed`` (:func:`smooth`), the smooth re-plan's (tagged ``"hop": None``) and

@@ -78,7 +78,7 @@ from .certification import note as certificate_note
 from .core import (
     Evaluation,
     Outcome,
-    Problem,
+    Evaluator,
     Start,
     Strategy,
     descend,
@@ -94,7 +94,7 @@ RANDOM_RMS = (0.2, 1.5)
 RANDOM_SEED = 20140901
 
 
-def to_frame(problem: Problem, controls: Controls) -> Controls:
+def to_frame(problem: Evaluator, controls: Controls) -> Controls:
     """The frame control ``w`` that reproduces the physical ``controls`` from ``problem.R0``.
 
     ``w = N(R)ᵀ ω`` with ``ω = L(R) u`` along the physical motion (simulated with
@@ -147,7 +147,7 @@ def spatial_gradient_delta(mechanism, R: np.ndarray, eps: float = 1e-6, q=None) 
     return g
 
 
-def barrier_gradient(problem: Problem, ev: Evaluation, d0: float) -> np.ndarray | None:
+def barrier_gradient(problem: Evaluator, ev: Evaluation, d0: float) -> np.ndarray | None:
     """Gradient in ``λ`` of the barrier ``φ = Σ_{n=1..N} h ψ(d_n)``, ``d_n = sgn(Δ(R0)) Δ(R(t_n))``,
     ``ψ(d) = −log(d/d₀)`` for ``d < d₀`` and 0 above, plus the same barrier on the legs'
     clearances from their stroke limits where the problem has them
@@ -190,7 +190,7 @@ def barrier_gradient(problem: Problem, ev: Evaluation, d0: float) -> np.ndarray 
     return _contract(problem, v)
 
 
-def _contract(problem: Problem, v: np.ndarray) -> np.ndarray:
+def _contract(problem: Evaluator, v: np.ndarray) -> np.ndarray:
     """``Σ_r Σ_k v[r, k] ∂U[r, k]/∂λ`` over the stage rows ``r = 3n + c`` (a vector in ``λ``)."""
     Bidx, Bval, sb, si = problem.stage_basis
     N, m = problem.steps, v.shape[1]
@@ -274,7 +274,7 @@ class RobustStrategy(Strategy):
                          False, f"u0 not used ({exc})")
 
     # -- initial guesses -----------------------------------------------------------------
-    def attempts(self, problem: Problem, start: Start) -> Iterator[tuple[str, Controls]]:
+    def attempts(self, problem: Evaluator, start: Start) -> Iterator[tuple[str, Controls]]:
         """The initial controls tried in turn: ``start``'s, then other loops and drifts."""
         first = start.controls
         T, m = problem.T, first.n_inputs
@@ -306,11 +306,11 @@ class RobustStrategy(Strategy):
             yield "random", f if K is not None else _like(first, f, T)
 
     # -- one descent ----------------------------------------------------------------------
-    def wants_full(self, problem: Problem, ev: Evaluation) -> bool:
+    def wants_full(self, problem: Evaluator, ev: Evaluation) -> bool:
         """Whether the next evaluations should keep ``Z`` and the stage weights (for the barrier)."""
         return self.barrier and self.near_limits(problem, ev, 2.0)
 
-    def near_limits(self, problem: Problem, ev: Evaluation, factor: float = 1.0) -> bool:
+    def near_limits(self, problem: Evaluator, ev: Evaluation, factor: float = 1.0) -> bool:
         """Whether ``ev``'s trajectory comes within ``factor`` times a barrier's reach of
         ``Δ = 0`` (:attr:`barrier_d0`) or of the legs' stroke limits
         (:data:`nonholo.model.limits.BARRIER_CLEARANCE`)."""
@@ -318,7 +318,7 @@ class RobustStrategy(Strategy):
         near_legs = ev.min_clearance is not None and ev.min_clearance < factor * BARRIER_CLEARANCE
         return near_delta or near_legs
 
-    def direction(self, problem: Problem, ev: Evaluation, scale: np.ndarray,
+    def direction(self, problem: Evaluator, ev: Evaluation, scale: np.ndarray,
                   newton: bool = False) -> np.ndarray:
         """The step direction (the step is ``−γh`` or ``−1`` times it).
 
@@ -343,7 +343,7 @@ class RobustStrategy(Strategy):
             return d
         return d + (self.barrier_weight * np.linalg.norm(d / scale) / size) * null
 
-    def descend(self, problem: Problem, ev: Evaluation, attempt: int, first: int, budget: int,
+    def descend(self, problem: Evaluator, ev: Evaluation, attempt: int, first: int, budget: int,
                 history: list, callback):
         """Flow then Newton steps from the admissible ``ev`` (:func:`~nonholo.planning.core.descend`
         with this strategy's direction, barrier evaluations and stall rule)."""
@@ -357,15 +357,15 @@ class RobustStrategy(Strategy):
         return d
 
     # -- accuracy of the integrator -----------------------------------------------------
-    def discretisation_error(self, problem: Problem, ev: Evaluation) -> float:
+    def discretisation_error(self, problem: Evaluator, ev: Evaluation) -> float:
         """Richardson estimate of the integrator's error at ``R(T)`` for ``ev``'s control:
         ``16/15`` of the distance between the endpoints with ``N`` and ``2N`` CF4 steps (rad)."""
         N2 = 2 * problem.steps
         Rs, Qs, _ = problem.forward(stages.stage_table(ev.controls, N2), 0.5 * problem.h, -np.inf)
         return problem.mechanism.space.distance(Rs[N2], Qs[N2], ev.R[-1], ev.q[-1]) * 16.0 / 15.0
 
-    def refine(self, problem: Problem, ev: Evaluation, attempt: int, it0: int, history: list,
-               callback) -> tuple[Problem, Evaluation, int, str]:
+    def refine(self, problem: Evaluator, ev: Evaluation, attempt: int, it0: int, history: list,
+               callback) -> tuple[Evaluator, Evaluation, int, str]:
         """Double the integrator's steps while the endpoint's discretisation error (see
         :meth:`discretisation_error`) exceeds :attr:`refine_above`, re-converging with Newton
         steps on each finer grid. Returns ``(problem, evaluation, accepted steps, note)``."""

@@ -1,0 +1,114 @@
+"""What a plan keeps along its motion, as objects in a list (as python-control's
+``trajectory_constraints`` and opty's ``bounds``): the clearance from the singular set,
+the legs' stroke and the legs' speed.
+
+Each constraint is checked against its mechanism when a :class:`~nonholo.planning.problem.Problem`
+is built (``ValueError`` naming the argument), and says whether a start and a goal can be
+joined at all (:meth:`refusal`, before anything is simulated). Along the motion the planner
+and the certificate keep them (:mod:`nonholo.planning.core`, :mod:`nonholo.certify.certificate`);
+the legs' speed is kept by re-timing the planned path (:mod:`nonholo.planning.retime`).
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..model.limits import LegLimits
+from ..motion.retimed import check_leg_speed
+from ..numerics.checks import is_number
+
+
+@dataclass(frozen=True)
+class Clearance:
+    """``sgnΔ ≥ delta_min`` along the motion (``sgn`` the sign of ``Δ`` at the start); nothing
+    for a mechanism without a singular set."""
+
+    delta_min: float
+
+    def __post_init__(self):
+        if not is_number(self.delta_min) or not math.isfinite(self.delta_min):
+            raise ValueError(f"delta_min must be a finite number, got {self.delta_min!r}")
+
+    def check(self, mechanism) -> "Clearance":
+        return self
+
+    def refusal(self, mechanism, start, goal) -> str | None:
+        """Why no motion keeping the clearance can join ``start`` and ``goal`` (``None``: it may)."""
+        singular = mechanism.singular
+        if not singular.exists:
+            return None
+        d0, dd = singular.value(*start), singular.value(*goal)
+        where, at0, atd = singular.where, singular.at_start, singular.at_goal
+        if dd == 0.0:
+            return f"the goal lies on the singular {where} Δ = 0 ({atd} = 0): unreachable with bounded inputs"
+        if np.sign(dd) != np.sign(d0):
+            return (f"the goal lies across the singular {where} Δ = 0 ({at0} = {d0:.4g}, "
+                    f"{atd} = {dd:.4g}): no motion can cross it, unreachable")
+        if abs(dd) < self.delta_min:
+            return (f"the goal lies within delta_min = {self.delta_min:g} of the singular "
+                    f"{where} (|{atd}| = {abs(dd):.3g})")
+        if abs(d0) < self.delta_min:
+            return (f"the start lies within delta_min = {self.delta_min:g} of the singular "
+                    f"{where} (|{at0}| = {abs(d0):.3g})")
+        return None
+
+
+@dataclass(frozen=True)
+class LegStroke:
+    """``lo ≤ l_i(R) ≤ hi`` for every leg at every point of the motion (a platform's legs,
+    :class:`~nonholo.model.limits.LegLimits`)."""
+
+    limits: LegLimits
+
+    @classmethod
+    def of(cls, value, mechanism) -> "LegStroke | None":
+        """From ``leg_length = (lo, hi)`` as :func:`nonholo.plan` takes it (``None``: none)."""
+        limits = LegLimits.from_argument(value, mechanism)
+        return None if limits is None else cls(limits)
+
+    def check(self, mechanism) -> "LegStroke":
+        LegLimits.from_argument(self.limits.as_tuple(), mechanism)
+        return self
+
+    def refusal(self, mechanism, start, goal) -> str | None:
+        return (self.limits.violation(mechanism, start[0], "the start")
+                or self.limits.violation(mechanism, goal[0], "the goal"))
+
+
+@dataclass(frozen=True)
+class LegSpeed:
+    """``|dl_i/dt| ≤ v`` for every leg: kept by re-timing the planned path."""
+
+    v: float
+
+    @classmethod
+    def of(cls, value, mechanism) -> "LegSpeed | None":
+        """From ``leg_speed = v`` as :func:`nonholo.plan` takes it (``None``: none)."""
+        speed = check_leg_speed(value, mechanism)
+        return None if speed is None else cls(speed)
+
+    def check(self, mechanism) -> "LegSpeed":
+        check_leg_speed(self.v, mechanism)
+        return self
+
+    def refusal(self, mechanism, start, goal) -> str | None:
+        return None
+
+
+def first_refusal(constraints, mechanism, start, goal) -> str | None:
+    """The first constraint's reason why ``start`` and ``goal`` cannot be joined, or ``None``."""
+    for constraint in constraints:
+        reason = constraint.refusal(mechanism, start, goal)
+        if reason is not None:
+            return reason
+    return None
+
+
+def one_of(constraints, kind):
+    """The constraint of type ``kind`` in ``constraints`` (``None`` if there is none)."""
+    found = [c for c in constraints if isinstance(c, kind)]
+    if len(found) > 1:
+        raise ValueError(f"constraints has {len(found)} {kind.__name__} constraints; give at most one")
+    return found[0] if found else None

@@ -1,0 +1,250 @@
+"""The planning problem as one object: mechanism, start, goal, horizon, parametrisation,
+constraints, objective and the solver's settings, checked once when it is built.
+
+:func:`nonholo.plan` builds a :class:`Problem` from its keywords (:meth:`Problem.build`)
+and hands it to :func:`nonholo.planning.api.solve`; the strategies, the global route and
+the least-energy stage read what they need from it, and the route plans its hops as
+problems of their own (:meth:`Problem.part`). Constraints are objects in a list
+(:mod:`nonholo.planning.constraints`).
+"""
+from __future__ import annotations
+
+import dataclasses
+import importlib
+import time
+from dataclasses import asdict, dataclass
+
+import numpy as np
+
+from ..controls import stages
+from ..controls.parametrisations import (
+    Controls,
+    Fourier,
+    PiecewiseConstant,
+    paper_initial,
+)
+from ..model import catalog
+from ..model.mechanism import Mechanism
+from ..motion.simulation import DEFAULT_STEPS
+from ..numerics import effort
+from ..numerics.checks import MAX_STEPS, check_count, check_time
+from . import energy
+from .constraints import Clearance, LegSpeed, LegStroke, one_of
+from .core import Options, Strategy
+from .strategy_paper import PaperStrategy
+from .strategy_robust import RobustStrategy
+
+METHODS = ("parametric", "nonparametric")
+#: The routes :func:`nonholo.plan` takes to a goal.
+ROUTES = ("auto", "local", "global")
+#: What :func:`nonholo.plan` optimises once the goal is reached: nothing, or the energy ∫|u|² dt.
+OBJECTIVES = (None, "energy")
+#: The strategies :func:`nonholo.plan` knows by name.
+STRATEGIES: dict[str, type[Strategy]] = {"paper": PaperStrategy, "robust": RobustStrategy}
+#: The planning horizon (s) of a plan asked for in the least time (``T=None``): the path is
+#: planned in this time, then re-timed (:mod:`nonholo.planning.retime`).
+PLANNING_TIME = 1.0
+
+
+def strategy_class(strategy) -> type[Strategy]:
+    """The :class:`~nonholo.planning.core.Strategy` subclass ``strategy``, the one of that
+    name in :data:`STRATEGIES`, or one given by its import path ``"package.module:Class"``
+    (so that a problem table, JSON, can name any strategy); ``ValueError`` lists them."""
+    if isinstance(strategy, type) and issubclass(strategy, Strategy):
+        return strategy
+    if isinstance(strategy, str) and strategy in STRATEGIES:
+        return STRATEGIES[strategy]
+    if isinstance(strategy, str) and ":" in strategy:
+        module, _, qualname = strategy.partition(":")
+        try:
+            found = importlib.import_module(module)
+            for part in qualname.split("."):
+                found = getattr(found, part)
+        except (ImportError, AttributeError, ValueError) as exc:
+            raise ValueError(f"strategy {strategy!r} cannot be imported: {exc}") from None
+        if isinstance(found, type) and issubclass(found, Strategy):
+            return found
+        raise ValueError(f"strategy {strategy!r} is not a Strategy subclass")
+    raise ValueError(f"unknown strategy {strategy!r}; known: {', '.join(STRATEGIES)} "
+                     "(or pass a Strategy subclass)")
+
+
+def initial_controls(method: str, T: float, n_inputs: int, harmonics: int, grid: int, u0=None) -> Controls:
+    """The initial control in the parametrisation of ``method``.
+
+    ``u0``: ``None`` (the examples' ``u_1 = 0.3 sin 2πt/T``, ``u_2 = 0.3 cos 2πt/T``), a
+    :class:`~nonholo.controls.parametrisations.Controls` of the right kind and size, or a vectorised
+    function ``u(t)`` (projected: least squares on the Fourier basis, interval means on
+    the grid).
+    """
+    kind, size = (Fourier, harmonics) if method == "parametric" else (PiecewiseConstant, grid)
+    if isinstance(u0, Controls):
+        if not isinstance(u0, kind):
+            raise ValueError(f"u0 is a {type(u0).__name__}, method {method!r} needs a {kind.__name__}")
+        if u0.T != T or u0.n_inputs != n_inputs:
+            raise ValueError(f"u0 is defined for T = {u0.T:g}, m = {u0.n_inputs}; the problem has "
+                             f"T = {T:g}, m = {n_inputs}")
+        got = u0.harmonics if kind is Fourier else u0.grid
+        if got != size:
+            what = "harmonics" if kind is Fourier else "grid"
+            raise ValueError(f"u0 has {what} = {got}, the planner was asked for {what} = {size}")
+        return u0
+    func = paper_initial(T, n_inputs) if u0 is None else u0
+    if not callable(func):
+        raise ValueError("u0 must be None, a nonholo.controls.parametrisations.Controls or a function u(t)")
+    return kind.fit(func, T, size, n_inputs)
+
+
+def default_steps(method: str, grid: int) -> int:
+    """:data:`~nonholo.motion.simulation.DEFAULT_STEPS`, rounded up to a multiple of ``grid`` for grid controls."""
+    if method == "nonparametric":
+        return -(-DEFAULT_STEPS // grid) * grid
+    return DEFAULT_STEPS
+
+
+@dataclass(frozen=True, eq=False)
+class Problem:
+    """One planning problem, checked (see the module; build it with :meth:`build`).
+
+    ``R0, q0`` and ``Rd, qd``: start and goal as states ``(R, q)``
+    (:mod:`nonholo.spaces.groups`); ``T``: the horizon (s); ``method``, ``harmonics``,
+    ``grid``: the parametrisation of the planned control, ``controls`` its physical initial
+    guess (``u0_given``: the caller's; ``gamma_given``: ``options.gamma`` is the caller's,
+    not the strategy's default); ``strategy_class``; ``options``: the solver's
+    settings; ``steps``: CF4 steps on ``[0, T]``; ``constraints``: what the motion keeps;
+    ``objective``: ``None`` or ``"energy"``; ``route``; ``least_time``: ``T`` is the
+    planning horizon of a plan re-timed in the least time. ``started`` and
+    ``started_effort``: when the problem was built (for the result's ``seconds`` and the
+    global route's budget of effort).
+    """
+
+    mechanism: Mechanism
+    R0: np.ndarray
+    q0: np.ndarray
+    Rd: np.ndarray
+    qd: np.ndarray
+    T: float
+    method: str
+    harmonics: int
+    grid: int
+    controls: Controls
+    u0_given: bool
+    gamma_given: bool
+    strategy_class: type[Strategy]
+    options: Options
+    steps: int
+    constraints: tuple = ()
+    objective: str | None = None
+    route: str = "auto"
+    least_time: bool = False
+    started: float = dataclasses.field(default_factory=time.perf_counter)
+    started_effort: float = dataclasses.field(default_factory=effort.seconds)
+
+    @classmethod
+    def build(cls, R0, Rd, *, T: float | None = 1.0, method: str = "parametric", harmonics: int = 2,
+              grid: int = 100, u0=None, gamma: float | None = None, step: float = 1.0, tol: float = 1e-10,
+              max_iter: int = 200, strategy="robust", mechanism="platform", delta_min: float = 1e-2,
+              steps: int | None = None, newton_below: float = 1e-3, min_step: float = 1e-6,
+              route: str = "auto", leg_length=None, leg_speed=None, objective: str | None = None,
+              constraints=()) -> "Problem":
+        """The problem of :func:`nonholo.plan`'s keywords (see there), checked:
+        ``ValueError`` naming the argument for bad input. ``constraints``: further
+        constraint objects (:mod:`nonholo.planning.constraints`), besides those of
+        ``delta_min``, ``leg_length`` and ``leg_speed``."""
+        started, started_effort = time.perf_counter(), effort.seconds()
+        mech = catalog.get(mechanism)
+        speed = LegSpeed.of(leg_speed, mech)
+        if T is None and speed is None:
+            raise ValueError("T=None asks for the least time, which needs a leg_speed to bound")
+        if objective not in OBJECTIVES:
+            raise ValueError(f"unknown objective {objective!r}; known: None, 'energy'")
+        if route not in ROUTES:
+            raise ValueError(f"unknown route {route!r}; known: {', '.join(ROUTES)}")
+        stroke = LegStroke.of(leg_length, mech)
+        if method not in METHODS:
+            raise ValueError(f"unknown method {method!r}; known: {', '.join(METHODS)}")
+        solver = strategy_class(strategy)
+        least_time = T is None
+        T = check_time(PLANNING_TIME if least_time else T)
+        harmonics = check_count(harmonics, "harmonics")
+        grid = check_count(grid, "grid")
+        R0, q0 = mech.parse_state(R0, "R0")
+        Rd, qd = mech.parse_state(Rd, "Rd")
+        if objective is not None and not energy.supports(mech):
+            raise ValueError(f"objective {objective!r} is for mechanisms on SO(3); {mech.name!r} has "
+                             f"the state space {mech.space.name}")
+        options = Options(gamma=solver.default_gamma if gamma is None else gamma, step=step, tol=tol,
+                          max_iter=max_iter, newton_below=newton_below, min_step=min_step,
+                          delta_min=delta_min)
+        if mech.singular.value(R0, q0) == 0.0:
+            raise ValueError(mech.singular.refusal)
+        steps = check_count(default_steps(method, grid) if steps is None else steps, "steps", maximum=MAX_STEPS)
+        if method == "parametric" and 2 * harmonics > steps:
+            raise ValueError(f"harmonics = {harmonics} is more than the integrator's steps = {steps} "
+                             "can resolve (at most steps/2; raise steps or lower harmonics)")
+        controls = initial_controls(method, T, mech.n_inputs, harmonics, grid, u0)
+        stages.check_steps(controls, steps)
+        listed = (Clearance(options.delta_min), stroke, speed) + tuple(constraints)
+        checked = tuple(c.check(mech) for c in listed if c is not None)
+        for kind in (Clearance, LegStroke, LegSpeed):
+            one_of(checked, kind)
+        return cls(mechanism=mech, R0=R0, q0=q0, Rd=Rd, qd=qd, T=T, method=method, harmonics=harmonics,
+                   grid=grid, controls=controls, u0_given=u0 is not None, gamma_given=gamma is not None,
+                   strategy_class=solver,
+                   options=options, steps=steps, constraints=checked, objective=objective, route=route,
+                   least_time=least_time, started=started, started_effort=started_effort)
+
+    def part(self, start, goal, T: float, delta_min: float, strategy) -> "Problem":
+        """A part of the global route, ``start → goal`` (states ``(R, q)``) in ``T``, planned
+        locally with ``strategy`` and the clearance ``delta_min``, under this problem's other
+        constraints but the legs' speed (kept by the whole plan's re-timing), with no
+        objective: the same settings, its own clock."""
+        mech = self.mechanism
+        solver = strategy_class(strategy)
+        options = dataclasses.replace(self.options, delta_min=delta_min,
+                                      gamma=self.options.gamma if self.gamma_given else solver.default_gamma)
+        controls = initial_controls(self.method, T, mech.n_inputs, self.harmonics, self.grid)
+        kept = tuple(c for c in self.constraints if not isinstance(c, (Clearance, LegSpeed)))
+        return dataclasses.replace(
+            self, R0=np.asarray(start[0], dtype=float), q0=np.asarray(start[1], dtype=float),
+            Rd=np.asarray(goal[0], dtype=float), qd=np.asarray(goal[1], dtype=float), T=check_time(T),
+            controls=controls, u0_given=False, strategy_class=solver, options=options,
+            constraints=(Clearance(options.delta_min),) + kept, objective=None, route="local",
+            least_time=False, started=time.perf_counter(), started_effort=effort.seconds())
+
+    # -- what the planner reads ---------------------------------------------------------
+
+    @property
+    def strategy(self) -> str:
+        """The strategy's name."""
+        return self.strategy_class.name
+
+    @property
+    def start(self) -> tuple[np.ndarray, np.ndarray]:
+        return self.R0, self.q0
+
+    @property
+    def goal(self) -> tuple[np.ndarray, np.ndarray]:
+        return self.Rd, self.qd
+
+    @property
+    def delta_min(self) -> float:
+        return self.options.delta_min
+
+    @property
+    def leg_limits(self):
+        """The legs' stroke limits (:class:`~nonholo.model.limits.LegLimits`), or ``None``."""
+        stroke = one_of(self.constraints, LegStroke)
+        return None if stroke is None else stroke.limits
+
+    @property
+    def leg_speed(self) -> float | None:
+        speed = one_of(self.constraints, LegSpeed)
+        return None if speed is None else speed.v
+
+    def recorded_options(self) -> dict:
+        """The options a result records: :class:`~nonholo.planning.core.Options`,
+        ``harmonics``, ``grid`` and, when set, ``leg_length``."""
+        limits = self.leg_limits
+        extra = {} if limits is None else {"leg_length": list(limits.as_tuple())}
+        return {**asdict(self.options), "harmonics": self.harmonics, "grid": self.grid, **extra}
