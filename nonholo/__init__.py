@@ -22,4 +22,25 @@ from .motion.simulation import simulate  # noqa: E402
 from .planning.api import plan  # noqa: E402
 from .planning.retime import retime  # noqa: E402
 
-__all__ = ["plan", "simulate", "retime", "PlanResult", "Mechanism", "mechanism_named"]
+from .planning.problem import Problem  # noqa: E402
+
+__all__ = ["plan", "simulate", "retime", "PlanResult", "Mechanism", "mechanism_named", "Problem"]
+
+#: Modules of the package's former flat layout, reachable as ``from nonholo import so3`` for
+#: one release (with a ``DeprecationWarning``): old name → its module now.
+MOVED = {"so3": "spaces.so3", "verify": "certify.resimulate", "catalog": "model.catalog",
+         "planner": "planning.api", "result": "io.result", "figures": "viz.figures",
+         "examples": "paper.examples", "simulation": "motion.simulation",
+         "platform": "model.platform", "export": "io.csv_export", "sweep": "batch.sweep",
+         "problems": "io.problems", "limits": "model.limits"}
+
+
+def __getattr__(name):
+    if name in MOVED:
+        import importlib
+        import warnings
+
+        warnings.warn(f"nonholo.{name} is now nonholo.{MOVED[name]}; the old name goes in the next release",
+                      DeprecationWarning, stacklevel=2)
+        return importlib.import_module(f".{MOVED[name]}", __name__)
+    raise AttributeError(f"module 'nonholo' has no attribute {name!r}")
