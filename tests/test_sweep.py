@@ -44,6 +44,66 @@ def test_local_workers_give_the_serial_rows(serial, tmp_path):
     np.testing.assert_array_equal(res.R0, np.asarray(rows[0]["start"]))
 
 
+def mixed_rows():
+    """Two problems of each kind of state: the platform on SO(3) (goals near Example 1's
+    start), the car on R⁴ and the rolling ball on SO(3) × R²."""
+    R0 = so3.from_rpy(*atlas.START)
+    I = np.eye(3)
+    return [
+        {"start": R0, "goal": so3.from_rpy(0.7, 1.1, -0.4), "label": "platform-1"},
+        {"start": [0.0, 0.0, 0.0, 0.0], "goal": [0.0, 1.0, 0.0, 0.0], "mechanism": "car", "label": "car-sideways"},
+        {"start": (I, [0.0, 0.0]), "goal": (so3.from_rpy(0.0, 0.0, np.pi / 2), [0.0, 0.0]),
+         "mechanism": "rolling_ball", "label": "ball-yaw"},
+        {"start": R0, "goal": so3.from_rpy(0.3, 1.25, -0.6), "mechanism": "platform", "label": "platform-2"},
+        {"start": np.array([0.0, 0.0, 0.0, 0.0]), "goal": np.array([0.5, 0.3, 0.2, 0.0]), "mechanism": "car",
+         "label": "car-forward"},
+        {"start": [I.tolist(), [0.0, 0.0]], "goal": [I.tolist(), [0.5, 0.0]], "mechanism": "rolling_ball",
+         "label": "ball-roll"},
+    ]
+
+
+def test_one_table_mixes_mechanisms(tmp_path):
+    """Platform, car and ball problems in one table: the file round-trips, 1 and 2 workers
+    give the same rows, and every claimed success holds under SciPy's DOP853."""
+    from nonholo.certify import resimulate as verify
+    from nonholo.model import catalog
+
+    rows = mixed_rows()
+    path = problems.write(tmp_path / "mixed.jsonl", rows)
+    read = problems.read(path)
+    assert problems.fingerprint(read) == problems.fingerprint(problems.check(rows))
+    assert [problems.as_json(p) for p in read] == [json.loads(line) for line in path.read_text().splitlines()]
+    # the SO(3) rows are stored as before: nested 3×3 lists
+    assert json.loads(path.read_text().splitlines()[0])["goal"] == so3.from_rpy(0.7, 1.1, -0.4).tolist()
+    one = sweep.sweep(path, tmp_path / "one.parquet", workers=1, progress=False)
+    two = sweep.sweep(path, tmp_path / "two.parquet", workers=2, progress=False, batch=1)
+    assert sweep.comparable(two) == sweep.comparable(one)
+    table = one.to_pylist()
+    assert [r["mechanism"] for r in table] == [p["mechanism"] for p in read]
+    assert all(r["error"] is None for r in table), [r["error"] for r in table]
+    assert all(r["success"] for r in table), [(r["label"], r["reason"]) for r in table]
+    for row, problem in zip(table, read):
+        res = sweep.plan_of(row)
+        assert res.mechanism == problem["mechanism"] and res.success
+        space = catalog.get(res.mechanism).space
+        R0, q0 = space.parse(problem["start"], "start")
+        Rd, qd = space.parse(problem["goal"], "goal")
+        np.testing.assert_array_equal(res.R0, R0)
+        if res.q0 is not None:
+            np.testing.assert_array_equal(res.q0, q0)
+            np.testing.assert_array_equal(res.qd, qd)
+        # independent: DOP853 on the hand-written model (car, ball) or on L(R) (platform)
+        if space.k or not space.has_orientation:
+            _, R, q, delta = verify.resimulate_state(res.start, res.controls, res.T, res.mechanism,
+                                                     res.breakpoints)
+            R_T, q_T = R[-1], q[-1]
+            if delta is not None:
+                assert np.min(np.sign(delta[0]) * delta) > 0.0
+        else:
+            R_T, q_T = verify.resimulate(R0, res.controls, res.T, res.mechanism, res.breakpoints), q0
+        assert space.distance(R_T, q_T, Rd, qd) < 1e-8, row["label"]
+
+
 def test_a_finished_sweep_is_not_run_again(serial, tmp_path, monkeypatch):
     rows, _ = serial
     out = tmp_path / "r.parquet"
@@ -69,7 +129,16 @@ def test_a_problem_that_raises_is_recorded_and_the_sweep_goes_on(tmp_path):
 
 @pytest.mark.parametrize("line, match", [
     ('{"goal": I}', r"row 1, column 'start': is missing"),
-    ('{"start": I, "goal": [[1, 0], [0, 1]]}', r"row 1, column 'goal': must be a 3×3 rotation matrix, got shape \(2, 2\)"),
+    ('{"start": I, "goal": [[1, 0], [0, 1]]}',
+     r"row 1, column 'goal': mechanism 'platform' expects a rotation matrix \(3×3\); goal must have shape \(3, 3\)"),
+    ('{"start": I, "goal": [0, 1, 0, 0], "mechanism": "car"}',
+     r"row 1, column 'start': mechanism 'car' expects a vector of its 4 coordinates \(x, y, theta, phi\); start has "
+     r"shape \(3, 3\)"),
+    ('{"start": [I, [0, 0]], "goal": G, "mechanism": "rolling_ball"}',
+     r"row 1, column 'goal': mechanism 'rolling_ball' expects a pair \(R, q\): a rotation matrix R \(3×3\) and the 2 "
+     r"coordinates q = \(p1, p2\); got an array of shape \(3, 3\)"),
+    ('{"start": [I, [0]], "goal": [G, [0, 0]], "mechanism": "rolling_ball"}',
+     r"row 1, column 'start': .*start\[1\] \(the coordinates\) has shape \(1,\), expected \(2,\)"),
     ('{"start": I, "goal": [[1, 0, 0], [0, 1, 0], [0, 0, 2]]}', r"row 1, column 'goal': "),
     ('{"start": I, "goal": G, "mechanism": "nosuch"}', r"row 1, column 'mechanism': unknown mechanism 'nosuch'"),
     ('{"start": I, "goal": G, "options": {"speed": 1}}', r"row 1, column 'options.speed': is not an option"),
@@ -89,7 +158,7 @@ def test_bad_problem_files_name_the_row_and_column_before_anything_runs(tmp_path
         sweep.sweep(path, tmp_path / "r.parquet", workers=1, progress=False)
     assert not (tmp_path / "r.parquet").exists() and not sweep.parts_dir(tmp_path / "r.parquet").exists()
     # the command line: exit status 2, the same message
-    run = subprocess.run([sys.executable, "-m", "nonholo.cli.main.entry", "sweep", str(path), "--out",
+    run = subprocess.run([sys.executable, "-m", "nonholo.cli.entry", "sweep", str(path), "--out",
                           str(tmp_path / "r.parquet")], capture_output=True, text=True)
     assert run.returncode == 2 and "row 1" in run.stderr
 
@@ -100,7 +169,7 @@ def test_a_killed_sweep_resumes_without_losing_or_repeating_a_row(tmp_path):
     table = sweep.sweep(rows, tmp_path / "serial.parquet", workers=1, progress=False)
     path = problems.write(tmp_path / "p.jsonl", rows)
     out = tmp_path / "r.parquet"
-    cmd = [sys.executable, "-m", "nonholo.cli.main.entry", "sweep", str(path), "--out", str(out), "--workers", "1",
+    cmd = [sys.executable, "-m", "nonholo.cli.entry", "sweep", str(path), "--out", str(out), "--workers", "1",
            "--batch", "1", "--quiet"]
     proc = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
     parts = sweep.parts_dir(out)
@@ -146,7 +215,7 @@ def test_a_dask_cluster_of_separate_processes_gives_the_serial_rows(serial, tmp_
         assert sweep.comparable(got) == sweep.comparable(table)[:8]
         # the command line takes the scheduler's address
         path = problems.write(tmp_path / "p.jsonl", rows)
-        subprocess.run([sys.executable, "-m", "nonholo.cli.main.entry", "sweep", str(path), "--out",
+        subprocess.run([sys.executable, "-m", "nonholo.cli.entry", "sweep", str(path), "--out",
                         str(tmp_path / "cli.parquet"), "--scheduler", address, "--quiet"], check=True)
         assert sweep.comparable(sweep.load(tmp_path / "cli.parquet")) == sweep.comparable(table)[:8]
 
@@ -172,7 +241,7 @@ def test_atlas_maps_from_a_small_sweep(tmp_path):
     for q in atlas.QUANTITIES:
         fig = atlas.atlas_figure(table, q)
         assert len(fig.axes) >= 2
-    run = subprocess.run([sys.executable, "-m", "nonholo.cli.main.entry", "atlas", str(tmp_path / "a.parquet"), "--out",
+    run = subprocess.run([sys.executable, "-m", "nonholo.cli.entry", "atlas", str(tmp_path / "a.parquet"), "--out",
                           str(tmp_path / "figs")], capture_output=True, text=True)
     assert run.returncode == 0, run.stderr
     assert all((tmp_path / "figs" / f"atlas_{q}.{ext}").stat().st_size > 0
