@@ -262,3 +262,76 @@ def test_a_strategy_class_goes_into_a_problem_table_by_its_import_path(tmp_path)
     table = sweep.sweep(rows, tmp_path / "r.parquet", workers=1, progress=False).to_pylist()
     assert [r["strategy"] for r in table] == [bench_robust.WBarrier.name] * 2
     assert all(r["error"] is None for r in table)
+
+
+def test_car_atlas_over_the_goal_position(tmp_path):
+    """A goal grid in the car's (x, y) from a start, the heading and steering the start's:
+    the goals are the cell centres, every claimed success holds under DOP853, the maps are
+    drawn, and the command line writes the same problems."""
+    from nonholo.certify import resimulate as verify
+    from nonholo.model import catalog
+
+    start = (0.0, 0.0, 0.3, 0.0)
+    rows = atlas.problems(n=3, mechanism="car", axes=("x", "y"), start=start, extent=(-1.0, 1.0, -0.5, 1.5),
+                          settings=("default",))
+    assert len(rows) == 9
+    xs, ys = [-2 / 3, 0.0, 2 / 3], [-1 / 6, 0.5, 7 / 6]
+    for r in rows:
+        lab = json.loads(r["label"])
+        np.testing.assert_allclose(r["goal"], [xs[lab["i"]], ys[lab["j"]], 0.3, 0.0], atol=1e-15)
+        np.testing.assert_array_equal(r["start"], start)
+    table = sweep.sweep(rows, tmp_path / "car.parquet", workers=1, progress=False)
+    a = atlas.Atlas(table)
+    assert a.axes == ("x", "y") and a.slices == [None] and a.holds_start(0)
+    assert a.count("default", "unreachable") == 0        # the steering angle stays 0: Δ = cos φ = 1
+    space = catalog.get("car").space
+    for row in table.to_pylist():
+        res = sweep.plan_of(row)
+        if row["success"]:
+            _, R, q, _ = verify.resimulate_state(res.start, res.controls, res.T, "car", res.breakpoints)
+            goal = space.parse(json.loads(row["problem"])["goal"], "goal")
+            assert space.distance(R[-1], q[-1], *goal) < 1e-8
+    assert a.count("default", "solved") >= 8
+    for q in atlas.QUANTITIES:
+        fig = atlas.atlas_figure(table, q)
+        assert fig.axes[0].get_xlabel() == "goal x [wheelbase]" and fig.axes[0].get_ylabel() == "goal y [wheelbase]"
+    from nonholo.cli.entry import main
+
+    assert main(["atlas", "--problems", str(tmp_path / "cli.jsonl"), "--mechanism", "car", "--grid", "3",
+                 "--axes", "x", "y", "--start", *map(str, start), "--extent", "-1", "1", "-0.5", "1.5"]) == 0
+    mine = problems.write(tmp_path / "mine.jsonl", atlas.problems(
+        n=3, mechanism="car", axes=("x", "y"), start=start, extent=(-1.0, 1.0, -0.5, 1.5)))
+    assert (tmp_path / "cli.jsonl").read_text() == mine.read_text()
+
+
+def test_car_atlas_across_the_singular_set(tmp_path):
+    """Over (x, steering φ) the car's singular set cos φ = 0 crosses the grid: goals beyond
+    it (or within delta_min of it) are unreachable, exactly where cos φ says."""
+    rows = atlas.problems(n=4, mechanism="car", axes=("x", "phi"), settings=("default",))
+    table = sweep.sweep(rows, tmp_path / "car.parquet", workers=1, progress=False)
+    a = atlas.Atlas(table)
+    steering = atlas.cell_centres(4, (-np.pi, np.pi))
+    for j, phi in enumerate(steering):
+        for i in range(4):
+            assert (a.outcome[0, 0, j, i] == "unreachable") == (np.cos(phi) < 1e-2)
+    assert a.count("default", "unreachable") == 8
+    fig = atlas.atlas_figure(table, "success")
+    assert "Δ = 0" in fig._suptitle.get_text()
+
+
+@pytest.mark.parametrize("flags, flag", [
+    (["--mechanism", "car", "--axes", "x", "z"], "--axes"),
+    (["--mechanism", "car", "--axes", "x", "x"], "--axes"),
+    (["--mechanism", "car", "--start", "0", "0", "0"], "--start"),
+    (["--mechanism", "car", "--psi", "0.1"], "--psi"),
+    (["--axes", "phi", "psi", "--psi", "0.1"], "--psi"),
+    (["--mechanism", "nosuch"], "--mechanism"),
+    (["--grid", "1"], "--grid"),
+    (["--extent", "1", "0", "-1", "1"], "--extent"),
+])
+def test_atlas_refuses_bad_flags_naming_them(tmp_path, capsys, flags, flag):
+    from nonholo.cli.entry import main
+
+    assert main(["atlas", "--problems", str(tmp_path / "p.jsonl"), *flags]) == 2
+    assert f"error: {flag} " in capsys.readouterr().err
+    assert not (tmp_path / "p.jsonl").exists()
