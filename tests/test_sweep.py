@@ -44,6 +44,66 @@ def test_local_workers_give_the_serial_rows(serial, tmp_path):
     np.testing.assert_array_equal(res.R0, np.asarray(rows[0]["start"]))
 
 
+def mixed_rows():
+    """Two problems of each kind of state: the platform on SO(3) (goals near Example 1's
+    start), the car on R⁴ and the rolling ball on SO(3) × R²."""
+    R0 = so3.from_rpy(*atlas.START)
+    I = np.eye(3)
+    return [
+        {"start": R0, "goal": so3.from_rpy(0.7, 1.1, -0.4), "label": "platform-1"},
+        {"start": [0.0, 0.0, 0.0, 0.0], "goal": [0.0, 1.0, 0.0, 0.0], "mechanism": "car", "label": "car-sideways"},
+        {"start": (I, [0.0, 0.0]), "goal": (so3.from_rpy(0.0, 0.0, np.pi / 2), [0.0, 0.0]),
+         "mechanism": "rolling_ball", "label": "ball-yaw"},
+        {"start": R0, "goal": so3.from_rpy(0.3, 1.25, -0.6), "mechanism": "platform", "label": "platform-2"},
+        {"start": np.array([0.0, 0.0, 0.0, 0.0]), "goal": np.array([0.5, 0.3, 0.2, 0.0]), "mechanism": "car",
+         "label": "car-forward"},
+        {"start": [I.tolist(), [0.0, 0.0]], "goal": [I.tolist(), [0.5, 0.0]], "mechanism": "rolling_ball",
+         "label": "ball-roll"},
+    ]
+
+
+def test_one_table_mixes_mechanisms(tmp_path):
+    """Platform, car and ball problems in one table: the file round-trips, 1 and 2 workers
+    give the same rows, and every claimed success holds under SciPy's DOP853."""
+    from nonholo.certify import resimulate as verify
+    from nonholo.model import catalog
+
+    rows = mixed_rows()
+    path = problems.write(tmp_path / "mixed.jsonl", rows)
+    read = problems.read(path)
+    assert problems.fingerprint(read) == problems.fingerprint(problems.check(rows))
+    assert [problems.as_json(p) for p in read] == [json.loads(line) for line in path.read_text().splitlines()]
+    # the SO(3) rows are stored as before: nested 3×3 lists
+    assert json.loads(path.read_text().splitlines()[0])["goal"] == so3.from_rpy(0.7, 1.1, -0.4).tolist()
+    one = sweep.sweep(path, tmp_path / "one.parquet", workers=1, progress=False)
+    two = sweep.sweep(path, tmp_path / "two.parquet", workers=2, progress=False, batch=1)
+    assert sweep.comparable(two) == sweep.comparable(one)
+    table = one.to_pylist()
+    assert [r["mechanism"] for r in table] == [p["mechanism"] for p in read]
+    assert all(r["error"] is None for r in table), [r["error"] for r in table]
+    assert all(r["success"] for r in table), [(r["label"], r["reason"]) for r in table]
+    for row, problem in zip(table, read):
+        res = sweep.plan_of(row)
+        assert res.mechanism == problem["mechanism"] and res.success
+        space = catalog.get(res.mechanism).space
+        R0, q0 = space.parse(problem["start"], "start")
+        Rd, qd = space.parse(problem["goal"], "goal")
+        np.testing.assert_array_equal(res.R0, R0)
+        if res.q0 is not None:
+            np.testing.assert_array_equal(res.q0, q0)
+            np.testing.assert_array_equal(res.qd, qd)
+        # independent: DOP853 on the hand-written model (car, ball) or on L(R) (platform)
+        if space.k or not space.has_orientation:
+            _, R, q, delta = verify.resimulate_state(res.start, res.controls, res.T, res.mechanism,
+                                                     res.breakpoints)
+            R_T, q_T = R[-1], q[-1]
+            if delta is not None:
+                assert np.min(np.sign(delta[0]) * delta) > 0.0
+        else:
+            R_T, q_T = verify.resimulate(R0, res.controls, res.T, res.mechanism, res.breakpoints), q0
+        assert space.distance(R_T, q_T, Rd, qd) < 1e-8, row["label"]
+
+
 def test_a_finished_sweep_is_not_run_again(serial, tmp_path, monkeypatch):
     rows, _ = serial
     out = tmp_path / "r.parquet"
@@ -69,7 +129,16 @@ def test_a_problem_that_raises_is_recorded_and_the_sweep_goes_on(tmp_path):
 
 @pytest.mark.parametrize("line, match", [
     ('{"goal": I}', r"row 1, column 'start': is missing"),
-    ('{"start": I, "goal": [[1, 0], [0, 1]]}', r"row 1, column 'goal': must be a 3×3 rotation matrix, got shape \(2, 2\)"),
+    ('{"start": I, "goal": [[1, 0], [0, 1]]}',
+     r"row 1, column 'goal': mechanism 'platform' expects a rotation matrix \(3×3\); goal must have shape \(3, 3\)"),
+    ('{"start": I, "goal": [0, 1, 0, 0], "mechanism": "car"}',
+     r"row 1, column 'start': mechanism 'car' expects a vector of its 4 coordinates \(x, y, theta, phi\); start has "
+     r"shape \(3, 3\)"),
+    ('{"start": [I, [0, 0]], "goal": G, "mechanism": "rolling_ball"}',
+     r"row 1, column 'goal': mechanism 'rolling_ball' expects a pair \(R, q\): a rotation matrix R \(3×3\) and the 2 "
+     r"coordinates q = \(p1, p2\); got an array of shape \(3, 3\)"),
+    ('{"start": [I, [0]], "goal": [G, [0, 0]], "mechanism": "rolling_ball"}',
+     r"row 1, column 'start': .*start\[1\] \(the coordinates\) has shape \(1,\), expected \(2,\)"),
     ('{"start": I, "goal": [[1, 0, 0], [0, 1, 0], [0, 0, 2]]}', r"row 1, column 'goal': "),
     ('{"start": I, "goal": G, "mechanism": "nosuch"}', r"row 1, column 'mechanism': unknown mechanism 'nosuch'"),
     ('{"start": I, "goal": G, "options": {"speed": 1}}', r"row 1, column 'options.speed': is not an option"),
@@ -193,3 +262,76 @@ def test_a_strategy_class_goes_into_a_problem_table_by_its_import_path(tmp_path)
     table = sweep.sweep(rows, tmp_path / "r.parquet", workers=1, progress=False).to_pylist()
     assert [r["strategy"] for r in table] == [bench_robust.WBarrier.name] * 2
     assert all(r["error"] is None for r in table)
+
+
+def test_car_atlas_over_the_goal_position(tmp_path):
+    """A goal grid in the car's (x, y) from a start, the heading and steering the start's:
+    the goals are the cell centres, every claimed success holds under DOP853, the maps are
+    drawn, and the command line writes the same problems."""
+    from nonholo.certify import resimulate as verify
+    from nonholo.model import catalog
+
+    start = (0.0, 0.0, 0.3, 0.0)
+    rows = atlas.problems(n=3, mechanism="car", axes=("x", "y"), start=start, extent=(-1.0, 1.0, -0.5, 1.5),
+                          settings=("default",))
+    assert len(rows) == 9
+    xs, ys = [-2 / 3, 0.0, 2 / 3], [-1 / 6, 0.5, 7 / 6]
+    for r in rows:
+        lab = json.loads(r["label"])
+        np.testing.assert_allclose(r["goal"], [xs[lab["i"]], ys[lab["j"]], 0.3, 0.0], atol=1e-15)
+        np.testing.assert_array_equal(r["start"], start)
+    table = sweep.sweep(rows, tmp_path / "car.parquet", workers=1, progress=False)
+    a = atlas.Atlas(table)
+    assert a.axes == ("x", "y") and a.slices == [None] and a.holds_start(0)
+    assert a.count("default", "unreachable") == 0        # the steering angle stays 0: Δ = cos φ = 1
+    space = catalog.get("car").space
+    for row in table.to_pylist():
+        res = sweep.plan_of(row)
+        if row["success"]:
+            _, R, q, _ = verify.resimulate_state(res.start, res.controls, res.T, "car", res.breakpoints)
+            goal = space.parse(json.loads(row["problem"])["goal"], "goal")
+            assert space.distance(R[-1], q[-1], *goal) < 1e-8
+    assert a.count("default", "solved") >= 8
+    for q in atlas.QUANTITIES:
+        fig = atlas.atlas_figure(table, q)
+        assert fig.axes[0].get_xlabel() == "goal x [wheelbase]" and fig.axes[0].get_ylabel() == "goal y [wheelbase]"
+    from nonholo.cli.entry import main
+
+    assert main(["atlas", "--problems", str(tmp_path / "cli.jsonl"), "--mechanism", "car", "--grid", "3",
+                 "--axes", "x", "y", "--start", *map(str, start), "--extent", "-1", "1", "-0.5", "1.5"]) == 0
+    mine = problems.write(tmp_path / "mine.jsonl", atlas.problems(
+        n=3, mechanism="car", axes=("x", "y"), start=start, extent=(-1.0, 1.0, -0.5, 1.5)))
+    assert (tmp_path / "cli.jsonl").read_text() == mine.read_text()
+
+
+def test_car_atlas_across_the_singular_set(tmp_path):
+    """Over (x, steering φ) the car's singular set cos φ = 0 crosses the grid: goals beyond
+    it (or within delta_min of it) are unreachable, exactly where cos φ says."""
+    rows = atlas.problems(n=4, mechanism="car", axes=("x", "phi"), settings=("default",))
+    table = sweep.sweep(rows, tmp_path / "car.parquet", workers=1, progress=False)
+    a = atlas.Atlas(table)
+    steering = atlas.cell_centres(4, (-np.pi, np.pi))
+    for j, phi in enumerate(steering):
+        for i in range(4):
+            assert (a.outcome[0, 0, j, i] == "unreachable") == (np.cos(phi) < 1e-2)
+    assert a.count("default", "unreachable") == 8
+    fig = atlas.atlas_figure(table, "success")
+    assert "Δ = 0" in fig._suptitle.get_text()
+
+
+@pytest.mark.parametrize("flags, flag", [
+    (["--mechanism", "car", "--axes", "x", "z"], "--axes"),
+    (["--mechanism", "car", "--axes", "x", "x"], "--axes"),
+    (["--mechanism", "car", "--start", "0", "0", "0"], "--start"),
+    (["--mechanism", "car", "--psi", "0.1"], "--psi"),
+    (["--axes", "phi", "psi", "--psi", "0.1"], "--psi"),
+    (["--mechanism", "nosuch"], "--mechanism"),
+    (["--grid", "1"], "--grid"),
+    (["--extent", "1", "0", "-1", "1"], "--extent"),
+])
+def test_atlas_refuses_bad_flags_naming_them(tmp_path, capsys, flags, flag):
+    from nonholo.cli.entry import main
+
+    assert main(["atlas", "--problems", str(tmp_path / "p.jsonl"), *flags]) == 2
+    assert f"error: {flag} " in capsys.readouterr().err
+    assert not (tmp_path / "p.jsonl").exists()

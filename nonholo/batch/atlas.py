@@ -1,13 +1,24 @@
-"""Atlases: maps over slices of the orientation space of how a planner fares from one start.
+"""Atlases: maps over two coordinates of the goal of how a planner fares from one start.
 
-:func:`problems` lays goals on a grid of each RPY slice ``ψ = const`` — ``φ`` about z
-across ``[−π, π)``, ``ϑ`` about y across ``(−π/2, π/2)``, cell centres — one problem per goal
-and planner setting (:data:`SETTINGS`: the paper's algorithm, the robust strategy alone,
-and the default ``plan()``), each labelled with its setting and angles (JSON). A sweep of
-them (:func:`nonholo.batch.sweep.sweep`) is drawn by :func:`atlas_figure`: one panel per setting
-and slice, coloured by success, iterations or time, over the singular set ``Δ = 0`` (black
-line) with the start marked; goals across it (or within ``delta_min`` of it) are
-unreachable and drawn grey.
+:func:`problems` lays goals on an ``n × n`` grid (cell centres) over two of the numbers of a
+state of the mechanism's space (its command-line numbers,
+:attr:`nonholo.spaces.groups.Product.cli_names`: the RPY angles ``φ, ϑ, ψ`` with an
+orientation, then the coordinates), the goal's other numbers those of the start:
+
+- on SO(3) (the default axes ``φ, ϑ``): the RPY slices ``ψ = const`` — ``φ`` about z across
+  ``[−π, π)``, ``ϑ`` about y across ``(−π/2, π/2)``, one slice per value of ``psi``;
+- on ``Rᵏ`` (default: the first two coordinates), e.g. the car's goal position ``(x, y)``:
+  angle coordinates across ``[−π, π)``, others across the space's sampling box
+  ``[−box, box]`` (:attr:`nonholo.spaces.groups.Euclidean.box`), or any ``extent``;
+- on ``SO(3) × Rᵏ`` either, or one angle and one coordinate.
+
+One problem per goal and planner setting (:data:`SETTINGS`: the paper's algorithm, the
+robust strategy alone, and the default ``plan()``), each labelled with its setting, axes
+and goal (JSON). A sweep of them (:func:`nonholo.batch.sweep.sweep`) is drawn by
+:func:`atlas_figure`: one panel per setting and slice, coloured by success, iterations or
+time, over the singular set ``Δ = 0`` (black line, where a slice crosses it) with the
+start marked; goals across it (or within ``delta_min`` of it) are unreachable and drawn
+grey.
 """
 from __future__ import annotations
 
@@ -16,10 +27,9 @@ import json
 import numpy as np
 from matplotlib.colors import BoundaryNorm, ListedColormap, LogNorm
 from matplotlib.figure import Figure
+from scipy.spatial.transform import Rotation
 
 from ..model import catalog
-from ..spaces import so3
-from ..viz.figures import mechanism_delta_rpy
 
 #: The planner settings an atlas compares: name → options of :func:`nonholo.plan`.
 SETTINGS = {"paper": {"strategy": "paper", "route": "local"},
@@ -27,46 +37,163 @@ SETTINGS = {"paper": {"strategy": "paper", "route": "local"},
             "default": {}}
 #: The quantities :func:`atlas_figure` draws.
 QUANTITIES = ("success", "iterations", "time")
-#: Example 1's start (RPY, rad): the atlases' default.
+#: Example 1's start (RPY, rad): the atlases' default orientation (coordinates default to 0).
 START = (0.5, 1.2, -0.5)
+#: ASCII names of the RPY angles (``--axes phi theta``), for a space with an orientation.
+ALIASES = {"phi": "φ", "theta": "ϑ", "psi": "ψ"}
+#: The RPY angles' ranges (rad).
+RPY_RANGES = {"φ": (-np.pi, np.pi), "ϑ": (-np.pi / 2, np.pi / 2), "ψ": (-np.pi, np.pi)}
 #: Success map colours: solved, failed, unreachable.
 _SUCCESS_COLORS = ("#2ca02c", "#d62728", "#d9d9d9")
+_AXIS_TEXT = {"φ": "goal φ (about z) [rad]", "ϑ": "goal ϑ (about y) [rad]", "ψ": "goal ψ (about x) [rad]"}
+_PI_TICKS = {(-np.pi, np.pi): ([-np.pi, -np.pi / 2, 0, np.pi / 2, np.pi], ["−π", "−π/2", "0", "π/2", "π"]),
+             (-np.pi / 2, np.pi / 2): ([-np.pi / 2, 0, np.pi / 2], ["−π/2", "0", "π/2"])}
+
+
+class BadArgument(ValueError):
+    """A bad argument of :func:`problems`: ``argument`` names it, ``detail`` says why."""
+
+    def __init__(self, argument: str, detail: str):
+        super().__init__(f"{argument} {detail}")
+        self.argument, self.detail = argument, detail
 
 
 def grid_angles(n: int) -> tuple[np.ndarray, np.ndarray]:
-    """The cell centres ``φ`` (``n``) and ``ϑ`` (``n``) of an ``n × n`` slice grid."""
-    phi = -np.pi + (np.arange(n) + 0.5) * (2 * np.pi / n)
-    theta = -np.pi / 2 + (np.arange(n) + 0.5) * (np.pi / n)
-    return phi, theta
+    """The cell centres ``φ`` (``n``) and ``ϑ`` (``n``) of an ``n × n`` RPY slice grid."""
+    return cell_centres(n, RPY_RANGES["φ"]), cell_centres(n, RPY_RANGES["ϑ"])
 
 
-def problems(n: int = 31, psi=(START[2],), start=START, mechanism: str = "platform",
-             settings=tuple(SETTINGS), options: dict | None = None) -> list[dict]:
-    """The problems of an atlas (rows of :mod:`nonholo.io.problems`): from ``RPY(start)`` to every
-    cell centre of an ``n × n`` grid of each slice ``ψ ∈ psi``, for every setting."""
-    if not isinstance(n, int) or n < 2:
-        raise ValueError(f"n must be an integer >= 2, got {n!r}")
+def cell_centres(n: int, bounds) -> np.ndarray:
+    """The centres of ``n`` equal cells across ``bounds = (lo, hi)``."""
+    lo, hi = bounds
+    return lo + (np.arange(n) + 0.5) * ((hi - lo) / n)
+
+
+def default_start(space) -> tuple[float, ...]:
+    """The atlases' default start as command-line numbers: Example 1's RPY angles with an
+    orientation, the coordinates 0."""
+    return (START if space.has_orientation else ()) + (0.0,) * space.k
+
+
+def default_axes(space) -> tuple[str, str]:
+    """``φ, ϑ`` with an orientation, else the first two coordinates."""
+    return ("φ", "ϑ") if space.has_orientation else tuple(space.cli_names[:2])
+
+
+def axis_range(space, name: str) -> tuple[float, float]:
+    """The default range of the goal's number ``name``: :data:`RPY_RANGES`, ``[−π, π)`` for an
+    angle coordinate, ``[−box, box]`` for another."""
+    if name in RPY_RANGES and space.has_orientation:
+        return RPY_RANGES[name]
+    c = space.coordinates
+    index = c.names.index(name)
+    return (-np.pi, np.pi) if c.angles[index] else (-c.box, c.box)
+
+
+def resolve_axis(space, name: str) -> str:
+    """``name`` as one of the space's :attr:`cli_names` (ASCII ``phi``/``theta``/``psi``
+    accepted for the RPY angles); ``BadArgument`` naming ``axes`` otherwise."""
+    names = space.cli_names
+    if name in names:
+        return name
+    if space.has_orientation and name in ALIASES:
+        return ALIASES[name]
+    raise BadArgument("axes", f"must be two of the state's numbers ({' '.join(names)}), got {name!r}")
+
+
+def states(space, numbers) -> tuple[np.ndarray, np.ndarray]:
+    """The states ``(R, q)`` of command-line numbers ``(N, d)``, vectorised: ``(N, 3, 3)``,
+    ``(N, k)``."""
+    numbers = np.asarray(numbers, dtype=float).reshape(-1, len(space.cli_names))
+    if space.has_orientation:
+        R = Rotation.from_euler("ZYX", numbers[:, :3]).as_matrix().reshape(-1, 3, 3)
+        return R, numbers[:, 3:]
+    return np.broadcast_to(np.eye(3), (numbers.shape[0], 3, 3)), numbers
+
+
+def problems(n: int = 31, psi=None, start=None, mechanism: str = "platform",
+             settings=tuple(SETTINGS), options: dict | None = None, *, axes=None, extent=None) -> list[dict]:
+    """The problems of an atlas (rows of :mod:`nonholo.io.problems`): from ``start`` to every
+    cell centre of an ``n × n`` grid over the goal's numbers ``axes``, for every setting.
+
+    - ``start``: the start's command-line numbers (RPY angles in rad, then the coordinates;
+      default :func:`default_start`); the goal's numbers off the axes are the start's.
+    - ``axes``: two of the space's numbers (default :func:`default_axes`); ``extent``:
+      ``(lo, hi, lo, hi)`` of the two axes (default :func:`axis_range`).
+    - ``psi``: the slices ``ψ = const`` (rad) with an orientation and ``ψ`` off the axes
+      (default: the start's ψ).
+
+    A bad argument raises :class:`BadArgument` (a ``ValueError``) naming it.
+    """
+    if not isinstance(n, int) or isinstance(n, bool) or n < 2:
+        raise BadArgument("n", f"must be an integer >= 2, got {n!r}")
     unknown = [s for s in settings if s not in SETTINGS]
     if unknown:
-        raise ValueError(f"unknown setting {unknown[0]!r}; known: {', '.join(SETTINGS)}")
-    R0 = so3.from_rpy(*start)
-    phi, theta = grid_angles(n)
+        raise BadArgument("settings", f"has an unknown setting {unknown[0]!r}; known: {', '.join(SETTINGS)}")
+    if mechanism not in catalog.names():
+        raise BadArgument("mechanism", f"must be one of {', '.join(catalog.names())}, got {mechanism!r}")
+    space = catalog.get(mechanism).space
+    names = space.cli_names
+    if start is None:
+        start = default_start(space)
+    start = np.asarray(start, dtype=float)
+    if start.shape != (len(names),) or not np.all(np.isfinite(start)):
+        raise BadArgument("start", f"must be the {len(names)} finite numbers of a state of {mechanism} "
+                                   f"({' '.join(names)}), got {start.tolist()}")
+    axes = default_axes(space) if axes is None else tuple(axes)
+    if len(axes) != 2:
+        raise BadArgument("axes", f"must be two of the state's numbers ({' '.join(names)}), got {len(axes)}")
+    axes = tuple(resolve_axis(space, a) for a in axes)
+    if axes[0] == axes[1]:
+        raise BadArgument("axes", f"must be two different numbers, got {axes[0]!r} twice")
+    if extent is None:
+        bounds = [axis_range(space, a) for a in axes]
+    else:
+        values = np.asarray(extent, dtype=float)
+        if values.shape != (4,) or not np.all(np.isfinite(values)):
+            raise BadArgument("extent", f"must be four finite numbers LO HI LO HI, got {list(extent)}")
+        bounds = [(float(values[0]), float(values[1])), (float(values[2]), float(values[3]))]
+        for a, (lo, hi) in zip(axes, bounds):
+            if not lo < hi:
+                raise BadArgument("extent", f"of axis {a} must have LO < HI, got {lo:g} {hi:g}")
+    slicing = space.has_orientation and "ψ" not in axes
+    if psi is None:
+        psi = (float(start[2]),) if slicing else (None,)
+    elif not space.has_orientation:
+        raise BadArgument("psi", f"takes slices ψ = const of an orientation: {mechanism} has none")
+    elif not slicing:
+        raise BadArgument("psi", "takes slices ψ = const: not with ψ as an axis")
+    else:
+        psi = tuple(float(p) for p in psi)
+        if not psi or not np.all(np.isfinite(psi)):
+            raise BadArgument("psi", f"must be finite angles (rad), got {list(psi)}")
+    which = [names.index(a) for a in axes]
+    centres = [cell_centres(n, b) for b in bounds]
+    R0, q0 = space.from_cli(start)
+    first = space.public(R0, q0)
     rows = []
     for s in settings:
         for k, p in enumerate(psi):
-            for j, th in enumerate(theta):
-                for i, ph in enumerate(phi):
-                    label = {"atlas": s, "slice": k, "i": i, "j": j, "n": n, "phi": float(ph),
-                             "theta": float(th), "psi": float(p), "start": list(map(float, start))}
-                    rows.append({"start": R0, "goal": so3.from_rpy(ph, th, p), "mechanism": mechanism,
-                                 "options": {**(options or {}), **SETTINGS[s]},
+            for j, y in enumerate(centres[1]):
+                for i, x in enumerate(centres[0]):
+                    goal = start.copy()
+                    if p is not None:
+                        goal[2] = p
+                    goal[which] = (x, y)
+                    label = {"atlas": s, "slice": k, "i": i, "j": j, "n": n, "axes": list(axes),
+                             "extent": [float(v) for b in bounds for v in b], "goal": goal.tolist(),
+                             "start": start.tolist(), **({} if p is None else {"psi": p})}
+                    rows.append({"start": first, "goal": space.public(*space.from_cli(goal)),
+                                 "mechanism": mechanism, "options": {**(options or {}), **SETTINGS[s]},
                                  "label": json.dumps(label, separators=(",", ":"))})
     return rows
 
 
 class Atlas:
     """The grids of one sweep of :func:`problems`: per setting and slice, ``n × n`` arrays of
-    the outcome (``"solved"``/``"failed"``/``"unreachable"``), iterations and seconds."""
+    the outcome (``"solved"``/``"failed"``/``"unreachable"``), iterations and seconds;
+    ``axes``, ``extent``, ``start`` (command-line numbers), ``slices`` (the ψ of each slice,
+    ``None`` without) and ``goals`` (each slice's goal numbers off the grid's cells)."""
 
     def __init__(self, table):
         rows = table.to_pylist() if hasattr(table, "to_pylist") else list(table)
@@ -82,29 +209,72 @@ class Atlas:
         first = keep[0][1]
         self.n, self.start = first["n"], tuple(first["start"])
         self.mechanism = keep[0][0]["mechanism"]
+        mech = catalog.get(self.mechanism)
+        self.space = space = mech.space
+        # labels without axes: an RPY slice atlas
+        self.axes = tuple(first.get("axes", ("φ", "ϑ")))
+        extent = first.get("extent") or [v for a in self.axes for v in axis_range(space, a)]
+        self.extent = tuple(float(v) for v in extent)
         self.settings = [s for s in SETTINGS if any(lab["atlas"] == s for _, lab in keep)]
-        slices = sorted({(lab["slice"], lab["psi"]) for _, lab in keep})
-        self.psi = [p for _, p in slices]
-        shape = (len(self.settings), len(self.psi), self.n, self.n)
+        slices = sorted({(lab["slice"], lab.get("psi")) for _, lab in keep}, key=lambda x: x[0])
+        self.slices = [p for _, p in slices]
+        shape = (len(self.settings), len(self.slices), self.n, self.n)
         self.outcome = np.full(shape, "", dtype=object)
         self.iterations = np.full(shape, np.nan)
         self.seconds = np.full(shape, np.nan)
-        mech = catalog.get(self.mechanism)
-        sign0 = np.sign(mech.delta(so3.from_rpy(*self.start))) if mech.singular.exists else 1.0
+        self.goals = [None] * len(self.slices)
+        singular = mech.singular
+        sign0 = singular.sign(*space.from_cli(self.start))
         for r, lab in keep:
-            idx = (self.settings.index(lab["atlas"]), self.psi.index(lab["psi"]), lab["j"], lab["i"])
+            k = [key for key, _ in slices].index(lab["slice"])
+            idx = (self.settings.index(lab["atlas"]), k, lab["j"], lab["i"])
             problem = json.loads(r["problem"])
+            if self.goals[k] is None:
+                self.goals[k] = tuple(lab["goal"]) if "goal" in lab else (lab["phi"], lab["theta"], lab["psi"])
             dmin = problem["options"].get("delta_min", 1e-2)
-            reachable = True
-            if mech.singular.exists:
-                d = float(mech.delta(np.array(problem["goal"])))
-                reachable = np.sign(d) == sign0 and abs(d) >= dmin
+            d = singular.value(*space.from_json(problem["goal"], "goal"))
+            reachable = np.sign(d) == sign0 and abs(d) >= dmin
             self.outcome[idx] = "solved" if r["success"] else ("failed" if reachable else "unreachable")
             self.iterations[idx] = r["iterations"]
             self.seconds[idx] = r["seconds"]
 
     def count(self, setting: str, outcome: str) -> int:
         return int(np.sum(self.outcome[self.settings.index(setting)] == outcome))
+
+    def holds_start(self, k: int) -> bool:
+        """Whether slice ``k`` passes through the start (its goals off the axes are the start's)."""
+        names = self.space.cli_names
+        off = [c for c, name in enumerate(names) if name not in self.axes]
+        return all(abs(self.goals[k][c] - self.start[c]) < 1e-12 for c in off)
+
+    def describe_start(self) -> str:
+        """The start in words: ``RPY(φ, ϑ, ψ)`` and/or ``(x, y, …) = (…)``."""
+        space, numbers = self.space, self.start
+        parts = []
+        if space.has_orientation:
+            parts.append(f"RPY{tuple(round(a, 3) for a in numbers[:3])}")
+            numbers = numbers[3:]
+        if space.k:
+            parts.append(f"({', '.join(space.coordinates.names)}) = {tuple(round(a, 3) for a in numbers)}")
+        return ", ".join(parts)
+
+    def singular_values(self, k: int, x, y) -> np.ndarray:
+        """``Δ`` over the arrays ``x``, ``y`` of the two axes in slice ``k``."""
+        names = self.space.cli_names
+        numbers = np.broadcast_to(np.asarray(self.goals[k], dtype=float), x.shape + (len(names),)).copy()
+        numbers[..., names.index(self.axes[0])] = x
+        numbers[..., names.index(self.axes[1])] = y
+        R, q = states(self.space, numbers.reshape(-1, len(names)))
+        D = catalog.get(self.mechanism).singular.values(R, q)
+        return np.asarray(D, dtype=float).reshape(x.shape)
+
+
+def _axis_text(space, name: str) -> str:
+    if space.has_orientation and name in _AXIS_TEXT:
+        return _AXIS_TEXT[name]
+    c = space.coordinates
+    unit = c.units[c.names.index(name)]
+    return f"goal {name}" + (f" [{unit}]" if unit else "")
 
 
 def atlas_figure(table, quantity: str = "success") -> Figure:
@@ -113,46 +283,55 @@ def atlas_figure(table, quantity: str = "success") -> Figure:
     if quantity not in QUANTITIES:
         raise ValueError(f"unknown quantity {quantity!r}; known: {', '.join(QUANTITIES)}")
     atlas = Atlas(table)
-    rows, cols = len(atlas.psi), len(atlas.settings)
+    space = atlas.space
+    singular = catalog.get(atlas.mechanism).singular
+    rows, cols = len(atlas.slices), len(atlas.settings)
     fig = Figure(figsize=(4.6 * cols + 1.2, 3.4 * rows + 0.8), layout="constrained")
     axes = np.array(fig.subplots(rows, cols, squeeze=False, sharex=True, sharey=True))
-    phi, theta = grid_angles(atlas.n)
-    edges_phi = np.linspace(-np.pi, np.pi, atlas.n + 1)
-    edges_theta = np.linspace(-np.pi / 2, np.pi / 2, atlas.n + 1)
-    fine_phi, fine_theta = np.meshgrid(np.linspace(-np.pi, np.pi, 241), np.linspace(-np.pi / 2, np.pi / 2, 121))
-    mesh = None
+    bx, by = atlas.extent[:2], atlas.extent[2:]
+    edges_x = np.linspace(*bx, atlas.n + 1)
+    edges_y = np.linspace(*by, atlas.n + 1)
+    fine_x, fine_y = np.meshgrid(np.linspace(*bx, 241), np.linspace(*by, 121))
+    which = [space.cli_names.index(a) for a in atlas.axes]
+    mesh, crossed = None, False
     for c, setting in enumerate(atlas.settings):
-        for k, psi in enumerate(atlas.psi):
+        for k, psi in enumerate(atlas.slices):
             ax = axes[k, c]
             outcome = atlas.outcome[c, k]
             unreachable = outcome == "unreachable"
             if quantity == "success":
                 codes = np.select([outcome == "solved", outcome == "failed"], [0, 1], 2).astype(float)
-                mesh = ax.pcolormesh(edges_phi, edges_theta, codes, cmap=ListedColormap(_SUCCESS_COLORS),
+                mesh = ax.pcolormesh(edges_x, edges_y, codes, cmap=ListedColormap(_SUCCESS_COLORS),
                                      norm=BoundaryNorm([-0.5, 0.5, 1.5, 2.5], 3))
             else:
                 values = atlas.iterations[c, k] if quantity == "iterations" else 1e3 * atlas.seconds[c, k]
                 values = np.where(unreachable, np.nan, values)
                 finite = values[np.isfinite(values) & (values > 0)]
                 norm = LogNorm(vmin=max(finite.min(), 1e-3), vmax=finite.max()) if finite.size else None
-                ax.pcolormesh(edges_phi, edges_theta, np.where(unreachable, 1.0, np.nan),
+                ax.pcolormesh(edges_x, edges_y, np.where(unreachable, 1.0, np.nan),
                               cmap=ListedColormap([_SUCCESS_COLORS[2]]), vmin=0, vmax=2)
-                mesh = ax.pcolormesh(edges_phi, edges_theta, np.where(values > 0, values, np.nan),
+                mesh = ax.pcolormesh(edges_x, edges_y, np.where(values > 0, values, np.nan),
                                      cmap="viridis", norm=norm)
-            if catalog.get(atlas.mechanism).singular.exists:
-                D = mechanism_delta_rpy(atlas.mechanism, fine_phi, fine_theta, psi)
-                ax.contour(fine_phi, fine_theta, D, levels=[0.0], colors="k", linewidths=1.6)
-            if abs(psi - atlas.start[2]) < 1e-12:
-                ax.plot(*atlas.start[:2], "o", color="k", mfc="yellow", ms=8, mew=1.2)
+            if singular.exists:
+                D = atlas.singular_values(k, fine_x, fine_y)
+                if np.nanmin(D) < 0.0 < np.nanmax(D):
+                    crossed = True
+                    ax.contour(fine_x, fine_y, D, levels=[0.0], colors="k", linewidths=1.6)
+            if atlas.holds_start(k):
+                ax.plot(atlas.start[which[0]], atlas.start[which[1]], "o", color="k", mfc="yellow", ms=8, mew=1.2)
             solved = atlas.count(setting, "solved")
             reachable = solved + atlas.count(setting, "failed")
-            ax.set_title(f"{setting}: ψ = {psi:+.2f}; solved {solved} of {reachable} reachable", fontsize=9)
-            ax.set_xticks([-np.pi, -np.pi / 2, 0, np.pi / 2, np.pi], ["−π", "−π/2", "0", "π/2", "π"])
-            ax.set_yticks([-np.pi / 2, 0, np.pi / 2], ["−π/2", "0", "π/2"])
+            where = "" if psi is None else f" ψ = {psi:+.2f};"
+            ax.set_title(f"{setting}:{where} solved {solved} of {reachable} reachable", fontsize=9)
+            for name, bounds, ticks in ((atlas.axes[0], bx, ax.set_xticks), (atlas.axes[1], by, ax.set_yticks)):
+                angle = name in RPY_RANGES and space.has_orientation or (
+                    name in space.coordinates.names and space.coordinates.angles[space.coordinates.names.index(name)])
+                if angle and tuple(bounds) in _PI_TICKS:
+                    ticks(*_PI_TICKS[tuple(bounds)])
             if k == rows - 1:
-                ax.set_xlabel("goal φ (about z) [rad]")
+                ax.set_xlabel(_axis_text(space, atlas.axes[0]))
             if c == 0:
-                ax.set_ylabel("goal ϑ (about y) [rad]")
+                ax.set_ylabel(_axis_text(space, atlas.axes[1]))
     if quantity == "success":
         cb = fig.colorbar(mesh, ax=axes, ticks=[0, 1, 2], shrink=0.8)
         cb.ax.set_yticklabels(["solved", "failed", "unreachable\n(across Δ = 0)"])
@@ -161,6 +340,6 @@ def atlas_figure(table, quantity: str = "success") -> Figure:
                      label="accepted iterations" if quantity == "iterations" else "wall time [ms]")
     what = {"success": "which goals each planner solves", "iterations": "accepted iterations",
             "time": "wall time per plan"}[quantity]
-    fig.suptitle(f"{atlas.mechanism}: {what}, from RPY{tuple(round(a, 3) for a in atlas.start)} (yellow "
-                 f"dot), T = 1 s; black: Δ = 0", fontsize=11)
+    fig.suptitle(f"{atlas.mechanism}: {what}, from {atlas.describe_start()} (yellow "
+                 f"dot), T = 1 s" + ("; black: Δ = 0" if crossed else ""), fontsize=11)
     return fig

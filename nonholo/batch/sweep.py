@@ -4,14 +4,18 @@ The problems (:mod:`nonholo.io.problems`: a JSON Lines file or a list of dicts) 
 first, all of them; then they are planned in batches — in this process (``workers=1``), on
 local worker processes (``workers=N``, default: one per core), or on a Dask distributed
 cluster (``client=`` a ``distributed.Client``, or ``scheduler=`` its address) — and every
-finished batch is written at once, so nothing computed is lost.
+finished batch is written at once, so nothing computed is lost. A table may mix
+mechanisms and kinds of state (SO(3), ``Rᵏ``, ``SO(3) × Rᵏ``): each row is planned with
+its own mechanism.
 
 Results: a Parquet file (pyarrow), one row per problem, sorted by ``index`` (the problem's
 row, from 0), with :data:`SCHEMA`'s columns: the problem's ``label`` and ``mechanism``,
 the plan's ``strategy``, ``method``, ``route``, ``T``, ``success``, ``terminal_error``,
 ``min_delta``, ``iterations``, ``reason``, the wall time ``seconds`` of the call, the
-``problem`` and the ``plan`` itself as JSON (:meth:`nonholo.io.result.PlanResult.to_dict`;
-reload with :func:`plan_of`), and ``error``: the exception a problem raised (then the
+``problem`` (its start and goal in the JSON form of its mechanism's space, so a row of an
+SO(3) mechanism holds 3×3 nested lists) and the ``plan`` itself as JSON
+(:meth:`nonholo.io.result.PlanResult.to_dict`, with the coordinates beyond SO(3); reload
+with :func:`plan_of`), and ``error``: the exception a problem raised (then the
 plan is null; a problem that raises is recorded, not fatal).
 
 While it runs, each batch is a Parquet file of its own in ``RESULTS.parts/`` — written by
@@ -60,8 +64,8 @@ MAX_BATCH = 8
 
 
 def solve(index: int, row: dict) -> dict:
-    """Plan one problem (a JSON row of :mod:`nonholo.io.problems`): its results row. An
-    exception is recorded in ``error``."""
+    """Plan one problem (a JSON row of :mod:`nonholo.io.problems`, any mechanism) with its
+    mechanism: its results row. An exception is recorded in ``error``."""
     from ..planning.api import plan
 
     problem = problem_table.check_row(row, index)

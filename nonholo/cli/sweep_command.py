@@ -7,12 +7,17 @@ Examples::
     nonholo atlas --problems atlas.jsonl --grid 31
     nonholo sweep atlas.jsonl --out atlas.parquet
     nonholo atlas atlas.parquet --out paper_figures
+    nonholo atlas --problems car.jsonl --mechanism car --grid 9 --axes x y --start 0 0 0 0 --extent -1.5 1.5 -1.5 1.5
 
 ``sweep`` plans every problem of a JSON Lines file (:mod:`nonholo.io.problems`) and writes one
 row per problem to a Parquet file as results arrive (:mod:`nonholo.batch.sweep`); run again with
 the same arguments it finishes what an interrupted run left. ``atlas --problems`` writes
-an atlas's problems (:func:`nonholo.batch.atlas.problems`); ``atlas RESULTS`` draws the maps of
-their sweep (``atlas_success``, ``atlas_iterations``, ``atlas_time``, PNG and PDF).
+an atlas's problems (:func:`nonholo.batch.atlas.problems`): goals on a grid over two of the
+numbers of a state (``--axes``: the RPY angles phi theta psi with an orientation, then the
+coordinates; default phi theta, or the first two coordinates), the others the start's
+(``--start``: all of a state's numbers, as ``nonholo plan --from`` takes them), one RPY slice
+per ``--psi`` with an orientation; ``atlas RESULTS`` draws the maps of their sweep
+(``atlas_success``, ``atlas_iterations``, ``atlas_time``, PNG and PDF).
 
 Exit status: 0 done, 2 bad input (a bad problem file names the row and column).
 """
@@ -44,12 +49,24 @@ def add_parsers(subparsers) -> None:
     p.add_argument("--out", default="paper_figures", help="directory of the figures (default paper_figures)")
     p.add_argument("--problems", default=None, metavar="FILE",
                    help="instead of drawing: write an atlas's problems to FILE (JSON Lines)")
+    p.add_argument("--mechanism", default="platform", help="the mechanism (default platform)")
     p.add_argument("--grid", type=int, default=31, help="goals per side of each slice (default 31)")
+    p.add_argument("--axes", nargs=2, default=None, metavar=("A", "B"),
+                   help="the goal's two numbers on the grid: phi theta psi (with an orientation) or "
+                        "coordinates, e.g. x y (default: phi theta, or the first two coordinates)")
+    p.add_argument("--extent", type=float, nargs=4, default=None, metavar=("LO", "HI", "LO", "HI"),
+                   help="the axes' ranges (default: φ, ψ [−π, π), ϑ (−π/2, π/2), an angle coordinate "
+                        "[−π, π), another [−box, box] of the space)")
     p.add_argument("--psi", type=float, nargs="+", default=None,
-                   help="the slices ψ (rad; default: the start's)")
-    p.add_argument("--start", type=float, nargs=3, default=None, metavar=("PHI", "THETA", "PSI"),
-                   help="the start, RPY angles (rad; default Example 1's)")
+                   help="the slices ψ (rad; default: the start's; with an orientation, ψ off the axes)")
+    p.add_argument("--start", type=float, nargs="+", default=None, metavar="X",
+                   help="the start: a state's numbers, RPY angles (rad) then the coordinates "
+                        "(default: Example 1's RPY angles, the coordinates 0)")
     p.set_defaults(func=run_atlas)
+
+
+#: The flags of :func:`nonholo.batch.atlas.problems`'s arguments named otherwise.
+FLAGS = {"n": "grid"}
 
 
 def _error(message: str) -> int:
@@ -78,10 +95,12 @@ def run_atlas(args) -> int:
     from ..viz import figures
 
     if args.problems:
-        start = tuple(args.start) if args.start else atlas.START
-        psi = tuple(args.psi) if args.psi else (start[2],)
         try:
-            rows = atlas.problems(n=args.grid, psi=psi, start=start)
+            rows = atlas.problems(n=args.grid, psi=args.psi, start=args.start, mechanism=args.mechanism,
+                                  axes=args.axes, extent=args.extent)
+        except atlas.BadArgument as exc:
+            return _error(f"--{FLAGS.get(exc.argument, exc.argument)} {exc.detail}")
+        try:
             problem_table.write(args.problems, rows)
         except (ValueError, OSError) as exc:
             return _error(str(exc))

@@ -4,13 +4,19 @@ One problem per line, a JSON object::
 
     {"start": [[...], [...], [...]], "goal": [[...], [...], [...]],
      "mechanism": "platform", "options": {"T": 1.0, "strategy": "paper"}}
+    {"start": [0, 0, 0, 0], "goal": [0, 1, 0, 0], "mechanism": "car"}
+    {"start": [[[...], [...], [...]], [0, 0]], "goal": [[[...], [...], [...]], [0, 0]],
+     "mechanism": "rolling_ball"}
 
-``start`` and ``goal`` are what :func:`nonholo.plan` takes as ``R0`` and ``Rd`` (3×3
-rotation matrices, nested lists); ``mechanism`` (a name, :func:`nonholo.model.catalog.names`;
+``start`` and ``goal`` are the states :func:`nonholo.plan` takes as ``R0`` and ``Rd``, in
+the JSON form of the row's mechanism's space (:meth:`nonholo.spaces.groups.Product.to_json`):
+a 3×3 rotation matrix (nested lists) on SO(3), the ``k`` coordinates on ``Rᵏ``, the pair
+``[R, q]`` on ``SO(3) × Rᵏ``. ``mechanism`` (a name, :func:`nonholo.model.catalog.names`;
 default ``"platform"``) and ``options`` (keyword arguments of :func:`nonholo.plan`
 that JSON can hold, :data:`OPTIONS`) are optional; so is ``label``, free text carried
-into the results (e.g. a goal's name). In Python the same rows are dicts (``start`` and
-``goal`` may be arrays).
+into the results (e.g. a goal's name). A table may mix mechanisms: each row's states are
+checked against its own. In Python the same rows are dicts (``start`` and ``goal`` may
+be arrays, and a pair a tuple ``(R, q)``).
 
 :func:`check` validates a whole table before anything runs and names the row (from 0, the
 line of the file) and the column of the first problem it finds; :func:`fingerprint`
@@ -26,7 +32,6 @@ import numpy as np
 
 from ..model import catalog
 from ..numerics.checks import is_number
-from ..spaces import so3
 
 #: The columns a problem may have; ``start`` and ``goal`` are required.
 COLUMNS = ("start", "goal", "mechanism", "options", "label")
@@ -42,22 +47,23 @@ def _fail(row: int, column: str | None, message: str):
     raise ValueError(f"problem {where}: {message}")
 
 
-def _rotation(value, row: int, column: str) -> np.ndarray:
+def _state(space, value, row: int, column: str, mechanism: str):
+    """The state ``value`` of the column ``column`` in the caller's form of ``space``."""
     try:
-        R = np.array(value, dtype=float)
-    except (TypeError, ValueError, OverflowError):
-        _fail(row, column, "must be a 3×3 rotation matrix (nested lists of numbers)")
-    if R.shape != (3, 3):
-        _fail(row, column, f"must be a 3×3 rotation matrix, got shape {R.shape}")
-    try:
-        return so3.check_rotation(R, column)
-    except ValueError as exc:
-        _fail(row, column, str(exc))
+        R, q = space.from_json(value, column)
+    except (TypeError, ValueError, OverflowError) as exc:
+        want = space.describe()
+        detail = str(exc)
+        if detail.startswith(f"{column} must be {want}"):
+            detail = detail[len(f"{column} must be {want}"):].lstrip(":, ")
+        _fail(row, column, f"mechanism {mechanism!r} expects {want}; {detail}")
+    return space.public(R, q)
 
 
 def check_row(d, row: int) -> dict:
     """One problem, checked: ``{"start", "goal", "mechanism", "options", "label"}`` with
-    rotation matrices as arrays, the mechanism's name and a dict of options."""
+    the states in the form :func:`nonholo.plan` takes (arrays; a pair ``(R, q)`` as a
+    tuple), the mechanism's name and a dict of options."""
     if not isinstance(d, dict):
         _fail(row, None, f"must be an object with columns {', '.join(COLUMNS)}, got {type(d).__name__}")
     unknown = [k for k in d if k not in COLUMNS]
@@ -66,13 +72,14 @@ def check_row(d, row: int) -> dict:
     for key in ("start", "goal"):
         if key not in d:
             _fail(row, key, "is missing")
-    start = _rotation(d["start"], row, "start")
-    goal = _rotation(d["goal"], row, "goal")
     name = d.get("mechanism", "platform")
     if not isinstance(name, str):
         _fail(row, "mechanism", f"must be a mechanism's name, got {name!r}")
     if name not in catalog.names():
         _fail(row, "mechanism", f"unknown mechanism {name!r} (known: {', '.join(catalog.names())})")
+    space = catalog.get(name).space
+    start = _state(space, d["start"], row, "start", name)
+    goal = _state(space, d["goal"], row, "goal", name)
     options = d.get("options", {})
     if not isinstance(options, dict):
         _fail(row, "options", f"must be an object of plan() options, got {type(options).__name__}")
@@ -121,8 +128,11 @@ def read(path) -> list[dict]:
 
 
 def as_json(problem: dict) -> dict:
-    """A checked problem as a JSON-able row (the inverse of :func:`check_row`)."""
-    out = {"start": np.asarray(problem["start"]).tolist(), "goal": np.asarray(problem["goal"]).tolist(),
+    """A checked problem as a JSON-able row (the inverse of :func:`check_row`): the states in
+    the JSON form of the mechanism's space."""
+    space = catalog.get(problem["mechanism"]).space
+    out = {"start": space.to_json(*space.parse(problem["start"], "start")),
+           "goal": space.to_json(*space.parse(problem["goal"], "goal")),
            "mechanism": problem["mechanism"], "options": problem["options"]}
     if problem.get("label") is not None:
         out["label"] = problem["label"]
