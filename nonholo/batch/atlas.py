@@ -19,7 +19,7 @@ from matplotlib.figure import Figure
 
 from ..model import catalog
 from ..spaces import so3
-from ..viz.figures import mechanism_delta_rpy
+from ..viz.singular_set import mechanism_delta_rpy
 
 #: The planner settings an atlas compares: name → options of :func:`nonholo.plan`.
 SETTINGS = {"paper": {"strategy": "paper", "route": "local"},
