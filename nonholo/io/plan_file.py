@@ -1,9 +1,40 @@
-"""The plan file's codec (format ``nonholo.plan/3``, see :mod:`nonholo.io.result`): a plan
-file's JSON object decoded field by field into the fields of a
-:class:`~nonholo.io.result.PlanResult` (types, shapes, the controls rebuilt), the JSON
+"""The plan file's codec: a plan file's JSON object decoded field by field into the fields
+of a :class:`~nonholo.io.result.PlanResult` (types, shapes, the controls rebuilt), the JSON
 text read from a file, and the atomic write. Decoding only: the checks that the numbers
 agree with each other (replaying the stored controls) are
-:mod:`nonholo.certify.plan_checks`'s."""
+:mod:`nonholo.certify.plan_checks`'s.
+
+File format (``PlanResult.save``): one JSON object, ``"format": "nonholo.plan/3"``, with
+the scalar fields, ``R0``/``Rd`` as nested 3×3 lists, the samples ``t`` (n), ``R``
+(n×3×3), ``u`` (n×m) and ``delta`` (n, or null), ``history`` (a list of per-iteration
+records) and ``controls``, the parametrisation (``{"kind": "fourier", "T", "harmonics",
+"coeffs"}``, ``{"kind": "piecewise_constant", "T", "grid", "values"}`` or, for a motion
+planned in frame coordinates (strategy ``"robust"``), ``{"kind": "frame", "T",
+"mechanism", "steps", "R0", "frame": <the w parametrisation>}``, or, for a global route
+(``"route": "global"``), ``{"kind": "stitched", "T", "pieces": [<one of those per hop>],
+"waypoints"}``, unless the route was re-planned as one smooth control: then ``controls``
+is that control and ``"stitched"`` the route's stitched control (absent otherwise); see :mod:`nonholo.controls.parametrisations`, :mod:`nonholo.motion.frame_controls` and
+:mod:`nonholo.controls.stitched`) from which ``controls(t)`` is rebuilt (identically: the frame
+motion's nodes are recomputed by the same kernel). Floats are written with
+``repr`` precision, so a save/load round trip reproduces every number exactly. Quantities
+that do not exist (``min_delta`` for a mechanism without a singular set, the terminal
+error of a run stopped before any simulation) are ``null``/``None``, never NaN.
+
+Saving is atomic (a complete new file replaces the old one, or the old one stays).
+Loading (:meth:`~nonholo.io.result.PlanResult.load`) decodes the file (:func:`decode`) and
+checks it (:mod:`nonholo.certify.plan_checks`): every
+field's type and shape, finite numbers, and that the numbers agree with each other — the
+stored samples are those of the stored controls replayed from ``R0`` (``n`` samples at the
+integrator's step points ``t = kT/steps``; ``n = steps + 1`` when the motion reached
+``T``, fewer when it stopped early, none when the planner refused the goal), ``u =
+controls(t)``, ``delta = Δ(R)``, and ``terminal_error``, ``min_delta``, ``success``,
+``mechanism``, ``method``, ``T``, ``steps`` agree with them. A file that does not is
+rejected with a ``ValueError`` naming the field, so a plan cannot be changed — by a
+damaged byte or by hand — without the change being noticed (fields that are records, not
+results, are checked only for their type: ``reason``, ``history``, ``options``,
+``seconds``, ``sensitivity``). Files written by earlier versions of the format load:
+``nonholo.plan/2`` (no ``route``: local) and ``nonholo.plan/1`` (no certificates).
+"""
 from __future__ import annotations
 
 import contextlib
