@@ -18,7 +18,7 @@ from nonholo.model import catalog
 from nonholo.model.mechanism import Geometry
 from nonholo.paper import examples
 from nonholo.spaces import so3
-from nonholo.viz import figures
+from nonholo import viz
 
 RNG = np.random.default_rng(7)
 PLATFORM = catalog.get("platform")
@@ -75,7 +75,7 @@ def check_figure(fig, n_axes, tmp_path, stem):
             assert UNITS.search(label), f"no unit in brackets: {label!r} ({stem})"
         if hasattr(ax, "get_zlabel"):
             assert UNITS.search(ax.get_zlabel())
-    png, pdf = figures.save_figure(fig, stem, tmp_path, dpi=60)
+    png, pdf = viz.save_figure(fig, stem, tmp_path, dpi=60)
     assert png.stat().st_size > 1000 and pdf.stat().st_size > 1000
     with Image.open(png) as im:
         assert im.format == "PNG" and min(im.size) > 200
@@ -84,114 +84,114 @@ def check_figure(fig, n_axes, tmp_path, stem):
 
 def test_mechanism_figure(tmp_path):
     R0, R1 = example(1)
-    check_figure(figures.mechanism_figure(R0), 1, tmp_path, "mech1")
-    fig = figures.mechanism_figure(R0, R1, title="Example 1")
+    check_figure(viz.mechanism_figure(R0), 1, tmp_path, "mech1")
+    fig = viz.mechanism_figure(R0, R1, title="Example 1")
     check_figure(fig, 2, tmp_path, "mech2")
     titles = [ax.get_title() for ax in fig.axes]
     assert titles[0].startswith("start") and titles[1].startswith("goal")
     assert "Δ = +0.727" in titles[0] and "Δ = +0.582" in titles[1]
     texts = " ".join(t.get_text() for t in fig.axes[0].texts)
     assert "leg 1" in texts and "leg 2" in texts
-    l1, l2 = figures.leg_lengths(R0)
+    l1, l2 = viz.leg_lengths(R0)
     assert f"{l1:.3f}" in texts and f"{l2:.3f}" in texts
 
 
 def test_mechanism_figure_other_geometry(tmp_path):
     from derivations.catalog import RAISED_GEOMETRY
 
-    g = figures.as_geometry(RAISED_GEOMETRY)
+    g = viz.as_geometry(RAISED_GEOMETRY)
     assert isinstance(g, Geometry)
     assert np.allclose(g.base1, 1.6 * np.array([1, 0, 1]) / np.sqrt(2))
     assert np.allclose(g.contact, np.array([1, 1, 0]) / np.sqrt(2))
-    fig = figures.mechanism_figure(np.eye(3), geometry=g, mechanism="platform_raised")
+    fig = viz.mechanism_figure(np.eye(3), geometry=g, mechanism="platform_raised")
     assert "Δ = +1.000" in fig.axes[0].get_title()
     # the generated module's drawing geometry is the same one (a = 1.6, b = rho = 1)
     raised = catalog.get("platform_raised")
     for name in Geometry.FIELDS:
         assert np.allclose(getattr(raised.geometry, name), getattr(g, name))
-    fig = figures.mechanism_figure(np.eye(3), mechanism=raised)       # a Mechanism object
+    fig = viz.mechanism_figure(np.eye(3), mechanism=raised)       # a Mechanism object
     assert "Δ = +1.000" in fig.axes[0].get_title()
 
 
 def test_default_geometry_is_the_papers():
     from derivations.mechanism import PAPER_GEOMETRY
 
-    sym = figures.as_geometry(PAPER_GEOMETRY)  # a = 1.6, b = rho = 1 substituted
-    num = figures.as_geometry()
-    gen = figures.as_geometry("platform")
-    assert gen is PLATFORM.geometry and figures.as_geometry(PLATFORM) is PLATFORM.geometry
+    sym = viz.as_geometry(PAPER_GEOMETRY)  # a = 1.6, b = rho = 1 substituted
+    num = viz.as_geometry()
+    gen = viz.as_geometry("platform")
+    assert gen is PLATFORM.geometry and viz.as_geometry(PLATFORM) is PLATFORM.geometry
     assert Geometry.FIELDS == ("base1", "tip1", "base2", "tip2", "contact", "axle")
     for name in Geometry.FIELDS:
         assert np.allclose(getattr(sym, name), getattr(num, name))
         assert np.allclose(getattr(gen, name), getattr(num, name))
     assert num.radius == 1.0
     with pytest.raises(ValueError, match="no legs"):
-        figures.as_geometry("attitude")
+        viz.as_geometry("attitude")
 
 
 def test_leg_lengths_closed_form():
     a, b = 1.6, 1.0
     Rs = Rotation.random(50, random_state=3).as_matrix()
-    lengths = figures.leg_lengths(Rs)
+    lengths = viz.leg_lengths(Rs)
     assert lengths.shape == (50, 2)
     assert np.allclose(lengths[:, 0] ** 2, a * a + b * b - 2 * a * b * Rs[:, 1, 1], atol=1e-12)
     assert np.allclose(lengths[:, 1] ** 2, a * a + b * b - 2 * a * b * Rs[:, 0, 0], atol=1e-12)
-    assert np.allclose(figures.leg_lengths(Rs[0]), lengths[0])
+    assert np.allclose(viz.leg_lengths(Rs[0]), lengths[0])
     np.testing.assert_array_equal(PLATFORM.geometry.leg_lengths(Rs), lengths)
     # other dimensions
-    g = figures.as_geometry(None, a=2.0, b=0.5, rho=0.5)
-    l = figures.leg_lengths(Rs, g)
+    g = viz.as_geometry(None, a=2.0, b=0.5, rho=0.5)
+    l = viz.leg_lengths(Rs, g)
     assert np.allclose(l[:, 0] ** 2, 4.25 - 2.0 * Rs[:, 1, 1])
 
 
 def test_singular_set_points_are_on_the_surface():
-    phi, theta, psi = figures.singular_set_points(31, 61)
+    phi, theta, psi = viz.singular_set_points(31, 61)
     assert phi.shape == (2, 31, 61)
     assert np.all(np.abs(phi) <= np.pi) and np.all(np.abs(theta) <= np.pi / 2)
     idx = RNG.choice(phi.size, 300, replace=False)
     for p, t, s in zip(phi.ravel()[idx], theta.ravel()[idx], psi.ravel()[idx]):
         assert abs(PLATFORM.delta(so3.from_rpy(p, t, s))) < 1e-8
-    assert np.max(np.abs(figures.delta_rpy(phi, theta, psi))) < 1e-12
+    assert np.max(np.abs(viz.delta_rpy(phi, theta, psi))) < 1e-12
     # Δ > 0 between the two sheets, Δ < 0 beyond
     p0 = np.arctan2(np.sin(psi[0]) * np.sin(theta[0]) ** 2,
                     np.sin(theta[0]) * np.cos(psi[0]) + np.sin(psi[0]) * np.cos(theta[0]) ** 2)
-    regular = np.abs(figures.delta_rpy(p0 + np.pi / 2, theta[0], psi[0])) > 1e-9
-    assert np.all(figures.delta_rpy(p0 + np.pi / 2, theta[0], psi[0])[regular] > 0)
-    assert np.all(figures.delta_rpy(p0 - np.pi / 2, theta[0], psi[0])[regular] < 0)
+    regular = np.abs(viz.delta_rpy(p0 + np.pi / 2, theta[0], psi[0])) > 1e-9
+    assert np.all(viz.delta_rpy(p0 + np.pi / 2, theta[0], psi[0])[regular] > 0)
+    assert np.all(viz.delta_rpy(p0 - np.pi / 2, theta[0], psi[0])[regular] < 0)
 
 
 def test_normal_form_points():
-    x, y, z = figures.normal_form_surface(41)
+    x, y, z = viz.normal_form_surface(41)
     assert np.max(np.abs(z ** 3 + x * y)) < 1e-12
-    rpy, xyz = figures.normal_form_image(0.5, n=41)
+    rpy, xyz = viz.normal_form_image(0.5, n=41)
     assert len(rpy) > 50 and np.all(np.abs(rpy) <= 0.5)
     x, y, z = xyz.T
     assert np.max(np.abs(z ** 3 + x * y)) < 1e-10  # the image of Δ = 0 lies on it
 
 
 def test_singular_figures(tmp_path):
-    fig = figures.singular_set_figure(marks={"start": (0.5, 1.2, "o")})
+    fig = viz.singular_set_figure(marks={"start": (0.5, 1.2, "o")})
     check_figure(fig, 2, tmp_path, "singular")
-    check_figure(figures.singular_slices_figure((-1.0, 0.0, 1.0)), 3, tmp_path, "slices")
-    check_figure(figures.normal_form_figure(), 2, tmp_path, "normal_form")
+    check_figure(viz.singular_slices_figure((-1.0, 0.0, 1.0)), 3, tmp_path, "slices")
+    check_figure(viz.normal_form_figure(), 2, tmp_path, "normal_form")
 
 
 def test_plan_figures(results, tmp_path):
-    check_figure(figures.convergence_figure(results, tol=1e-10), 1, tmp_path, "conv")
-    check_figure(figures.controls_figure(results), 2, tmp_path, "controls")
-    check_figure(figures.rpy_figure(results), 1, tmp_path, "rpy")
-    check_figure(figures.leg_lengths_figure(results), 1, tmp_path, "legs")
-    check_figure(figures.delta_figure(results, threshold=1e-2), 1, tmp_path, "delta")
-    check_figure(figures.body_axes_figure(results[0]), 1, tmp_path, "axes")
-    check_figure(figures.example_overview_figure(results, "Example"), 6, tmp_path, "overview")
+    check_figure(viz.convergence_figure(results, tol=1e-10), 1, tmp_path, "conv")
+    check_figure(viz.controls_figure(results), 2, tmp_path, "controls")
+    check_figure(viz.rpy_figure(results), 1, tmp_path, "rpy")
+    check_figure(viz.leg_lengths_figure(results), 1, tmp_path, "legs")
+    check_figure(viz.delta_figure(results, threshold=1e-2), 1, tmp_path, "delta")
+    check_figure(viz.body_axes_figure(results[0]), 1, tmp_path, "axes")
+    check_figure(viz.example_overview_figure(results, "Example"), 6, tmp_path, "overview")
 
 
 def test_plotted_data(results):
     res = results[0]
-    fig = figures.leg_lengths_figure(res)
+    fig = viz.leg_lengths_figure(res)
     lines = [ln for ln in fig.axes[0].get_lines() if len(ln.get_xdata()) == len(res.t)]
-    assert np.allclose(lines[0].get_ydata(), figures.leg_lengths(res.R)[:, 0])
-    fig = figures.delta_figure(results, threshold=0.05)
+    assert np.allclose(lines[0].get_ydata(), viz.leg_lengths(res.R)[:, 0])
+    fig = viz.delta_figure(results, threshold=0.05)
     ax = fig.axes[0]
     d = np.array([PLATFORM.delta(R) for R in res.R])
     assert any(np.allclose(ln.get_ydata(), d) for ln in ax.get_lines()
@@ -199,32 +199,32 @@ def test_plotted_data(results):
     levels = {float(ln.get_ydata()[0]) for ln in ax.get_lines() if len(ln.get_ydata()) == 2}
     assert {0.0, 0.05, -0.05} <= levels
     # the switch to Newton steps is found from the step sizes
-    assert figures.newton_switch(res.history) == 8
-    assert figures.newton_switch([{"step": 1.0}] * 3) is None
-    rpy = figures.rpy_along(res.R)
+    assert viz.newton_switch(res.history) == 8
+    assert viz.newton_switch([{"step": 1.0}] * 3) is None
+    rpy = viz.rpy_along(res.R)
     assert np.allclose(rpy[0], examples.get(1).rpy_start)       # (0.5, 1.2, -0.5)
 
 
 def test_animation(results, tmp_path):
-    path = figures.animate_platform(results[0], tmp_path / "anim.gif", frames=4, fps=10)
+    path = viz.animate_platform(results[0], tmp_path / "anim.gif", frames=4, fps=10)
     with Image.open(path) as im:
         assert im.format == "GIF"
         assert im.n_frames == 4
 
 
 def test_mechanism_delta_rpy_matches_the_analytic_form():
-    from nonholo.viz import figures as F
+    from nonholo import viz
     rng = np.random.default_rng(5)
     a = rng.uniform(-3, 3, size=(3, 7, 5))
-    np.testing.assert_allclose(F.mechanism_delta_rpy("platform", *a), F.delta_rpy(*a), atol=1e-14)
+    np.testing.assert_allclose(viz.mechanism_delta_rpy("platform", *a), viz.delta_rpy(*a), atol=1e-14)
     R = so3.from_rpy(*a[:, 2, 3])
-    assert F.mechanism_delta_rpy("platform_raised", *a)[2, 3] == pytest.approx(
+    assert viz.mechanism_delta_rpy("platform_raised", *a)[2, 3] == pytest.approx(
         float(catalog.get("platform_raised").delta(R)), abs=1e-14)
 
 
 @pytest.mark.parametrize("name", ["platform", "platform_raised"])
 def test_mechanism_card(name):
-    from nonholo.viz import figures as F
-    fig = F.mechanism_card_figure(name)
+    from nonholo import viz
+    fig = viz.mechanism_card_figure(name)
     assert len(fig.axes) == 3  # schematic, slice, colour bar
     assert "[" in fig.axes[1].get_xlabel()

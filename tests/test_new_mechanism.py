@@ -32,7 +32,7 @@ from nonholo.controls.parametrisations import Fourier
 from nonholo.io.result import PlanResult
 from nonholo.model import catalog
 from nonholo.spaces import so3
-from nonholo.viz import figures
+from nonholo import viz
 
 NAME = "test_moved_disk"
 G = PAPER_GEOMETRY
@@ -85,7 +85,7 @@ def test_from_symbolic_builds_the_numeric_mechanism(symbolic, moved, own_catalog
     assert moved.inputs == symbolic.inputs and moved.n_inputs == 2
     assert moved.has_singular_set and moved.has_frame and moved.state_space == "SO(3)"
     # its drawing geometry: the symbolic one at the drawing dimensions a = 1.6, b = rho = 1
-    num = figures.as_geometry(MOVED)
+    num = viz.as_geometry(MOVED)
     for name in moved.geometry.FIELDS:
         np.testing.assert_allclose(getattr(moved.geometry, name), getattr(num, name), atol=1e-15)
     np.testing.assert_allclose(moved.geometry.contact, [0.3 * np.sqrt(2), 0.3 * np.sqrt(2), 0.8], atol=1e-15)
@@ -216,11 +216,11 @@ def test_figures_draw_a_mechanism_outside_the_catalog(moved, goal):
     """The Δ panel of a plan with a Mechanism nobody added draws the plan's own Δ(t)."""
     import matplotlib
     matplotlib.use("Agg")
-    from nonholo.viz import figures
+    from nonholo import viz
 
     R0, Rd = goal
     res = plan(R0, Rd, mechanism=moved)
-    ax = figures.delta_figure(res).axes[0]
+    ax = viz.delta_figure(res).axes[0]
     curves = [ln for ln in ax.lines if len(ln.get_xdata()) == len(res.t)]
     assert len(curves) == 1
     np.testing.assert_array_equal(curves[0].get_ydata(), res.delta)

@@ -20,7 +20,8 @@ from conftest import (
 
 from nonholo.cli import plan_command as cli_plan
 from nonholo.controls import parametrisations as C
-from nonholo.io.result import FORMAT, PlanResult
+from nonholo.certify.plan_fields import FORMAT
+from nonholo.io.result import PlanResult
 from nonholo.motion import simulation as S
 from nonholo.motion.frame_controls import FrameControls
 from nonholo.numerics import kernels

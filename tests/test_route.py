@@ -205,7 +205,8 @@ def test_plan_files_keep_the_smoothed_route_honest():
     """``stitched`` only with a one-piece control on a global route, of the plan's T and R0."""
     from dataclasses import replace
 
-    from nonholo.io.result import FORMAT_2, PlanResult
+    from nonholo.certify.plan_fields import FORMAT_2
+    from nonholo.io.result import PlanResult
 
     p = far_pair()
     res = planner.plan(p["R0"], p["Rd"])
@@ -255,7 +256,8 @@ def test_plan_files_keep_the_route_honest(tmp_path):
     """A file may not relabel a local plan as global (or back), nor carry a route in format 2."""
     import json
 
-    from nonholo.io.result import FORMAT_2, PlanResult
+    from nonholo.certify.plan_fields import FORMAT_2
+    from nonholo.io.result import PlanResult
 
     p = goalset.uniform_pairs("platform", 3)[0]
     res = planner.plan(p["R0"], p["Rd"])

@@ -92,7 +92,7 @@ def run_sweep(args) -> int:
 
 def run_atlas(args) -> int:
     from ..batch import atlas
-    from ..viz import figures
+    from .. import viz
 
     if args.problems:
         try:
@@ -113,7 +113,7 @@ def run_atlas(args) -> int:
     try:
         table = load(args.results)
         for q in atlas.QUANTITIES:
-            for path in figures.save_figure(atlas.atlas_figure(table, q), f"atlas_{q}", Path(args.out)):
+            for path in viz.save_figure(atlas.atlas_figure(table, q), f"atlas_{q}", Path(args.out)):
                 print(f"wrote {path}")
     except (ValueError, OSError) as exc:
         return _error(str(exc))

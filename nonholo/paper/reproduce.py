@@ -36,7 +36,8 @@ from ..model import catalog
 from ..planning.api import STRATEGIES, plan
 from ..planning.retime import retime
 from ..spaces import so3
-from ..viz import figures, state_figures
+from .. import viz
+from ..viz import state_figures
 from . import examples as _examples
 
 DEFAULT_OUTDIR = Path("paper_figures")
@@ -139,10 +140,10 @@ def mechanism_cards():
         elif mech.geometry is not None:
             R = np.eye(3) if abs(float(mech.delta(np.eye(3)))) > 0.1 else _examples.get(1).R_start
             psi = float(so3.as_rpy(R)[2])
-            yield figures.mechanism_card_figure(name, R=R, psi_slice=psi), f"mechanism_{name}"
+            yield viz.mechanism_card_figure(name, R=R, psi_slice=psi), f"mechanism_{name}"
         else:
             result = plan(so3.from_rpy(0.1, 0.2, 0.3), so3.from_rpy(0.8, -0.4, 0.5), mechanism=name)
-            yield figures.mechanism_card_figure(name, result=result), f"mechanism_{name}"
+            yield viz.mechanism_card_figure(name, result=result), f"mechanism_{name}"
 
 
 def plan_limits_goal():
@@ -168,7 +169,7 @@ def write_figures(solved: list[Solved], outdir: Path, progress=_log) -> list[Pat
     written: list[Path] = []
 
     def save(fig, stem):
-        written.extend(figures.save_figure(fig, stem, outdir))
+        written.extend(viz.save_figure(fig, stem, outdir))
         progress(f"      wrote {stem}.png/.pdf")
 
     exs = _examples.examples()
@@ -177,33 +178,33 @@ def write_figures(solved: list[Solved], outdir: Path, progress=_log) -> list[Pat
     ex1 = _examples.get(1)  # its start and goal lie in the slice ψ = -0.5 drawn on the right
     marks = {"Example 1 start": (*ex1.rpy_start[:2], "o"),
              "Example 1 goal": (*ex1.rpy_goal[:2], "X")}
-    save(figures.singular_set_figure(psi_slice=ex1.rpy_start[2], marks=marks), "singular_set")
-    save(figures.singular_slices_figure(), "singular_set_slices")
-    save(figures.normal_form_figure(), "normal_form")
+    save(viz.singular_set_figure(psi_slice=ex1.rpy_start[2], marks=marks), "singular_set")
+    save(viz.singular_slices_figure(), "singular_set_slices")
+    save(viz.normal_form_figure(), "normal_form")
     for ex in exs:
-        save(figures.mechanism_figure(ex.R_start, ex.R_goal, title=f"{ex.title}: start and goal"),
+        save(viz.mechanism_figure(ex.R_start, ex.R_goal, title=f"{ex.title}: start and goal"),
              f"example{ex.number}_mechanism")
         results = [s.result for s in solved if s.example.number == ex.number and len(s.result.R)]
         if not results:
             continue
         stem = f"example{ex.number}"
-        save(figures.example_overview_figure(results, title=f"{ex.title} ({ex.description})"),
+        save(viz.example_overview_figure(results, title=f"{ex.title} ({ex.description})"),
              f"{stem}_overview")
-        save(figures.convergence_figure(results), f"{stem}_convergence")
-        save(figures.controls_figure(results), f"{stem}_controls")
-        save(figures.rpy_figure(results), f"{stem}_rpy")
-        save(figures.leg_lengths_figure(results), f"{stem}_leg_lengths")
-        save(figures.delta_figure(results), f"{stem}_delta")
+        save(viz.convergence_figure(results), f"{stem}_convergence")
+        save(viz.controls_figure(results), f"{stem}_controls")
+        save(viz.rpy_figure(results), f"{stem}_rpy")
+        save(viz.leg_lengths_figure(results), f"{stem}_leg_lengths")
+        save(viz.delta_figure(results), f"{stem}_delta")
     far = plan_far_goal()
     if far.route == "global":
-        save(figures.global_route_figure(far), "global_route")
+        save(viz.global_route_figure(far), "global_route")
     else:
         progress(f"      note: the far goal took the {far.route} route ({far.reason[:120]}); no global_route figure")
     (outdir / "plans").mkdir(parents=True, exist_ok=True)
     far.save(outdir / "plans" / "far_goal.json")
     free, limited = plan_limits_goal()
     if free.success and limited.success:
-        save(figures.leg_limits_figure(free, limited), "leg_limits")
+        save(viz.leg_limits_figure(free, limited), "leg_limits")
         limited.save(outdir / "plans" / "leg_limits.json")
         limited.to_csv(outdir / "plans" / "leg_limits.csv", rate=100)
         progress("      wrote plans/leg_limits.json and plans/leg_limits.csv")
@@ -211,14 +212,14 @@ def write_figures(solved: list[Solved], outdir: Path, progress=_log) -> list[Pat
         progress(f"      note: the stroke-limits goal was not solved ({limited.reason[:120]}); no leg_limits figure")
     if free.success:
         cheap, fast = plan_quality(free)
-        save(figures.motion_quality_figure(free, cheap, fast), "motion_quality")
+        save(viz.motion_quality_figure(free, cheap, fast), "motion_quality")
         fast.save(outdir / "plans" / "least_time.json")
         fast.to_csv(outdir / "plans" / "least_time.csv", rate=100)
         progress("      wrote plans/least_time.json and plans/least_time.csv")
     ex3 = [s for s in solved if s.example.number == 3 and len(s.result.R)]
     if ex3:
         gif = outdir / "example3_animation.gif"
-        figures.animate_platform(ex3[0].result, gif)
+        viz.animate_platform(ex3[0].result, gif)
         written.append(gif)
         progress(f"      wrote {gif.name}")
     return written

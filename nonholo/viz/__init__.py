@@ -1,1 +1,78 @@
-"""nonholo.viz."""
+"""Figures of the mechanisms, their singular sets and planned motions, by job:
+
+- :mod:`~nonholo.viz.style` -- the house style, colours and :func:`save_figure`;
+- :mod:`~nonholo.viz.platform_drawing` -- the platform's geometry and 3D schematic;
+- :mod:`~nonholo.viz.singular_set` -- the singular set ``Δ = 0`` and its normal form;
+- :mod:`~nonholo.viz.plan_figures` -- figures of plans (convergence, controls, RPY, legs,
+  ``Δ``, body axes, global route, leg limits, motion quality, example overview);
+- :mod:`~nonholo.viz.mechanism_cards` -- one mechanism at a glance;
+- :mod:`~nonholo.viz.platform_animation` -- a GIF of a motion;
+- :mod:`~nonholo.viz.state_figures` -- plans whose state goes beyond SO(3) (the ball, the
+  car; imported on its own: it uses pyplot).
+
+The public functions are re-exported here: ``from nonholo import viz; viz.rpy_figure(res)``.
+"""
+from .mechanism_cards import mechanism_card_figure
+from .plan_figures import (
+    body_axes_figure,
+    controls_figure,
+    convergence_figure,
+    delta_figure,
+    example_overview_figure,
+    global_route_figure,
+    leg_lengths_figure,
+    leg_limits_figure,
+    motion_quality_figure,
+    newton_switch,
+    plot_body_axes,
+    plot_controls,
+    plot_convergence,
+    plot_delta,
+    plot_leg_lengths,
+    plot_min_delta,
+    plot_rpy,
+    rpy_along,
+    rpy_figure,
+)
+from .platform_animation import animate_platform
+from .platform_drawing import (
+    MECHANISM_VIEW,
+    as_geometry,
+    delta_along,
+    draw_platform,
+    leg_lengths,
+    mechanism_figure,
+)
+from .singular_set import (
+    delta_rpy,
+    mechanism_delta_rpy,
+    normal_form_figure,
+    normal_form_image,
+    normal_form_surface,
+    singular_set_figure,
+    singular_set_points,
+    singular_slices_figure,
+)
+from .style import (
+    NEGATIVE_COLOR,
+    PAIR_COLORS,
+    POSITIVE_COLOR,
+    RESULT_COLORS,
+    RESULT_STYLES,
+    STYLE,
+    TRIPLE_COLORS,
+    save_figure,
+)
+
+__all__ = [
+    "STYLE", "RESULT_STYLES", "RESULT_COLORS", "PAIR_COLORS", "TRIPLE_COLORS", "POSITIVE_COLOR",
+    "NEGATIVE_COLOR", "save_figure",
+    "MECHANISM_VIEW", "as_geometry", "leg_lengths", "delta_along", "draw_platform", "mechanism_figure",
+    "delta_rpy", "mechanism_delta_rpy", "singular_set_points", "singular_set_figure",
+    "singular_slices_figure", "normal_form_surface", "normal_form_image", "normal_form_figure",
+    "newton_switch", "rpy_along", "plot_convergence", "plot_controls", "plot_rpy", "plot_leg_lengths",
+    "plot_delta", "plot_body_axes", "plot_min_delta", "convergence_figure", "controls_figure",
+    "rpy_figure", "leg_lengths_figure", "delta_figure", "body_axes_figure", "global_route_figure",
+    "leg_limits_figure", "motion_quality_figure", "example_overview_figure",
+    "mechanism_card_figure", "animate_platform",
+]

@@ -1,0 +1,418 @@
+"""The checks of a plan result's numbers (what :meth:`nonholo.io.result.PlanResult.validate`
+and :meth:`~nonholo.io.result.PlanResult.load` run): every field's type, shape and
+finiteness, the labels (mechanism, method, strategy, route, ``T``, ``steps``, ``R0``)
+against the controls, and the stored controls replayed from ``R0`` against the stored
+samples — ``R`` (and ``q``) within :data:`REPLAY_TOL`, ``u = controls(t)``, ``Δ`` of the
+samples, ``terminal_error``, ``min_delta``, ``error_bound`` (at least the replay's
+Richardson estimate) and ``success`` (certified: ``terminal_error + error_bound ≤ tol``,
+clear of ``Δ = 0``, within the legs' stroke and speed). The result is taken by its
+attributes (no import of :mod:`nonholo.io`); a failed check raises ``ValueError`` naming
+the field."""
+from __future__ import annotations
+
+import numpy as np
+
+from ..controls import stages
+from ..controls.parametrisations import Fourier, PiecewiseConstant
+from ..controls.stitched import Stitched
+from ..model import catalog
+from ..model.limits import LegLimits
+from ..motion import playback
+from ..motion.frame_controls import FrameControls
+from ..motion.retimed import Retimed
+from ..numerics import kernels
+from ..numerics.checks import is_number
+from ..spaces.groups import NO_COORDINATES
+from ..spaces.state import forward as states_forward
+from . import certificate as certify
+from .plan_fields import (
+    FORMAT_1,
+    METHOD_OF_KIND,
+    ROTATION_TOL,
+    ROUTES,
+    fail,
+    integer_field,
+    json_type,
+    number_field,
+    rotation_field,
+    scan_finite,
+    short,
+    string_field,
+)
+
+#: stored samples ``R`` against the controls replayed from ``R0`` by the planning
+#: integrator (largest entry difference, ≈ rad), and ``terminal_error`` against
+#: ``|log(R[-1] Rdᵀ)|`` (rad). Replays on this machine reproduce both exactly; the
+#: tolerance leaves room for another machine's rounding, amplified along the motion.
+REPLAY_TOL = 1e-9
+#: stored ``u`` against ``controls(t)``, ``delta`` against ``Δ(R)`` and ``min_delta``
+#: against the samples, relative to ``max(1, largest value)``
+VALUE_RTOL = 1e-12
+#: ``t`` against the integrator's step points ``k T/steps``, relative to ``T``
+TIME_RTOL = 1e-12
+#: the legs' speeds at the samples of a success against its ``leg_speed``, relative (the
+#: re-timing's spline moves them off the bound by less)
+SPEED_RTOL = 1e-6
+
+
+def check(result, legacy: bool = False) -> None:
+    """Check ``result`` (an object with the fields of :class:`~nonholo.io.result.PlanResult`
+    and its ``hops``), as :meth:`~nonholo.io.result.PlanResult.validate` describes;
+    ``legacy``: it was read from a file of format ``nonholo.plan/1`` (no certificates).
+    ``ValueError`` naming the field otherwise."""
+    PlanChecks(result, legacy).run()
+
+
+class PlanChecks:
+    """The checks of one plan result: its fields, then its numbers against its controls."""
+
+    def __init__(self, result, legacy: bool = False):
+        self.r = result
+        #: a file of format ``nonholo.plan/1`` (no certificates)
+        self.legacy = legacy
+
+    def run(self) -> None:
+        r = self.r
+        self.scalars()
+        mech = self.labels()
+        n = self.arrays(mech)
+        complete = n == r.steps + 1
+        if n == 0:
+            self.nothing_simulated()
+            return
+        if not np.array_equal(r.R[0], r.R0):
+            fail("R", "starts elsewhere than R0 (R[0] != R0)")
+        if mech.space.k and not np.array_equal(r.q[0], r.q0):
+            fail("q", "starts elsewhere than q0 (q[0] != q0)")
+        self.replay(mech, n)
+        self.values(mech, n, complete)
+
+    # -- field by field --------------------------------------------------------------------
+    def scalars(self) -> None:
+        r = self.r
+        if not isinstance(r.success, (bool, np.bool_)):
+            fail("success", f"must be true or false, got {json_type(r.success)}")
+        v = vars(r)
+        string_field(v, "reason", empty=True)
+        for key in ("mechanism", "method", "strategy"):
+            string_field(v, key)
+        integer_field(v, "iterations", 0)
+        integer_field(v, "steps", 1)
+        if number_field(v, "T") <= 0:
+            fail("T", f"must be a positive time (s), got {r.T}")
+        if number_field(v, "seconds") < 0:
+            fail("seconds", f"must be >= 0, got {r.seconds}")
+        for key in ("terminal_error", "sensitivity", "error_bound"):
+            x = number_field(v, key, null=True)
+            if x is not None and x < 0:
+                fail(key, f"must be >= 0 (or null), got {x}")
+        number_field(v, "min_delta", null=True)
+        if r.replay_steps is not None:
+            M = integer_field(v, "replay_steps", 2)
+            if M % r.steps or M % 2:
+                fail("replay_steps", f"({M}) must be an even multiple of steps ({r.steps})")
+            if r.error_bound is None:
+                fail("error_bound", "is null, but the plan has a certified replay (replay_steps)")
+        elif r.error_bound is not None:
+            fail("replay_steps", "is null, but the plan has an error bound (error_bound)")
+        if self.legacy and r.replay_steps is not None:
+            fail("replay_steps", f"is set in a file of format {FORMAT_1!r}, which has no certificates")
+        if not isinstance(r.history, list) or not all(isinstance(h, dict) for h in r.history):
+            fail("history", "must be a list of objects (one per iteration)")
+        if not isinstance(r.options, dict):
+            fail("options", f"must be an object, got {json_type(r.options)}")
+        scan_finite(r.history, "history")
+        scan_finite(r.options, "options")
+        for key in ("tol", "delta_min"):
+            if key in r.options and not is_number(r.options[key]):
+                fail("options", f"has {key} = {short(r.options[key])}, not a number")
+
+    def labels(self):
+        """The mechanism; ``method``, ``strategy``, ``T``, ``steps``, ``R0`` against the controls."""
+        r = self.r
+        try:
+            mech = catalog.get(r.mechanism)
+        except ValueError as exc:
+            fail("mechanism", f"is unknown: {exc}")
+        par = r.parametrisation
+        if isinstance(par, Retimed):
+            self.retimed(par, mech)
+            par = par.base
+        if r.route not in ROUTES:
+            fail("route", f"must be one of {', '.join(map(repr, ROUTES))}, got {short(r.route)}")
+        stitched = isinstance(par, Stitched)
+        if r.stitched is not None:
+            if not isinstance(r.stitched, Stitched):
+                fail("stitched", f"must be stitched controls or None, got {type(r.stitched).__name__}")
+            if stitched:
+                fail("stitched", "is set, but the controls are stitched themselves (a smoothed route's "
+                                  "controls are one piece)")
+        routed = stitched or r.stitched is not None
+        if routed != (r.route == "global"):
+            fail("route", f"is {r.route!r}, but the controls are "
+                           f"{'stitched' if stitched else 'one piece'}"
+                           f"{' with the stitched route they were smoothed from' if r.stitched is not None else ''}"
+                           f" (route {'global' if routed else 'local'!r})")
+        if r.method not in METHOD_OF_KIND.values():
+            fail("method", f"must be one of {', '.join(map(repr, METHOD_OF_KIND.values()))}, got {r.method!r}")
+        if par.n_inputs != mech.n_inputs:
+            fail("controls", f"have {par.n_inputs} inputs, mechanism {mech.name!r} has {mech.n_inputs}")
+        if r.parametrisation.T != r.T:
+            fail("T", f"is {r.T!r}, the controls are defined on [0, {r.parametrisation.T!r}]")
+        hops = r.hops                   # the route's stitched control: the controls, or their record
+        if hops is not None:
+            where = "controls" if stitched else "stitched"
+            if not r.success or r.replay_steps is None:
+                fail("route", "is 'global', which only a certified success has")
+            if hops.T != par.T:
+                fail(where, f"is defined on [0, {hops.T!r}], the plan on [0, {par.T!r}]")
+            if not np.array_equal(hops.waypoints[0], r.R0):
+                fail("R0", f"differs from the first waypoint of the stitched controls ({where!r})")
+            for i, piece in enumerate(hops.pieces):
+                self.piece(piece, mech, f"{where}.pieces[{i}]", None, None)
+        if stitched:
+            if r.steps % par.grid:
+                fail("steps", f"({r.steps}) must be a multiple of the stitched controls' grid ({par.grid})")
+        else:
+            self.piece(par, mech, "controls", r.steps, r.R0)
+        return mech
+
+    def retimed(self, par: Retimed, mech) -> None:
+        """Re-timed controls: of a certified success's path, from its ``R0``, of its
+        mechanism, under the ``leg_speed`` the options record."""
+        r = self.r
+        if r.replay_steps is None:
+            fail("controls", "are re-timed, which only the path of a certified plan can be")
+        if par.mechanism.name != r.mechanism:
+            fail("mechanism", f"is {r.mechanism!r}, the re-timed controls are of {par.mechanism.name!r}")
+        if not np.array_equal(par.R0, r.R0):
+            fail("R0", "differs from the re-timed controls' R0")
+        if r.options.get("leg_speed") != par.leg_speed:
+            fail("options", f"record leg_speed = {short(r.options.get('leg_speed'))}, the controls "
+                             f"are re-timed for {par.leg_speed!r}")
+
+    def piece(self, par, mech, where: str, steps: int | None, R0) -> None:
+        """One piece of physical controls against the plan's ``method``, ``strategy``,
+        ``mechanism`` (and ``steps``, ``R0``, when the piece is the whole plan)."""
+        r = self.r
+        frame = isinstance(par, FrameControls)
+        inner = par.frame if frame else par
+        if not isinstance(inner, (Fourier, PiecewiseConstant)):
+            fail(where, f"must be Fourier, piecewise-constant or frame controls, got {type(par).__name__}")
+        if r.method != METHOD_OF_KIND[inner.kind]:
+            fail("method", f"is {r.method!r}, but the controls are {inner.kind!r} "
+                            f"(method {METHOD_OF_KIND[inner.kind]!r})")
+        if frame:
+            if par.mechanism.name != r.mechanism:
+                fail("mechanism", f"is {r.mechanism!r}, the frame controls are of {par.mechanism.name!r}")
+            if steps is not None and par.steps != steps:
+                fail("steps", f"is {steps}, the frame controls replay {par.steps} steps")
+            if R0 is not None and not np.array_equal(par.R0, R0):
+                fail("R0", "differs from the frame controls' R0")
+            if r.strategy == "paper":
+                fail("strategy", "is 'paper', which plans the physical inputs, but the controls are "
+                                  "frame controls (strategy 'robust')")
+        if steps is not None and isinstance(inner, PiecewiseConstant) and steps % inner.grid:
+            fail("steps", f"({steps}) must be a multiple of the controls' grid ({inner.grid})")
+
+    def arrays(self, mech) -> int:
+        """Shapes and finiteness of ``R0``, ``Rd``, ``t``, ``R``, ``u``, ``delta``; returns ``n``."""
+        r = self.r
+        for key in ("R0", "Rd"):
+            rotation_field(getattr(r, key), key)
+        arrays = {"t": r.t, "R": r.R, "u": r.u, "delta": r.delta}
+        for key, a in arrays.items():
+            if key == "delta" and a is None:
+                continue
+            if not isinstance(a, np.ndarray) or a.dtype.kind != "f":
+                fail(key, "must be a float array")
+            if not np.all(np.isfinite(a)):
+                fail(key, "has non-finite entries (NaN or infinity)")
+        n = r.t.shape[0] if r.t.ndim == 1 else -1
+        if n < 0:
+            fail("t", f"must have shape (n,), got {r.t.shape}")
+        if mech.space.k:
+            if r.q is None or r.q0 is None or r.qd is None:
+                fail("q", f"must be set: mechanism {mech.name!r} has coordinates")
+            arrays["q"] = r.q
+            for key in ("q", "q0", "qd"):
+                if not np.all(np.isfinite(getattr(r, key))):
+                    fail(key, "has non-finite entries (NaN or infinity)")
+        elif r.q is not None or r.q0 is not None or r.qd is not None:
+            fail("q", f"must be null: mechanism {mech.name!r} has no coordinates")
+        for key, shape in (("R", (n, 3, 3)), ("u", (n, mech.n_inputs)), ("q", (n, mech.n_coordinates))):
+            if key not in arrays:
+                continue
+            if arrays[key].shape != shape:
+                fail(key, f"must have shape {shape} (n = {n} samples in t), got {arrays[key].shape}")
+        if mech.singular.exists:
+            if r.delta is None or r.delta.shape != (n,):
+                fail("delta", f"must have shape ({n},): mechanism {mech.name!r} has a singular set, "
+                               f"got {'null' if r.delta is None else r.delta.shape}")
+        elif r.delta is not None:
+            fail("delta", f"must be null: mechanism {mech.name!r} has no singular set")
+        if n > r.steps + 1:
+            fail("t", f"has {n} samples, more than the {r.steps + 1} step points of {r.steps} steps")
+        par = r.parametrisation
+        if isinstance(par, Retimed):
+            # the planned step points, at their re-timed instants
+            tau = np.arange(n) * (par.base.T / r.steps)
+            if n == r.steps + 1:
+                tau[-1] = par.base.T
+            expected = par.time(tau)
+            expected[0] = 0.0
+        else:
+            expected = np.arange(n) * (r.T / r.steps)
+        if n == r.steps + 1:
+            expected[-1] = r.T
+        if n and np.max(np.abs(r.t - expected)) > TIME_RTOL * r.T:
+            k = int(np.argmax(np.abs(r.t - expected)))
+            what = ("the re-timed instants of the step points" if isinstance(par, Retimed)
+                    else "the integrator's step points k·T/steps")
+            fail("t", f"must hold {what}: t[{k}] = {r.t[k]!r}, expected {expected[k]!r}")
+        if n:
+            err = np.max(np.abs(np.einsum("nji,njk->nik", r.R, r.R) - np.eye(3)), axis=(1, 2))
+            k = int(np.argmax(err))
+            if err[k] > ROTATION_TOL:
+                fail("R", f"sample {k} is not a rotation: |RᵀR - I| = {err[k]:.3g}")
+            det = np.linalg.det(r.R)
+            if np.any(det < 0):
+                fail("R", f"sample {int(np.argmax(det < 0))} is a reflection (det = -1)")
+        return n
+
+    def nothing_simulated(self) -> None:
+        """A plan without a trajectory (refused before any simulation)."""
+        r = self.r
+        if r.success:
+            fail("success", "is true, but nothing was simulated (no trajectory)")
+        for key in ("terminal_error", "min_delta", "sensitivity", "error_bound", "replay_steps"):
+            if getattr(r, key) is not None:
+                fail(key, "must be null when nothing was simulated (no trajectory)")
+        if r.iterations or r.history:
+            fail("iterations", "must be 0, with an empty history, when nothing was simulated")
+        if isinstance(r.parametrisation, FrameControls):
+            fail("controls", "are frame controls, but nothing was simulated (no trajectory)")
+
+    # -- against the controls --------------------------------------------------------------
+    def replay(self, mech, n: int) -> None:
+        """The controls replayed from ``R0`` pass through the stored samples; keeps the
+        least ``sgnΔ`` over the replay's evaluation points. A certified plan: the
+        physical inputs on ``replay_steps`` steps (:func:`nonholo.motion.playback.replay`), whose
+        Richardson estimate ``error_bound`` must cover; otherwise by the integrator that
+        planned them, the physical system's for controls of ``u``, the frame system's for
+        frame controls."""
+        r = self.r
+        par = r.parametrisation
+        if isinstance(par, Retimed):
+            par = par.base             # the same path: replayed as planned
+        T = par.T
+        frame = isinstance(par, FrameControls) and r.replay_steps is None
+        q0 = np.ascontiguousarray(r.q0 if mech.space.k else NO_COORDINATES, dtype=float)
+        self.sign = mech.singular.sign(r.R0, q0)
+        if self.sign == 0.0:
+            fail("R0", "lies on the singular surface Δ = 0")
+        if r.replay_steps is not None:
+            if n != r.steps + 1:
+                fail("replay_steps", f"is set, but the trajectory stops at t = {r.t[-1]:.6g} s < T")
+            M = r.replay_steps
+            U = np.ascontiguousarray(stages.stage_table(par, M))
+            R_M, done, dmin, Q_M = playback.replay(r.R0, par, T, mech, M, self.sign, U, q0)
+            Rs, Qs = R_M[::M // r.steps], Q_M[::M // r.steps]
+            done //= M // r.steps
+        else:
+            kern = mech.kernels(frame=frame)
+            U = np.ascontiguousarray(stages.stage_table(par.frame if frame else par, r.steps)[:n - 1])
+            Rs, Qs = np.empty((n, 3, 3)), np.empty((n, mech.n_coordinates))
+            done, dmin, _ = states_forward(mech, kern, np.ascontiguousarray(r.R0, dtype=float),
+                                           q0,
+                                           U, T / r.steps, self.sign, -np.inf, Rs, Qs)
+        if done < n - 1:
+            fail("R", f"goes on to t = {r.t[-1]:.6g} s, but the controls replayed from R0 stop at "
+                       f"t = {r.t[done]:.6g} s (non-finite angular velocity)")
+        dev = np.max(np.abs(Rs - r.R), axis=(1, 2))
+        k = int(np.argmax(dev))
+        if not dev[k] <= REPLAY_TOL:
+            system = "frame system" if frame else "system"
+            steps = r.steps if r.replay_steps is None else r.replay_steps
+            fail("R", f"disagrees with the controls replayed from R0 (the {system} of "
+                       f"{mech.name!r}, {steps} steps): by {dev[k]:.3g} at t = {r.t[k]:.6g} s "
+                       f"(tolerance {REPLAY_TOL:g})")
+        if mech.space.k:
+            dev = np.max(np.abs(Qs - r.q), axis=1)
+            k = int(np.argmax(dev))
+            if not dev[k] <= REPLAY_TOL:
+                fail("q", f"disagrees with the controls replayed from (R0, q0) by {dev[k]:.3g} at "
+                           f"t = {r.t[k]:.6g} s (tolerance {REPLAY_TOL:g})")
+        self.dmin = float(dmin)
+        if r.replay_steps is not None:
+            R_half, _, _, Q_half = playback.replay(r.R0, par, T, mech, M // 2, self.sign, stages.halve(U), q0)
+            est = certify.richardson((R_M[-1], Q_M[-1]), (R_half[-1], Q_half[-1]), mech)
+            if not r.error_bound >= est * (1.0 - 1e-9):
+                fail("error_bound", f"({r.error_bound:.3g}) is below the replay's own error "
+                                     f"estimate ({est:.3g} rad with {M} steps)")
+
+    def values(self, mech, n: int, complete: bool) -> None:
+        """``u``, ``delta``, ``terminal_error``, ``min_delta`` and ``success`` against the samples."""
+        r = self.r
+        u = np.asarray(r.parametrisation(r.t), dtype=float).reshape(n, mech.n_inputs)
+        dev = np.max(np.abs(u - r.u))
+        if not dev <= VALUE_RTOL * max(1.0, float(np.max(np.abs(u)))):
+            fail("u", f"disagrees with controls(t) by {dev:.3g}")
+        if mech.singular.exists:
+            d = mech.delta_samples(r.R, r.q)
+            dev = np.max(np.abs(d - r.delta))
+            if not dev <= VALUE_RTOL * max(1.0, float(np.max(np.abs(d)))):
+                fail("delta", f"disagrees with Δ(R) of the samples by {dev:.3g}")
+        if complete:
+            if r.terminal_error is None:
+                fail("terminal_error", "is null, but the trajectory reaches T")
+            if mech.space.k:
+                err = mech.space.distance(r.R[-1], r.q[-1], r.Rd, r.qd)
+                what = "the distance of the last sample from the goal"
+            else:
+                err = float(kernels.log_error(np.ascontiguousarray(r.R[-1]), np.ascontiguousarray(r.Rd))[1])
+                what = "|log(R[-1] Rdᵀ)|"
+            if not abs(err - r.terminal_error) <= REPLAY_TOL:
+                fail("terminal_error", f"is {r.terminal_error:.6g}, but {what} = {err:.6g}")
+        elif r.terminal_error is not None:
+            fail("terminal_error", f"must be null: the trajectory stops at t = {r.t[-1]:.6g} s < T")
+        if mech.singular.exists:
+            if r.min_delta is None:
+                fail("min_delta", f"is null, but mechanism {mech.name!r} has a singular set")
+            tol = VALUE_RTOL * max(1.0, abs(r.min_delta))
+            least = float(np.min(self.sign * r.delta))
+            if r.min_delta > least + tol:
+                fail("min_delta", f"({r.min_delta:.6g}) exceeds the least sgnΔ of the samples ({least:.6g})")
+            if complete and r.min_delta < self.dmin - tol:
+                fail("min_delta", f"({r.min_delta:.6g}) is below the least sgnΔ of the replayed motion "
+                                   f"({self.dmin:.6g})")
+        elif r.min_delta is not None:
+            fail("min_delta", f"must be null: mechanism {mech.name!r} has no singular set")
+        if r.success:
+            if not complete:
+                fail("success", f"is true, but the trajectory stops at t = {r.t[-1]:.6g} s < T")
+            if r.replay_steps is None and not self.legacy:
+                fail("success", "is true, but the plan has no certificate (replay_steps, error_bound)")
+            tol = r.options.get("tol")
+            bound = r.error_bound or 0.0
+            if tol is not None and r.terminal_error + bound > tol:
+                fail("success", f"is true, but terminal_error + error_bound = "
+                                 f"{r.terminal_error + bound:.3g} > tol = {tol:g}")
+            dmin = r.options.get("delta_min")
+            if mech.singular.exists and dmin is not None and r.min_delta < dmin:
+                fail("success", f"is true, but min_delta = {r.min_delta:.4g} < delta_min = {dmin:g}")
+            stroke = r.options.get("leg_length")
+            if stroke is not None:
+                try:
+                    limits = LegLimits.from_argument(stroke, mech)
+                except ValueError as exc:
+                    fail("options", f"has a bad leg_length: {exc}")
+                if limits.least_clearance(mech, r.R) < -VALUE_RTOL * limits.hi:
+                    fail("success", f"is true, but {limits.describe(mech, r.R, r.t)}")
+            speed = r.options.get("leg_speed")
+            if speed is not None:
+                if not is_number(speed) or not speed > 0:
+                    fail("options", f"has a bad leg_speed: {short(speed)}")
+                fastest = float(np.max(np.abs(mech.leg_speeds(r.R, r.u))))
+                if fastest > speed * (1.0 + SPEED_RTOL):
+                    fail("success", f"is true, but a leg moves at {fastest:.6g} > leg_speed = {speed:g}")

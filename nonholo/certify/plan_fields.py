@@ -1,0 +1,110 @@
+"""A plan's fields, value by value: the format's names (:data:`FORMAT` and the earlier
+formats still read), the routes and methods a plan may record, and the typed checks of
+one field (a string, number, integer, rotation, finite JSON value), each raising
+``ValueError("invalid plan: '<field>' ...")``. Shared by the plan file's decoding
+(:mod:`nonholo.io.plan_file`) and the checks of a plan's numbers
+(:mod:`nonholo.certify.plan_checks`)."""
+from __future__ import annotations
+
+import numpy as np
+
+from ..numerics.checks import MAX_STEPS, is_number
+from ..spaces import so3
+
+FORMAT = "nonholo.plan/3"
+#: the format before global routes (``route``, stitched controls): still loaded
+FORMAT_2 = "nonholo.plan/2"
+#: the format before certificates (``replay_steps``, ``error_bound``): still loaded, checked
+#: against the planner's own replay
+FORMAT_1 = "nonholo.plan/1"
+#: how a plan reached its goal: one local plan, or a global route of stitched hops
+ROUTES = ("local", "global")
+
+#: the planner's methods, by the kind of the parametrisation each plans with
+METHOD_OF_KIND = {"fourier": "parametric", "piecewise_constant": "nonparametric"}
+#: ``R0``, ``Rd`` and the samples ``R``: ``|RᵀR − I| ≤`` this (as :func:`nonholo.plan` accepts)
+ROTATION_TOL = 1e-9
+
+
+def fail(field: str, message: str):
+    """Raise the ``ValueError`` of a bad plan field."""
+    raise ValueError(f"invalid plan: {field!r} {message}")
+
+
+def short(x) -> str:
+    """``repr(x)``, cut to 60 characters."""
+    try:
+        text = repr(x)
+    except ValueError:             # an integer too long to print
+        return "a very large integer"
+    return text if len(text) <= 60 else text[:57] + "..."
+
+
+def json_type(x) -> str:
+    """What ``x`` is, in JSON's words (for messages)."""
+    if x is None:
+        return "null"
+    if isinstance(x, bool):
+        return str(x).lower()
+    if isinstance(x, dict):
+        return "an object"
+    if isinstance(x, (list, tuple)):
+        return "an array"
+    if isinstance(x, str):
+        return f"the string {short(x)}"
+    return short(x)
+
+
+def string_field(d: dict, key: str, empty: bool = False, where: str = "") -> str:
+    """``d[key]``, a (non-empty unless ``empty``) string."""
+    v = d[key]
+    if not isinstance(v, str) or (not v and not empty):
+        fail(where + key, f"must be a {'' if empty else 'non-empty '}string, got {json_type(v)}")
+    return v
+
+
+def number_field(d: dict, key: str, null: bool = False, where: str = "") -> float | None:
+    """``d[key]``, a finite number (or ``None`` if ``null``), as a float."""
+    v = d[key]
+    if v is None and null:
+        return None
+    if not is_number(v):
+        fail(where + key, f"must be a number{' or null' if null else ''}, got {json_type(v)}")
+    try:
+        x = float(v)
+    except OverflowError:
+        x = float("inf")
+    if not np.isfinite(x):
+        fail(where + key, f"must be finite{' (or null)' if null else ''}, got {v!r}")
+    return x
+
+
+def integer_field(d: dict, key: str, minimum: int, where: str = "") -> int:
+    """``d[key]``, an integer ``>= minimum`` (``steps``: at most ``MAX_STEPS``)."""
+    v = d[key]
+    if not isinstance(v, (int, np.integer)) or isinstance(v, (bool, np.bool_)) or v < minimum:
+        fail(where + key, f"must be an integer >= {minimum}, got {json_type(v)}")
+    if key == "steps" and v > MAX_STEPS:
+        fail(where + key, f"must be at most {MAX_STEPS}, got {v}")
+    return int(v)
+
+
+def rotation_field(R, field: str) -> None:
+    """``R`` is a rotation within :data:`ROTATION_TOL`."""
+    try:
+        so3.check_rotation(R, repr(field), ROTATION_TOL)
+    except ValueError as exc:
+        raise ValueError(f"invalid plan: {exc}") from None
+
+
+def scan_finite(value, field: str) -> None:
+    """Every number inside the JSON value ``value`` is finite (iteratively: no recursion)."""
+    stack = [value]
+    while stack:
+        x = stack.pop()
+        if isinstance(x, dict):
+            stack.extend(x.values())
+        elif isinstance(x, (list, tuple)):
+            stack.extend(x)
+        elif is_number(x) and not np.isfinite(float(x)):
+            fail(field, f"contains a non-finite number ({x})")

@@ -1,0 +1,355 @@
+"""The plan file's codec: a plan file's JSON object decoded field by field into the fields
+of a :class:`~nonholo.io.result.PlanResult` (types, shapes, the controls rebuilt), the JSON
+text read from a file, and the atomic write. Decoding only: the checks that the numbers
+agree with each other (replaying the stored controls) are
+:mod:`nonholo.certify.plan_checks`'s.
+
+File format (``PlanResult.save``): one JSON object, ``"format": "nonholo.plan/3"``, with
+the scalar fields, ``R0``/``Rd`` as nested 3×3 lists, the samples ``t`` (n), ``R``
+(n×3×3), ``u`` (n×m) and ``delta`` (n, or null), ``history`` (a list of per-iteration
+records) and ``controls``, the parametrisation (``{"kind": "fourier", "T", "harmonics",
+"coeffs"}``, ``{"kind": "piecewise_constant", "T", "grid", "values"}`` or, for a motion
+planned in frame coordinates (strategy ``"robust"``), ``{"kind": "frame", "T",
+"mechanism", "steps", "R0", "frame": <the w parametrisation>}``, or, for a global route
+(``"route": "global"``), ``{"kind": "stitched", "T", "pieces": [<one of those per hop>],
+"waypoints"}``, unless the route was re-planned as one smooth control: then ``controls``
+is that control and ``"stitched"`` the route's stitched control (absent otherwise); see :mod:`nonholo.controls.parametrisations`, :mod:`nonholo.motion.frame_controls` and
+:mod:`nonholo.controls.stitched`) from which ``controls(t)`` is rebuilt (identically: the frame
+motion's nodes are recomputed by the same kernel). Floats are written with
+``repr`` precision, so a save/load round trip reproduces every number exactly. Quantities
+that do not exist (``min_delta`` for a mechanism without a singular set, the terminal
+error of a run stopped before any simulation) are ``null``/``None``, never NaN.
+
+Saving is atomic (a complete new file replaces the old one, or the old one stays).
+Loading (:meth:`~nonholo.io.result.PlanResult.load`) decodes the file (:func:`decode`) and
+checks it (:mod:`nonholo.certify.plan_checks`): every
+field's type and shape, finite numbers, and that the numbers agree with each other — the
+stored samples are those of the stored controls replayed from ``R0`` (``n`` samples at the
+integrator's step points ``t = kT/steps``; ``n = steps + 1`` when the motion reached
+``T``, fewer when it stopped early, none when the planner refused the goal), ``u =
+controls(t)``, ``delta = Δ(R)``, and ``terminal_error``, ``min_delta``, ``success``,
+``mechanism``, ``method``, ``T``, ``steps`` agree with them. A file that does not is
+rejected with a ``ValueError`` naming the field, so a plan cannot be changed — by a
+damaged byte or by hand — without the change being noticed (fields that are records, not
+results, are checked only for their type: ``reason``, ``history``, ``options``,
+``seconds``, ``sensitivity``). Files written by earlier versions of the format load:
+``nonholo.plan/2`` (no ``route``: local) and ``nonholo.plan/1`` (no certificates).
+"""
+from __future__ import annotations
+
+import contextlib
+import json
+import os
+import secrets
+import stat
+from pathlib import Path
+
+import numpy as np
+
+from ..certify.plan_fields import (
+    FORMAT,
+    FORMAT_1,
+    FORMAT_2,
+    METHOD_OF_KIND,
+    fail,
+    integer_field,
+    json_type,
+    number_field,
+    rotation_field,
+    short,
+    string_field,
+)
+from ..controls.parametrisations import Controls
+from ..controls.stitched import Stitched
+from ..model import catalog
+from ..motion.frame_controls import FrameControls, from_dict
+from ..motion.retimed import Retimed
+from ..numerics.checks import is_number
+
+#: the fields of a plan file
+_REQUIRED = ("format", "success", "reason", "terminal_error", "min_delta", "iterations", "history",
+             "mechanism", "method", "strategy", "T", "steps", "seconds", "R0", "Rd", "controls",
+             "t", "R", "u", "delta")
+#: fields the first files of the format did not have (absent: ``{}`` and ``null``)
+_OPTIONAL = ("options", "sensitivity", "error_bound", "replay_steps", "route", "stitched",
+             "q0", "qd", "q", "errors")
+#: the fields of each kind of ``controls``
+_CONTROL_FIELDS = {"fourier": ("kind", "T", "harmonics", "coeffs"),
+                   "piecewise_constant": ("kind", "T", "grid", "values"),
+                   "frame": ("kind", "T", "mechanism", "steps", "R0", "frame"),
+                   "stitched": ("kind", "T", "pieces", "waypoints"),
+                   "retimed": ("kind", "T", "leg_speed", "nodes", "mechanism", "R0", "base")}
+
+
+
+def _coordinates(d: dict, mech) -> dict:
+    """The coordinate fields of a plan of a mechanism whose state goes beyond SO(3)."""
+    k = mech.n_coordinates
+    missing = [key for key in ("q0", "qd", "q") if key not in d]
+    if missing:
+        fail(missing[0], f"is missing: mechanism {mech.name!r} has coordinates ({', '.join(mech.coordinates)})")
+    errors = d.get("errors")
+    if errors is not None and not (isinstance(errors, dict) and all(is_number(v) for v in errors.values())):
+        fail("errors", "must be an object of numbers or null")
+    return {"q0": _array(d["q0"], "q0", (k,)), "qd": _array(d["qd"], "qd", (k,)),
+            "q": _array(d["q"], "q", (None, k)), "errors": errors}
+
+
+def _unique_keys(pairs):
+    """``object_pairs_hook`` of :func:`json.loads`: an object with a key twice is an error."""
+    d = {}
+    for k, v in pairs:
+        if k in d:
+            raise ValueError(f"duplicate key {short(k)} in a JSON object")
+        d[k] = v
+    return d
+
+
+def _shape_text(shape) -> str:
+    return "(" + ", ".join("n" if s is None else str(s) for s in shape) + ("," if len(shape) == 1 else "") + ")"
+
+
+def _array(value, field: str, shape: tuple) -> np.ndarray:
+    """``value`` (nested lists of numbers) as a float array of ``shape`` (``None``: any
+    length); ``ValueError`` naming ``field`` for anything else (non-finite entries are
+    left to :mod:`nonholo.certify.plan_checks`)."""
+    bad = f"must be an array of numbers of shape {_shape_text(shape)}"
+    if isinstance(value, np.ndarray):
+        if value.dtype.kind not in "iuf" or value.ndim != len(shape):
+            fail(field, bad)
+        a = value.astype(float)
+    else:
+        flat = []
+        dims = list(shape)
+        stack = [(value, 0)]
+        while stack:
+            x, k = stack.pop()
+            if k == len(shape):
+                if not is_number(x):
+                    fail(field, f"{bad}: found {json_type(x)}")
+                flat.append(x)
+                continue
+            if not isinstance(x, (list, tuple)):
+                fail(field, f"{bad}: found {json_type(x)}")
+            if dims[k] is None:
+                dims[k] = len(x)
+            if len(x) != dims[k]:
+                fail(field, f"{bad}: got a row of length {len(x)} where {dims[k]} were expected")
+            stack.extend((y, k + 1) for y in reversed(x))
+        dims = [0 if s is None else s for s in dims]
+        try:
+            a = np.array(flat, dtype=float).reshape(dims)
+        except OverflowError:
+            fail(field, "has an integer too large for a float")
+    if any(s is not None and s != a.shape[i] for i, s in enumerate(shape)):
+        fail(field, f"{bad}, got {a.shape}")
+    return a
+
+
+
+def _fields(d: dict, expected: tuple, where: str) -> None:
+    missing = [k for k in expected if k not in d]
+    unknown = [k for k in d if k not in expected]
+    if missing:
+        fail(where, f"lacks the field{'s' if len(missing) > 1 else ''} {', '.join(map(repr, missing))}")
+    if unknown:
+        fail(where, f"has unknown field{'s' if len(unknown) > 1 else ''} {', '.join(short(k) for k in unknown)}")
+
+
+def _parametrisation(d, where: str, m: int) -> None:
+    """Check the description of Fourier or grid controls with ``m`` inputs (``where``: its field)."""
+    if not isinstance(d, dict):
+        fail(where, f"must be an object, got {json_type(d)}")
+    kind = d.get("kind")
+    if kind not in METHOD_OF_KIND:
+        fail(where + ".kind", f"must be one of {', '.join(map(repr, METHOD_OF_KIND))}, got {short(kind)}")
+    _fields(d, _CONTROL_FIELDS[kind], where)
+    T = number_field(d, "T", where=where + ".")
+    if T <= 0:
+        fail(where + ".T", f"must be positive, got {T}")
+    if kind == "fourier":
+        K = integer_field(d, "harmonics", 1, where=where + ".")
+        _array(d["coeffs"], where + ".coeffs", (m, 2 * K + 1))
+    else:
+        g = integer_field(d, "grid", 1, where=where + ".")
+        _array(d["values"], where + ".values", (g, m))
+
+
+def _physical(d, mech, where: str) -> None:
+    """Check the description of physical controls (a parametrisation or frame controls)."""
+    m = mech.n_inputs
+    if isinstance(d, dict) and d.get("kind") == FrameControls.kind:
+        _fields(d, _CONTROL_FIELDS["frame"], where)
+        _parametrisation(d["frame"], where + ".frame", m)
+        if number_field(d, "T", where=where + ".") != d["frame"]["T"]:
+            fail(where + ".T", f"differs from the frame controls' T ({d['frame']['T']!r})")
+        if string_field(d, "mechanism", where=where + ".") != mech.name:
+            fail(where + ".mechanism", f"is {d['mechanism']!r}, but the plan's 'mechanism' is {mech.name!r}")
+        integer_field(d, "steps", 1, where=where + ".")
+        rotation_field(_array(d["R0"], where + ".R0", (3, 3)), where + ".R0")
+    else:
+        _parametrisation(d, where, m)
+
+
+def _controls(d, mech, where: str = "controls", timed: bool = True) -> Controls | FrameControls | Stitched | Retimed:
+    """The ``controls`` field (or another field ``where`` holding controls) of a plan of
+    mechanism ``mech``, checked, as an object (``timed``: may be re-timed)."""
+    if isinstance(d, dict) and d.get("kind") == Retimed.kind and timed:
+        _fields(d, _CONTROL_FIELDS["retimed"], where)
+        for key in ("T", "leg_speed"):
+            if number_field(d, key, where=f"{where}.") <= 0:
+                fail(f"{where}.{key}", f"must be positive, got {d[key]}")
+        integer_field(d, "nodes", 2, where=f"{where}.")
+        if string_field(d, "mechanism", where=f"{where}.") != mech.name:
+            fail(f"{where}.mechanism", f"is {d['mechanism']!r}, but the plan's 'mechanism' is {mech.name!r}")
+        rotation_field(_array(d["R0"], f"{where}.R0", (3, 3)), f"{where}.R0")
+        _controls(d["base"], mech, f"{where}.base", timed=False)
+    elif isinstance(d, dict) and d.get("kind") == Stitched.kind:
+        _fields(d, _CONTROL_FIELDS["stitched"] + (("coordinates",) if mech.space.k else ()), where)
+        if number_field(d, "T", where=f"{where}.") <= 0:
+            fail(f"{where}.T", f"must be positive, got {d['T']}")
+        pieces = d["pieces"]
+        if not isinstance(pieces, list) or not pieces:
+            fail(f"{where}.pieces", "must be a non-empty list")
+        for i, p in enumerate(pieces):
+            _physical(p, mech, f"{where}.pieces[{i}]")
+        W = _array(d["waypoints"], f"{where}.waypoints", (len(pieces) + 1, 3, 3))
+        for i, R in enumerate(W):
+            rotation_field(R, f"{where}.waypoints[{i}]")
+        if mech.space.k:
+            _array(d["coordinates"], f"{where}.coordinates", (len(pieces) + 1, mech.n_coordinates))
+    else:
+        _physical(d, mech, where)
+    try:
+        return from_dict(d)
+    except (ValueError, TypeError, KeyError, IndexError, AttributeError) as exc:
+        fail(where, f"cannot be rebuilt: {exc}")
+
+
+def decode(d) -> tuple[dict, bool]:
+    """The fields of the plan described by ``d`` (a plan file's object), each checked for its
+    type and shape and the controls rebuilt, as keyword arguments of
+    :class:`~nonholo.io.result.PlanResult`; and whether ``d`` is of format
+    ``nonholo.plan/1`` (no certificates). ``ValueError`` naming the field otherwise."""
+    if not isinstance(d, dict):
+        raise ValueError(f"not a nonholo plan file: expected a JSON object, got {json_type(d)}")
+    if d.get("format") not in (FORMAT, FORMAT_2, FORMAT_1):
+        raise ValueError(f"not a nonholo plan file (format {short(d.get('format'))}, expected {FORMAT!r})")
+    missing = [k for k in _REQUIRED if k not in d]
+    if missing:
+        raise ValueError(f"invalid plan: missing field{'s' if len(missing) > 1 else ''} "
+                         f"{', '.join(map(repr, missing))}")
+    unknown = [k for k in d if k not in _REQUIRED and k not in _OPTIONAL]
+    if unknown:
+        raise ValueError(f"invalid plan: unknown field{'s' if len(unknown) > 1 else ''} "
+                         f"{', '.join(short(k) for k in unknown)}")
+    for key in ("route", "stitched"):
+        if key in d and d["format"] != FORMAT:
+            raise ValueError(f"invalid plan: {key!r} is set in a file of format {d['format']!r}, "
+                             "which has no global routes")
+    d = {"options": {}, "sensitivity": None, "error_bound": None, "replay_steps": None,
+         "route": "local", "stitched": None, **d}
+    if not isinstance(d["success"], bool):
+        raise ValueError(f"invalid plan: 'success' must be true or false, got {short(d['success'])}")
+    mechanism = string_field(d, "mechanism")
+    try:
+        mech = catalog.get(mechanism)
+    except ValueError as exc:
+        raise ValueError(f"invalid plan: 'mechanism': {exc}") from None
+    par = _controls(d["controls"], mech)
+    stitched = None
+    if d["stitched"] is not None:
+        if not isinstance(d["stitched"], dict) or d["stitched"].get("kind") != Stitched.kind:
+            fail("stitched", f"must be stitched controls ({{\"kind\": \"stitched\", ...}}) or null")
+        stitched = _controls(d["stitched"], mech, "stitched")
+    m = par.n_inputs
+    options = d["options"]
+    if not isinstance(options, dict):
+        raise ValueError(f"invalid plan: 'options' must be an object, got {json_type(options)}")
+    history = d["history"]
+    if not isinstance(history, list) or not all(isinstance(r, dict) for r in history):
+        raise ValueError("invalid plan: 'history' must be a list of objects")
+    delta = d["delta"]
+    fields = dict(
+        success=d["success"], reason=string_field(d, "reason", empty=True),
+        terminal_error=number_field(d, "terminal_error", null=True),
+        min_delta=number_field(d, "min_delta", null=True),
+        iterations=integer_field(d, "iterations", minimum=0), history=list(history),
+        t=_array(d["t"], "t", (None,)), R=_array(d["R"], "R", (None, 3, 3)),
+        u=_array(d["u"], "u", (None, m)),
+        delta=None if delta is None else _array(delta, "delta", (None,)),
+        parametrisation=par, mechanism=mechanism, method=string_field(d, "method"),
+        strategy=string_field(d, "strategy"), T=number_field(d, "T"),
+        R0=_array(d["R0"], "R0", (3, 3)), Rd=_array(d["Rd"], "Rd", (3, 3)),
+        steps=integer_field(d, "steps", minimum=1), seconds=number_field(d, "seconds"),
+        options=dict(options), sensitivity=number_field(d, "sensitivity", null=True),
+        error_bound=number_field(d, "error_bound", null=True),
+        replay_steps=None if d["replay_steps"] is None else integer_field(d, "replay_steps", minimum=2),
+        route=string_field(d, "route"), stitched=stitched,
+        **({} if not mech.space.k else _coordinates(d, mech)))
+    return fields, d["format"] == FORMAT_1
+
+
+def write_atomic(path: Path, data: bytes) -> None:
+    """Write ``data`` to a new file in ``path``'s directory, sync it, then rename it to
+    ``path``; on failure remove it (``path`` is untouched) and re-raise."""
+    directory = path.parent
+    for _ in range(100):
+        tmp = directory / f".{path.name}.{secrets.token_hex(4)}.tmp"
+        try:
+            # mode 0o666 less the umask, as a file created by open(path, "w")
+            fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL | getattr(os, "O_BINARY", 0), 0o666)
+        except FileExistsError:
+            continue
+        break
+    else:
+        raise FileExistsError(f"no free temporary file name in {directory}")
+    try:
+        with os.fdopen(fd, "wb") as f:
+            try:
+                mode = stat.S_IMODE(os.stat(path).st_mode)
+            except OSError:
+                mode = None                      # no file to replace: keep the new file's mode
+            if mode is not None and hasattr(os, "fchmod"):
+                os.fchmod(f.fileno(), mode)      # replacing a file keeps its permissions
+            f.write(data)
+            f.flush()
+            os.fsync(f.fileno())
+        os.replace(tmp, path)
+    except BaseException:
+        with contextlib.suppress(OSError):
+            os.unlink(tmp)
+        raise
+    # make the rename itself durable (POSIX; where a directory cannot be opened, skip)
+    with contextlib.suppress(OSError, AttributeError):
+        dfd = os.open(directory, os.O_RDONLY)
+        try:
+            os.fsync(dfd)
+        finally:
+            os.close(dfd)
+
+
+def read(path):
+    """The JSON value in the file ``path`` (UTF-8, a byte-order mark accepted; an object
+    with a key twice is refused); ``ValueError`` starting with ``path`` otherwise."""
+    raw = Path(path).read_bytes()
+    try:
+        text = raw.decode("utf-8-sig")
+    except UnicodeDecodeError as exc:
+        raise ValueError(f"{path}: not a nonholo plan file: not UTF-8 text ({exc.reason} at byte "
+                         f"{exc.start})") from None
+    try:
+        return json.loads(text, object_pairs_hook=_unique_keys)
+    except RecursionError:
+        raise ValueError(f"{path}: not a nonholo plan file: JSON nested too deeply") from None
+    except ValueError as exc:      # json.JSONDecodeError, duplicate keys, huge integers
+        raise ValueError(f"{path}: not a nonholo plan file: {exc}") from None
+
+
+def write_text(path, text: str) -> Path:
+    """Write ``text`` (UTF-8) to ``path`` atomically (:func:`write_atomic`; a symbolic link
+    is followed, its target replaced); returns ``path``."""
+    path = Path(path)
+    target = Path(os.path.realpath(path)) if path.is_symlink() else path
+    write_atomic(target, text.encode("utf-8"))
+    return path

@@ -1,0 +1,41 @@
+"""One mechanism at a glance (:func:`mechanism_card_figure`): its schematic and its
+singular set, or, without legs, the body axes and the inputs of a planned motion."""
+from __future__ import annotations
+
+import numpy as np
+from matplotlib.figure import Figure
+
+from ..model import catalog
+from .plan_figures import plot_body_axes, plot_controls
+from .platform_drawing import draw_platform, rpy_text
+from .singular_set import draw_slice
+from .style import styled
+
+
+@styled
+def mechanism_card_figure(mechanism: str, R=None, result=None, psi_slice: float = 0.0) -> Figure:
+    """One mechanism at a glance: the platform's schematic at ``R`` (default: identity) and
+    its singular set on the slice ``ψ = psi_slice``; for a mechanism without legs, the
+    paths of the body axes along ``result`` (a planned motion) and its inputs."""
+    mech = catalog.get(mechanism)
+    fig = Figure(figsize=(12.0, 5.2), layout="constrained")
+    gs = fig.add_gridspec(1, 2, width_ratios=[1.0, 1.1])
+    ax = fig.add_subplot(gs[0], projection="3d")
+    R = np.eye(3) if R is None else np.asarray(R, dtype=float)
+    if mech.geometry is not None:
+        draw_platform(ax, R, mechanism)
+        dtext = f",  Δ = {float(mech.delta(R)):+.3f}" if mech.singular.exists else ""
+        ax.set_title(f"{rpy_text(R)}{dtext}")
+    elif result is not None:
+        plot_body_axes(ax, result)
+        ax.set_title("paths of the body axes $R(t)e_k$")
+    ax2 = fig.add_subplot(gs[1])
+    if mech.singular.exists:
+        cs = draw_slice(ax2, psi_slice, n=181, mechanism=mechanism)
+        cb = fig.colorbar(cs, ax=ax2, shrink=0.9, ticks=np.linspace(-1, 1, 5))
+        cb.set_label("Δ / max|Δ| [-]")
+    elif result is not None:
+        plot_controls(ax2, result)
+        ax2.set_title("planned inputs")
+    fig.suptitle(f"{mechanism}: {mech.description}")
+    return fig
