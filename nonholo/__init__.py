@@ -29,7 +29,7 @@ __all__ = ["plan", "simulate", "retime", "PlanResult", "Mechanism", "mechanism_n
 #: Modules of the package's former flat layout, reachable as ``from nonholo import so3`` for
 #: one release (with a ``DeprecationWarning``): old name → its module now.
 MOVED = {"so3": "spaces.so3", "verify": "certify.resimulate", "catalog": "model.catalog",
-         "planner": "planning.api", "result": "io.result", "figures": "viz.figures",
+         "planner": "planning.api", "result": "io.result", "figures": "viz",
          "examples": "paper.examples", "simulation": "motion.simulation",
          "platform": "model.platform", "export": "io.csv_export", "sweep": "batch.sweep",
          "problems": "io.problems", "limits": "model.limits"}
