@@ -1,60 +1,83 @@
 """The generated CF4 kernels (the step inlined by `nonholo derive`) against the kernels of
-nonholo/cf4.py compiled as written (the step called), and against a fresh generation."""
+nonholo/integrate/cf4.py compiled as written (the step called), for every mechanism and
+both of its systems, and against a fresh generation.
+
+Bit for bit with the variational matrix ``QG`` compiled without fast-math (with it, LLVM
+may reorder ``QG``'s arithmetic differently where it is inlined: the platform's raised
+variant's Jacobians then differ at round-off level between the two forms); the kernels
+as used (fast-math ``QG``) agree with those to round-off."""
 import numpy as np
 import pytest
 from conftest import example
 
-from derivations import codegen
 from nonholo.controls import stages
 from nonholo.controls.parametrisations import Fourier, PiecewiseConstant
 from nonholo.generated import cf4_kernels
-from nonholo.integrate import cf4
+from nonholo.integrate import cf4, inliner
 from nonholo.model import catalog
+
+#: A start state per mechanism: ``(R0, q0)``.
+STARTS = {
+    "car": (np.eye(3), np.array([0.1, 0.2, 0.3, 0.2])),
+    "rolling_ball": (np.ascontiguousarray(example(1)[0]), np.array([0.1, -0.2])),
+}
+SYSTEMS = [(name, frame) for name in catalog.names() for frame in (False, True)
+           if not frame or catalog.get(name).has_frame]
+
+
+def start(name):
+    return STARTS.get(name, (np.ascontiguousarray(example(1)[0]), np.zeros(0)))
 
 
 def test_generated_kernels_are_fresh():
-    assert codegen.cf4_kernels_module() == open(cf4_kernels.__file__).read()
+    assert inliner.cf4_kernels_module() == open(cf4_kernels.__file__).read()
 
 
-@pytest.mark.parametrize("name,frame", [("platform", False), ("platform", True), ("attitude", True)])
+@pytest.mark.parametrize("name,frame", SYSTEMS)
 def test_inlined_kernels_equal_the_written_ones(name, frame):
     mech = catalog.get(name)
-    fast = cf4.compile_system(mech.module, frame)
-    ref = cf4.compile_system(mech.module, frame, inlined=False)
+    fast = cf4.compile_system(mech.module, frame, fast_derivative=False)
+    ref = cf4.compile_system(mech.module, frame, inlined=False, fast_derivative=False)
+    used = cf4.compile_system(mech.module, frame)
     rng = np.random.default_rng(7)
-    R0 = np.ascontiguousarray(example(1)[0])
-    for controls in (Fourier(1.0, 0.4 * rng.normal(size=(2, 5))),
-                     PiecewiseConstant(1.0, 0.4 * rng.normal(size=(20, 2)))):
+    R0, q0 = start(name)
+    d, m = mech.n_rates, mech.n_inputs
+    for controls in (Fourier(1.0, 0.4 * rng.normal(size=(m, 5))),
+                     PiecewiseConstant(1.0, 0.4 * rng.normal(size=(20, m)))):
         steps = 200
         U = stages.stage_table(controls, steps)
         basis = stages.kernel_basis(controls, steps)
         outs = []
-        for kern in (fast, ref):
-            Rs = np.empty((steps + 1, 3, 3))
-            a = kern.forward(R0, U, 1.0 / steps, 1.0, -np.inf, Rs)
-            Rv, Zs = np.empty((steps + 1, 3, 3)), np.empty((steps + 1, 3, 3))
-            J, M = np.empty((3, controls.params.size)), np.empty((3, 3))
-            Wd = np.empty((3 * steps, 3 * mech.n_inputs))
-            b = kern.forward_variational(R0, U, 1.0 / steps, 1.0, -np.inf, *basis, Rv, Zs, J, M, Wd, True)
-            outs.append((a, Rs, b, Rv, Zs, J, M, Wd))
-        for x, y in zip(*outs):
+        for kern in (fast, ref, used):
+            Rs, Qs = kern.nodes(steps)
+            a = kern.forward(R0, q0, U, 1.0 / steps, 1.0, -np.inf, Rs, Qs)
+            Rv, Qv = kern.nodes(steps)
+            Zs = np.empty((steps + 1, d, d))
+            J, M = np.empty((d, controls.params.size)), np.empty((d, d))
+            Wd = np.empty((3 * steps, d * m))
+            b = kern.forward_variational(R0, q0, U, 1.0 / steps, 1.0, -np.inf, *basis, Rv, Qv, Zs, J, M,
+                                         Wd, True)
+            outs.append((a, Rs, Qs, b, Rv, Qv, Zs, J, M, Wd))
+        assert outs[0][0][0] == steps and outs[0][3][0] == steps
+        for x, y, z in zip(*outs):
             if isinstance(x, tuple):
-                assert x == y
+                assert x == y == z
             else:
                 np.testing.assert_array_equal(x, y)
+                np.testing.assert_allclose(z, x, rtol=1e-12, atol=1e-12 * np.abs(x).max(initial=1.0))
         if frame:
-            nodes = outs[0][1]
+            nodes, qnodes = outs[0][1], outs[0][2]
             t = np.array([0.0, 0.1234, 0.5, 0.999])
             k = np.minimum((t * steps).astype(np.int64), steps)
             s = t - k / steps
-            Wst = np.ascontiguousarray(np.broadcast_to(controls(t)[:, None, :], (4, 3, 2)))
+            Wst = np.ascontiguousarray(np.broadcast_to(controls(t)[:, None, :], (4, 3, m)))
             res = []
             for kern in (fast, ref):
-                Rout, u = np.empty((4, 3, 3)), np.empty((4, 2))
-                kern.frame_inputs(nodes, k, s, Wst, np.ascontiguousarray(controls(t)), Rout, u)
-                res.append((Rout, u))
-            np.testing.assert_array_equal(res[0][0], res[1][0])
-            np.testing.assert_array_equal(res[0][1], res[1][1])
+                Rout, Qout, u = np.empty((4, 3, 3)), np.empty((4, mech.n_coordinates)), np.empty((4, m))
+                kern.frame_inputs(nodes, qnodes, k, s, Wst, np.ascontiguousarray(controls(t)), Rout, Qout, u)
+                res.append((Rout, Qout, u))
+            for x, y in zip(*res):
+                np.testing.assert_array_equal(x, y)
 
 
 def test_a_stopped_run_reports_where():
@@ -67,8 +90,28 @@ def test_a_stopped_run_reports_where():
     U = stages.stage_table(Fourier(1.0, [[3.0, 0, 0, 0, 0], [-3.0, 0, 0, 0, 0]]), 100)
     got = []
     for kern in (fast, ref):
-        Rs = np.empty((101, 3, 3))
-        got.append(kern.forward(R0, U, 0.01, 1.0, 0.3, Rs))
+        Rs, Qs = kern.nodes(100)
+        got.append(kern.forward(R0, np.zeros(0), U, 0.01, 1.0, 0.3, Rs, Qs))
     assert got[0] == got[1]
     n, dmin, t_stop = got[0]
     assert n < 100 and dmin < 0.3 and 0.0 <= t_stop <= 1.0
+
+
+def test_a_car_stops_before_its_singular_set():
+    """The car steered towards cos φ = 0 stops there, in both forms, where φ's own motion
+    (φ̇ = u₂, exact under CF4) says it should."""
+    mech = catalog.get("car")
+    fast = cf4.compile_system(mech.module)
+    ref = cf4.compile_system(mech.module, inlined=False)
+    U = np.zeros((100, 3, 2))
+    U[:, :, 0] = 1.0
+    U[:, :, 1] = 2.0                       # φ(t) = 2t reaches arccos(0.1) at t ≈ 0.735
+    got = []
+    for kern in (fast, ref):
+        Rs, Qs = kern.nodes(100)
+        got.append(kern.forward(np.eye(3), np.zeros(4), U, 0.01, 1.0, 0.1, Rs, Qs))
+    assert got[0] == got[1]
+    n, dmin, t_stop = got[0]
+    assert n == int(np.arccos(0.1) / 2 / 0.01) == 73
+    # step 73's middle (φ = 1.47) is clear, its end (φ = 1.48) is not
+    assert t_stop == pytest.approx(0.74) and dmin == pytest.approx(np.cos(1.48), rel=1e-12)

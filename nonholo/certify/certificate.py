@@ -130,11 +130,11 @@ def sensitivity(R0, par, T: float, mechanism, steps: int, U=None, sign: float | 
     if sign is None:
         sign = (float(np.sign(mechanism.delta_samples(R[None], q[None])[0]))
                 if mechanism.has_singular_set else 1.0)
-    Rs, Qs = states.buffers(mechanism, steps)
+    Rs, Qs = kern.nodes(steps)
     Zs = np.empty((steps + 1, d, d))
-    n, _, _ = states.forward_variational(
-        mechanism, kern, R, q, np.ascontiguousarray(U), T / steps, sign, 0.0,
-        (_NO_INDEX, np.zeros((steps, 3, 0)), 0, 0), Rs, Qs, Zs, np.empty((d, 0)),
+    n, _, _ = kern.forward_variational(
+        R, q, np.ascontiguousarray(U), T / steps, sign, 0.0,
+        _NO_INDEX, np.zeros((steps, 3, 0)), 0, 0, Rs, Qs, Zs, np.empty((d, 0)),
         np.empty((d, d)), np.empty((0, d * m)), True)
     if n < steps:
         return float("inf"), None

@@ -211,8 +211,8 @@ def resimulate_rk4(R0, controls, T: float, mechanism="platform", steps: int = RK
     Y = np.ascontiguousarray(R.transpose(1, 2, 0))                             # (3, 3, P)
     B = np.empty((3, m, P))
     has_delta = mech.has_singular_set
-    sign = np.sign(mech.module.delta(Y)) if has_delta else None
-    dmin = sign * mech.module.delta(Y) if has_delta else None
+    sign = np.sign(mech.delta(Y)) if has_delta else None
+    dmin = sign * mech.delta(Y) if has_delta else None
 
     def f(Y, u):
         L_into(Y, B)
@@ -231,7 +231,7 @@ def resimulate_rk4(R0, controls, T: float, mechanism="platform", steps: int = RK
             k4 = f(Y + h * k3, u2)
             Y = Y + (h / 6.0) * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
             if has_delta:
-                dmin = np.fmin(dmin, sign * mech.module.delta(Y))
+                dmin = np.fmin(dmin, sign * mech.delta(Y))
     RT = Y.transpose(2, 0, 1)
     if has_delta:
         dmin = np.where(np.isfinite(RT).all(axis=(1, 2)), dmin, -np.inf)

@@ -87,12 +87,12 @@ def states_at(result, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     U = np.stack([controls(starts), controls(starts + 0.5 * s), controls(starts + s)],
                  axis=1).reshape(len(t), 3, mech.n_inputs)
     out, out_q = np.empty((len(t), 3, 3)), np.empty((len(t), Q.shape[1]))
-    step, step_q = states.buffers(mech, 1)
+    step, step_q = kern.nodes(1)
     for k in range(len(t)):
         out[k], out_q[k] = result.R[idx[k]], Q[idx[k]]
         if s[k] > 0.0:
-            done, _, _ = states.forward(mech, kern, out[k].copy(), out_q[k].copy(), U[k:k + 1], s[k], sgn,
-                                        DELTA_STOP, step, step_q)
+            done, _, _ = kern.forward(out[k].copy(), out_q[k].copy(), U[k:k + 1], s[k], sgn,
+                                      DELTA_STOP, step, step_q)
             if done != 1:
                 raise ValueError(f"the motion runs into Δ = 0 at t ≈ {asked[k]:g} s: not a plan to play back")
             out[k], out_q[k] = step[1], step_q[1]

@@ -55,7 +55,6 @@ from ..numerics import kernels
 from ..numerics.checks import MAX_STEPS, is_number
 from ..spaces import so3
 from ..spaces.state import distance as state_distance
-from ..spaces.state import forward as states_forward
 from ..spaces.state import public as public_state
 from . import csv_export as export
 
@@ -960,9 +959,9 @@ class _Validation:
             kern = mech.kernels(frame=frame)
             U = np.ascontiguousarray(stages.stage_table(par.frame if frame else par, r.steps)[:n - 1])
             Rs, Qs = np.empty((n, 3, 3)), np.empty((n, mech.n_coordinates))
-            done, dmin, _ = states_forward(mech, kern, np.ascontiguousarray(r.R0, dtype=float),
-                                           np.zeros(0) if q0 is None else np.ascontiguousarray(q0),
-                                           U, T / r.steps, self.sign, -np.inf, Rs, Qs)
+            done, dmin, _ = kern.forward(np.ascontiguousarray(r.R0, dtype=float),
+                                         np.zeros(0) if q0 is None else np.ascontiguousarray(q0),
+                                         U, T / r.steps, self.sign, -np.inf, Rs, Qs)
         if done < n - 1:
             _fail("R", f"goes on to t = {r.t[-1]:.6g} s, but the controls replayed from R0 stop at "
                        f"t = {r.t[done]:.6g} s (non-finite angular velocity)")

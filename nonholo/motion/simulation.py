@@ -189,8 +189,8 @@ def simulate(R0, controls, T: float, *, mechanism="platform",
     :class:`SingularTrajectoryError` if the motion runs into ``Δ = 0``.
     """
     mech, (R0, q0), T, steps, kern, sgn, U = _setup(R0, controls, T, mechanism, steps)
-    Rs, Qs = states.buffers(mech, steps)
-    n, dmin, t_stop = states.forward(mech, kern, R0, q0, U, T / steps, sgn, DELTA_STOP, Rs, Qs)
+    Rs, Qs = kern.nodes(steps)
+    n, dmin, t_stop = kern.forward(R0, q0, U, T / steps, sgn, DELTA_STOP, Rs, Qs)
     traj = _trajectory(mech, Rs, U, T, steps, n, dmin, sgn, Qs)
     if n < steps:
         raise _stopped(mech, n, t_stop, dmin, sgn, traj)
@@ -219,12 +219,11 @@ def variational(R0, controls, T: float, *, mechanism="platform",
         # no parameters: an empty basis (the kernel then skips the Jacobian)
         basis = (np.zeros((steps, 3, 0), np.int64), np.zeros((steps, 3, 0)), 0, 0)
         J = np.empty((d, 0))
-    Rs, Qs = states.buffers(mech, steps)
+    Rs, Qs = kern.nodes(steps)
     Zs = np.empty((steps + 1, d, d))
     M = np.empty((d, d))
-    n, dmin, t_stop = states.forward_variational(mech, kern, R0, q0, U, T / steps, sgn, DELTA_STOP,
-                                                 basis, Rs, Qs, Zs, J, M,
-                                                 np.empty((0, d * mech.n_inputs)), True)
+    n, dmin, t_stop = kern.forward_variational(R0, q0, U, T / steps, sgn, DELTA_STOP, *basis,
+                                               Rs, Qs, Zs, J, M, np.empty((0, d * mech.n_inputs)), True)
     traj = _trajectory(mech, Rs, U, T, steps, n, dmin, sgn, Qs)
     if n < steps:
         raise _stopped(mech, n, t_stop, dmin, sgn, traj)

@@ -160,7 +160,7 @@ class Problem:
         self.deltad = self.delta_at(self.Rd, self.qd) if self.has_delta else None
         self.sign = float(np.sign(self.delta0)) if self.has_delta else 1.0
         d = mechanism.n_rates
-        self._Rs, self._Qs = states.buffers(mechanism, steps)
+        self._Rs, self._Qs = self.kernels.nodes(steps)
         self._Zs = np.empty((steps + 1, d, d))
         self._M = np.empty((d, d))
         self._U = np.empty((steps, 3, mechanism.n_inputs))
@@ -179,8 +179,8 @@ class Problem:
     def forward(self, U, h: float, stop: float):
         """The motion of the stage table ``U`` with steps ``h`` (no variational system):
         ``(R nodes, q nodes, steps done)``."""
-        Rs, Qs = states.buffers(self.mechanism, U.shape[0])
-        n, _, _ = states.forward(self.mechanism, self.kernels, self.R0, self.q0, U, h, self.sign, stop, Rs, Qs)
+        Rs, Qs = self.kernels.nodes(U.shape[0])
+        n, _, _ = self.kernels.forward(self.R0, self.q0, U, h, self.sign, stop, Rs, Qs)
         return Rs, Qs, int(n)
 
     def refined(self, steps: int) -> "Problem":
@@ -209,8 +209,8 @@ class Problem:
         stop = self.delta_min if delta_stop is None else delta_stop
         U = self._fill(x, self._U)
         J = np.empty((self.mechanism.n_rates, self.n_params))
-        n, dmin, t_stop = states.forward_variational(
-            self.mechanism, self.kernels, self.R0, self.q0, U, self.h, self.sign, stop, self.stage_basis,
+        n, dmin, t_stop = self.kernels.forward_variational(
+            self.R0, self.q0, U, self.h, self.sign, stop, *self.stage_basis,
             self._Rs, self._Qs, self._Zs, J, self._M, self._Wd, full)
         self.evaluations += 1
         complete = n == self.steps
