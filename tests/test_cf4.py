@@ -158,18 +158,20 @@ def dop853_variational(mech, frame, R0, q0, controls, T):
 @pytest.mark.parametrize("name,frame", SYSTEMS)
 def test_kernels_against_dop853_on_the_generated_field(name, frame):
     """Every mechanism's kernels (motion, Jacobian ``J``, mobility ``M``) against DOP853 on
-    its generated field and variational matrix: within 1e-10 with 1000 CF4 steps."""
+    its generated field and variational matrix: within 1e-10 with 1000 CF4 steps (the
+    motion kept at |Δ| ≥ 0.2, where the field's derivatives stay moderate)."""
     mech = catalog.get(name)
     kern = mech.kernels(frame)
     rng = np.random.default_rng(11)
     R0, q0 = start(name)
     d, m = mech.n_rates, mech.n_inputs
-    controls = Fourier(1.0, 0.3 * rng.normal(size=(m, 5)))
+    controls = Fourier(1.0, 0.15 * rng.normal(size=(m, 5)))
+    sign = np.sign(mech.delta_samples(R0[None], q0[None])[0]) if mech.has_singular_set else 1.0
     steps = 1000
     U = stages.stage_table(controls, steps)
     Rs, Qs = kern.nodes(steps)
     J, M = np.empty((d, controls.params.size)), np.empty((d, d))
-    n, _, _ = kern.forward_variational(R0, q0, U, 1.0 / steps, 1.0, -np.inf, *stages.kernel_basis(controls, steps),
+    n, _, _ = kern.forward_variational(R0, q0, U, 1.0 / steps, sign, 0.2, *stages.kernel_basis(controls, steps),
                                        Rs, Qs, np.empty((steps + 1, d, d)), J, M,
                                        np.empty((3 * steps, d * m)), True)
     assert n == steps
