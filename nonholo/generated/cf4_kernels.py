@@ -142,11 +142,11 @@ def forward_variational(R0, q0, U, h, sgn, delta_stop, Bidx, Bval, stride_b, str
     nq = 0 if dense else Bidx.shape[2]
     R = R0.copy()
     q = q0.copy()
-    Rn = R0.copy()
+    Rn = np.empty((3, 3))
     qn = np.empty(k)
-    Y2 = R0.copy()
-    Y3 = R0.copy()
-    Y4 = R0.copy()
+    Y2 = np.empty((3, 3))
+    Y3 = np.empty((3, 3))
+    Y4 = np.empty((3, 3))
     P2 = np.empty(k)
     P3 = np.empty(k)
     P4 = np.empty(k)
@@ -176,6 +176,10 @@ def forward_variational(R0, q0, U, h, sgn, delta_stop, Bidx, Bval, stride_b, str
     for i in range(3):
         for j in range(3):
             Rs[0, i, j] = R0[i, j]
+            Rn[i, j] = R0[i, j]
+            Y2[i, j] = R0[i, j]
+            Y3[i, j] = R0[i, j]
+            Y4[i, j] = R0[i, j]
     for i in range(k):
         Qs[0, i] = q0[i]
     for i in range(D):
@@ -329,7 +333,7 @@ def forward_variational(R0, q0, U, h, sgn, delta_stop, Bidx, Bval, stride_b, str
     for i in range(D):
         for j in range(D):
             Zs[N, i, j] = Z[i, j]
-    Zi = np.empty((D, D))
+    Zi = Qm
     if D == 3:
         inv33(Z, Zi)
     else:
@@ -343,7 +347,7 @@ def forward_variational(R0, q0, U, h, sgn, delta_stop, Bidx, Bval, stride_b, str
                 col = b * stride_b + j * stride_i
                 for i in range(D):
                     J[i, col] = A[i * m + j, b]
-    a = np.empty(D)
+    a = F1
     for c in range(p):
         for i in range(D):
             a[i] = J[i, c]

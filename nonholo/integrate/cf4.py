@@ -306,8 +306,30 @@ def zpredict(Z, a, f, out):
 
 def zstage(Zc, Y, P, v, F, B, Qm, f, K):
     """One stage of ``dZ/dt = -Z A``, ``A = QG(Y, P, v) + [ω] ⊕ 0`` (``ω = F[:3]``):
-    ``f = -Zc A``; and ``K = Zc B``. (``Qm`` receives ``A``.)"""
+    ``f = -Zc A``; and ``K = Zc B``."""
     field_derivative_into(Y, P, v, Qm)
+    m = B.shape[1]
+    if OFFSET == D:
+        # on SO(3) (d = 3): A in locals (lets LLVM keep it in registers: the arrays could alias)
+        a00 = Qm[0, 0]
+        a01 = Qm[0, 1] - F[2]
+        a02 = Qm[0, 2] + F[1]
+        a10 = Qm[1, 0] + F[2]
+        a11 = Qm[1, 1]
+        a12 = Qm[1, 2] - F[0]
+        a20 = Qm[2, 0] - F[1]
+        a21 = Qm[2, 1] + F[0]
+        a22 = Qm[2, 2]
+        for i in range(3):
+            z0 = Zc[i, 0]
+            z1 = Zc[i, 1]
+            z2 = Zc[i, 2]
+            f[i, 0] = -(z0 * a00 + z1 * a10 + z2 * a20)
+            f[i, 1] = -(z0 * a01 + z1 * a11 + z2 * a21)
+            f[i, 2] = -(z0 * a02 + z1 * a12 + z2 * a22)
+            for j in range(m):
+                K[i, j] = z0 * B[0, j] + z1 * B[1, j] + z2 * B[2, j]
+        return
     if ROTATION:
         Qm[0, 1] -= F[2]
         Qm[0, 2] += F[1]
@@ -315,7 +337,6 @@ def zstage(Zc, Y, P, v, F, B, Qm, f, K):
         Qm[1, 2] -= F[0]
         Qm[2, 0] -= F[1]
         Qm[2, 1] += F[0]
-    m = B.shape[1]
     for i in range(D):
         for j in range(D):
             s = 0.0
@@ -357,11 +378,11 @@ def forward_variational(R0, q0, U, h, sgn, delta_stop, Bidx, Bval, stride_b, str
     q = q0.copy()
     # the step's arrays allocated here, not by step_workspace: LLVM then knows them apart,
     # which makes this kernel markedly faster (benchmarks/bench_plan.py)
-    Rn = R0.copy()
+    Rn = np.empty((3, 3))
     qn = np.empty(k)
-    Y2 = R0.copy()
-    Y3 = R0.copy()
-    Y4 = R0.copy()
+    Y2 = np.empty((3, 3))
+    Y3 = np.empty((3, 3))
+    Y4 = np.empty((3, 3))
     P2 = np.empty(k)
     P3 = np.empty(k)
     P4 = np.empty(k)
@@ -391,6 +412,10 @@ def forward_variational(R0, q0, U, h, sgn, delta_stop, Bidx, Bval, stride_b, str
     for i in range(3):
         for j in range(3):
             Rs[0, i, j] = R0[i, j]
+            Rn[i, j] = R0[i, j]          # the orientations stay R0 without orientation
+            Y2[i, j] = R0[i, j]
+            Y3[i, j] = R0[i, j]
+            Y4[i, j] = R0[i, j]
     for i in range(k):
         Qs[0, i] = q0[i]
     for i in range(D):
@@ -469,7 +494,7 @@ def forward_variational(R0, q0, U, h, sgn, delta_stop, Bidx, Bval, stride_b, str
     for i in range(D):
         for j in range(D):
             Zs[N, i, j] = Z[i, j]
-    Zi = np.empty((D, D))
+    Zi = Qm                         # the step's scratch, free now
     if D == 3:
         inv33(Z, Zi)
     else:
@@ -483,7 +508,7 @@ def forward_variational(R0, q0, U, h, sgn, delta_stop, Bidx, Bval, stride_b, str
                 col = b * stride_b + j * stride_i
                 for i in range(D):
                     J[i, col] = A[i * m + j, b]
-    a = np.empty(D)
+    a = F1                          # scratch
     for c in range(p):
         for i in range(D):
             a[i] = J[i, c]
