@@ -29,7 +29,8 @@ def delta(R) -> float:
 def _finite(value: np.ndarray, name: str, R) -> np.ndarray:
     """``value`` if finite; else ``ValueError``: ``R`` is (numerically) on ``Δ = 0``."""
     if not np.all(np.isfinite(value)):
-        raise ValueError(f"R is too close to the singular surface Δ = 0 (Δ(R) = {_gen.delta(R, _gen.NO_COORDINATES):.3g}): "
+        d = _gen.delta(R, _gen.NO_COORDINATES)
+        raise ValueError(f"R is too close to the singular surface Δ = 0 (Δ(R) = {d:.3g}): "
                          f"{name} is not representable in floating point there")
     return value
 
