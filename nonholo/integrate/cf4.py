@@ -416,7 +416,7 @@ def forward_variational(R0, q0, U, h, sgn, delta_stop, Bidx, Bval, stride_b, str
             Y2[i, j] = R0[i, j]
             Y3[i, j] = R0[i, j]
             Y4[i, j] = R0[i, j]
-    for i in range(k):
+    for i in range(D - OFFSET):      # k, as a constant: the loops vanish on SO(3)
         Qs[0, i] = q0[i]
     for i in range(D):
         for j in range(D):
@@ -446,7 +446,7 @@ def forward_variational(R0, q0, U, h, sgn, delta_stop, Bidx, Bval, stride_b, str
             for j in range(3):
                 R[i, j] = Rn[i, j]
                 Rs[n + 1, i, j] = Rn[i, j]
-        for i in range(k):
+        for i in range(D - OFFSET):
             q[i] = qn[i]
             Qs[n + 1, i] = qn[i]
         # update Z; quadrature weights of the step at c = 0, ½, 1
