@@ -306,11 +306,22 @@ def forward_variational(R0, q0, U, h, sgn, delta_stop, Bidx, Bval, stride_b, str
         for c in range(3):
             for j in range(m):
                 off = j * stride_i
-                for b in range(nq):
-                    v = Bval[n, c, b]
-                    col = Bidx[n, c, b] * stride_b + off
-                    for i in range(D):
-                        J[i, col] += v * W[c, i, j]
+                if D == 3:
+                    w0 = W[c, 0, j]
+                    w1 = W[c, 1, j]
+                    w2 = W[c, 2, j]
+                    for b in range(nq):
+                        v = Bval[n, c, b]
+                        col = Bidx[n, c, b] * stride_b + off
+                        J[0, col] += v * w0
+                        J[1, col] += v * w1
+                        J[2, col] += v * w2
+                else:
+                    for b in range(nq):
+                        v = Bval[n, c, b]
+                        col = Bidx[n, c, b] * stride_b + off
+                        for i in range(D):
+                            J[i, col] += v * W[c, i, j]
         if full:
             for i in range(D):
                 for j in range(D):
