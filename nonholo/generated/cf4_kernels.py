@@ -140,16 +140,16 @@ def forward_variational(R0, q0, U, h, sgn, delta_stop, Bidx, Bval, stride_b, str
     dense = Bidx.shape[0] == 0 and Bval.shape[0] == N
     keep_w = Wd.shape[0] == 3 * N
     nq = 0 if dense else Bidx.shape[2]
-    R = R0.copy()
     q = q0.copy()
-    Rn = np.empty((3, 3))
     qn = np.empty(k)
-    Y2 = np.empty((3, 3))
-    Y3 = np.empty((3, 3))
-    Y4 = np.empty((3, 3))
     P2 = np.empty(k)
     P3 = np.empty(k)
     P4 = np.empty(k)
+    R = R0.copy()
+    Rn = np.empty((3, 3))
+    Y2 = np.empty((3, 3))
+    Y3 = np.empty((3, 3))
+    Y4 = np.empty((3, 3))
     Rh = np.empty((3, 3))
     E = np.empty((3, 3))
     B1 = np.empty((D, m))

@@ -374,18 +374,20 @@ def forward_variational(R0, q0, U, h, sgn, delta_stop, Bidx, Bval, stride_b, str
     dense = Bidx.shape[0] == 0 and Bval.shape[0] == N
     keep_w = Wd.shape[0] == 3 * N
     nq = 0 if dense else Bidx.shape[2]
-    R = R0.copy()
     q = q0.copy()
-    # the step's arrays allocated here, not by step_workspace: LLVM then knows them apart,
-    # which makes this kernel markedly faster (benchmarks/bench_plan.py)
-    Rn = np.empty((3, 3))
     qn = np.empty(k)
-    Y2 = np.empty((3, 3))
-    Y3 = np.empty((3, 3))
-    Y4 = np.empty((3, 3))
     P2 = np.empty(k)
     P3 = np.empty(k)
     P4 = np.empty(k)
+    R = R0.copy()
+    # the step's arrays allocated here, not by step_workspace: LLVM then knows them apart,
+    # which makes this kernel markedly faster (benchmarks/bench_plan.py); the coordinates'
+    # arrays first: allocated in between, they made the kernel's speed on SO(3) vary from
+    # one process to the next (by up to 15 %)
+    Rn = np.empty((3, 3))
+    Y2 = np.empty((3, 3))
+    Y3 = np.empty((3, 3))
+    Y4 = np.empty((3, 3))
     Rh = np.empty((3, 3))
     E = np.empty((3, 3))
     B1 = np.empty((D, m))
