@@ -13,6 +13,9 @@ output; the file is headed by the date, the git commit, the machine and the comm
   strategy ``"paper"`` in two more processes on the same cache (the first of them may
   still compile what the default strategy did not need). Median (and range) over
   ``--cold-runs`` fresh cache directories;
+- the cold first plan of each mechanism kind (:data:`FIRST_GOALS`: the platform's Example
+  1, the car's ``(0, 0, 0, 0) → (0, 1, 0, 0)``, the ball's ``(I, (0, 0)) → (R_z(π/2), (0,
+  0))``), each in a fresh process on a new, empty numba cache;
 - for Examples 1 and 2 and both methods (strategy ``"paper"``): median/min/max wall time
   of ``plan`` after warm-up, iterations, simulations (evaluations), terminal error, the
   error of a DOP853 re-simulation (rtol = atol = 1e-13) of the planned control, and the
@@ -46,27 +49,37 @@ EXAMPLES = {
     2: ((1.5, 1.4, 0.5), (1.5, 1.4, -0.5)),
 }
 
-#: Run in a fresh interpreter: import nonholo, plan Example 1 (strategy argv[1], or the
-#: default), print the times as JSON.
+#: The first plan of each mechanism kind in a fresh process: start, goal (Python
+#: expressions over ``np`` and ``so3``).
+FIRST_GOALS = {
+    "platform": ("so3.from_rpy(0.5, 1.2, -0.5)", "so3.from_rpy(1.0, 0.9, -0.5)"),
+    "car": ("np.zeros(4)", "np.array([0.0, 1.0, 0.0, 0.0])"),
+    "rolling_ball": ("(np.eye(3), np.zeros(2))", "(so3.from_rpy(np.pi / 2, 0.0, 0.0), np.zeros(2))"),
+}
+
+#: Run in a fresh interpreter: import nonholo, plan the first goal of mechanism argv[2]
+#: (strategy argv[1], or the default), print the times as JSON.
 FIRST_PLAN = r"""
 import json, sys, time
 t0 = time.perf_counter()
+import numpy as np
 import nonholo
 from nonholo.spaces import so3
 t1 = time.perf_counter()
 kw = {} if sys.argv[1] == "default" else {"strategy": sys.argv[1]}
-res = nonholo.plan(so3.from_rpy(0.5, 1.2, -0.5), so3.from_rpy(1.0, 0.9, -0.5), **kw)
+start, goal = eval(sys.argv[3]), eval(sys.argv[4])
+res = nonholo.plan(start, goal, mechanism=sys.argv[2], **kw)
 t2 = time.perf_counter()
 print(json.dumps({"import": t1 - t0, "plan": t2 - t1, "success": bool(res.success),
                   "strategy": res.strategy}))
 """
 
 
-def _first_plan(cache_dir: str, strategy: str) -> dict:
+def _first_plan(cache_dir: str, strategy: str, mechanism: str = "platform") -> dict:
     env = dict(os.environ, NUMBA_CACHE_DIR=cache_dir)
     t = time.perf_counter()
-    out = subprocess.run([sys.executable, "-c", FIRST_PLAN, strategy], capture_output=True, text=True,
-                         env=env)
+    out = subprocess.run([sys.executable, "-c", FIRST_PLAN, strategy, mechanism, *FIRST_GOALS[mechanism]],
+                         capture_output=True, text=True, env=env)
     wall = time.perf_counter() - t
     if out.returncode != 0:
         raise RuntimeError(f"fresh process failed ({strategy}):\n{out.stderr}")
@@ -104,6 +117,33 @@ def start_up(report: Report, runs: int) -> None:
                      cell([t["process"] for t in ts]),
                      "yes" if all(t["success"] for t in ts) else "NO"])
     report.table(["numba cache", "strategy", "import [s]", "first plan [s]", "process [s]", "success"],
+                 rows, ["l", "l", "r", "r", "r", "l"])
+
+
+def cold_by_mechanism(report: Report, runs: int) -> None:
+    """The first plan of each mechanism kind in a fresh process on an empty numba cache."""
+    times = {name: [] for name in FIRST_GOALS}
+    for _ in range(runs):
+        for name in FIRST_GOALS:
+            cache = tempfile.mkdtemp(prefix="nonholo_numba_cache_")
+            try:
+                times[name].append(_first_plan(cache, "default", name))
+            finally:
+                shutil.rmtree(cache, ignore_errors=True)
+
+    def cell(xs):
+        return f"{statistics.median(xs):.2f} ({min(xs):.2f}–{max(xs):.2f})"
+
+    report.heading("Start-up by mechanism: the first plan on an empty numba cache")
+    report.paragraph(
+        "`nonholo.plan(start, goal, mechanism=...)` with the default strategy in a fresh Python "
+        "process, `NUMBA_CACHE_DIR` a new empty directory per process (every kernel the plan "
+        f"needs compiled). Median (min–max) over {runs} runs, seconds.")
+    rows = [[name, f"`{a}` → `{b}`", cell([t["import"] for t in times[name]]),
+             cell([t["plan"] for t in times[name]]), cell([t["process"] for t in times[name]]),
+             "yes" if all(t["success"] for t in times[name]) else "NO"]
+            for name, (a, b) in FIRST_GOALS.items()]
+    report.table(["mechanism", "start → goal", "import [s]", "first plan [s]", "process [s]", "success"],
                  rows, ["l", "l", "r", "r", "r", "l"])
 
 
@@ -209,11 +249,11 @@ def iteration_cost(report: Report, repeat: int) -> None:
             params = par.params.copy()
             scale = step_scale(prob, par)
             U = stages.stage_table(par, steps)
-            Rs = np.empty((steps + 1, 3, 3))
             kern = prob.kernels
+            Rs, Qs = kern.nodes(steps)
 
             def forward():
-                kern.forward(prob.R0, U, prob.h, prob.sign, 1e-2, Rs)
+                kern.forward(prob.R0, prob.q0, U, prob.h, prob.sign, 1e-2, Rs, Qs)
 
             def iteration():
                 ev = prob.evaluate(params)
@@ -234,8 +274,8 @@ def iteration_cost(report: Report, repeat: int) -> None:
 
             def variational_kernel():
                 fill(params, U2)
-                kern.forward_variational(prob.R0, U2, prob.h, prob.sign, 1e-2, *basis, Rs, Zs, J, M,
-                                         Wd, False)
+                kern.forward_variational(prob.R0, prob.q0, U2, prob.h, prob.sign, 1e-2, *basis, Rs, Qs, Zs,
+                                         J, M, Wd, False)
 
             t = _median_interleaved({"forward": forward, "iteration": iteration,
                                      "kernel": variational_kernel}, repeat, 20)
@@ -260,6 +300,7 @@ def main(argv=None) -> None:
     report = Report("bench_plan.md", "Planner timing on Examples 1 and 2 (bench_plan)",
                     "benchmarks.bench_plan", argv)
     start_up(report, args.cold_runs)
+    cold_by_mechanism(report, args.cold_runs)
     plan_times(report, args.repeat)
     discretisation(report)
     iteration_cost(report, args.repeat)

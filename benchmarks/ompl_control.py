@@ -142,9 +142,9 @@ class Planner:
         stop = self.delta_min / 2 if has_delta else -np.inf
 
         def run(R, u, duration, n):
-            Rs = np.empty((n + 1, 3, 3))
-            done, _, _ = kern.forward(R, np.ascontiguousarray(np.broadcast_to(u, (n, 3, m))), duration / n,
-                                      self.sign, stop, Rs)
+            Rs, Qs = kern.nodes(n)
+            done, _, _ = kern.forward(R, Qs[0], np.ascontiguousarray(np.broadcast_to(u, (n, 3, m))), duration / n,
+                                      self.sign, stop, Rs, Qs)
             return Rs[done], done == n
 
         def propagate(start, control, duration, result) -> None:

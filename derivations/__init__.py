@@ -3,11 +3,15 @@
 Each module rebuilds one part of the appendix of Tchoń & Jakubiak (ARK 2014) from the
 mechanism's geometry:
 
-- :mod:`derivations.so3`          symbolic rotation matrices, skew matrices, RPY, dexp
-- :mod:`derivations.mechanism`    mechanisms as data; the platform's legs, disk, Δ(R), L(R)
+- :mod:`derivations.rotations`    symbolic rotation matrices, skew matrices, RPY, dexp
+- :mod:`derivations.mechanisms`   the Mechanism class (SO(3), SO(3) × Rᵏ, Rᵏ); the platform's
+  legs, disk, Δ(R), L(R)
+- :mod:`derivations.vehicles`     the rolling ball and the kinematic car
+- :mod:`derivations.definitions`  the mechanisms the toolkit generates code for, by name
 - :mod:`derivations.singularity`  Δ in RPY coordinates and its normal form z³ + xy
 - :mod:`derivations.variational`  Q(R,u), A = Q + [Lu], B = L, P(l) (eqs. (6)-(9), (12))
-- :mod:`derivations.paper`        the appendix formulas transcribed as printed
+- :mod:`derivations.state_space`  the variational matrix of the stacked field on SO(3) × Rᵏ
+- :mod:`derivations.printed`      the appendix formulas transcribed as printed
 - :mod:`derivations.audit`        printed vs derived, equation by equation
 - :mod:`derivations.codegen`      numeric modules written into ``nonholo/generated``
 """

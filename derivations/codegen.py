@@ -10,8 +10,6 @@ inner loop, where allocating a result would cost as much as the arithmetic — a
 """
 from __future__ import annotations
 
-import ast
-import copy
 import difflib
 import itertools
 from pathlib import Path
@@ -19,12 +17,10 @@ from pathlib import Path
 import sympy as sp
 from sympy.printing.numpy import NumPyPrinter
 
-from . import catalog, singularity
-from .mechanism import Mechanism, a, b, input_map, leg_length_squared, leg_rate_row, rho
-from .so3 import r
-from .state_space import Q_matrix as state_Q_matrix
-from .state_space import StateMechanism
-from .variational import Q_matrix, inputs
+from . import definitions, singularity
+from .mechanisms import Mechanism, a, b, input_map, leg_length_squared, leg_rate_row, rho
+from .rotations import r
+from .state_space import Q_matrix
 
 GENERATED_DIR = Path(__file__).resolve().parent.parent / "nonholo" / "generated"
 
@@ -87,53 +83,6 @@ def _rotation_unpack() -> dict[sp.Symbol, str]:
     return {r[i, j]: f"R[{i}, {j}]" for i in range(3) for j in range(3)}
 
 
-def codegen_delta(mechanism: Mechanism) -> str:
-    """``delta(R) -> float``: the singularity function Δ(R)."""
-    return _function("delta", "R", _rotation_unpack(), [mechanism.delta], None,
-                     f"Δ(R) = {sp.sstr(mechanism.delta)}; L(R) is singular where Δ = 0.")
-
-
-def codegen_L(mechanism: Mechanism) -> str:
-    """``L(R) -> (3, m) array``: spatial angular velocity per unit input."""
-    m = mechanism.n_inputs
-    return _function("L", "R", _rotation_unpack(), list(mechanism.L), (3, m),
-                     "L(R) of the spatial-form system dR/dt = [L(R) u] R.")
-
-
-def codegen_Q(mechanism: Mechanism) -> str:
-    """``Q(R, u) -> (3, 3) array`` with ``(∂L/∂θ) u = Q s`` (eq. (12))."""
-    m = mechanism.n_inputs
-    u = inputs(m)
-    unpack = _rotation_unpack() | {u[k]: f"u[{k}]" for k in range(m)}
-    return _function("Q", "R, u", unpack, list(Q_matrix(mechanism.L, u)), (3, 3),
-                     "Q(R, u) with d/de L(exp(e[s]) R) u = Q(R, u) s at e = 0 (eq. (12)).")
-
-
-def codegen_N(mechanism: Mechanism) -> str:
-    """``N(R) -> (3, m)``: orthonormal desingularised input frame, ``ω = N(R) w``."""
-    return _function("N", "R", _rotation_unpack(), list(mechanism.frame),
-                     (3, mechanism.n_inputs),
-                     "N(R): orthonormal frame of the admissible angular velocities, ω = N(R) w.")
-
-
-def codegen_QN(mechanism: Mechanism) -> str:
-    """``QN(R, w) -> (3, 3)``: the ``Q`` of eq. (12) for the system ``ω = N(R) w``."""
-    m = mechanism.n_inputs
-    w = sp.Matrix(sp.symbols(f"w1:{m + 1}", real=True))
-    unpack = _rotation_unpack() | {w[k]: f"w[{k}]" for k in range(m)}
-    return _function("QN", "R, w", unpack, list(Q_matrix(mechanism.frame, w)), (3, 3),
-                     "QN(R, w) with d/de N(exp(e[s]) R) w = QN(R, w) s at e = 0.")
-
-
-def codegen_W(mechanism: Mechanism) -> str:
-    """``W(R) -> (m, m)``: physical inputs ``u = W(R) w`` giving ``ω = N(R) w``."""
-    W = mechanism.frame_inputs
-    if W is None:
-        W = input_map(mechanism.L, mechanism.frame)
-    return _function("W", "R", _rotation_unpack(), list(W), (mechanism.n_inputs,) * 2,
-                     "W(R) = (N(R)^T L(R))^-1: physical inputs u = W(R) w for ω = N(R) w.")
-
-
 def codegen_delta_rpy() -> str:
     """``delta_rpy(phi, theta, psi) -> float``: Δ in RPY coordinates (App. 1.1)."""
     phi, theta, psi = singularity.angles
@@ -190,59 +139,62 @@ def codegen_legs(mechanism: Mechanism) -> str:
                       "Rows G_i(R) with dl_i = G_i s along dR = [s] R: dl_i/dt = G_i ω."))
 
 
-def mechanism_module(mechanism: Mechanism) -> str:
-    """The generated module of one mechanism: ``delta`` (if any), ``L``, ``Q``."""
-    doc = f"Numeric kinematics of the mechanism {mechanism.name!r}: {mechanism.description}."
-    parts = [HEADER.format(doc=doc, sympy_version=sp.__version__,
-                           source=f"mechanism {mechanism.name!r} (derivations/catalog.py)")]
-    parts.append(f"NAME = {mechanism.name!r}\n"
-                 f"DESCRIPTION = {mechanism.description!r}\n"
-                 f"INPUTS = {mechanism.inputs!r}\n"
-                 f"N_INPUTS = {mechanism.n_inputs}\n"
-                 f"HAS_SINGULAR_SET = {mechanism.delta is not None}\n")
-    geometry = mechanism.derivation.get("geometry")
-    parts.append(f"HAS_LEGS = {geometry is not None}\n")
-    if geometry is not None:
-        parts += [geometry_data(geometry), codegen_legs(mechanism)]
-    if mechanism.delta is not None:
-        parts.append(codegen_delta(mechanism))
-    parts.append(codegen_L(mechanism))
-    parts.append(codegen_Q(mechanism))
-    parts.append(f"HAS_FRAME = {mechanism.frame is not None}\n")
-    if mechanism.frame is not None:
-        parts += [codegen_N(mechanism), codegen_QN(mechanism), codegen_W(mechanism)]
-    return "\n\n".join(parts)
-
-
-def _state_unpack(mechanism: StateMechanism) -> dict[sp.Symbol, str]:
+def _unpack(mechanism: Mechanism) -> dict[sp.Symbol, str]:
     """``r_ij`` (with orientation) and the coordinates, read from ``R`` and ``q``."""
     rotation = _rotation_unpack() if mechanism.orientation else {}
     return rotation | {x: f"q[{c}]" for c, x in enumerate(mechanism.coordinates)}
 
 
-def codegen_state_field(mechanism: StateMechanism, name: str, G: sp.Matrix, doc: str) -> str:
-    """``NAME(R, q) -> (d, m)`` and its derivative ``QNAME(R, q, v) -> (d, d)`` (the ``Q``
-    of :mod:`derivations.state_space` for the field ``G``)."""
+def codegen_field(mechanism: Mechanism, name: str, G: sp.Matrix, doc: str) -> str:
+    """``NAME(R, q) -> (d, m)`` and its variational matrix ``QNAME(R, q, v) -> (d, d)`` (the
+    ``Q`` of :func:`derivations.state_space.Q_matrix` for the field ``G``; eq. (12) on SO(3))."""
     m = mechanism.n_inputs
     v = sp.Matrix(sp.symbols(f"v1:{m + 1}", real=True))
-    unpack = _state_unpack(mechanism)
+    unpack = _unpack(mechanism)
     d = G.shape[0]
-    Q = state_Q_matrix(mechanism, G, v)
     return (_function(name, "R, q", unpack, list(G), (d, m), doc)
             + "\n\n" +
-            _function(f"Q{name}", "R, q, v", unpack | {v[k]: f"v[{k}]" for k in range(m)}, list(Q),
-                      (d, d), f"Q{name}(R, q, v) s = d/de {name}(exp(e[s_R]) R, q + e s_q) v at e = 0 "
+            _function(f"Q{name}", "R, q, v", unpack | {v[k]: f"v[{k}]" for k in range(m)},
+                      list(Q_matrix(mechanism, G, v)), (d, d),
+                      f"Q{name}(R, q, v) s = d/de {name}(exp(e[s_R]) R, q + e s_q) v at e = 0 "
                       "(s = (s_R, s_q))."))
 
 
-def state_module(mechanism: StateMechanism) -> str:
-    """The generated module of a mechanism on ``SO(3) × Rᵏ`` or ``Rᵏ``: the field ``G``
-    (``q̇ = G u``, rows ``(ω, ẋ)``), its ``QG`` (the variational matrix), ``delta`` (if
-    any), and the desingularised field ``N`` with ``QN`` and ``W`` (if any); every function
-    takes the orientation ``R`` (ignored without one) and the coordinates ``q``."""
+def codegen_paper_names(mechanism: Mechanism) -> str:
+    """``L(R)`` and ``Q(R, u)`` of a mechanism on SO(3): the paper's names of ``G`` and ``QG``
+    without coordinates (eqs. (1)–(12))."""
+    m = mechanism.n_inputs
+    return f'''def L_into(R, out):
+    """L(R) of the spatial-form system dR/dt = [L(R) u] R (= G(R, q)). Fills ``out`` (3, {m})."""
+    G_into(R, NO_COORDINATES, out)
+
+
+def L(R):
+    """L(R) of the spatial-form system dR/dt = [L(R) u] R (= G(R, q))."""
+    return G(R, NO_COORDINATES)
+
+
+def Q_into(R, u, out):
+    """Q(R, u) with d/de L(exp(e[s]) R) u = Q(R, u) s at e = 0 (eq. (12); = QG). Fills ``out`` (3, 3)."""
+    QG_into(R, NO_COORDINATES, u, out)
+
+
+def Q(R, u):
+    """Q(R, u) with d/de L(exp(e[s]) R) u = Q(R, u) s at e = 0 (eq. (12); = QG)."""
+    return QG(R, NO_COORDINATES, u)
+'''
+
+
+def mechanism_module(mechanism: Mechanism) -> str:
+    """The generated module of a mechanism, one schema for every state space: the field
+    ``G`` (rows ``(ω, q̇)``), its variational matrix ``QG``, ``delta`` (if any), the
+    desingularised field ``N`` with ``QN`` and ``W`` (if any), every function taking the
+    orientation ``R`` (the identity, ignored, without one) and the coordinates ``q``
+    (shape ``(0,)`` on SO(3)); on SO(3) also ``L`` and ``Q`` (the paper's names) and, for a
+    two-leg platform, its geometry and legs."""
     doc = f"Numeric kinematics of the mechanism {mechanism.name!r}: {mechanism.description}."
     parts = [HEADER.format(doc=doc, sympy_version=sp.__version__,
-                           source=f"mechanism {mechanism.name!r} (derivations/catalog.py)")]
+                           source=f"mechanism {mechanism.name!r} (derivations/definitions.py)")]
     names = tuple(str(x) for x in mechanism.coordinates)
     parts.append(f"NAME = {mechanism.name!r}\n"
                  f"DESCRIPTION = {mechanism.description!r}\n"
@@ -254,20 +206,31 @@ def state_module(mechanism: StateMechanism) -> str:
                  f"UNITS = {tuple(mechanism.units)!r}\n"
                  f"ANGLES = {tuple(bool(a) for a in mechanism.angles)!r}\n"
                  f"HAS_SINGULAR_SET = {mechanism.delta is not None}\n"
-                 "HAS_LEGS = False\n")
-    unpack = _state_unpack(mechanism)
+                 "#: the coordinates of a state without any (``q`` on SO(3))\n"
+                 "NO_COORDINATES = numpy.zeros(0)\n")
+    geometry = mechanism.derivation.get("geometry")
+    parts.append(f"HAS_LEGS = {geometry is not None}\n")
+    if geometry is not None:
+        parts += [geometry_data(geometry), codegen_legs(mechanism)]
+    unpack = _unpack(mechanism)
+    field_name = "G" if mechanism.n_coordinates else "L"
     if mechanism.delta is not None:
         parts.append(_function("delta", "R, q", unpack, [mechanism.delta], None,
-                               f"Δ = {sp.sstr(mechanism.delta)}; G is singular where Δ = 0."))
-    rows = "(ω, dq/dt)" if mechanism.orientation else "dq/dt"
-    parts.append(codegen_state_field(mechanism, "G", mechanism.field,
-                                     f"G(R, q): the state's rates per unit input, rows {rows}."))
+                               f"Δ = {sp.sstr(mechanism.delta)}; {field_name} is singular where Δ = 0."))
+    rows = ("(ω, dq/dt)" if mechanism.orientation else "dq/dt") if mechanism.n_coordinates else "ω"
+    parts.append(codegen_field(mechanism, "G", mechanism.field,
+                               f"G(R, q): the state's rates per unit input, rows {rows}."))
+    if not mechanism.n_coordinates:
+        parts.append(codegen_paper_names(mechanism))
     parts.append(f"HAS_FRAME = {mechanism.frame is not None}\n")
     if mechanism.frame is not None:
         m = mechanism.n_inputs
-        parts.append(codegen_state_field(mechanism, "N", mechanism.frame,
-                                         "N(R, q): the desingularised field, rates = N(R, q) w."))
-        parts.append(_function("W", "R, q", unpack, list(mechanism.frame_inputs), (m, m),
+        W = mechanism.frame_inputs
+        if W is None:
+            W = input_map(mechanism.field, mechanism.frame)
+        parts.append(codegen_field(mechanism, "N", mechanism.frame,
+                                   "N(R, q): the desingularised field, rates = N(R, q) w."))
+        parts.append(_function("W", "R, q", unpack, list(W), (m, m),
                                "W(R, q): physical inputs u = W w for the rates N(R, q) w."))
     return "\n\n".join(parts)
 
@@ -282,125 +245,35 @@ def singularity_module() -> str:
     return "\n\n".join(parts)
 
 
-# --------------------------------------------------------------------------------------
-# The integrator's kernels with the CF4 step inlined
-# --------------------------------------------------------------------------------------
-
-#: The integrator's source: one CF4 step (``cf4_step``, with its stages ``cf4_stage``) and
-#: the kernels that call it.
-CF4_SOURCE = GENERATED_DIR.parent / "integrate" / "cf4.py"
-#: Functions whose calls are expanded in place, and the kernels written with them.
-CF4_INLINED = ("cf4_step", "cf4_stage", "cf4_close", "zpredict")
-CF4_KERNELS = ("forward", "forward_variational", "frame_inputs")
-
-
-class _Rename(ast.NodeTransformer):
-    def __init__(self, names: dict[str, str]):
-        self.names = names
-
-    def visit_Name(self, node):
-        if node.id in self.names:
-            return ast.copy_location(ast.Name(self.names[node.id], node.ctx), node)
-        return node
-
-
-def _expand(body: list, functions: dict) -> list:
-    """``body`` with every statement ``a, b = f(...)`` or ``f(...)`` (``f`` in ``functions``)
-    replaced by ``f``'s body: arguments that are names rename the parameters, others are
-    assigned to them first; in the first form ``f`` must end in ``return x, y`` (assigned
-    to ``a, b`` where they differ), in the second it must not return anything."""
-    out = []
-    for stmt in body:
-        for field in ("body", "orelse"):
-            if isinstance(getattr(stmt, field, None), list):
-                setattr(stmt, field, _expand(getattr(stmt, field), functions))
-        call = stmt.value if isinstance(stmt, (ast.Assign, ast.Expr)) else None
-        if not (isinstance(call, ast.Call) and isinstance(call.func, ast.Name)
-                and call.func.id in functions):
-            out.append(stmt)
-            continue
-        fn = functions[call.func.id]
-        params = [a.arg for a in fn.args.args]
-        if len(params) != len(call.args) or call.keywords:
-            raise ValueError(f"inline {fn.name}: call with {len(call.args)} positional arguments only")
-        names, pre = {}, []
-        for p, a in zip(params, call.args):
-            if isinstance(a, ast.Name):
-                if a.id != p:
-                    names[p] = a.id
-            else:
-                pre.append(ast.Assign([ast.Name(p, ast.Store())], a, lineno=0))
-        inner = [copy.deepcopy(st) for st in fn.body
-                 if not (isinstance(st, ast.Expr) and isinstance(st.value, ast.Constant))]
-        if isinstance(stmt, ast.Expr):
-            if any(isinstance(node, ast.Return) for st in inner for node in ast.walk(st)):
-                raise ValueError(f"inline {fn.name}: a call as a statement must not return")
-            out += pre + _expand([_Rename(names).visit(st) for st in inner], functions)
-            continue
-        ret = inner.pop()
-        if not isinstance(ret, ast.Return) or not isinstance(ret.value, ast.Tuple):
-            raise ValueError(f"inline {fn.name}: must end in `return x, y`")
-        inner = _expand([_Rename(names).visit(st) for st in inner], functions)
-        targets = stmt.targets[0].elts
-        values = [_Rename(names).visit(copy.deepcopy(v)) for v in ret.value.elts]
-        post = [ast.Assign([ast.Name(t.id, ast.Store())], v, lineno=0)
-                for t, v in zip(targets, values) if not (isinstance(v, ast.Name) and v.id == t.id)]
-        out += pre + inner + post
-    return out
-
-
-def cf4_kernels_module() -> str:
-    """``nonholo/generated/cf4_kernels.py``: the kernels of ``nonholo/integrate/cf4.py`` with every call
-    of the CF4 step (and of its stages) expanded in place — one function per kernel, as
-    the compiler needs it to keep the step's arrays in registers (see :mod:`nonholo.integrate.cf4`)."""
-    tree = ast.parse(CF4_SOURCE.read_text())
-    defs = {node.name: node for node in tree.body if isinstance(node, ast.FunctionDef)}
-    functions = {name: defs[name] for name in CF4_INLINED}
-    parts = [HEADER.format(doc="The CF4 kernels of nonholo/integrate/cf4.py with the step inlined (see nonholo.integrate.cf4).",
-                           sympy_version=sp.__version__, source="nonholo/integrate/cf4.py")]
-    for name in CF4_KERNELS:
-        fn = defs[name]
-        fn.body = _expand(fn.body, functions)
-        parts.append(ast.unparse(ast.fix_missing_locations(fn)) + "\n")
-    return "\n\n".join(parts)
-
-
-def module_of(mechanism: Mechanism | StateMechanism) -> str:
-    """The generated module of a mechanism on SO(3) (:func:`mechanism_module`) or beyond
-    (:func:`state_module`)."""
-    if isinstance(mechanism, StateMechanism):
-        return state_module(mechanism)
-    return mechanism_module(mechanism)
-
-
 def generated_files() -> dict[str, str]:
     """File name → source of every generated module."""
     files = {}
-    for name in catalog.MECHANISMS:
-        files[f"{name}.py"] = module_of(catalog.get(name))
+    for name in definitions.MECHANISMS:
+        files[f"{name}.py"] = mechanism_module(definitions.get(name))
     files["platform_singularity.py"] = singularity_module()
-    files["cf4_kernels.py"] = cf4_kernels_module()
     files["__init__.py"] = ('"""Numeric modules generated by `nonholo derive`; do not edit."""\n'
-                            f"MECHANISMS = {tuple(catalog.MECHANISMS)!r}\n")
+                            f"MECHANISMS = {tuple(definitions.MECHANISMS)!r}\n")
     return files
 
 
-def write(outdir: Path = GENERATED_DIR) -> list[Path]:
-    """Write every generated module into ``outdir``; returns the paths written."""
+def write(outdir: Path = GENERATED_DIR, files: dict[str, str] | None = None) -> list[Path]:
+    """Write every generated module (or the given ``files``, name → source) into
+    ``outdir``; returns the paths written."""
     outdir.mkdir(parents=True, exist_ok=True)
     paths = []
-    for name, text in generated_files().items():
+    for name, text in (generated_files() if files is None else files).items():
         path = outdir / name
         path.write_text(text)
         paths.append(path)
     return paths
 
 
-def check(outdir: Path = GENERATED_DIR) -> list[tuple[Path, str]]:
-    """Stale files: ``(path, unified diff)`` for every file that differs from a fresh
-    derivation (missing files count as stale)."""
+def check(outdir: Path = GENERATED_DIR, files: dict[str, str] | None = None) -> list[tuple[Path, str]]:
+    """Stale files: ``(path, unified diff)`` for every file (of the given ``files``, by
+    default every generated module) that differs from a fresh derivation (missing files
+    count as stale)."""
     stale = []
-    for name, text in generated_files().items():
+    for name, text in (generated_files() if files is None else files).items():
         path = outdir / name
         old = path.read_text() if path.exists() else ""
         if old != text:

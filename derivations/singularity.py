@@ -17,8 +17,8 @@ from functools import cache
 
 import sympy as sp
 
-from .mechanism import paper_platform
-from .so3 import rpy, substitute_rotation
+from .mechanisms import paper_platform
+from .rotations import rpy, substitute_rotation
 
 #: RPY angles φ (about Z), ϑ (about Y), ψ (about X).
 angles = sp.symbols("phi theta psi", real=True)

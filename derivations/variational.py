@@ -8,8 +8,8 @@ from __future__ import annotations
 
 import sympy as sp
 
-from .mechanism import Mechanism
-from .so3 import hat, r
+from .mechanisms import Mechanism
+from .rotations import hat, r
 
 #: Symbols of the inputs and of the variation ``s``.
 u_symbols = sp.Matrix(sp.symbols("u1:3", real=True))

@@ -5,7 +5,7 @@
 - :func:`kinematic_car`: the kinematic car with the steering angle as a state,
   ``x = (x, y, θ, φ) ∈ R⁴``, inputs ``(v, φ̇)``; singular where ``cos φ = 0``.
 
-Each is built as the platform is (:mod:`derivations.mechanism`): the constraints are
+Each is built as the platform is (:mod:`derivations.mechanisms`): the constraints are
 written as linear equations in the unknown rates, solved symbolically, and the
 determinant of the constraint matrix gives the singularity function.
 """
@@ -13,12 +13,11 @@ from __future__ import annotations
 
 import sympy as sp
 
-from .mechanism import input_map
-from .so3 import e3
-from .state_space import StateMechanism
+from .mechanisms import Mechanism, input_map
+from .rotations import e3
 
 
-def rolling_ball(radius=1, name: str = "rolling_ball") -> StateMechanism:
+def rolling_ball(radius=1, name: str = "rolling_ball") -> Mechanism:
     """The ball rolling on the plane z = 0 (radius ``radius``, centre at height ρ).
 
     ``name``: the mechanism's name (a variant of another radius needs its own).
@@ -38,17 +37,17 @@ def rolling_ball(radius=1, name: str = "rolling_ball") -> StateMechanism:
     C, rhs = sp.linear_eq_to_matrix(equations, list(w))
     solution = C.LUsolve(rhs)
     Omega = sp.Matrix(solution).jacobian(v).applyfunc(sp.simplify)
-    return StateMechanism(
+    return Mechanism(
         name=name,
         description=f"ball of radius {rho} rolling without slipping or spinning on the plane z = 0",
         inputs=("v1 = dp1/dt", "v2 = dp2/dt"),
         coordinates=(p1, p2), units=("radius", "radius"), angles=(False, False),
-        Omega=Omega, X=sp.eye(2),
+        L=Omega, X=sp.eye(2),
         derivation={"constraint_matrix": C, "constraint_rhs": rhs, "radius": rho},
     )
 
 
-def kinematic_car(wheelbase=1, name: str = "car") -> StateMechanism:
+def kinematic_car(wheelbase=1, name: str = "car") -> Mechanism:
     """The kinematic car with steering angle ``φ`` as a state (wheelbase ``ℓ``; ``name``:
     the mechanism's name, which a variant of another wheelbase needs its own of).
 
@@ -77,7 +76,7 @@ def kinematic_car(wheelbase=1, name: str = "car") -> StateMechanism:
     first = sp.Matrix([*rates, 0]).diff(v).applyfunc(sp.simplify)
     X = sp.Matrix.hstack(first, sp.Matrix([0, 0, 0, 1]))
     frame = sp.Matrix.hstack((first * delta).applyfunc(sp.simplify), sp.Matrix([0, 0, 0, 1]))
-    return StateMechanism(
+    return Mechanism(
         name=name,
         description=f"kinematic car with the steering angle as a state (wheelbase {ell})",
         inputs=("v = rear-axle speed", "u2 = dphi/dt"),

@@ -171,13 +171,16 @@ def check_into_forms(module, rotations, rng):
     ``out`` is pre-filled with NaN, so an entry the ``_into`` form leaves unwritten fails.
     Returns the names checked."""
     m = module.N_INPUTS
-    forms = {"L": ((3, m), False), "Q": ((3, 3), True)}
+    q = module.NO_COORDINATES
+    # name: (shape, takes the coordinates, takes inputs); L and Q: the paper's G and QG
+    forms = {"G": ((3, m), True, False), "QG": ((3, 3), True, True),
+             "L": ((3, m), False, False), "Q": ((3, 3), False, True)}
     if getattr(module, "HAS_FRAME", False):
-        forms.update({"N": ((3, m), False), "QN": ((3, 3), True), "W": ((m, m), False)})
+        forms.update({"N": ((3, m), True, False), "QN": ((3, 3), True, True), "W": ((m, m), True, False)})
     for R in rotations:
         v = rng.normal(size=m)
-        for name, (shape, takes_inputs) in forms.items():
-            args = (R, v) if takes_inputs else (R,)
+        for name, (shape, takes_q, takes_inputs) in forms.items():
+            args = (R,) + ((q,) if takes_q else ()) + ((v,) if takes_inputs else ())
             out = np.full(shape, np.nan)
             getattr(module, f"{name}_into")(*args, out)
             want = getattr(module, name)(*args)

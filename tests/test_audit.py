@@ -3,7 +3,7 @@ import json
 
 import pytest
 
-from derivations import audit, paper
+from derivations import audit, printed
 from nonholo.cli.entry import main
 
 
@@ -37,19 +37,19 @@ def test_eq12_note_names_the_repair(audit_json):
 
 
 def test_wrong_transcription_is_caught(monkeypatch):
-    monkeypatch.setitem(paper.DELTA, "python", "r12*r31 - r21*r32")
+    monkeypatch.setitem(printed.DELTA, "python", "r12*r31 - r21*r32")
     assert audit.check_delta().verdict == audit.WRONG
-    monkeypatch.setitem(paper.DELTA_CUBIC, "python", "xi**3*(sin(phi) - cos(phi))/(1 - zeta**2) + xi*eta + eta*zeta")
+    monkeypatch.setitem(printed.DELTA_CUBIC, "python", "xi**3*(sin(phi) - cos(phi))/(1 - zeta**2) + xi*eta + eta*zeta")
     assert audit.check_delta_cubic().verdict == audit.WRONG
 
 
 def test_unrepairable_row_is_wrong(monkeypatch):
-    rows = list(paper.EQ_12["rows"])
+    rows = list(printed.EQ_12["rows"])
     rows[2] = rows[2].replace("-r32", "+r32")
-    monkeypatch.setitem(paper.EQ_12, "rows", tuple(rows))
+    monkeypatch.setitem(printed.EQ_12, "rows", tuple(rows))
     assert audit.check_eq_12().verdict == audit.WRONG
 
 
 def test_label_exp_would_be_verified_if_rhs_were_exp(monkeypatch):
-    monkeypatch.setitem(paper.P_AFTER_7, "rhs_coefficients", ("sin(alpha)/alpha", "(1 - cos(alpha))/alpha**2"))
+    monkeypatch.setitem(printed.P_AFTER_7, "rhs_coefficients", ("sin(alpha)/alpha", "(1 - cos(alpha))/alpha**2"))
     assert audit.check_P().verdict == audit.VERIFIED

@@ -7,9 +7,9 @@ import sympy as sp
 from conftest import SO3_MECHANISMS
 from conftest import random_rotations as _random_rotations
 
-from derivations import catalog, codegen, singularity
-from derivations.mechanism import PAPER_GEOMETRY, constraint_matrix, paper_platform
-from derivations.so3 import r
+from derivations import codegen, definitions, singularity
+from derivations.mechanisms import PAPER_GEOMETRY, constraint_matrix, paper_platform
+from derivations.rotations import r
 from derivations.variational import Q_matrix, inputs
 from nonholo.generated import platform_singularity as gen_sing
 from nonholo.model import catalog as numeric
@@ -31,7 +31,7 @@ def _mp(expr_list, args):
 
 @pytest.mark.parametrize("name", SO3_MECHANISMS)
 def test_generated_matches_symbolic(name):
-    sym = catalog.get(name)
+    sym = definitions.get(name)
     num = numeric.get(name)
     u = inputs(sym.n_inputs)
     f_L = _mp(list(sym.L), list(r))
@@ -103,7 +103,7 @@ def test_normal_form_coordinates_are_local_coordinates():
 def test_attitude_A_vanishes():
     """For dR/dt = R[u1 e1 + u2 e2], A = Q + [Lu] = 0 identically (issue 6)."""
     from derivations.variational import variational_system
-    V = variational_system(catalog.get("attitude"))
+    V = variational_system(definitions.get("attitude"))
     assert V["A"].applyfunc(sp.expand).is_zero_matrix
 
 
@@ -131,7 +131,7 @@ def test_codegen_is_deterministic():
 
 def test_paper_instance_gives_the_papers_L():
     """The general platform derivation at the paper's geometry gives MODEL.md's L(R)."""
-    m = catalog.get("platform")
+    m = definitions.get("platform")
     D = r[0, 1] * r[2, 0] + r[1, 0] * r[2, 1]
     L_paper = 2 / D * sp.Matrix([[r[1, 0], r[0, 1]], [-r[1, 0], -r[0, 1]], [-r[2, 0], r[2, 1]]])
     assert (m.L - L_paper).applyfunc(sp.cancel).is_zero_matrix
@@ -153,12 +153,12 @@ def test_raised_platform_is_regular_at_identity_and_splits_SO3():
 def test_desingularised_frame(name):
     """ω = N(R) w with N orthonormal; u = W(R) w reproduces it (L W = N); W is finite
     everywhere (polynomial in r_ij); QN is the derivative of N along left variations."""
-    sym = catalog.get(name)
+    sym = definitions.get(name)
     num = numeric.get(name)
     assert num.has_frame
     gen = num.frame                 # N, QN, W of the desingularised frame
     W_sym = sym.frame_inputs if sym.frame_inputs is not None else \
-        __import__("derivations.mechanism", fromlist=["input_map"]).input_map(sym.L, sym.frame)
+        __import__("derivations.mechanisms", fromlist=["input_map"]).input_map(sym.L, sym.frame)
     assert all(sp.denom(sp.cancel(w)).free_symbols == set() for w in W_sym)
     f_N = _mp(list(sym.frame), list(r))
     eps = 1e-6

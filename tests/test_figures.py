@@ -97,7 +97,7 @@ def test_mechanism_figure(tmp_path):
 
 
 def test_mechanism_figure_other_geometry(tmp_path):
-    from derivations.catalog import RAISED_GEOMETRY
+    from derivations.definitions import RAISED_GEOMETRY
 
     g = viz.as_geometry(RAISED_GEOMETRY)
     assert isinstance(g, Geometry)
@@ -114,7 +114,7 @@ def test_mechanism_figure_other_geometry(tmp_path):
 
 
 def test_default_geometry_is_the_papers():
-    from derivations.mechanism import PAPER_GEOMETRY
+    from derivations.mechanisms import PAPER_GEOMETRY
 
     sym = viz.as_geometry(PAPER_GEOMETRY)  # a = 1.6, b = rho = 1 substituted
     num = viz.as_geometry()

@@ -13,12 +13,18 @@ def test_into_forms_fill_out_with_the_allocating_result(name):
     rng = np.random.default_rng(sum(map(ord, name)))
     Rs = random_rotations(50, rng, 0.05, mech.delta)        # away from the mechanism's own Δ = 0
     checked = check_into_forms(mech.module, Rs, rng)
-    assert {"L", "Q"} <= set(checked)
+    assert {"G", "QG", "L", "Q"} <= set(checked)
     assert ("W" in checked) == mech.has_frame
-    # the Mechanism's callables are the module's allocating forms
-    assert mech.L is mech.module.L and mech.Q is mech.module.Q
+    # the Mechanism's callables are the module's allocating forms (on SO(3), of R alone)
+    assert mech.L is mech.module.L and mech.Q is mech.module.Q and mech.G is mech.module.G
     if mech.has_frame:
-        assert (mech.frame.N, mech.frame.QN, mech.frame.W) == (mech.module.N, mech.module.QN, mech.module.W)
+        assert tuple(f.generated for f in (mech.frame.N, mech.frame.QN, mech.frame.W)) == (
+            mech.module.N, mech.module.QN, mech.module.W)
+        R, w = Rs[0], rng.normal(size=mech.n_inputs)
+        q = mech.module.NO_COORDINATES
+        np.testing.assert_array_equal(mech.frame.N(R), mech.module.N(R, q))
+        np.testing.assert_array_equal(mech.frame.QN(R, w), mech.module.QN(R, q, w))
+        np.testing.assert_array_equal(mech.frame.W(R), mech.module.W(R, q))
 
 
 @pytest.mark.parametrize("name", SO3_MECHANISMS)

@@ -110,7 +110,7 @@ def test_kernels_of_a_mechanism(name):
 
 
 def test_frame_inputs_kernel_is_W_times_w():
-    """``frame_inputs(nodes, idx, s, Wst, w_end, Rout, out)`` (no ``h``): at ``s = 0`` the
+    """``frame_inputs(nodes, qnodes, idx, s, Wst, w_end, Rout, Qout, out)`` (no ``h``): at ``s = 0`` the
     node itself and ``u = W(R_n) w``; at ``s > 0`` one CF4 step from the node — the next
     node when ``s`` is a whole step with the step's stage inputs."""
     mech = catalog.get("platform")
@@ -123,7 +123,8 @@ def test_frame_inputs_kernel_is_W_times_w():
     Wst = np.ascontiguousarray(Ust[idx])
     w_end = np.ascontiguousarray(Ust[idx, 2])
     Rout, out = np.empty((4, 3, 3)), np.empty((4, 2))
-    mech.kernels(frame=True).frame_inputs(nodes, idx, s, Wst, w_end, Rout, out)
+    mech.kernels(frame=True).frame_inputs(nodes, np.empty((len(nodes), 0)), idx, s, Wst, w_end, Rout,
+                                          np.empty((4, 0)), out)
     np.testing.assert_array_equal(Rout[:2], nodes[idx[:2]])
     np.testing.assert_allclose(Rout[2:], nodes[idx[2:] + 1], atol=1e-15)
     for k in range(4):

@@ -15,7 +15,7 @@ import pytest
 import sympy as sp
 from conftest import check_into_forms, check_solution, random_rotations, reachable_goals
 
-from derivations.mechanism import (
+from derivations.mechanisms import (
     PAPER_GEOMETRY,
     PlatformGeometry,
     constraint_matrix,
@@ -23,7 +23,7 @@ from derivations.mechanism import (
     platform_mechanism,
     rho,
 )
-from derivations.so3 import e1, e2, e3, r
+from derivations.rotations import e1, e2, e3, r
 from derivations.variational import Q_matrix, inputs
 from nonholo import Mechanism, plan, simulate
 from nonholo.certify import resimulate as verify

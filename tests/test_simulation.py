@@ -203,7 +203,7 @@ def test_dense_basis_gives_the_sparse_jacobian():
     for basis in (stages.sparse_basis(u, 400), stages.kernel_basis(u, 400)):
         J = np.empty((3, 10))
         Wd = np.empty((1200, 6))
-        n, _, _ = kern.forward_variational(R0, U, 1 / 400, 1.0, 1e-9, *basis, np.empty((401, 3, 3)),
+        n, _, _ = kern.forward_variational(R0, np.zeros(0), U, 1 / 400, 1.0, 1e-9, *basis, *kern.nodes(400),
                                            np.empty((401, 3, 3)), J, np.empty((3, 3)), Wd, False)
         assert n == 400
         out.append(J)

@@ -9,14 +9,13 @@ import pytest
 import sympy as sp
 
 import nonholo
-from derivations import catalog as symbolic
+from derivations import definitions as symbolic
 from derivations import state_space
 from nonholo.certify import resimulate as verify
 from nonholo.controls import stages
 from nonholo.controls.parametrisations import Fourier
 from nonholo.model import catalog
 from nonholo.spaces import so3
-from nonholo.spaces import state as states
 
 NAMES = ("rolling_ball", "car")
 rng = np.random.default_rng(7)
@@ -47,7 +46,7 @@ def test_generated_matches_symbolic(name):
         R, q = random_state(mech)
         subs = {c: float(v) for c, v in zip(sym.coordinates, q)}
         if sym.orientation:
-            from derivations.so3 import r
+            from derivations.rotations import r
             subs |= {r[i, j]: R[i, j] for i in range(3) for j in range(3)}
         G = np.array(sym.field.subs(subs).evalf(), dtype=float)
         assert np.allclose(mech.G(R, q), G, atol=1e-13)
@@ -238,7 +237,7 @@ def test_state_space_derivation_is_shared():
     ball = symbolic.get("rolling_ball")
     A = state_space.A_matrix(ball)
     u = sp.Matrix(sp.symbols("u1:3", real=True))
-    from derivations.so3 import hat
+    from derivations.rotations import hat
     assert sp.simplify(A[:3, :3] - hat(ball.Omega * u)) == sp.zeros(3, 3)
 
 

@@ -36,7 +36,6 @@ import numpy as np
 
 from ..controls import stages
 from ..motion.playback import replay
-from ..spaces import state as states
 from ..spaces.groups import NO_COORDINATES
 
 #: Factor on the asymptotic Richardson estimate ``|R_M − R_{M/2}|/15`` of the error of ``R_M``.
@@ -122,14 +121,14 @@ def sensitivity(R0, par, T: float, mechanism, steps: int, U=None, sign: float | 
     kern = mechanism.kernels(frame=False)
     m, d = mechanism.n_inputs, mechanism.n_rates
     R = np.ascontiguousarray(R0, dtype=float)
-    q = np.ascontiguousarray(states.NO_COORDINATES if q0 is None else q0, dtype=float)
+    q = np.ascontiguousarray(NO_COORDINATES if q0 is None else q0, dtype=float)
     if sign is None:
         sign = mechanism.singular.sign(R, q)
-    Rs, Qs = states.buffers(mechanism, steps)
+    Rs, Qs = kern.nodes(steps)
     Zs = np.empty((steps + 1, d, d))
-    n, _, _ = states.forward_variational(
-        mechanism, kern, R, q, np.ascontiguousarray(U), T / steps, sign, 0.0,
-        (_NO_INDEX, np.zeros((steps, 3, 0)), 0, 0), Rs, Qs, Zs, np.empty((d, 0)),
+    n, _, _ = kern.forward_variational(
+        R, q, np.ascontiguousarray(U), T / steps, sign, 0.0,
+        _NO_INDEX, np.zeros((steps, 3, 0)), 0, 0, Rs, Qs, Zs, np.empty((d, 0)),
         np.empty((d, d)), np.empty((0, d * m)), True)
     if n < steps:
         return float("inf"), None

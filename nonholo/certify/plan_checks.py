@@ -23,7 +23,6 @@ from ..motion.retimed import Retimed
 from ..numerics import kernels
 from ..numerics.checks import is_number
 from ..spaces.groups import NO_COORDINATES
-from ..spaces.state import forward as states_forward
 from . import certificate as certify
 from .plan_fields import (
     FORMAT_1,
@@ -323,9 +322,8 @@ class PlanChecks:
             kern = mech.kernels(frame=frame)
             U = np.ascontiguousarray(stages.stage_table(par.frame if frame else par, r.steps)[:n - 1])
             Rs, Qs = np.empty((n, 3, 3)), np.empty((n, mech.n_coordinates))
-            done, dmin, _ = states_forward(mech, kern, np.ascontiguousarray(r.R0, dtype=float),
-                                           q0,
-                                           U, T / r.steps, self.sign, -np.inf, Rs, Qs)
+            done, dmin, _ = kern.forward(np.ascontiguousarray(r.R0, dtype=float), q0,
+                                         U, T / r.steps, self.sign, -np.inf, Rs, Qs)
         if done < n - 1:
             fail("R", f"goes on to t = {r.t[-1]:.6g} s, but the controls replayed from R0 stop at "
                        f"t = {r.t[done]:.6g} s (non-finite angular velocity)")

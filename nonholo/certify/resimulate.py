@@ -211,8 +211,8 @@ def resimulate_rk4(R0, controls, T: float, mechanism="platform", steps: int = RK
     Y = np.ascontiguousarray(R.transpose(1, 2, 0))                             # (3, 3, P)
     B = np.empty((3, m, P))
     watched = mech.singular.exists
-    sign = np.sign(mech.module.delta(Y)) if watched else None
-    dmin = sign * mech.module.delta(Y) if watched else None
+    sign = np.sign(mech.delta(Y)) if watched else None
+    dmin = sign * mech.delta(Y) if watched else None
 
     def f(Y, u):
         L_into(Y, B)
@@ -231,7 +231,7 @@ def resimulate_rk4(R0, controls, T: float, mechanism="platform", steps: int = RK
             k4 = f(Y + h * k3, u2)
             Y = Y + (h / 6.0) * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
             if watched:
-                dmin = np.fmin(dmin, sign * mech.module.delta(Y))
+                dmin = np.fmin(dmin, sign * mech.delta(Y))
     RT = Y.transpose(2, 0, 1)
     if watched:
         dmin = np.where(np.isfinite(RT).all(axis=(1, 2)), dmin, -np.inf)
@@ -309,5 +309,5 @@ def resimulate_state(start, controls, T: float, mechanism, breakpoints=None, sam
 
 def state_errors(mechanism, R_T, q_T, Rd, qd) -> dict:
     """The terminal error by part of an independently re-simulated endpoint:
-    ``{"rotation": rad, "coordinates": units}`` (angles wrapped, :mod:`nonholo.spaces.state`)."""
+    ``{"rotation": rad, "coordinates": units}`` (angles wrapped, :mod:`nonholo.spaces.groups`)."""
     return catalog.get(mechanism).space.error(R_T, q_T, Rd, qd)[1]

@@ -16,10 +16,13 @@ from . import sweep_command as cli_sweep
 def _derive(args) -> int:
     from derivations import codegen
 
+    from ..integrate import inliner
+
     t0 = time.perf_counter()
     outdir = Path(args.dir) if args.dir else codegen.GENERATED_DIR
+    files = inliner.every_generated_file()
     if args.check:
-        stale = codegen.check(outdir)
+        stale = codegen.check(outdir, files)
         for path, diff in stale:
             print(f"stale: {path}", file=sys.stderr)
             if args.verbose:
@@ -30,7 +33,7 @@ def _derive(args) -> int:
             return 1
         print(f"generated modules are up to date ({time.perf_counter() - t0:.1f} s)")
         return 0
-    for path in codegen.write(outdir):
+    for path in codegen.write(outdir, files):
         print(f"wrote {path}")
     print(f"done in {time.perf_counter() - t0:.1f} s")
     return 0
@@ -39,7 +42,9 @@ def _derive(args) -> int:
 def _audit(args) -> int:
     from derivations import audit
 
-    findings = audit.run()
+    from ..paper import appendix_audit
+
+    findings = appendix_audit.run()
     if args.json:
         print(json.dumps([{"equation": f.equation, "verdict": f.verdict, "note": f.note}
                           for f in findings], indent=2, ensure_ascii=False))

@@ -36,7 +36,6 @@ from ..io import csv_export as export
 from ..model import catalog
 from ..planning import api as planner
 from ..spaces import so3
-from ..spaces import state as states
 
 #: exit status of ``nonholo plan`` (see the module docstring)
 EXIT_SUCCESS, EXIT_FAILED, EXIT_BAD_INPUT, EXIT_WRITE_FAILED = 0, 1, 2, 3

@@ -14,7 +14,7 @@ Columns, one row per sample time ``t_k = k / rate`` (and ``T``):
   see a jump);
 - ``delta``: ``Δ(R(t))``, for a mechanism with a singular set.
 
-A mechanism whose state goes beyond SO(3) (:mod:`nonholo.spaces.state`) has its coordinates as
+A mechanism whose state goes beyond SO(3) (:mod:`nonholo.spaces.groups`) has its coordinates as
 columns named as the mechanism names them (the car's ``x, y, theta, phi``), after the
 inputs; the quaternion only if it has an orientation; ``delta`` is ``Δ(R(t), q(t))``.
 
@@ -35,7 +35,7 @@ from ..model import catalog
 from ..motion.retimed import Retimed
 from ..motion.simulation import DELTA_STOP
 from ..numerics.checks import is_number
-from ..spaces import state as states
+from ..spaces.groups import NO_COORDINATES
 
 #: Sample rate of :func:`trajectory_table` unless given (Hz).
 DEFAULT_RATE = 100.0
@@ -78,7 +78,7 @@ def states_at(result, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     idx = np.minimum(np.floor(t / h + 1e-9).astype(np.int64), n_samples - 1)
     s = t - idx * h
     s[np.abs(s) <= 1e-12 * max(1.0, T)] = 0.0
-    q0 = states.NO_COORDINATES if result.q0 is None else np.asarray(result.q0, dtype=float)
+    q0 = NO_COORDINATES if result.q0 is None else np.asarray(result.q0, dtype=float)
     Q = np.zeros((n_samples, 0)) if result.q is None else np.asarray(result.q, dtype=float)
     sgn = 1.0
     if mech.singular.exists:
@@ -87,12 +87,12 @@ def states_at(result, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     U = np.stack([controls(starts), controls(starts + 0.5 * s), controls(starts + s)],
                  axis=1).reshape(len(t), 3, mech.n_inputs)
     out, out_q = np.empty((len(t), 3, 3)), np.empty((len(t), Q.shape[1]))
-    step, step_q = states.buffers(mech, 1)
+    step, step_q = kern.nodes(1)
     for k in range(len(t)):
         out[k], out_q[k] = result.R[idx[k]], Q[idx[k]]
         if s[k] > 0.0:
-            done, _, _ = states.forward(mech, kern, out[k].copy(), out_q[k].copy(), U[k:k + 1], s[k], sgn,
-                                        DELTA_STOP, step, step_q)
+            done, _, _ = kern.forward(out[k].copy(), out_q[k].copy(), U[k:k + 1], s[k], sgn,
+                                      DELTA_STOP, step, step_q)
             if done != 1:
                 raise ValueError(f"the motion runs into Δ = 0 at t ≈ {asked[k]:g} s: not a plan to play back")
             out[k], out_q[k] = step[1], step_q[1]

@@ -65,7 +65,7 @@ class PlanResult:
     - ``q``, ``q0``, ``qd``, ``errors`` (a mechanism whose state goes beyond SO(3), else
       ``None``): the coordinates at the samples ``(n, k)``, of the start and of the goal,
       and the terminal error by part, ``{"rotation": rad, "coordinates": units}``
-      (:mod:`nonholo.spaces.state`; ``terminal_error`` is then the norm of the stacked error,
+      (:mod:`nonholo.spaces.groups`; ``terminal_error`` is then the norm of the stacked error,
       which bounds both). ``R`` is the identity throughout for a state without
       orientation. :attr:`start`, :attr:`goal` and :meth:`state` give states as
       :func:`nonholo.plan` takes them.

@@ -19,12 +19,15 @@ each matrix also as ``NAME_into(..., out)`` for the compiled integrator
 (:meth:`Mechanism.kernels`). Nothing downstream depends on which mechanism it is;
 :mod:`nonholo.model.catalog` looks mechanisms up by name.
 
-A mechanism whose state goes beyond SO(3) — ``(R, q) ∈ SO(3) × Rᵏ`` or ``q ∈ Rᵏ``
-(:mod:`derivations.state_space`) — has instead the stacked field ``G(R, q)`` (rows
-``(ω, q̇)``; ``q̇`` only without orientation), its variational matrix ``QG(R, q, v)``,
-``delta(R, q)`` and the frame ``N(R, q)``, ``QN``, ``W``; its ``L`` and ``Q`` are ``None``
-and its kernels are those of :mod:`nonholo.integrate.cf4_product`. :attr:`Mechanism.state_space`
-tells the kinds apart (``"SO(3)"``, ``"SO(3)xR^k"``, ``"R^k"``).
+Every generated module has one schema, whatever the state: the stacked field
+``G(R, q)`` (rows ``(ω, q̇)``; ``q̇`` only without orientation, ``ω`` only on SO(3), where
+``G = L``), its variational matrix ``QG(R, q, v)``, ``delta(R, q)`` and the frame
+``N(R, q)``, ``QN(R, q, v)``, ``W(R, q)``, with ``q`` of shape ``(0,)`` on SO(3); the kernels
+(:mod:`nonholo.integrate.cf4`) take the state as ``(R, q)`` alike. A mechanism whose state
+goes beyond SO(3) — ``(R, q) ∈ SO(3) × Rᵏ`` or ``q ∈ Rᵏ`` (:mod:`derivations.state_space`) —
+has no ``L`` and ``Q`` (``None``); on SO(3), :attr:`Mechanism.delta` and :attr:`Mechanism.frame`
+take ``R`` alone (the paper's ``Δ(R)``, ``N(R)``, ``QN(R, w)``, ``W(R)``).
+:attr:`Mechanism.state_space` tells the kinds apart (``"SO(3)"``, ``"SO(3)xR^k"``, ``"R^k"``).
 """
 from __future__ import annotations
 
@@ -35,7 +38,7 @@ from typing import Callable
 
 import numpy as np
 
-from ..integrate import cf4, cf4_product
+from ..integrate import cf4
 from ..spaces.groups import Product
 from ..spaces.singular import NoSingularSet, SingularSet
 
@@ -43,7 +46,7 @@ from ..spaces.singular import NoSingularSet, SingularSet
 @dataclass(frozen=True)
 class Geometry:
     """Numeric geometry of a two-leg platform with one rolling disk (the symbolic one is
-    ``derivations.mechanism.PlatformGeometry``): base joints ``base_i`` (world frame),
+    ``derivations.mechanisms.PlatformGeometry``): base joints ``base_i`` (world frame),
     platform joints ``tip_i`` (platform frame, world position ``R tip_i``), the disk's
     contact point ``contact`` on the sphere and its unit axle direction ``axle`` (world).
     Lengths in the units of the derivation's drawing dimensions; the sphere's radius is
@@ -100,6 +103,21 @@ def _on_stack(into, R, shape: tuple) -> np.ndarray:
     return np.moveaxis(out, -1, 0)
 
 
+def on_rotation(function, module) -> Callable:
+    """A generated ``function(R, q, ...)`` of a mechanism on SO(3) as ``function(R, ...)``
+    (``q`` = the module's ``NO_COORDINATES``): the paper's ``Δ(R)``, ``N(R)``, ``QN(R, w)``,
+    ``W(R)``."""
+    none = module.NO_COORDINATES
+
+    def on_R(R, *args):
+        return function(R, none, *args)
+
+    on_R.__name__ = on_R.__qualname__ = function.__name__
+    on_R.__doc__ = function.__doc__
+    on_R.generated = function
+    return on_R
+
+
 @dataclass(frozen=True)
 class Frame:
     """The desingularised input frame of a mechanism: ``ω = N(R) w``, ``u = W(R) w``."""
@@ -134,7 +152,7 @@ class Mechanism:
     coordinates: tuple[str, ...] = ()
     units: tuple[str, ...] = ()
     angles: tuple[bool, ...] = ()
-    #: the stacked field ``G(R, q)`` (a state beyond SO(3); ``None`` on SO(3))
+    #: the stacked field ``G(R, q)`` (rows ``(ω, q̇)``; ``G(R, q) = L(R)`` on SO(3))
     G: Callable | None = None
 
     @cached_property
@@ -186,12 +204,10 @@ class Mechanism:
         return self.frame is not None
 
     def kernels(self, frame: bool = False) -> cf4.Kernels:
-        """The compiled integrator kernels of ``ω = L(R) u`` (or, ``frame=True``, of the
-        desingularised ``ω = N(R) w``); see :func:`nonholo.integrate.cf4.compile_system`."""
+        """The compiled integrator kernels of ``(ω, q̇) = G(R, q) u`` (or, ``frame=True``, of
+        the desingularised ``N(R, q) w``); see :func:`nonholo.integrate.cf4.compile_system`."""
         if frame and not self.has_frame:
             raise ValueError(f"mechanism {self.name!r} has no desingularised frame N(R)")
-        if self.beyond_so3:
-            return cf4_product.compile_system(self.module, frame)
         return cf4.compile_system(self.module, frame)
 
     @property
@@ -247,32 +263,33 @@ class Mechanism:
     @classmethod
     def from_module(cls, module: types.ModuleType) -> "Mechanism":
         """The mechanism of a generated module."""
-        if hasattr(module, "STATE_SPACE"):
-            frame = Frame(module.N, module.QN, module.W) if module.HAS_FRAME else None
+        delta = module.delta if module.HAS_SINGULAR_SET else None
+        frame = Frame(module.N, module.QN, module.W) if module.HAS_FRAME else None
+        if module.STATE_SPACE != "SO(3)":
             return cls(name=module.NAME, description=module.DESCRIPTION, inputs=tuple(module.INPUTS),
-                       L=None, Q=None, delta=module.delta if module.HAS_SINGULAR_SET else None,
-                       frame=frame, geometry=None, module=module, state_space=module.STATE_SPACE,
-                       coordinates=tuple(module.COORDINATES), units=tuple(module.UNITS),
-                       angles=tuple(module.ANGLES), G=module.G)
-        frame = Frame(module.N, module.QN, module.W) if getattr(module, "HAS_FRAME", False) else None
+                       L=None, Q=None, delta=delta, frame=frame, geometry=None, module=module,
+                       state_space=module.STATE_SPACE, coordinates=tuple(module.COORDINATES),
+                       units=tuple(module.UNITS), angles=tuple(module.ANGLES), G=module.G)
+        if frame is not None:
+            frame = Frame(*(on_rotation(f, module) for f in (module.N, module.QN, module.W)))
         geometry = getattr(module, "GEOMETRY", None)
         return cls(name=module.NAME, description=module.DESCRIPTION, inputs=tuple(module.INPUTS),
-                   L=module.L, Q=module.Q, delta=module.delta if module.HAS_SINGULAR_SET else None,
+                   L=module.L, Q=module.Q, delta=None if delta is None else on_rotation(delta, module),
                    frame=frame, geometry=None if geometry is None else Geometry.from_mapping(geometry),
-                   module=module)
+                   module=module, G=module.G)
 
     @classmethod
     def from_symbolic(cls, mechanism) -> "Mechanism":
-        """The numeric mechanism of a symbolic ``derivations.mechanism.Mechanism``, in one
+        """The numeric mechanism of a symbolic :class:`derivations.mechanisms.Mechanism`, in one
         call: its module is generated (as ``nonholo derive`` would write it) and loaded
         in this process. Its kernels are compiled on first use and not cached on disk
         (the module exists only in this process); to add a mechanism for good, put it in
-        ``derivations/catalog.py`` and run ``nonholo derive``. To look it up by name,
+        ``derivations/definitions.py`` and run ``nonholo derive``. To look it up by name,
         :func:`nonholo.model.catalog.add` it.
         """
         from derivations import codegen  # SymPy: imported only when asked for
 
-        source = codegen.module_of(mechanism)
+        source = codegen.mechanism_module(mechanism)
         module = types.ModuleType(f"nonholo_symbolic_{mechanism.name}")
         module.SOURCE = source
         exec(compile(source, f"<generated module of mechanism {mechanism.name!r}>", "exec"),

@@ -23,13 +23,14 @@ def _inputs(u) -> np.ndarray:
 
 def delta(R) -> float:
     """Singularity function ``Δ(R) = r12 r31 + r21 r32`` (appendix, App. 1.1)."""
-    return float(_gen.delta(check_rotation(R)))
+    return float(_gen.delta(check_rotation(R), _gen.NO_COORDINATES))
 
 
 def _finite(value: np.ndarray, name: str, R) -> np.ndarray:
     """``value`` if finite; else ``ValueError``: ``R`` is (numerically) on ``Δ = 0``."""
     if not np.all(np.isfinite(value)):
-        raise ValueError(f"R is too close to the singular surface Δ = 0 (Δ(R) = {_gen.delta(R):.3g}): "
+        d = _gen.delta(R, _gen.NO_COORDINATES)
+        raise ValueError(f"R is too close to the singular surface Δ = 0 (Δ(R) = {d:.3g}): "
                          f"{name} is not representable in floating point there")
     return value
 
@@ -38,7 +39,7 @@ def L(R) -> np.ndarray:
     """``L(R)`` (3×2); ``ValueError`` on or numerically too close to the singular surface
     ``Δ(R) = 0`` (``L ~ 1/Δ``)."""
     R = check_rotation(R)
-    if _gen.delta(R) == 0.0:
+    if _gen.delta(R, _gen.NO_COORDINATES) == 0.0:
         raise ValueError("R lies on the singular surface Δ(R) = 0, where L(R) is undefined")
     with np.errstate(all="ignore"):         # overflow is reported by _finite
         return _finite(_gen.L(R), "L(R)", R)
@@ -48,7 +49,7 @@ def Q(R, u) -> np.ndarray:
     """``Q(R, u)`` (3×3) of eq. (12): ``(∂L/∂θ) u = Q s`` for ``∂R/∂θ = [s] R``; ``ValueError``
     on or numerically too close to ``Δ = 0`` (``Q ~ 1/Δ²``)."""
     R = check_rotation(R)
-    if _gen.delta(R) == 0.0:
+    if _gen.delta(R, _gen.NO_COORDINATES) == 0.0:
         raise ValueError("R lies on the singular surface Δ(R) = 0, where Q(R, u) is undefined")
     u = _inputs(u)
     with np.errstate(all="ignore"):         # overflow is reported by _finite

@@ -99,10 +99,10 @@ class FrameControls:
     def nodes(self) -> np.ndarray:
         """``R(t_n)``, ``t_n = nT/steps``: the CF4 nodes of the frame motion, shape ``(steps+1, 3, 3)``."""
         if self._nodes is None:
-            Rs = np.empty((self.steps + 1, 3, 3))
-            n, _, _ = self.mechanism.kernels(frame=True).forward(
-                np.ascontiguousarray(self.R0), stages.stage_table(self.frame, self.steps),
-                self.T / self.steps, 1.0, -np.inf, Rs)
+            kern = self.mechanism.kernels(frame=True)
+            Rs, Qs = kern.nodes(self.steps)
+            n, _, _ = kern.forward(np.ascontiguousarray(self.R0), Qs[0], stages.stage_table(self.frame, self.steps),
+                                   self.T / self.steps, 1.0, -np.inf, Rs, Qs)
             if n != self.steps:
                 raise ValueError("the frame motion produced a non-finite angular velocity")
             self._nodes = Rs
@@ -144,8 +144,10 @@ class FrameControls:
         n_t, m = k.size, self.n_inputs
         Rt = np.empty((n_t, 3, 3))
         u = np.empty((n_t, m))
-        self.mechanism.kernels(frame=True).frame_inputs(self.nodes, k, s, np.ascontiguousarray(Wst),
-                                                        np.ascontiguousarray(w_end), Rt, u)
+        nodes = self.nodes              # on SO(3): no coordinates
+        self.mechanism.kernels(frame=True).frame_inputs(
+            nodes, np.empty((len(nodes), 0)), k, s, np.ascontiguousarray(Wst),
+            np.ascontiguousarray(w_end), Rt, np.empty((n_t, 0)), u)
         return Rt, u
 
     def __call__(self, t):

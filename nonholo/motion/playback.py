@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..controls import stages
-from ..spaces import state as states
+from ..spaces.groups import NO_COORDINATES
 
 
 def replay(R0, par, T: float, mechanism, steps: int, sign: float = 1.0, U=None, q0=None):
@@ -20,9 +20,9 @@ def replay(R0, par, T: float, mechanism, steps: int, sign: float = 1.0, U=None, 
     over the evaluation points and the nodes' coordinates ``(steps + 1, k)``.
     """
     U = np.ascontiguousarray(stages.stage_table(par, steps) if U is None else U)
-    Rs, Qs = states.buffers(mechanism, steps)
-    q0 = np.ascontiguousarray(states.NO_COORDINATES if q0 is None else q0, dtype=float)
-    done, dmin, _ = states.forward(mechanism, mechanism.kernels(frame=False),
-                                   np.ascontiguousarray(R0, dtype=float), q0, U, T / steps, sign,
-                                   -np.inf, Rs, Qs)
+    kern = mechanism.kernels(frame=False)
+    Rs, Qs = kern.nodes(steps)
+    q0 = np.ascontiguousarray(NO_COORDINATES if q0 is None else q0, dtype=float)
+    done, dmin, _ = kern.forward(np.ascontiguousarray(R0, dtype=float), q0, U, T / steps, sign,
+                                 -np.inf, Rs, Qs)
     return Rs, int(done), float(dmin), Qs

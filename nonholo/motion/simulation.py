@@ -26,7 +26,6 @@ from ..controls import stages
 from ..controls.parametrisations import Controls
 from ..model import catalog
 from ..numerics.checks import MAX_STEPS, check_count, check_time
-from ..spaces import state as states
 
 #: Default number of CF4 steps on ``[0, T]``: chosen so that on the examples of MODEL.md
 #: (``T = 1``) the endpoint is within the planner's 1e-10 rad of a DOP853 solution
@@ -161,7 +160,7 @@ def _stopped(mech, n, t_stop, dmin, sgn, traj) -> SingularTrajectoryError:
 
 def _setup(R0, controls, T, mechanism, steps):
     """Checked inputs of a simulation: the mechanism, the start ``(R0, q0)``
-    (:func:`nonholo.spaces.state.parse`), ``T``, ``steps``, its kernels, ``sgn Δ`` at the start and
+    (:meth:`nonholo.spaces.groups.Product.parse`), ``T``, ``steps``, its kernels, ``sgn Δ`` at the start and
     the controls' stage table."""
     mech = catalog.get(mechanism)
     R0, q0 = mech.parse_state(R0, "R0")
@@ -177,7 +176,7 @@ def simulate(R0, controls, T: float, *, mechanism="platform",
     """Solve ``dR/dt = [L(R) u(t)] R``, ``R(0) = R0`` on ``[0, T]`` with ``steps`` CF4 steps.
 
     ``R0``: the start — a rotation matrix, or for a mechanism whose state goes beyond
-    SO(3) its coordinates ``q0`` or the pair ``(R0, q0)`` (:func:`nonholo.spaces.state.parse`;
+    SO(3) its coordinates ``q0`` or the pair ``(R0, q0)`` (:meth:`nonholo.spaces.groups.Product.parse`;
     the trajectory's ``q`` holds the coordinates). ``controls``: a :class:`~nonholo.controls.parametrisations.Controls`, a
     :class:`~nonholo.motion.frame_controls.FrameControls` or a vectorised ``u(t)``; ``mechanism``: a
     :class:`~nonholo.model.mechanism.Mechanism` or its name.
@@ -185,8 +184,8 @@ def simulate(R0, controls, T: float, *, mechanism="platform",
     :class:`SingularTrajectoryError` if the motion runs into ``Δ = 0``.
     """
     mech, (R0, q0), T, steps, kern, sgn, U = _setup(R0, controls, T, mechanism, steps)
-    Rs, Qs = states.buffers(mech, steps)
-    n, dmin, t_stop = states.forward(mech, kern, R0, q0, U, T / steps, sgn, DELTA_STOP, Rs, Qs)
+    Rs, Qs = kern.nodes(steps)
+    n, dmin, t_stop = kern.forward(R0, q0, U, T / steps, sgn, DELTA_STOP, Rs, Qs)
     traj = _trajectory(mech, Rs, U, T, steps, n, dmin, sgn, Qs)
     if n < steps:
         raise _stopped(mech, n, t_stop, dmin, sgn, traj)
@@ -215,12 +214,11 @@ def variational(R0, controls, T: float, *, mechanism="platform",
         # no parameters: an empty basis (the kernel then skips the Jacobian)
         basis = (np.zeros((steps, 3, 0), np.int64), np.zeros((steps, 3, 0)), 0, 0)
         J = np.empty((d, 0))
-    Rs, Qs = states.buffers(mech, steps)
+    Rs, Qs = kern.nodes(steps)
     Zs = np.empty((steps + 1, d, d))
     M = np.empty((d, d))
-    n, dmin, t_stop = states.forward_variational(mech, kern, R0, q0, U, T / steps, sgn, DELTA_STOP,
-                                                 basis, Rs, Qs, Zs, J, M,
-                                                 np.empty((0, d * mech.n_inputs)), True)
+    n, dmin, t_stop = kern.forward_variational(R0, q0, U, T / steps, sgn, DELTA_STOP, *basis,
+                                               Rs, Qs, Zs, J, M, np.empty((0, d * mech.n_inputs)), True)
     traj = _trajectory(mech, Rs, U, T, steps, n, dmin, sgn, Qs)
     if n < steps:
         raise _stopped(mech, n, t_stop, dmin, sgn, traj)

@@ -1,7 +1,7 @@
 """Small compiled (numba) numerics shared by the integrator and the planners.
 
 - SO(3): :func:`rodrigues` (``exp([w])``), :func:`exp_times` (``exp([w]) R``),
-  :func:`inv33`, :func:`log_rotation` and :func:`log_error` (the planner's error
+  :func:`inv33` (and :func:`inverse_into` for any n×n), :func:`log_rotation` and :func:`log_error` (the planner's error
   ``l_T``, ``[l_T] = log(R_T R_dᵀ)``, and its norm).
 - :func:`min_norm_step`: the minimum-norm solution of ``J x = l`` (3 × p) in a diagonal
   metric — a 3×3 Cholesky solve, with an eigen-decomposition fallback for a
@@ -72,6 +72,38 @@ def inv33(Z, out):
     out[0, 2] = (Z[0, 1] * Z[1, 2] - Z[0, 2] * Z[1, 1]) * d
     out[1, 2] = (Z[0, 2] * Z[1, 0] - Z[0, 0] * Z[1, 2]) * d
     out[2, 2] = (Z[0, 0] * Z[1, 1] - Z[0, 1] * Z[1, 0]) * d
+
+
+@jit
+def inverse_into(A, out):
+    """``out = A^{-1}`` (n×n, Gauss–Jordan with partial pivoting); all NaN where ``A`` is
+    singular or not finite."""
+    n = A.shape[0]
+    M = A.copy()
+    for i in range(n):
+        for j in range(n):
+            out[i, j] = 1.0 if i == j else 0.0
+    for c in range(n):
+        p = c
+        for i in range(c + 1, n):
+            if abs(M[i, c]) > abs(M[p, c]):
+                p = i
+        pivot = M[p, c]
+        if not (pivot != 0.0 and np.isfinite(pivot)):
+            out[:, :] = np.nan
+            return
+        for j in range(n):
+            M[c, j], M[p, j] = M[p, j], M[c, j]
+            out[c, j], out[p, j] = out[p, j], out[c, j]
+        for j in range(n):
+            M[c, j] /= pivot
+            out[c, j] /= pivot
+        for i in range(n):
+            if i != c:
+                f = M[i, c]
+                for j in range(n):
+                    M[i, j] -= f * M[c, j]
+                    out[i, j] -= f * out[c, j]
 
 
 @jit

@@ -244,18 +244,21 @@ def run(outdir: Path = DEFAULT_OUTDIR, audit: bool = True, draw: bool = True) ->
     from derivations import audit as _audit
     from derivations import codegen
 
+    from ..integrate import inliner
+    from . import appendix_audit
+
     t0 = time.perf_counter()
     outdir = Path(outdir)
     outdir.mkdir(parents=True, exist_ok=True)
     _log("checking that the generated modules match a fresh derivation ...")
-    stale = codegen.check()
+    stale = codegen.check(files=inliner.every_generated_file())
     if stale:
         for path, _ in stale:
             _log(f"stale generated module: {path} (run `nonholo derive`)")
         return 1
     if audit:
         _log("auditing the appendix against the derivation ...")
-        print(_audit.format_table(_audit.run()), flush=True)
+        print(_audit.format_table(appendix_audit.run()), flush=True)
     _log("solving the examples ...")
     solved = solve_all()
     plans = outdir / "plans"

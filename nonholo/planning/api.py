@@ -60,7 +60,7 @@ def plan(R0, Rd, *, T: float | None = 1.0, method: str = "parametric", harmonics
     - ``R0``, ``Rd``: start and goal — rotation matrices for a mechanism on SO(3); for one
       whose state goes beyond SO(3) (:attr:`~nonholo.model.mechanism.Mechanism.state_space`)
       vectors of its coordinates (``"R^k"``) or pairs ``(R, q)`` (``"SO(3)xR^k"``), see
-      :mod:`nonholo.spaces.state`. There the error is the stacked ``(l, q_T − q_d)`` and the
+      :mod:`nonholo.spaces.groups`. There the error is the stacked ``(l, q_T − q_d)`` and the
       result reports it by part (``errors``); strategies ``"paper"`` and ``"robust"`` plan
       in the physical inputs, and the global route, ``leg_length``, ``leg_speed`` and
       ``objective`` are for SO(3) mechanisms only (``ValueError`` otherwise).

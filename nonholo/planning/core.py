@@ -46,7 +46,7 @@ from ..model.limits import LegLimits
 from ..model.mechanism import Mechanism
 from ..motion.frame_controls import FrameControls
 from ..numerics.checks import check_count
-from ..spaces import state as states
+from ..spaces.groups import NO_COORDINATES
 
 
 @dataclass(frozen=True)
@@ -106,7 +106,7 @@ class Evaluation:
         self.R = R
         #: the coordinates at the nodes, ``(n, k)`` (``k = 0`` on SO(3))
         self.q = np.zeros((len(R), 0)) if q is None else q
-        #: ``(rotation, coordinates)``: the norms of the two parts of ``l`` (:mod:`nonholo.spaces.state`)
+        #: ``(rotation, coordinates)``: the norms of the two parts of ``l`` (:mod:`nonholo.spaces.groups`)
         self.errors = None
         self.l = self.error = self.J = self.Z = self.Wd = None
         self._controls = controls
@@ -137,7 +137,7 @@ class Evaluator:
     monitored): ``λ`` then parametrises ``w``. ``leg_limits``: the legs' stroke limits
     (:class:`~nonholo.model.limits.LegLimits`) an admissible trajectory keeps at every node, or
     ``None``. ``q0``, ``qd``: the coordinates of start and goal of a mechanism whose state
-    goes beyond SO(3) (:mod:`nonholo.spaces.state`; ``R0 = Rd = I`` without orientation); then
+    goes beyond SO(3) (:mod:`nonholo.spaces.groups`; ``R0 = Rd = I`` without orientation); then
     ``l_T`` is the stacked error ``(l, δq)`` and ``J`` has ``d`` rows.
     """
 
@@ -150,8 +150,8 @@ class Evaluator:
         self.kernels = mechanism.kernels(frame)
         self.R0 = np.ascontiguousarray(R0, dtype=float)
         self.Rd = np.ascontiguousarray(Rd, dtype=float)
-        self.q0 = np.ascontiguousarray(states.NO_COORDINATES if q0 is None else q0, dtype=float)
-        self.qd = np.ascontiguousarray(states.NO_COORDINATES if qd is None else qd, dtype=float)
+        self.q0 = np.ascontiguousarray(NO_COORDINATES if q0 is None else q0, dtype=float)
+        self.qd = np.ascontiguousarray(NO_COORDINATES if qd is None else qd, dtype=float)
         self.T = T
         self.method = method
         self.steps = steps
@@ -160,7 +160,7 @@ class Evaluator:
         self.singular = mechanism.singular
         self.sign = self.singular.sign(self.R0, self.q0)
         d = mechanism.n_rates
-        self._Rs, self._Qs = states.buffers(mechanism, steps)
+        self._Rs, self._Qs = self.kernels.nodes(steps)
         self._Zs = np.empty((steps + 1, d, d))
         self._M = np.empty((d, d))
         self._U = np.empty((steps, 3, mechanism.n_inputs))
@@ -176,8 +176,8 @@ class Evaluator:
     def forward(self, U, h: float, stop: float):
         """The motion of the stage table ``U`` with steps ``h`` (no variational system):
         ``(R nodes, q nodes, steps done)``."""
-        Rs, Qs = states.buffers(self.mechanism, U.shape[0])
-        n, _, _ = states.forward(self.mechanism, self.kernels, self.R0, self.q0, U, h, self.sign, stop, Rs, Qs)
+        Rs, Qs = self.kernels.nodes(U.shape[0])
+        n, _, _ = self.kernels.forward(self.R0, self.q0, U, h, self.sign, stop, Rs, Qs)
         return Rs, Qs, int(n)
 
     def refined(self, steps: int) -> "Evaluator":
@@ -206,8 +206,8 @@ class Evaluator:
         stop = self.delta_min if delta_stop is None else delta_stop
         U = self._fill(x, self._U)
         J = np.empty((self.mechanism.n_rates, self.n_params))
-        n, dmin, t_stop = states.forward_variational(
-            self.mechanism, self.kernels, self.R0, self.q0, U, self.h, self.sign, stop, self.stage_basis,
+        n, dmin, t_stop = self.kernels.forward_variational(
+            self.R0, self.q0, U, self.h, self.sign, stop, *self.stage_basis,
             self._Rs, self._Qs, self._Zs, J, self._M, self._Wd, full)
         self.evaluations += 1
         complete = n == self.steps

@@ -38,7 +38,7 @@ hard part), then ``R_0 → R_m``, each planned as a whole without the hops' sens
 (two legs multiply only two) and with a few initial guesses only
 (:func:`quick_strategy`), stitched and certified as above, within :data:`VIA_TIME` more.
 
-States beyond SO(3) (:mod:`nonholo.spaces.state`). For a mechanism whose state is ``(R, q)`` or
+States beyond SO(3) (:mod:`nonholo.spaces.groups`). For a mechanism whose state is ``(R, q)`` or
 ``q``, the path is the straight path of states (:func:`nonholo.planning.state_path.straight_path`,
 hops of at most :data:`nonholo.planning.state_path.MAX_HOP`, checked clear of ``Δ = 0``), a failed
 hop is split at its straight midpoint, and the hops, stitching, certification and

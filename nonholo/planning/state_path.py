@@ -1,6 +1,6 @@
 """Paths of states beyond SO(3) for the global route (:mod:`nonholo.planning.route`).
 
-A state is a pair ``(R, q)`` (:mod:`nonholo.spaces.state`). The straight path from ``a`` to ``b``
+A state is a pair ``(R, q)`` (:mod:`nonholo.spaces.groups`). The straight path from ``a`` to ``b``
 moves the orientation along its geodesic and the coordinates along their difference
 (angles the short way round), both at constant rate:
 

@@ -50,7 +50,7 @@ def as_geometry(geometry=None, a: float | None = None, b: float | None = None,
     if geometry is None:
         if all(v is None for v in given.values()):
             return platform.geometry
-        from derivations.mechanism import (
+        from derivations.mechanisms import (
             PAPER_GEOMETRY,  # SymPy: only for other dimensions
         )
 

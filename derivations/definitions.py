@@ -1,7 +1,7 @@
 """The mechanisms the toolkit derives and generates code for, by name.
 
 Adding a mechanism means adding one entry here: a function returning a
-:class:`~derivations.mechanism.Mechanism` (see ``notebooks/adding_a_mechanism.ipynb``).
+:class:`~derivations.mechanisms.Mechanism` (see ``notebooks/adding_a_mechanism.ipynb``).
 """
 from __future__ import annotations
 
@@ -9,7 +9,7 @@ from collections.abc import Callable
 
 import sympy as sp
 
-from .mechanism import (
+from .mechanisms import (
     Mechanism,
     PlatformGeometry,
     a,
@@ -19,8 +19,7 @@ from .mechanism import (
     platform_mechanism,
     rho,
 )
-from .so3 import e1, e2, e3
-from .state_space import StateMechanism
+from .rotations import e1, e2, e3
 from .vehicles import kinematic_car, rolling_ball
 
 #: A second placement of the platform's legs and disk. The paper's legs are radial at
@@ -35,7 +34,7 @@ RAISED_GEOMETRY = PlatformGeometry(
     contact=tuple(rho * (e1 + e2) / sp.sqrt(2)), axle=tuple((e1 - e2) / sp.sqrt(2)),
 )
 
-MECHANISMS: dict[str, Callable[[], Mechanism | StateMechanism]] = {
+MECHANISMS: dict[str, Callable[[], Mechanism]] = {
     "platform": paper_platform,
     "platform_raised": lambda: platform_mechanism(
         "platform_raised", RAISED_GEOMETRY,
@@ -49,7 +48,7 @@ MECHANISMS: dict[str, Callable[[], Mechanism | StateMechanism]] = {
 }
 
 
-def get(name: str) -> Mechanism | StateMechanism:
+def get(name: str) -> Mechanism:
     """The mechanism called ``name`` (``KeyError`` lists the known names)."""
     try:
         return MECHANISMS[name]()

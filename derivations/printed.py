@@ -2,7 +2,7 @@
 
 Each entry carries its equation tag and the printed LaTeX. Formulas that are balanced
 are also given as SymPy-buildable Python text in the symbols of
-:mod:`derivations.so3`, :mod:`derivations.singularity` and :mod:`derivations.variational`;
+:mod:`derivations.rotations`, :mod:`derivations.singularity` and :mod:`derivations.variational`;
 the rows of eq. (12) are kept as printed text (two of them do not parse: unbalanced
 parentheses), and :mod:`derivations.audit` looks for the repairs that make them true.
 

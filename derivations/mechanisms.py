@@ -1,10 +1,18 @@
 """Mechanisms as data, and the orienting platform's kinematics from its geometry.
 
-A mechanism on SO(3) is a driftless system in spatial form ``dR/dt = [L(R) u] R``:
-``ω = L(R) u`` is the spatial angular velocity, ``u`` the inputs. A :class:`Mechanism`
-holds ``L(R)`` as a SymPy matrix in the symbols ``r_ij`` (see :mod:`derivations.so3`)
-and, where ``L`` blows up, the singularity function ``Δ(R)``. Everything downstream
-(Q, A, B, the generated numeric code, the planner) takes a mechanism as input.
+A mechanism is a driftless system in spatial form. On SO(3), ``dR/dt = [L(R) u] R``:
+``ω = L(R) u`` is the spatial angular velocity, ``u`` the inputs. A state may also carry
+Euclidean coordinates ``x`` (``(R, x) ∈ SO(3) × Rᵏ``) or consist of them alone (``x ∈ Rᵏ``)::
+
+    dR/dt = [ω] R,   ω = L(R, x) u        (the orientation part, when there is one)
+    dx/dt = X(R, x) u                      (the Euclidean part, k ≥ 1)
+
+stacked as ``(ω, ẋ) = G u`` with the field ``G = [L; X]`` of ``d = 3 + k`` rows (``d = k``
+without orientation; ``G = L`` on SO(3), the product with ``k = 0``). A
+:class:`Mechanism` holds these as SymPy matrices in the symbols ``r_ij`` (see
+:mod:`derivations.rotations`) and the coordinates and, where the field blows up, the
+singularity function ``Δ``. Everything downstream (Q, A, B, the generated numeric code,
+the planner) takes a mechanism as input.
 
 The parallel orienting platform is built, not typed in: two extensible legs and a disk
 rolling on the sphere give three linear equations ``C(R) ω = (u_1, u_2, 0)``; solving
@@ -16,42 +24,88 @@ from dataclasses import dataclass, field
 
 import sympy as sp
 
-from .so3 import e1, e2, e3, hat, r
+from .rotations import e1, e2, e3, hat, r
 
 
 @dataclass(frozen=True)
 class Mechanism:
-    """A driftless system ``dR/dt = [L(R) u] R`` on SO(3).
+    """A driftless system on ``SO(3)``, ``SO(3) × Rᵏ`` or ``Rᵏ`` (see the module docstring).
 
     Attributes:
         name: identifier used by the CLI and the generated module's file name.
         description: one line for listings.
-        L: 3×m SymPy matrix in the symbols ``r_ij``; column k is the spatial angular
-            velocity produced by a unit input ``u_k``.
-        delta: the singularity function ``Δ(R)`` (``L`` is finite where ``Δ ≠ 0``), or
-            ``None`` when ``L`` is polynomial (no singular set).
+        L: 3×m SymPy matrix in the symbols ``r_ij`` (and the coordinates); column k is the
+            spatial angular velocity ``ω`` produced by a unit input ``u_k`` — the paper's
+            ``L(R)`` on SO(3), ``Ω`` of a state with coordinates; ``None`` for a state
+            without orientation.
+        delta: the singularity function ``Δ`` (the field is finite where ``Δ ≠ 0``), or
+            ``None`` when it is finite everywhere (no singular set).
         inputs: names of the inputs, with their physical meaning.
-        frame: ``N(R)``, 3×m with orthonormal columns spanning the range of ``L(R)`` and
-            finite everywhere: the desingularised input coordinates ``ω = N(R) w`` (the
-            physical inputs are ``u = W(R) w``, see :func:`input_map`); ``None`` if the
+        frame: the desingularised field ``N`` (d×m, rows as :attr:`field`'s, finite
+            everywhere, orthonormal columns spanning the range of the field); the
+            physical inputs are ``u = W w`` (see :func:`input_map`); ``None`` if the
             mechanism has none.
-        frame_inputs: ``W(R)`` when it is known in closed form (otherwise derived from
-            ``L`` and ``N`` by :func:`input_map`).
+        frame_inputs: ``W`` when it is known in closed form (otherwise derived from the
+            field and ``N`` by :func:`input_map`).
+        coordinates: the symbols of the Euclidean state ``x`` (k of them; none on SO(3)).
+        units: the unit of each coordinate (for reports: ``"m"``, ``"rad"``, ...).
+        angles: which coordinates are angles (errors of an angle are taken modulo 2π).
+        X: k×m rates of the coordinates per unit input (``None``: no coordinates).
         derivation: named intermediate results (leg rows, constraint matrix, ...).
     """
 
     name: str
     description: str
-    L: sp.Matrix
-    delta: sp.Expr | None
-    inputs: tuple[str, ...]
+    L: sp.Matrix | None = None
+    delta: sp.Expr | None = None
+    inputs: tuple[str, ...] = ()
     frame: sp.Matrix | None = None
     frame_inputs: sp.Matrix | None = None
+    coordinates: tuple[sp.Symbol, ...] = ()
+    units: tuple[str, ...] = ()
+    angles: tuple[bool, ...] = ()
+    X: sp.Matrix | None = None
     derivation: dict = field(default_factory=dict, compare=False, repr=False)
+
+    def __post_init__(self):
+        if self.L is None and self.X is None:
+            raise ValueError(f"mechanism {self.name!r}: give L (an orientation), X (coordinates) or both")
+        if (self.X is None) != (not self.coordinates):
+            raise ValueError(f"mechanism {self.name!r}: X needs one row per coordinate")
+
+    @property
+    def orientation(self) -> bool:
+        """Whether the state includes an orientation ``R``."""
+        return self.L is not None
+
+    @property
+    def Omega(self) -> sp.Matrix | None:
+        """The orientation's rows of the field, ``ω = Ω u`` (:attr:`L`)."""
+        return self.L
 
     @property
     def n_inputs(self) -> int:
-        return self.L.shape[1]
+        return (self.L if self.L is not None else self.X).shape[1]
+
+    @property
+    def n_coordinates(self) -> int:
+        return len(self.coordinates)
+
+    @property
+    def field(self) -> sp.Matrix:
+        """The stacked field ``G = [L; X]`` (d×m, ``d = 3 + k`` with orientation, else ``k``):
+        the state's rates ``(ω, ẋ) = G u``; ``G = L`` on SO(3)."""
+        if self.X is None:
+            return self.L
+        return sp.Matrix.vstack(self.L, self.X) if self.orientation else self.X
+
+    @property
+    def state_space(self) -> str:
+        """``"SO(3)"``, ``"SO(3)xR^k"`` or ``"R^k"``."""
+        k = self.n_coordinates
+        if not k:
+            return "SO(3)"
+        return f"SO(3)xR^{k}" if self.orientation else f"R^{k}"
 
 
 # --------------------------------------------------------------------------------------
