@@ -316,3 +316,13 @@ def min_norm_step(J, l, scale):
         return scale * (np.linalg.pinv(JS, rcond=PINV_RCOND) @ l)
     x, ok = cholesky_step(J, l, scale)
     return x if ok else pinv_step(J, l, scale)
+
+
+@jit
+def all_finite(A) -> bool:
+    """Whether every entry of the 2-d array ``A`` is finite."""
+    for i in range(A.shape[0]):
+        for j in range(A.shape[1]):
+            if not np.isfinite(A[i, j]):
+                return False
+    return True

@@ -45,6 +45,7 @@ from ..io.result import PlanResult, coordinate_fields
 from ..model.limits import LegLimits
 from ..model.mechanism import Mechanism
 from ..motion.frame_controls import FrameControls
+from ..numerics import kernels
 from ..numerics.checks import check_count
 from ..spaces.groups import NO_COORDINATES
 
@@ -211,7 +212,7 @@ class Evaluator:
             self._Rs, self._Qs, self._Zs, J, self._M, self._Wd, full)
         self.evaluations += 1
         complete = n == self.steps
-        if complete and not np.all(np.isfinite(J)):
+        if complete and not kernels.all_finite(J):
             # the variational system overflowed (Φ(T, 0) does not exist in floating point):
             # a motion no step can be taken from
             complete, n, t_stop = False, n - 1, self.T

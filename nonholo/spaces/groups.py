@@ -211,6 +211,10 @@ class Product:
         self.factors = tuple(f for f in (rotation, coordinates) if f is not None and f.dim)
         #: ``d``: rows of the stacked field ``G``; size of a variation ``s = (s_R, s_q)``
         self.dim = (3 if rotation is not None else 0) + self.coordinates.dim
+        if rotation is None:
+            self.error = self._coordinates_error
+        elif not self.coordinates.dim:
+            self.error = self._rotation_error
 
     @classmethod
     def of(cls, orientation: bool, names=(), units=None, angles=None) -> "Product":
@@ -274,18 +278,19 @@ class Product:
 
     def error(self, R, q, Rd, qd) -> tuple[np.ndarray, dict]:
         """``(e, parts)``: the stacked terminal error ``e = (l, δq)`` of ``(R, q)`` from
-        ``(R_d, q_d)`` and the norms of its parts by name (:meth:`parts`)."""
-        pieces, norms = [], []
-        if self.rotation is not None:
-            l, err = self.rotation.error(R, Rd)
-            pieces.append(l)
-            norms.append(err)
-        if self.k or self.rotation is None:
-            dq, err = self.coordinates.error(q, qd)
-            pieces.append(dq)
-            norms.append(err)
-        e = pieces[0] if len(pieces) == 1 else np.concatenate(pieces)
-        return e, self.parts(*norms)
+        ``(R_d, q_d)`` and the norms of its parts by name (:meth:`parts`). (The factors'
+        case is chosen once, in ``__init__``: this runs at every planner iteration.)"""
+        l, rot = self.rotation.error(R, Rd)
+        dq, coord = self.coordinates.error(q, qd)
+        return np.concatenate((l, dq)), {"rotation": rot, "coordinates": coord}
+
+    def _rotation_error(self, R, q, Rd, qd) -> tuple[np.ndarray, dict]:
+        l, rot = self.rotation.error(R, Rd)
+        return l, {"rotation": rot}
+
+    def _coordinates_error(self, R, q, Rd, qd) -> tuple[np.ndarray, dict]:
+        dq, coord = self.coordinates.error(q, qd)
+        return dq, {"coordinates": coord}
 
     def parts(self, *norms) -> dict:
         """The error's part norms by name: ``{"rotation": rad, "coordinates": units}`` (the
@@ -296,7 +301,10 @@ class Product:
 
     def norm(self, parts: dict) -> float:
         """``|e|`` from the norms of its parts."""
-        return float(np.hypot(parts.get("rotation", 0.0), parts.get("coordinates", 0.0)))
+        if len(parts) == 1:
+            (value,) = parts.values()
+            return float(value)
+        return float(np.hypot(parts["rotation"], parts["coordinates"]))
 
     def distance(self, R, q, Rd, qd) -> float:
         """``|e|`` of :meth:`error`."""
