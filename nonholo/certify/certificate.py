@@ -68,7 +68,7 @@ class Certificate:
     ``correctable``: only the replay's terminal error is too large (the replay is accurate,
     well conditioned and clear of ``Δ = 0``). ``l``: the replay's ``l_T``; ``R``: its nodes
     (``M + 1``); ``q``: their coordinates (``(M + 1, k)``); ``errors``: the norms of the
-    parts of ``l`` by name (:meth:`nonholo.spaces.groups.Product.parts`). Errors and bounds
+    parts of ``l`` by name (:meth:`nonholo.spaces.groups.Product.error`). Errors and bounds
     are in the stacked metric of :mod:`nonholo.spaces.groups`.
     """
 

@@ -278,8 +278,9 @@ class Product:
 
     def error(self, R, q, Rd, qd) -> tuple[np.ndarray, dict]:
         """``(e, parts)``: the stacked terminal error ``e = (l, δq)`` of ``(R, q)`` from
-        ``(R_d, q_d)`` and the norms of its parts by name (:meth:`parts`). (The factors'
-        case is chosen once, in ``__init__``: this runs at every planner iteration.)"""
+        ``(R_d, q_d)`` and the norms of its parts by name (``"rotation"`` in rad,
+        ``"coordinates"`` in the mechanism's units; the parts the state has). The factors'
+        case is chosen once, in ``__init__``: this runs at every planner iteration."""
         l, rot = self.rotation.error(R, Rd)
         dq, coord = self.coordinates.error(q, qd)
         return np.concatenate((l, dq)), {"rotation": rot, "coordinates": coord}
@@ -291,13 +292,6 @@ class Product:
     def _coordinates_error(self, R, q, Rd, qd) -> tuple[np.ndarray, dict]:
         dq, coord = self.coordinates.error(q, qd)
         return dq, {"coordinates": coord}
-
-    def parts(self, *norms) -> dict:
-        """The error's part norms by name: ``{"rotation": rad, "coordinates": units}`` (the
-        parts the state has; an SO(3) state's only part is its rotation)."""
-        names = (["rotation"] if self.rotation is not None else []) + (
-            ["coordinates"] if self.k or self.rotation is None else [])
-        return {n: float(v) for n, v in zip(names, norms)}
 
     def norm(self, parts: dict) -> float:
         """``|e|`` from the norms of its parts."""

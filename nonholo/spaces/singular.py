@@ -47,9 +47,6 @@ class SingularSet:
         """Whether a motion whose least ``sgnΔ`` is ``least`` keeps the clearance ``delta_min``."""
         return least >= delta_min
 
-    def __bool__(self) -> bool:
-        return True
-
 
 class NoSingularSet(SingularSet):
     """The singular set of a mechanism that has none: ``Δ ≡ +∞``, sign 1, always clear."""
@@ -73,6 +70,3 @@ class NoSingularSet(SingularSet):
 
     def clear(self, least: float, delta_min: float) -> bool:
         return True
-
-    def __bool__(self) -> bool:
-        return False
