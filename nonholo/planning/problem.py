@@ -184,8 +184,9 @@ class Problem:
                              "can resolve (at most steps/2; raise steps or lower harmonics)")
         controls = initial_controls(method, T, mech.n_inputs, harmonics, grid, u0)
         stages.check_steps(controls, steps)
-        listed = (Clearance(options.delta_min), stroke, speed) + tuple(constraints)
-        checked = tuple(c.check(mech) for c in listed if c is not None)
+        # the keywords' constraints are checked as they are built; the caller's ones here
+        listed = (Clearance(options.delta_min), stroke, speed)
+        checked = tuple(c for c in listed if c is not None) + tuple(c.check(mech) for c in constraints)
         for kind in (Clearance, LegStroke, LegSpeed):
             one_of(checked, kind)
         return cls(mechanism=mech, R0=R0, q0=q0, Rd=Rd, qd=qd, T=T, method=method, harmonics=harmonics,

@@ -379,7 +379,7 @@ def _steer_path(mechanism: Mechanism, path: list, goal, T: float, local: Callabl
                 delta_min: float, sign: float, deadline: float, leg_limits=None) -> Steered:
     """:func:`steer` along one path of states ``(R, q)`` (``path[0]`` the start)."""
     start = path[0]
-    (R0, q0), (Rd, qd) = start, goal
+    R0, q0 = start
     provider = paths_for(mechanism)
     T_hop = T / (len(path) - 1)
     targets = list(path[1:])
@@ -393,7 +393,7 @@ def _steer_path(mechanism: Mechanism, path: list, goal, T: float, local: Callabl
             return Steered(None, None, hops, f"the route ran out of its time after {len(hops)} "
                                              f"hops ({len(targets)} to go)", waypoints)
         res = local(here, targets[0], T_hop, hop_delta_min(mechanism, here, targets[0], delta_min))
-        if res.success and res.sensitivity <= max_hop_sensitivity(mechanism):
+        if res.success and res.sensitivity <= provider.max_hop_sensitivity:
             hops.append(res)
             here = _end(res)
             targets.pop(0)

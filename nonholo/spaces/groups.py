@@ -264,8 +264,7 @@ class Product:
             return self.rotation.parse(value, name), NO_COORDINATES
         if not (isinstance(value, (tuple, list)) and len(value) == 2):
             raise ValueError(f"{want}, got {_kind(value)}")
-        R = self.rotation.parse(np.asarray(value[0], dtype=float) if isinstance(value[0], list)
-                                else value[0], f"{name}[0] (the orientation)")
+        R = self.rotation.parse(value[0], f"{name}[0] (the orientation)")
         return R, self.coordinates.parse(value[1], f"{name}[1] (the coordinates)", want)
 
     def public(self, R, q):
@@ -315,8 +314,8 @@ class Product:
         s = np.atleast_1d(np.asarray(s, dtype=float))
         R = (self.rotation.interpolate(Ra, Rb, s) if self.rotation is not None
              else np.broadcast_to(IDENTITY, (s.size, 3, 3)))
-        step = self.coordinates.difference(qb, qa)
-        return [(np.array(R[i]), qa + s[i] * step) for i in range(s.size)]
+        q = self.coordinates.interpolate(qa, qb, s)
+        return [(np.array(R[i]), q[i]) for i in range(s.size)]
 
     def sample(self, rng: np.random.Generator, n: int) -> list[tuple[np.ndarray, np.ndarray]]:
         """``n`` states, uniform: Haar on SO(3) × the coordinates' box."""
