@@ -263,6 +263,7 @@ def write(outdir: Path = GENERATED_DIR, files: dict[str, str] | None = None) -> 
     paths = []
     for name, text in (generated_files() if files is None else files).items():
         path = outdir / name
+        path.parent.mkdir(parents=True, exist_ok=True)
         path.write_text(text)
         paths.append(path)
     return paths

@@ -96,6 +96,7 @@ from ..generated import cf4_kernels as kernels_inlined
 from ..numerics import effort
 from ..numerics.jit import jit
 from ..numerics.kernels import exp_times, inv33, inverse_into
+from .native_kernels import kernel_source, native_kernels
 
 # --------------------------------------------------------------------------------------
 # The system a kernel integrates (bound per system by compile_system)
@@ -614,6 +615,9 @@ class Kernels:
     frame_inputs: object = None
     #: ``k``, the number of coordinates ``q`` of the state (0 on SO(3))
     n_coordinates: int = 0
+    #: ``"native"`` (C translated from these kernels, :mod:`nonholo.integrate.native_kernels`)
+    #: or ``"numba"``
+    backend: str = "numba"
 
     def nodes(self, steps: int) -> tuple[np.ndarray, np.ndarray]:
         """Node arrays ``(Rs (steps+1, 3, 3), Qs (steps+1, k))`` for a kernel's trajectory."""
@@ -657,7 +661,8 @@ _COMPILED: dict[str, Kernels] = {}
 _BY_MODULE: dict[tuple, Kernels] = {}
 
 
-def compile_system(module, frame: bool = False, inlined: bool = True, fast_derivative: bool = True) -> Kernels:
+def compile_system(module, frame: bool = False, inlined: bool = True, fast_derivative: bool = True,
+                   backend: str | None = None) -> Kernels:
     """The kernels of a system of the generated ``module``'s mechanism (compiled once,
     cached on disk).
 
@@ -673,11 +678,21 @@ def compile_system(module, frame: bool = False, inlined: bool = True, fast_deriv
     checked against. ``fast_derivative=False`` compiles ``QG`` without fast-math (not
     cached): LLVM may then reorder its arithmetic differently wherever it is inlined, so
     only these kernels are bit for bit the same in both forms.
+
+    ``backend``: ``"native"`` — the same kernels translated to C and compiled ahead of
+    time (:mod:`nonholo.integrate.native_kernels`) — or ``"numba"``; by default native
+    where available (a C compiler, ``NONHOLO_BACKEND`` not ``numba``), else numba.
     """
-    if (module, frame) in _BY_MODULE and inlined and fast_derivative:
-        return _BY_MODULE[module, frame]
+    if backend not in (None, "native", "numba"):
+        raise ValueError(f"backend must be 'native', 'numba' or None, not {backend!r}")
     if frame and not getattr(module, "HAS_FRAME", False):
         raise ValueError(f"mechanism {module.NAME!r} has no desingularised frame N(R, q)")
+    if backend != "numba" and inlined and fast_derivative:
+        kern = _native(module, frame, required=backend == "native")
+        if kern is not None:
+            return kern
+    if (module, frame) in _BY_MODULE and inlined and fast_derivative:
+        return _BY_MODULE[module, frame]
     if not (inlined and fast_derivative):
         tag = system_tag(module, frame) + ("" if inlined else "_written") + ("" if fast_derivative else "_exact")
         return _compile(module, frame, _TEMPLATES if inlined else _WRITTEN, tag, False, fast_derivative)
@@ -687,6 +702,41 @@ def compile_system(module, frame: bool = False, inlined: bool = True, fast_deriv
         return _COMPILED[tag]
     kern = _compile(module, frame, _TEMPLATES, tag, importable(module))
     _COMPILED[tag] = _BY_MODULE[module, frame] = kern
+    return kern
+
+
+_NATIVE: dict[tuple, Kernels] = {}
+
+
+def native_parts() -> dict:
+    """The pieces of this module the native kernels are translated from besides the inlined
+    kernels (see :func:`nonholo.integrate.native_kernels.functions`)."""
+    return {"rates": rates, "zstage": zstage, "no_singularity": no_singularity, "step_workspace": step_workspace}
+
+
+def native_source(module, kernels_text: str | None = None) -> str:
+    """The C source of the native kernels of the generated ``module`` (``nonholo derive``;
+    ``kernels_text``: the inlined kernels' source, by default the generated module's)."""
+    return kernel_source(module, native_parts(), kernels_text)
+
+
+def _native(module, frame: bool, required: bool) -> Kernels | None:
+    """The native kernels of a system (see :func:`compile_system`), or None."""
+    if (module, frame) in _NATIVE:
+        return _NATIVE[module, frame]
+    fns = native_kernels(module, frame, native_parts())
+    if fns is None:
+        if required:
+            raise RuntimeError(f"no native kernels for {module.NAME!r} (no C compiler, or NONHOLO_BACKEND=numba)")
+        return None
+    kern = Kernels(name=module.NAME, frame=frame, n_inputs=module.N_INPUTS,
+                   has_singular_set=module.HAS_SINGULAR_SET, n_coordinates=len(module.COORDINATES),
+                   forward=metered(fns["forward"], effort.FORWARD_WEIGHT, 2),
+                   forward_variational=metered(fns["forward_variational"], 1.0, 2),
+                   frame_inputs=None if fns["frame_inputs"] is None
+                   else metered(fns["frame_inputs"], effort.FORWARD_WEIGHT, 2),
+                   backend="native")
+    _NATIVE[module, frame] = kern
     return kern
 
 

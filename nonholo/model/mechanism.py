@@ -31,14 +31,19 @@ take ``R`` alone (the paper's ``Δ(R)``, ``N(R)``, ``QN(R, w)``, ``W(R)``).
 """
 from __future__ import annotations
 
+import hashlib
+import os
+import tempfile
 import types
 from dataclasses import dataclass, field
 from functools import cached_property
+from pathlib import Path
 from typing import Callable
 
 import numpy as np
 
 from ..integrate import cf4
+from ..numerics import native
 from ..spaces.groups import Product
 from ..spaces.singular import NoSingularSet, SingularSet
 
@@ -279,17 +284,19 @@ class Mechanism:
                    module=module, G=module.G)
 
     @classmethod
-    def from_symbolic(cls, mechanism) -> "Mechanism":
+    def from_symbolic(cls, mechanism, cache: bool = True) -> "Mechanism":
         """The numeric mechanism of a symbolic :class:`derivations.mechanisms.Mechanism`, in one
         call: its module is generated (as ``nonholo derive`` would write it) and loaded
-        in this process. Its kernels are compiled on first use and not cached on disk
-        (the module exists only in this process); to add a mechanism for good, put it in
-        ``derivations/definitions.py`` and run ``nonholo derive``. To look it up by name,
-        :func:`nonholo.model.catalog.add` it.
+        in this process. With ``cache``, the generated source is kept on disk by a digest of
+        the definition (:func:`generated_source`), so a later run skips the generation; its
+        kernels are compiled once and cached on disk too (:mod:`nonholo.numerics.native`).
+        To add a mechanism for good, put it in ``derivations/definitions.py`` and run
+        ``nonholo derive``. To look it up by name, :func:`nonholo.model.catalog.add` it.
         """
-        from derivations import codegen  # SymPy: imported only when asked for
-
-        source = codegen.mechanism_module(mechanism)
+        if type(mechanism).__name__ != "Mechanism" or not hasattr(mechanism, "field"):
+            raise TypeError(f"mechanism must be a symbolic derivations.mechanisms.Mechanism, "
+                            f"not {type(mechanism).__name__}")
+        source = generated_source(mechanism, cache)
         module = types.ModuleType(f"nonholo_symbolic_{mechanism.name}")
         module.SOURCE = source
         exec(compile(source, f"<generated module of mechanism {mechanism.name!r}>", "exec"),
@@ -298,3 +305,48 @@ class Mechanism:
 
     def __repr__(self) -> str:
         return f"Mechanism({self.name!r}: {self.description})"
+
+
+#: The fields of a symbolic mechanism that define its generated module.
+DEFINING_FIELDS = ("name", "description", "L", "delta", "inputs", "frame", "frame_inputs",
+                   "coordinates", "units", "angles", "X")
+
+
+def definition_digest(mechanism) -> str:
+    """SHA-256 of a symbolic mechanism's definition (its :data:`DEFINING_FIELDS` as SymPy
+    ``srepr``), of SymPy's version and of the code generator's source."""
+    import sympy
+
+    from derivations import codegen
+
+    h = hashlib.sha256()
+    h.update(sympy.__version__.encode())
+    h.update(Path(codegen.__file__).read_bytes())
+    for name in DEFINING_FIELDS:
+        h.update(f"{name}={sympy.srepr(getattr(mechanism, name, None))};".encode())
+    return h.hexdigest()
+
+
+def generated_source(mechanism, cache: bool = True) -> str:
+    """The generated module's source of a symbolic mechanism (``derivations.codegen``); with
+    ``cache``, read from (or written to) ``<cache>/generated/<name>_<digest>.py`` (the cache
+    of :func:`nonholo.numerics.native.cache_dir`, written atomically)."""
+    from derivations import codegen  # SymPy: imported only when asked for
+
+    if not cache:
+        return codegen.mechanism_module(mechanism)
+    path = native.cache_dir().parent / "generated" / f"{mechanism.name}_{definition_digest(mechanism)[:24]}.py"
+    try:
+        return path.read_text()
+    except OSError:
+        pass
+    source = codegen.mechanism_module(mechanism)
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        with tempfile.NamedTemporaryFile("w", dir=path.parent, delete=False, suffix=".tmp") as f:
+            f.write(source)
+        os.replace(f.name, path)
+    except OSError as exc:
+        native.warn_once("generated cache", f"nonholo: could not cache the generated module of "
+                                            f"{mechanism.name!r} ({exc})")
+    return source

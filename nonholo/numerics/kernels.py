@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from . import native
 from .jit import jit
 
 
@@ -107,8 +108,9 @@ def inverse_into(A, out):
 
 
 @jit
-def log_rotation(R):
-    """Rotation vector ``l`` with ``exp([l]) = R``, ``|l| ≤ π`` (the error of (4): ``[l] = log R``).
+def log_rotation_into(R, out):
+    """``out`` = the rotation vector ``l`` with ``exp([l]) = R``, ``|l| ≤ π`` (the error of (4):
+    ``[l] = log R``).
 
     ``sin α · a = vee(R − Rᵀ)/2`` and ``cos α = (tr R − 1)/2`` give ``α = atan2``; near
     ``α = π`` the axis comes from the symmetric part ``(R + Rᵀ)/2 − cos α I = (1 − cos α) a aᵀ``.
@@ -120,13 +122,12 @@ def log_rotation(R):
     c = min(1.0, max(-1.0, c))
     s = np.sqrt(sx * sx + sy * sy + sz * sz)
     a = np.arctan2(s, c)
-    out = np.empty(3)
     if c > -0.9:
         f = 1.0 + s * s / 6.0 if s < 1e-6 else a / s
         out[0] = f * sx
         out[1] = f * sy
         out[2] = f * sz
-        return out
+        return
     k = 0
     for i in range(1, 3):
         if R[i, i] > R[k, k]:
@@ -140,18 +141,17 @@ def log_rotation(R):
     out[0] = a * v0 / n
     out[1] = a * v1 / n
     out[2] = a * v2 / n
-    return out
 
 
 @jit
-def log_error(R, Rd):
-    """``(l, |l|)`` with ``[l] = log(R Rdᵀ)``: the planner's error ``l_T`` and its norm (rad)."""
+def log_error_into(R, Rd, l):
+    """``l`` with ``[l] = log(R Rdᵀ)``: the planner's error ``l_T``; returns its norm (rad)."""
     P = np.empty((3, 3))
     for i in range(3):
         for j in range(3):
             P[i, j] = R[i, 0] * Rd[j, 0] + R[i, 1] * Rd[j, 1] + R[i, 2] * Rd[j, 2]
-    l = log_rotation(P)
-    return l, np.sqrt(l[0] * l[0] + l[1] * l[1] + l[2] * l[2])
+    log_rotation_into(P, l)
+    return np.sqrt(l[0] * l[0] + l[1] * l[1] + l[2] * l[2])
 
 
 @jit
@@ -216,10 +216,12 @@ CHOLESKY_PIVOT = 1e-10
 
 
 @jit
-def scaled_gram(J, scale):
+def scaled_gram_into(J, scale, A):
     """``A = J S² Jᵀ`` (3×3), ``S = diag(scale)``."""
     p = J.shape[1]
-    A = np.zeros((3, 3))
+    for i in range(3):
+        for j in range(3):
+            A[i, j] = 0.0
     for k in range(p):
         s2 = scale[k] * scale[k]
         j0 = J[0, k] * s2
@@ -234,24 +236,22 @@ def scaled_gram(J, scale):
     A[0, 1] = A[1, 0]
     A[0, 2] = A[2, 0]
     A[1, 2] = A[2, 1]
-    return A
 
 
 @jit
-def scaled_back(J, y, scale):
+def scaled_back_into(J, y, scale, x):
     """``x = S² Jᵀ y``: the step from the solution ``y`` of ``J S² Jᵀ y = l``."""
     p = J.shape[1]
-    x = np.empty(p)
     for k in range(p):
         x[k] = scale[k] * scale[k] * (J[0, k] * y[0] + J[1, k] * y[1] + J[2, k] * y[2])
-    return x
 
 
 @jit
-def cholesky_step(J, l, scale):
-    """``(x, True)`` with ``x = S² Jᵀ (J S² Jᵀ)^{-1} l`` by Cholesky, or ``(·, False)`` when a
+def cholesky_into(J, l, scale, x):
+    """``x = S² Jᵀ (J S² Jᵀ)^{-1} l`` by Cholesky; returns ``False`` (``x`` unset) when a
     pivot falls below :data:`CHOLESKY_PIVOT` times the largest diagonal entry."""
-    A = scaled_gram(J, scale)
+    A = np.empty((3, 3))
+    scaled_gram_into(J, scale, A)
     y = np.empty(3)
     amax = max(A[0, 0], max(A[1, 1], A[2, 2]))
     floor = CHOLESKY_PIVOT * amax
@@ -275,23 +275,26 @@ def cholesky_step(J, l, scale):
                 if ok:
                     c22 = np.sqrt(d)
     if not ok:
-        return y, False
+        return False
     z0 = l[0] / c00
     z1 = (l[1] - c10 * z0) / c11
     z2 = (l[2] - c20 * z0 - c21 * z1) / c22
     y[2] = z2 / c22
     y[1] = (z1 - c21 * y[2]) / c11
     y[0] = (z0 - c10 * y[1] - c20 * y[2]) / c00
-    return scaled_back(J, y, scale), True
+    scaled_back_into(J, y, scale, x)
+    return True
 
 
 @jit
-def pinv_step(J, l, scale):
+def pinv_into(J, l, scale, x):
     """``x = S² Jᵀ (J S² Jᵀ)^# l`` by the eigen pseudo-inverse (eigenvalues below
     ``1e-14·max`` dropped)."""
+    A = np.empty((3, 3))
+    scaled_gram_into(J, scale, A)
     y = np.empty(3)
-    _pinv_solve3(scaled_gram(J, scale), l, y)
-    return scaled_back(J, y, scale)
+    _pinv_solve3(A, l, y)
+    scaled_back_into(J, y, scale, x)
 
 
 #: relative cut-off of the singular values of ``J S`` for ``d ≠ 3`` rows: the square root of
@@ -319,10 +322,118 @@ def min_norm_step(J, l, scale):
 
 
 @jit
-def all_finite(A) -> bool:
+def all_finite_jit(A) -> bool:
     """Whether every entry of the 2-d array ``A`` is finite."""
     for i in range(A.shape[0]):
         for j in range(A.shape[1]):
             if not np.isfinite(A[i, j]):
                 return False
     return True
+
+
+# --------------------------------------------------------------------------------------
+# The functions the planners call: native where available (the module docstring)
+# --------------------------------------------------------------------------------------
+
+#: The functions of the native module ``nonholo.generated.native.numerics``, with the kinds
+#: of their arguments (see :mod:`nonholo.numerics.c_translation`); the first ones are the
+#: helpers of the others.
+NATIVE = {
+    "log_rotation_into": {"R": "f8[2]", "out": "f8[1]"},
+    "log_error_into": {"R": "f8[2]", "Rd": "f8[2]", "l": "f8[1]"},
+    "scaled_gram_into": {"J": "f8[2]", "scale": "f8[1]", "A": "f8[2]"},
+    "scaled_back_into": {"J": "f8[2]", "y": "f8[1]", "scale": "f8[1]", "x": "f8[1]"},
+    "cholesky_into": {"J": "f8[2]", "l": "f8[1]", "scale": "f8[1]", "x": "f8[1]"},
+    "all_finite_jit": {"A": "f8[2]"},
+}
+
+
+def native_functions() -> list:
+    """The functions of :data:`NATIVE` to translate, in order."""
+    from .c_translation import Function
+
+    calls = {name: name for name in NATIVE}
+    calls.update(log_rotation="log_rotation_into")
+    return [Function(globals()[name], name, kinds, calls=calls, constants={"CHOLESKY_PIVOT": CHOLESKY_PIVOT})
+            for name, kinds in NATIVE.items()]
+
+
+def native_source() -> str:
+    """The C source of ``nonholo.generated.native.numerics``."""
+    from .c_translation import extension_source
+
+    header = ("Native small numerics of nonholo/numerics/kernels.py. Generated by `nonholo derive` "
+              "(nonholo/numerics/c_translation.py). Do not edit.")
+    return extension_source("nonholo.generated.native.numerics", header, native_functions(), native_digest())
+
+
+def native_digest() -> str:
+    """The digest of what the native numerics are translated from (this module, the translator)."""
+    from pathlib import Path
+
+    from . import c_translation
+
+    return native.digest(Path(__file__).read_text(), Path(c_translation.__file__).read_text())
+
+
+_LIB: list = []
+
+
+def native_lib():
+    """The native module of these numerics, or None (numba then)."""
+    if not _LIB:
+        _LIB.append(native.load("numerics", native_digest(), native_source) if native.enabled() else None)
+    return _LIB[0]
+
+
+def log_rotation(R):
+    """Rotation vector ``l`` with ``exp([l]) = R``, ``|l| ≤ π`` (see :func:`log_rotation_into`)."""
+    out = np.empty(3)
+    lib = native_lib()
+    (lib.log_rotation_into if lib is not None else log_rotation_into)(np.ascontiguousarray(R, dtype=float), out)
+    return out
+
+
+def log_error(R, Rd):
+    """``(l, |l|)`` with ``[l] = log(R Rdᵀ)``: the planner's error ``l_T`` and its norm (rad)."""
+    l = np.empty(3)
+    lib = native_lib()
+    norm = (lib.log_error_into if lib is not None else log_error_into)(R, Rd, l)
+    return l, norm
+
+
+def scaled_gram(J, scale):
+    """``A = J S² Jᵀ`` (3×3), ``S = diag(scale)``."""
+    A = np.empty((3, 3))
+    scaled_gram_into(J, scale, A)
+    return A
+
+
+def scaled_back(J, y, scale):
+    """``x = S² Jᵀ y``: the step from the solution ``y`` of ``J S² Jᵀ y = l``."""
+    x = np.empty(J.shape[1])
+    scaled_back_into(J, y, scale, x)
+    return x
+
+
+def cholesky_step(J, l, scale):
+    """``(x, True)`` with ``x = S² Jᵀ (J S² Jᵀ)^{-1} l`` by Cholesky, or ``(·, False)`` when a
+    pivot falls below :data:`CHOLESKY_PIVOT` times the largest diagonal entry."""
+    x = np.empty(J.shape[1])
+    lib = native_lib()
+    ok = (lib.cholesky_into if lib is not None else cholesky_into)(J, l, scale, x)
+    return x, bool(ok)
+
+
+def pinv_step(J, l, scale):
+    """``x = S² Jᵀ (J S² Jᵀ)^# l`` by the eigen pseudo-inverse (eigenvalues below
+    ``1e-14·max`` dropped; compiled by numba on first use: a rank-deficient fallback)."""
+    x = np.empty(J.shape[1])
+    pinv_into(J, l, scale, x)
+    return x
+
+
+def all_finite(A) -> bool:
+    """Whether every entry of the 2-d array ``A`` is finite."""
+    lib = native_lib()
+    return bool((lib.all_finite_jit if lib is not None else all_finite_jit)(A))

@@ -1,0 +1,155 @@
+"""Native kernels: C extension modules built from generated C, found or compiled once.
+
+A native module ``nonholo.generated.native.<name>`` carries the digest of what its C was
+translated from (``SOURCE_DIGEST``: the Python sources and the translator's, see
+:func:`digest`), so that a module built from other sources is never used. :func:`load`
+returns, in this order:
+
+1. the module built at install: ``nonholo.generated.native.<name>`` (``pip install``
+   compiles the catalog's C with the system compiler, see ``setup.py``), if its digest is
+   the source's;
+2. the module in the disk cache (:func:`cache_dir`), if built before from the same source;
+3. a module compiled now with the system compiler (``cc``/``gcc``, the Python headers and
+   NumPy's) into the disk cache;
+
+or ``None`` where there is no compiler, the compilation fails, or ``NONHOLO_BACKEND=numba``
+is set; the caller then compiles its kernels with numba, said once in a warning. The cache
+is written atomically (a file renamed into place), so concurrent processes and killed runs
+never leave a half-written module behind.
+"""
+from __future__ import annotations
+
+import hashlib
+import importlib
+import importlib.machinery
+import importlib.util
+import os
+import shutil
+import subprocess
+import sys
+import sysconfig
+import tempfile
+import warnings
+from pathlib import Path
+
+#: Environment variable choosing the kernels' backend: ``native`` (the default: C where a
+#: compiler is found, else numba) or ``numba``.
+BACKEND_ENV = "NONHOLO_BACKEND"
+#: Environment variable naming the disk cache of compiled modules (default: the user's cache).
+CACHE_ENV = "NONHOLO_CACHE_DIR"
+#: The compiler's flags: optimised, no contraction into fused multiply-adds (the numba
+#: kernels' arithmetic, operation for operation), position-independent.
+CFLAGS = ("-O2", "-fno-math-errno", "-ffp-contract=off", "-fPIC", "-shared", "-std=gnu99",
+          "-Wno-unused-variable", "-Wno-unused-but-set-variable")
+
+_LOADED: dict[str, object] = {}
+_WARNED: set[str] = set()
+
+
+def digest(*texts: str) -> str:
+    """SHA-256 of what a native module is translated from (the Python sources and the
+    translator's): the module records it as ``SOURCE_DIGEST``."""
+    h = hashlib.sha256()
+    for t in texts:
+        h.update(hashlib.sha256(t.encode()).digest())
+    return h.hexdigest()
+
+
+def enabled() -> bool:
+    """Whether native kernels are wanted (``NONHOLO_BACKEND`` is not ``numba``)."""
+    value = os.environ.get(BACKEND_ENV, "native").strip().lower()
+    if value not in ("native", "numba"):
+        raise ValueError(f"{BACKEND_ENV} must be 'native' or 'numba', not {value!r}")
+    return value == "native"
+
+
+def cache_dir() -> Path:
+    """The disk cache of compiled modules: ``$NONHOLO_CACHE_DIR``, else
+    ``$XDG_CACHE_HOME/nonholo/native``, else ``~/.cache/nonholo/native``."""
+    if os.environ.get(CACHE_ENV):
+        return Path(os.environ[CACHE_ENV])
+    base = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
+    return Path(base) / "nonholo" / "native"
+
+
+def compiler() -> str | None:
+    """The C compiler: ``$CC``, Python's own, ``cc`` or ``gcc``, whichever is found first."""
+    for cand in (os.environ.get("CC"), (sysconfig.get_config_var("CC") or "").split(" ")[0], "cc", "gcc"):
+        if cand and shutil.which(cand):
+            return shutil.which(cand)
+    return None
+
+
+def include_dirs() -> list[str]:
+    """The headers a native module needs: Python's and NumPy's."""
+    import numpy
+
+    return [sysconfig.get_paths()["include"], numpy.get_include()]
+
+
+def warn_once(key: str, message: str) -> None:
+    """A warning said once per process."""
+    if key not in _WARNED:
+        _WARNED.add(key)
+        warnings.warn(message, RuntimeWarning, stacklevel=3)
+
+
+def _import_file(name: str, path: Path):
+    loader = importlib.machinery.ExtensionFileLoader(name, str(path))
+    spec = importlib.util.spec_from_file_location(name, str(path), loader=loader)
+    module = importlib.util.module_from_spec(spec)
+    loader.exec_module(module)
+    return module
+
+
+def installed(name: str, want: str):
+    try:
+        module = importlib.import_module(f"nonholo.generated.native.{name}")
+    except ImportError:
+        return None
+    return module if getattr(module, "SOURCE_DIGEST", None) == want else None
+
+
+def compile_module(name: str, source: str, target: Path) -> None:
+    """Compile ``source`` into the extension module file ``target`` (atomically); raises
+    :class:`RuntimeError` with the compiler's message on failure."""
+    cc = compiler()
+    if cc is None:
+        raise RuntimeError("no C compiler found (set CC)")
+    target.parent.mkdir(parents=True, exist_ok=True)
+    with tempfile.TemporaryDirectory(dir=target.parent) as tmp:
+        src = Path(tmp) / f"{name}.c"
+        src.write_text(source)
+        out = Path(tmp) / target.name
+        cmd = [cc, *CFLAGS, *(f"-I{d}" for d in include_dirs()), str(src), "-o", str(out), "-lm"]
+        run = subprocess.run(cmd, capture_output=True, text=True)
+        if run.returncode != 0:
+            raise RuntimeError(f"compiling {name} failed:\n{run.stderr[-4000:]}")
+        os.replace(out, target)
+
+
+def load(name: str, want: str, source):
+    """The native module ``nonholo.generated.native.<name>`` whose ``SOURCE_DIGEST`` is
+    ``want`` (the module docstring says where it is found), or None; ``source()`` gives its
+    C source when it must be compiled."""
+    if not enabled():
+        return None
+    key = f"{name}:{want}"
+    if key in _LOADED:
+        return _LOADED[key]
+    module = installed(name, want)
+    if module is None:
+        suffix = sysconfig.get_config_var("EXT_SUFFIX") or ".so"
+        target = cache_dir() / f"{name}_{want[:16]}{suffix}"
+        try:
+            if not target.exists():
+                compile_module(name, source(), target)
+            module = _import_file(f"nonholo.generated.native.{name}", target)
+            if getattr(module, "SOURCE_DIGEST", None) != want:
+                raise RuntimeError(f"{target} does not hold the expected kernels")
+        except (OSError, RuntimeError, ImportError) as exc:
+            warn_once("native", f"nonholo: native kernels unavailable ({str(exc).splitlines()[0]}); "
+                                f"compiling them with numba instead (slower to start)")
+            module = None
+    _LOADED[key] = module
+    return module

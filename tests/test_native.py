@@ -1,0 +1,217 @@
+"""The native (C) kernels against the numba ones they are translated from.
+
+Both are compiled from the same Python (:mod:`nonholo.numerics.c_translation`); these
+tests hold them to agree to 1e-13 on random inputs for every mechanism of the catalog and
+every kernel, and check the build's plumbing: the digest that keeps a stale module out,
+the disk cache, the fallback to numba, the arguments' checks.
+"""
+import os
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from nonholo.generated import MECHANISMS
+from nonholo.integrate import cf4
+from nonholo.numerics import c_translation, kernels, native
+
+pytestmark = pytest.mark.skipif(native.compiler() is None, reason="no C compiler")
+
+
+def _module(name):
+    import importlib
+
+    return importlib.import_module(f"nonholo.generated.{name}")
+
+
+def _systems(module):
+    return [False, True] if getattr(module, "HAS_FRAME", False) else [False]
+
+
+def _start(module, rng):
+    from scipy.spatial.transform import Rotation
+
+    for _ in range(100):
+        R0 = Rotation.random(random_state=rng.integers(1 << 30)).as_matrix() if module.ORIENTATION else np.eye(3)
+        q0 = rng.normal(size=len(module.COORDINATES)) * 0.3
+        if not module.HAS_SINGULAR_SET or abs(module.delta(R0, q0)) > 0.2:
+            return R0, q0
+    raise AssertionError("no regular start found")
+
+
+def _close(a, b, tol=1e-13):
+    a, b = np.asarray(a, float), np.asarray(b, float)
+    assert a.shape == b.shape
+    finite = np.isfinite(a)
+    np.testing.assert_array_equal(a[~finite], b[~finite])      # the same inf, nan where not finite
+    if finite.any():
+        scale = max(1.0, float(np.abs(a[finite]).max()))
+        assert float(np.abs(a[finite] - b[finite]).max()) <= tol * scale
+
+
+@pytest.mark.parametrize("name", MECHANISMS)
+def test_native_kernels_agree_with_numba(name):
+    """forward, forward_variational (sparse and dense bases, with and without M(T)) and
+    frame_inputs: the same trajectory, Jacobian and Gramian to 1e-13."""
+    module = _module(name)
+    rng = np.random.default_rng(abs(hash(name)) % 2**32)
+    for frame in _systems(module):
+        nat = cf4.compile_system(module, frame, backend="native")
+        ref = cf4.compile_system(module, frame, backend="numba")
+        assert (nat.backend, ref.backend) == ("native", "numba")
+        m, k = module.N_INPUTS, len(module.COORDINATES)
+        d = (3 if module.ORIENTATION else 0) + k
+        N = 120
+        R0, q0 = _start(module, rng)
+        U = rng.normal(size=(N, 3, m)) * 0.4
+        h = 1.0 / N
+        sgn = float(np.sign(module.delta(R0, q0))) if module.HAS_SINGULAR_SET else 1.0
+        outs = []
+        for kern in (nat, ref):
+            Rs, Qs = kern.nodes(N)
+            outs.append((kern.forward(R0, q0, U, h, sgn, 1e-9, Rs, Qs), Rs, Qs))
+        (r1, R1, Q1), (r2, R2, Q2) = outs
+        assert r1[0] == r2[0] and r1[2] == r2[2]
+        _close(r1[1], r2[1])
+        _close(R1[: r1[0] + 1], R2[: r2[0] + 1])
+        _close(Q1[: r1[0] + 1], Q2[: r2[0] + 1])
+        nb = 5
+        sparse_idx = rng.integers(0, nb, size=(N, 3, 2)).astype(np.int64)
+        bases = [(sparse_idx, rng.normal(size=(N, 3, 2)), np.zeros((0, d * m))),
+                 (np.zeros((0, 3, 0), np.int64), rng.normal(size=(N, 3, nb)), np.empty((3 * N, d * m)))]
+        for Bidx, Bval, Wd0 in bases:
+            for full in (False, True):
+                res = []
+                for kern in (nat, ref):
+                    Rs, Qs = kern.nodes(N)
+                    Zs = np.zeros((N + 1, d, d))
+                    J = np.empty((d, nb * m))
+                    Mq = np.empty((d, d))
+                    Wd = Wd0.copy()
+                    r = kern.forward_variational(R0, q0, U, h, sgn, 1e-9, Bidx, Bval, m, 1, Rs, Qs, Zs, J, Mq, Wd, full)
+                    res.append((r, Rs, Qs, Zs, J, Mq if full else None, Wd))
+                a, b = res
+                assert a[0][0] == b[0][0] == N
+                for x, y in zip(a[1:], b[1:]):
+                    if x is not None:
+                        _close(x, y)
+        if frame:
+            n_t = 30
+            idx = rng.integers(0, N, size=n_t).astype(np.int64)
+            s = rng.uniform(0, h, size=n_t)
+            s[::4] = 0.0
+            Wst = rng.normal(size=(n_t, 3, m))
+            w_end = rng.normal(size=(n_t, m))
+            res = []
+            for kern in (nat, ref):
+                Rout, Qout, out = np.empty((n_t, 3, 3)), np.empty((n_t, k)), np.empty((n_t, m))
+                kern.frame_inputs(R1, Q1, idx, s, Wst, w_end, Rout, Qout, out)
+                res.append((Rout, Qout, out))
+            for x, y in zip(*res):
+                _close(x, y)
+
+
+def test_native_small_numerics_agree_with_numba():
+    """log_rotation/log_error (also near a half turn), the Cholesky step, all_finite."""
+    from scipy.spatial.transform import Rotation
+
+    lib = kernels.native_lib()
+    assert lib is not None
+    rng = np.random.default_rng(3)
+    for i in range(200):
+        R = Rotation.random(random_state=i).as_matrix()
+        if i % 3 == 0:                                   # near α = π: the symmetric-part branch
+            axis = rng.normal(size=3)
+            R = Rotation.from_rotvec(axis / np.linalg.norm(axis) * (np.pi - 10.0 ** -rng.uniform(1, 9))).as_matrix()
+        Rd = Rotation.random(random_state=1000 + i).as_matrix()
+        l1, l2 = np.empty(3), np.empty(3)
+        n1 = lib.log_error_into(R, Rd, l1)
+        n2 = kernels.log_error_into(R, Rd, l2)
+        _close(l1, l2)
+        _close(n1, n2)
+        J = rng.normal(size=(3, 8))
+        if i % 5 == 0:
+            J[2] = J[0] + J[1]                           # rank-deficient: Cholesky refuses
+        l = rng.normal(size=3)
+        scale = rng.uniform(0.5, 2.0, size=8)
+        x1, x2 = np.empty(8), np.empty(8)
+        ok1, ok2 = lib.cholesky_into(J, l, scale, x1), kernels.cholesky_into(J, l, scale, x2)
+        assert ok1 == ok2
+        if ok1:
+            _close(x1, x2, 1e-12)
+    A = rng.normal(size=(4, 5))
+    assert lib.all_finite_jit(A) and kernels.all_finite_jit(A)
+    A[2, 3] = np.nan
+    assert not lib.all_finite_jit(A) and not kernels.all_finite_jit(A)
+
+
+def test_native_arguments_are_checked():
+    """A written argument of the wrong dtype or layout is refused (a copy would lose the
+    writes); a read-only one is converted; the message names the argument."""
+    module = _module("car")
+    kern = cf4.compile_system(module, backend="native")
+    N = 4
+    U = np.zeros((N, 3, 2))
+    Rs, Qs = kern.nodes(N)
+    with pytest.raises(TypeError, match="'Qs'"):
+        kern.forward(np.eye(3), np.zeros(4), U, 0.1, 1.0, 1e-9, Rs, Qs.astype(np.float32))
+    with pytest.raises(TypeError, match="'Rs'"):
+        kern.forward(np.eye(3), np.zeros(4), U, 0.1, 1.0, 1e-9, np.empty((N + 1, 3, 3)).transpose(0, 2, 1), Qs)
+    n, _, _ = kern.forward(np.eye(3).T, [0, 0, 0, 0], U.tolist(), 0.1, 1.0, 1e-9, Rs, Qs)
+    assert n == N
+
+
+def test_a_stale_module_is_not_used(tmp_path, monkeypatch):
+    """A module whose recorded digest is not the sources' is passed over: the kernels are
+    compiled into the cache (named by the digest) and loaded from there."""
+    monkeypatch.setenv(native.CACHE_ENV, str(tmp_path))
+    src = c_translation.extension_source(
+        "nonholo.generated.native.toy", "toy", [c_translation.Function(_toy, "toy", {"x": "f8", "a": "f8[1]"})],
+        "abc")
+    lib = native.load("toy", "abc", lambda: src)
+    assert lib is not None and lib.SOURCE_DIGEST == "abc"
+    assert lib.toy(2.0, np.array([1.0, 2.0, 3.0])) == 12.0
+    assert len(list(tmp_path.glob("toy_*"))) == 1
+    with pytest.warns(RuntimeWarning, match="native kernels unavailable"):
+        monkeypatch.setattr(native, "_WARNED", set())      # said once per process
+        assert native.load("toy", "def", lambda: src) is None      # built from other sources
+
+
+def _toy(x, a):
+    s = 0.0
+    for i in range(a.shape[0]):
+        s += x * a[i]
+    return s
+
+
+def test_no_compiler_falls_back_to_numba(tmp_path):
+    """Without a working compiler (and nothing cached) a user's mechanism still gets its
+    kernels: from numba, said once in a warning. (The catalog's car would use the module
+    built at install: its digest is the same.)"""
+    code = r"""
+import warnings, numpy as np
+warnings.simplefilter("always")
+from nonholo.model.mechanism import Mechanism
+from nonholo.integrate import cf4
+from derivations import vehicles
+m = Mechanism.from_symbolic(vehicles.kinematic_car(2, name="car_wheelbase_2"), cache=False)
+with warnings.catch_warnings(record=True) as w:
+    kern = cf4.compile_system(m.module)
+print(kern.backend, sum("native kernels unavailable" in str(x.message) for x in w))
+"""
+    env = dict(os.environ, CC="/bin/false", NONHOLO_CACHE_DIR=str(tmp_path), PATH="/nonexistent")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env, timeout=600)
+    assert out.returncode == 0, out.stderr
+    assert out.stdout.split()[-2:] == ["numba", "1"]
+
+
+def test_the_catalog_is_built_at_install():
+    """``pip install`` built every catalog module from the checked-in C (so that the first
+    plan needs no compiler): each loads with the digest of its sources."""
+    from nonholo.integrate import native_kernels
+
+    for name in MECHANISMS:
+        module = _module(name)
+        want = native_kernels.source_digest(module, cf4.native_parts())
+        assert native.installed(name, want) is not None, name
