@@ -173,9 +173,10 @@ def test_a_stale_module_is_not_used(tmp_path, monkeypatch):
     assert lib is not None and lib.SOURCE_DIGEST == "abc"
     assert lib.toy(2.0, np.array([1.0, 2.0, 3.0])) == 12.0
     assert len(list(tmp_path.glob("toy_*"))) == 1
+    monkeypatch.setattr(native, "_WARNED", set())          # said once per process
     with pytest.warns(RuntimeWarning, match="native kernels unavailable"):
-        monkeypatch.setattr(native, "_WARNED", set())      # said once per process
-        assert native.load("toy", "def", lambda: src) is None      # built from other sources
+        stale = native.load("toy", "def", lambda: src)   # a module built from other sources
+    assert stale is None
 
 
 def _toy(x, a):
@@ -201,7 +202,7 @@ with warnings.catch_warnings(record=True) as w:
 print(kern.backend, sum("native kernels unavailable" in str(x.message) for x in w))
 """
     env = dict(os.environ, CC="/bin/false", NONHOLO_CACHE_DIR=str(tmp_path), PATH="/nonexistent")
-    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env, timeout=600)
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env, timeout=600, check=False)
     assert out.returncode == 0, out.stderr
     assert out.stdout.split()[-2:] == ["numba", "1"]
 

@@ -93,7 +93,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..generated import cf4_kernels as kernels_inlined
-from ..numerics import effort
+from ..numerics import effort, native
 from ..numerics.jit import jit
 from ..numerics.kernels import exp_times, inv33, inverse_into
 from .native_kernels import kernel_source, native_kernels
@@ -722,6 +722,10 @@ def native_source(module, kernels_text: str | None = None) -> str:
 
 def _native(module, frame: bool, required: bool) -> Kernels | None:
     """The native kernels of a system (see :func:`compile_system`), or None."""
+    if not native.enabled():
+        if required:
+            raise RuntimeError("native kernels asked for, but NONHOLO_BACKEND is 'numba'")
+        return None
     if (module, frame) in _NATIVE:
         return _NATIVE[module, frame]
     fns = native_kernels(module, frame, native_parts())

@@ -85,7 +85,7 @@ def _tree(func) -> ast.FunctionDef:
     return copy.deepcopy(_parsed(func))
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def _parsed(func) -> ast.FunctionDef:
     src = textwrap.dedent(func if isinstance(func, str) else inspect.getsource(func))
     node = ast.parse(src).body[0]
@@ -140,7 +140,7 @@ class _Translator:
                 params = {a.arg: v for a, v in zip(callee.args.args, s.value.args)}
 
                 class Sub(ast.NodeTransformer):
-                    def visit_Name(self, n):
+                    def visit_Name(self, n, params=params):
                         return params.get(n.id, n)
 
                 for t, v in zip(s.targets[0].elts, ret[0].value.elts):

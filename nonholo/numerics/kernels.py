@@ -380,9 +380,12 @@ _LIB: list = []
 
 
 def native_lib():
-    """The native module of these numerics, or None (numba then)."""
+    """The native module of these numerics, or None (numba then: no compiler, or
+    ``NONHOLO_BACKEND=numba``)."""
+    if not native.enabled():
+        return None
     if not _LIB:
-        _LIB.append(native.load("numerics", native_digest(), native_source) if native.enabled() else None)
+        _LIB.append(native.load("numerics", native_digest(), native_source))
     return _LIB[0]
 
 
