@@ -475,3 +475,38 @@ def test_every_kind_of_plan_saves_and_loads_back_equal(tmp_path, name):
         mech = catalog.get(res.mechanism)
         R_T = verify.resimulate(back.R0, back.controls, back.T, mech, back.breakpoints)
         assert verify.terminal_error(R_T, back.Rd) <= back.options["tol"] + 1e-12
+
+
+def as_format_1(res) -> dict:
+    """``res`` (physical controls) as a file of format ``nonholo.plan/1`` would hold it: no
+    route, no certificate, the samples those of the planner's own replay on ``steps`` steps."""
+    from nonholo.motion import playback
+    from nonholo.numerics import kernels
+
+    mech = catalog.get(res.mechanism)
+    d = file_of(res)
+    d["format"] = "nonholo.plan/1"
+    del d["route"]
+    for key in ("sensitivity", "error_bound", "replay_steps"):
+        del d[key]
+    sign = float(np.sign(mech.delta(res.R0)))
+    R, done, dmin, _ = playback.replay(res.R0, res.parametrisation, res.T, mech, res.steps, sign)
+    assert done == res.steps
+    d["R"] = R.tolist()
+    d["delta"] = mech.delta_samples(R, None).tolist()
+    d["min_delta"] = float(dmin)
+    d["terminal_error"] = float(kernels.log_error(np.ascontiguousarray(R[-1]), np.ascontiguousarray(res.Rd))[1])
+    return d
+
+
+def test_a_format_1_success_is_certified_on_load(tmp_path, paper_plan):
+    """The same standard for every format: a genuine old success loads (its controls are
+    certified on load as plan() certifies them), and the same file at a tol its controls
+    cannot be certified for is refused, although its stored numbers alone would pass."""
+    d = as_format_1(paper_plan)
+    assert d["terminal_error"] <= 1e-13
+    res = load(tmp_path, d)
+    assert res.success and res.replay_steps is None
+    d["options"]["tol"] = 2e-13                # above the stored terminal error, below the bound
+    with pytest.raises(ValueError, match="'success' is true, but the plan's controls are not certified"):
+        load(tmp_path, d)
