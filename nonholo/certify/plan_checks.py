@@ -1,13 +1,17 @@
 """The checks of a plan result's numbers (what :meth:`nonholo.io.result.PlanResult.validate`
-and :meth:`~nonholo.io.result.PlanResult.load` run): every field's type, shape and
-finiteness, the labels (mechanism, method, strategy, route, ``T``, ``steps``, ``R0``)
+and :meth:`~nonholo.io.result.PlanResult.load` run, and what
+:meth:`~nonholo.io.result.PlanResult.save` runs before it writes): every field's type, shape
+and finiteness, the options (every one :func:`nonholo.plan` records, present and with a value
+it accepts), the labels (mechanism, method, strategy, route, ``T``, ``steps``, ``R0``)
 against the controls, and the stored controls replayed from ``R0`` against the stored
 samples — ``R`` (and ``q``) within :data:`REPLAY_TOL`, ``u = controls(t)``, ``Δ`` of the
-samples, ``terminal_error``, ``min_delta``, ``error_bound`` (at least the replay's
-Richardson estimate) and ``success`` (certified: ``terminal_error + error_bound ≤ tol``,
-clear of ``Δ = 0``, within the legs' stroke and speed). The result is taken by its
-attributes (no import of :mod:`nonholo.io`); a failed check raises ``ValueError`` naming
-the field."""
+samples, ``terminal_error`` (within the plan's own ``tol``), ``min_delta``, ``error_bound``
+(at least the replay's Richardson estimate) — and ``success``, judged from the replay
+itself: the certified replay ends within ``tol − error_bound`` of ``Rd``, with a
+sensitivity the certificate accepts, clear of ``Δ = 0``, within the legs' stroke and
+speed (a ``nonholo.plan/1`` success, which records no certificate, is certified anew). The
+result is taken by its attributes (no import of :mod:`nonholo.io`); a failed check raises
+``ValueError`` naming the field."""
 from __future__ import annotations
 
 import numpy as np
@@ -25,10 +29,10 @@ from ..spaces.groups import NO_COORDINATES
 from . import certificate as certify
 from .plan_fields import (
     FORMAT_1,
-    check_options,
     METHOD_OF_KIND,
     ROTATION_TOL,
     ROUTES,
+    check_options,
     fail,
     integer_field,
     json_type,
@@ -40,7 +44,7 @@ from .plan_fields import (
 )
 
 #: stored samples ``R`` against the controls replayed from ``R0`` by the planning
-#: integrator (largest entry difference, ≈ rad), and ``terminal_error`` against
+#: integrator (largest entry difference, ≈ rad), and (at most) ``terminal_error`` against
 #: ``|log(R[-1] Rdᵀ)|`` (rad). Replays on this machine reproduce both exactly; the
 #: tolerance leaves room for another machine's rounding, amplified along the motion.
 REPLAY_TOL = 1e-9

@@ -36,8 +36,12 @@ controls(t)``, ``delta = Δ(R)``, and ``terminal_error``, ``min_delta``, ``succe
 rejected with a ``ValueError`` naming the field, so a plan cannot be changed — by a
 damaged byte or by hand — without the change being noticed (fields that are records, not
 results, are checked only for their type: ``reason``, ``history``, ``options``,
-``seconds``, ``sensitivity``). Files written by earlier versions of the format load:
-``nonholo.plan/2`` (no ``route``: local) and ``nonholo.plan/1`` (no certificates).
+``seconds``, ``sensitivity``; but ``options`` must hold every option the planner
+records, with a value it accepts, and a success is judged from the replay at the plan's
+own ``tol``, with a ``sensitivity`` the certificate accepts for it). A missing field is refused, never taken as "unchecked". Files written by
+earlier versions of the format load, checked to the same standard: ``nonholo.plan/2``
+(no ``route``: local) and ``nonholo.plan/1`` (no certificates: a success's controls are
+certified on load, as :func:`nonholo.plan` certifies them).
 """
 from __future__ import annotations
 
