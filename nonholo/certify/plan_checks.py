@@ -1,13 +1,17 @@
 """The checks of a plan result's numbers (what :meth:`nonholo.io.result.PlanResult.validate`
-and :meth:`~nonholo.io.result.PlanResult.load` run): every field's type, shape and
-finiteness, the labels (mechanism, method, strategy, route, ``T``, ``steps``, ``R0``)
+and :meth:`~nonholo.io.result.PlanResult.load` run, and what
+:meth:`~nonholo.io.result.PlanResult.save` runs before it writes): every field's type, shape
+and finiteness, the options (every one :func:`nonholo.plan` records, present and with a value
+it accepts), the labels (mechanism, method, strategy, route, ``T``, ``steps``, ``R0``)
 against the controls, and the stored controls replayed from ``R0`` against the stored
 samples — ``R`` (and ``q``) within :data:`REPLAY_TOL`, ``u = controls(t)``, ``Δ`` of the
-samples, ``terminal_error``, ``min_delta``, ``error_bound`` (at least the replay's
-Richardson estimate) and ``success`` (certified: ``terminal_error + error_bound ≤ tol``,
-clear of ``Δ = 0``, within the legs' stroke and speed). The result is taken by its
-attributes (no import of :mod:`nonholo.io`); a failed check raises ``ValueError`` naming
-the field."""
+samples, ``terminal_error`` (within the plan's own ``tol``), ``min_delta``, ``error_bound``
+(at least the replay's Richardson estimate) — and ``success``, judged from the replay
+itself: the certified replay ends within ``tol − error_bound`` of ``Rd``, with a
+sensitivity the certificate accepts, clear of ``Δ = 0``, within the legs' stroke and
+speed (a ``nonholo.plan/1`` success, which records no certificate, is certified anew). The
+result is taken by its attributes (no import of :mod:`nonholo.io`); a failed check raises
+``ValueError`` naming the field."""
 from __future__ import annotations
 
 import numpy as np
@@ -21,7 +25,6 @@ from ..motion import playback
 from ..motion.frame_controls import FrameControls
 from ..motion.retimed import Retimed
 from ..numerics import kernels
-from ..numerics.checks import is_number
 from ..spaces.groups import NO_COORDINATES
 from . import certificate as certify
 from .plan_fields import (
@@ -29,6 +32,7 @@ from .plan_fields import (
     METHOD_OF_KIND,
     ROTATION_TOL,
     ROUTES,
+    check_options,
     fail,
     integer_field,
     json_type,
@@ -40,10 +44,14 @@ from .plan_fields import (
 )
 
 #: stored samples ``R`` against the controls replayed from ``R0`` by the planning
-#: integrator (largest entry difference, ≈ rad), and ``terminal_error`` against
+#: integrator (largest entry difference, ≈ rad), and (at most) ``terminal_error`` against
 #: ``|log(R[-1] Rdᵀ)|`` (rad). Replays on this machine reproduce both exactly; the
 #: tolerance leaves room for another machine's rounding, amplified along the motion.
 REPLAY_TOL = 1e-9
+#: ``terminal_error`` against ``|log(R[-1] Rdᵀ)|`` is held to ``min(REPLAY_TOL, tol)`` of the
+#: plan's own ``tol``, but never below this (rad): two computations of one distance
+#: differ by rounding
+TERMINAL_FLOOR = 1e-13
 #: stored ``u`` against ``controls(t)``, ``delta`` against ``Δ(R)`` and ``min_delta``
 #: against the samples, relative to ``max(1, largest value)``
 VALUE_RTOL = 1e-12
@@ -74,6 +82,8 @@ class PlanChecks:
         r = self.r
         self.scalars()
         mech = self.labels()
+        check_options(r.options, mech)
+        self.tol = float(r.options["tol"])
         n = self.arrays(mech)
         complete = n == r.steps + 1
         if n == 0:
@@ -122,9 +132,6 @@ class PlanChecks:
             fail("options", f"must be an object, got {json_type(r.options)}")
         scan_finite(r.history, "history")
         scan_finite(r.options, "options")
-        for key in ("tol", "delta_min"):
-            if key in r.options and not is_number(r.options[key]):
-                fail("options", f"has {key} = {short(r.options[key])}, not a number")
 
     def labels(self):
         """The mechanism; ``method``, ``strategy``, ``T``, ``steps``, ``R0`` against the controls."""
@@ -161,8 +168,8 @@ class PlanChecks:
         hops = r.hops                   # the route's stitched control: the controls, or their record
         if hops is not None:
             where = "controls" if stitched else "stitched"
-            if not r.success or r.replay_steps is None:
-                fail("route", "is 'global', which only a certified success has")
+            if r.replay_steps is None:
+                fail("route", "is 'global', which only a certified path has (replay_steps, error_bound)")
             if hops.T != par.T:
                 fail(where, f"is defined on [0, {hops.T!r}], the plan on [0, {par.T!r}]")
             if not np.array_equal(hops.waypoints[0], r.R0):
@@ -348,6 +355,12 @@ class PlanChecks:
             if not r.error_bound >= est * (1.0 - 1e-9):
                 fail("error_bound", f"({r.error_bound:.3g}) is below the replay's own error "
                                      f"estimate ({est:.3g} rad with {M} steps)")
+            #: the certified replay itself: its nodes, Richardson estimate and distance from
+            #: the goal (as the certificate measures it), for the success check
+            self.replayed, self.replay_T = R_M, T
+            self.estimate = est
+            _, parts = mech.space.error(R_M[-1], Q_M[-1], r.Rd, r.qd if mech.space.k else NO_COORDINATES)
+            self.end_error = float(mech.space.norm(parts))
 
     def values(self, mech, n: int, complete: bool) -> None:
         """``u``, ``delta``, ``terminal_error``, ``min_delta`` and ``success`` against the samples."""
@@ -370,8 +383,10 @@ class PlanChecks:
             else:
                 err = float(kernels.log_error(np.ascontiguousarray(r.R[-1]), np.ascontiguousarray(r.Rd))[1])
                 what = "|log(R[-1] Rdᵀ)|"
-            if not abs(err - r.terminal_error) <= REPLAY_TOL:
-                fail("terminal_error", f"is {r.terminal_error:.6g}, but {what} = {err:.6g}")
+            within = max(min(REPLAY_TOL, self.tol), TERMINAL_FLOOR)
+            if not abs(err - r.terminal_error) <= within:
+                fail("terminal_error", f"is {r.terminal_error:.6g}, but {what} = {err:.6g} (they must "
+                                       f"agree within {within:g}, the plan's tol or less)")
         elif r.terminal_error is not None:
             fail("terminal_error", f"must be null: the trajectory stops at t = {r.t[-1]:.6g} s < T")
         if mech.singular.exists:
@@ -387,30 +402,72 @@ class PlanChecks:
         elif r.min_delta is not None:
             fail("min_delta", f"must be null: mechanism {mech.name!r} has no singular set")
         if r.success:
-            if not complete:
-                fail("success", f"is true, but the trajectory stops at t = {r.t[-1]:.6g} s < T")
-            if r.replay_steps is None and not self.legacy:
-                fail("success", "is true, but the plan has no certificate (replay_steps, error_bound)")
-            tol = r.options.get("tol")
-            bound = r.error_bound or 0.0
-            if tol is not None and r.terminal_error + bound > tol:
-                fail("success", f"is true, but terminal_error + error_bound = "
-                                 f"{r.terminal_error + bound:.3g} > tol = {tol:g}")
-            dmin = r.options.get("delta_min")
-            if mech.singular.exists and dmin is not None and r.min_delta < dmin:
+            self.success(mech, complete)
+
+    def success(self, mech, complete: bool) -> None:
+        """A success is what :func:`nonholo.plan` certifies, judged from the controls
+        replayed here, not from the stored numbers: the certified replay (``replay_steps``
+        steps) ends within ``tol - error_bound`` of ``Rd`` (``tol``: the plan's own option),
+        its ``error_bound`` covers the Richardson estimate and the sensitivity's share, the
+        sensitivity is one the certificate accepts for ``tol``, the replay keeps
+        ``delta_min`` and the stroke, and the samples keep ``leg_speed``. A file of format
+        ``nonholo.plan/1`` (no certificate recorded) is certified here as the planner
+        certifies a plan (:func:`nonholo.certify.certificate.measure`): the same standard."""
+        r = self.r
+        if not complete:
+            fail("success", f"is true, but the trajectory stops at t = {r.t[-1]:.6g} s < T")
+        tol = self.tol
+        dmin = float(r.options["delta_min"])
+        stroke = r.options.get("leg_length")
+        limits = None if stroke is None else LegLimits.from_argument(stroke, mech)
+        if self.legacy:
+            self.legacy_certificate(mech, tol, dmin, limits)
+        elif r.replay_steps is None:
+            fail("success", "is true, but the plan has no certificate (replay_steps, error_bound)")
+        else:
+            if not self.end_error + r.error_bound <= tol:
+                fail("success", f"is true, but the controls replayed ({r.replay_steps} steps) end "
+                                 f"{self.end_error:.3g} rad from Rd: + error_bound {r.error_bound:.2g} "
+                                 f"> tol = {tol:g}")
+            G = r.sensitivity
+            if G is None:
+                fail("sensitivity", "is null, but a certified success has one")
+            if not G * certify.REPLAY_PERTURBATION <= certify.SENSITIVITY_FRACTION * tol:
+                fail("sensitivity", f"({G:.3g}) is too large for a success at tol = {tol:g}: it amplifies "
+                                    f"{certify.REPLAY_PERTURBATION:g} rad to {G * certify.REPLAY_PERTURBATION:.2g} "
+                                    f"rad, more than {certify.SENSITIVITY_FRACTION:g}·tol (plan() certifies "
+                                    "no such motion)")
+            least = self.estimate + G * certify.REPLAY_PERTURBATION
+            if not r.error_bound >= least * (1.0 - 1e-9):
+                fail("error_bound", f"({r.error_bound:.3g}) is below the replay's error estimate plus the "
+                                     f"sensitivity's share ({least:.3g} rad)")
+            if not mech.singular.clear(self.dmin, dmin):
+                fail("success", f"is true, but the replayed motion comes within {self.dmin:.4g} of Δ = 0 "
+                                 f"(delta_min = {dmin:g})")
+            if mech.singular.exists and r.min_delta < dmin:
                 fail("success", f"is true, but min_delta = {r.min_delta:.4g} < delta_min = {dmin:g}")
-            stroke = r.options.get("leg_length")
-            if stroke is not None:
-                try:
-                    limits = LegLimits.from_argument(stroke, mech)
-                except ValueError as exc:
-                    fail("options", f"has a bad leg_length: {exc}")
-                if limits.least_clearance(mech, r.R) < -VALUE_RTOL * limits.hi:
-                    fail("success", f"is true, but {limits.describe(mech, r.R, r.t)}")
-            speed = r.options.get("leg_speed")
-            if speed is not None:
-                if not is_number(speed) or not speed > 0:
-                    fail("options", f"has a bad leg_speed: {short(speed)}")
-                fastest = float(np.max(np.abs(mech.leg_speeds(r.R, r.u))))
-                if fastest > speed * (1.0 + SPEED_RTOL):
-                    fail("success", f"is true, but a leg moves at {fastest:.6g} > leg_speed = {speed:g}")
+            if limits is not None and limits.least_clearance(mech, self.replayed) < 0.0:
+                fail("success", f"is true, but the replayed motion leaves the legs' stroke: "
+                                 f"{limits.describe(mech, self.replayed, np.linspace(0.0, self.replay_T, len(self.replayed)))}")
+        if limits is not None and limits.least_clearance(mech, r.R) < -VALUE_RTOL * limits.hi:
+            fail("success", f"is true, but {limits.describe(mech, r.R, r.t)}")
+        speed = r.options.get("leg_speed")
+        if speed is not None:
+            fastest = float(np.max(np.abs(mech.leg_speeds(r.R, r.u))))
+            if fastest > speed * (1.0 + SPEED_RTOL):
+                fail("success", f"is true, but a leg moves at {fastest:.6g} > leg_speed = {speed:g}")
+
+    def legacy_certificate(self, mech, tol: float, dmin: float, limits) -> None:
+        """A success read from a file of format ``nonholo.plan/1``: its physical controls
+        certified now, as :func:`nonholo.plan` certifies a plan, for the file's ``tol``,
+        ``delta_min`` and stroke."""
+        r = self.r
+        par = r.parametrisation
+        steps = r.steps if r.steps % 2 == 0 else 2 * r.steps
+        q0 = r.q0 if mech.space.k else None
+        qd = r.qd if mech.space.k else None
+        cert = certify.measure(r.R0, r.Rd, r.T, mech, par, steps, tol, dmin, self.sign,
+                               leg_limits=limits, q0=q0, qd=qd)
+        if not cert.passed:
+            fail("success", f"is true, but the plan's controls are not certified for its tol = {tol:g} "
+                             f"and delta_min = {dmin:g}: {cert.reason}")

@@ -6,9 +6,13 @@ one field (a string, number, integer, rotation, finite JSON value), each raising
 (:mod:`nonholo.certify.plan_checks`)."""
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
-from ..numerics.checks import MAX_STEPS, is_number
+from ..model.limits import LegLimits
+from ..motion.retimed import check_leg_speed
+from ..numerics.checks import MAX_STEPS, check_count, is_number
 from ..spaces import so3
 
 FORMAT = "nonholo.plan/3"
@@ -22,6 +26,16 @@ ROUTES = ("local", "global")
 
 #: the planner's methods, by the kind of the parametrisation each plans with
 METHOD_OF_KIND = {"fourier": "parametric", "piecewise_constant": "nonparametric"}
+#: the options every plan records (``plan()``'s settings, :class:`nonholo.planning.core.Options`,
+#: and its parametrisation's size), in every format: by the rule ``plan()`` checks each with —
+#: a positive number, a non-negative number, or an integer >= the minimum
+OPTION_RULES = {"gamma": "positive", "step": "positive", "tol": "positive", "min_step": "positive",
+                "newton_below": "non-negative", "delta_min": "non-negative",
+                "max_iter": 0, "harmonics": 1, "grid": 1}
+#: the options a plan records only when they were given (absent: none)
+OPTIONAL_OPTIONS = ("leg_length", "leg_speed", "objective")
+#: the objectives a plan may record
+OBJECTIVES = ("energy",)
 #: ``R0``, ``Rd`` and the samples ``R``: ``|RᵀR − I| ≤`` this (as :func:`nonholo.plan` accepts)
 ROTATION_TOL = 1e-9
 
@@ -108,3 +122,47 @@ def scan_finite(value, field: str) -> None:
             stack.extend(x)
         elif is_number(x) and not np.isfinite(float(x)):
             fail(field, f"contains a non-finite number ({x})")
+
+
+def check_options(options, mechanism) -> None:
+    """``options``, a plan's record of the options it was planned with, holds every option
+    of :data:`OPTION_RULES` with a value :func:`nonholo.plan` accepts (checked by its own
+    rules), and otherwise only ``leg_length``, ``leg_speed`` (as ``plan()`` checks them for
+    ``mechanism``) and ``objective``: a missing option is refused, never taken as unchecked."""
+    if not isinstance(options, dict):
+        fail("options", f"must be an object, got {json_type(options)}")
+    missing = [k for k in OPTION_RULES if k not in options]
+    if missing:
+        fail("options", f"lacks {', '.join(map(repr, missing))} (every plan records "
+                        f"{', '.join(OPTION_RULES)})")
+    unknown = [k for k in options if k not in OPTION_RULES and k not in OPTIONAL_OPTIONS]
+    if unknown:
+        fail("options", f"has unknown option{'s' if len(unknown) > 1 else ''} "
+                        f"{', '.join(short(k) for k in unknown)}")
+    for key, rule in OPTION_RULES.items():
+        v = options[key]
+        if isinstance(rule, int):
+            try:
+                check_count(v, key, minimum=rule)
+            except ValueError as exc:
+                fail("options", f"has a bad {key}: {exc}")
+            if not isinstance(v, (int, np.integer)):
+                fail("options", f"has a bad {key}: must be an integer, got {short(v)}")
+            continue
+        if not is_number(v) or not math.isfinite(v) or (v <= 0 if rule == "positive" else v < 0):
+            fail("options", f"has a bad {key}: must be a {rule} finite number, as plan() takes it, "
+                            f"got {json_type(v)}")
+    try:
+        if "leg_length" in options:
+            if options["leg_length"] is None:
+                raise ValueError("leg_length is recorded only when given: null is not a value")
+            LegLimits.from_argument(options["leg_length"], mechanism)
+        if "leg_speed" in options:
+            if options["leg_speed"] is None:
+                raise ValueError("leg_speed is recorded only when given: null is not a value")
+            check_leg_speed(options["leg_speed"], mechanism)
+    except ValueError as exc:
+        fail("options", f"has a bad {str(exc).split()[0].rstrip(':')}: {exc}")
+    if "objective" in options and options["objective"] not in OBJECTIVES:
+        fail("options", f"has an unknown objective {short(options['objective'])} "
+                        f"(known: {', '.join(map(repr, OBJECTIVES))})")

@@ -12,7 +12,10 @@ mechanisms`` lists each one's state. The strategy is ``robust`` unless ``--strat
 the appendix's algorithm as published (see :mod:`nonholo.robust`). One line is printed per accepted iteration (iteration, error
 ``|l_T|`` in rad, the step ``γh``, least ``|Δ|`` along the trajectory), then a summary;
 then the result is written to ``--out`` and the figure to ``--plot`` (each even if the
-other cannot be written; a plan file is replaced only once the new one is complete).
+other cannot be written). Every file is written by :mod:`nonholo.io.safe_write`: a regular
+file is replaced only once the new one is complete; a character device or FIFO
+(``--out /dev/stdout``, a named pipe) is written in place, never replaced; a path that is
+anything else (a directory) is not written, with an error naming the option.
 Output closed early by its reader (``nonholo plan ... | head -1``) is not an error: the
 rest is discarded and the files are still written.
 
@@ -33,6 +36,7 @@ from pathlib import Path
 import numpy as np
 
 from ..io import csv_export as export
+from ..io import safe_write
 from ..model import catalog
 from ..planning import api as planner
 from ..spaces import so3
@@ -201,8 +205,9 @@ def run(args) -> int:
     status = EXIT_SUCCESS if res.success else EXIT_FAILED
     if args.out:
         try:
+            safe_write.check_target(args.out, "--out")
             res.save(args.out)
-        except (OSError, ValueError) as exc:     # ValueError: a number JSON cannot hold
+        except (OSError, ValueError) as exc:     # ValueError: not a file, or a plan that would not load
             _cannot_write(args.out, exc)
             status = EXIT_WRITE_FAILED
         else:
@@ -210,7 +215,7 @@ def run(args) -> int:
     if args.plot:
         try:
             plot(res, args.plot)
-        except OSError as exc:
+        except (OSError, ValueError) as exc:
             _cannot_write(args.plot, exc)
             status = EXIT_WRITE_FAILED
         else:
@@ -220,6 +225,7 @@ def run(args) -> int:
             _say(f"{args.csv} not written: a failed plan is not a motion to play back")
         else:
             try:
+                safe_write.check_target(args.csv, "--csv")
                 res.to_csv(args.csv, rate=args.csv_rate)
             except (OSError, ValueError) as exc:
                 _cannot_write(args.csv, exc)
@@ -229,10 +235,17 @@ def run(args) -> int:
     return status
 
 
-def plot(res, path) -> None:
+def plot(res, path, argument: str = "--plot") -> None:
     """Figure of a :class:`~nonholo.io.result.PlanResult`: ``u(t)``, ``RPY(t)`` (with an
     orientation), the coordinates ``q(t)`` (beyond SO(3)), ``Δ(t)`` and, for a mechanism
-    with legs, the leg lengths and speeds against their limits (if the plan had them)."""
+    with legs, the leg lengths and speeds against their limits (if the plan had them).
+    Written to ``path`` by :func:`nonholo.io.safe_write.write_bytes` in the format of its
+    extension (matplotlib's default format without one; the name is kept as given): a
+    path that is not a regular file, a character device or a FIFO is refused with a
+    ``ValueError`` naming ``argument`` before the figure is drawn."""
+    safe_write.check_target(path, argument)
+    import io
+
     import matplotlib
 
     matplotlib.use("Agg")
@@ -299,7 +312,10 @@ def plot(res, path) -> None:
         ax.legend(fontsize="small")
     axes[-1].set_xlabel("t [s]")
     fig.tight_layout()
+    buffer = io.BytesIO()
     try:
-        fig.savefig(path, dpi=100)
+        fmt = Path(path).suffix[1:].lower() or matplotlib.rcParams["savefig.format"]
+        fig.savefig(buffer, dpi=100, format=fmt)
     finally:
         plt.close(fig)
+    safe_write.write_bytes(path, buffer.getvalue(), argument)

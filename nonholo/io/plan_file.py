@@ -1,6 +1,6 @@
 """The plan file's codec: a plan file's JSON object decoded field by field into the fields
 of a :class:`~nonholo.io.result.PlanResult` (types, shapes, the controls rebuilt), the JSON
-text read from a file, and the atomic write. Decoding only: the checks that the numbers
+text read from a file. Decoding only: the checks that the numbers
 agree with each other (replaying the stored controls) are
 :mod:`nonholo.certify.plan_checks`'s.
 
@@ -20,7 +20,11 @@ motion's nodes are recomputed by the same kernel). Floats are written with
 that do not exist (``min_delta`` for a mechanism without a singular set, the terminal
 error of a run stopped before any simulation) are ``null``/``None``, never NaN.
 
-Saving is atomic (a complete new file replaces the old one, or the old one stays).
+Saving (:mod:`nonholo.io.safe_write`) is atomic (a complete new file replaces the old
+one, or the old one stays), never replaces what is not a regular file (a directory is
+refused; a character device or FIFO is written in place), and writes only what loading
+accepts: the text is decoded and checked exactly as :meth:`~nonholo.io.result.PlanResult.load`
+does before anything is written.
 Loading (:meth:`~nonholo.io.result.PlanResult.load`) decodes the file (:func:`decode`) and
 checks it (:mod:`nonholo.certify.plan_checks`): every
 field's type and shape, finite numbers, and that the numbers agree with each other — the
@@ -32,16 +36,16 @@ controls(t)``, ``delta = Δ(R)``, and ``terminal_error``, ``min_delta``, ``succe
 rejected with a ``ValueError`` naming the field, so a plan cannot be changed — by a
 damaged byte or by hand — without the change being noticed (fields that are records, not
 results, are checked only for their type: ``reason``, ``history``, ``options``,
-``seconds``, ``sensitivity``). Files written by earlier versions of the format load:
-``nonholo.plan/2`` (no ``route``: local) and ``nonholo.plan/1`` (no certificates).
+``seconds``, ``sensitivity``; but ``options`` must hold every option the planner
+records, with a value it accepts, and a success is judged from the replay at the plan's
+own ``tol``, with a ``sensitivity`` the certificate accepts for it). A missing field is refused, never taken as "unchecked". Files written by
+earlier versions of the format load, checked to the same standard: ``nonholo.plan/2``
+(no ``route``: local) and ``nonholo.plan/1`` (no certificates: a success's controls are
+certified on load, as :func:`nonholo.plan` certifies them).
 """
 from __future__ import annotations
 
-import contextlib
 import json
-import os
-import secrets
-import stat
 from pathlib import Path
 
 import numpy as np
@@ -68,10 +72,14 @@ from ..numerics.checks import is_number
 
 #: the fields of a plan file
 _REQUIRED = ("format", "success", "reason", "terminal_error", "min_delta", "iterations", "history",
-             "mechanism", "method", "strategy", "T", "steps", "seconds", "R0", "Rd", "controls",
-             "t", "R", "u", "delta")
-#: fields the first files of the format did not have (absent: ``{}`` and ``null``)
-_OPTIONAL = ("options", "sensitivity", "error_bound", "replay_steps", "route", "stitched",
+             "mechanism", "method", "strategy", "T", "steps", "seconds", "options", "R0", "Rd",
+             "controls", "t", "R", "u", "delta")
+#: fields every file since ``nonholo.plan/2`` has (the certificate's record)
+_CERTIFIED = ("sensitivity", "error_bound", "replay_steps")
+#: fields only some files have: the certificate's, absent from ``nonholo.plan/1`` files
+#: (``null`` there); ``route`` (``nonholo.plan/3``); a smoothed route's stitched controls;
+#: the coordinates of a mechanism whose state has them
+_OPTIONAL = ("sensitivity", "error_bound", "replay_steps", "route", "stitched",
              "q0", "qd", "q", "errors")
 #: the fields of each kind of ``controls``
 _CONTROL_FIELDS = {"fourier": ("kind", "T", "harmonics", "coeffs"),
@@ -235,7 +243,9 @@ def decode(d) -> tuple[dict, bool]:
         raise ValueError(f"not a nonholo plan file: expected a JSON object, got {json_type(d)}")
     if d.get("format") not in (FORMAT, FORMAT_2, FORMAT_1):
         raise ValueError(f"not a nonholo plan file (format {short(d.get('format'))}, expected {FORMAT!r})")
-    missing = [k for k in _REQUIRED if k not in d]
+    required = (_REQUIRED + (() if d["format"] == FORMAT_1 else _CERTIFIED)
+                + (("route",) if d["format"] == FORMAT else ()))
+    missing = [k for k in required if k not in d]
     if missing:
         raise ValueError(f"invalid plan: missing field{'s' if len(missing) > 1 else ''} "
                          f"{', '.join(map(repr, missing))}")
@@ -247,7 +257,7 @@ def decode(d) -> tuple[dict, bool]:
         if key in d and d["format"] != FORMAT:
             raise ValueError(f"invalid plan: {key!r} is set in a file of format {d['format']!r}, "
                              "which has no global routes")
-    d = {"options": {}, "sensitivity": None, "error_bound": None, "replay_steps": None,
+    d = {"sensitivity": None, "error_bound": None, "replay_steps": None,
          "route": "local", "stitched": None, **d}
     if not isinstance(d["success"], bool):
         raise ValueError(f"invalid plan: 'success' must be true or false, got {short(d['success'])}")
@@ -290,43 +300,15 @@ def decode(d) -> tuple[dict, bool]:
     return fields, d["format"] == FORMAT_1
 
 
-def write_atomic(path: Path, data: bytes) -> None:
-    """Write ``data`` to a new file in ``path``'s directory, sync it, then rename it to
-    ``path``; on failure remove it (``path`` is untouched) and re-raise."""
-    directory = path.parent
-    for _ in range(100):
-        tmp = directory / f".{path.name}.{secrets.token_hex(4)}.tmp"
-        try:
-            # mode 0o666 less the umask, as a file created by open(path, "w")
-            fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL | getattr(os, "O_BINARY", 0), 0o666)
-        except FileExistsError:
-            continue
-        break
-    else:
-        raise FileExistsError(f"no free temporary file name in {directory}")
+def parse(text: str):
+    """The JSON value of a plan file's ``text`` (an object with a key twice is refused);
+    ``ValueError`` otherwise."""
     try:
-        with os.fdopen(fd, "wb") as f:
-            try:
-                mode = stat.S_IMODE(os.stat(path).st_mode)
-            except OSError:
-                mode = None                      # no file to replace: keep the new file's mode
-            if mode is not None and hasattr(os, "fchmod"):
-                os.fchmod(f.fileno(), mode)      # replacing a file keeps its permissions
-            f.write(data)
-            f.flush()
-            os.fsync(f.fileno())
-        os.replace(tmp, path)
-    except BaseException:
-        with contextlib.suppress(OSError):
-            os.unlink(tmp)
-        raise
-    # make the rename itself durable (POSIX; where a directory cannot be opened, skip)
-    with contextlib.suppress(OSError, AttributeError):
-        dfd = os.open(directory, os.O_RDONLY)
-        try:
-            os.fsync(dfd)
-        finally:
-            os.close(dfd)
+        return json.loads(text, object_pairs_hook=_unique_keys)
+    except RecursionError:
+        raise ValueError("not a nonholo plan file: JSON nested too deeply") from None
+    except ValueError as exc:      # json.JSONDecodeError, duplicate keys, huge integers
+        raise ValueError(f"not a nonholo plan file: {exc}") from None
 
 
 def read(path):
@@ -339,17 +321,7 @@ def read(path):
         raise ValueError(f"{path}: not a nonholo plan file: not UTF-8 text ({exc.reason} at byte "
                          f"{exc.start})") from None
     try:
-        return json.loads(text, object_pairs_hook=_unique_keys)
-    except RecursionError:
-        raise ValueError(f"{path}: not a nonholo plan file: JSON nested too deeply") from None
-    except ValueError as exc:      # json.JSONDecodeError, duplicate keys, huge integers
-        raise ValueError(f"{path}: not a nonholo plan file: {exc}") from None
+        return parse(text)
+    except ValueError as exc:
+        raise ValueError(f"{path}: {exc}") from None
 
-
-def write_text(path, text: str) -> Path:
-    """Write ``text`` (UTF-8) to ``path`` atomically (:func:`write_atomic`; a symbolic link
-    is followed, its target replaced); returns ``path``."""
-    path = Path(path)
-    target = Path(os.path.realpath(path)) if path.is_symlink() else path
-    write_atomic(target, text.encode("utf-8"))
-    return path

@@ -32,6 +32,7 @@ import numpy as np
 
 from ..model import catalog
 from ..numerics.checks import is_number
+from . import safe_write
 
 #: The columns a problem may have; ``start`` and ``goal`` are required.
 COLUMNS = ("start", "goal", "mechanism", "options", "label")
@@ -140,11 +141,12 @@ def as_json(problem: dict) -> dict:
 
 
 def write(path, rows) -> Path:
-    """Write problems (dicts as :func:`check_row` takes them) as JSON Lines, checked first."""
+    """Write problems (dicts as :func:`check_row` takes them) as JSON Lines, checked first;
+    written by :func:`nonholo.io.safe_write.write_text` (atomically; a directory at
+    ``path`` is refused with a ``ValueError`` naming ``path``)."""
+    safe_write.check_target(path, "path")
     lines = [json.dumps(as_json(p), separators=(",", ":")) for p in check(rows)]
-    path = Path(path)
-    path.write_text("\n".join(lines) + "\n", encoding="utf-8")
-    return path
+    return safe_write.write_text(path, "\n".join(lines) + "\n", "path")
 
 
 def fingerprint(problems: list[dict]) -> str:

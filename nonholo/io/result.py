@@ -18,7 +18,7 @@ from ..model import catalog
 from ..motion.frame_controls import FrameControls
 from ..motion.retimed import Retimed
 from . import csv_export as export
-from . import plan_file
+from . import plan_file, safe_write
 
 
 @dataclass(eq=False)
@@ -162,21 +162,21 @@ class PlanResult:
             "terminal_error": self.terminal_error,
             "min_delta": self.min_delta,
             "iterations": int(self.iterations),
-            "history": self.history,
+            "history": _plain(self.history),
             "mechanism": self.mechanism,
             "method": self.method,
             "strategy": self.strategy,
             "T": self.T,
             "steps": int(self.steps),
             "seconds": self.seconds,
-            "options": self.options,
+            "options": _plain(self.options),
             "sensitivity": self.sensitivity,
             "error_bound": self.error_bound,
             "replay_steps": None if self.replay_steps is None else int(self.replay_steps),
             "route": self.route,
             **({} if self.stitched is None else {"stitched": self.stitched.to_dict()}),
             **({} if self.q0 is None else {"q0": arr(self.q0), "qd": arr(self.qd), "q": arr(self.q),
-                                           "errors": self.errors}),
+                                           "errors": _plain(self.errors)}),
             "R0": arr(self.R0),
             "Rd": arr(self.Rd),
             "controls": self.parametrisation.to_dict(),
@@ -213,17 +213,38 @@ class PlanResult:
         plan_checks.check(self)
         return self
 
-    def save(self, path) -> Path:
-        """Write the result as JSON (format ``nonholo.plan/3``, see :mod:`nonholo.io.plan_file`).
+    def to_json(self) -> str:
+        """The plan file's text (format ``nonholo.plan/3``, see :mod:`nonholo.io.plan_file`),
+        checked: it is decoded and checked exactly as :meth:`load` reads a file, so text
+        that :meth:`load` would refuse is never returned — ``ValueError`` naming the field
+        instead (and for a number JSON cannot hold)."""
+        try:
+            text = json.dumps(self.to_dict(), allow_nan=False, indent=1)
+        except (ValueError, TypeError) as exc:
+            raise ValueError(f"cannot save the plan: {exc}") from None
+        try:
+            type(self).from_dict(plan_file.parse(text))
+        except ValueError as exc:
+            raise ValueError(f"cannot save the plan, its file would not load: {exc}") from None
+        return text
 
-        Atomic: the text goes to a temporary file in the same directory, flushed and
-        synced to disk, which then replaces ``path`` (a symbolic link is followed, its
-        target replaced). If anything fails (``OSError``, e.g. a full disk) the error
-        propagates, the temporary file is removed and an existing ``path`` is untouched.
-        A result holding a non-finite number, which JSON cannot, raises ``ValueError``
-        before anything is written.
+    def save(self, path) -> Path:
+        """Write the result as JSON (format ``nonholo.plan/3``, see :mod:`nonholo.io.plan_file`);
+        returns ``path``.
+
+        Only what :meth:`load` accepts is written: the text is decoded and checked as a
+        loaded file is (:meth:`to_json`) before anything is written, else ``ValueError``
+        naming the field. The file is written by :mod:`nonholo.io.safe_write`: atomically
+        (the text goes to a temporary file in the same directory, flushed and synced to
+        disk, which then replaces ``path``; a symbolic link is followed, its target
+        replaced; if anything fails — ``OSError``, e.g. a full disk — the error propagates,
+        the temporary file is removed and an existing ``path`` is untouched); a character
+        device or FIFO at ``path`` is written in place, never replaced; any other path
+        that exists and is not a regular file (a directory) is refused with a
+        ``ValueError`` naming ``path``, before anything is written.
         """
-        return plan_file.write_text(path, json.dumps(self.to_dict(), allow_nan=False, indent=1))
+        safe_write.check_target(path, "path")
+        return safe_write.write_text(path, self.to_json(), "path")
 
     def to_csv(self, path, rate: float = export.DEFAULT_RATE) -> Path:
         """Write the motion sampled at ``rate`` Hz as CSV for an actuator controller: ``t``,
@@ -231,8 +252,9 @@ class PlanResult:
         orientation as a unit quaternion ``qx, qy, qz, qw`` (scalar last) and ``delta``
         (see :mod:`nonholo.io.csv_export`). A failed plan or a bad ``rate`` raises ``ValueError``
         before anything is written; the file is written atomically, like :meth:`save`."""
+        safe_write.check_target(path, "path")
         text = export.csv_text(self, rate)
-        return plan_file.write_text(path, text)
+        return safe_write.write_text(path, text, "path")
 
     @classmethod
     def load(cls, path) -> "PlanResult":
@@ -280,6 +302,24 @@ class PlanResult:
         if not self.success:
             lines.append(f"  reason: {self.reason}")
         return "\n".join(lines) + ")"
+
+
+def _plain(x):
+    """``x`` (a JSON-like value of a result: options, history) with NumPy scalars and
+    arrays and tuples as the plain Python numbers and lists JSON writes."""
+    if isinstance(x, dict):
+        return {k: _plain(v) for k, v in x.items()}
+    if isinstance(x, (list, tuple)):
+        return [_plain(v) for v in x]
+    if isinstance(x, np.ndarray):
+        return x.tolist()
+    if isinstance(x, np.bool_):
+        return bool(x)
+    if isinstance(x, np.integer):
+        return int(x)
+    if isinstance(x, np.floating):
+        return float(x)
+    return x
 
 
 def coordinate_fields(mechanism, q, q0, qd, errors) -> dict:

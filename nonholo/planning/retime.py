@@ -17,6 +17,7 @@ import numpy as np
 
 from ..io.result import PlanResult
 from ..model import catalog
+from ..motion.frame_controls import from_dict as controls_from_dict
 from ..motion.retimed import RETIME_NODES, Retimed, TimeMap, check_leg_speed
 from ..numerics.checks import check_time
 
@@ -56,7 +57,11 @@ def retime(result: PlanResult, leg_speed: float, T: float | None = None) -> Plan
     if not result.success:
         raise ValueError(f"only a successful plan can be re-timed; this one failed: {result.reason}")
     base = planned_controls(result)
-    timed = Retimed(base, result.R0, mech, v, T=T)
+    # the re-timed controls exactly as a plan file rebuilds them (its base read back from
+    # its description, the time map recomputed from that): the time map is computed from a
+    # replay of the base, whose rounding a kink of the fastest leg can amplify, so samples
+    # computed from any other copy need not be ``controls(t)`` of the loaded plan
+    timed = controls_from_dict(Retimed(base, result.R0, mech, v, T=T).to_dict())
     n = len(result.t)
     tau = np.arange(n) * (base.T / result.steps)
     tau[-1] = base.T
