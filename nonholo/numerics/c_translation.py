@@ -19,7 +19,9 @@ Conventions of the subset (checked; anything else raises :class:`TranslationErro
   (``alloca``), so they may not be made inside a loop. Locals are typed by what is assigned
   to them (``double`` unless every value is an integer or a truth value).
 - ``/`` is true division, ``min``/``max`` keep Python's order (``min(a, b) = b if b < a else
-  a``), ``**`` is ``pow``; NumPy's element functions map to C's ``<math.h>``.
+  a``), ``**`` is ``pow`` but for a constant integer exponent ``|n| ≤ 4``, which is a product
+  (and its reciprocal for ``n < 0``: what numba's fast-math makes of it, round-off apart);
+  NumPy's element functions map to C's ``<math.h>``.
 - A call of a function whose body is ``return (a, b, …)`` assigned to a tuple of names is
   expanded in place (the allocations of a workspace).
 - ``np.dot(A.T, B.reshape((r, c)))`` (the one matrix product, of the dense Jacobian) is a
@@ -92,6 +94,18 @@ def _parsed(func) -> ast.FunctionDef:
     if not isinstance(node, ast.FunctionDef):
         raise TranslationError("expected a function definition")
     return node
+
+
+def _small_integer(node) -> int | None:
+    """The exponent of ``x ** n`` when it is a constant integer (``2``, ``-2.0``) of at most 4."""
+    sign = 1
+    if isinstance(node, ast.UnaryOp) and isinstance(node.op, ast.USub):
+        sign, node = -1, node.operand
+    if isinstance(node, ast.Constant) and isinstance(node.value, (int, float)) and not isinstance(node.value, bool):
+        v = float(node.value)
+        if v.is_integer() and abs(v) <= 4:
+            return sign * int(v)
+    return None
 
 
 class _Translator:
@@ -413,6 +427,13 @@ class _Translator:
             if isinstance(op, ast.Pow):
                 if self.typeof(node) == "int64_t":
                     return f"((int64_t)pow((double)({a}), (double)({b})))"
+                n = _small_integer(node.right)
+                if n is not None:            # x**n by products, as LLVM's fast-math does (pow is slow)
+                    self.tmp += 1
+                    x = f"_p{self.tmp}"
+                    prod = " * ".join([x] * abs(n)) if n else "1.0"
+                    value = f"(1.0 / ({prod}))" if n < 0 else f"({prod})"
+                    return f"({{ double {x} = {a}; {value}; }})"
                 return f"pow({a}, {b})"
             if isinstance(op, ast.FloorDiv):
                 if self.typeof(node) == "double":

@@ -236,7 +236,7 @@ static void physical_QG_into(double *R, int64_t R_s0, int64_t R_s1, double *q, i
     out[(INT64_C(2)) * out_s1 + (INT64_C(0))] = INT64_C(0);
     out[(INT64_C(2)) * out_s1 + (INT64_C(1))] = INT64_C(0);
     out[(INT64_C(2)) * out_s1 + (INT64_C(2))] = INT64_C(0);
-    out[(INT64_C(2)) * out_s1 + (INT64_C(3))] = ((double)(v1) / (double)(pow(cos(phi), INT64_C(2))));
+    out[(INT64_C(2)) * out_s1 + (INT64_C(3))] = ((double)(v1) / (double)(({ double _p1 = cos(phi); (_p1 * _p1); })));
     out[(INT64_C(3)) * out_s1 + (INT64_C(0))] = INT64_C(0);
     out[(INT64_C(3)) * out_s1 + (INT64_C(1))] = INT64_C(0);
     out[(INT64_C(3)) * out_s1 + (INT64_C(2))] = INT64_C(0);
@@ -2440,6 +2440,6 @@ PyMODINIT_FUNC PyInit_car(void)
     import_array();
     PyObject *m = PyModule_Create(&moduledef);
     if (m == NULL) return NULL;
-    if (PyModule_AddStringConstant(m, "SOURCE_DIGEST", "7f3b0b488c164f59fa45d0a518248901c043874cbce0fb1e3f3867332cc6a114") < 0) { Py_DECREF(m); return NULL; }
+    if (PyModule_AddStringConstant(m, "SOURCE_DIGEST", "82d6f11f5c055530533e236e8b7acb646da21dddb693f10f8117ff53fbcc59e8") < 0) { Py_DECREF(m); return NULL; }
     return m;
 }

@@ -384,6 +384,6 @@ PyMODINIT_FUNC PyInit_numerics(void)
     import_array();
     PyObject *m = PyModule_Create(&moduledef);
     if (m == NULL) return NULL;
-    if (PyModule_AddStringConstant(m, "SOURCE_DIGEST", "00cc7629ccb7995af2b57ffd65e0320b3fa236cc05996726c2a2b452a686d6c3") < 0) { Py_DECREF(m); return NULL; }
+    if (PyModule_AddStringConstant(m, "SOURCE_DIGEST", "6621cb6a6d1a28583997b5f0ec73ce26fff2ed4617b20fccf71a0036fdd66d4a") < 0) { Py_DECREF(m); return NULL; }
     return m;
 }

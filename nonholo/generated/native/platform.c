@@ -279,14 +279,14 @@ static void physical_QG_into(double *R, int64_t R_s0, int64_t R_s1, double *q, i
     x0 = (r12 * r31);
     x1 = (r21 * r32);
     x2 = (x0 + x1);
-    x3 = pow(x2, (-2.0));
+    x3 = ({ double _p1 = x2; (1.0 / (_p1 * _p1)); });
     x4 = (INT64_C(2) * x3);
     x5 = (v1 * x4);
     x6 = (r12 * r21);
     x7 = (v2 * x4);
-    x8 = ((pow(r12, INT64_C(2)) * x7) + (x5 * x6));
+    x8 = ((({ double _p2 = r12; (_p2 * _p2); }) * x7) + (x5 * x6));
     x9 = (-x8);
-    x10 = ((pow(r21, INT64_C(2)) * x5) + (x6 * x7));
+    x10 = ((({ double _p3 = r21; (_p3 * _p3); }) * x5) + (x6 * x7));
     x11 = (-x10);
     x12 = ((double)(1.0) / (double)(x2));
     x13 = (INT64_C(2) * x12);
@@ -299,10 +299,10 @@ static void physical_QG_into(double *R, int64_t R_s0, int64_t R_s1, double *q, i
     x20 = (r21 * x19);
     x21 = (((((-INT64_C(2)) * v2) * x12) + (x0 * x7)) + x20);
     x22 = (-x21);
-    x23 = (((-pow(r32, INT64_C(2))) * x7) + (r32 * x19));
+    x23 = (((-({ double _p4 = r32; (_p4 * _p4); })) * x7) + (r32 * x19));
     x24 = ((((((INT64_C(2) * r12) * r31) * v1) * x3) - x14) - x16);
     x25 = (((v2 * x13) - (x1 * x7)) + x20);
-    x26 = ((pow(r31, INT64_C(2)) * x5) - (r31 * x15));
+    x26 = ((({ double _p5 = r31; (_p5 * _p5); }) * x5) - (r31 * x15));
     out[(INT64_C(0)) * out_s1 + (INT64_C(0))] = (((r21 * x9) + (r22 * x11)) - (r31 * x18));
     out[(INT64_C(0)) * out_s1 + (INT64_C(1))] = ((((-r11) * x9) - (r12 * x11)) + (r32 * x22));
     out[(INT64_C(0)) * out_s1 + (INT64_C(2))] = ((r11 * x18) - (r22 * x22));
@@ -2565,6 +2565,6 @@ PyMODINIT_FUNC PyInit_platform(void)
     import_array();
     PyObject *m = PyModule_Create(&moduledef);
     if (m == NULL) return NULL;
-    if (PyModule_AddStringConstant(m, "SOURCE_DIGEST", "97f765dce0088ba9cad816a50dca135cb1bda3c2e8dc063e259dff2a9ade3ee4") < 0) { Py_DECREF(m); return NULL; }
+    if (PyModule_AddStringConstant(m, "SOURCE_DIGEST", "c52f1debb831d7d6d4fdb481dc439e859bb75742b4c479e1ac2cc6b3dd385fe9") < 0) { Py_DECREF(m); return NULL; }
     return m;
 }

@@ -286,7 +286,7 @@ static void physical_QG_into(double *R, int64_t R_s0, int64_t R_s1, double *q, i
     v2 = v[INT64_C(1)];
     x0 = (r12 * r21);
     x1 = (((((r11 * r22) - (r11 * r32)) - (r22 * r31)) + (r31 * r32)) - x0);
-    x2 = pow(x1, (-2.0));
+    x2 = ({ double _p1 = x1; (1.0 / (_p1 * _p1)); });
     x3 = sqrt(INT64_C(2));
     x4 = (INT64_C(2) * x3);
     x5 = (x2 * x4);
@@ -294,9 +294,9 @@ static void physical_QG_into(double *R, int64_t R_s0, int64_t R_s1, double *q, i
     x7 = (r11 - r31);
     x8 = (v2 * x5);
     x9 = (x7 * x8);
-    x10 = ((pow(r12, INT64_C(2)) * x6) - (r12 * x9));
+    x10 = ((({ double _p2 = r12; (_p2 * _p2); }) * x6) - (r12 * x9));
     x11 = (r12 * x6);
-    x12 = ((x11 * x7) - (pow(x7, INT64_C(2)) * x8));
+    x12 = ((x11 * x7) - (({ double _p3 = x7; (_p3 * _p3); }) * x8));
     x13 = (-x7);
     x14 = ((x11 * x13) - (x13 * x9));
     x15 = ((double)(x4) / (double)(x1));
@@ -309,11 +309,11 @@ static void physical_QG_into(double *R, int64_t R_s0, int64_t R_s1, double *q, i
     x22 = (-x17);
     x23 = (((((((INT64_C(2) * r12) * v1) * x2) * x22) * x3) - x16) - (x22 * x9));
     x24 = (r21 * x8);
-    x25 = (((((INT64_C(2) * v1) * pow(x17, INT64_C(2))) * x2) * x3) - (x17 * x24));
+    x25 = (((((INT64_C(2) * v1) * ({ double _p4 = x17; (_p4 * _p4); })) * x2) * x3) - (x17 * x24));
     x26 = (((((((INT64_C(2) * r12) * v1) * x17) * x2) * x3) - (x0 * x8)) - x16);
     x27 = (((((((INT64_C(2) * v1) * x17) * x2) * x3) * x7) - x19) - x20);
     x28 = ((((x13 * x17) * x6) - (x13 * x24)) + x19);
-    x29 = (((-pow(r21, INT64_C(2))) * x8) + (((((INT64_C(2) * r21) * v1) * x17) * x2) * x3));
+    x29 = (((-({ double _p5 = r21; (_p5 * _p5); })) * x8) + (((((INT64_C(2) * r21) * v1) * x17) * x2) * x3));
     x30 = ((((((INT64_C(2) * v1) * x17) * x2) * x22) * x3) - (x22 * x24));
     out[(INT64_C(0)) * out_s1 + (INT64_C(0))] = ((((r21 * x18) + (r22 * x12)) - (r31 * x10)) - (r32 * x14));
     out[(INT64_C(0)) * out_s1 + (INT64_C(1))] = (((((-r11) * x18) - (r12 * x12)) + (r31 * x23)) + (r32 * x21));
@@ -2583,6 +2583,6 @@ PyMODINIT_FUNC PyInit_platform_raised(void)
     import_array();
     PyObject *m = PyModule_Create(&moduledef);
     if (m == NULL) return NULL;
-    if (PyModule_AddStringConstant(m, "SOURCE_DIGEST", "6675260dbcafcdedf005e5306fee353a918b2dbcf1e63fb4f1dc7c1e69f8651a") < 0) { Py_DECREF(m); return NULL; }
+    if (PyModule_AddStringConstant(m, "SOURCE_DIGEST", "03a92519242ef1c9455528c75865579f11766810fa71e0c7de9013281e86eeb6") < 0) { Py_DECREF(m); return NULL; }
     return m;
 }
