@@ -31,6 +31,8 @@ import tempfile
 import warnings
 from pathlib import Path
 
+from .c_translation import TranslationError
+
 #: Environment variable choosing the kernels' backend: ``native`` (the default: C where a
 #: compiler is found, else numba) or ``numba``.
 BACKEND_ENV = "NONHOLO_BACKEND"
@@ -146,7 +148,7 @@ def load(name: str, want: str, source):
             module = _import_file(f"nonholo.generated.native.{name}", target)
             if getattr(module, "SOURCE_DIGEST", None) != want:
                 raise RuntimeError(f"{target} does not hold the expected kernels")
-        except (OSError, RuntimeError, ImportError) as exc:
+        except (OSError, RuntimeError, ImportError, TranslationError) as exc:
             warn_once("native", f"nonholo: native kernels unavailable ({str(exc).splitlines()[0]}); "
                                 f"compiling them with numba instead (slower to start)")
             module = None
