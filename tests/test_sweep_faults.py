@@ -5,6 +5,7 @@ results: each ends with every row exactly once, equal to an uninterrupted run's,
 clear refusal; no worker outlives its sweep.
 
 The problems are the car's (they plan in a fraction of a second each)."""
+import contextlib
 import fcntl
 import json
 import os
@@ -60,10 +61,16 @@ def processes_naming(text):
 
 
 def gone(text, within=5.0):
+    """The processes naming ``text`` still there after ``within`` seconds (killed then, so
+    that a failing test leaves none behind)."""
     deadline = time.monotonic() + within
     while processes_naming(text) and time.monotonic() < deadline:
         time.sleep(0.05)
-    return processes_naming(text)
+    left = processes_naming(text)
+    for pid in left:
+        with contextlib.suppress(OSError):
+            os.kill(pid, signal.SIGKILL)
+    return left
 
 
 def assert_complete(out, reference_table):
