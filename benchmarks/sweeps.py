@@ -44,7 +44,9 @@ def plan_all(name: str, goals: list[dict], options: dict | None = None, mechanis
     safe = "".join(c if c.isalnum() or c in "-_." else "_" for c in name)
     out = (directory or runs_dir()) / f"{safe}.parquet"
     out.parent.mkdir(parents=True, exist_ok=True)
-    table = sweep(problems_of(goals, options, mechanism), out, workers=1, progress=sys.stderr.isatty())
+    # the benchmarks' own tables may name their strategies by import path
+    table = sweep(problems_of(goals, options, mechanism), out, workers=1, progress=sys.stderr.isatty(),
+                  allow_imports=True)
     planned = []
     for row in table.to_pylist():
         if row["error"] is not None:

@@ -118,11 +118,21 @@ def test_a_finished_sweep_is_not_run_again(serial, tmp_path, monkeypatch):
         sweep.sweep(rows[1:5], out, workers=1, progress=False)
 
 
-def test_a_problem_that_raises_is_recorded_and_the_sweep_goes_on(tmp_path):
+def test_a_problem_that_raises_is_recorded_and_the_sweep_goes_on(tmp_path, monkeypatch):
+    from nonholo.planning import api as planner
+
     rows = pair_rows(3)
-    rows[1] = {**rows[1], "options": {"harmonics": -1}}
+    rows[1] = {**rows[1], "options": {"tol": 1e-9}}
+    real = planner.plan
+
+    def plan(*args, tol=1e-10, **kwargs):           # a failure only planning shows
+        if tol == 1e-9:
+            raise ArithmeticError("the planner broke")
+        return real(*args, tol=tol, **kwargs)
+
+    monkeypatch.setattr(planner, "plan", plan)
     table = sweep.sweep(rows, tmp_path / "r.parquet", workers=1, progress=False).to_pylist()
-    assert table[1]["error"].startswith("ValueError: harmonics") and table[1]["plan"] is None
+    assert table[1]["error"] == "ArithmeticError: the planner broke" and table[1]["plan"] is None
     assert not table[1]["success"]
     assert table[0]["error"] is None and table[2]["error"] is None and table[0]["plan"] is not None
 
@@ -259,7 +269,9 @@ def test_a_strategy_class_goes_into_a_problem_table_by_its_import_path(tmp_path)
             planner.strategy_class(bad)
     rows = [{**r, "options": {"strategy": "benchmarks.bench_robust:WBarrier", "route": "local"}}
             for r in pair_rows(2)]
-    table = sweep.sweep(rows, tmp_path / "r.parquet", workers=1, progress=False).to_pylist()
+    with pytest.raises(ValueError, match=r"row 0, column 'options.strategy': names a strategy by its import path"):
+        sweep.sweep(rows, tmp_path / "r.parquet", workers=1, progress=False)
+    table = sweep.sweep(rows, tmp_path / "r.parquet", workers=1, progress=False, allow_imports=True).to_pylist()
     assert [r["strategy"] for r in table] == [bench_robust.WBarrier.name] * 2
     assert all(r["error"] is None for r in table)
 

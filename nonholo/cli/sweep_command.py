@@ -11,7 +11,10 @@ Examples::
 
 ``sweep`` plans every problem of a JSON Lines file (:mod:`nonholo.io.problems`) and writes one
 row per problem to a Parquet file as results arrive (:mod:`nonholo.batch.sweep`); run again with
-the same arguments it finishes what an interrupted run left. ``atlas --problems`` writes
+the same arguments it finishes what an interrupted (even killed) run left, and a second sweep
+on the same output while one runs is refused (exit 2). Every row's options are checked as
+``plan`` checks them before anything runs; a strategy named by import path
+(``"module:Class"``) needs ``--allow-imports``. ``atlas --problems`` writes
 an atlas's problems (:func:`nonholo.batch.atlas.problems`): goals on a grid over two of the
 numbers of a state (``--axes``: the RPY angles phi theta psi with an orientation, then the
 coordinates; default phi theta, or the first two coordinates), the others the start's
@@ -19,7 +22,8 @@ coordinates; default phi theta, or the first two coordinates), the others the st
 per ``--psi`` with an orientation; ``atlas RESULTS`` draws the maps of their sweep
 (``atlas_success``, ``atlas_iterations``, ``atlas_time``, PNG and PDF).
 
-Exit status: 0 done, 2 bad input (a bad problem file names the row and column).
+Exit status: 0 done, 2 bad input (a bad problem file names the row and column; a damaged
+results file; another sweep writing the same output).
 """
 from __future__ import annotations
 
@@ -40,6 +44,9 @@ def add_parsers(subparsers) -> None:
                    help="run on a Dask distributed cluster: its scheduler's address, e.g. tcp://HOST:8786")
     p.add_argument("--batch", type=int, default=None,
                    help="problems per unit of work, each written as it finishes (default: automatic)")
+    p.add_argument("--allow-imports", action="store_true",
+                   help="let a row name its strategy by import path (options.strategy = \"module:Class\"), "
+                        "which imports that module and runs its code: only for tables you trust")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.set_defaults(func=run_sweep)
 
@@ -75,12 +82,12 @@ def _error(message: str) -> int:
 
 
 def run_sweep(args) -> int:
-    from ..batch.sweep import sweep
+    from ..batch.sweep import SweepBusy, sweep
 
     try:
         table = sweep(args.problems, args.out, workers=args.workers, scheduler=args.scheduler,
-                      progress=not args.quiet, batch=args.batch)
-    except (ValueError, OSError) as exc:
+                      progress=not args.quiet, batch=args.batch, allow_imports=args.allow_imports)
+    except (ValueError, TypeError, OSError, SweepBusy) as exc:
         return _error(str(exc))
     rows = table.select(["success", "error"]).to_pylist()
     solved = sum(r["success"] for r in rows)

@@ -21,6 +21,11 @@ be arrays, and a pair a tuple ``(R, q)``).
 :func:`check` validates a whole table before anything runs and names the row (from 0, the
 line of the file) and the column of the first problem it finds; :func:`fingerprint`
 identifies a table, so that a sweep resumed with another one is refused.
+
+A table is data: ``options.strategy`` names a strategy (``"paper"``, ``"robust"``); one
+given by its import path ``"package.module:Class"`` would import that module (and run its
+top-level code), so it is refused, naming the row, unless the caller opts in
+(``allow_imports=True``; ``nonholo sweep --allow-imports``). Nothing is imported here.
 """
 from __future__ import annotations
 
@@ -61,10 +66,11 @@ def _state(space, value, row: int, column: str, mechanism: str):
     return space.public(R, q)
 
 
-def check_row(d, row: int) -> dict:
+def check_row(d, row: int, allow_imports: bool = False) -> dict:
     """One problem, checked: ``{"start", "goal", "mechanism", "options", "label"}`` with
     the states in the form :func:`nonholo.plan` takes (arrays; a pair ``(R, q)`` as a
-    tuple), the mechanism's name and a dict of options."""
+    tuple), the mechanism's name and a dict of options. A strategy named by its import
+    path is refused unless ``allow_imports`` (see the module)."""
     if not isinstance(d, dict):
         _fail(row, None, f"must be an object with columns {', '.join(COLUMNS)}, got {type(d).__name__}")
     unknown = [k for k in d if k not in COLUMNS]
@@ -89,6 +95,12 @@ def check_row(d, row: int) -> dict:
             _fail(row, f"options.{key}", f"is not an option of plan() (known: {', '.join(OPTIONS)})")
         if not _json_value(value):
             _fail(row, f"options.{key}", f"must be a number, string, boolean, null or list, got {value!r}")
+    strategy = options.get("strategy")
+    if isinstance(strategy, str) and ":" in strategy and not allow_imports:
+        _fail(row, "options.strategy",
+              f"names a strategy by its import path {strategy!r}, which would import the module "
+              f"{strategy.partition(':')[0]!r} and run its code; a problem table is data: allow it with "
+              "allow_imports=True (nonholo sweep --allow-imports) if you trust the table")
     label = d.get("label")
     if label is not None and not isinstance(label, str):
         _fail(row, "label", f"must be text, got {label!r}")
@@ -103,17 +115,25 @@ def _json_value(x) -> bool:
     return False
 
 
-def check(rows) -> list[dict]:
-    """Every row checked (:func:`check_row`); ``ValueError`` naming the first bad one."""
-    rows = list(rows)
+def check(rows, allow_imports: bool = False) -> list[dict]:
+    """Every row checked (:func:`check_row`); ``ValueError`` naming the first bad one,
+    ``TypeError`` if ``rows`` is not a list (an iterable) of rows."""
+    if rows is None or isinstance(rows, (str, bytes, dict)):
+        raise TypeError(f"problems must be a list of problems (dicts) or a JSON Lines file's path, "
+                        f"got {type(rows).__name__}")
+    try:
+        rows = list(rows)
+    except TypeError:
+        raise TypeError(f"problems must be a list of problems (dicts) or a JSON Lines file's path, "
+                        f"got {type(rows).__name__}") from None
     if not rows:
         raise ValueError("the problem table is empty")
-    return [check_row(d, i) for i, d in enumerate(rows)]
+    return [check_row(d, i, allow_imports) for i, d in enumerate(rows)]
 
 
-def read(path) -> list[dict]:
+def read(path, allow_imports: bool = False) -> list[dict]:
     """The problems of a JSON Lines file, checked (blank lines are not allowed: every line
-    is a row, numbered from 0)."""
+    is a row, numbered from 0; ``allow_imports``: see :func:`check_row`)."""
     rows = []
     with open(path, encoding="utf-8-sig") as f:
         for i, line in enumerate(f):
@@ -125,7 +145,7 @@ def read(path) -> list[dict]:
                 _fail(i, None, f"is not JSON: {exc.msg} at character {exc.pos}")
     if not rows:
         raise ValueError(f"{path}: no problems (an empty file)")
-    return check(rows)
+    return check(rows, allow_imports)
 
 
 def as_json(problem: dict) -> dict:
@@ -145,7 +165,7 @@ def write(path, rows) -> Path:
     written by :func:`nonholo.io.safe_write.write_text` (atomically; a directory at
     ``path`` is refused with a ``ValueError`` naming ``path``)."""
     safe_write.check_target(path, "path")
-    lines = [json.dumps(as_json(p), separators=(",", ":")) for p in check(rows)]
+    lines = [json.dumps(as_json(p), separators=(",", ":")) for p in check(rows, allow_imports=True)]
     return safe_write.write_text(path, "\n".join(lines) + "\n", "path")
 
 
