@@ -17,6 +17,7 @@ as ``<kernel>__<system>`` (``forward__physical``, ``forward_variational__frame``
 from __future__ import annotations
 
 import ast
+import functools
 import sys
 from pathlib import Path
 
@@ -67,10 +68,17 @@ def module_text(module) -> str:
 
 def function_source(text: str, name: str) -> str:
     """The source of the top-level function ``name`` in the module source ``text``."""
-    for node in ast.parse(text).body:
-        if isinstance(node, ast.FunctionDef) and node.name == name:
-            return ast.get_source_segment(text, node)
-    raise ValueError(f"no function {name!r} in the generated module")
+    functions = _functions(text)
+    if name not in functions:
+        raise ValueError(f"no function {name!r} in the generated module")
+    return functions[name]
+
+
+@functools.lru_cache(maxsize=64)
+def _functions(text: str) -> dict[str, str]:
+    lines = text.splitlines(keepends=True)
+    return {node.name: "".join(lines[node.lineno - 1:node.end_lineno])
+            for node in ast.parse(text).body if isinstance(node, ast.FunctionDef)}
 
 
 def functions(module, parts: dict, kernels_text: str | None = None) -> list:

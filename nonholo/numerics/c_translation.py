@@ -30,7 +30,6 @@ Conventions of the subset (checked; anything else raises :class:`TranslationErro
 from __future__ import annotations
 
 import ast
-import copy
 import functools
 import inspect
 import textwrap
@@ -83,17 +82,22 @@ class Function:
 
 
 def _tree(func) -> ast.FunctionDef:
-    """A fresh syntax tree of ``func`` (the translation rewrites it)."""
-    return copy.deepcopy(_parsed(func))
-
-
-@functools.cache
-def _parsed(func) -> ast.FunctionDef:
-    src = textwrap.dedent(func if isinstance(func, str) else inspect.getsource(func))
-    node = ast.parse(src).body[0]
+    """A fresh syntax tree of ``func`` (the translation rewrites it; parsing is cheaper than a copy)."""
+    node = ast.parse(_source(func)).body[0]
     if not isinstance(node, ast.FunctionDef):
         raise TranslationError("expected a function definition")
     return node
+
+
+@functools.cache
+def _source(func) -> str:
+    return textwrap.dedent(func if isinstance(func, str) else inspect.getsource(func))
+
+
+@functools.cache
+def _parameters(func) -> tuple[str, ...]:
+    """The names of ``func``'s parameters."""
+    return tuple(a.arg for a in _tree(func).args.args)
 
 
 def _small_integer(node) -> int | None:
@@ -135,6 +139,7 @@ class _Translator:
         self.body = [s for s in self.tree.body
                      if not (isinstance(s, ast.Expr) and isinstance(s.value, ast.Constant))]
         self.body = self._expand_workspaces(self.body)
+        self.nodes = list(ast.walk(ast.Module(body=self.body, type_ignores=[])))
 
     # ---- errors -------------------------------------------------------------------
     def fail(self, node, what: str):
@@ -268,7 +273,7 @@ class _Translator:
     def infer(self):
         """Types of the locals (fixed point over their assignments)."""
         assigns = []
-        for node in ast.walk(ast.Module(body=self.body, type_ignores=[])):
+        for node in self.nodes:
             if isinstance(node, ast.Assign):
                 for t in node.targets:
                     if isinstance(t, ast.Name):
@@ -503,7 +508,7 @@ class _Translator:
             if callee is None:
                 self.fail(node, f"call of {f.id}, which is not bound to a translated function")
             args = []
-            params = [a.arg for a in _tree(callee.func).args.args]
+            params = _parameters(callee.func)
             if len(node.args) != len(params) or node.keywords:
                 self.fail(node, f"{f.id} takes {len(params)} positional arguments")
             for p, a in zip(params, node.args):
@@ -688,7 +693,7 @@ class _Translator:
     def returns(self):
         """C types of the returned values (from the first ``return`` with a value)."""
         types = None
-        for node in ast.walk(ast.Module(body=self.body, type_ignores=[])):
+        for node in self.nodes:
             if isinstance(node, ast.Return) and node.value is not None:
                 vals = node.value.elts if isinstance(node.value, ast.Tuple) else [node.value]
                 ts = [self.typeof(v) for v in vals]
@@ -731,7 +736,7 @@ class _Translator:
         unused = [f"(void){s};" for a in self.args if a in self.arrays for s in self.arrays[a].shape]
         body = "\n".join(["    " + " ".join(unused)] + self.lines) if unused else "\n".join(self.lines)
         aliases = {}
-        for node in ast.walk(ast.Module(body=self.body, type_ignores=[])):
+        for node in self.nodes:
             if (isinstance(node, ast.Assign) and len(node.targets) == 1 and isinstance(node.targets[0], ast.Name)
                     and node.targets[0].id in self.arrays and self.base_name(node.value) in self.arrays
                     and self.new_array(node.value) is None):
@@ -800,7 +805,7 @@ static int nh_array(PyObject *o, int type, int nd, int written, const char *fnam
 
 def _wrapper(fn: Function) -> str:
     """A METH_FASTCALL wrapper of ``fn`` (arguments checked, the GIL released while it runs)."""
-    params = [a.arg for a in _tree(fn.func).args.args]
+    params = _parameters(fn.func)
     arrays = [p for p in params if KINDS[fn.kinds[p]][1]]
     lines = [f"static PyObject *py_{fn.cname}(PyObject *self, PyObject *const *args, Py_ssize_t nargs)", "{"]
     lines.append(f"    if (nargs != {len(params)}) {{ PyErr_Format(PyExc_TypeError, \"{fn.cname} takes {len(params)} arguments (%zd given)\", nargs); return NULL; }}")

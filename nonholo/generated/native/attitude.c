@@ -2521,6 +2521,6 @@ PyMODINIT_FUNC PyInit_attitude(void)
     import_array();
     PyObject *m = PyModule_Create(&moduledef);
     if (m == NULL) return NULL;
-    if (PyModule_AddStringConstant(m, "SOURCE_DIGEST", "3a1992b8933bdb6c657e24238e3eb4f2e18630e2b53f293e18e65fcc0f335502") < 0) { Py_DECREF(m); return NULL; }
+    if (PyModule_AddStringConstant(m, "SOURCE_DIGEST", "9ec46c3e0ec1be0c8ec27a8f567afb14fe2c0b243c527b4f433fb935115d2452") < 0) { Py_DECREF(m); return NULL; }
     return m;
 }

@@ -2440,6 +2440,6 @@ PyMODINIT_FUNC PyInit_car(void)
     import_array();
     PyObject *m = PyModule_Create(&moduledef);
     if (m == NULL) return NULL;
-    if (PyModule_AddStringConstant(m, "SOURCE_DIGEST", "82d6f11f5c055530533e236e8b7acb646da21dddb693f10f8117ff53fbcc59e8") < 0) { Py_DECREF(m); return NULL; }
+    if (PyModule_AddStringConstant(m, "SOURCE_DIGEST", "b3c74845b55fba63c1fcd520ae92774bc236f0f96ebc688baeb1c6739ba58fed") < 0) { Py_DECREF(m); return NULL; }
     return m;
 }

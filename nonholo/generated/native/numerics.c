@@ -384,6 +384,6 @@ PyMODINIT_FUNC PyInit_numerics(void)
     import_array();
     PyObject *m = PyModule_Create(&moduledef);
     if (m == NULL) return NULL;
-    if (PyModule_AddStringConstant(m, "SOURCE_DIGEST", "6621cb6a6d1a28583997b5f0ec73ce26fff2ed4617b20fccf71a0036fdd66d4a") < 0) { Py_DECREF(m); return NULL; }
+    if (PyModule_AddStringConstant(m, "SOURCE_DIGEST", "a8463d0ae456c0ad742d3960a1e77c5aea3026ad2e14fc22afabe9855d729675") < 0) { Py_DECREF(m); return NULL; }
     return m;
 }

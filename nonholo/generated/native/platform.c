@@ -2565,6 +2565,6 @@ PyMODINIT_FUNC PyInit_platform(void)
     import_array();
     PyObject *m = PyModule_Create(&moduledef);
     if (m == NULL) return NULL;
-    if (PyModule_AddStringConstant(m, "SOURCE_DIGEST", "c52f1debb831d7d6d4fdb481dc439e859bb75742b4c479e1ac2cc6b3dd385fe9") < 0) { Py_DECREF(m); return NULL; }
+    if (PyModule_AddStringConstant(m, "SOURCE_DIGEST", "dd89a675ed0fbc6713653b98f6a59109425b048bf35529dd250edf3e84e22819") < 0) { Py_DECREF(m); return NULL; }
     return m;
 }

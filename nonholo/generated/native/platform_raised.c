@@ -2583,6 +2583,6 @@ PyMODINIT_FUNC PyInit_platform_raised(void)
     import_array();
     PyObject *m = PyModule_Create(&moduledef);
     if (m == NULL) return NULL;
-    if (PyModule_AddStringConstant(m, "SOURCE_DIGEST", "03a92519242ef1c9455528c75865579f11766810fa71e0c7de9013281e86eeb6") < 0) { Py_DECREF(m); return NULL; }
+    if (PyModule_AddStringConstant(m, "SOURCE_DIGEST", "cd03dceb6fa62c50b8511cb6a37c770d81035952339bf3e1ce9f9479a4ccbb00") < 0) { Py_DECREF(m); return NULL; }
     return m;
 }

@@ -1201,6 +1201,6 @@ PyMODINIT_FUNC PyInit_rolling_ball(void)
     import_array();
     PyObject *m = PyModule_Create(&moduledef);
     if (m == NULL) return NULL;
-    if (PyModule_AddStringConstant(m, "SOURCE_DIGEST", "2fc50c30c23b78b21cfdb3120d368f55a5c84215ac5cb95289ae4e54fc69470e") < 0) { Py_DECREF(m); return NULL; }
+    if (PyModule_AddStringConstant(m, "SOURCE_DIGEST", "b7f00138bba17688873a378a6f43241b505560744dc2f5bacfddef33b934468b") < 0) { Py_DECREF(m); return NULL; }
     return m;
 }
