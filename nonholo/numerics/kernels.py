@@ -1,4 +1,4 @@
-"""Small compiled (numba) numerics shared by the integrator and the planners.
+"""Small compiled numerics shared by the integrator and the planners.
 
 - SO(3): :func:`rodrigues` (``exp([w])``), :func:`exp_times` (``exp([w]) R``),
   :func:`inv33` (and :func:`inverse_into` for any n×n), :func:`log_rotation` and :func:`log_error` (the planner's error
@@ -6,6 +6,12 @@
 - :func:`min_norm_step`: the minimum-norm solution of ``J x = l`` (3 × p) in a diagonal
   metric — a 3×3 Cholesky solve, with an eigen-decomposition fallback for a
   rank-deficient ``J`` that is compiled only if a run needs it.
+
+The numba-compiled functions are the ``_into`` cores (outputs passed in). The functions the
+planners call (:func:`log_rotation`, :func:`log_error`, :func:`cholesky_step`,
+:func:`all_finite`, :func:`min_norm_step`) run the same cores translated to C
+(:data:`NATIVE`, the module ``nonholo.generated.native.numerics``) where that is available
+(:mod:`nonholo.numerics.native`), else numba's.
 
 The integrator itself is :mod:`nonholo.integrate.cf4`.
 """
@@ -332,7 +338,7 @@ def all_finite_jit(A) -> bool:
 
 
 # --------------------------------------------------------------------------------------
-# The functions the planners call: native where available (the module docstring)
+# The functions the planners call: native where available, else numba
 # --------------------------------------------------------------------------------------
 
 #: The functions of the native module ``nonholo.generated.native.numerics``, with the kinds

@@ -2521,6 +2521,6 @@ PyMODINIT_FUNC PyInit_attitude(void)
     import_array();
     PyObject *m = PyModule_Create(&moduledef);
     if (m == NULL) return NULL;
-    if (PyModule_AddStringConstant(m, "SOURCE_DIGEST", "9ec46c3e0ec1be0c8ec27a8f567afb14fe2c0b243c527b4f433fb935115d2452") < 0) { Py_DECREF(m); return NULL; }
+    if (PyModule_AddStringConstant(m, "SOURCE_DIGEST", "6cceaea1e151f1da8157ad6169f95c16f03cfb07e7e094e64c04685e9c2cdcd3") < 0) { Py_DECREF(m); return NULL; }
     return m;
 }

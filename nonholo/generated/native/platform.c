@@ -2565,6 +2565,6 @@ PyMODINIT_FUNC PyInit_platform(void)
     import_array();
     PyObject *m = PyModule_Create(&moduledef);
     if (m == NULL) return NULL;
-    if (PyModule_AddStringConstant(m, "SOURCE_DIGEST", "dd89a675ed0fbc6713653b98f6a59109425b048bf35529dd250edf3e84e22819") < 0) { Py_DECREF(m); return NULL; }
+    if (PyModule_AddStringConstant(m, "SOURCE_DIGEST", "a2743e7ad5dd2094c03cfbec605476d2e73ef5eb24aea872ab685c3f6174f254") < 0) { Py_DECREF(m); return NULL; }
     return m;
 }
