@@ -1,4 +1,5 @@
-"""The numba disk cache never stops a run: no writable cache location, a damaged entry."""
+"""The numba disk cache never stops a run: no writable cache location, a damaged entry
+(the numba backend chosen, since the native kernels installed would bypass its cache)."""
 import os
 import subprocess
 import sys
@@ -23,7 +24,7 @@ caching._CacheLocator.ensure_cache_path = refuse      # every cache location unw
 
 
 def run(code: str, cache_dir: Path):
-    env = {**os.environ, "NUMBA_CACHE_DIR": str(cache_dir)}
+    env = {**os.environ, "NUMBA_CACHE_DIR": str(cache_dir), "NONHOLO_BACKEND": "numba"}
     return subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env,
                           timeout=600)
 

@@ -257,7 +257,7 @@ def _read_checked(path: Path) -> pa.Table:
         meta = {k: v for k, v in meta.items() if k in (FINGERPRINT_KEY, CHECKSUM_KEY)}
         table = pq.read_table(path, schema=SCHEMA).replace_schema_metadata(meta or None)
     except (OSError, pa.ArrowException) as exc:
-        raise ValueError(f"{path} cannot be read as a sweep's results ({exc})") from None
+        raise ValueError(f"{path} is damaged or not a sweep's results: it cannot be read ({exc})") from None
     want = meta.get(CHECKSUM_KEY)
     if want is not None and want.decode(errors="replace") != checksum(table):
         raise ValueError(f"{path} is damaged: its rows do not match the checksum written with them")
