@@ -5,11 +5,13 @@
 - :func:`verified`: the same check as the robust-strategy benchmark (dense path, ``|Δ|``);
 - :func:`reachable_goals`, :func:`paper_reachable_goals`: goals reachable by construction;
 - :func:`random_rotations`: random rotations away from a mechanism's singular set;
-- :func:`forbid_simulation`: make any simulation (or kernel compilation) fail the test.
+- :func:`forbid_simulation`: make any simulation (or kernel compilation) fail the test;
+- fixture ``interpreted_kernels``: every system's kernels run by the interpreter (:mod:`kernel_runs`).
 """
 from __future__ import annotations
 
 import numpy as np
+import pytest
 from scipy.spatial.transform import Rotation
 
 from nonholo.certify import resimulate as verify
@@ -193,3 +195,12 @@ def check_into_forms(module, rotations, rng):
 #: The package's mechanisms whose state is an orientation alone (the rest, e.g. the
 #: rolling ball and the car, are tested by ``tests/test_state_spaces.py``).
 SO3_MECHANISMS = tuple(n for n in GENERATED_MECHANISMS if not catalog.get(n).beyond_so3)
+
+
+@pytest.fixture(scope="session")
+def interpreted_kernels(tmp_path_factory):
+    """Every catalog system's kernels in both Python forms, run by the interpreter on
+    :mod:`kernel_runs`' inputs: ``{(name, frame, form): outputs}``."""
+    import kernel_runs
+
+    return kernel_runs.interpreted(tmp_path_factory.mktemp("kernels"))

@@ -1,17 +1,15 @@
-"""The generated CF4 kernels (the step inlined by `nonholo derive`) against the kernels of
-nonholo/integrate/cf4.py compiled as written (the step called), for every mechanism and
-both of its systems, and against a fresh generation.
-
-Bit for bit with the variational matrix ``QG`` compiled without fast-math (with it, LLVM
-may reorder ``QG``'s arithmetic differently where it is inlined: the platform's raised
-variant's Jacobians then differ at round-off level between the two forms); the kernels
-as used (fast-math ``QG``) agree with those to round-off."""
+"""The generated CF4 kernels (the step inlined by `nonholo derive`): against the kernels
+of nonholo/integrate/cf4.py as written (the step called), bit for bit, both executed by
+the interpreter (``kernel_runs``), for every mechanism and both of its systems; against a
+fresh generation; against DOP853 on the generated field; stopping at the singular set.
+(The compiled backends are held to the interpreted source in ``test_native``.)"""
+import kernel_runs
 import numpy as np
 import pytest
 from conftest import example
 
 from nonholo.controls import stages
-from nonholo.controls.parametrisations import Fourier, PiecewiseConstant
+from nonholo.controls.parametrisations import Fourier
 from nonholo.generated import cf4_kernels
 from nonholo.integrate import cf4, inliner
 from nonholo.model import catalog
@@ -33,85 +31,46 @@ def test_generated_kernels_are_fresh():
     assert inliner.cf4_kernels_module() == open(cf4_kernels.__file__).read()
 
 
-@pytest.mark.parametrize("name,frame", SYSTEMS)
-def test_inlined_kernels_equal_the_written_ones(name, frame):
-    mech = catalog.get(name)
-    fast = cf4.compile_system(mech.module, frame, fast_derivative=False)
-    ref = cf4.compile_system(mech.module, frame, inlined=False, fast_derivative=False)
-    used = cf4.compile_system(mech.module, frame)
-    rng = np.random.default_rng(7)
-    R0, q0 = start(name)
-    d, m = mech.n_rates, mech.n_inputs
-    for controls in (Fourier(1.0, 0.4 * rng.normal(size=(m, 5))),
-                     PiecewiseConstant(1.0, 0.4 * rng.normal(size=(20, m)))):
-        steps = 200
-        U = stages.stage_table(controls, steps)
-        basis = stages.kernel_basis(controls, steps)
-        outs = []
-        for kern in (fast, ref, used):
-            Rs, Qs = kern.nodes(steps)
-            a = kern.forward(R0, q0, U, 1.0 / steps, 1.0, -np.inf, Rs, Qs)
-            Rv, Qv = kern.nodes(steps)
-            Zs = np.empty((steps + 1, d, d))
-            J, M = np.empty((d, controls.params.size)), np.empty((d, d))
-            Wd = np.empty((3 * steps, d * m))
-            b = kern.forward_variational(R0, q0, U, 1.0 / steps, 1.0, -np.inf, *basis, Rv, Qv, Zs, J, M,
-                                         Wd, True)
-            outs.append((a, Rs, Qs, b, Rv, Qv, Zs, J, M, Wd))
-        assert outs[0][0][0] == steps and outs[0][3][0] == steps
-        for x, y, z in zip(*outs):
-            if isinstance(x, tuple):
-                assert x == y == z
-            else:
-                np.testing.assert_array_equal(x, y)
-                np.testing.assert_allclose(z, x, rtol=1e-12, atol=1e-12 * np.abs(x).max(initial=1.0))
-        if frame:
-            nodes, qnodes = outs[0][1], outs[0][2]
-            t = np.array([0.0, 0.1234, 0.5, 0.999])
-            k = np.minimum((t * steps).astype(np.int64), steps)
-            s = t - k / steps
-            Wst = np.ascontiguousarray(np.broadcast_to(controls(t)[:, None, :], (4, 3, m)))
-            res = []
-            for kern in (fast, ref):
-                Rout, Qout, u = np.empty((4, 3, 3)), np.empty((4, mech.n_coordinates)), np.empty((4, m))
-                kern.frame_inputs(nodes, qnodes, k, s, Wst, np.ascontiguousarray(controls(t)), Rout, Qout, u)
-                res.append((Rout, Qout, u))
-            for x, y in zip(*res):
-                np.testing.assert_array_equal(x, y)
+@pytest.mark.parametrize("name,frame", kernel_runs.SYSTEMS)
+def test_inlined_kernels_equal_the_written_ones(name, frame, interpreted_kernels):
+    """Every output of the generated kernels (forward, variational with both bases, with
+    and without ``M(T)``, frame inputs) bit for bit that of the kernels as written, both
+    executed by the interpreter: the inlining changes no operation."""
+    inlined, written = (interpreted_kernels[name, frame, form] for form in kernel_runs.FORMS)
+    assert inlined.keys() == written.keys()
+    assert inlined["forward_result"][0] > 0
+    for key in inlined:
+        np.testing.assert_array_equal(inlined[key], written[key], err_msg=key)
 
 
 def test_a_stopped_run_reports_where():
-    """A trajectory driven into Δ = 0 stops at the stage where sgnΔ fell below delta_stop,
-    in both forms, with the same step count."""
+    """A trajectory driven into Δ = 0 stops in the step where sgnΔ at a stage fell below
+    delta_stop: the nodes before it are clear of the threshold, the reported least sgnΔ
+    is below it and is Δ at one of that step's stages."""
     mech = catalog.get("platform")
-    fast = cf4.compile_system(mech.module)
-    ref = cf4.compile_system(mech.module, inlined=False)
+    kern = cf4.compile_system(mech.module)
     R0 = np.ascontiguousarray(example(1)[0])
     U = stages.stage_table(Fourier(1.0, [[3.0, 0, 0, 0, 0], [-3.0, 0, 0, 0, 0]]), 100)
-    got = []
-    for kern in (fast, ref):
-        Rs, Qs = kern.nodes(100)
-        got.append(kern.forward(R0, np.zeros(0), U, 0.01, 1.0, 0.3, Rs, Qs))
-    assert got[0] == got[1]
-    n, dmin, t_stop = got[0]
-    assert n < 100 and dmin < 0.3 and 0.0 <= t_stop <= 1.0
+    Rs, Qs = kern.nodes(100)
+    n, dmin, t_stop = kern.forward(R0, np.zeros(0), U, 0.01, 1.0, 0.3, Rs, Qs)
+    assert 0 < n < 100 and dmin < 0.3 and n * 0.01 <= t_stop <= (n + 1) * 0.01
+    assert np.all(mech.delta_samples(Rs[:n + 1], None) >= 0.3)
+    full = kern.nodes(100)
+    m, _, _ = kern.forward(R0, np.zeros(0), U, 0.01, 1.0, -np.inf, *full)
+    assert m == 100
+    np.testing.assert_array_equal(full[0][:n + 1], Rs[:n + 1])    # the same motion up to the stop
 
 
 def test_a_car_stops_before_its_singular_set():
-    """The car steered towards cos φ = 0 stops there, in both forms, where φ's own motion
-    (φ̇ = u₂, exact under CF4) says it should."""
+    """The car steered towards cos φ = 0 stops there, where φ's own motion (φ̇ = u₂, exact
+    under CF4) says it should."""
     mech = catalog.get("car")
-    fast = cf4.compile_system(mech.module)
-    ref = cf4.compile_system(mech.module, inlined=False)
+    kern = cf4.compile_system(mech.module)
     U = np.zeros((100, 3, 2))
     U[:, :, 0] = 1.0
     U[:, :, 1] = 2.0                       # φ(t) = 2t reaches arccos(0.1) at t ≈ 0.735
-    got = []
-    for kern in (fast, ref):
-        Rs, Qs = kern.nodes(100)
-        got.append(kern.forward(np.eye(3), np.zeros(4), U, 0.01, 1.0, 0.1, Rs, Qs))
-    assert got[0] == got[1]
-    n, dmin, t_stop = got[0]
+    Rs, Qs = kern.nodes(100)
+    n, dmin, t_stop = kern.forward(np.eye(3), np.zeros(4), U, 0.01, 1.0, 0.1, Rs, Qs)
     assert n == int(np.arccos(0.1) / 2 / 0.01) == 73
     # step 73's middle (φ = 1.47) is clear, its end (φ = 1.48) is not
     assert t_stop == pytest.approx(0.74) and dmin == pytest.approx(np.cos(1.48), rel=1e-12)
