@@ -97,7 +97,7 @@ def resimulate(R0, controls, T: float, mechanism="platform", breakpoints=None,
     """
     mech = catalog.get(mechanism)
     R0 = so3.check_rotation(R0, "R0")
-    L, m = mech.L, mech.n_inputs
+    L, m = mech.module.L, mech.n_inputs
 
     def rhs(a, b):
         u = _input(controls, a, b, m)
@@ -122,7 +122,7 @@ def resimulate_path(R0, controls, T: float, mechanism="platform", breakpoints=No
     """
     mech = catalog.get(mechanism)
     R0 = so3.check_rotation(R0, "R0")
-    L, m = mech.L, mech.n_inputs
+    L, m = mech.module.L, mech.n_inputs
     ts, Rs = [], []
     y = R0.ravel()
     grid = np.linspace(0.0, float(T), int(samples))
@@ -162,7 +162,7 @@ def mobility_lyapunov(R0, controls, T: float, mechanism="platform", breakpoints=
     """``M(T)`` from ``dM/dt = B Bᵀ + A M + M Aᵀ``, ``M(0) = 0`` (integrated with ``R``)."""
     mech = catalog.get(mechanism)
     R0 = so3.check_rotation(R0, "R0")
-    L, Q, m = mech.L, mech.Q, mech.n_inputs
+    L, Q, m = mech.module.L, mech.module.Q, mech.n_inputs
 
     def rhs(a, b):
         u = _input(controls, a, b, m)

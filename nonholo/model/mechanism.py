@@ -44,6 +44,7 @@ import numpy as np
 
 from ..integrate import cf4
 from ..numerics import native
+from ..numerics.checks import real_array
 from ..spaces.groups import Product
 from ..spaces.singular import NoSingularSet, SingularSet
 
@@ -98,7 +99,9 @@ def _on_stack(into, R, shape: tuple) -> np.ndarray:
     """A generated ``NAME_into(R, out)`` (plain arithmetic on the entries of ``R``) filling
     ``shape``: on one ``R`` (3, 3), or on a stack (n, 3, 3) at once, evaluated on ``(3, 3,
     n)`` into ``shape + (n,)``; shape ``shape`` or ``(n,) + shape``."""
-    R = np.asarray(R, dtype=float)
+    R = real_array(R, "R")
+    if R.shape[-2:] != (3, 3) or R.ndim not in (2, 3):
+        raise ValueError(f"R must be a rotation matrix (3, 3) or a stack of them (n, 3, 3), got shape {R.shape}")
     if R.ndim == 2:
         out = np.empty(shape)
         into(R, out)
@@ -116,6 +119,24 @@ def on_rotation(function, module) -> Callable:
 
     def on_R(R, *args):
         return function(R, none, *args)
+
+    on_R.__name__ = on_R.__qualname__ = function.__name__
+    on_R.__doc__ = function.__doc__
+    on_R.generated = function
+    return on_R
+
+
+def checked_on_R(function) -> Callable:
+    """A generated ``function(R, ...)`` (``L``, ``Q``) that refuses, with ``ValueError``
+    naming ``R``, what is not a finite real 3×3 matrix (or a ``(3, 3, n)`` stack)."""
+
+    def on_R(R, *args):
+        R = real_array(R, "R")
+        if R.shape[:2] != (3, 3) or R.ndim not in (2, 3):
+            raise ValueError(f"R must be a 3×3 matrix (or a (3, 3, n) stack), got shape {R.shape}")
+        if not np.all(np.isfinite(R)):
+            raise ValueError("R has non-finite entries (NaN or infinity)")
+        return function(R, *args)
 
     on_R.__name__ = on_R.__qualname__ = function.__name__
     on_R.__doc__ = function.__doc__
@@ -279,7 +300,7 @@ class Mechanism:
             frame = Frame(*(on_rotation(f, module) for f in (module.N, module.QN, module.W)))
         geometry = getattr(module, "GEOMETRY", None)
         return cls(name=module.NAME, description=module.DESCRIPTION, inputs=tuple(module.INPUTS),
-                   L=module.L, Q=module.Q, delta=None if delta is None else on_rotation(delta, module),
+                   L=checked_on_R(module.L), Q=checked_on_R(module.Q), delta=None if delta is None else on_rotation(delta, module),
                    frame=frame, geometry=None if geometry is None else Geometry.from_mapping(geometry),
                    module=module, G=module.G)
 

@@ -122,10 +122,13 @@ def plan(R0, Rd, *, T: float | None = 1.0, method: str = "parametric", harmonics
 
     Raises ``ValueError`` for bad input (``R0``/``Rd`` not rotations, ``Δ(R0) = 0``,
     ``T ≤ 0``, ``harmonics``/``grid``/``steps`` < 1, unknown method/strategy/mechanism, bad
-    numerical options). A goal on or across the singular surface ``Δ = 0`` (or within
+    numerical options, a basis too large for memory), ``TypeError`` for a ``callback`` that
+    is not callable. A goal on or across the singular surface ``Δ = 0`` (or within
     ``delta_min`` of it) returns at once a failed :class:`~nonholo.io.result.PlanResult`
     with the reason.
     """
+    if callback is not None and not callable(callback):
+        raise TypeError(f"callback must be callable (it is given each iteration's record), got {callback!r}")
     problem = Problem.build(R0, Rd, T=T, method=method, harmonics=harmonics, grid=grid, u0=u0,
                             gamma=gamma, step=step, tol=tol, max_iter=max_iter, strategy=strategy,
                             mechanism=mechanism, delta_min=delta_min, steps=steps,

@@ -46,7 +46,7 @@ from ..model.limits import LegLimits
 from ..model.mechanism import Mechanism
 from ..motion.frame_controls import FrameControls
 from ..numerics import kernels
-from ..numerics.checks import check_count
+from ..numerics.checks import check_count, is_number
 from ..spaces.groups import NO_COORDINATES
 
 
@@ -65,12 +65,14 @@ class Options:
     def __post_init__(self):
         for name in ("gamma", "step", "tol", "min_step"):
             v = getattr(self, name)
-            if not (isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) and v > 0):
+            if not (is_number(v) and math.isfinite(v) and v > 0):
                 raise ValueError(f"{name} must be a positive number, got {v!r}")
+            object.__setattr__(self, name, float(v))
         for name in ("newton_below", "delta_min"):
             v = getattr(self, name)
-            if not (isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) and v >= 0):
+            if not (is_number(v) and math.isfinite(v) and v >= 0):
                 raise ValueError(f"{name} must be a non-negative number, got {v!r}")
+            object.__setattr__(self, name, float(v))
         object.__setattr__(self, "max_iter", check_count(self.max_iter, "max_iter", minimum=0))
 
 

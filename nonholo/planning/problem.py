@@ -37,6 +37,9 @@ from .strategy_robust import RobustStrategy
 METHODS = ("parametric", "nonparametric")
 #: The routes :func:`nonholo.plan` takes to a goal.
 ROUTES = ("auto", "local", "global")
+#: The most numbers the Fourier basis at the integrator's stages (``3·steps × (2·harmonics + 1)``)
+#: may hold: 2·10⁷ (160 MB); the planner keeps a few arrays of that size.
+MAX_BASIS = 2 * 10**7
 #: What :func:`nonholo.plan` optimises once the goal is reached: nothing, or the energy ∫|u|² dt.
 OBJECTIVES = (None, "energy")
 #: The strategies :func:`nonholo.plan` knows by name.
@@ -167,7 +170,7 @@ class Problem:
         least_time = T is None
         T = check_time(PLANNING_TIME if least_time else T)
         harmonics = check_count(harmonics, "harmonics")
-        grid = check_count(grid, "grid")
+        grid = check_count(grid, "grid", maximum=MAX_STEPS // 2)     # at most the steps (below)
         R0, q0 = mech.parse_state(R0, "R0")
         Rd, qd = mech.parse_state(Rd, "Rd")
         if objective is not None and not energy.supports(mech):
@@ -178,10 +181,17 @@ class Problem:
                           delta_min=delta_min)
         if mech.singular.value(R0, q0) == 0.0:
             raise ValueError(mech.singular.refusal)
-        steps = check_count(default_steps(method, grid) if steps is None else steps, "steps", maximum=MAX_STEPS)
+        # the planner checks its discretisation on twice the steps: half the integrator's limit
+        steps = check_count(default_steps(method, grid) if steps is None else steps, "steps",
+                            maximum=MAX_STEPS // 2)
         if method == "parametric" and 2 * harmonics > steps:
             raise ValueError(f"harmonics = {harmonics} is more than the integrator's steps = {steps} "
                              "can resolve (at most steps/2; raise steps or lower harmonics)")
+        basis = 3 * steps * (2 * harmonics + 1) if method == "parametric" else 0
+        if basis > MAX_BASIS:
+            raise ValueError(f"harmonics = {harmonics} on steps = {steps}: the Fourier basis at the "
+                             f"integrator's stages would hold {basis:.3g} numbers ({8 * basis / 2**30:.3g} GiB), "
+                             f"more than {MAX_BASIS:.0e}; lower harmonics or steps")
         controls = initial_controls(method, T, mech.n_inputs, harmonics, grid, u0)
         stages.check_steps(controls, steps)
         # the keywords' constraints are checked as they are built; the caller's ones here

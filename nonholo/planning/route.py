@@ -164,7 +164,8 @@ class RoadmapPaths:
                                             power=power, legs=leg_limits)
             yield None if path is None else [(R, NO_COORDINATES) for R in path]
 
-    def no_path(self, leg_limits) -> str:
+    def no_path(self, leg_limits, start, goal) -> str:
+        """Why no path of :meth:`paths` was given (``start``, ``goal``: its ends)."""
         within = "" if leg_limits is None else " and inside the legs' stroke limits"
         return f"no path of orientations clear of Δ = 0{within} joins the start and the goal on the roadmap"
 
@@ -195,9 +196,10 @@ class StraightPaths(RoadmapPaths):
     def paths(self, start, goal, delta_min: float, leg_limits):
         yield state_path.straight_path(self.mechanism, start, goal, delta_min=delta_min)
 
-    def no_path(self, leg_limits) -> str:
-        return (f"the straight path of states comes within delta_min of the singular set Δ = 0 of "
-                f"{self.mechanism.name!r}")
+    def no_path(self, leg_limits, start, goal) -> str:
+        return state_path.too_far(self.mechanism, start, goal) or (
+            f"the straight path of states comes within delta_min of the singular set Δ = 0 of "
+            f"{self.mechanism.name!r}")
 
     def length(self, a, b) -> float:
         return state_path.length(self.mechanism, a, b)
@@ -352,7 +354,7 @@ def steer(mechanism: Mechanism, R0, Rd, T: float, local: Callable, *, tol: float
     provider = paths_for(mechanism)
     for path in provider.paths(start, goal, delta_min, leg_limits):
         if path is None:
-            return Steered(None, None, reason=provider.no_path(leg_limits))
+            return Steered(None, None, reason=provider.no_path(leg_limits, start, goal))
         if any(_same_path(p, path) for p in tried):
             continue        # steering is deterministic: the same path fails the same way
         tried.append(path)

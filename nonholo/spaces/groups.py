@@ -24,6 +24,7 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from ..numerics import kernels
+from ..numerics.checks import real_array
 from . import so3
 
 IDENTITY = np.eye(3)
@@ -139,9 +140,9 @@ class Euclidean:
         ``want`` says what the whole state should be)."""
         want = want or f"{name} must be {self.describe()}"
         try:
-            q = np.array(value, dtype=float)
-        except (TypeError, ValueError):
-            raise ValueError(f"{want}, got {_kind(value)}") from None
+            q = real_array(value, name)
+        except ValueError as exc:
+            raise ValueError(f"{want}, got {_kind(value)} ({exc})") from None
         if q.shape != (self.dim,):
             raise ValueError(f"{want}: {name} has shape {q.shape}, expected ({self.dim},)")
         if not np.all(np.isfinite(q)):

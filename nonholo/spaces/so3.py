@@ -14,6 +14,8 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial.transform import Rotation
 
+from ..numerics.checks import real_array
+
 #: Below this angle the closed forms lose digits to cancellation; Taylor series are used.
 SMALL_ANGLE = 1e-4
 
@@ -92,10 +94,7 @@ def check_rotation(R, name: str = "R", tol: float = 1e-9) -> np.ndarray:
 
     Checks the shape, finiteness, orthonormality (``|RᵀR - I| ≤ tol``) and ``det R = +1``.
     """
-    try:
-        A = np.asarray(R, dtype=float)
-    except (TypeError, ValueError) as exc:
-        raise ValueError(f"{name} must be a 3x3 array of numbers: {exc}") from None
+    A = real_array(R, name)
     if A.shape != (3, 3):
         raise ValueError(f"{name} must have shape (3, 3), got {A.shape}")
     if not np.all(np.isfinite(A)):
