@@ -5,9 +5,14 @@ from __future__ import annotations
 import numpy as np
 
 
+#: The longest time accepted (s): about 30 years; a longer horizon scales the inputs
+#: towards underflow and is a mistake of units, not a slower motion.
+MAX_TIME = 1e9
+
+
 def check_time(T, name: str = "T") -> float:
-    """A positive finite time (s) as a float: a real number (Python or NumPy), not a
-    boolean or a string."""
+    """A positive finite time (s) as a float, at most :data:`MAX_TIME`: a real number
+    (Python or NumPy), not a boolean or a string."""
     if not is_number(T):
         raise ValueError(f"{name} must be a positive finite time in seconds, got {T!r}")
     try:
@@ -16,6 +21,8 @@ def check_time(T, name: str = "T") -> float:
         raise ValueError(f"{name} must be a positive finite time, got {T}") from None
     if not np.isfinite(T) or T <= 0:
         raise ValueError(f"{name} must be a positive finite time, got {T}")
+    if T > MAX_TIME:
+        raise ValueError(f"{name} must be at most {MAX_TIME:g} s, got {T:g}")
     return T
 
 

@@ -49,6 +49,13 @@ STRATEGIES: dict[str, type[Strategy]] = {"paper": PaperStrategy, "robust": Robus
 PLANNING_TIME = 1.0
 
 
+def one_of_choices(value, choices) -> bool:
+    """Whether ``value`` is one of ``choices`` (strings, or None): compared only as a
+    string or None, so an array or a dict is simply not one (``==`` would compare it
+    elementwise or fail to hash)."""
+    return (value is None or isinstance(value, str)) and value in choices
+
+
 def strategy_class(strategy) -> type[Strategy]:
     """The :class:`~nonholo.planning.core.Strategy` subclass ``strategy``, the one of that
     name in :data:`STRATEGIES`, or one given by its import path ``"package.module:Class"``
@@ -159,12 +166,12 @@ class Problem:
         speed = LegSpeed.of(leg_speed, mech)
         if T is None and speed is None:
             raise ValueError("T=None asks for the least time, which needs a leg_speed to bound")
-        if objective not in OBJECTIVES:
+        if not one_of_choices(objective, OBJECTIVES):
             raise ValueError(f"unknown objective {objective!r}; known: None, 'energy'")
-        if route not in ROUTES:
+        if not one_of_choices(route, ROUTES):
             raise ValueError(f"unknown route {route!r}; known: {', '.join(ROUTES)}")
         stroke = LegStroke.of(leg_length, mech)
-        if method not in METHODS:
+        if not one_of_choices(method, METHODS):
             raise ValueError(f"unknown method {method!r}; known: {', '.join(METHODS)}")
         solver = strategy_class(strategy)
         least_time = T is None
