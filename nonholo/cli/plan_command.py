@@ -8,9 +8,11 @@ Orientations are given as RPY angles ``φ ϑ ψ`` in radians, ``RPY(φ, ϑ, ψ) 
 R(Z, φ) R(Y, ϑ) R(X, ψ)``. A mechanism whose state goes beyond SO(3) takes its coordinates
 (``nonholo plan --mechanism car --from 0 0 0 0 --to 0 1 0 0``: ``x y θ φ``), after the RPY
 angles if it has an orientation too (``rolling_ball``: ``φ ϑ ψ p1 p2``); ``nonholo
-mechanisms`` lists each one's state. The strategy is ``robust`` unless ``--strategy paper`` asks for
-the appendix's algorithm as published (see :mod:`nonholo.robust`). One line is printed per accepted iteration (iteration, error
-``|l_T|`` in rad, the step ``γh``, least ``|Δ|`` along the trajectory), then a summary;
+mechanisms`` lists each one's state. The strategy is ``robust``
+(:mod:`nonholo.planning.strategy_robust`) unless ``--strategy paper`` asks for the
+appendix's algorithm as published (:mod:`nonholo.planning.strategy_paper`). One line is
+printed per accepted iteration (iteration, error ``|l_T|``, the step ``γh``, least ``|Δ|``
+along the trajectory), then a summary with the errors in the state's units;
 then the result is written to ``--out`` and the figure to ``--plot`` (each even if the
 other cannot be written). Every file is written by :mod:`nonholo.io.safe_write`: a regular
 file is replaced only once the new one is complete; a character device or FIFO
@@ -40,6 +42,7 @@ from ..io import safe_write
 from ..model import catalog
 from ..planning import api as planner
 from ..spaces import so3
+from .help_text import plain
 
 #: exit status of ``nonholo plan`` (see the module docstring)
 EXIT_SUCCESS, EXIT_FAILED, EXIT_BAD_INPUT, EXIT_WRITE_FAILED = 0, 1, 2, 3
@@ -49,7 +52,7 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     """Add the ``plan`` sub-command to an ``argparse`` sub-parsers object."""
     p = subparsers.add_parser(
         "plan", help="plan a motion R0 -> Rd (Jacobian algorithm of Tchoń & Jakubiak)",
-        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+        description=plain(__doc__), formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--from", dest="start", nargs="+", type=float, required=True, metavar="X",
                    help="the start: RPY angles φ ϑ ψ (rad) of the orientation, then the coordinates "
                         "of a mechanism whose state has them (see the description)")
