@@ -109,8 +109,9 @@ class PlanChecks:
         integer_field(v, "steps", 1)
         if number_field(v, "T") <= 0:
             fail("T", f"must be a positive time (s), got {r.T}")
-        if number_field(v, "seconds") < 0:
-            fail("seconds", f"must be >= 0, got {r.seconds}")
+        seconds = number_field(v, "seconds", null=True)
+        if seconds is not None and seconds < 0:
+            fail("seconds", f"must be >= 0 (or null), got {r.seconds}")
         for key in ("terminal_error", "sensitivity", "error_bound"):
             x = number_field(v, key, null=True)
             if x is not None and x < 0:
