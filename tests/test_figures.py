@@ -312,6 +312,11 @@ def test_units_come_from_the_data_not_the_name(car_plan):
     fig = Figure()
     viz.plot_plane_path(fig.add_subplot(), car_plan, mechanism=other)
     assert (fig.axes[0].get_xlabel(), fig.axes[0].get_ylabel()) == ("x [m]", "y [m]")
+    bare = dataclasses.replace(car, name="vehicle", units=("",) * 4)   # no units given: none shown
+    assert viz.input_units(bare) == ("", "") and viz.plane_position(bare) == (0, 1)
+    fig = Figure()
+    viz.plot_plane_path(fig.add_subplot(), car_plan, mechanism=bare)
+    assert (fig.axes[0].get_xlabel(), fig.axes[0].get_ylabel()) == ("x", "y")
     turned = dataclasses.replace(car, name="vehicle", angles=(True, False, True, True))
     assert viz.plane_position(turned) is None          # one length coordinate: no plane
     mixed = dataclasses.replace(car, name="vehicle", units=("m", "wheelbase", "m", "rad"),

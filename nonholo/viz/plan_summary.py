@@ -12,7 +12,7 @@ import numpy as np
 
 from ..spaces import so3
 from .platform_drawing import result_mechanism
-from .quantities import input_units, label, plane_position, unit_groups
+from .quantities import coordinate_units, input_units, label, plane_position, unit_groups
 from .style import NotebookFigure, styled
 
 #: Height of one time axes (inches).
@@ -45,6 +45,7 @@ def plot_plane_path(ax, result, mechanism=None) -> None:
         raise ValueError(f"mechanism {mech.name!r} has no position on a plane (two coordinates "
                          "that are not angles and share a unit)")
     i, j = plane
+    units = coordinate_units(mech)
     if len(result.q):
         ax.plot(result.q[:, i], result.q[:, j], color="0.3", lw=1.5, label="path")
         ax.plot(result.q[0, i], result.q[0, j], "o", color="tab:green", ms=8, label="start")
@@ -56,8 +57,8 @@ def plot_plane_path(ax, result, mechanism=None) -> None:
     ax.plot(result.qd[i], result.qd[j], "x", color="tab:red", ms=10, mew=2, label="goal")
     ax.set_aspect("equal", adjustable="datalim")
     ax.margins(0.15)
-    ax.set_xlabel(label(mech.coordinates[i], mech.units[i]))
-    ax.set_ylabel(label(mech.coordinates[j], mech.units[j]))
+    ax.set_xlabel(label(mech.coordinates[i], units[i]))
+    ax.set_ylabel(label(mech.coordinates[j], units[j]))
     ax.set_title("path on the plane")
     ax.legend(fontsize=8, loc="best")
 

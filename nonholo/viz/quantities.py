@@ -28,6 +28,11 @@ def label(name: str, unit: str) -> str:
     return f"{name} [{unit}]" if unit else name
 
 
+def coordinate_units(mechanism) -> tuple[str, ...]:
+    """The unit of each coordinate (``""`` for each when the mechanism gives none)."""
+    return tuple(mechanism.units) or ("",) * mechanism.n_coordinates
+
+
 def _probe_state(mechanism):
     R = so3.from_rpy(*_PROBE_RPY) if mechanism.space.has_orientation else np.eye(3)
     q = 0.1 + 0.07 * np.arange(mechanism.n_coordinates)
@@ -50,7 +55,7 @@ def input_units(mechanism) -> tuple[str, ...]:
         if not len(moved):
             units.append("1/s")
             continue
-        unit = mechanism.units[moved[0]] if mechanism.units else ""
+        unit = coordinate_units(mechanism)[moved[0]]
         units.append(f"{unit}/s" if unit else "")
     return tuple(units)
 
@@ -59,8 +64,8 @@ def plane_position(mechanism) -> tuple[int, int] | None:
     """The indices of the coordinates of a vehicle's position on the plane (see the
     module), or ``None`` when no two coordinates qualify."""
     k = mechanism.n_coordinates
-    angles = mechanism.angles or (False,) * k
-    units = mechanism.units or ("",) * k
+    angles = tuple(mechanism.angles) or (False,) * k
+    units = coordinate_units(mechanism)
     lengths = [i for i in range(k) if not angles[i]]
     for a, i in enumerate(lengths):
         for j in lengths[a + 1:]:
@@ -73,7 +78,7 @@ def unit_groups(mechanism) -> list[tuple[str, list[int]]]:
     """The coordinates grouped by unit, in order of first appearance: ``[(unit, indices)]``
     (one axes each, so that every axes has one unit)."""
     groups: dict[str, list[int]] = {}
-    units = mechanism.units or ("",) * mechanism.n_coordinates
+    units = coordinate_units(mechanism)
     for i in range(mechanism.n_coordinates):
         groups.setdefault(units[i], []).append(i)
     return list(groups.items())

@@ -12,7 +12,7 @@ import numpy as np
 from matplotlib.patches import Polygon
 
 from .platform_drawing import result_mechanism
-from .quantities import input_units, label
+from .quantities import coordinate_units, input_units, label
 from .style import NotebookFigure, styled
 
 
@@ -33,8 +33,9 @@ def _layout():
 def _path_labels(ax, result, title: str, margin: float):
     """The path panel's axes labelled with the first two coordinates and their units."""
     mech = result_mechanism(result)
-    _finish_path(ax, label(mech.coordinates[0], mech.units[0]),
-                 label(mech.coordinates[1], mech.units[1]), title, margin)
+    units = coordinate_units(mech)
+    _finish_path(ax, label(mech.coordinates[0], units[0]), label(mech.coordinates[1], units[1]),
+                 title, margin)
 
 
 def _input_labels(result) -> tuple:
