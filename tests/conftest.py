@@ -1,6 +1,6 @@
 """Helpers shared by the test modules (plain functions: ``from conftest import example``).
 
-- :func:`example`: ``(R0, Rd)`` of an example of MODEL.md, from :mod:`nonholo.paper.examples`;
+- :func:`example`: ``(R0, Rd)`` of an example of :mod:`nonholo.paper.examples`;
 - :func:`check_solution`: a planner result confirmed by an independent DOP853 re-simulation;
 - :func:`verified`: the same check as the robust-strategy benchmark (dense path, ``|Δ|``);
 - :func:`reachable_goals`, :func:`paper_reachable_goals`: goals reachable by construction;
@@ -23,7 +23,7 @@ from nonholo.spaces import so3
 
 
 def example(k: int) -> tuple[np.ndarray, np.ndarray]:
-    """``(R0, Rd)`` of example ``k`` of MODEL.md (:func:`nonholo.paper.examples.get`)."""
+    """``(R0, Rd)`` of example ``k`` (:func:`nonholo.paper.examples.get`)."""
     ex = examples.get(k)
     return ex.R_start, ex.R_goal
 
@@ -36,7 +36,7 @@ def example_rpy_args(k: int) -> tuple[list[str], list[str]]:
 
 
 def platform_delta(R) -> float:
-    """The paper's ``Δ(R) = r12 r31 + r21 r32`` (MODEL.md), written out independently of
+    """The paper's ``Δ(R) = r12 r31 + r21 r32``, written out independently of
     the generated code."""
     return R[0, 1] * R[2, 0] + R[1, 0] * R[2, 1]
 

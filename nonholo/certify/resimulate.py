@@ -246,14 +246,14 @@ def resimulate_rk4(R0, controls, T: float, mechanism="platform", steps: int = RK
 
 
 def rolling_ball_rates(R, p, v, radius: float = 1.0):
-    """The ball rolling on the plane z = 0 without slipping or spinning (MODEL.md): the
+    """The ball rolling on the plane z = 0 without slipping or spinning: the
     centre moves with ``ṗ = v`` and the spatial angular velocity is ``ω = (e₃ × v)/ρ``.
     Returns ``(ω, ṗ)``."""
     return np.array([-v[1], v[0], 0.0]) / radius, np.asarray(v, dtype=float)
 
 
 def car_rates(R, x, u, wheelbase: float = 1.0):
-    """The kinematic car ``x = (x, y, θ, φ)``, ``u = (v, φ̇)`` (MODEL.md): ``ẋ = v cos θ``,
+    """The kinematic car ``x = (x, y, θ, φ)``, ``u = (v, φ̇)``: ``ẋ = v cos θ``,
     ``ẏ = v sin θ``, ``θ̇ = (v/ℓ) tan φ``, ``φ̇ = u₂``. Returns ``(ω = 0, ẋ)``."""
     _, _, th, ph = x
     v, dphi = u

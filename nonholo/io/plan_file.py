@@ -36,7 +36,7 @@ controls(t)``, ``delta = Δ(R)``, and ``terminal_error``, ``min_delta``, ``succe
 rejected with a ``ValueError`` naming the field, so a plan cannot be changed — by a
 damaged byte or by hand — without the change being noticed (fields that are records, not
 results, are checked only for their type: ``reason``, ``history``, ``options``,
-``seconds``, ``sensitivity``; but ``options`` must hold every option the planner
+``seconds`` (``null``: the wall time not recorded), ``sensitivity``; but ``options`` must hold every option the planner
 records, with a value it accepts, and a success is judged from the replay at the plan's
 own ``tol``, with a ``sensitivity`` the certificate accepts for it). A missing field is refused, never taken as "unchecked". Files written by
 earlier versions of the format load, checked to the same standard: ``nonholo.plan/2``
@@ -291,7 +291,7 @@ def decode(d) -> tuple[dict, bool]:
         parametrisation=par, mechanism=mechanism, method=string_field(d, "method"),
         strategy=string_field(d, "strategy"), T=number_field(d, "T"),
         R0=_array(d["R0"], "R0", (3, 3)), Rd=_array(d["Rd"], "Rd", (3, 3)),
-        steps=integer_field(d, "steps", minimum=1), seconds=number_field(d, "seconds"),
+        steps=integer_field(d, "steps", minimum=1), seconds=number_field(d, "seconds", null=True),
         options=dict(options), sensitivity=number_field(d, "sensitivity", null=True),
         error_bound=number_field(d, "error_bound", null=True),
         replay_steps=None if d["replay_steps"] is None else integer_field(d, "replay_steps", minimum=2),

@@ -69,6 +69,9 @@ class PlanResult:
       which bounds both). ``R`` is the identity throughout for a state without
       orientation. :attr:`start`, :attr:`goal` and :meth:`state` give states as
       :func:`nonholo.plan` takes them.
+    - ``seconds``: the planner's wall time; ``None`` when not recorded (a plan file kept
+      without it, as ``nonholo reproduce`` writes them, so that a second run writes the same
+      bytes).
     """
 
     success: bool
@@ -89,7 +92,7 @@ class PlanResult:
     R0: np.ndarray
     Rd: np.ndarray
     steps: int
-    seconds: float
+    seconds: float | None
     options: dict = field(default_factory=dict)
     sensitivity: float | None = None
     error_bound: float | None = None
@@ -287,17 +290,21 @@ class PlanResult:
         def num(x, fmt):
             return "n/a" if x is None else format(x, fmt)
 
+        try:                             # errors in the state's units (rad on SO(3))
+            amount = catalog.get(self.mechanism).space.amount
+        except ValueError:               # a mechanism not in the catalog: numbers alone
+            amount = num
         status = "success" if self.success else "FAILED"
+        wall = "wall time not recorded" if self.seconds is None else f"{self.seconds * 1e3:.1f} ms"
         lines = [
             f"PlanResult({status}: {self.mechanism}, {self.method}/{self.strategy}, T={self.T:g} s, "
             f"{self.parametrisation!r}",
-            f"  terminal error |l_T| = {num(self.terminal_error, '.3e')} rad after "
-            f"{self.iterations} iterations, min |Δ| = {num(self.min_delta, '.4f')}, "
-            f"{self.seconds * 1e3:.1f} ms",
+            f"  terminal error {amount(self.terminal_error, '.3e')} after "
+            f"{self.iterations} iterations, min |Δ| = {num(self.min_delta, '.4f')}, {wall}",
         ]
         if self.replay_steps is not None:
             lines.append(f"  certified: physical controls replayed with {self.replay_steps} steps, "
-                         f"error bound {num(self.error_bound, '.1e')} rad, sensitivity "
+                         f"error bound {amount(self.error_bound, '.1e')}, sensitivity "
                          f"{num(self.sensitivity, '.3g')}")
         if not self.success:
             lines.append(f"  reason: {self.reason}")

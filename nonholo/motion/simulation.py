@@ -27,10 +27,10 @@ from ..controls.parametrisations import Controls
 from ..model import catalog
 from ..numerics.checks import MAX_STEPS, check_count, check_time
 
-#: Default number of CF4 steps on ``[0, T]``: chosen so that on the examples of MODEL.md
-#: (``T = 1``) the endpoint is within the planner's 1e-10 rad of a DOP853 solution
-#: (``benchmarks/results/bench_plan.md``). The method has order 4: the error grows like
-#: ``(h |ω|)⁴``, so larger inputs need more steps.
+#: Default number of CF4 steps on ``[0, T]``: chosen so that on the examples
+#: (:mod:`nonholo.paper.examples`, ``T = 1``) the endpoint is within the planner's 1e-10
+#: rad of a DOP853 solution (``benchmarks/results/bench_plan.md``). The method has order
+#: 4: the error grows like ``(h |ω|)⁴``, so larger inputs need more steps.
 DEFAULT_STEPS = 400
 
 #: ``simulate`` stops (with :class:`SingularTrajectoryError`) where ``|Δ|`` falls below this.

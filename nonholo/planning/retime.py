@@ -73,7 +73,7 @@ def retime(result: PlanResult, leg_speed: float, T: float | None = None) -> Plan
     return dataclasses.replace(
         result, parametrisation=timed, T=timed.T, t=t, u=timed(t).reshape(n, mech.n_inputs),
         reason=reason, options={**result.options, "leg_speed": v},
-        seconds=result.seconds + (time.perf_counter() - started))
+        seconds=None if result.seconds is None else result.seconds + (time.perf_counter() - started))
 
 
 def limit_speed(result: PlanResult, leg_speed: float | None, T: float | None) -> PlanResult:

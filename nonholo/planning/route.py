@@ -190,8 +190,13 @@ class StraightPaths(RoadmapPaths):
     budget counted from the route's own start (the local attempt at a far goal can take
     the whole of :data:`TIME_BUDGET`)."""
 
-    unit = ""
     max_hop_sensitivity = state_path.MAX_HOP_SENSITIVITY
+
+    @property
+    def unit(self) -> str:
+        """The stacked error's unit (:attr:`nonholo.spaces.groups.Product.error_unit`), spaced."""
+        unit = self.mechanism.space.error_unit
+        return f" {unit}" if unit else ""
 
     def paths(self, start, goal, delta_min: float, leg_limits):
         yield state_path.straight_path(self.mechanism, start, goal, delta_min=delta_min)
