@@ -11,6 +11,7 @@ inner loop, where allocating a result would cost as much as the arithmetic — a
 from __future__ import annotations
 
 import difflib
+import hashlib
 import itertools
 from pathlib import Path
 
@@ -32,6 +33,19 @@ file differs from a fresh derivation.
 """
 import numpy
 '''
+
+
+#: The modules whose code decides the text of a generated module (with SymPy's version).
+GENERATOR_MODULES = ("codegen", "equations", "mechanisms", "rotations", "state_space", "variational")
+
+
+def generator_version() -> str:
+    """SHA-256 of SymPy's version and of the sources of :data:`GENERATOR_MODULES`: it changes
+    whenever a generated module's text may (a key for caches of generated modules)."""
+    h = hashlib.sha256(sp.__version__.encode())
+    for name in GENERATOR_MODULES:
+        h.update(Path(__file__).with_name(f"{name}.py").read_bytes())
+    return h.hexdigest()
 
 
 class _Printer(NumPyPrinter):
