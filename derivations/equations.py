@@ -22,7 +22,8 @@ from collections.abc import Mapping
 
 import sympy as sp
 
-from .mechanisms import Mechanism, is_free_name
+from .generator import check_name
+from .mechanisms import Mechanism, exact_number, is_free_name
 from .rotations import r
 
 
@@ -45,7 +46,7 @@ def field_mechanism(name: str, *, inputs, coordinates=(), rates=(), omega=None, 
       default: the product of the distinct factors of the field's denominators (``tan``,
       ``sec`` … as ``sin``/``cos``), none if it has none.
     """
-    name = _name(name)
+    name = check_name(name)
     u = _symbols(inputs, "inputs", at_least=1)
     x = _symbols(coordinates, "coordinates")
     values = _parameters(parameters)
@@ -148,34 +149,7 @@ def singular_factor(field: sp.Matrix) -> sp.Expr | None:
     return sp.Mul(*factors) if factors else None
 
 
-def definition_text(form: str, name, arguments: Mapping) -> str:
-    """A canonical text of a definition (for a cache key): the form, the name and each
-    argument as SymPy ``srepr`` (mappings by their keys' names); ``ValueError`` for a name
-    that is not an identifier or an argument that is not SymPy data (naming it)."""
-    def text(value, key):
-        if isinstance(value, Mapping):
-            items = sorted(((str(k), text(k, key), text(v, key)) for k, v in value.items()))
-            return "{" + ", ".join(f"{k}: {v}" for _, k, v in items) + "}"
-        if isinstance(value, (list, tuple, sp.MatrixBase)):
-            return "[" + ", ".join(text(v, key) for v in value) + "]"
-        if value is None or isinstance(value, (str, bool)):
-            return repr(value)
-        try:
-            return sp.srepr(sp.sympify(value))
-        except (sp.SympifyError, TypeError, ValueError):
-            raise ValueError(f"{key}: {value!r} is not a SymPy expression or symbol") from None
-
-    name = _name(name)
-    return f"{form}({name!r}; " + "; ".join(f"{k}={text(v, k)}" for k, v in sorted(arguments.items())) + ")"
-
-
 # -- checks ------------------------------------------------------------------------------------
-
-def _name(name) -> str:
-    if not isinstance(name, str) or not name.isidentifier():
-        raise ValueError(f"name must be a Python identifier (it names the generated module), got {name!r}")
-    return name
-
 
 def _symbols(values, key: str, at_least: int = 0) -> tuple[sp.Symbol, ...]:
     values = (values,) if isinstance(values, sp.Symbol) else tuple(values)
@@ -219,7 +193,7 @@ def _parameters(parameters) -> dict:
             raise ValueError(f"parameters: {k} = {v!r} is not a number") from None
         if value.free_symbols or not value.is_number:
             raise ValueError(f"parameters: {k} = {v!r} is not a number")
-        out[k] = sp.nsimplify(value, rational=True) if value.has(sp.Float) else value
+        out[k] = exact_number(value)
     return out
 
 

@@ -53,9 +53,10 @@ class Mechanism:
         units: the unit of each coordinate (for reports: ``"m"``, ``"rad"``, ...).
         angles: which coordinates are angles (errors of an angle are taken modulo 2π).
         X: k×m rates of the coordinates per unit input (``None``: no coordinates).
-        derivation: named intermediate results (leg rows, constraint matrix, ...);
-            ``variational``, when the derivation has it in closed form: ``Q`` of the field in
-            the inputs ``u1 … um`` (:func:`derivations.state_space.Q_matrix` uses it).
+        derivation: named intermediate results (leg rows, constraint matrix, ...); the code
+            generator takes ``auxiliary_forms`` — the generated ``G``, ``QG`` (in the inputs
+            ``u1 … um``) and ``delta`` written in symbols of ``auxiliaries`` (pairs of a symbol
+            and its expression, in order) — where the derivation gives them.
     """
 
     name: str
@@ -228,7 +229,11 @@ def leg_rate_row(base, tip, R: sp.Matrix = r) -> sp.Matrix:
     ``-2 baseᵀ (ω × R tip) = -2 ω · (R tip × base)``. Linear in ``R``: any 3×3 matrix may
     stand for it (``[e_k] R`` gives the row's derivative along ``∂R = [e_k] R``).
     """
-    return (-2 * (R * sp.Matrix(tip)).cross(sp.Matrix(base))).T.applyfunc(sp.expand)
+    # the coefficient of R_ij in component m: -2 tip_j (e_i × base)_m (no products of sums)
+    A, P = sp.Matrix(base), sp.Matrix(tip)
+    axes = [sp.eye(3).col(i).cross(A) for i in range(3)]
+    return sp.Matrix([[sp.expand(sp.Add(*(-2 * P[j] * axes[i][m] * R[i, j] for i in range(3) for j in range(3))))
+                       for m in range(3)]])
 
 
 def leg_input_scale(base, tip) -> sp.Expr:
@@ -334,8 +339,15 @@ def exact_geometry(geometry: PlatformGeometry) -> PlatformGeometry | None:
         vector = tuple(sp.sympify(x) for x in getattr(geometry, key))
         if any(x.free_symbols for x in vector):
             return None
-        values[key] = tuple(sp.nsimplify(x, rational=True) if x.has(sp.Float) else x for x in vector)
+        values[key] = tuple(exact_number(x) for x in vector)
     return PlatformGeometry(**values)
+
+
+def exact_number(x: sp.Expr) -> sp.Expr:
+    """``x`` with its floats as the rationals of their printed digits (``0.112 → 14/125``)."""
+    if isinstance(x, sp.Float):
+        return sp.Rational(repr(float(x)))
+    return x.xreplace({f: sp.Rational(repr(float(f))) for f in x.atoms(sp.Float)}) if x.has(sp.Float) else x
 
 
 def exact_platform(name: str, geometry: PlatformGeometry, description: str) -> Mechanism:
@@ -343,14 +355,14 @@ def exact_platform(name: str, geometry: PlatformGeometry, description: str) -> M
 
     With symbols ``c_ij`` for the entries of the unscaled constraint matrix ``C₀(R)`` (leg
     rows ``-2 (R tip_i × base_i)ᵀ``, disk row ``contact × axle``; ``C = diag(s₁, s₂, 1/|contact ×
-    axle|) C₀``, ``s_i`` the inputs' scales): ``L = adj(C₀)[:, :2] diag(1/s_i) / det C₀`` and,
-    differentiating ``C ω = (u, 0)`` along ``∂R = [e_k] R`` (``C₀`` is linear in ``R``, its disk row
-    constant), the variational matrix ``Q[:, k] = -adj(C₀) C₀([e_k] R) L u / det C₀``. The
-    ``c_ij`` are then replaced by their linear forms in ``r_ij``, so the generated code
-    computes ``C₀``, its adjugate and determinant once (common subexpressions) rather than
-    expanded rational functions. ``Δ = det C₀ / κ₀`` (leading coefficient 1, as
-    :func:`normalized_determinant`). The derivation's ``variational`` gives ``Q`` to the code
-    generator (:func:`derivations.state_space.Q_matrix`).
+    axle|) C₀``, ``s_i = 1/k_i`` the inputs' scales): ``L = adj(C₀)[:, :2] diag(k) / det C₀`` and,
+    differentiating ``C ω = (u, 0)`` along ``∂R = [e_j] R`` (``C₀`` is linear in ``R``, its disk
+    row constant; ``d_j = C₀([e_j] R)``), the variational matrix
+    ``Q[:, j] = -adj(C₀) d_j L u / det C₀``; ``Δ = det C₀ / κ₀`` (leading coefficient 1, as
+    :func:`normalized_determinant`); ``W = diag(s) C₀[:2] N``. The derivation gives these forms in the symbols
+    (``auxiliary_forms``) with the symbols' definitions (``auxiliaries``: linear forms in
+    ``r_ij``, and the constants ``k_i``), so the generated code computes ``C₀``, its
+    adjugate and determinant once; the mechanism's ``L`` and ``Δ`` are the same in ``r_ij``.
     """
     g = geometry
     legs = ((g.base1, g.tip1), (g.base2, g.tip2))
@@ -360,31 +372,34 @@ def exact_platform(name: str, geometry: PlatformGeometry, description: str) -> M
     det_c, adj_c = c.det(method="berkowitz"), c.adjugate()
     det0 = sp.Poly(det_c.xreplace(dict(zip(c, C0))), *r)
     kappa0 = det0.LC()
-    # symbols k_i for the inputs' inverse scales (square roots) until the end: SymPy
-    # multiplies symbols fast, surds slowly
     scales = [leg_input_scale(base, tip) for base, tip in legs]
     k = sp.symbols("k1:3")
-    L_c = adj_c[:, :2] * sp.diag(*k) / det_c
-    u = sp.Matrix(sp.symbols("u1:3", real=True))
-    entries = {**dict(zip(c, C0)), **{ki: 1 / s for ki, s in zip(k, scales)}}
+    auxiliaries = [*zip(c, C0), *((ki, 1 / s) for ki, s in zip(k, scales))]
+    u = sp.symbols("u1:3", real=True)
+    # written out entry by entry: SymPy's matrix products of symbolic entries are slower
+    L_c = sp.Matrix(3, 2, lambda i, j: adj_c[i, j] * k[j] / det_c)
+    omega = [adj_c[i, 0] * k[0] * u[0] / det_c + adj_c[i, 1] * k[1] * u[1] / det_c for i in range(3)]
     columns = []
     for j, e in enumerate((e1, e2, e3)):
-        d = sp.Matrix(3, 3, lambda i, l: sp.Symbol(f"d{j + 1}{i + 1}{l + 1}"))
-        moved = sp.Matrix.vstack(*(leg_rate_row(base, tip, hat(e) * r) for base, tip in legs), sp.zeros(1, 3))
-        entries.update(zip(d, moved))
-        columns.append(-adj_c * (d * (L_c * u)) / det_c)
+        d = sp.Matrix(2, 3, lambda i, l: sp.Symbol(f"d{j + 1}{i + 1}{l + 1}"))
+        auxiliaries += zip(d, sp.Matrix.vstack(*(leg_rate_row(base, tip, hat(e) * r) for base, tip in legs)))
+        z = [sp.Add(*(d[i, l] * omega[l] for l in range(3))) for i in range(2)]
+        columns.append([-(adj_c[m, 0] * z[0] + adj_c[m, 1] * z[1]) / det_c for m in range(3)])
     norm = sp.sqrt((disk * disk.T)[0])
     frame = constraint_plane_frame(disk)
-    W = sp.diag(*scales) * (C0[:2, :] * frame).applyfunc(sp.expand)
+    W_c = sp.Matrix(2, 2, lambda i, j: sp.Add(*(c[i, l] * frame[l, j] for l in range(3))) / k[i])
+    values = dict(auxiliaries)
     return Mechanism(
-        name=name, description=description, L=L_c.xreplace(entries),
-        delta=sp.expand(det0.as_expr() / kappa0), inputs=PLATFORM_INPUTS, frame=frame, frame_inputs=W,
+        name=name, description=description, L=L_c.xreplace(values),
+        delta=sp.expand(det0.as_expr() / kappa0), inputs=PLATFORM_INPUTS, frame=frame,
+        frame_inputs=sp.diag(*scales) * (C0[:2, :] * frame).applyfunc(sp.expand),
         derivation={
             "geometry": geometry,
             "leg_length_squared": tuple(leg_length_squared(base, tip) for base, tip in legs),
             "constraint_matrix": sp.Matrix.vstack(C0.row(0) * scales[0], C0.row(1) * scales[1], disk / norm),
             "kappa": kappa0 * scales[0] * scales[1] / norm,
-            "variational": sp.Matrix.hstack(*columns).xreplace(entries),
+            "auxiliaries": tuple(auxiliaries),
+            "auxiliary_forms": {"G": L_c, "QG": sp.Matrix(columns).T, "delta": det_c / kappa0, "W": W_c},
         },
     )
 

@@ -32,13 +32,9 @@ def Q_matrix(mechanism: Mechanism, G: sp.Matrix | None = None,
              u: sp.Matrix | None = None) -> sp.Matrix:
     """``Q(R, x, u)`` (d×d) with ``Q s = d/dε G(exp(ε[s_R]) R, x + ε s_x) u`` at ``ε = 0``:
     the chain rule with ``δR = [s_R] R`` and ``δx = s_x``. ``G`` defaults to the
-    mechanism's field (pass its frame for the frame system); the field's ``Q`` is the
-    derivation's ``variational`` when it gives one in closed form."""
-    u = inputs(mechanism.n_inputs) if u is None else u
-    known = mechanism.derivation.get("variational")
-    if known is not None and (G is None or G == mechanism.field):     # the derivation's closed form
-        return known.xreplace(dict(zip(inputs(mechanism.n_inputs), u)))
+    mechanism's field (pass its frame for the frame system)."""
     G = mechanism.field if G is None else G
+    u = inputs(mechanism.n_inputs) if u is None else u
     if not mechanism.n_coordinates:         # SO(3): eq. (12) as the appendix writes it
         return variational.Q_matrix(G, u)
     s = variation_symbols(mechanism)

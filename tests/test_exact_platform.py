@@ -74,7 +74,7 @@ def test_the_exact_route_is_the_symbolic_one_on_the_catalog_geometries(name, geo
     """The generated functions of the exact route at the drawing dimensions against the
     catalog's (generated from the symbolic route; the kinematics do not depend on a, b, ρ)."""
     m = platform_mechanism("exact_" + name, at_dimensions(geometry), "exact route")
-    assert "variational" in m.derivation
+    assert set(m.derivation["auxiliary_forms"]) == {"G", "QG", "delta", "W"}
     mine, ref = load_source(codegen.mechanism_module(m), m.name), catalog.get(name).module
     q = ref.NO_COORDINATES
     rng = np.random.default_rng(3)
@@ -113,6 +113,19 @@ def test_a_geometry_of_floats_solves_its_constraints(floats):
         N = mod.N(R, q)
         np.testing.assert_allclose(N.T @ N, np.eye(2), atol=1e-14)
         np.testing.assert_allclose(mod.W(R, q), np.linalg.inv(N.T @ mod.G(R, q)), rtol=1e-10, atol=1e-12)
+
+
+def test_the_generated_forms_are_the_mechanism_s_expressions(floats):
+    """The generated ``G``, ``Δ``, ``W`` (from the derivation's forms in the entries of C₀)
+    against the mechanism's ``L``, ``delta`` and ``frame_inputs`` in ``r_ij`` (mpmath)."""
+    m, mod = floats
+    f = sp.lambdify(list(r), [m.L, m.delta, m.frame_inputs], modules="mpmath")
+    q = mod.NO_COORDINATES
+    for R in rotations(30, 17, lambda R: mod.delta(R, q)):
+        L, delta, W = (np.array(x.tolist() if hasattr(x, "tolist") else x, dtype=float) for x in f(*R.ravel()))
+        np.testing.assert_allclose(mod.G(R, q), L, rtol=1e-12, atol=1e-13)
+        assert mod.delta(R, q) == pytest.approx(float(delta), rel=1e-12)
+        np.testing.assert_allclose(mod.W(R, q), W, rtol=1e-12, atol=1e-13)
 
 
 def test_its_variational_matrix_is_the_derivative_of_its_field(floats):

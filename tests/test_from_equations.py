@@ -12,6 +12,7 @@ from sympy import cos, sin, tan
 
 import derivations.codegen
 import derivations.equations
+import derivations.generator
 from derivations.mechanisms import Mechanism as Symbolic
 from nonholo import Mechanism, mechanism_named, plan
 from nonholo.model import mechanism as mechanism_module
@@ -191,7 +192,7 @@ def test_a_second_build_reads_the_cache_and_the_generator_s_version_is_in_its_ke
         again = Mechanism.from_equations("trailer1", **TRAILER)
     assert again.module.SOURCE == first.module.SOURCE and again is not first
     # another generator, or other equations: another file
-    monkeypatch.setattr(derivations.codegen, "generator_version", lambda: "another generator")
+    monkeypatch.setattr(derivations.generator, "generator_version", lambda: "another generator")
     Mechanism.from_equations("trailer1", **TRAILER)
     Mechanism.from_equations("trailer1", **{**TRAILER, "rates": TRAILER["rates"][:3] + [v * sin(th1 - th0)]})
     assert len(list(cache.glob("trailer1_*.py"))) == 3
@@ -204,11 +205,11 @@ def test_the_generator_s_version_follows_its_sources(tmp_path, monkeypatch):
     import shutil
     from pathlib import Path
 
-    here = Path(derivations.codegen.__file__)
-    for name in derivations.codegen.GENERATOR_MODULES:
+    here = Path(derivations.generator.__file__)
+    for name in derivations.generator.GENERATOR_MODULES:
         shutil.copy(here.with_name(f"{name}.py"), tmp_path / f"{name}.py")
-    monkeypatch.setattr(derivations.codegen, "__file__", str(tmp_path / "codegen.py"))
-    before = derivations.codegen.generator_version()
+    monkeypatch.setattr(derivations.generator, "__file__", str(tmp_path / "generator.py"))
+    before = derivations.generator.generator_version()
     with open(tmp_path / "state_space.py", "a") as f:
         f.write("\n# changed\n")
-    assert derivations.codegen.generator_version() != before
+    assert derivations.generator.generator_version() != before

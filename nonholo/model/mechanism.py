@@ -369,12 +369,12 @@ DEFINING_FIELDS = ("name", "description", "L", "delta", "inputs", "frame", "fram
 
 def definition_digest(mechanism) -> str:
     """SHA-256 of a symbolic mechanism's definition (its :data:`DEFINING_FIELDS` as SymPy
-    ``srepr``) and of the generator's version (``derivations.codegen.generator_version``)."""
+    ``srepr``) and of the generator's version (``derivations.generator.generator_version``)."""
     import sympy
 
-    from derivations import codegen
+    from derivations import generator
 
-    h = hashlib.sha256(codegen.generator_version().encode())
+    h = hashlib.sha256(generator.generator_version().encode())
     for name in DEFINING_FIELDS:
         h.update(f"{name}={sympy.srepr(getattr(mechanism, name, None))};".encode())
     return h.hexdigest()
@@ -394,17 +394,19 @@ def generated_source(mechanism, cache: bool = True) -> str:
 def equations_source(form: str, name, arguments: dict, cache: bool = True) -> str:
     """The generated module's source of the mechanism ``derivations.equations.<form>(name,
     **arguments)`` builds; cached (:func:`cached_source`) by a digest of the equations as
-    given (``derivations.equations.definition_text``) and the generator's version, so a
-    cached mechanism is neither derived nor generated again."""
-    from derivations import codegen, equations
+    given and the generator's version (:mod:`derivations.generator`), so a cached mechanism
+    is neither derived nor generated again (nor the generator imported)."""
+    from derivations import generator
 
     def build() -> str:
+        from derivations import codegen, equations
+
         return codegen.mechanism_module(getattr(equations, form)(name, **arguments))
 
     if not cache:
         return build()
-    text = equations.definition_text(form, name, arguments)
-    digest = hashlib.sha256((codegen.generator_version() + text).encode()).hexdigest()
+    text = generator.definition_text(form, name, arguments)
+    digest = hashlib.sha256((generator.generator_version() + text).encode()).hexdigest()
     return cached_source(name, digest, build)
 
 
