@@ -15,4 +15,5 @@ mechanism's geometry:
 - :mod:`derivations.printed`      the appendix formulas transcribed as printed
 - :mod:`derivations.audit`        printed vs derived, equation by equation
 - :mod:`derivations.codegen`      numeric modules written into ``nonholo/generated``
+- :mod:`derivations.generator`    what keys a generated module: the generator's version, a definition's text
 """
