@@ -137,10 +137,14 @@ class PlanChecks:
     def labels(self):
         """The mechanism; ``method``, ``strategy``, ``T``, ``steps``, ``R0`` against the controls."""
         r = self.r
-        try:
-            mech = catalog.get(r.mechanism)
-        except ValueError as exc:
-            fail("mechanism", f"is unknown: {exc}")
+        mech = getattr(r, "kinematics", None)
+        if mech is None:
+            try:
+                mech = catalog.get(r.mechanism)
+            except ValueError as exc:
+                fail("mechanism", f"is unknown: {exc}")
+        elif mech.name != r.mechanism:
+            fail("mechanism", f"is {r.mechanism!r}, but the plan's kinematics are of {mech.name!r}")
         par = r.parametrisation
         if isinstance(par, Retimed):
             self.retimed(par, mech)

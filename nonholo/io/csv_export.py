@@ -31,7 +31,6 @@ import math
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from ..model import catalog
 from ..motion.retimed import Retimed
 from ..motion.simulation import DELTA_STOP
 from ..numerics.checks import is_number
@@ -65,7 +64,7 @@ def states_at(result, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     stored sample at or below each ``t`` (none where ``t`` is a sample time); ``q`` has no
     columns on SO(3). A re-timed plan (:class:`~nonholo.motion.retimed.Retimed`) moves along its
     planned path: ``R(τ(t))``, stepped in the planned time ``τ`` with the planned controls."""
-    mech = catalog.get(result.mechanism)
+    mech = result.kinematics
     kern = mech.kernels(False)
     n_samples = len(result.t)
     if n_samples == 0 or t[-1] > result.t[-1] * (1 + 1e-12):
@@ -115,7 +114,7 @@ def trajectory_table(result, rate: float = DEFAULT_RATE) -> dict[str, np.ndarray
     (``ValueError`` with its reason): it is not a motion to play on a machine."""
     if not result.success:
         raise ValueError(f"the plan failed ({result.reason}): not exported")
-    mech = catalog.get(result.mechanism)
+    mech = result.kinematics
     t = sample_times(result.T, rate)
     R, q = states_at(result, t)
     u = np.asarray(result.controls(t), dtype=float).reshape(len(t), mech.n_inputs)

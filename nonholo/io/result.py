@@ -15,6 +15,7 @@ from ..certify.plan_fields import FORMAT
 from ..controls.parametrisations import Controls
 from ..controls.stitched import Stitched
 from ..model import catalog
+from ..model.mechanism import Mechanism
 from ..motion.frame_controls import FrameControls
 from ..motion.retimed import Retimed
 from . import csv_export as export
@@ -72,6 +73,10 @@ class PlanResult:
     - ``seconds``: the planner's wall time; ``None`` when not recorded (a plan file kept
       without it, as ``nonholo reproduce`` writes them, so that a second run writes the same
       bytes).
+    - ``mechanism``: the mechanism's name (the file's label); ``kinematics``: the
+      :class:`~nonholo.model.mechanism.Mechanism` itself, which re-timing, export, saving and
+      checks use, so that a plan of a mechanism outside the catalog works as one of the
+      catalog's (by default the catalog's of that name; ``ValueError`` if it has none).
     """
 
     success: bool
@@ -103,6 +108,11 @@ class PlanResult:
     q0: np.ndarray | None = None
     qd: np.ndarray | None = None
     errors: dict | None = None
+    kinematics: Mechanism | None = field(default=None, repr=False)
+
+    def __post_init__(self):
+        if self.kinematics is None:
+            self.kinematics = catalog.get(self.mechanism)
 
     @property
     def start(self):
@@ -121,7 +131,7 @@ class PlanResult:
     def _public(self, R, q):
         if q is None:
             return R
-        return catalog.get(self.mechanism).space.public(R, q)
+        return self.kinematics.space.public(R, q)
 
     # -- controls ----------------------------------------------------------------------
     def controls(self, t) -> np.ndarray:
@@ -190,11 +200,13 @@ class PlanResult:
         }
 
     @classmethod
-    def from_dict(cls, d: dict) -> "PlanResult":
+    def from_dict(cls, d: dict, mechanism=None) -> "PlanResult":
         """The result described by ``d`` (a plan file's object, see :mod:`nonholo.io.plan_file`),
         checked field by field (:func:`nonholo.io.plan_file.decode`) and for consistency
-        (:meth:`validate`); ``ValueError`` naming the field otherwise."""
-        values, legacy = plan_file.decode(d)
+        (:meth:`validate`); ``ValueError`` naming the field otherwise. ``mechanism``: the
+        :class:`~nonholo.model.mechanism.Mechanism` of a plan whose mechanism is not in the
+        catalog (see :meth:`load`)."""
+        values, legacy = plan_file.decode(d, mechanism)
         res = cls(**values)
         plan_checks.check(res, legacy=legacy)
         return res
@@ -226,7 +238,7 @@ class PlanResult:
         except (ValueError, TypeError) as exc:
             raise ValueError(f"cannot save the plan: {exc}") from None
         try:
-            type(self).from_dict(plan_file.parse(text))
+            type(self).from_dict(plan_file.parse(text), self.kinematics)
         except ValueError as exc:
             raise ValueError(f"cannot save the plan, its file would not load: {exc}") from None
         return text
@@ -260,14 +272,19 @@ class PlanResult:
         return safe_write.write_text(path, text, "path")
 
     @classmethod
-    def load(cls, path) -> "PlanResult":
+    def load(cls, path, mechanism=None) -> "PlanResult":
         """Read and check a result written by :meth:`save` (see :meth:`from_dict`); a file
         that is not one — malformed JSON, wrong or missing fields, numbers that disagree
         with the controls — raises ``ValueError`` saying what is wrong. A UTF-8 byte-order
-        mark is accepted."""
+        mark is accepted.
+
+        ``mechanism``: the :class:`~nonholo.model.mechanism.Mechanism` the plan was made with,
+        for one that is not in the catalog (built in the script, e.g. by
+        :meth:`~nonholo.model.mechanism.Mechanism.from_equations`); it must have the name the
+        file gives. Without it, an unknown name raises ``ValueError`` saying to pass it."""
         d = plan_file.read(path)
         try:
-            return cls.from_dict(d)
+            return cls.from_dict(d, mechanism)
         except RecursionError:
             raise ValueError(f"{path}: invalid plan file: nested too deeply") from None
         except ValueError as exc:
@@ -278,6 +295,8 @@ class PlanResult:
         if not isinstance(other, PlanResult):
             return NotImplemented
         for f in fields(self):
+            if f.name == "kinematics":          # the mechanism itself: compared by name
+                continue
             a, b = getattr(self, f.name), getattr(other, f.name)
             if isinstance(a, np.ndarray) or isinstance(b, np.ndarray):
                 if a is None or b is None or not np.array_equal(a, b):

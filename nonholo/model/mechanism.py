@@ -32,6 +32,7 @@ take ``R`` alone (the paper's ``Δ(R)``, ``N(R)``, ``QN(R, w)``, ``W(R)``).
 from __future__ import annotations
 
 import hashlib
+import inspect
 import os
 import tempfile
 import types
@@ -181,6 +182,19 @@ class Mechanism:
     #: the stacked field ``G(R, q)`` (rows ``(ω, q̇)``; ``G(R, q) = L(R)`` on SO(3))
     G: Callable | None = None
 
+    def __new__(cls, *args, **kwargs):
+        """Arguments that do not fit the fields raise a ``TypeError`` saying how a mechanism
+        is built (its fields are a generated module's functions)."""
+        try:
+            INIT_SIGNATURE.bind(None, *args, **kwargs)
+        except TypeError as exc:
+            raise TypeError(f"{exc}. A Mechanism holds the functions of a generated module; build one "
+                            "with Mechanism.from_equations (a velocity field: coordinates on R^k, an "
+                            "orientation on SO(3), or both), Mechanism.from_constraints (Pfaffian "
+                            "constraints), Mechanism.from_symbolic (a derivations.mechanisms.Mechanism) "
+                            "or Mechanism.from_module") from None
+        return super().__new__(cls)
+
     @cached_property
     def space(self) -> Product:
         """The state space (:mod:`nonholo.spaces.groups`): ``SO(3)``, ``SO(3) × Rᵏ`` or ``Rᵏ``."""
@@ -309,24 +323,65 @@ class Mechanism:
         """The numeric mechanism of a symbolic :class:`derivations.mechanisms.Mechanism`, in one
         call: its module is generated (as ``nonholo derive`` would write it) and loaded
         in this process. With ``cache``, the generated source is kept on disk by a digest of
-        the definition (:func:`generated_source`), so a later run skips the generation; its
-        kernels are compiled once and cached on disk too (:mod:`nonholo.numerics.native`).
-        To add a mechanism for good, put it in ``derivations/definitions.py`` and run
-        ``nonholo derive``. To look it up by name, :func:`nonholo.model.catalog.add` it.
+        the definition and of the generator (:func:`generated_source`), so a later run skips
+        the generation; its kernels are compiled once and cached on disk too
+        (:mod:`nonholo.numerics.native`). To add a mechanism for good, put it in
+        ``derivations/definitions.py`` and run ``nonholo derive``. To look it up by name,
+        :func:`nonholo.model.catalog.add` it.
         """
         if type(mechanism).__name__ != "Mechanism" or not hasattr(mechanism, "field"):
-            raise TypeError(f"mechanism must be a symbolic derivations.mechanisms.Mechanism, "
-                            f"not {type(mechanism).__name__}")
-        source = generated_source(mechanism, cache)
-        module = types.ModuleType(f"nonholo_symbolic_{mechanism.name}")
-        module.SOURCE = source
-        exec(compile(source, f"<generated module of mechanism {mechanism.name!r}>", "exec"),
-             module.__dict__)
-        return cls.from_module(module)
+            raise TypeError(f"mechanism must be a symbolic derivations.mechanisms.Mechanism, not "
+                            f"{type(mechanism).__name__}; from equations, use Mechanism.from_equations "
+                            "(a velocity field) or Mechanism.from_constraints (Pfaffian constraints)")
+        return cls.from_module(load_source(generated_source(mechanism, cache), mechanism.name))
+
+    @classmethod
+    def from_equations(cls, name: str, *, inputs, coordinates=(), rates=(), omega=None, rotation=None,
+                       angles=(), parameters=None, delta=None, units=None, description: str | None = None,
+                       cache: bool = True) -> "Mechanism":
+        """The mechanism of a driftless field given by its equations (SymPy symbols and
+        expressions), e.g. the unicycle towing a trailer::
+
+            Mechanism.from_equations("trailer1", coordinates=[x, y, th0, th1], inputs=[v, w],
+                                     rates=[v*cos(th0), v*sin(th0), w, v*sin(th0 - th1)],
+                                     angles=[th0, th1])
+
+        ``coordinates`` and ``rates`` (``ẋ = G(x) u``) give a state in ``Rᵏ``; ``omega``, the
+        spatial angular velocity of an orientation in the entries of ``rotation``, a state
+        on SO(3) (or, with coordinates, on SO(3) × Rᵏ); ``parameters`` maps further symbols
+        to numbers; ``delta`` the singularity function (default: the factors of the field's
+        denominators). See :func:`derivations.equations.field_mechanism`, which checks the
+        equations: an undeclared symbol, a rate that is not linear in the inputs or an
+        argument of the wrong class of state raises ``ValueError`` naming it.
+
+        Generated like :meth:`from_symbolic`; with ``cache``, keyed by the equations as given
+        and the generator's version, so a later run neither derives nor generates.
+        """
+        arguments = dict(inputs=inputs, coordinates=coordinates, rates=rates, omega=omega, rotation=rotation,
+                         angles=angles, parameters=parameters, delta=delta, units=units, description=description)
+        return cls.from_module(load_source(equations_source("field_mechanism", name, arguments, cache), name))
+
+    @classmethod
+    def from_constraints(cls, name: str, *, coordinates, velocities, constraints, inputs, angles=(),
+                         parameters=None, units=None, description: str | None = None,
+                         cache: bool = True) -> "Mechanism":
+        """The mechanism whose rates (the symbols ``velocities``, one per coordinate) obey
+        linear ``constraints`` (expressions equal to zero): Pfaffian constraints
+        ``A(x) ẋ = 0`` with ``inputs`` chosen among the velocities, and equations defining
+        other inputs (a rolling speed). The velocities that are not inputs are solved for;
+        ``det A`` is the singularity function. See
+        :func:`derivations.equations.constraint_mechanism` (its checks) and
+        :meth:`from_equations` (the rest, caching included)."""
+        arguments = dict(coordinates=coordinates, velocities=velocities, constraints=constraints, inputs=inputs,
+                         angles=angles, parameters=parameters, units=units, description=description)
+        return cls.from_module(load_source(equations_source("constraint_mechanism", name, arguments, cache), name))
 
     def __repr__(self) -> str:
         return f"Mechanism({self.name!r}: {self.description})"
 
+
+#: The signature of :class:`Mechanism`'s fields (checked by ``Mechanism.__new__``).
+INIT_SIGNATURE = inspect.signature(Mechanism.__init__)
 
 #: The fields of a symbolic mechanism that define its generated module.
 DEFINING_FIELDS = ("name", "description", "L", "delta", "inputs", "frame", "frame_inputs",
@@ -335,33 +390,57 @@ DEFINING_FIELDS = ("name", "description", "L", "delta", "inputs", "frame", "fram
 
 def definition_digest(mechanism) -> str:
     """SHA-256 of a symbolic mechanism's definition (its :data:`DEFINING_FIELDS` as SymPy
-    ``srepr``), of SymPy's version and of the code generator's source."""
+    ``srepr``) and of the generator's version (``derivations.generator.generator_version``)."""
     import sympy
 
-    from derivations import codegen
+    from derivations import generator
 
-    h = hashlib.sha256()
-    h.update(sympy.__version__.encode())
-    h.update(Path(codegen.__file__).read_bytes())
+    h = hashlib.sha256(generator.generator_version().encode())
     for name in DEFINING_FIELDS:
         h.update(f"{name}={sympy.srepr(getattr(mechanism, name, None))};".encode())
     return h.hexdigest()
 
 
 def generated_source(mechanism, cache: bool = True) -> str:
-    """The generated module's source of a symbolic mechanism (``derivations.codegen``); with
-    ``cache``, read from (or written to) ``<cache>/generated/<name>_<digest>.py`` (the cache
-    of :func:`nonholo.numerics.native.cache_dir`, written atomically)."""
+    """The generated module's source of a symbolic mechanism (``derivations.codegen``), cached
+    by :func:`definition_digest` (:func:`cached_source`)."""
     from derivations import codegen  # SymPy: imported only when asked for
 
     if not cache:
         return codegen.mechanism_module(mechanism)
-    path = native.cache_dir().parent / "generated" / f"{mechanism.name}_{definition_digest(mechanism)[:24]}.py"
+    return cached_source(mechanism.name, definition_digest(mechanism),
+                         lambda: codegen.mechanism_module(mechanism))
+
+
+def equations_source(form: str, name, arguments: dict, cache: bool = True) -> str:
+    """The generated module's source of the mechanism ``derivations.equations.<form>(name,
+    **arguments)`` builds; cached (:func:`cached_source`) by a digest of the equations as
+    given and the generator's version (:mod:`derivations.generator`), so a cached mechanism
+    is neither derived nor generated again (nor the generator imported)."""
+    from derivations import generator
+
+    def build() -> str:
+        from derivations import codegen, equations
+
+        return codegen.mechanism_module(getattr(equations, form)(name, **arguments))
+
+    if not cache:
+        return build()
+    text = generator.definition_text(form, name, arguments)
+    digest = hashlib.sha256((generator.generator_version() + text).encode()).hexdigest()
+    return cached_source(name, digest, build)
+
+
+def cached_source(name: str, digest: str, build: Callable[[], str]) -> str:
+    """``build()`` read from (or written to) ``<name>_<digest[:24]>.py`` in
+    :func:`generated_cache_dir` (written atomically; a cache that cannot be written is
+    reported once and skipped)."""
+    path = generated_cache_dir() / f"{name}_{digest[:24]}.py"
     try:
         return path.read_text()
     except OSError:
         pass
-    source = codegen.mechanism_module(mechanism)
+    source = build()
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
         with tempfile.NamedTemporaryFile("w", dir=path.parent, delete=False, suffix=".tmp") as f:
@@ -369,5 +448,22 @@ def generated_source(mechanism, cache: bool = True) -> str:
         os.replace(f.name, path)
     except OSError as exc:
         native.warn_once("generated cache", f"nonholo: could not cache the generated module of "
-                                            f"{mechanism.name!r} ({exc})")
+                                            f"{name!r} ({exc})")
     return source
+
+
+def generated_cache_dir() -> Path:
+    """Where generated modules are cached: ``$NONHOLO_CACHE_DIR/generated`` when that is set
+    (beside the compiled kernels, :func:`nonholo.numerics.native.cache_dir`), else
+    ``generated`` beside the default kernel cache (``~/.cache/nonholo/generated``)."""
+    kernels = native.cache_dir()
+    return kernels / "generated" if os.environ.get(native.CACHE_ENV) else kernels.parent / "generated"
+
+
+def load_source(source: str, name: str) -> types.ModuleType:
+    """A generated module's ``source`` loaded as a module (not imported: it is not on disk in
+    the package); its text is kept as ``SOURCE``."""
+    module = types.ModuleType(f"nonholo_symbolic_{name}")
+    module.SOURCE = source
+    exec(compile(source, f"<generated module of mechanism {name!r}>", "exec"), module.__dict__)
+    return module

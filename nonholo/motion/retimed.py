@@ -311,8 +311,9 @@ class Retimed:
                 f"{self.leg_speed:g} fast)")
 
 
-def from_dict(d: dict, base_from_dict) -> Retimed:
-    """Inverse of :meth:`Retimed.to_dict` (``base_from_dict`` reads the base controls); the
-    time map is rebuilt by the same computation."""
-    return Retimed(base_from_dict(d["base"]), d["R0"], d["mechanism"], d["leg_speed"], T=d["T"],
-                   nodes=d["nodes"])
+def from_dict(d: dict, base_from_dict, mechanism=None) -> Retimed:
+    """Inverse of :meth:`Retimed.to_dict` (``base_from_dict`` reads the base controls; the
+    mechanism is ``mechanism``, by default the one ``d`` names); the time map is rebuilt by
+    the same computation."""
+    return Retimed(base_from_dict(d["base"]), d["R0"], d["mechanism"] if mechanism is None else mechanism,
+                   d["leg_speed"], T=d["T"], nodes=d["nodes"])

@@ -16,7 +16,6 @@ import time
 import numpy as np
 
 from ..io.result import PlanResult
-from ..model import catalog
 from ..motion.frame_controls import from_dict as controls_from_dict
 from ..motion.retimed import RETIME_NODES, Retimed, TimeMap, check_leg_speed
 from ..numerics.checks import check_time
@@ -31,7 +30,7 @@ def planned_controls(result: PlanResult):
 def time_map(result: PlanResult, leg_speed: float, nodes: int = RETIME_NODES) -> TimeMap:
     """The fastest re-timing of ``result``'s path under ``leg_speed``
     (:attr:`~nonholo.motion.retimed.TimeMap.minimum_time`, :attr:`~nonholo.motion.retimed.TimeMap.peak_ratio`)."""
-    mech = catalog.get(result.mechanism)
+    mech = result.kinematics
     return TimeMap(planned_controls(result), result.R0, mech, check_leg_speed(leg_speed, mech), None, nodes)
 
 
@@ -48,7 +47,7 @@ def retime(result: PlanResult, leg_speed: float, T: float | None = None) -> Plan
     started = time.perf_counter()
     if not isinstance(result, PlanResult):
         raise ValueError(f"result must be a PlanResult, got {type(result).__name__}")
-    mech = catalog.get(result.mechanism)
+    mech = result.kinematics
     v = check_leg_speed(leg_speed, mech)
     if v is None:
         raise ValueError("leg_speed must be a positive finite speed, got None")
@@ -61,7 +60,7 @@ def retime(result: PlanResult, leg_speed: float, T: float | None = None) -> Plan
     # its description, the time map recomputed from that): the time map is computed from a
     # replay of the base, whose rounding a kink of the fastest leg can amplify, so samples
     # computed from any other copy need not be ``controls(t)`` of the loaded plan
-    timed = controls_from_dict(Retimed(base, result.R0, mech, v, T=T).to_dict())
+    timed = controls_from_dict(Retimed(base, result.R0, mech, v, T=T).to_dict(), mech)
     n = len(result.t)
     tau = np.arange(n) * (base.T / result.steps)
     tau[-1] = base.T
