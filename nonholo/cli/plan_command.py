@@ -9,7 +9,7 @@ R(Z, φ) R(Y, ϑ) R(X, ψ)``. A mechanism whose state goes beyond SO(3) takes it
 (``nonholo plan --mechanism car --from 0 0 0 0 --to 0 1 0 0``: ``x y θ φ``), after the RPY
 angles if it has an orientation too (``rolling_ball``: ``φ ϑ ψ p1 p2``); ``nonholo
 mechanisms`` lists each one's state. The strategy is ``robust`` unless ``--strategy paper`` asks for
-the appendix's algorithm as published (see :mod:`nonholo.robust`). One line is printed per accepted iteration (iteration, error
+the appendix's algorithm as published (see :mod:`nonholo.planning.strategy_robust`). One line is printed per accepted iteration (iteration, error
 ``|l_T|`` in rad, the step ``γh``, least ``|Δ|`` along the trajectory), then a summary;
 then the result is written to ``--out`` and the figure to ``--plot`` (each even if the
 other cannot be written). Every file is written by :mod:`nonholo.io.safe_write`: a regular
