@@ -149,7 +149,7 @@ def test_the_site_builds_without_warnings_and_its_internal_links_resolve(tmp_pat
     pytest.importorskip("myst_nb")
     out = tmp_path / "html"
     env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")]))
-    run = subprocess.run([sys.executable, "-m", "sphinx", "-W", "--keep-going", "-q", "-b", "html",
+    run = subprocess.run([sys.executable, "-m", "sphinx", "-W", "--keep-going", "-q", "-j", "auto", "-b", "html",
                           str(ROOT / "docs"), str(out)], cwd=ROOT, env=env, capture_output=True, text=True)
     assert run.returncode == 0, run.stderr[-6000:]
 
