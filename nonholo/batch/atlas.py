@@ -92,7 +92,7 @@ def axis_range(space, name: str) -> tuple[float, float]:
 
 
 def resolve_axis(space, name: str) -> str:
-    """``name`` as one of the space's :attr:`cli_names` (ASCII ``phi``/``theta``/``psi``
+    """``name`` as one of the space's :attr:`~nonholo.spaces.groups.Product.cli_names` (ASCII ``phi``/``theta``/``psi``
     accepted for the RPY angles); ``BadArgument`` naming ``axes`` otherwise."""
     names = space.cli_names
     if name in names:

@@ -112,7 +112,7 @@ def sensitivity(R0, par, T: float, mechanism, steps: int, U=None, sign: float | 
     the variational replay runs into ``Δ = 0``) and the replay's endpoint ``R_T``, from the
     variational system of the physical inputs (as :func:`nonholo.motion.simulation.variational`)
     on ``steps`` CF4 steps (``U``: their stage table, if known). The nodes of ``R`` are
-    those of :func:`replay` on the same steps. ``G`` is only as good as the grid resolves
+    those of :func:`~nonholo.motion.playback.replay` on the same steps. ``G`` is only as good as the grid resolves
     ``Φ``, which may take a finer grid than ``R_T`` does: :func:`resolved_sensitivity`.
     ``Φ`` is that of the stacked variation, ``d × d``, and the endpoint the state ``(R_T, q_T)``.
     """

@@ -56,8 +56,17 @@ class Geometry:
     ``derivations.mechanisms.PlatformGeometry``): base joints ``base_i`` (world frame),
     platform joints ``tip_i`` (platform frame, world position ``R tip_i``), the disk's
     contact point ``contact`` on the sphere and its unit axle direction ``axle`` (world).
-    Lengths in the units of the derivation's drawing dimensions; the sphere's radius is
-    ``|contact|``."""
+    Lengths in the units of the derivation's drawing dimensions.
+
+    Parameters
+    ----------
+    base1, tip1, base2, tip2 : numpy.ndarray
+        The legs' base joints (world frame) and platform joints (platform frame), 3-vectors.
+    contact : numpy.ndarray
+        The disk's contact point on the sphere; the sphere's radius is ``|contact|``.
+    axle : numpy.ndarray
+        The disk's unit axle direction (world frame).
+    """
 
     base1: np.ndarray
     tip1: np.ndarray
@@ -70,25 +79,50 @@ class Geometry:
 
     @classmethod
     def from_mapping(cls, data) -> "Geometry":
-        """From a mapping of the six fields to 3-vectors (the generated ``GEOMETRY``)."""
+        """From a mapping of the six fields to 3-vectors (the generated ``GEOMETRY``).
+
+        Parameters
+        ----------
+        data : mapping
+            The six fields by name; ``axle`` is normalised.
+
+        Returns
+        -------
+        Geometry
+            The geometry.
+        """
         vals = {k: np.array(data[k], dtype=float) for k in cls.FIELDS}
         vals["axle"] = vals["axle"] / np.linalg.norm(vals["axle"])
         return cls(**vals)
 
     @property
     def radius(self) -> float:
+        """The sphere's radius ``|contact|``."""
         return float(np.linalg.norm(self.contact))
 
     @property
     def bases(self) -> tuple[np.ndarray, np.ndarray]:
+        """The legs' base joints ``(base1, base2)``."""
         return self.base1, self.base2
 
     @property
     def tips(self) -> tuple[np.ndarray, np.ndarray]:
+        """The legs' platform joints ``(tip1, tip2)``."""
         return self.tip1, self.tip2
 
     def leg_lengths(self, R) -> np.ndarray:
-        """``l_i = |R tip_i − base_i|``: shape (2,) for one ``R``, (n, 2) for a stack (n, 3, 3)."""
+        """The legs' lengths ``l_i = |R tip_i − base_i|``.
+
+        Parameters
+        ----------
+        R : array_like
+            One rotation ``(3, 3)`` or a stack ``(n, 3, 3)``.
+
+        Returns
+        -------
+        numpy.ndarray
+            Shape ``(2,)`` for one ``R``, ``(n, 2)`` for a stack.
+        """
         R = np.asarray(R, dtype=float)
         Rs = R[None] if R.ndim == 2 else R
         out = np.stack([np.linalg.norm(Rs @ tip - base, axis=-1)
@@ -113,9 +147,20 @@ def _on_stack(into, R, shape: tuple) -> np.ndarray:
 
 
 def on_rotation(function, module) -> Callable:
-    """A generated ``function(R, q, ...)`` of a mechanism on SO(3) as ``function(R, ...)``
-    (``q`` = the module's ``NO_COORDINATES``): the paper's ``Δ(R)``, ``N(R)``, ``QN(R, w)``,
-    ``W(R)``."""
+    """A generated ``function(R, q, ...)`` of a mechanism on SO(3) as ``function(R, ...)``.
+
+    Parameters
+    ----------
+    function : callable
+        A generated function of ``(R, q, ...)``.
+    module : module
+        Its generated module (``q`` is bound to its ``NO_COORDINATES``).
+
+    Returns
+    -------
+    callable
+        ``function(R, ...)``: the paper's ``Δ(R)``, ``N(R)``, ``QN(R, w)``, ``W(R)``.
+    """
     none = module.NO_COORDINATES
 
     def on_R(R, *args):
@@ -147,7 +192,14 @@ def checked_on_R(function) -> Callable:
 
 @dataclass(frozen=True)
 class Frame:
-    """The desingularised input frame of a mechanism: ``ω = N(R) w``, ``u = W(R) w``."""
+    """The desingularised input frame of a mechanism: ``ω = N(R) w``, ``u = W(R) w``.
+
+    Parameters
+    ----------
+    N, QN, W : callable
+        The generated frame ``N(R)``, its variational matrix ``QN(R, w)`` and the physical
+        inputs ``W(R)``.
+    """
 
     N: Callable
     QN: Callable
@@ -158,11 +210,33 @@ class Frame:
 class Mechanism:
     """Numeric kinematics of one mechanism (see the module docstring).
 
-    ``delta`` is ``None`` without a singular set; ``frame`` is ``None`` without a
-    desingularised frame; ``geometry`` is ``None`` for a mechanism that is not a
-    two-leg platform. ``state_space`` names the state (``"SO(3)"``: an orientation ``R``).
-    ``module`` is the generated module the numbers come from (the integrator compiles
-    its ``*_into`` functions).
+    Built from a generated module (:meth:`from_module`) or a symbolic mechanism
+    (:meth:`from_symbolic`); looked up by name with :func:`nonholo.mechanism_named`.
+
+    Parameters
+    ----------
+    name, description : str
+        The mechanism's name and a phrase describing it.
+    inputs : tuple of str
+        The inputs' names.
+    L, Q : callable
+        ``L(R)`` and ``Q(R, u)`` of ``dR/dt = [L(R) u] R`` and eq. (12) (for a state
+        beyond SO(3), those of the stacked field).
+    delta : callable or None
+        ``Δ(R)``; ``None`` without a singular set.
+    frame : Frame or None
+        The desingularised input frame; ``None`` without one.
+    geometry : Geometry or None
+        ``None`` for a mechanism that is not a two-leg platform.
+    module : module
+        The generated module the numbers come from (the integrator compiles its
+        ``*_into`` functions).
+    state_space : str
+        Names the state: ``"SO(3)"`` (an orientation ``R``), ``"SO(3)xR^k"`` or ``"R^k"``.
+    coordinates, units, angles : tuple
+        Names, units and angle flags of the coordinates ``q`` (a state beyond SO(3)).
+    G : callable or None
+        The stacked field ``G(R, q)`` (rows ``(ω, q̇)``; ``G(R, q) = L(R)`` on SO(3)).
     """
 
     name: str
@@ -208,8 +282,25 @@ class Mechanism:
         return SingularSet(self.delta_samples, on_rotations=not self.space.k, owner=self.name)
 
     def parse_state(self, value, name: str):
-        """The caller's state ``value`` (argument ``name``) as ``(R, q)``
-        (:meth:`nonholo.spaces.groups.Product.parse`)."""
+        """The caller's state as ``(R, q)`` (:meth:`nonholo.spaces.groups.Product.parse`).
+
+        Parameters
+        ----------
+        value
+            A state as :func:`nonholo.plan` takes it.
+        name : str
+            The argument's name, for the error message.
+
+        Returns
+        -------
+        tuple
+            ``(R, q)``.
+
+        Raises
+        ------
+        ValueError
+            If ``value`` is not a state of the mechanism, naming ``name``.
+        """
         return self.space.parse(value, name, owner=f" for mechanism {self.name!r}")
 
     @property
@@ -224,6 +315,7 @@ class Mechanism:
 
     @property
     def n_coordinates(self) -> int:
+        """``k``: the number of coordinates ``q``."""
         return len(self.coordinates)
 
     @property
@@ -233,19 +325,38 @@ class Mechanism:
 
     @property
     def n_inputs(self) -> int:
+        """``m``: the number of inputs."""
         return len(self.inputs)
 
     @property
     def has_singular_set(self) -> bool:
+        """Whether the mechanism has a singularity function ``Δ``."""
         return self.delta is not None
 
     @property
     def has_frame(self) -> bool:
+        """Whether the mechanism has a desingularised input frame ``N``."""
         return self.frame is not None
 
     def kernels(self, frame: bool = False) -> cf4.Kernels:
-        """The compiled integrator kernels of ``(ω, q̇) = G(R, q) u`` (or, ``frame=True``, of
-        the desingularised ``N(R, q) w``); see :func:`nonholo.integrate.cf4.compile_system`."""
+        """The compiled integrator kernels (see :func:`nonholo.integrate.cf4.compile_system`).
+
+        Parameters
+        ----------
+        frame : bool
+            ``False``: of ``(ω, q̇) = G(R, q) u``; ``True``: of the desingularised
+            ``N(R, q) w``.
+
+        Returns
+        -------
+        nonholo.integrate.cf4.Kernels
+            The kernels, compiled once per process (native or numba).
+
+        Raises
+        ------
+        ValueError
+            If ``frame`` is asked of a mechanism without a desingularised frame.
+        """
         if frame and not self.has_frame:
             raise ValueError(f"mechanism {self.name!r} has no desingularised frame N(R)")
         return cf4.compile_system(self.module, frame)
@@ -256,18 +367,51 @@ class Mechanism:
         return bool(getattr(self.module, "HAS_LEGS", False))
 
     def leg_lengths(self, R) -> np.ndarray:
-        """``l_i(R) = |R tip_i − base_i|`` (the generated ``leg_lengths``, in the units of
-        :attr:`geometry`): shape ``(k,)`` for one ``R``, ``(n, k)`` for a stack ``(n, 3, 3)``."""
+        """The legs' lengths ``l_i(R) = |R tip_i − base_i|`` (the generated ``leg_lengths``).
+
+        Parameters
+        ----------
+        R : array_like
+            One rotation ``(3, 3)`` or a stack ``(n, 3, 3)``.
+
+        Returns
+        -------
+        numpy.ndarray
+            In the units of :attr:`geometry`: shape ``(k,)`` for one ``R``, ``(n, k)`` for a
+            stack.
+        """
         return self._legs("leg_lengths_into", R, ())
 
     def leg_gradients(self, R) -> np.ndarray:
-        """Rows ``G_i(R)`` with ``dl_i = G_i s`` along ``∂R = [s] R``: shape ``(k, 3)`` for one
-        ``R``, ``(n, k, 3)`` for a stack."""
+        """Rows ``G_i(R)`` with ``dl_i = G_i s`` along ``∂R = [s] R``.
+
+        Parameters
+        ----------
+        R : array_like
+            One rotation ``(3, 3)`` or a stack ``(n, 3, 3)``.
+
+        Returns
+        -------
+        numpy.ndarray
+            Shape ``(k, 3)`` for one ``R``, ``(n, k, 3)`` for a stack.
+        """
         return self._legs("leg_gradients_into", R, (3,))
 
     def leg_speeds(self, R, u) -> np.ndarray:
-        """``dl_i/dt = G_i(R) L(R) u`` for inputs ``u`` at ``R``: shape ``(k,)`` for one ``R``
-        and ``u`` (m,), ``(n, k)`` for stacks ``(n, 3, 3)`` and ``(n, m)``."""
+        """The legs' speeds ``dl_i/dt = G_i(R) L(R) u`` for inputs ``u`` at ``R``.
+
+        Parameters
+        ----------
+        R : array_like
+            One rotation ``(3, 3)`` or a stack ``(n, 3, 3)``.
+        u : array_like
+            The inputs, ``(m,)`` or ``(n, m)``.
+
+        Returns
+        -------
+        numpy.ndarray
+            Shape ``(k,)`` for one ``R``, ``(n, k)`` for stacks.
+        """
         R = np.asarray(R, dtype=float)
         u = np.asarray(u, dtype=float)
         one = R.ndim == 2
@@ -283,8 +427,21 @@ class Mechanism:
         return _on_stack(getattr(self.module, function), R, (len(self.geometry.bases), *tail))
 
     def delta_samples(self, R, q=None) -> np.ndarray | None:
-        """``Δ(R[n])`` (``Δ(R[n], q[n])`` beyond SO(3), ``q`` of shape ``(n, k)``) for a stack
-        ``R`` of shape ``(n, 3, 3)``; ``None`` without a singular set."""
+        """``Δ`` at every state of a stack.
+
+        Parameters
+        ----------
+        R : array_like
+            Rotations, shape ``(n, 3, 3)``.
+        q : array_like, optional
+            Coordinates beyond SO(3), shape ``(n, k)``.
+
+        Returns
+        -------
+        numpy.ndarray or None
+            ``Δ(R[n])`` (``Δ(R[n], q[n])`` beyond SO(3)), shape ``(n,)``; ``None`` without a
+            singular set.
+        """
         if self.delta is None:
             return None
         R = np.asarray(R, dtype=float)
@@ -297,12 +454,39 @@ class Mechanism:
         return np.broadcast_to(np.asarray(value, dtype=float), (R.shape[0],)).copy()
 
     def rates(self, R, q, u) -> np.ndarray:
-        """The stacked rates ``G(R, q) u`` (``(ω, q̇)``) of a state beyond SO(3)."""
+        """The stacked rates ``G(R, q) u`` of a state beyond SO(3).
+
+        Parameters
+        ----------
+        R : numpy.ndarray
+            The orientation (the identity without one).
+        q : numpy.ndarray
+            The coordinates.
+        u : numpy.ndarray
+            The inputs.
+
+        Returns
+        -------
+        numpy.ndarray
+            ``(ω, q̇)``, shape ``(d,)``.
+        """
         return self.G(np.asarray(R, dtype=float), np.asarray(q, dtype=float)) @ np.asarray(u, dtype=float)
 
     @classmethod
     def from_module(cls, module: types.ModuleType) -> "Mechanism":
-        """The mechanism of a generated module."""
+        """The mechanism of a generated module.
+
+        Parameters
+        ----------
+        module : module
+            A module written by the code generator (``nonholo derive`` or
+            :func:`generated_source`).
+
+        Returns
+        -------
+        Mechanism
+            Its numeric kinematics.
+        """
         delta = module.delta if module.HAS_SINGULAR_SET else None
         frame = Frame(module.N, module.QN, module.W) if module.HAS_FRAME else None
         if module.STATE_SPACE != "SO(3)":
@@ -324,10 +508,27 @@ class Mechanism:
         call: its module is generated (as ``nonholo derive`` would write it) and loaded
         in this process. With ``cache``, the generated source is kept on disk by a digest of
         the definition and of the generator (:func:`generated_source`), so a later run skips
-        the generation; its kernels are compiled once and cached on disk too
-        (:mod:`nonholo.numerics.native`). To add a mechanism for good, put it in
-        ``derivations/definitions.py`` and run ``nonholo derive``. To look it up by name,
-        :func:`nonholo.model.catalog.add` it.
+        the generation; its
+        kernels are compiled once and cached on disk too (:mod:`nonholo.numerics.native`).
+        To add a mechanism for good, put it in ``derivations/definitions.py`` and run
+        ``nonholo derive``. To look it up by name, :func:`nonholo.model.catalog.add` it.
+
+        Parameters
+        ----------
+        mechanism : derivations.mechanisms.Mechanism
+            The symbolic mechanism.
+        cache : bool
+            Keep the generated source on disk (and read it from there).
+
+        Returns
+        -------
+        Mechanism
+            Its numeric kinematics.
+
+        Raises
+        ------
+        TypeError
+            If ``mechanism`` is not a symbolic mechanism.
         """
         if type(mechanism).__name__ != "Mechanism" or not hasattr(mechanism, "field"):
             raise TypeError(f"mechanism must be a symbolic derivations.mechanisms.Mechanism, not "
@@ -389,8 +590,19 @@ DEFINING_FIELDS = ("name", "description", "L", "delta", "inputs", "frame", "fram
 
 
 def definition_digest(mechanism) -> str:
-    """SHA-256 of a symbolic mechanism's definition (its :data:`DEFINING_FIELDS` as SymPy
-    ``srepr``) and of the generator's version (``derivations.generator.generator_version``)."""
+    """SHA-256 of a symbolic mechanism's definition and of the generator's version
+    (``derivations.generator.generator_version``).
+
+    Parameters
+    ----------
+    mechanism : derivations.mechanisms.Mechanism
+        The symbolic mechanism; its :data:`DEFINING_FIELDS` are hashed as SymPy ``srepr``.
+
+    Returns
+    -------
+    str
+        The hex digest.
+    """
     import sympy
 
     from derivations import generator
@@ -402,8 +614,21 @@ def definition_digest(mechanism) -> str:
 
 
 def generated_source(mechanism, cache: bool = True) -> str:
-    """The generated module's source of a symbolic mechanism (``derivations.codegen``), cached
-    by :func:`definition_digest` (:func:`cached_source`)."""
+    """The generated module's source of a symbolic mechanism (``derivations.codegen``).
+
+    Parameters
+    ----------
+    mechanism : derivations.mechanisms.Mechanism
+        The symbolic mechanism.
+    cache : bool
+        Read the source from (or write it to) ``<cache>/generated/<name>_<digest>.py``
+        (the cache of :func:`nonholo.numerics.native.cache_dir`, written atomically).
+
+    Returns
+    -------
+    str
+        The module's source.
+    """
     from derivations import codegen  # SymPy: imported only when asked for
 
     if not cache:

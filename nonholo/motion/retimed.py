@@ -12,7 +12,7 @@ planned motion. Under a bound ``|dl_i/dt| ≤ v`` the fastest re-timing has
     ``dτ/dt = 1/ρ(τ)``,  ``ρ(τ) = max_i |s_i(τ)| / v``,  ``T̃ = ∫_0^T ρ(τ) dτ``:
 
 at every instant the fastest leg moves at ``v``, and no re-timing of the path takes less
-than ``T̃`` (:attr:`TimeMap.minimum_time`). A longer ``T`` is met by ``dτ/dt = 1/(cρ)``,
+than ``T̃`` (``TimeMap.minimum_time``). A longer ``T`` is met by ``dτ/dt = 1/(cρ)``,
 ``c = T/T̃ ≥ 1``: the fastest leg then moves at ``v/c`` throughout.
 
 How :class:`TimeMap` builds ``τ(t)``:
@@ -89,7 +89,7 @@ class TimeMap:
     """``t(τ)`` and its inverse for controls ``base`` (physical, on ``[0, T]``) played from
     ``R0`` with every leg at most ``leg_speed`` fast (see the module).
 
-    ``T``: the re-timed duration, ``None`` for the least (:attr:`minimum_time`); a ``T``
+    ``T``: the re-timed duration, ``None`` for the least (``minimum_time``); a ``T``
     below it raises ``ValueError`` saying the time needed.
     """
 

@@ -56,6 +56,7 @@ FAR_GOAL = ((-1.918, 0.336, -2.521), (1.433, -0.813, 1.324))
 #: planned again with :data:`LEG_LENGTH` (figure ``leg_limits``, ``plans/leg_limits.json``
 #: and ``.csv``).
 LIMITS_GOAL = ((0.5, 1.2, -0.5), (-0.4527, 1.4094, -1.3638))
+#: the legs' stroke of the limits example (:data:`LIMITS_GOAL`)
 LEG_LENGTH = (1.2, 2.0)
 #: The legs' speed bound the same goal's default plan is re-timed under (figure
 #: ``motion_quality``, ``plans/least_time.json`` and ``.csv``), geometry units per second.

@@ -385,7 +385,7 @@ class Outcome:
 
 
 class Strategy(ABC):
-    """A way of following the θ-flow (see :data:`nonholo.planning.api.STRATEGIES`).
+    """A way of following the θ-flow (see :data:`nonholo.planning.problem.STRATEGIES`).
 
     :meth:`frame` chooses the coordinates of the planned control (physical inputs ``u``
     of ``dR/dt = [L(R) u] R``, or frame coordinates ``w`` of ``dR/dt = [N(R) w] R``);

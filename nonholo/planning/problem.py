@@ -57,9 +57,26 @@ def one_of_choices(value, choices) -> bool:
 
 
 def strategy_class(strategy) -> type[Strategy]:
-    """The :class:`~nonholo.planning.core.Strategy` subclass ``strategy``, the one of that
-    name in :data:`STRATEGIES`, or one given by its import path ``"package.module:Class"``
-    (so that a problem table, JSON, can name any strategy); ``ValueError`` lists them."""
+    """The strategy a name or a class stands for.
+
+    Parameters
+    ----------
+    strategy : str or type
+        A :class:`~nonholo.planning.core.Strategy` subclass, a name of :data:`STRATEGIES`,
+        or an import path ``"package.module:Class"`` (so that a problem table, JSON, can
+        name any strategy).
+
+    Returns
+    -------
+    type
+        The :class:`~nonholo.planning.core.Strategy` subclass.
+
+    Raises
+    ------
+    ValueError
+        For an unknown name (listing the known ones), a path that cannot be imported, or
+        a class that is not a strategy.
+    """
     if isinstance(strategy, type) and issubclass(strategy, Strategy):
         return strategy
     if isinstance(strategy, str) and strategy in STRATEGIES:
@@ -82,10 +99,32 @@ def strategy_class(strategy) -> type[Strategy]:
 def initial_controls(method: str, T: float, n_inputs: int, harmonics: int, grid: int, u0=None) -> Controls:
     """The initial control in the parametrisation of ``method``.
 
-    ``u0``: ``None`` (the examples' ``u_1 = 0.3 sin 2πt/T``, ``u_2 = 0.3 cos 2πt/T``), a
-    :class:`~nonholo.controls.parametrisations.Controls` of the right kind and size, or a vectorised
-    function ``u(t)`` (projected: least squares on the Fourier basis, interval means on
-    the grid).
+    Parameters
+    ----------
+    method : {"parametric", "nonparametric"}
+        The parametrisation: Fourier series or piecewise constant.
+    T : float
+        The horizon (s).
+    n_inputs : int
+        The mechanism's inputs.
+    harmonics, grid : int
+        The size of the parametrisation.
+    u0 : optional
+        ``None`` (the examples' ``u_1 = 0.3 sin 2πt/T``, ``u_2 = 0.3 cos 2πt/T``), a
+        :class:`~nonholo.controls.parametrisations.Controls` of the right kind and size,
+        or a vectorised function ``u(t)`` (projected: least squares on the Fourier basis,
+        interval means on the grid).
+
+    Returns
+    -------
+    Controls
+        The initial control.
+
+    Raises
+    ------
+    ValueError
+        For a ``u0`` of another kind, size, horizon or number of inputs, or that is
+        neither controls nor a function.
     """
     kind, size = (Fourier, harmonics) if method == "parametric" else (PiecewiseConstant, grid)
     if isinstance(u0, Controls):
@@ -106,7 +145,21 @@ def initial_controls(method: str, T: float, n_inputs: int, harmonics: int, grid:
 
 
 def default_steps(method: str, grid: int) -> int:
-    """:data:`~nonholo.motion.simulation.DEFAULT_STEPS`, rounded up to a multiple of ``grid`` for grid controls."""
+    """The default CF4 steps of a plan.
+
+    Parameters
+    ----------
+    method : {"parametric", "nonparametric"}
+        The parametrisation.
+    grid : int
+        Intervals of the nonparametric form.
+
+    Returns
+    -------
+    int
+        :data:`~nonholo.motion.simulation.DEFAULT_STEPS`, rounded up to a multiple of
+        ``grid`` for grid controls.
+    """
     if method == "nonparametric":
         return -(-DEFAULT_STEPS // grid) * grid
     return DEFAULT_STEPS
@@ -116,16 +169,38 @@ def default_steps(method: str, grid: int) -> int:
 class Problem:
     """One planning problem, checked (see the module; build it with :meth:`build`).
 
-    ``R0, q0`` and ``Rd, qd``: start and goal as states ``(R, q)``
-    (:mod:`nonholo.spaces.groups`); ``T``: the horizon (s); ``method``, ``harmonics``,
-    ``grid``: the parametrisation of the planned control, ``controls`` its physical initial
-    guess (``u0_given``: the caller's; ``gamma_given``: ``options.gamma`` is the caller's,
-    not the strategy's default); ``strategy_class``; ``options``: the solver's
-    settings; ``steps``: CF4 steps on ``[0, T]``; ``constraints``: what the motion keeps;
-    ``objective``: ``None`` or ``"energy"``; ``route``; ``least_time``: ``T`` is the
-    planning horizon of a plan re-timed in the least time. ``started`` and
-    ``started_effort``: when the problem was built (for the result's ``seconds`` and the
-    global route's budget of effort).
+    Parameters
+    ----------
+    mechanism : Mechanism
+        The mechanism.
+    R0, q0, Rd, qd : numpy.ndarray
+        Start and goal as states ``(R, q)`` (:mod:`nonholo.spaces.groups`).
+    T : float
+        The horizon (s).
+    method, harmonics, grid : str, int, int
+        The parametrisation of the planned control.
+    controls : Controls
+        Its physical initial guess.
+    u0_given, gamma_given : bool
+        Whether the initial guess, and ``options.gamma``, are the caller's (not the
+        strategy's defaults).
+    strategy_class : type
+        The :class:`~nonholo.planning.core.Strategy` subclass.
+    options : Options
+        The solver's settings.
+    steps : int
+        CF4 steps on ``[0, T]``.
+    constraints : tuple
+        What the motion keeps (:mod:`nonholo.planning.constraints`).
+    objective : {None, "energy"}
+        What is lowered once the plan is found.
+    route : {"auto", "local", "global"}
+        The route (see :func:`nonholo.plan`).
+    least_time : bool
+        ``T`` is the planning horizon of a plan re-timed in the least time.
+    started, started_effort : float
+        When the problem was built (for the result's ``seconds`` and the global route's
+        budget of effort, :mod:`nonholo.numerics.effort`).
     """
 
     mechanism: Mechanism
@@ -157,10 +232,30 @@ class Problem:
               steps: int | None = None, newton_below: float = 1e-3, min_step: float = 1e-6,
               route: str = "auto", leg_length=None, leg_speed=None, objective: str | None = None,
               constraints=()) -> "Problem":
-        """The problem of :func:`nonholo.plan`'s keywords (see there), checked:
-        ``ValueError`` naming the argument for bad input. ``constraints``: further
-        constraint objects (:mod:`nonholo.planning.constraints`), besides those of
-        ``delta_min``, ``leg_length`` and ``leg_speed``."""
+        """The problem of :func:`nonholo.plan`'s keywords, checked.
+
+        Parameters
+        ----------
+        R0, Rd, T, method, harmonics, grid, u0, gamma, step, tol, max_iter, strategy
+            As for :func:`nonholo.plan`.
+        mechanism, delta_min, steps, newton_below, min_step, route, leg_length
+            As for :func:`nonholo.plan`.
+        leg_speed, objective
+            As for :func:`nonholo.plan`.
+        constraints : sequence
+            Further constraint objects (:mod:`nonholo.planning.constraints`), besides those
+            of ``delta_min``, ``leg_length`` and ``leg_speed``.
+
+        Returns
+        -------
+        Problem
+            The problem, every argument checked.
+
+        Raises
+        ------
+        ValueError
+            For bad input, naming the argument.
+        """
         started, started_effort = time.perf_counter(), effort.seconds()
         mech = catalog.get(mechanism)
         speed = LegSpeed.of(leg_speed, mech)
@@ -216,7 +311,24 @@ class Problem:
         """A part of the global route, ``start → goal`` (states ``(R, q)``) in ``T``, planned
         locally with ``strategy`` and the clearance ``delta_min``, under this problem's other
         constraints but the legs' speed (kept by the whole plan's re-timing), with no
-        objective: the same settings, its own clock."""
+        objective: the same settings, its own clock.
+
+        Parameters
+        ----------
+        start, goal : tuple
+            States ``(R, q)``.
+        T : float
+            The part's horizon (s).
+        delta_min : float
+            The part's clearance from ``Δ = 0``.
+        strategy : str or type
+            The part's strategy.
+
+        Returns
+        -------
+        Problem
+            The part.
+        """
         mech = self.mechanism
         solver = strategy_class(strategy)
         options = dataclasses.replace(self.options, delta_min=delta_min,
@@ -239,14 +351,17 @@ class Problem:
 
     @property
     def start(self) -> tuple[np.ndarray, np.ndarray]:
+        """The start ``(R0, q0)``."""
         return self.R0, self.q0
 
     @property
     def goal(self) -> tuple[np.ndarray, np.ndarray]:
+        """The goal ``(Rd, qd)``."""
         return self.Rd, self.qd
 
     @property
     def delta_min(self) -> float:
+        """The clearance from ``Δ = 0`` the motion keeps."""
         return self.options.delta_min
 
     @property
@@ -257,12 +372,19 @@ class Problem:
 
     @property
     def leg_speed(self) -> float | None:
+        """The legs' top speed, or ``None``."""
         speed = one_of(self.constraints, LegSpeed)
         return None if speed is None else speed.v
 
     def recorded_options(self) -> dict:
-        """The options a result records: :class:`~nonholo.planning.core.Options`,
-        ``harmonics``, ``grid`` and, when set, ``leg_length``."""
+        """The options a result records.
+
+        Returns
+        -------
+        dict
+            :class:`~nonholo.planning.core.Options`, ``harmonics``, ``grid`` and, when set,
+            ``leg_length``.
+        """
         limits = self.leg_limits
         extra = {} if limits is None else {"leg_length": list(limits.as_tuple())}
         return {**asdict(self.options), "harmonics": self.harmonics, "grid": self.grid, **extra}
