@@ -35,13 +35,11 @@ import os
 import sys
 from pathlib import Path
 
-import numpy as np
 
 from ..io import csv_export as export
 from ..io import safe_write
 from ..model import catalog
 from ..planning import api as planner
-from ..spaces import so3
 from .help_text import plain
 
 #: exit status of ``nonholo plan`` (see the module docstring)

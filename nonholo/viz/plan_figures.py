@@ -352,7 +352,6 @@ def plot_delta(ax, results, threshold: float | None = 1e-2, labels=None) -> None
             d = delta_along(res.R, getattr(res, "mechanism", "platform"))
         if d is None:
             continue
-        drawn = True
         ax.plot(res.t, d, color=_color(i), ls=_ls(i), label=lab)
         k = int(np.argmin(np.abs(d)))
         ax.plot(res.t[k], d[k], "v", color=_color(i), ms=6)
