@@ -343,7 +343,6 @@ def plot_delta(ax, results, threshold: float | None = 1e-2, labels=None) -> None
         ax.text(0.5, 0.5, f"no singular set ({results[0].mechanism})", transform=ax.transAxes,
                 ha="center", va="center", color="0.4")
         return
-    drawn = False
     for i, (res, lab) in enumerate(zip(results, labels)):
         if not has_trajectory(res):
             continue
