@@ -216,9 +216,13 @@ def main(argv=None) -> None:
     args = ap.parse_args(argv)
     report = Report("own_mechanism.md", "A mechanism of one's own (bench_own_mechanism)",
                     "benchmarks.bench_own_mechanism", argv, extra_packages=("sympy",))
+    load = os.getloadavg()[0]
     trailer(report, args.runs)
     platforms(report, args.runs)
     agreement(report)
+    report.paragraph(f"Load average (1 min) of the machine when the measurements started and ended: "
+                     f"{load:.1f} and {os.getloadavg()[0]:.1f}, on {os.cpu_count()} cores (other work "
+                     "beside these processes slows every row alike).")
     report.write()
 
 
