@@ -92,12 +92,13 @@ def mechanism_named(name):
 
 
 def result_mechanism(res):
-    """The :class:`Mechanism` of a result: the one its controls were replayed with (a
-    mechanism built in the session need not be in the catalog), else the one its name
-    gives (``None`` if unknown)."""
-    mech = getattr(getattr(res, "parametrisation", None), "mechanism", None)
-    if isinstance(mech, Mechanism):
-        return mech
+    """The :class:`Mechanism` of a result: the one it carries (``kinematics``) or its
+    controls were replayed with (a mechanism built in the session need not be in the
+    catalog), else the one its name gives (``None`` if unknown)."""
+    for mech in (getattr(res, "kinematics", None),
+                 getattr(getattr(res, "parametrisation", None), "mechanism", None)):
+        if isinstance(mech, Mechanism):
+            return mech
     return mechanism_named(getattr(res, "mechanism", "platform"))
 
 
