@@ -16,6 +16,11 @@ sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(DOCS / "ext"))
 
 import nonholo  # noqa: E402
+from docutils import nodes  # noqa: E402
+from docutils.parsers.rst import roles  # noqa: E402
+
+# matplotlib's own role, in the docstrings nonholo.viz.style.NotebookFigure inherits
+roles.register_generic_role("mpltype", nodes.literal)
 
 project = "nonholo"
 author = "nonholo authors"
@@ -71,7 +76,9 @@ NOT_YET_NUMPYDOC = [
     r"^nonholo\.io\.plan_file\.",
     r"^nonholo\.io\.problems\.",
     r"^nonholo\.io\.safe_write\.",
+    r"^nonholo\.cli\.help_text\.",
     r"^nonholo\.model\.limits\.",
+    r"^nonholo\.model\.mechanism\.",
     r"^nonholo\.model\.platform\.",
     r"^nonholo\.motion\.frame_controls\.",
     r"^nonholo\.motion\.playback\.",

@@ -20,7 +20,7 @@
   ``min_delta``, ``reason``; and ``summary.md``, the same as a table.
 
 A second run writes the same bytes (on the same machine and kernels): no file records when
-or how fast it was made — PDFs carry no creation date (:func:`nonholo.viz.save_figure`),
+or how fast it was made — PDFs carry no creation date (:func:`nonholo.viz.style.save_figure`),
 plan files no wall time (``seconds`` is ``null``). The times go to the terminal: one line
 per plan on stderr and the summary table with a time column on stdout.
 

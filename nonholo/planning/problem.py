@@ -50,9 +50,21 @@ PLANNING_TIME = 1.0
 
 
 def one_of_choices(value, choices) -> bool:
-    """Whether ``value`` is one of ``choices`` (strings, or None): compared only as a
-    string or None, so an array or a dict is simply not one (``==`` would compare it
-    elementwise or fail to hash)."""
+    """Whether ``value`` is one of ``choices``, compared only as a string or None.
+
+    Parameters
+    ----------
+    value : object
+        What the caller passed (an array or a dict is simply not a choice: ``==`` would
+        compare it elementwise or fail to hash).
+    choices : sequence of str or None
+        The known names.
+
+    Returns
+    -------
+    bool
+        Whether ``value`` is one of them.
+    """
     return (value is None or isinstance(value, str)) and value in choices
 
 

@@ -14,7 +14,7 @@ Conventions
   coordinates (an SO(3) mechanism is the product with ``k = 0``). The terminal error is
   the stacked vector ``e = (l, δq)`` of a variation ``s = (s_R, s_q)``; its parts are
   reported by name (``"rotation"`` in rad, ``"coordinates"`` in the mechanism's units).
-- Units: each coordinate has one (:attr:`Euclidean.units`, ``""`` if not given), the
+- Units: each coordinate has one (``Euclidean.units``, ``""`` if not given), the
   rotation's rows are in rad; an error's norm is written with :meth:`Product.amount` (its
   unit, or the units it mixes: ``"3e-11 (wheelbase, rad)"``).
 - The caller's form of a state: a rotation matrix for SO(3), the ``k`` numbers for
