@@ -461,7 +461,7 @@ class PlanResult:
         lines = [
             f"PlanResult({status}: {self.mechanism}, {self.method}/{self.strategy}, T={self.T:g} s, "
             f"{self.parametrisation!r}",
-            f"  terminal error {amount(self.terminal_error, '.3e')} after "
+            f"  terminal error |l_T| = {amount(self.terminal_error, '.3e')} after "
             f"{self.iterations} iterations, min |Δ| = {num(self.min_delta, '.4f')}, {wall}",
         ]
         if self.replay_steps is not None:
