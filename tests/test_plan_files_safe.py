@@ -176,6 +176,26 @@ def test_save_leaves_a_character_device_a_character_device(tmp_path, paper_plan)
     assert stat.S_ISCHR(os.stat(dev).st_mode)
 
 
+def test_figures_are_written_safely(tmp_path):
+    """``save_figure`` (every figure ``nonholo reproduce`` and ``--plot`` write) writes a
+    character device in place and refuses a directory, leaving it as it was."""
+    from matplotlib.figure import Figure
+
+    from nonholo.viz.style import save_figure
+
+    fig = Figure()
+    fig.add_subplot().plot([0, 1])
+    dev = char_device(tmp_path / "f.png")
+    (tmp_path / "f.pdf").mkdir()
+    with pytest.raises(ValueError, match="is a directory"):
+        save_figure(fig, "f", tmp_path)
+    assert stat.S_ISCHR(os.stat(dev).st_mode) and not any((tmp_path / "f.pdf").iterdir())
+    (tmp_path / "f.pdf").rmdir()
+    png, pdf = save_figure(fig, "f", tmp_path)
+    assert stat.S_ISCHR(os.stat(png).st_mode) and pdf.read_bytes().startswith(b"%PDF")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["f.pdf", "f.png"]     # no temporary left
+
+
 def test_save_refuses_a_directory_naming_the_argument(tmp_path, paper_plan):
     d = tmp_path / "plan.json"
     d.mkdir()

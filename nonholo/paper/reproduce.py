@@ -37,6 +37,7 @@ from pathlib import Path
 import numpy as np
 
 from ..certify import resimulate as verify
+from ..io import safe_write
 from ..model import catalog
 from ..planning.api import STRATEGIES, plan
 from ..planning.retime import retime
@@ -280,8 +281,8 @@ def run(outdir: Path = DEFAULT_OUTDIR, audit: bool = True, draw: bool = True) ->
     for s in solved:
         keep(s.result, plans / f"example{s.example.number}_{s.result.method}.json")
     rows = [s.summary() for s in solved]
-    (outdir / "summary.json").write_text(json.dumps(rows, indent=2) + "\n")
-    (outdir / "summary.md").write_text(summary_table(rows) + "\n")
+    safe_write.write_text(outdir / "summary.json", json.dumps(rows, indent=2) + "\n")
+    safe_write.write_text(outdir / "summary.md", summary_table(rows) + "\n")
     print(summary_table(rows, [s.result.seconds for s in solved]), flush=True)
     if draw:
         _log("drawing the figures ...")

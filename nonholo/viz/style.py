@@ -16,6 +16,8 @@ from pathlib import Path
 import matplotlib
 from matplotlib.figure import Figure
 
+from ..io import safe_write
+
 STYLE = {
     "font.size": 10,
     "axes.titlesize": 11,
@@ -83,6 +85,8 @@ def save_figure(fig: Figure, stem: str, outdir=".", dpi: int = 150) -> tuple[Pat
     outdir = Path(outdir)
     outdir.mkdir(parents=True, exist_ok=True)
     png, pdf = outdir / f"{stem}.png", outdir / f"{stem}.pdf"
-    fig.savefig(png, dpi=dpi)
-    fig.savefig(pdf, metadata=PDF_METADATA)
+    with safe_write.replacing(png) as tmp:             # never half a file, never over a non-file
+        fig.savefig(tmp, format="png", dpi=dpi)
+    with safe_write.replacing(pdf) as tmp:
+        fig.savefig(tmp, format="pdf", metadata=PDF_METADATA)
     return png, pdf
