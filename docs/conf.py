@@ -101,8 +101,6 @@ NOT_YET_NUMPYDOC = [
     r"^nonholo\.planning\.state_path\.",
     r"^nonholo\.planning\.strategy_paper\.",
     r"^nonholo\.planning\.strategy_robust\.",
-    r"^nonholo\.spaces\.groups\.",
-    r"^nonholo\.spaces\.singular\.",
     r"^nonholo\.viz\.",
 ]
 numpydoc_validation_exclude = set(NOT_YET_NUMPYDOC)
