@@ -75,9 +75,10 @@ NOT_YET_NUMPYDOC = [
     r"^nonholo\.planning\.state_path\.",
     r"^nonholo\.planning\.strategy_paper\.",
     r"^nonholo\.planning\.strategy_robust\.",
-    r"^nonholo\.viz\.",
 ]
-numpydoc_validation_exclude = set(NOT_YET_NUMPYDOC)
+# NotebookFigure is matplotlib's Figure: its parameters and the set() matplotlib writes for
+# every subclass are matplotlib's, documented there
+numpydoc_validation_exclude = set(NOT_YET_NUMPYDOC) | {r"^nonholo\.viz\.style\.NotebookFigure(\.|$)"}
 
 nitpicky = True
 nitpick_ignore_regex = [
