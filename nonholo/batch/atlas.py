@@ -52,7 +52,15 @@ _PI_TICKS = {(-np.pi, np.pi): ([-np.pi, -np.pi / 2, 0, np.pi / 2, np.pi], ["−�
 
 
 class BadArgument(ValueError):
-    """A bad argument of :func:`problems`: ``argument`` names it, ``detail`` says why."""
+    """A bad argument of :func:`problems`.
+
+    Parameters
+    ----------
+    argument : str
+        Its name.
+    detail : str
+        Why it is bad; the message is ``"<argument> <detail>"``.
+    """
 
     def __init__(self, argument: str, detail: str):
         super().__init__(f"{argument} {detail}")
@@ -60,30 +68,88 @@ class BadArgument(ValueError):
 
 
 def grid_angles(n: int) -> tuple[np.ndarray, np.ndarray]:
-    """The cell centres ``φ`` (``n``) and ``ϑ`` (``n``) of an ``n × n`` RPY slice grid."""
+    """The cell centres of an ``n × n`` RPY slice grid.
+
+    Parameters
+    ----------
+    n : int
+        Cells per axis.
+
+    Returns
+    -------
+    tuple of numpy.ndarray
+        ``φ`` and ``ϑ`` (rad), ``n`` each.
+    """
     return cell_centres(n, RPY_RANGES["φ"]), cell_centres(n, RPY_RANGES["ϑ"])
 
 
 def cell_centres(n: int, bounds) -> np.ndarray:
-    """The centres of ``n`` equal cells across ``bounds = (lo, hi)``."""
+    """The centres of ``n`` equal cells across an interval.
+
+    Parameters
+    ----------
+    n : int
+        The number of cells.
+    bounds : tuple of float
+        ``(lo, hi)``.
+
+    Returns
+    -------
+    numpy.ndarray
+        The ``n`` centres.
+    """
     lo, hi = bounds
     return lo + (np.arange(n) + 0.5) * ((hi - lo) / n)
 
 
 def default_start(space) -> tuple[float, ...]:
-    """The atlases' default start as command-line numbers: Example 1's RPY angles with an
-    orientation, the coordinates 0."""
+    """The atlases' default start as command-line numbers.
+
+    Parameters
+    ----------
+    space : Product
+        The mechanism's state space.
+
+    Returns
+    -------
+    tuple of float
+        Example 1's RPY angles with an orientation, the coordinates 0.
+    """
     return (START if space.has_orientation else ()) + (0.0,) * space.k
 
 
 def default_axes(space) -> tuple[str, str]:
-    """``φ, ϑ`` with an orientation, else the first two coordinates."""
+    """The atlases' default axes.
+
+    Parameters
+    ----------
+    space : Product
+        The mechanism's state space.
+
+    Returns
+    -------
+    tuple of str
+        ``φ, ϑ`` with an orientation, else the first two coordinates.
+    """
     return ("φ", "ϑ") if space.has_orientation else tuple(space.cli_names[:2])
 
 
 def axis_range(space, name: str) -> tuple[float, float]:
-    """The default range of the goal's number ``name``: :data:`RPY_RANGES`, ``[−π, π)`` for an
-    angle coordinate, ``[−box, box]`` for another."""
+    """The default range of one of the goal's numbers.
+
+    Parameters
+    ----------
+    space : Product
+        The mechanism's state space.
+    name : str
+        The number's name (:func:`resolve_axis`).
+
+    Returns
+    -------
+    tuple of float
+        :data:`RPY_RANGES`, ``[−π, π)`` for an angle coordinate, ``[−box, box]`` for
+        another.
+    """
     if name in RPY_RANGES and space.has_orientation:
         return RPY_RANGES[name]
     c = space.coordinates
@@ -92,8 +158,25 @@ def axis_range(space, name: str) -> tuple[float, float]:
 
 
 def resolve_axis(space, name: str) -> str:
-    """``name`` as one of the space's :attr:`~nonholo.spaces.groups.Product.cli_names` (ASCII ``phi``/``theta``/``psi``
-    accepted for the RPY angles); ``BadArgument`` naming ``axes`` otherwise."""
+    """An axis' name as one of the space's :attr:`~nonholo.spaces.groups.Product.cli_names`.
+
+    Parameters
+    ----------
+    space : Product
+        The mechanism's state space.
+    name : str
+        The name (ASCII ``phi``/``theta``/``psi`` accepted for the RPY angles).
+
+    Returns
+    -------
+    str
+        The space's name of that number.
+
+    Raises
+    ------
+    BadArgument
+        Naming ``axes``, if ``name`` is not one of the state's numbers.
+    """
     names = space.cli_names
     if name in names:
         return name
@@ -103,8 +186,20 @@ def resolve_axis(space, name: str) -> str:
 
 
 def states(space, numbers) -> tuple[np.ndarray, np.ndarray]:
-    """The states ``(R, q)`` of command-line numbers ``(N, d)``, vectorised: ``(N, 3, 3)``,
-    ``(N, k)``."""
+    """The states of command-line numbers, vectorised.
+
+    Parameters
+    ----------
+    space : Product
+        The mechanism's state space.
+    numbers : array_like
+        The numbers, shape ``(N, d)``.
+
+    Returns
+    -------
+    tuple of numpy.ndarray
+        ``(R, q)``: shapes ``(N, 3, 3)`` and ``(N, k)``.
+    """
     numbers = np.asarray(numbers, dtype=float).reshape(-1, len(space.cli_names))
     if space.has_orientation:
         R = Rotation.from_euler("ZYX", numbers[:, :3]).as_matrix().reshape(-1, 3, 3)
@@ -114,17 +209,40 @@ def states(space, numbers) -> tuple[np.ndarray, np.ndarray]:
 
 def problems(n: int = 31, psi=None, start=None, mechanism: str = "platform",
              settings=tuple(SETTINGS), options: dict | None = None, *, axes=None, extent=None) -> list[dict]:
-    """The problems of an atlas (rows of :mod:`nonholo.io.problems`): from ``start`` to every
-    cell centre of an ``n × n`` grid over the goal's numbers ``axes``, for every setting.
+    """The problems of an atlas: from ``start`` to every cell centre of an ``n × n`` grid
+    over the goal's numbers ``axes``, for every setting.
 
-    - ``start``: the start's command-line numbers (RPY angles in rad, then the coordinates;
-      default :func:`default_start`); the goal's numbers off the axes are the start's.
-    - ``axes``: two of the space's numbers (default :func:`default_axes`); ``extent``:
-      ``(lo, hi, lo, hi)`` of the two axes (default :func:`axis_range`).
-    - ``psi``: the slices ``ψ = const`` (rad) with an orientation and ``ψ`` off the axes
-      (default: the start's ψ).
+    Parameters
+    ----------
+    n : int
+        Cells per axis, ``≥ 2``.
+    psi : sequence of float, optional
+        The slices ``ψ = const`` (rad), with an orientation and ``ψ`` off the axes
+        (default: the start's ψ).
+    start : sequence of float, optional
+        The start's command-line numbers (RPY angles in rad, then the coordinates; default
+        :func:`default_start`); the goal's numbers off the axes are the start's.
+    mechanism : str
+        The mechanism's name.
+    settings : sequence of str
+        Keys of :data:`SETTINGS`.
+    options : dict, optional
+        Options of :func:`nonholo.plan` for every problem (a setting's own win).
+    axes : sequence of str, optional
+        Two of the space's numbers (default :func:`default_axes`).
+    extent : sequence of float, optional
+        ``(lo, hi, lo, hi)`` of the two axes (default :func:`axis_range`).
 
-    A bad argument raises :class:`BadArgument` (a ``ValueError``) naming it.
+    Returns
+    -------
+    list of dict
+        Rows of :mod:`nonholo.io.problems`, each labelled with its setting, axes and goal
+        (JSON).
+
+    Raises
+    ------
+    BadArgument
+        A ``ValueError`` naming the bad argument.
     """
     if not isinstance(n, int) or isinstance(n, bool) or n < 2:
         raise BadArgument("n", f"must be an integer >= 2, got {n!r}")
@@ -194,7 +312,18 @@ class Atlas:
     """The grids of one sweep of :func:`problems`: per setting and slice, ``n × n`` arrays of
     the outcome (``"solved"``/``"failed"``/``"unreachable"``), iterations and seconds;
     ``axes``, ``extent``, ``start`` (command-line numbers), ``slices`` (the ψ of each slice,
-    ``None`` without) and ``goals`` (each slice's goal numbers off the grid's cells)."""
+    ``None`` without) and ``goals`` (each slice's goal numbers off the grid's cells).
+
+    Parameters
+    ----------
+    table : pyarrow.Table or iterable of dict
+        The sweep's results (:func:`nonholo.batch.sweep.sweep`).
+
+    Raises
+    ------
+    ValueError
+        If the results hold no atlas problems.
+    """
 
     def __init__(self, table):
         rows = table.to_pylist() if hasattr(table, "to_pylist") else list(table)
@@ -240,16 +369,47 @@ class Atlas:
             self.seconds[idx] = r["seconds"]
 
     def count(self, setting: str, outcome: str) -> int:
+        """The number of goals of an outcome for a setting, over every slice.
+
+        Parameters
+        ----------
+        setting : str
+            One of the atlas's ``settings``.
+        outcome : {"solved", "failed", "unreachable"}
+            The outcome.
+
+        Returns
+        -------
+        int
+            The count.
+        """
         return int(np.sum(self.outcome[self.settings.index(setting)] == outcome))
 
     def holds_start(self, k: int) -> bool:
-        """Whether slice ``k`` passes through the start (its goals off the axes are the start's)."""
+        """Whether a slice passes through the start (its goals off the axes are the start's).
+
+        Parameters
+        ----------
+        k : int
+            The slice.
+
+        Returns
+        -------
+        bool
+            Whether it does.
+        """
         names = self.space.cli_names
         off = [c for c, name in enumerate(names) if name not in self.axes]
         return all(abs(self.goals[k][c] - self.start[c]) < 1e-12 for c in off)
 
     def describe_start(self) -> str:
-        """The start in words: ``RPY(φ, ϑ, ψ)`` and/or ``(x, y, …) = (…)``."""
+        """The start in words.
+
+        Returns
+        -------
+        str
+            ``RPY(φ, ϑ, ψ)`` and/or ``(x, y, …) = (…)``.
+        """
         space, numbers = self.space, self.start
         parts = []
         if space.has_orientation:
@@ -260,7 +420,20 @@ class Atlas:
         return ", ".join(parts)
 
     def singular_values(self, k: int, x, y) -> np.ndarray:
-        """``Δ`` over the arrays ``x``, ``y`` of the two axes in slice ``k``."""
+        """``Δ`` over the goals of a slice.
+
+        Parameters
+        ----------
+        k : int
+            The slice.
+        x, y : numpy.ndarray
+            Values of the two axes, of one shape.
+
+        Returns
+        -------
+        numpy.ndarray
+            ``Δ``, of their shape.
+        """
         names = self.space.cli_names
         numbers = np.broadcast_to(np.asarray(self.goals[k], dtype=float), x.shape + (len(names),)).copy()
         numbers[..., names.index(self.axes[0])] = x
@@ -279,8 +452,26 @@ def _axis_text(space, name: str) -> str:
 
 
 def atlas_figure(table, quantity: str = "success") -> Figure:
-    """The atlas of a sweep of :func:`problems` (a ``pyarrow.Table`` or rows): one panel per
-    setting (columns) and slice (rows), coloured by ``quantity`` (:data:`QUANTITIES`)."""
+    """The atlas of a sweep of :func:`problems`: one panel per setting (columns) and slice
+    (rows).
+
+    Parameters
+    ----------
+    table : pyarrow.Table or iterable of dict
+        The sweep's results.
+    quantity : str
+        What colours the cells, one of :data:`QUANTITIES`.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The figure.
+
+    Raises
+    ------
+    ValueError
+        For an unknown ``quantity``, or results that hold no atlas problems.
+    """
     if quantity not in QUANTITIES:
         raise ValueError(f"unknown quantity {quantity!r}; known: {', '.join(QUANTITIES)}")
     atlas = Atlas(table)

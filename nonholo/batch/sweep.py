@@ -99,9 +99,22 @@ class SweepBusy(RuntimeError):
 
 
 def solve(index: int, row: dict) -> dict:
-    """Plan one problem (a JSON row of :mod:`nonholo.io.problems`, any mechanism, already
-    checked by :func:`sweep`) with its mechanism: its results row. An exception is recorded
-    in ``error``."""
+    """Plan one problem with its mechanism.
+
+    Parameters
+    ----------
+    index : int
+        The problem's row, from 0.
+    row : dict
+        A JSON row of :mod:`nonholo.io.problems` (any mechanism), already checked by
+        :func:`sweep`.
+
+    Returns
+    -------
+    dict
+        Its results row (:data:`SCHEMA`'s columns); an exception the plan raised is
+        recorded in ``error``.
+    """
     from ..planning.api import plan
 
     problem = problem_table.check_row(row, index, allow_imports=True)
@@ -123,15 +136,37 @@ def solve(index: int, row: dict) -> dict:
 
 
 def problem_json(row: dict) -> str:
-    """The ``problem`` column of a JSON row (canonical JSON)."""
+    """The ``problem`` column of a JSON row.
+
+    Parameters
+    ----------
+    row : dict
+        A JSON row of :mod:`nonholo.io.problems`.
+
+    Returns
+    -------
+    str
+        The row as canonical JSON.
+    """
     return json.dumps(row, separators=(",", ":"), sort_keys=True)
 
 
 def solve_batch(batch: list[tuple[int, dict]]) -> list[dict]:
-    """:func:`solve` on every ``(index, row)`` of ``batch`` (the unit of work of a worker),
-    with the BLAS libraries held to one thread: the workers are the parallelism (a planner's
-    small matrices gain nothing from BLAS threads, which only take cores from the other
-    workers)."""
+    """:func:`solve` on every problem of a batch (the unit of work of a worker), with the
+    BLAS libraries held to one thread: the workers are the parallelism (a planner's small
+    matrices gain nothing from BLAS threads, which only take cores from the other
+    workers).
+
+    Parameters
+    ----------
+    batch : list of tuple
+        ``(index, row)`` pairs.
+
+    Returns
+    -------
+    list of dict
+        Their results rows.
+    """
     from threadpoolctl import threadpool_limits
 
     with threadpool_limits(limits=1, user_api="blas"):
@@ -139,26 +174,59 @@ def solve_batch(batch: list[tuple[int, dict]]) -> list[dict]:
 
 
 def solve_and_keep(batch: list[tuple[int, dict]], parts: str) -> list[int]:
-    """:func:`solve_batch`, its rows written as a part in the directory ``parts`` by the
-    worker itself (the parent then handles no plan); returns the indices done."""
+    """:func:`solve_batch`, its rows written as a part by the worker itself (the parent then
+    handles no plan).
+
+    Parameters
+    ----------
+    batch : list of tuple
+        ``(index, row)`` pairs.
+    parts : str
+        The parts directory (:func:`write_part`).
+
+    Returns
+    -------
+    list of int
+        The indices done.
+    """
     rows = solve_batch(batch)
     write_part(rows, Path(parts))
     return [r["index"] for r in rows]
 
 
 def plan_of(row) -> PlanResult | None:
-    """The :class:`~nonholo.io.result.PlanResult` of a results row (a dict, or the ``plan``
-    JSON text), checked like a plan file; ``None`` for a problem that raised."""
+    """The plan of a results row, checked like a plan file.
+
+    Parameters
+    ----------
+    row : dict or str
+        A results row, or its ``plan`` JSON text.
+
+    Returns
+    -------
+    PlanResult or None
+        The :class:`~nonholo.io.result.PlanResult`; ``None`` for a problem that raised.
+    """
     text = row["plan"] if isinstance(row, dict) else row
     return None if text is None else PlanResult.from_dict(json.loads(text))
 
 
 # -- checking the table --------------------------------------------------------------------------
 def check_options(problems: list[dict]) -> None:
-    """Every checked problem (:func:`nonholo.io.problems.check`) built as :func:`nonholo.plan`
-    builds it (:meth:`~nonholo.planning.problem.Problem.build`: its options, and its start
-    and goal against them), nothing planned; ``ValueError`` naming the first bad row and
-    the option (or ``start``/``goal``)."""
+    """Every problem built as :func:`nonholo.plan` builds it
+    (:meth:`~nonholo.planning.problem.Problem.build`: its options, and its start and goal
+    against them), nothing planned.
+
+    Parameters
+    ----------
+    problems : list of dict
+        Checked problems (:func:`nonholo.io.problems.check`).
+
+    Raises
+    ------
+    ValueError
+        Naming the first bad row and the option (or ``start``/``goal``).
+    """
     from ..planning.problem import Problem
 
     for i, p in enumerate(problems):
@@ -179,13 +247,35 @@ def _column_of(message: str, options: dict) -> str:
 
 # -- files ------------------------------------------------------------------------------------
 def parts_dir(out: Path) -> Path:
-    """Where a running sweep keeps its finished batches."""
+    """Where a running sweep keeps its finished batches.
+
+    Parameters
+    ----------
+    out : pathlib.Path
+        The results file.
+
+    Returns
+    -------
+    pathlib.Path
+        ``RESULTS.parts`` beside it.
+    """
     out = Path(out)
     return out.with_name(out.name + ".parts")
 
 
 def lock_path(out: Path) -> Path:
-    """The lock file of a sweep writing ``out``."""
+    """The lock file of a sweep.
+
+    Parameters
+    ----------
+    out : pathlib.Path
+        The results file.
+
+    Returns
+    -------
+    pathlib.Path
+        ``RESULTS.lock`` beside it.
+    """
     out = Path(out)
     return out.with_name(out.name + ".lock")
 
@@ -225,8 +315,20 @@ def _table(rows: list[dict], metadata: dict | None = None) -> pa.Table:
 
 
 def write_part(rows: list[dict], parts: Path) -> Path:
-    """``rows`` as one part of a running sweep: written in full, then renamed to
-    ``part-<first index>-<SHA-256 of its bytes>.parquet`` (see the module)."""
+    """Rows as one part of a running sweep: written in full, then renamed (see the module).
+
+    Parameters
+    ----------
+    rows : list of dict
+        Results rows.
+    parts : pathlib.Path
+        The parts directory.
+
+    Returns
+    -------
+    pathlib.Path
+        The part, ``part-<first index>-<SHA-256 of its bytes>.parquet``.
+    """
     tmp = parts / f".part-{secrets.token_hex(6)}.tmp"
     try:
         pq.write_table(_table(rows), tmp)
@@ -239,8 +341,19 @@ def write_part(rows: list[dict], parts: Path) -> Path:
 
 
 def checksum(table: pa.Table) -> str:
-    """The SHA-256 of ``table``'s rows: every column of :data:`SCHEMA`, in order, as JSON
-    (floats exactly, by their shortest repr); independent of the file's layout and metadata."""
+    """The SHA-256 of a results table's rows, independent of the file's layout and metadata.
+
+    Parameters
+    ----------
+    table : pyarrow.Table
+        Results with :data:`SCHEMA`'s columns.
+
+    Returns
+    -------
+    str
+        The hex digest of every column, in order, as JSON (floats exactly, by their
+        shortest repr).
+    """
     h = hashlib.sha256()
     for name in SCHEMA.names:
         h.update(name.encode() + b"\0")
@@ -454,8 +567,25 @@ def _output(out) -> Path:
 
 # -- running -----------------------------------------------------------------------------------
 def batches(todo: list[int], rows: list[dict], workers: int, size: int | None = None) -> list[list[tuple[int, dict]]]:
-    """``todo`` cut into batches of ``size`` problems (default: at most :data:`MAX_BATCH`,
-    small enough that every worker gets several)."""
+    """Problems cut into batches.
+
+    Parameters
+    ----------
+    todo : list of int
+        The indices of the problems to plan.
+    rows : list of dict
+        Every problem's JSON row.
+    workers : int
+        The number of workers.
+    size : int, optional
+        Problems per batch (default: at most :data:`MAX_BATCH`, small enough that every
+        worker gets several).
+
+    Returns
+    -------
+    list of list of tuple
+        The batches of ``(index, row)`` pairs.
+    """
     if size is None:
         size = max(1, min(MAX_BATCH, math.ceil(len(todo) / (4 * max(1, workers)))))
     return [[(i, rows[i]) for i in todo[k:k + size]] for k in range(0, len(todo), size)]
@@ -468,23 +598,50 @@ def _positive(value, name: str) -> None:
 
 def sweep(problems, out, *, workers: int | None = None, client=None, scheduler: str | None = None,
           progress: bool = True, batch: int | None = None, allow_imports: bool = False) -> pa.Table:
-    """Plan every problem of ``problems`` (a JSON Lines path or a list of dicts, see
-    :mod:`nonholo.io.problems`) and write the results to the Parquet file ``out`` (see the
-    module); returns them as a ``pyarrow.Table``.
+    """Plan every problem and write the results to a Parquet file (see the module).
 
-    ``workers``: local processes (default ``os.cpu_count()``; ``1``: in this process);
-    ``client`` / ``scheduler``: run on a Dask distributed cluster instead (a
-    ``distributed.Client``, or the scheduler's address, e.g. ``"tcp://127.0.0.1:8786"``);
-    ``progress``: a progress bar on standard error; ``batch``: problems per unit of work
-    (each written as it finishes; default: chosen from the number of problems and workers,
-    at most :data:`MAX_BATCH`); ``allow_imports``: let a row name its strategy by import
-    path (``"package.module:Class"``, imported — its code run — in this process and the
-    workers); without it such a row is refused before anything is imported.
+    Finished results of the same problems at ``out`` are returned (checked against their
+    checksum).
 
-    Bad arguments raise ``ValueError``/``TypeError`` naming them, bad problems ``ValueError``
-    naming the row and column (the option), before anything runs; another sweep running on
-    ``out`` raises :class:`SweepBusy`; finished results of the same problems are returned
-    (checked against their checksum; a damaged file raises ``ValueError``).
+    Parameters
+    ----------
+    problems : str, os.PathLike or list of dict
+        A JSON Lines path or a list of dicts, see :mod:`nonholo.io.problems`.
+    out : str or os.PathLike
+        The results file.
+    workers : int, optional
+        Local processes (default ``os.cpu_count()``; ``1``: in this process).
+    client : distributed.Client, optional
+        Run on this Dask distributed cluster instead.
+    scheduler : str, optional
+        Or on the cluster of this scheduler's address, e.g. ``"tcp://127.0.0.1:8786"``.
+    progress : bool
+        A progress bar on standard error.
+    batch : int, optional
+        Problems per unit of work, each written as it finishes (default: chosen from the
+        number of problems and workers, at most :data:`MAX_BATCH`).
+    allow_imports : bool
+        Let a row name its strategy by import path (``"package.module:Class"``, imported —
+        its code run — in this process and the workers); without it such a row is refused
+        before anything is imported.
+
+    Returns
+    -------
+    pyarrow.Table
+        The results, one row per problem, sorted by ``index``.
+
+    Raises
+    ------
+    ValueError
+        Naming them, for bad arguments; naming the row and column (the option) for bad
+        problems, before anything runs; for an ``out`` that holds other results or is
+        damaged.
+    TypeError
+        Naming them, for arguments of the wrong type.
+    SweepBusy
+        If another sweep is running on ``out``.
+    RuntimeError
+        If problems are still missing after three runs.
     """
     out = _output(out)
     _positive(workers, "workers")
@@ -637,15 +794,41 @@ def _run_dask(todo: list[int], rows: list[dict], keep, client, scheduler, size: 
 
 # -- reading -----------------------------------------------------------------------------------
 def load(path) -> pa.Table:
-    """A finished sweep's results, checked against the checksum written with them
-    (``ValueError`` naming the file if they do not match; a file written before checksums
-    were kept is read as it is)."""
+    """A finished sweep's results, checked against the checksum written with them (a file
+    written before checksums were kept is read as it is).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The results file.
+
+    Returns
+    -------
+    pyarrow.Table
+        The results.
+
+    Raises
+    ------
+    ValueError
+        Naming the file, if it cannot be read or its rows do not match the checksum.
+    """
     return _read_checked(Path(path))
 
 
 def comparable(table: pa.Table) -> list[dict]:
-    """The rows of ``table`` without what differs from run to run (:data:`TIMING`, and the
-    plans' own ``seconds``): two runs of one sweep give equal lists."""
+    """A results table's rows without what differs from run to run.
+
+    Parameters
+    ----------
+    table : pyarrow.Table
+        Results.
+
+    Returns
+    -------
+    list of dict
+        The rows without :data:`TIMING` and the plans' own ``seconds`` (the plans parsed):
+        two runs of one sweep give equal lists.
+    """
     out = []
     for row in table.to_pylist():
         row = {k: v for k, v in row.items() if k not in TIMING}

@@ -60,16 +60,39 @@ SENSITIVITY_AGREEMENT = 0.25
 class Certificate:
     """The physical controls of a plan replayed (see the module).
 
-    ``replay_steps``: CF4 steps of the certified replay ``R_M``; ``terminal_error``:
-    ``|log(R_M(T) R_dᵀ)|`` (rad); ``error_bound``: bound on ``|R(T) − R_M(T)|`` of the exact
-    motion (rad); ``min_delta``: least ``sgn(Δ(R0))·Δ`` over the replay's evaluation points
-    (``None`` without a singular set); ``sensitivity``: ``G``; ``passed``: the plan is
-    certified for the ``tol`` and ``delta_min`` it was measured against; ``reason``: why not;
-    ``correctable``: only the replay's terminal error is too large (the replay is accurate,
-    well conditioned and clear of ``Δ = 0``). ``l``: the replay's ``l_T``; ``R``: its nodes
-    (``M + 1``); ``q``: their coordinates (``(M + 1, k)``); ``errors``: the norms of the
-    parts of ``l`` by name (:meth:`nonholo.spaces.groups.Product.error`). Errors and bounds
-    are in the stacked metric of :mod:`nonholo.spaces.groups`.
+    Errors and bounds are in the stacked metric of :mod:`nonholo.spaces.groups`.
+
+    Parameters
+    ----------
+    replay_steps : int
+        CF4 steps ``M`` of the certified replay ``R_M``.
+    terminal_error : float
+        ``|log(R_M(T) R_dᵀ)|`` (rad).
+    error_bound : float
+        Bound on ``|R(T) − R_M(T)|`` of the exact motion (rad).
+    min_delta : float or None
+        Least ``sgn(Δ(R0))·Δ`` over the replay's evaluation points (``None`` without a
+        singular set).
+    sensitivity : float
+        ``G``.
+    passed : bool
+        The plan is certified for the ``tol`` and ``delta_min`` it was measured against.
+    reason : str
+        Why not.
+    correctable : bool
+        Only the replay's terminal error is too large (the replay is accurate, well
+        conditioned and clear of ``Δ = 0``).
+    l : numpy.ndarray
+        The replay's ``l_T``.
+    R : numpy.ndarray
+        Its nodes (``M + 1``).
+    U : numpy.ndarray, optional
+        Its stage table.
+    q : numpy.ndarray, optional
+        The nodes' coordinates (``(M + 1, k)``).
+    errors : dict, optional
+        The norms of the parts of ``l`` by name
+        (:meth:`nonholo.spaces.groups.Product.error`).
     """
 
     replay_steps: int
@@ -87,9 +110,20 @@ class Certificate:
     errors: dict | None = None
 
     def inputs_at(self, steps: int) -> np.ndarray:
-        """The replayed inputs ``u(t_n)`` at the ``steps + 1`` points ``t_n = nT/steps``
-        (``steps`` dividing :attr:`replay_steps`), from the replay's stage table: each
-        node's start-of-step value, the last step's end value at ``T``."""
+        """The replayed inputs ``u(t_n)`` at the points ``t_n = nT/steps``, from the replay's
+        stage table.
+
+        Parameters
+        ----------
+        steps : int
+            A divisor of ``replay_steps``.
+
+        Returns
+        -------
+        numpy.ndarray
+            ``steps + 1`` rows: each node's start-of-step value, the last step's end value
+            at ``T``.
+        """
         r = self.replay_steps // steps
         return np.concatenate([self.U[::r, 0], self.U[-1:, 2]])
 
@@ -100,21 +134,60 @@ class Certificate:
 
 
 def richardson(fine, coarse, mechanism) -> float:
-    """The error estimate of the ``M``-step endpoint ``fine`` from the ``M/2``-step
-    ``coarse`` (states ``(R, q)``): :data:`SAFETY` times their distance (``|log(R_fine
-    R_coarseᵀ)|`` on SO(3), the stacked error's norm beyond) over 15."""
+    """The error estimate of the ``M``-step endpoint from the ``M/2``-step one.
+
+    Parameters
+    ----------
+    fine, coarse : tuple of numpy.ndarray
+        The endpoints, states ``(R, q)``.
+    mechanism : Mechanism
+        The mechanism (its space's distance).
+
+    Returns
+    -------
+    float
+        :data:`SAFETY` times their distance (``|log(R_fine R_coarseᵀ)|`` on SO(3), the
+        stacked error's norm beyond) over 15.
+    """
     return SAFETY * mechanism.space.distance(*fine, *coarse) / 15.0
 
 
 def sensitivity(R0, par, T: float, mechanism, steps: int, U=None, sign: float | None = None, q0=None):
-    """``(G, R_T)`` on one grid: ``G = max_n |Φ(T, t_n)|_F`` of the physical system along
-    ``par``'s motion (the amplification of a perturbation at ``t_n`` by ``T``; ``inf`` if
-    the variational replay runs into ``Δ = 0``) and the replay's endpoint ``R_T``, from the
-    variational system of the physical inputs (as :func:`nonholo.motion.simulation.variational`)
-    on ``steps`` CF4 steps (``U``: their stage table, if known). The nodes of ``R`` are
-    those of :func:`~nonholo.motion.playback.replay` on the same steps. ``G`` is only as good as the grid resolves
-    ``Φ``, which may take a finer grid than ``R_T`` does: :func:`resolved_sensitivity`.
-    ``Φ`` is that of the stacked variation, ``d × d``, and the endpoint the state ``(R_T, q_T)``.
+    """The sensitivity ``G = max_n |Φ(T, t_n)|_F`` of the physical system along a motion,
+    on one grid.
+
+    From the variational system of the physical inputs (as
+    :func:`nonholo.motion.simulation.variational`); the nodes of ``R`` are those of
+    :func:`~nonholo.motion.playback.replay` on the same steps. ``G`` is only as good as the
+    grid resolves ``Φ``, which may take a finer grid than ``R_T`` does:
+    :func:`resolved_sensitivity`. ``Φ`` is that of the stacked variation, ``d × d``.
+
+    Parameters
+    ----------
+    R0 : array_like
+        The start's orientation.
+    par : Controls or FrameControls
+        The physical inputs.
+    T : float
+        The horizon (s).
+    mechanism : Mechanism
+        The mechanism.
+    steps : int
+        CF4 steps.
+    U : numpy.ndarray, optional
+        Their stage table, if known.
+    sign : float, optional
+        The side of ``Δ = 0`` (default: the start's).
+    q0 : array_like, optional
+        The start's coordinates.
+
+    Returns
+    -------
+    G : float
+        The amplification of a perturbation at ``t_n`` by ``T``; ``inf`` if the
+        variational replay runs into ``Δ = 0``.
+    end : tuple of numpy.ndarray or None
+        The replay's endpoint ``(R_T, q_T)`` (``None`` with an infinite ``G``).
     """
     if U is None:
         U = stages.stage_table(par, steps)
@@ -142,8 +215,18 @@ def sensitivity(R0, par, T: float, mechanism, steps: int, U=None, sign: float | 
 
 
 def agree(G_coarse: float, G_fine: float) -> bool:
-    """Two sensitivities on grids a factor 2 apart agree: within :data:`SENSITIVITY_AGREEMENT`
-    of the larger."""
+    """Whether two sensitivities on grids a factor 2 apart agree.
+
+    Parameters
+    ----------
+    G_coarse, G_fine : float
+        The sensitivities.
+
+    Returns
+    -------
+    bool
+        They are within :data:`SENSITIVITY_AGREEMENT` of the larger.
+    """
     return abs(G_fine - G_coarse) <= SENSITIVITY_AGREEMENT * max(G_fine, G_coarse)
 
 
@@ -157,9 +240,29 @@ def resolved_sensitivity(R0, par, T: float, mechanism, steps: int, U=None, sign:
     ``limit`` (too ill-conditioned either way) or one is infinite, and at
     :data:`MAX_REPLAY_STEPS` (or ``max_steps``).
 
-    ``U``: the stage table of ``2·steps`` steps, if known. Returns ``(G, resolved, grids,
-    R_T)``: the larger of the last two, whether they agree (or exceed ``limit``), the
-    sensitivities by grid, and the endpoint of the ``steps``-step replay.
+    Parameters
+    ----------
+    R0, par, T, mechanism, sign, q0
+        As for :func:`sensitivity`.
+    steps : int
+        CF4 steps of the finer of the first two grids.
+    U : numpy.ndarray, optional
+        The stage table of ``2·steps`` steps, if known.
+    limit : float
+        Stop when both sensitivities exceed it.
+    max_steps : int, optional
+        The finest grid (default :data:`MAX_REPLAY_STEPS`).
+
+    Returns
+    -------
+    G : float
+        The larger of the last two.
+    resolved : bool
+        Whether they agree (or exceed ``limit``).
+    grids : dict of int to float
+        The sensitivities by grid.
+    end : tuple of numpy.ndarray or None
+        The endpoint of the ``steps``-step replay.
     """
     try:
         first = stages.check_steps(par, steps // 2) if steps % 2 == 0 else steps
@@ -193,16 +296,47 @@ _NO_INDEX = np.zeros((0, 3, 0), np.int64)
 def measure(R0, Rd, T: float, mechanism, par, steps: int, tol: float, delta_min: float,
             sign: float = 1.0, G: float | None = None, R_half=None,
             max_steps: int | None = None, leg_limits=None, q0=None, qd=None) -> Certificate:
-    """The certificate of the physical controls ``par`` (see the module): replays on
-    ``steps/2``·2ᵏ and ``steps``·2ᵏ CF4 steps, ``k`` the least with an error estimate
-    below ``ERROR_FRACTION · tol``, or ``k = 0`` when the sensitivity already rules the
-    plan out (infinite, unresolved or too large for ``tol``). ``steps`` must be even and a
-    multiple of the controls' grid and of a :class:`~nonholo.motion.frame_controls.FrameControls`' steps.
-    ``G``: the sensitivity, ``R_half``: the endpoint of the ``steps/2`` replay, if already
-    known; ``max_steps``: the finest replay (default :data:`MAX_REPLAY_STEPS`);
-    ``leg_limits``: stroke limits (:class:`~nonholo.model.limits.LegLimits`) every node of the
-    replay must keep. ``q0``, ``qd``: the start's and goal's coordinates (``R_half`` is the
-    state ``(R, q)``)."""
+    """The certificate of physical controls (see the module): replays on ``steps/2``·2ᵏ and
+    ``steps``·2ᵏ CF4 steps, ``k`` the least with an error estimate below ``ERROR_FRACTION ·
+    tol``, or ``k = 0`` when the sensitivity already rules the plan out (infinite,
+    unresolved or too large for ``tol``).
+
+    Parameters
+    ----------
+    R0, Rd : array_like
+        The start's and the goal's orientations.
+    T : float
+        The horizon (s).
+    mechanism : Mechanism
+        The mechanism.
+    par : Controls or FrameControls
+        The physical inputs.
+    steps : int
+        Even, and a multiple of the controls' grid and of a
+        :class:`~nonholo.motion.frame_controls.FrameControls`' steps.
+    tol : float
+        The goal's tolerance (stacked metric).
+    delta_min : float
+        The clearance from ``Δ = 0`` the replay must keep.
+    sign : float
+        The side of ``Δ = 0`` the motion keeps to.
+    G : float, optional
+        The sensitivity, if already known.
+    R_half : tuple of numpy.ndarray, optional
+        The endpoint ``(R, q)`` of the ``steps/2`` replay, if already known.
+    max_steps : int, optional
+        The finest replay (default :data:`MAX_REPLAY_STEPS`).
+    leg_limits : LegLimits, optional
+        Stroke limits (:class:`~nonholo.model.limits.LegLimits`) every node of the replay
+        must keep.
+    q0, qd : array_like, optional
+        The start's and the goal's coordinates.
+
+    Returns
+    -------
+    Certificate
+        The certificate, ``passed`` or with the ``reason`` why not.
+    """
     singular = mechanism.singular
     q0 = np.ascontiguousarray(NO_COORDINATES if q0 is None else q0, dtype=float)
     qd = NO_COORDINATES if qd is None else qd

@@ -63,15 +63,36 @@ SPEED_RTOL = 1e-6
 
 
 def check(result, legacy: bool = False) -> None:
-    """Check ``result`` (an object with the fields of :class:`~nonholo.io.result.PlanResult`
-    and its ``hops``), as :meth:`~nonholo.io.result.PlanResult.validate` describes;
-    ``legacy``: it was read from a file of format ``nonholo.plan/1`` (no certificates).
-    ``ValueError`` naming the field otherwise."""
+    """Check a plan result, as :meth:`~nonholo.io.result.PlanResult.validate` describes.
+
+    Parameters
+    ----------
+    result : PlanResult
+        An object with the fields of :class:`~nonholo.io.result.PlanResult` and its
+        ``hops``.
+    legacy : bool
+        It was read from a file of format ``nonholo.plan/1`` (no certificates).
+
+    Raises
+    ------
+    ValueError
+        Naming the field, for a result that fails a check.
+    """
     PlanChecks(result, legacy).run()
 
 
 class PlanChecks:
-    """The checks of one plan result: its fields, then its numbers against its controls."""
+    """The checks of one plan result: its fields, then its numbers against its controls.
+
+    Each check raises ``ValueError`` naming the field it fails on.
+
+    Parameters
+    ----------
+    result : PlanResult
+        As for :func:`check`.
+    legacy : bool
+        As for :func:`check`.
+    """
 
     def __init__(self, result, legacy: bool = False):
         self.r = result
@@ -79,6 +100,7 @@ class PlanChecks:
         self.legacy = legacy
 
     def run(self) -> None:
+        """Every check, in order (:func:`check`)."""
         r = self.r
         self.scalars()
         mech = self.labels()
@@ -98,6 +120,7 @@ class PlanChecks:
 
     # -- field by field --------------------------------------------------------------------
     def scalars(self) -> None:
+        """The scalar fields' types and ranges, ``history`` and ``options``."""
         r = self.r
         if not isinstance(r.success, (bool, np.bool_)):
             fail("success", f"must be true or false, got {json_type(r.success)}")
@@ -135,7 +158,13 @@ class PlanChecks:
         scan_finite(r.options, "options")
 
     def labels(self):
-        """The mechanism; ``method``, ``strategy``, ``T``, ``steps``, ``R0`` against the controls."""
+        """The mechanism; ``method``, ``strategy``, ``T``, ``steps``, ``R0`` against the controls.
+
+        Returns
+        -------
+        Mechanism
+            The plan's mechanism.
+        """
         r = self.r
         mech = getattr(r, "kinematics", None)
         if mech is None:
@@ -190,7 +219,15 @@ class PlanChecks:
 
     def retimed(self, par: Retimed, mech) -> None:
         """Re-timed controls: of a certified success's path, from its ``R0``, of its
-        mechanism, under the ``leg_speed`` the options record."""
+        mechanism, under the ``leg_speed`` the options record.
+
+        Parameters
+        ----------
+        par : Retimed
+            The controls.
+        mech : Mechanism
+            The plan's mechanism.
+        """
         r = self.r
         if r.replay_steps is None:
             fail("controls", "are re-timed, which only the path of a certified plan can be")
@@ -204,7 +241,21 @@ class PlanChecks:
 
     def piece(self, par, mech, where: str, steps: int | None, R0) -> None:
         """One piece of physical controls against the plan's ``method``, ``strategy``,
-        ``mechanism`` (and ``steps``, ``R0``, when the piece is the whole plan)."""
+        ``mechanism`` (and ``steps``, ``R0``, when the piece is the whole plan).
+
+        Parameters
+        ----------
+        par : Controls or FrameControls
+            The piece.
+        mech : Mechanism
+            The plan's mechanism.
+        where : str
+            The field holding it, for messages.
+        steps : int or None
+            The plan's ``steps`` (``None``: a piece of a stitched route).
+        R0 : numpy.ndarray or None
+            The plan's ``R0`` (``None``: a piece of a stitched route).
+        """
         r = self.r
         frame = isinstance(par, FrameControls)
         inner = par.frame if frame else par
@@ -227,7 +278,18 @@ class PlanChecks:
             fail("steps", f"({steps}) must be a multiple of the controls' grid ({inner.grid})")
 
     def arrays(self, mech) -> int:
-        """Shapes and finiteness of ``R0``, ``Rd``, ``t``, ``R``, ``u``, ``delta``; returns ``n``."""
+        """Shapes and finiteness of ``R0``, ``Rd``, ``t``, ``R``, ``u``, ``delta``.
+
+        Parameters
+        ----------
+        mech : Mechanism
+            The plan's mechanism.
+
+        Returns
+        -------
+        int
+            ``n``, the number of samples.
+        """
         r = self.r
         for key in ("R0", "Rd"):
             rotation_field(getattr(r, key), key)
@@ -311,7 +373,15 @@ class PlanChecks:
         physical inputs on ``replay_steps`` steps (:func:`nonholo.motion.playback.replay`), whose
         Richardson estimate ``error_bound`` must cover; otherwise by the integrator that
         planned them, the physical system's for controls of ``u``, the frame system's for
-        frame controls."""
+        frame controls.
+
+        Parameters
+        ----------
+        mech : Mechanism
+            The plan's mechanism.
+        n : int
+            The number of samples.
+        """
         r = self.r
         par = r.parametrisation
         if isinstance(par, Retimed):
@@ -373,7 +443,17 @@ class PlanChecks:
             self.end_error = float(mech.space.norm(parts))
 
     def values(self, mech, n: int, complete: bool) -> None:
-        """``u``, ``delta``, ``terminal_error``, ``min_delta`` and ``success`` against the samples."""
+        """``u``, ``delta``, ``terminal_error``, ``min_delta`` and ``success`` against the samples.
+
+        Parameters
+        ----------
+        mech : Mechanism
+            The plan's mechanism.
+        n : int
+            The number of samples.
+        complete : bool
+            Whether the trajectory reaches ``T``.
+        """
         r = self.r
         u = np.asarray(r.parametrisation(r.t), dtype=float).reshape(n, mech.n_inputs)
         dev = np.max(np.abs(u - r.u))
@@ -422,7 +502,15 @@ class PlanChecks:
         sensitivity is one the certificate accepts for ``tol``, the replay keeps
         ``delta_min`` and the stroke, and the samples keep ``leg_speed``. A file of format
         ``nonholo.plan/1`` (no certificate recorded) is certified here as the planner
-        certifies a plan (:func:`nonholo.certify.certificate.measure`): the same standard."""
+        certifies a plan (:func:`nonholo.certify.certificate.measure`): the same standard.
+
+        Parameters
+        ----------
+        mech : Mechanism
+            The plan's mechanism.
+        complete : bool
+            Whether the trajectory reaches ``T``.
+        """
         r = self.r
         if not complete:
             fail("success", f"is true, but the trajectory stops at t = {r.t[-1]:.6g} s < T")
@@ -470,7 +558,19 @@ class PlanChecks:
     def legacy_certificate(self, mech, tol: float, dmin: float, limits) -> None:
         """A success read from a file of format ``nonholo.plan/1``: its physical controls
         certified now, as :func:`nonholo.plan` certifies a plan, for the file's ``tol``,
-        ``delta_min`` and stroke."""
+        ``delta_min`` and stroke.
+
+        Parameters
+        ----------
+        mech : Mechanism
+            The plan's mechanism.
+        tol : float
+            The plan's ``tol``.
+        dmin : float
+            Its ``delta_min``.
+        limits : LegLimits or None
+            Its stroke limits.
+        """
         r = self.r
         par = r.parametrisation
         steps = r.steps if r.steps % 2 == 0 else 2 * r.steps

@@ -64,6 +64,13 @@ def _mechanisms(args) -> int:
 
 
 def build_parser() -> argparse.ArgumentParser:
+    """The command line's parser, one subcommand per command.
+
+    Returns
+    -------
+    argparse.ArgumentParser
+        The parser; each subcommand sets ``func``, the function that runs it.
+    """
     parser = argparse.ArgumentParser(
         prog="nonholo", description="Motion planning of non-holonomic systems on SO(3).")
     sub = parser.add_subparsers(dest="command", required=True)
@@ -89,6 +96,18 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv: list[str] | None = None) -> int:
+    """Run ``nonholo`` with the arguments ``argv``.
+
+    Parameters
+    ----------
+    argv : list of str, optional
+        The arguments (default: the process's).
+
+    Returns
+    -------
+    int
+        The exit status.
+    """
     args = build_parser().parse_args(argv)
     try:
         return args.func(args)

@@ -25,7 +25,18 @@ def _role_text(match: re.Match) -> str:
 
 
 def plain(doc: str) -> str:
-    """``doc`` (reST) as plain text for ``argparse`` (see the module)."""
+    """A reST docstring as plain text for ``argparse`` (see the module).
+
+    Parameters
+    ----------
+    doc : str
+        The docstring.
+
+    Returns
+    -------
+    str
+        The text.
+    """
     text = _ROLE.sub(_role_text, doc)
     text = _LITERAL.sub(r"\1", text)
     return _LITERAL_BLOCK.sub(r"\1:", text)

@@ -5,6 +5,13 @@ import os
 
 
 def add_parser(subparsers) -> None:
+    """Add ``nonholo reproduce``.
+
+    Parameters
+    ----------
+    subparsers : argparse._SubParsersAction
+        The subcommands of the ``nonholo`` parser.
+    """
     p = subparsers.add_parser(
         "reproduce", help="check the derivation, audit, solve the examples, write paper_figures/")
     p.add_argument("--out", default="paper_figures", help="output directory (default: paper_figures)")
@@ -14,6 +21,18 @@ def add_parser(subparsers) -> None:
 
 
 def run(args) -> int:
+    """Run ``nonholo reproduce`` (:func:`nonholo.paper.reproduce.run`).
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed arguments.
+
+    Returns
+    -------
+    int
+        The exit status.
+    """
     os.environ.setdefault("MPLBACKEND", "Agg")
     from ..paper.reproduce import run as _run
     return _run(args.out, audit=not args.no_audit, draw=not args.no_figures)

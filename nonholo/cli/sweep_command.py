@@ -36,6 +36,13 @@ from .help_text import plain
 
 
 def add_parsers(subparsers) -> None:
+    """Add ``nonholo sweep`` and ``nonholo atlas``.
+
+    Parameters
+    ----------
+    subparsers : argparse._SubParsersAction
+        The subcommands of the ``nonholo`` parser.
+    """
     p = subparsers.add_parser("sweep", help="plan every problem of a JSON Lines file, in parallel, into Parquet",
                               description=plain(__doc__), formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("problems", help="JSON Lines file: one problem per line (start, goal, mechanism, options)")
@@ -83,6 +90,18 @@ def _error(message: str) -> int:
 
 
 def run_sweep(args) -> int:
+    """Run ``nonholo sweep`` (:func:`nonholo.batch.sweep.sweep`).
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed arguments.
+
+    Returns
+    -------
+    int
+        The exit status: 0 done, 2 bad input (the error on standard error).
+    """
     from ..batch.sweep import SweepBusy, sweep
 
     try:
@@ -99,6 +118,18 @@ def run_sweep(args) -> int:
 
 
 def run_atlas(args) -> int:
+    """Run ``nonholo atlas``: write an atlas's problems, or draw the maps of their sweep.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed arguments.
+
+    Returns
+    -------
+    int
+        The exit status: 0 done, 2 bad input (the error on standard error).
+    """
     from ..batch import atlas
     from .. import viz
 

@@ -27,7 +27,18 @@ from ..numerics.checks import check_count, check_time, check_times
 
 
 class Controls(ABC):
-    """A control ``u(t)`` on ``[0, T]`` given by a flat parameter vector ``params``."""
+    """A control ``u(t)`` on ``[0, T]`` given by a flat parameter vector ``params``.
+
+    Parameters
+    ----------
+    T : float
+        The horizon (s).
+
+    Raises
+    ------
+    ValueError
+        If ``T`` is not a positive finite time.
+    """
 
     kind: str = ""
 
@@ -50,7 +61,23 @@ class Controls(ABC):
         """``m``, the number of inputs."""
 
     def with_params(self, params) -> "Controls":
-        """The same parametrisation with parameters ``params`` (a new object)."""
+        """The same parametrisation with other parameters.
+
+        Parameters
+        ----------
+        params : array_like
+            The flat parameter vector ``λ``, of the size of :attr:`params`.
+
+        Returns
+        -------
+        Controls
+            A new object.
+
+        Raises
+        ------
+        ValueError
+            If ``params`` has the wrong size or is not finite.
+        """
         p = np.array(params, dtype=float)
         if p.size != self._flat.size:
             raise ValueError(f"expected {self._flat.size} parameters, got {p.size}")
@@ -72,12 +99,24 @@ class Controls(ABC):
 
     @abstractmethod
     def metric(self) -> np.ndarray:
-        """Diagonal of the L2 Gram matrix: ``∫_0^T |u|² dt = Σ metric_k λ_k²``."""
+        """Diagonal of the L2 Gram matrix: ``∫_0^T |u|² dt = Σ metric_k λ_k²``.
+
+        Returns
+        -------
+        numpy.ndarray
+            ``metric``, of the size of :attr:`params`.
+        """
 
     # -- description -------------------------------------------------------------------
     @abstractmethod
     def to_dict(self) -> dict:
-        """A JSON-able description (``kind``, ``T``, parameters) for :func:`from_dict`."""
+        """A JSON-able description for :func:`from_dict`.
+
+        Returns
+        -------
+        dict
+            ``kind``, ``T`` and the parameters.
+        """
 
     def __eq__(self, other) -> bool:
         return (type(self) is type(other) and self.T == other.T
@@ -93,7 +132,22 @@ class Controls(ABC):
 
 
 def fourier_basis(t, T: float, K: int) -> np.ndarray:
-    """``φ(t) = (1, sin ωt, cos ωt, …, sin Kωt, cos Kωt)``, shape ``(n, 2K+1)``."""
+    """``φ(t) = (1, sin ωt, cos ωt, …, sin Kωt, cos Kωt)``, ``ω = 2π/T``.
+
+    Parameters
+    ----------
+    t : array_like
+        Times, shape ``(n,)``.
+    T : float
+        The period (s).
+    K : int
+        The number of harmonics.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``φ(t)``, shape ``(n, 2K+1)``.
+    """
     t = np.asarray(t, dtype=float)
     w = 2.0 * np.pi / T
     kwt = np.multiply.outer(t, w * np.arange(1, K + 1))
@@ -107,7 +161,18 @@ def fourier_basis(t, T: float, K: int) -> np.ndarray:
 class Fourier(Controls):
     """``u_i(t) = λ_i0 + Σ_k λ_i,2k−1 sin kωt + λ_i,2k cos kωt``, ``ω = 2π/T``.
 
-    ``coeffs`` has shape ``(m, 2K+1)``; ``K = harmonics``.
+    Parameters
+    ----------
+    T : float
+        The horizon (s).
+    coeffs : array_like
+        ``coeffs[i] = (λ_i0, λ_i1, λ_i2, …)``, shape ``(m, 2K+1)``; ``K = harmonics ≥ 1``.
+
+    Raises
+    ------
+    ValueError
+        If ``T`` is not a positive finite time, or ``coeffs`` has not that shape or is not
+        finite.
     """
 
     kind = "fourier"
@@ -130,34 +195,73 @@ class Fourier(Controls):
 
     @property
     def harmonics(self) -> int:
+        """``K``, the number of harmonics."""
         return (self.coeffs.shape[1] - 1) // 2
 
     @property
     def n_inputs(self) -> int:
+        """``m``, the number of inputs."""
         return self.coeffs.shape[0]
 
     @property
     def params(self) -> np.ndarray:
+        """The flat parameter vector ``λ``, ``coeffs`` row by row (a copy)."""
         return self.coeffs.ravel().copy()
 
     def __call__(self, t):
         return fourier_basis(check_times(t), self.T, self.harmonics) @ self.coeffs.T
 
     def metric(self) -> np.ndarray:
+        """Diagonal of the L2 Gram matrix: ``T`` for the constant terms, ``T/2`` for the others.
+
+        Returns
+        -------
+        numpy.ndarray
+            ``metric``, of the size of :attr:`params`.
+        """
         w = np.full(self.coeffs.shape, self.T / 2.0)
         w[:, 0] = self.T
         return w.ravel()
 
     def to_dict(self) -> dict:
+        """A JSON-able description for :func:`from_dict`.
+
+        Returns
+        -------
+        dict
+            ``{"kind": "fourier", "T", "harmonics", "coeffs"}``.
+        """
         return {"kind": self.kind, "T": self.T, "harmonics": self.harmonics,
                 "coeffs": self.coeffs.tolist()}
 
     @classmethod
     def fit(cls, func, T: float, harmonics: int, n_inputs: int | None = None) -> "Fourier":
-        """Least-squares (L2) projection of ``func(t) -> (n, m)`` on the K-harmonic basis.
+        """Least-squares (L2) projection of a control on the K-harmonic basis.
 
         Sampled on ``n = 8K + 64`` uniform points: exact for trigonometric polynomials of
         degree below ``n − K`` (no aliasing onto the first K harmonics).
+
+        Parameters
+        ----------
+        func : callable
+            ``func(t) -> (n, m)``, vectorised.
+        T : float
+            The horizon (s).
+        harmonics : int
+            ``K ≥ 1``.
+        n_inputs : int, optional
+            ``m`` expected of ``func``.
+
+        Returns
+        -------
+        Fourier
+            The projection.
+
+        Raises
+        ------
+        ValueError
+            If ``T`` or ``harmonics`` is invalid, or ``func`` gives other than ``n_inputs``
+            inputs.
         """
         T = check_time(T)
         K = check_count(harmonics, "harmonics")
@@ -173,6 +277,22 @@ class Fourier(Controls):
 
     @classmethod
     def zeros(cls, T: float, harmonics: int, n_inputs: int) -> "Fourier":
+        """The zero control.
+
+        Parameters
+        ----------
+        T : float
+            The horizon (s).
+        harmonics : int
+            ``K ≥ 1``.
+        n_inputs : int
+            ``m ≥ 1``.
+
+        Returns
+        -------
+        Fourier
+            ``u ≡ 0``.
+        """
         K = check_count(harmonics, "harmonics")
         return cls(T, np.zeros((check_count(n_inputs, "n_inputs"), 2 * K + 1)))
 
@@ -188,8 +308,21 @@ class Fourier(Controls):
 class PiecewiseConstant(Controls):
     """``u(t) = values[j]`` on ``[t_j, t_{j+1})``, ``t_j = jT/n`` (``n = grid``); ``u(T) = values[-1]``.
 
-    ``values`` has shape ``(grid, m)``. The integrator's step count must be a multiple of
-    ``grid`` so that no step straddles a jump (:func:`nonholo.controls.stages.check_steps`).
+    The integrator's step count must be a multiple of ``grid`` so that no step straddles a
+    jump (:func:`nonholo.controls.stages.check_steps`).
+
+    Parameters
+    ----------
+    T : float
+        The horizon (s).
+    values : array_like
+        ``v_j``, shape ``(grid, m)``.
+
+    Raises
+    ------
+    ValueError
+        If ``T`` is not a positive finite time, or ``values`` has not that shape or is not
+        finite.
     """
 
     kind = "piecewise_constant"
@@ -216,22 +349,37 @@ class PiecewiseConstant(Controls):
 
     @property
     def grid(self) -> int:
+        """``n``, the number of intervals."""
         return self.values.shape[0]
 
     @property
     def n_inputs(self) -> int:
+        """``m``, the number of inputs."""
         return self.values.shape[1]
 
     @property
     def params(self) -> np.ndarray:
+        """The flat parameter vector ``λ``, ``values`` row by row (a copy)."""
         return self.values.ravel().copy()
 
     @property
     def breakpoints(self) -> np.ndarray:
+        """The grid ``t_j = jT/n``, ``j = 0 … n``: where ``u`` may jump."""
         return self._breakpoints
 
     def interval(self, t) -> np.ndarray:
-        """Index ``j`` of the interval ``[t_j, t_{j+1})`` holding ``t`` (clipped to the grid)."""
+        """Index ``j`` of the interval ``[t_j, t_{j+1})`` holding ``t`` (clipped to the grid).
+
+        Parameters
+        ----------
+        t : array_like
+            Times (s).
+
+        Returns
+        -------
+        numpy.ndarray
+            The indices, of the shape of ``t``.
+        """
         j = np.searchsorted(self._breakpoints, np.asarray(t, dtype=float), side="right") - 1
         return np.clip(j, 0, self.grid - 1)
 
@@ -239,14 +387,51 @@ class PiecewiseConstant(Controls):
         return self.values[self.interval(check_times(t))]
 
     def metric(self) -> np.ndarray:
+        """Diagonal of the L2 Gram matrix: each interval's length, once per input.
+
+        Returns
+        -------
+        numpy.ndarray
+            ``metric``, of the size of :attr:`params`.
+        """
         return self._metric
 
     def to_dict(self) -> dict:
+        """A JSON-able description for :func:`from_dict`.
+
+        Returns
+        -------
+        dict
+            ``{"kind": "piecewise_constant", "T", "grid", "values"}``.
+        """
         return {"kind": self.kind, "T": self.T, "grid": self.grid, "values": self.values.tolist()}
 
     @classmethod
     def fit(cls, func, T: float, grid: int, n_inputs: int | None = None) -> "PiecewiseConstant":
-        """Interval means of ``func(t) -> (n, m)`` (5-point Gauss–Legendre per interval)."""
+        """Interval means of a control (5-point Gauss–Legendre per interval).
+
+        Parameters
+        ----------
+        func : callable
+            ``func(t) -> (n, m)``, vectorised.
+        T : float
+            The horizon (s).
+        grid : int
+            ``n ≥ 1``, the number of intervals.
+        n_inputs : int, optional
+            ``m`` expected of ``func``.
+
+        Returns
+        -------
+        PiecewiseConstant
+            The means.
+
+        Raises
+        ------
+        ValueError
+            If ``T`` or ``grid`` is invalid, or ``func`` gives other than ``n_inputs``
+            inputs.
+        """
         T = check_time(T)
         grid = check_count(grid, "grid")
         x, w = np.polynomial.legendre.leggauss(5)
@@ -267,7 +452,23 @@ KINDS: dict[str, type[Controls]] = {Fourier.kind: Fourier, PiecewiseConstant.kin
 
 
 def from_dict(d: dict) -> Controls:
-    """Inverse of :meth:`Controls.to_dict`."""
+    """Inverse of :meth:`Controls.to_dict`.
+
+    Parameters
+    ----------
+    d : dict
+        A description, its ``kind`` a key of ``KINDS``.
+
+    Returns
+    -------
+    Controls
+        The parametrisation.
+
+    Raises
+    ------
+    ValueError
+        For an unknown ``kind`` or invalid parameters.
+    """
     kind = d.get("kind")
     if kind == Fourier.kind:
         return Fourier(d["T"], d["coeffs"])
@@ -280,7 +481,20 @@ def paper_initial(T: float, n_inputs: int = 2, amplitude: float = 0.3):
     """The initial control of the examples: ``u_1 = 0.3 sin ωt``, ``u_2 = 0.3 cos ωt``.
 
     ``ω = 2π/T``. For ``m`` inputs, ``u_{i+1} = 0.3 sin(ωt + iπ/2)`` (``i = 0 … m−1``).
-    Returns a vectorised function ``t (n,) -> (n, m)``.
+
+    Parameters
+    ----------
+    T : float
+        The horizon (s).
+    n_inputs : int
+        ``m``.
+    amplitude : float
+        The amplitude (0.3 in the examples).
+
+    Returns
+    -------
+    callable
+        The control, vectorised: ``t (n,) -> (n, m)``.
     """
     T = check_time(T)
     w = 2.0 * np.pi / T

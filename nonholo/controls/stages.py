@@ -33,13 +33,41 @@ FFT_ABOVE = 6400
 
 
 def stage_times(T: float, steps: int) -> np.ndarray:
-    """The stage times ``t_n + c h`` of ``steps`` steps on ``[0, T]``, shape ``(steps, 3)``."""
+    """The stage times ``t_n + c h`` of ``steps`` steps on ``[0, T]``.
+
+    Parameters
+    ----------
+    T : float
+        The horizon (s).
+    steps : int
+        The number of CF4 steps.
+
+    Returns
+    -------
+    numpy.ndarray
+        The times, shape ``(steps, 3)``.
+    """
     return (np.arange(steps)[:, None] + STAGE_FRACTIONS[None, :]) * (T / steps)
 
 
 @jit
 def stage_values(lam, Bidx, Bval, stride_b, stride_i, m):
-    """The stage table ``U[n, c, i] = Σ_q Bval[n, c, q] λ[Bidx[n, c, q]·stride_b + i·stride_i]``."""
+    """The stage table ``U[n, c, i] = Σ_q Bval[n, c, q] λ[Bidx[n, c, q]·stride_b + i·stride_i]``.
+
+    Parameters
+    ----------
+    lam : numpy.ndarray
+        The flat parameters ``λ``.
+    Bidx, Bval, stride_b, stride_i : numpy.ndarray, numpy.ndarray, int, int
+        The stage basis (:func:`sparse_basis`).
+    m : int
+        The number of inputs.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``U``, shape ``(steps, 3, m)``.
+    """
     N = Bidx.shape[0]
     nq = Bidx.shape[2]
     U = np.zeros((N, 3, m))
@@ -55,7 +83,20 @@ def stage_values(lam, Bidx, Bval, stride_b, stride_i, m):
 
 @jit
 def grid_stage_values(values, out):
-    """Stage table of grid controls: ``out[n, c] = values[n // r]`` (``r = N / grid``)."""
+    """Stage table of grid controls: ``out[n, c] = values[n // r]`` (``r = N / grid``).
+
+    Parameters
+    ----------
+    values : numpy.ndarray
+        The grid's values, shape ``(grid, m)``.
+    out : numpy.ndarray
+        The table to fill, shape ``(N, 3, m)``, ``N`` a multiple of ``grid``.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``out``.
+    """
     g = values.shape[0]
     m = values.shape[1]
     r = out.shape[0] // g
@@ -88,9 +129,27 @@ def _grid_basis(grid: int, steps: int) -> tuple[np.ndarray, np.ndarray]:
 
 
 def check_steps(controls, steps) -> int:
-    """``steps`` if the integrator can take that many steps with ``controls``, else ``ValueError``.
+    """``steps`` if the integrator can take that many steps with ``controls``.
 
     Grid controls need a multiple of the grid, so that no step straddles a jump.
+
+    Parameters
+    ----------
+    controls : Controls
+        The controls (any with a ``grid`` is grid controls).
+    steps : int
+        The number of CF4 steps.
+
+    Returns
+    -------
+    int
+        ``steps``.
+
+    Raises
+    ------
+    ValueError
+        If ``steps`` is not a whole number in ``[1, MAX_STEPS]`` or not a multiple of the
+        grid.
     """
     steps = check_count(steps, "steps", maximum=MAX_STEPS)
     grid = getattr(controls, "grid", None)
@@ -102,12 +161,29 @@ def check_steps(controls, steps) -> int:
 
 
 def sparse_basis(controls, steps: int) -> tuple[np.ndarray, np.ndarray, int, int]:
-    """``(Bidx, Bval, stride_b, stride_i)`` of a :class:`~nonholo.controls.parametrisations.Fourier` or
-    :class:`~nonholo.controls.parametrisations.PiecewiseConstant` control (see the module docstring).
+    """The stage basis of a control linear in its parameters (see the module docstring).
 
-    ``Bidx`` (int64) and ``Bval`` have shape ``(steps, 3, q)``. Grid controls: one entry
-    per stage, the interval's index (so the Jacobian's columns are the ``G_j`` of the
-    nonparametric update).
+    Grid controls: one entry per stage, the interval's index (so the Jacobian's columns
+    are the ``G_j`` of the nonparametric update).
+
+    Parameters
+    ----------
+    controls : Fourier or PiecewiseConstant
+        A :class:`~nonholo.controls.parametrisations.Fourier` or
+        :class:`~nonholo.controls.parametrisations.PiecewiseConstant` control.
+    steps : int
+        The number of CF4 steps (:func:`check_steps`).
+
+    Returns
+    -------
+    tuple
+        ``(Bidx, Bval, stride_b, stride_i)``: ``Bidx`` (int64) and ``Bval`` of shape
+        ``(steps, 3, q)``, the strides ints.
+
+    Raises
+    ------
+    ValueError
+        For other controls, or ``steps`` :func:`check_steps` refuses.
     """
     steps = check_steps(controls, steps)
     if isinstance(controls, Fourier):
@@ -120,9 +196,22 @@ def sparse_basis(controls, steps: int) -> tuple[np.ndarray, np.ndarray, int, int
 
 
 def kernel_basis(controls, steps: int) -> tuple[np.ndarray, np.ndarray, int, int]:
-    """The stage basis in the form the variational kernel contracts fastest: for Fourier
-    series the dense form (empty ``Bidx``, ``Bval`` of shape ``(steps, 3, nb)`` over every
-    index, see :func:`nonholo.integrate.cf4.forward_variational`), else :func:`sparse_basis`."""
+    """The stage basis in the form the variational kernel contracts fastest.
+
+    Parameters
+    ----------
+    controls : Fourier or PiecewiseConstant
+        A control linear in its parameters.
+    steps : int
+        The number of CF4 steps.
+
+    Returns
+    -------
+    tuple
+        ``(Bidx, Bval, stride_b, stride_i)``: for Fourier series the dense form (empty
+        ``Bidx``, ``Bval`` of shape ``(steps, 3, nb)`` over every index, see
+        :func:`nonholo.integrate.cf4.forward_variational`), else :func:`sparse_basis`'s.
+    """
     if isinstance(controls, Fourier):
         steps = check_steps(controls, steps)
         return (_EMPTY_INDEX, _fourier_stage_basis(controls.T, controls.harmonics, steps), 1,
@@ -131,12 +220,24 @@ def kernel_basis(controls, steps: int) -> tuple[np.ndarray, np.ndarray, int, int
 
 
 def stage_table(controls, steps: int) -> np.ndarray:
-    """``U`` of shape ``(steps, 3, m)``: the inputs of ``controls`` at the stage times.
+    """``U``: the inputs of ``controls`` at the stage times.
 
     A parametrisation is evaluated through its stage basis (the same map the kernels
     differentiate; for Fourier series as one dense product); any other input source —
     a motion replay such as :class:`~nonholo.motion.frame_controls.FrameControls` — through its own
     ``stage_table(steps)``.
+
+    Parameters
+    ----------
+    controls : Controls or object
+        A parametrisation, or an input source with a ``stage_table(steps)`` method.
+    steps : int
+        The number of CF4 steps.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``U``, shape ``(steps, 3, m)``.
     """
     if isinstance(controls, Fourier):
         steps = check_steps(controls, steps)
@@ -151,12 +252,26 @@ def stage_table(controls, steps: int) -> np.ndarray:
 
 
 def fourier_stage_values(controls: Fourier, steps: int) -> np.ndarray:
-    """The stage table of the Fourier series ``controls`` by an inverse real FFT: the stage
-    times are the ``2·steps`` points ``j T/(2 steps)`` of a uniform grid of one period (and
-    ``T``, which is ``0`` again), where ``w(t_j) = Σ_k X_k e^{2πi kj/n}/n`` with ``X_0 = n
-    a_0``, ``X_k = (n/2)(b_k − i a_k)`` (``a_k``, ``b_k``: the coefficients of ``sin kωt``,
-    ``cos kωt``). Equal to the stage basis' product up to round-off (``O(ε log n)``
-    relative to the coefficients)."""
+    """The stage table of a Fourier series by an inverse real FFT.
+
+    The stage times are the ``2·steps`` points ``j T/(2 steps)`` of a uniform grid of one
+    period (and ``T``, which is ``0`` again), where ``w(t_j) = Σ_k X_k e^{2πi kj/n}/n``
+    with ``X_0 = n a_0``, ``X_k = (n/2)(b_k − i a_k)`` (``a_k``, ``b_k``: the coefficients
+    of ``sin kωt``, ``cos kωt``). Equal to the stage basis' product up to round-off
+    (``O(ε log n)`` relative to the coefficients).
+
+    Parameters
+    ----------
+    controls : Fourier
+        The series (``2K < 2·steps``).
+    steps : int
+        The number of CF4 steps.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``U``, shape ``(steps, 3, m)``.
+    """
     n = 2 * steps
     c = controls.coeffs                                  # (m, 2K+1): a0, (sin k, cos k)…
     X = np.zeros((c.shape[0], n // 2 + 1), dtype=complex)
@@ -169,11 +284,28 @@ def fourier_stage_values(controls: Fourier, steps: int) -> np.ndarray:
 
 
 def stage_function(controls, steps: int):
-    """``f(params, out) -> out``: the stage table of ``controls``' parametrisation with the
-    flat parameters ``params``, written into ``out`` (shape ``(steps, 3, m)``).
+    """The stage table of ``controls``' parametrisation as a function of its parameters.
 
     Nothing is validated and no object is built per call (``params`` must be a float64
     vector of the right size).
+
+    Parameters
+    ----------
+    controls : Fourier or PiecewiseConstant
+        A control linear in its parameters.
+    steps : int
+        The number of CF4 steps.
+
+    Returns
+    -------
+    callable
+        ``f(params, out) -> out``: the table with the flat parameters ``params``, written
+        into ``out`` (shape ``(steps, 3, m)``).
+
+    Raises
+    ------
+    ValueError
+        For other controls, or ``steps`` :func:`check_steps` refuses.
     """
     steps = check_steps(controls, steps)
     if isinstance(controls, Fourier):
@@ -196,21 +328,58 @@ def stage_function(controls, steps: int):
 
 
 def halve(U: np.ndarray) -> np.ndarray:
-    """The stage table of ``steps/2`` steps from that of ``steps`` (even): every stage time
-    of a coarse step is a node of the fine grid, ``[U[2n, 0], U[2n, 2], U[2n+1, 2]]`` (for
-    grid controls, whose cells hold whole coarse steps, all three are the step's value)."""
+    """The stage table of ``steps/2`` steps from that of ``steps`` (even).
+
+    Every stage time of a coarse step is a node of the fine grid (for grid controls, whose
+    cells hold whole coarse steps, all three are the step's value).
+
+    Parameters
+    ----------
+    U : numpy.ndarray
+        The fine table, shape ``(steps, 3, m)``.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``[U[2n, 0], U[2n, 2], U[2n+1, 2]]``, shape ``(steps/2, 3, m)``.
+    """
     return np.ascontiguousarray(np.stack([U[0::2, 0], U[0::2, 2], U[1::2, 2]], axis=1))
 
 
 class Tabulated:
-    """Inputs known at the stage times of one grid of ``steps`` steps on ``[0, T]``: their
-    stage table ``U`` (``(steps, 3, m)``), for the integrator of that grid."""
+    """Inputs known at the stage times of one grid of ``steps`` steps on ``[0, T]``, for
+    the integrator of that grid.
+
+    Parameters
+    ----------
+    T : float
+        The horizon (s).
+    U : numpy.ndarray
+        Their stage table, shape ``(steps, 3, m)``.
+    """
 
     def __init__(self, T: float, U: np.ndarray):
         self.T = T
         self.U = U
 
     def stage_table(self, steps: int) -> np.ndarray:
+        """The stage table, for the grid it was tabulated on.
+
+        Parameters
+        ----------
+        steps : int
+            The number of CF4 steps.
+
+        Returns
+        -------
+        numpy.ndarray
+            ``U``.
+
+        Raises
+        ------
+        ValueError
+            If ``steps`` is not that of the table.
+        """
         if steps != self.U.shape[0]:
             raise ValueError(f"the inputs are tabulated for {self.U.shape[0]} steps, not {steps}")
         return self.U

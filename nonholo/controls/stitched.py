@@ -34,7 +34,27 @@ from .parametrisations import from_dict as controls_from_dict
 
 
 class Stitched:
-    """Pieces of physical controls re-timed into equal slots of ``[0, T]`` (see the module)."""
+    """Pieces of physical controls re-timed into equal slots of ``[0, T]`` (see the module).
+
+    Parameters
+    ----------
+    T : float
+        The horizon (s).
+    pieces : iterable of Controls or FrameControls
+        The ``k`` pieces, each on its own ``[0, T_i]``, with the same number of inputs.
+    waypoints : array_like
+        The orientations the pieces were planned between, shape ``(k + 1, 3, 3)``.
+    coordinates : array_like, optional
+        The waypoints' coordinates, shape ``(k + 1, n)``, for a mechanism whose state
+        goes beyond SO(3).
+
+    Raises
+    ------
+    ValueError
+        If ``T`` is not a positive finite time, there are no pieces or their inputs
+        differ, a waypoint is not a rotation, or ``waypoints`` or ``coordinates`` has the
+        wrong shape.
+    """
 
     kind = "stitched"
 
@@ -67,10 +87,12 @@ class Stitched:
     # -- the slots ------------------------------------------------------------------------
     @property
     def n_pieces(self) -> int:
+        """``k``, the number of pieces."""
         return len(self.pieces)
 
     @property
     def n_inputs(self) -> int:
+        """``m``, the number of inputs."""
         return self.pieces[0].n_inputs
 
     @property
@@ -104,10 +126,24 @@ class Stitched:
         return self._retimed(t, list(self.pieces))
 
     def planned(self, t):
-        """The pieces' controls in the coordinates they were planned in — the frame
-        coordinates ``w`` of :class:`~nonholo.motion.frame_controls.FrameControls` pieces, ``u`` of the
-        others — re-timed like calling the object (frame systems are driftless too). The
-        initial guess of a re-plan of the whole motion (:func:`nonholo.planning.route.smooth`)."""
+        """The pieces' controls in the coordinates they were planned in, re-timed like
+        calling the object (frame systems are driftless too).
+
+        The initial guess of a re-plan of the whole motion
+        (:func:`nonholo.planning.route.smooth`).
+
+        Parameters
+        ----------
+        t : array_like
+            Times (s), shape ``(n,)`` or a scalar.
+
+        Returns
+        -------
+        numpy.ndarray
+            The frame coordinates ``w`` of
+            :class:`~nonholo.motion.frame_controls.FrameControls` pieces, ``u`` of the
+            others: shape ``(n, m)``, ``(m,)`` for a scalar ``t``.
+        """
         return self._retimed(t, [getattr(p, "frame", p) for p in self.pieces])
 
     def _retimed(self, t, functions):
@@ -125,8 +161,19 @@ class Stitched:
         return u[0] if scalar else u
 
     def stage_table(self, steps: int) -> np.ndarray:
-        """The inputs at the stage times of ``steps`` steps (a multiple of :attr:`grid`):
-        each piece's table of ``steps/k`` steps, scaled by its ``c_i``."""
+        """The inputs at the stage times of ``steps`` steps: each piece's table of
+        ``steps/k`` steps, scaled by its ``c_i``.
+
+        Parameters
+        ----------
+        steps : int
+            The number of CF4 steps, a multiple of :attr:`grid`.
+
+        Returns
+        -------
+        numpy.ndarray
+            ``U``, shape ``(steps, 3, m)``.
+        """
         steps = stages.check_steps(self, steps)
         r = steps // len(self.pieces)
         return np.concatenate([c * stages.stage_table(p, r) for p, c in zip(self.pieces, self._rates())])
@@ -148,6 +195,14 @@ class Stitched:
 
     # -- description ----------------------------------------------------------------------
     def to_dict(self) -> dict:
+        """A JSON-able description for :func:`from_dict`.
+
+        Returns
+        -------
+        dict
+            ``{"kind": "stitched", "T", "pieces", "waypoints"}`` (and ``"coordinates"``
+            if there are some), the pieces by their own ``to_dict``.
+        """
         return {"kind": self.kind, "T": self.T, "pieces": [p.to_dict() for p in self.pieces],
                 "waypoints": self.waypoints.tolist(),
                 **({} if self.coordinates is None else {"coordinates": self.coordinates.tolist()})}
@@ -167,7 +222,26 @@ class Stitched:
 
 
 def from_dict(d: dict, piece_from_dict=controls_from_dict) -> Stitched:
-    """Inverse of :meth:`Stitched.to_dict` (``piece_from_dict`` reads one piece)."""
+    """Inverse of :meth:`Stitched.to_dict`.
+
+    Parameters
+    ----------
+    d : dict
+        The description.
+    piece_from_dict : callable
+        Reads one piece (default
+        :func:`nonholo.controls.parametrisations.from_dict`).
+
+    Returns
+    -------
+    Stitched
+        The control.
+
+    Raises
+    ------
+    ValueError
+        If ``pieces`` is not a list, or the description is otherwise invalid.
+    """
     pieces = d.get("pieces")
     if not isinstance(pieces, list):
         raise ValueError("a stitched control's 'pieces' must be a list")

@@ -29,22 +29,62 @@ file differs from a fresh generation.
 
 
 class Rename(ast.NodeTransformer):
-    """Renames the names in ``names`` (old → new)."""
+    """Renames the names in ``names``.
+
+    Parameters
+    ----------
+    names : dict of str to str
+        Old name → new name.
+    """
 
     def __init__(self, names: dict[str, str]):
         self.names = names
 
     def visit_Name(self, node):
+        """A name, renamed if it is one of ``names``.
+
+        Parameters
+        ----------
+        node : ast.Name
+            The name.
+
+        Returns
+        -------
+        ast.Name
+            The renamed name, or ``node``.
+        """
         if node.id in self.names:
             return ast.copy_location(ast.Name(self.names[node.id], node.ctx), node)
         return node
 
 
 def expand(body: list, functions: dict) -> list:
-    """``body`` with every statement ``a, b = f(...)`` or ``f(...)`` (``f`` in ``functions``)
-    replaced by ``f``'s body: arguments that are names rename the parameters, others are
-    assigned to them first; in the first form ``f`` must end in ``return x, y`` (assigned
-    to ``a, b`` where they differ), in the second it must not return anything."""
+    """Statements with every call of ``functions`` expanded in place.
+
+    Every statement ``a, b = f(...)`` or ``f(...)`` (``f`` in ``functions``) is replaced by
+    ``f``'s body: arguments that are names rename the parameters, others are assigned to
+    them first; in the first form ``f`` must end in ``return x, y`` (assigned to ``a, b``
+    where they differ), in the second it must not return anything.
+
+    Parameters
+    ----------
+    body : list of ast.stmt
+        The statements (nested blocks are expanded too).
+    functions : dict of str to ast.FunctionDef
+        The functions to expand, by name.
+
+    Returns
+    -------
+    list of ast.stmt
+        The expanded statements.
+
+    Raises
+    ------
+    ValueError
+        For a call with keywords or a wrong number of arguments, a call as a statement of
+        a function that returns, or an assigned call of one that does not end in
+        ``return x, y``.
+    """
     out = []
     for stmt in body:
         for field in ("body", "orelse"):
@@ -86,8 +126,14 @@ def expand(body: list, functions: dict) -> list:
 
 
 def cf4_kernels_module() -> str:
-    """``nonholo/generated/cf4_kernels.py``: the kernels of ``nonholo/integrate/cf4.py`` with
-    every call of the functions in :data:`INLINED` expanded in place."""
+    """The source of ``nonholo/generated/cf4_kernels.py``.
+
+    Returns
+    -------
+    str
+        The kernels of ``nonholo/integrate/cf4.py`` with every call of the functions in
+        :data:`INLINED` expanded in place.
+    """
     tree = ast.parse(CF4_SOURCE.read_text())
     defs = {node.name: node for node in tree.body if isinstance(node, ast.FunctionDef)}
     functions = {name: defs[name] for name in INLINED}
@@ -100,14 +146,27 @@ def cf4_kernels_module() -> str:
 
 
 def generated_files() -> dict[str, str]:
-    """File name → source of the integrator's generated modules (in ``nonholo/generated``)."""
+    """The integrator's generated modules (in ``nonholo/generated``).
+
+    Returns
+    -------
+    dict of str to str
+        File name → source.
+    """
     return {"cf4_kernels.py": cf4_kernels_module()}
 
 
 def every_generated_file() -> dict[str, str]:
-    """What ``nonholo derive`` writes into ``nonholo/generated``: the derivations' modules
-    (:func:`derivations.codegen.generated_files`, SymPy: imported when asked for) and the
-    integrator's (:func:`generated_files`)."""
+    """What ``nonholo derive`` writes into ``nonholo/generated``.
+
+    Returns
+    -------
+    dict of str to str
+        File name → source: the derivations' modules
+        (:func:`derivations.codegen.generated_files`, SymPy: imported when asked for), the
+        integrator's (:func:`generated_files`) and the native kernels' C
+        (:func:`native_files`).
+    """
     from derivations import codegen
 
     files = {**codegen.generated_files(), **generated_files()}
@@ -115,8 +174,19 @@ def every_generated_file() -> dict[str, str]:
 
 
 def native_files(files: dict[str, str]) -> dict[str, str]:
-    """The C sources of the native kernels (``native/<mechanism>.c``, ``native/numerics.c``)
-    translated from the generated modules ``files`` (name → source), built by ``pip install``."""
+    """The C sources of the native kernels, built by ``pip install``.
+
+    Parameters
+    ----------
+    files : dict of str to str
+        The generated modules, name → source.
+
+    Returns
+    -------
+    dict of str to str
+        ``native/<mechanism>.c``, ``native/numerics.c`` and ``native/__init__.py``, name →
+        source.
+    """
     import types
 
     from ..numerics import kernels

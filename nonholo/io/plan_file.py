@@ -235,12 +235,32 @@ def _controls(d, mech, where: str = "controls", timed: bool = True) -> Controls 
 
 
 def decode(d, mechanism=None) -> tuple[dict, bool]:
-    """The fields of the plan described by ``d`` (a plan file's object), each checked for its
-    type and shape and the controls rebuilt, as keyword arguments of
-    :class:`~nonholo.io.result.PlanResult` (``kinematics``: ``mechanism``, a
-    :class:`~nonholo.model.mechanism.Mechanism` of the name the file gives, for one that is
-    not in the catalog; by default the catalog's of that name); and whether ``d`` is of format
-    ``nonholo.plan/1`` (no certificates). ``ValueError`` naming the field otherwise."""
+    """The fields of the plan described by a plan file's object, each checked for its type
+    and shape and the controls rebuilt.
+
+    Parameters
+    ----------
+    d : dict
+        The plan file's JSON object.
+    mechanism : Mechanism, optional
+        The :class:`~nonholo.model.mechanism.Mechanism` of the name the file gives, for one
+        that is not in the catalog (by default the catalog's of that name).
+
+    Returns
+    -------
+    fields : dict
+        Keyword arguments of :class:`~nonholo.io.result.PlanResult` (``kinematics``: the
+        mechanism).
+    version_1 : bool
+        Whether ``d`` is of format ``nonholo.plan/1`` (no certificates).
+
+    Raises
+    ------
+    ValueError
+        Naming the field, if ``d`` is not a plan file's object, lacks a field or has one
+        of the wrong type or shape; if ``mechanism`` is not of the file's name, or the
+        catalog does not know the name.
+    """
     if not isinstance(d, dict):
         raise ValueError(f"not a nonholo plan file: expected a JSON object, got {json_type(d)}")
     if d.get("format") not in (FORMAT, FORMAT_2, FORMAT_1):
@@ -322,8 +342,23 @@ def _mechanism(name: str, mechanism):
 
 
 def parse(text: str):
-    """The JSON value of a plan file's ``text`` (an object with a key twice is refused);
-    ``ValueError`` otherwise."""
+    """The JSON value of a plan file's text.
+
+    Parameters
+    ----------
+    text : str
+        The file's text.
+
+    Returns
+    -------
+    object
+        The JSON value.
+
+    Raises
+    ------
+    ValueError
+        If ``text`` is not JSON, is nested too deeply, or has an object with a key twice.
+    """
     try:
         return json.loads(text, object_pairs_hook=_unique_keys)
     except RecursionError:
@@ -333,8 +368,24 @@ def parse(text: str):
 
 
 def read(path):
-    """The JSON value in the file ``path`` (UTF-8, a byte-order mark accepted; an object
-    with a key twice is refused); ``ValueError`` starting with ``path`` otherwise."""
+    """The JSON value in a plan file.
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        The file (UTF-8, a byte-order mark accepted).
+
+    Returns
+    -------
+    object
+        The JSON value.
+
+    Raises
+    ------
+    ValueError
+        Starting with ``path``, if the file is not UTF-8 text or not JSON :func:`parse`
+        accepts.
+    """
     raw = Path(path).read_bytes()
     try:
         text = raw.decode("utf-8-sig")

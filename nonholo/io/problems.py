@@ -67,10 +67,29 @@ def _state(space, value, row: int, column: str, mechanism: str):
 
 
 def check_row(d, row: int, allow_imports: bool = False) -> dict:
-    """One problem, checked: ``{"start", "goal", "mechanism", "options", "label"}`` with
-    the states in the form :func:`nonholo.plan` takes (arrays; a pair ``(R, q)`` as a
-    tuple), the mechanism's name and a dict of options. A strategy named by its import
-    path is refused unless ``allow_imports`` (see the module)."""
+    """One problem, checked.
+
+    Parameters
+    ----------
+    d : dict
+        The row, with the columns of :data:`COLUMNS`.
+    row : int
+        Its number (from 0), for messages.
+    allow_imports : bool
+        Accept a strategy named by its import path (see the module); refused otherwise.
+
+    Returns
+    -------
+    dict
+        ``{"start", "goal", "mechanism", "options", "label"}`` with the states in the form
+        :func:`nonholo.plan` takes (arrays; a pair ``(R, q)`` as a tuple), the mechanism's
+        name and a dict of options.
+
+    Raises
+    ------
+    ValueError
+        Naming the row and the column, for a row that is not a problem.
+    """
     if not isinstance(d, dict):
         _fail(row, None, f"must be an object with columns {', '.join(COLUMNS)}, got {type(d).__name__}")
     unknown = [k for k in d if k not in COLUMNS]
@@ -116,8 +135,27 @@ def _json_value(x) -> bool:
 
 
 def check(rows, allow_imports: bool = False) -> list[dict]:
-    """Every row checked (:func:`check_row`); ``ValueError`` naming the first bad one,
-    ``TypeError`` if ``rows`` is not a list (an iterable) of rows."""
+    """Every row checked (:func:`check_row`).
+
+    Parameters
+    ----------
+    rows : iterable of dict
+        The problems.
+    allow_imports : bool
+        See :func:`check_row`.
+
+    Returns
+    -------
+    list of dict
+        The checked problems, in order.
+
+    Raises
+    ------
+    ValueError
+        Naming the first bad row, or if there are no rows.
+    TypeError
+        If ``rows`` is not a list (an iterable) of rows.
+    """
     if rows is None or isinstance(rows, (str, bytes, dict)):
         raise TypeError(f"problems must be a list of problems (dicts) or a JSON Lines file's path, "
                         f"got {type(rows).__name__}")
@@ -132,8 +170,27 @@ def check(rows, allow_imports: bool = False) -> list[dict]:
 
 
 def read(path, allow_imports: bool = False) -> list[dict]:
-    """The problems of a JSON Lines file, checked (blank lines are not allowed: every line
-    is a row, numbered from 0; ``allow_imports``: see :func:`check_row`)."""
+    """The problems of a JSON Lines file, checked.
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        The file: one JSON object per line (blank lines are not allowed: every line is a
+        row, numbered from 0).
+    allow_imports : bool
+        See :func:`check_row`.
+
+    Returns
+    -------
+    list of dict
+        The checked problems (:func:`check`).
+
+    Raises
+    ------
+    ValueError
+        Naming the row, for a line that is blank, not JSON or not a problem; for an empty
+        file.
+    """
     rows = []
     with open(path, encoding="utf-8-sig") as f:
         for i, line in enumerate(f):
@@ -149,8 +206,18 @@ def read(path, allow_imports: bool = False) -> list[dict]:
 
 
 def as_json(problem: dict) -> dict:
-    """A checked problem as a JSON-able row (the inverse of :func:`check_row`): the states in
-    the JSON form of the mechanism's space."""
+    """A checked problem as a JSON-able row (the inverse of :func:`check_row`).
+
+    Parameters
+    ----------
+    problem : dict
+        A problem as :func:`check_row` returns it.
+
+    Returns
+    -------
+    dict
+        The row, the states in the JSON form of the mechanism's space.
+    """
     space = catalog.get(problem["mechanism"]).space
     out = {"start": space.to_json(*space.parse(problem["start"], "start")),
            "goal": space.to_json(*space.parse(problem["goal"], "goal")),
@@ -161,16 +228,44 @@ def as_json(problem: dict) -> dict:
 
 
 def write(path, rows) -> Path:
-    """Write problems (dicts as :func:`check_row` takes them) as JSON Lines, checked first;
-    written by :func:`nonholo.io.safe_write.write_text` (atomically; a directory at
-    ``path`` is refused with a ``ValueError`` naming ``path``)."""
+    """Write problems as JSON Lines, checked first.
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        The file, written by :func:`nonholo.io.safe_write.write_text` (atomically).
+    rows : iterable of dict
+        The problems, as :func:`check_row` takes them.
+
+    Returns
+    -------
+    pathlib.Path
+        The file written.
+
+    Raises
+    ------
+    ValueError
+        Naming ``path`` if it is a directory; naming the row for a bad problem
+        (:func:`check`).
+    """
     safe_write.check_target(path, "path")
     lines = [json.dumps(as_json(p), separators=(",", ":")) for p in check(rows, allow_imports=True)]
     return safe_write.write_text(path, "\n".join(lines) + "\n", "path")
 
 
 def fingerprint(problems: list[dict]) -> str:
-    """A SHA-256 of the checked problems' canonical JSON: the identity of a table."""
+    """A SHA-256 of the checked problems' canonical JSON: the identity of a table.
+
+    Parameters
+    ----------
+    problems : list of dict
+        Checked problems (:func:`check`).
+
+    Returns
+    -------
+    str
+        The hex digest.
+    """
     h = hashlib.sha256()
     for p in problems:
         h.update(json.dumps(as_json(p), sort_keys=True, separators=(",", ":")).encode())

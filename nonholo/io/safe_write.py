@@ -46,11 +46,30 @@ def _kind(mode: int) -> str:
 
 
 def check_target(path, argument: str = "path") -> tuple[Path, str]:
-    """``(target, how)``: the file ``path`` names (a symbolic link followed) and how it
-    is written, :data:`REPLACE` or :data:`IN_PLACE` (see the module). ``ValueError``
-    naming ``argument`` for a path that exists and is neither a regular file, a character
-    device nor a FIFO, or that is empty or ends in a separator; ``TypeError`` for a path
-    that is not a string or path-like."""
+    """The file ``path`` names and how it is written (see the module).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The target.
+    argument : str
+        The name the errors give the path (``"--out"``).
+
+    Returns
+    -------
+    target : pathlib.Path
+        The file ``path`` names (a symbolic link followed).
+    how : str
+        :data:`REPLACE` or :data:`IN_PLACE`.
+
+    Raises
+    ------
+    ValueError
+        Naming ``argument``, for a path that exists and is neither a regular file, a
+        character device nor a FIFO, or that is empty or ends in a separator.
+    TypeError
+        For a path that is not a string or path-like.
+    """
     if isinstance(path, bytes) or not isinstance(path, (str, os.PathLike)):
         raise TypeError(f"{argument} must be a file path (str or path-like), got {type(path).__name__}")
     text = os.fspath(path)
@@ -123,8 +142,29 @@ def _put_in_place(tmp: Path, target: Path, argument: str) -> None:
 
 
 def write_bytes(path, data: bytes, argument: str = "path") -> Path:
-    """Write ``data`` to ``path`` safely (see the module); returns ``path`` as a
-    :class:`~pathlib.Path`. ``argument``: the name the errors give the path (``"--out"``)."""
+    """Write ``data`` to ``path`` safely (see the module).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The target.
+    data : bytes
+        What to write.
+    argument : str
+        The name the errors give the path (``"--out"``).
+
+    Returns
+    -------
+    pathlib.Path
+        ``path``.
+
+    Raises
+    ------
+    ValueError
+        Naming ``argument``, for a path :func:`check_target` refuses.
+    OSError
+        If the write fails (``path`` is then untouched, unless written in place).
+    """
     target, how = check_target(path, argument)
     data = bytes(data)
     if how == IN_PLACE:
@@ -145,19 +185,53 @@ def write_bytes(path, data: bytes, argument: str = "path") -> Path:
 
 
 def write_text(path, text: str, argument: str = "path") -> Path:
-    """Write ``text`` as UTF-8 to ``path`` safely (:func:`write_bytes`)."""
+    """Write ``text`` as UTF-8 to ``path`` safely (:func:`write_bytes`).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The target.
+    text : str
+        What to write.
+    argument : str
+        The name the errors give the path.
+
+    Returns
+    -------
+    pathlib.Path
+        ``path``.
+    """
     return write_bytes(path, text.encode("utf-8"), argument)
 
 
 @contextlib.contextmanager
 def replacing(path, argument: str = "path"):
-    """A temporary path (``.name.<random>.tmp`` beside the target) for a writer to write
-    ``path``'s new content to; when the block ends without an exception it is synced and
-    put in place as :func:`write_bytes` would (renamed over a regular file, copied into a
-    device or FIFO), else removed and ``path`` left untouched. ``path`` is checked
-    (:func:`check_target`) before the block runs.
+    """A temporary path for a writer to write ``path``'s new content to.
 
-    Example::
+    When the block ends without an exception the file is synced and put in place as
+    :func:`write_bytes` would (renamed over a regular file, copied into a device or FIFO),
+    else removed and ``path`` left untouched.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The target, checked (:func:`check_target`) before the block runs.
+    argument : str
+        The name the errors give the path.
+
+    Yields
+    ------
+    pathlib.Path
+        The temporary file, ``.name.<random>.tmp`` beside the target.
+
+    Raises
+    ------
+    ValueError
+        Naming ``argument``, for a path :func:`check_target` refuses.
+
+    Examples
+    --------
+    ::
 
         with replacing(out, "--out") as tmp:
             table.to_parquet(tmp)

@@ -22,16 +22,39 @@ BARRIER_CLEARANCE = 0.05
 
 @dataclass(frozen=True)
 class LegLimits:
-    """Every leg's length within ``[lo, hi]`` (geometry units)."""
+    """Every leg's length within ``[lo, hi]`` (geometry units).
+
+    Parameters
+    ----------
+    lo, hi : float
+        The stroke's ends, ``0 ≤ lo < hi``.
+    """
 
     lo: float
     hi: float
 
     @classmethod
     def from_argument(cls, value, mechanism) -> "LegLimits | None":
-        """``leg_length`` as :func:`nonholo.plan` takes it: ``None`` (no limits) or ``(lo,
-        hi)`` with ``0 ≤ lo < hi`` finite, for a mechanism with legs; ``ValueError`` naming
-        the argument otherwise."""
+        """``leg_length`` as :func:`nonholo.plan` takes it.
+
+        Parameters
+        ----------
+        value : tuple of float or None
+            ``None`` (no limits) or ``(lo, hi)`` with ``0 ≤ lo < hi`` finite.
+        mechanism : Mechanism
+            The mechanism planned, one with legs.
+
+        Returns
+        -------
+        LegLimits or None
+            The limits, ``None`` for none.
+
+        Raises
+        ------
+        ValueError
+            Naming ``leg_length``, if ``value`` is not such a pair or the mechanism has no
+            legs.
+        """
         if value is None:
             return None
         if not mechanism.has_legs:
@@ -50,12 +73,32 @@ class LegLimits:
         return cls(float(lo), float(hi))
 
     def as_tuple(self) -> tuple[float, float]:
+        """The limits as :func:`nonholo.plan` takes them.
+
+        Returns
+        -------
+        tuple of float
+            ``(lo, hi)``.
+        """
         return (self.lo, self.hi)
 
     # -- clearances --------------------------------------------------------------------------
     def clearances(self, mechanism, R) -> np.ndarray:
-        """``(l_i − lo, hi − l_i)`` for every leg, shape ``(n, 2k)`` for a stack ``R`` (n, 3, 3)
-        (column ``2i``: leg ``i + 1`` above ``lo``, ``2i + 1``: below ``hi``)."""
+        """``(l_i − lo, hi − l_i)`` for every leg.
+
+        Parameters
+        ----------
+        mechanism : Mechanism
+            The platform (:meth:`~nonholo.model.mechanism.Mechanism.leg_lengths`).
+        R : array_like
+            A stack of orientations ``(n, 3, 3)`` (or one).
+
+        Returns
+        -------
+        numpy.ndarray
+            Shape ``(n, 2k)``: column ``2i`` leg ``i + 1`` above ``lo``, ``2i + 1`` below
+            ``hi``.
+        """
         lengths = mechanism.leg_lengths(np.asarray(R, dtype=float).reshape(-1, 3, 3))
         out = np.empty((lengths.shape[0], 2 * lengths.shape[1]))
         out[:, 0::2] = lengths - self.lo
@@ -63,7 +106,20 @@ class LegLimits:
         return out
 
     def least_clearance(self, mechanism, R) -> float:
-        """The least clearance over the stack ``R`` (negative: a leg left its stroke)."""
+        """The least clearance over a stack of orientations.
+
+        Parameters
+        ----------
+        mechanism : Mechanism
+            The platform.
+        R : array_like
+            Orientations ``(n, 3, 3)``.
+
+        Returns
+        -------
+        float
+            The least of :meth:`clearances` (negative: a leg left its stroke).
+        """
         return float(self.clearances(mechanism, R).min())
 
     def _worst(self, mechanism, R) -> tuple[int, int, int, float]:
@@ -74,8 +130,23 @@ class LegLimits:
         return int(n), int(j) // 2 + 1, int(j) % 2, float(c[n, j])
 
     def violation(self, mechanism, R, what: str) -> str | None:
-        """Why the orientation ``R`` (3, 3) is outside the limits (``what``: e.g. ``"the
-        start"``), naming the leg that is out the most and by how much; ``None`` inside."""
+        """Why an orientation is outside the limits.
+
+        Parameters
+        ----------
+        mechanism : Mechanism
+            The platform.
+        R : array_like
+            The orientation (3, 3).
+        what : str
+            What it is, e.g. ``"the start"``.
+
+        Returns
+        -------
+        str or None
+            The message, naming the leg that is out the most and by how much; ``None``
+            inside.
+        """
         _, leg, bound, c = self._worst(mechanism, R)
         if c >= 0.0:
             return None
@@ -85,16 +156,45 @@ class LegLimits:
                 f"{-c:.3g} {side} leg_length's {end} end {limit:g}")
 
     def describe(self, mechanism, R, times=None) -> str:
-        """Where the stack ``R`` leaves the limits the most (for a failure's reason)."""
+        """Where a stack of orientations leaves the limits the most (for a failure's reason).
+
+        Parameters
+        ----------
+        mechanism : Mechanism
+            The platform.
+        R : array_like
+            Orientations ``(n, 3, 3)``.
+        times : array_like, optional
+            Their times (s), to say when.
+
+        Returns
+        -------
+        str
+            The leg, the limit it passes and by how much.
+        """
         n, leg, bound, c = self._worst(mechanism, R)
         when = f" at t ≈ {times[n]:.4g} s" if times is not None else ""
         return (f"leg {leg} passes its {('lower', 'upper')[bound]} stroke limit by {-c:.3g}{when} "
                 f"(leg_length = ({self.lo:g}, {self.hi:g}))")
 
     def clearance_terms(self, mechanism, R, threshold: float = BARRIER_CLEARANCE):
-        """The active terms of a log barrier ``Σ −log(c/c₀)`` on the clearances of the
-        nodes ``R`` (n, 3, 3): ``(nodes, c, ∇c)`` for every clearance ``c < threshold``
-        (``∇c``: rows with ``dc = ∇c · s`` along ``∂R = [s] R``), or ``None``."""
+        """The active terms of a log barrier ``Σ −log(c/c₀)`` on the clearances of nodes.
+
+        Parameters
+        ----------
+        mechanism : Mechanism
+            The platform.
+        R : array_like
+            The nodes' orientations ``(n, 3, 3)``.
+        threshold : float
+            Only clearances below it are active.
+
+        Returns
+        -------
+        tuple of numpy.ndarray or None
+            ``(nodes, c, ∇c)`` for every clearance ``c < threshold`` (``∇c``: rows with
+            ``dc = ∇c · s`` along ``∂R = [s] R``), or ``None`` if none is.
+        """
         c = self.clearances(mechanism, R)
         nodes, cols = np.nonzero(c < threshold)
         if nodes.size == 0:

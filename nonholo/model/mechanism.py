@@ -173,8 +173,19 @@ def on_rotation(function, module) -> Callable:
 
 
 def checked_on_R(function) -> Callable:
-    """A generated ``function(R, ...)`` (``L``, ``Q``) that refuses, with ``ValueError``
-    naming ``R``, what is not a finite real 3×3 matrix (or a ``(3, 3, n)`` stack)."""
+    """A generated ``function(R, ...)`` (``L``, ``Q``) that checks its ``R``.
+
+    Parameters
+    ----------
+    function : callable
+        A generated function of ``(R, ...)``.
+
+    Returns
+    -------
+    callable
+        ``function(R, ...)`` that refuses, with ``ValueError`` naming ``R``, what is not a
+        finite real 3×3 matrix (or a ``(3, 3, n)`` stack).
+    """
 
     def on_R(R, *args):
         R = real_array(R, "R")
@@ -207,7 +218,7 @@ class Frame:
 
 
 @dataclass(frozen=True, eq=False)
-class Mechanism:
+class Mechanism:  # signature: __new__'s (*args, **kwargs), the fields below; numpydoc ignore=PR01,PR02
     """Numeric kinematics of one mechanism (see the module docstring).
 
     Built from a generated module (:meth:`from_module`) or a symbolic mechanism
@@ -547,16 +558,51 @@ class Mechanism:
                                      rates=[v*cos(th0), v*sin(th0), w, v*sin(th0 - th1)],
                                      angles=[th0, th1])
 
-        ``coordinates`` and ``rates`` (``ẋ = G(x) u``) give a state in ``Rᵏ``; ``omega``, the
-        spatial angular velocity of an orientation in the entries of ``rotation``, a state
-        on SO(3) (or, with coordinates, on SO(3) × Rᵏ); ``parameters`` maps further symbols
-        to numbers; ``delta`` the singularity function (default: the factors of the field's
-        denominators). See :func:`derivations.equations.field_mechanism`, which checks the
-        equations: an undeclared symbol, a rate that is not linear in the inputs or an
-        argument of the wrong class of state raises ``ValueError`` naming it.
-
+        ``coordinates`` and ``rates`` (``ẋ = G(x) u``) give a state in ``Rᵏ``; ``omega`` a
+        state on SO(3) (or, with coordinates, on SO(3) × Rᵏ). See
+        :func:`derivations.equations.field_mechanism`, which checks the equations.
         Generated like :meth:`from_symbolic`; with ``cache``, keyed by the equations as given
         and the generator's version, so a later run neither derives nor generates.
+
+        Parameters
+        ----------
+        name : str
+            The mechanism's name.
+        inputs : sequence of sympy.Symbol
+            The input symbols ``u``.
+        coordinates : sequence of sympy.Symbol
+            The coordinates ``x`` of a Euclidean state.
+        rates : sequence of sympy.Expr
+            Their rates ``ẋ``, one expression each, linear in the inputs.
+        omega : sequence of sympy.Expr, optional
+            The spatial angular velocity (3 expressions, linear in the inputs) of an
+            orientation, in the entries of ``rotation``.
+        rotation : sympy.Matrix, optional
+            3×3 symbols of the orientation (default ``r11 … r33``).
+        angles : sequence of sympy.Symbol
+            The coordinates that are angles (errors taken modulo 2π).
+        parameters : mapping, optional
+            Further symbols and their values (numbers).
+        delta : sympy.Expr, optional
+            The singularity function ``Δ`` (default: the factors of the field's
+            denominators).
+        units : sequence or mapping, optional
+            A unit per coordinate (default ``"rad"`` for an angle, ``""`` otherwise).
+        description : str, optional
+            A phrase describing the mechanism.
+        cache : bool
+            Keep the generated source on disk (and read it from there).
+
+        Returns
+        -------
+        Mechanism
+            Its numeric kinematics.
+
+        Raises
+        ------
+        ValueError
+            Naming it, for an undeclared symbol, a rate that is not linear in the inputs or
+            an argument of the wrong class of state.
         """
         arguments = dict(inputs=inputs, coordinates=coordinates, rates=rates, omega=omega, rotation=rotation,
                          angles=angles, parameters=parameters, delta=delta, units=units, description=description)
@@ -566,13 +612,40 @@ class Mechanism:
     def from_constraints(cls, name: str, *, coordinates, velocities, constraints, inputs, angles=(),
                          parameters=None, units=None, description: str | None = None,
                          cache: bool = True) -> "Mechanism":
-        """The mechanism whose rates (the symbols ``velocities``, one per coordinate) obey
-        linear ``constraints`` (expressions equal to zero): Pfaffian constraints
+        """The mechanism whose rates obey linear constraints: Pfaffian constraints
         ``A(x) ẋ = 0`` with ``inputs`` chosen among the velocities, and equations defining
-        other inputs (a rolling speed). The velocities that are not inputs are solved for;
-        ``det A`` is the singularity function. See
-        :func:`derivations.equations.constraint_mechanism` (its checks) and
-        :meth:`from_equations` (the rest, caching included)."""
+        other inputs (a rolling speed).
+
+        The velocities that are not inputs are solved for; ``det A`` is the singularity
+        function. See :func:`derivations.equations.constraint_mechanism` (its checks) and
+        :meth:`from_equations` (the rest, caching included).
+
+        Parameters
+        ----------
+        name : str
+            The mechanism's name.
+        coordinates : sequence of sympy.Symbol
+            The coordinates ``x``.
+        velocities : sequence of sympy.Symbol
+            Their rates ``ẋ``, one symbol per coordinate.
+        constraints : sequence of sympy.Expr
+            Expressions equal to zero, linear in the velocities and inputs.
+        inputs : sequence of sympy.Symbol
+            Velocities, or symbols the constraints define.
+        angles, parameters, units, description, cache
+            As for :meth:`from_equations`.
+
+        Returns
+        -------
+        Mechanism
+            Its numeric kinematics.
+
+        Raises
+        ------
+        ValueError
+            Naming it, for equations :func:`derivations.equations.constraint_mechanism`
+            refuses.
+        """
         arguments = dict(coordinates=coordinates, velocities=velocities, constraints=constraints, inputs=inputs,
                          angles=angles, parameters=parameters, units=units, description=description)
         return cls.from_module(load_source(equations_source("constraint_mechanism", name, arguments, cache), name))
@@ -639,9 +712,26 @@ def generated_source(mechanism, cache: bool = True) -> str:
 
 def equations_source(form: str, name, arguments: dict, cache: bool = True) -> str:
     """The generated module's source of the mechanism ``derivations.equations.<form>(name,
-    **arguments)`` builds; cached (:func:`cached_source`) by a digest of the equations as
-    given and the generator's version (:mod:`derivations.generator`), so a cached mechanism
-    is neither derived nor generated again (nor the generator imported)."""
+    **arguments)`` builds.
+
+    Parameters
+    ----------
+    form : str
+        ``"field_mechanism"`` or ``"constraint_mechanism"``.
+    name : str
+        The mechanism's name.
+    arguments : dict
+        The keyword arguments of ``form``.
+    cache : bool
+        Cache the source (:func:`cached_source`) by a digest of the equations as given and
+        the generator's version (:mod:`derivations.generator`), so a cached mechanism is
+        neither derived nor generated again.
+
+    Returns
+    -------
+    str
+        The module's source.
+    """
     from derivations import generator
 
     def build() -> str:
@@ -657,9 +747,24 @@ def equations_source(form: str, name, arguments: dict, cache: bool = True) -> st
 
 
 def cached_source(name: str, digest: str, build: Callable[[], str]) -> str:
-    """``build()`` read from (or written to) ``<name>_<digest[:24]>.py`` in
-    :func:`generated_cache_dir` (written atomically; a cache that cannot be written is
-    reported once and skipped)."""
+    """A generated source, read from the cache or built and written to it.
+
+    Parameters
+    ----------
+    name : str
+        The mechanism's name.
+    digest : str
+        The definition's digest; the file is ``<name>_<digest[:24]>.py`` in
+        :func:`generated_cache_dir` (written atomically; a cache that cannot be written is
+        reported once and skipped).
+    build : callable
+        ``build()``: the source, when it is not cached.
+
+    Returns
+    -------
+    str
+        The module's source.
+    """
     path = generated_cache_dir() / f"{name}_{digest[:24]}.py"
     try:
         return path.read_text()
@@ -678,16 +783,35 @@ def cached_source(name: str, digest: str, build: Callable[[], str]) -> str:
 
 
 def generated_cache_dir() -> Path:
-    """Where generated modules are cached: ``$NONHOLO_CACHE_DIR/generated`` when that is set
-    (beside the compiled kernels, :func:`nonholo.numerics.native.cache_dir`), else
-    ``generated`` beside the default kernel cache (``~/.cache/nonholo/generated``)."""
+    """Where generated modules are cached.
+
+    Returns
+    -------
+    pathlib.Path
+        ``$NONHOLO_CACHE_DIR/generated`` when that is set (beside the compiled kernels,
+        :func:`nonholo.numerics.native.cache_dir`), else ``generated`` beside the default
+        kernel cache (``~/.cache/nonholo/generated``).
+    """
     kernels = native.cache_dir()
     return kernels / "generated" if os.environ.get(native.CACHE_ENV) else kernels.parent / "generated"
 
 
 def load_source(source: str, name: str) -> types.ModuleType:
-    """A generated module's ``source`` loaded as a module (not imported: it is not on disk in
-    the package); its text is kept as ``SOURCE``."""
+    """A generated module's source loaded as a module (not imported: it is not on disk in
+    the package).
+
+    Parameters
+    ----------
+    source : str
+        The source.
+    name : str
+        The mechanism's name (for the module's name and tracebacks).
+
+    Returns
+    -------
+    module
+        The module; its text is kept as ``SOURCE``.
+    """
     module = types.ModuleType(f"nonholo_symbolic_{name}")
     module.SOURCE = source
     exec(compile(source, f"<generated module of mechanism {name!r}>", "exec"), module.__dict__)

@@ -22,7 +22,18 @@ def _inputs(u) -> np.ndarray:
 
 
 def delta(R) -> float:
-    """Singularity function ``Δ(R) = r12 r31 + r21 r32`` (appendix, App. 1.1)."""
+    """Singularity function ``Δ(R) = r12 r31 + r21 r32`` (appendix, App. 1.1).
+
+    Parameters
+    ----------
+    R : array_like
+        A rotation matrix.
+
+    Returns
+    -------
+    float
+        ``Δ(R)``.
+    """
     return float(_gen.delta(check_rotation(R), _gen.NO_COORDINATES))
 
 
@@ -36,8 +47,24 @@ def _finite(value: np.ndarray, name: str, R) -> np.ndarray:
 
 
 def L(R) -> np.ndarray:
-    """``L(R)`` (3×2); ``ValueError`` on or numerically too close to the singular surface
-    ``Δ(R) = 0`` (``L ~ 1/Δ``)."""
+    """``L(R)``: the spatial angular velocity ``ω = L(R) u``.
+
+    Parameters
+    ----------
+    R : array_like
+        A rotation matrix.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``L(R)``, 3×2.
+
+    Raises
+    ------
+    ValueError
+        If ``R`` is not a rotation, or is on or numerically too close to the singular
+        surface ``Δ(R) = 0`` (``L ~ 1/Δ``).
+    """
     R = check_rotation(R)
     if _gen.delta(R, _gen.NO_COORDINATES) == 0.0:
         raise ValueError("R lies on the singular surface Δ(R) = 0, where L(R) is undefined")
@@ -46,8 +73,26 @@ def L(R) -> np.ndarray:
 
 
 def Q(R, u) -> np.ndarray:
-    """``Q(R, u)`` (3×3) of eq. (12): ``(∂L/∂θ) u = Q s`` for ``∂R/∂θ = [s] R``; ``ValueError``
-    on or numerically too close to ``Δ = 0`` (``Q ~ 1/Δ²``)."""
+    """``Q(R, u)`` of eq. (12): ``(∂L/∂θ) u = Q s`` for ``∂R/∂θ = [s] R``.
+
+    Parameters
+    ----------
+    R : array_like
+        A rotation matrix.
+    u : array_like
+        The inputs ``(u_1, u_2)``.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``Q(R, u)``, 3×3.
+
+    Raises
+    ------
+    ValueError
+        If ``R`` is not a rotation, ``u`` not two finite numbers, or ``R`` on or
+        numerically too close to ``Δ = 0`` (``Q ~ 1/Δ²``).
+    """
     R = check_rotation(R)
     if _gen.delta(R, _gen.NO_COORDINATES) == 0.0:
         raise ValueError("R lies on the singular surface Δ(R) = 0, where Q(R, u) is undefined")

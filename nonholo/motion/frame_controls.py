@@ -26,18 +26,37 @@ from . import retimed
 class FrameControls:
     """Physical inputs ``u(t) = W(R(t)) w(t)`` of a motion planned in frame coordinates.
 
-    ``frame``: the planned ``w`` (Fourier or grid controls, rad/s); ``R0``: the start;
-    ``mechanism``: a :class:`~nonholo.model.mechanism.Mechanism` with a frame, or its name.
-    ``R(t)``: the nodes of ``steps`` CF4 steps of the frame system from ``R0`` (computed
-    once, on first use, or given as ``nodes`` by a planner that has just computed them),
-    and between nodes one CF4 step of length ``t − t_n`` from the node below — the same
-    local approximation as an integrator step, ``O(h⁵)`` from the exact motion.
+    ``R(t)``: the nodes of ``steps`` CF4 steps of the frame system from ``R0``, and between
+    nodes one CF4 step of length ``t − t_n`` from the node below — the same local
+    approximation as an integrator step, ``O(h⁵)`` from the exact motion.
 
     Evaluates like a control (``u = self(t)``, vectorised, physical units) and gives the
     integrator its stage table (:meth:`stage_table`), so
     :func:`nonholo.motion.simulation.simulate` re-traces the motion in the physical system.
     ``params`` and ``metric`` are those of ``frame``; ``u`` is not linear in the
     parameters; ``breakpoints`` are the nodes.
+
+    Parameters
+    ----------
+    frame : Fourier or PiecewiseConstant
+        The planned ``w`` (rad/s).
+    R0 : array_like
+        The start, a rotation matrix.
+    mechanism : str or Mechanism
+        A :class:`~nonholo.model.mechanism.Mechanism` with a frame, or its name.
+    steps : int
+        CF4 steps of the frame motion (a multiple of a grid's).
+    nodes : array_like, optional
+        The nodes ``(steps + 1, 3, 3)``, given by a planner that has just computed them
+        (by default computed once, on first use).
+
+    Raises
+    ------
+    ValueError
+        If ``frame`` is not Fourier or grid controls, the mechanism has no frame or
+        another number of inputs, ``steps`` is refused
+        (:func:`~nonholo.controls.stages.check_steps`), ``R0`` is not a rotation, or
+        ``nodes`` are not the motion's from ``R0``.
     """
 
     kind = "frame"
@@ -67,15 +86,28 @@ class FrameControls:
             self._nodes = nodes
 
     def with_params(self, params) -> "FrameControls":
-        """The same replay with frame parameters ``params``."""
+        """The same replay with other frame parameters.
+
+        Parameters
+        ----------
+        params : array_like
+            The flat parameters of ``frame``.
+
+        Returns
+        -------
+        FrameControls
+            A new object (its nodes computed on first use).
+        """
         return FrameControls(self.frame.with_params(params), self.R0, self.mechanism, self.steps)
 
     @property
     def params(self) -> np.ndarray:
+        """The frame controls' flat parameters (a copy)."""
         return self.frame.params
 
     @property
     def n_inputs(self) -> int:
+        """``m``, the number of inputs."""
         return self.frame.n_inputs
 
     @property
@@ -92,7 +124,14 @@ class FrameControls:
         return np.linspace(0.0, self.T, self.steps + 1)
 
     def metric(self) -> np.ndarray:
-        """The L2 metric of the frame controls ``w`` (see :meth:`Controls.metric`)."""
+        """The L2 metric of the frame controls ``w``.
+
+        Returns
+        -------
+        numpy.ndarray
+            :meth:`Controls.metric <nonholo.controls.parametrisations.Controls.metric>` of
+            ``frame``.
+        """
         return self.frame.metric()
 
     @property
@@ -156,16 +195,49 @@ class FrameControls:
         return u[0] if scalar else u.reshape(np.shape(t) + (self.n_inputs,))
 
     def states(self, t) -> np.ndarray:
-        """``R(t)`` of the planned motion, shape ``(n, 3, 3)`` for ``t`` of shape ``(n,)``."""
+        """``R(t)`` of the planned motion.
+
+        Parameters
+        ----------
+        t : array_like
+            Times (s), shape ``(n,)``.
+
+        Returns
+        -------
+        numpy.ndarray
+            The orientations, shape ``(n, 3, 3)``.
+        """
         return self._evaluate(t)[0]
 
     def frame_inputs(self, t) -> np.ndarray:
-        """``w(t)``, the frame coordinates of ``ω = N(R) w`` (the planner's controls)."""
+        """``w(t)``, the frame coordinates of ``ω = N(R) w`` (the planner's controls).
+
+        Parameters
+        ----------
+        t : array_like
+            Times (s).
+
+        Returns
+        -------
+        numpy.ndarray
+            ``w(t)``, shape ``(n, m)`` (``(m,)`` for a scalar ``t``).
+        """
         return self.frame(t)
 
     def stage_table(self, steps: int) -> np.ndarray:
-        """The physical inputs at the stage times of ``steps`` steps (grid controls: the
-        step's own value at its end), for :func:`nonholo.controls.stages.stage_table`."""
+        """The physical inputs at the stage times of ``steps`` steps, for
+        :func:`nonholo.controls.stages.stage_table`.
+
+        Parameters
+        ----------
+        steps : int
+            The number of CF4 steps (a multiple of a grid's).
+
+        Returns
+        -------
+        numpy.ndarray
+            ``U``, shape ``(steps, 3, m)`` (grid controls: the step's own value at its end).
+        """
         steps = stages.check_steps(self.frame, steps)
         if isinstance(self.frame, Fourier) and steps % self.steps == 0:
             return self._aligned_stage_table(steps)
@@ -189,6 +261,13 @@ class FrameControls:
         return u[expand]
 
     def to_dict(self) -> dict:
+        """A JSON-able description for :func:`from_dict`.
+
+        Returns
+        -------
+        dict
+            ``{"kind": "frame", "T", "mechanism", "steps", "R0", "frame"}``.
+        """
         return {"kind": self.kind, "T": self.T, "mechanism": self.mechanism.name, "steps": self.steps,
                 "R0": self.R0.tolist(), "frame": self.frame.to_dict()}
 
@@ -224,10 +303,27 @@ def _aligned_indices(steps: int, nodes: int):
 def from_dict(d: dict, mechanism=None):
     """Inverse of ``to_dict`` for a parametrisation (:func:`nonholo.controls.parametrisations.from_dict`), a
     :class:`FrameControls`, a :class:`~nonholo.controls.stitched.Stitched` of them, or any of those
-    :class:`~nonholo.motion.retimed.Retimed`. Controls that name their mechanism are rebuilt
-    with ``mechanism`` (a :class:`~nonholo.model.mechanism.Mechanism`, which need not be in the
-    catalog; ``ValueError`` if the description names another) or, by default, the one of
-    that name."""
+    :class:`~nonholo.motion.retimed.Retimed`.
+
+    Parameters
+    ----------
+    d : dict
+        The description.
+    mechanism : Mechanism, optional
+        The :class:`~nonholo.model.mechanism.Mechanism` controls that name their mechanism
+        are rebuilt with (it need not be in the catalog); by default the one of that name.
+
+    Returns
+    -------
+    Controls, FrameControls, Stitched or Retimed
+        The controls.
+
+    Raises
+    ------
+    ValueError
+        If the description names another mechanism than ``mechanism``, or is otherwise
+        invalid.
+    """
     def rebuilt(p):
         return from_dict(p, mechanism)
 

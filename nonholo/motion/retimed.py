@@ -67,9 +67,26 @@ _GAUSS_X, _GAUSS_W = np.polynomial.legendre.leggauss(3)
 
 
 def check_leg_speed(value, mechanism) -> float | None:
-    """``leg_speed`` as :func:`nonholo.plan` takes it: ``None`` (no bound) or a positive
-    finite speed (the geometry's length units per second), for a mechanism with legs;
-    ``ValueError`` naming the argument otherwise."""
+    """``leg_speed`` as :func:`nonholo.plan` takes it.
+
+    Parameters
+    ----------
+    value : float or None
+        ``None`` (no bound) or a positive finite speed (the geometry's length units per
+        second).
+    mechanism : Mechanism
+        The mechanism planned, one with legs.
+
+    Returns
+    -------
+    float or None
+        The speed, ``None`` for no bound.
+
+    Raises
+    ------
+    ValueError
+        Naming ``leg_speed``, if ``value`` is not such a speed or the mechanism has no legs.
+    """
     if value is None:
         return None
     if not mechanism.has_legs:
@@ -80,17 +97,49 @@ def check_leg_speed(value, mechanism) -> float | None:
 
 
 def node_count(controls, nodes: int) -> int:
-    """``nodes`` rounded up to a multiple of the controls' grid (1 for smooth controls)."""
+    """``nodes`` rounded up to a multiple of the controls' grid (1 for smooth controls).
+
+    Parameters
+    ----------
+    controls : Controls
+        The controls (a ``grid`` attribute, if any).
+    nodes : int
+        The least number of nodes.
+
+    Returns
+    -------
+    int
+        The number of nodes.
+    """
     g = getattr(controls, "grid", None) or 1
     return -(-nodes // g) * g
 
 
 class TimeMap:
-    """``t(τ)`` and its inverse for controls ``base`` (physical, on ``[0, T]``) played from
-    ``R0`` with every leg at most ``leg_speed`` fast (see the module).
+    """``t(τ)`` and its inverse for controls played with every leg at most ``leg_speed``
+    fast (see the module).
 
-    ``T``: the re-timed duration, ``None`` for the least (``minimum_time``); a ``T``
-    below it raises ``ValueError`` saying the time needed.
+    Parameters
+    ----------
+    base : Controls or FrameControls
+        The planned physical controls, on ``[0, T_base]``.
+    R0 : array_like
+        The start, a rotation matrix.
+    mechanism : str or Mechanism
+        The platform.
+    leg_speed : float
+        ``v``, the legs' top speed (geometry units per second).
+    T : float, optional
+        The re-timed duration; ``None`` for the least (``minimum_time``).
+    nodes : int
+        CF4 nodes of the replay that samples the legs' speeds, at least.
+
+    Raises
+    ------
+    ValueError
+        If ``leg_speed`` is not a positive finite speed or the mechanism has no legs, the
+        motion never moves a leg or stands still somewhere, or runs into a non-finite
+        angular velocity, or ``T`` is below the time needed (saying it).
     """
 
     def __init__(self, base, R0, mechanism, leg_speed: float, T: float | None = None,
@@ -135,7 +184,18 @@ class TimeMap:
 
     # -- ρ -----------------------------------------------------------------------------------
     def ratio(self, tau) -> np.ndarray:
-        """``ρ(τ) = max_i |S_i(τ)| / v``: the planned motion's fastest leg speed over the bound."""
+        """``ρ(τ) = max_i |S_i(τ)| / v``: the planned motion's fastest leg speed over the bound.
+
+        Parameters
+        ----------
+        tau : array_like
+            Planned times ``τ``.
+
+        Returns
+        -------
+        numpy.ndarray
+            ``ρ(τ)``, of the shape of ``tau``.
+        """
         tau = np.asarray(tau, dtype=float)
         return np.max(np.abs(self._spline(tau)), axis=-1) / self.leg_speed
 
@@ -146,13 +206,35 @@ class TimeMap:
 
     # -- the map -----------------------------------------------------------------------------
     def time(self, tau) -> np.ndarray:
-        """``t(τ) = c ∫_0^τ ρ`` (vectorised)."""
+        """``t(τ) = c ∫_0^τ ρ``.
+
+        Parameters
+        ----------
+        tau : array_like
+            Planned times ``τ`` (clipped to ``[0, T_base]``).
+
+        Returns
+        -------
+        numpy.ndarray
+            The re-timed times ``t``.
+        """
         tau = np.clip(np.asarray(tau, dtype=float), 0.0, self.T_base)
         p = self._piece(tau, self.edges)
         return self._t_edges[p] + self.scale * self._integral(self.edges[p], tau)
 
     def tau(self, t) -> tuple[np.ndarray, np.ndarray]:
-        """``(τ(t), dτ/dt)`` for times ``t`` of the re-timed motion (vectorised)."""
+        """The planned time and its rate at times of the re-timed motion.
+
+        Parameters
+        ----------
+        t : array_like
+            Re-timed times (clipped to ``[0, T]``).
+
+        Returns
+        -------
+        tuple of numpy.ndarray
+            ``(τ(t), dτ/dt)``.
+        """
         t = np.clip(check_times(t), 0.0, self.T)
         p = self._piece(t, self._t_edges)
         a, b = self.edges[p], self.edges[p + 1]
@@ -231,14 +313,32 @@ def _kinks(spline: PPoly) -> np.ndarray:
 
 
 class Retimed:
-    """Physical controls ``base`` (on ``[0, T_base]``) played from ``R0`` re-timed so that
-    every leg moves at most ``leg_speed`` fast: ``ũ(t) = u(τ(t)) dτ/dt`` on ``[0, T]``
-    (:class:`TimeMap`; ``T=None``: the least time).
+    """Physical controls re-timed so that every leg moves at most ``leg_speed`` fast:
+    ``ũ(t) = u(τ(t)) dτ/dt`` on ``[0, T]`` (:class:`TimeMap`).
 
     Evaluates like a control (``u = self(t)``, vectorised); :meth:`tau` maps its times to
-    the planned ones, :meth:`time` back. ``breakpoints``: the re-timed images of the base
-    controls' breakpoints and of the instants where the fastest leg changes (``ũ`` has a
-    kink there).
+    the planned ones, :meth:`time` back.
+
+    Parameters
+    ----------
+    base : Controls or FrameControls
+        The planned physical controls, on ``[0, T_base]`` (not re-timed already).
+    R0 : array_like
+        The start, a rotation matrix.
+    mechanism : str or Mechanism
+        The platform.
+    leg_speed : float
+        ``v``, the legs' top speed (geometry units per second).
+    T : float, optional
+        The re-timed duration; ``None`` for the least time.
+    nodes : int
+        CF4 nodes of the replay that samples the legs' speeds, at least.
+
+    Raises
+    ------
+    ValueError
+        If ``base`` is re-timed already, ``R0`` is not a rotation, or :class:`TimeMap`
+        refuses the rest.
     """
 
     kind = "retimed"
@@ -257,10 +357,12 @@ class Retimed:
 
     @property
     def leg_speed(self) -> float:
+        """``v``, the legs' top speed."""
         return self.map.leg_speed
 
     @property
     def n_inputs(self) -> int:
+        """``m``, the number of inputs."""
         return self.base.n_inputs
 
     @property
@@ -274,11 +376,33 @@ class Retimed:
         return None
 
     def tau(self, t) -> tuple[np.ndarray, np.ndarray]:
-        """``(τ(t), dτ/dt)``: the planned time at re-timed times ``t``."""
+        """The planned time at re-timed times (:meth:`TimeMap.tau`).
+
+        Parameters
+        ----------
+        t : array_like
+            Re-timed times.
+
+        Returns
+        -------
+        tuple of numpy.ndarray
+            ``(τ(t), dτ/dt)``.
+        """
         return self.map.tau(t)
 
     def time(self, tau) -> np.ndarray:
-        """The re-timed time of planned times ``τ``."""
+        """The re-timed time of planned times (:meth:`TimeMap.time`).
+
+        Parameters
+        ----------
+        tau : array_like
+            Planned times ``τ``.
+
+        Returns
+        -------
+        numpy.ndarray
+            The re-timed times ``t``.
+        """
         return self.map.time(tau)
 
     def __call__(self, t):
@@ -289,6 +413,8 @@ class Retimed:
 
     @property
     def breakpoints(self) -> np.ndarray:
+        """The re-timed images of the base controls' breakpoints and of the instants where
+        the fastest leg changes (``ũ`` has a kink there)."""
         b = getattr(self.base, "breakpoints", None)
         inner = [self.map.kinks, self.map.jumps, [0.0, self.base.T]]
         if b is not None:
@@ -298,6 +424,13 @@ class Retimed:
         return np.unique(out)
 
     def to_dict(self) -> dict:
+        """A JSON-able description for :func:`from_dict`.
+
+        Returns
+        -------
+        dict
+            ``{"kind": "retimed", "T", "leg_speed", "nodes", "mechanism", "R0", "base"}``.
+        """
         return {"kind": self.kind, "T": self.T, "leg_speed": self.leg_speed, "nodes": self.map.nodes,
                 "mechanism": self.mechanism.name, "R0": self.R0.tolist(), "base": self.base.to_dict()}
 
@@ -312,8 +445,21 @@ class Retimed:
 
 
 def from_dict(d: dict, base_from_dict, mechanism=None) -> Retimed:
-    """Inverse of :meth:`Retimed.to_dict` (``base_from_dict`` reads the base controls; the
-    mechanism is ``mechanism``, by default the one ``d`` names); the time map is rebuilt by
-    the same computation."""
+    """Inverse of :meth:`Retimed.to_dict`; the time map is rebuilt by the same computation.
+
+    Parameters
+    ----------
+    d : dict
+        The description.
+    base_from_dict : callable
+        Reads the base controls.
+    mechanism : Mechanism, optional
+        The mechanism (by default the one ``d`` names).
+
+    Returns
+    -------
+    Retimed
+        The controls.
+    """
     return Retimed(base_from_dict(d["base"]), d["R0"], d["mechanism"] if mechanism is None else mechanism,
                    d["leg_speed"], T=d["T"], nodes=d["nodes"])

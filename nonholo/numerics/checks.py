@@ -11,8 +11,25 @@ MAX_TIME = 1e9
 
 
 def check_time(T, name: str = "T") -> float:
-    """A positive finite time (s) as a float, at most :data:`MAX_TIME`: a real number
-    (Python or NumPy), not a boolean or a string."""
+    """A positive finite time (s) as a float, at most :data:`MAX_TIME`.
+
+    Parameters
+    ----------
+    T : float
+        A real number (Python or NumPy), not a boolean or a string.
+    name : str
+        The argument's name, for the message.
+
+    Returns
+    -------
+    float
+        ``T``.
+
+    Raises
+    ------
+    ValueError
+        Naming ``name``, if ``T`` is not such a time.
+    """
     if not is_number(T):
         raise ValueError(f"{name} must be a positive finite time in seconds, got {T!r}")
     try:
@@ -27,8 +44,26 @@ def check_time(T, name: str = "T") -> float:
 
 
 def real_array(value, name: str) -> np.ndarray:
-    """``value`` (an array or nested sequences of numbers) as a float array; booleans,
-    complex numbers, strings and other objects are refused with ``ValueError`` naming ``name``."""
+    """An array of real numbers as a float array.
+
+    Parameters
+    ----------
+    value : array_like
+        An array or nested sequences of numbers.
+    name : str
+        The argument's name, for the message.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``value`` as floats.
+
+    Raises
+    ------
+    ValueError
+        Naming ``name``, for booleans, complex numbers, strings, ragged nesting and other
+        objects.
+    """
     if isinstance(value, (str, bytes)):
         raise ValueError(f"{name} must be numbers, got a string")
     try:
@@ -58,14 +93,47 @@ MAX_STEPS = 10**6
 
 
 def is_number(x) -> bool:
-    """Whether ``x`` is a real number (Python or NumPy), booleans excluded."""
+    """Whether ``x`` is a real number (Python or NumPy), booleans excluded.
+
+    Parameters
+    ----------
+    x : object
+        Anything.
+
+    Returns
+    -------
+    bool
+        True for an int or float (Python or NumPy) that is not a boolean.
+    """
     return isinstance(x, (int, float, np.integer, np.floating)) and not isinstance(x, (bool, np.bool_))
 
 
 def check_count(value, name: str, minimum: int = 1, maximum: int | None = None) -> int:
-    """An integer ``≥ minimum`` (and ``≤ maximum``) (``harmonics``, ``grid``, ``steps``,
-    ``max_iter``, ...); integral floats are accepted, booleans, infinities and non-numbers
-    are not."""
+    """An integer ``≥ minimum`` (and ``≤ maximum``): ``harmonics``, ``grid``, ``steps``,
+    ``max_iter``, ...
+
+    Parameters
+    ----------
+    value : int
+        The count; integral floats are accepted, booleans, infinities and non-numbers are
+        not.
+    name : str
+        The argument's name, for the message.
+    minimum : int
+        The least value.
+    maximum : int, optional
+        The greatest value (default: none).
+
+    Returns
+    -------
+    int
+        ``value``.
+
+    Raises
+    ------
+    ValueError
+        Naming ``name``, if ``value`` is not such an integer.
+    """
     integral = isinstance(value, (int, np.integer)) or (is_number(value) and np.isfinite(value)
                                                          and int(value) == value)
     if not is_number(value) or not integral or value < minimum:
@@ -76,7 +144,25 @@ def check_count(value, name: str, minimum: int = 1, maximum: int | None = None) 
 
 
 def check_times(t, name: str = "t") -> np.ndarray:
-    """Sample times as a float array, all finite (``ValueError`` naming the first bad one)."""
+    """Sample times as a float array, all finite.
+
+    Parameters
+    ----------
+    t : array_like
+        A number or an array of numbers (s).
+    name : str
+        The argument's name, for the message.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``t`` as floats.
+
+    Raises
+    ------
+    ValueError
+        Naming ``name`` and the first bad entry, if ``t`` is not numbers or not finite.
+    """
     try:
         t = np.asarray(t, dtype=float)
     except (TypeError, ValueError, OverflowError):

@@ -32,9 +32,29 @@ def _warn_once(key: str, message: str) -> None:
 
 
 class TolerantCache(FunctionCache):
-    """numba's on-disk cache of one function, where a damaged entry is a miss, not an error."""
+    """numba's on-disk cache of one function, where a damaged entry is a miss, not an error.
+
+    Parameters
+    ----------
+    py_func : callable
+        The Python function compiled.
+    """
 
     def load_overload(self, sig, target_context):
+        """numba's load of a cache entry; a damaged entry is discarded (one warning).
+
+        Parameters
+        ----------
+        sig : numba signature
+            The entry's signature.
+        target_context : numba target context
+            Where the code is loaded.
+
+        Returns
+        -------
+        object or None
+            The compiled overload, or ``None`` (a miss) for a missing or damaged entry.
+        """
         try:
             return super().load_overload(sig, target_context)
         except Exception as exc:                    # pickle, zlib, EOF, OS errors of a bad entry
@@ -47,6 +67,15 @@ class TolerantCache(FunctionCache):
             return None
 
     def save_overload(self, sig, data):
+        """numba's write of a cache entry; a failed write is a warning (once), not an error.
+
+        Parameters
+        ----------
+        sig : numba signature
+            The entry's signature.
+        data : object
+            The compiled overload.
+        """
         try:
             super().save_overload(sig, data)
         except Exception as exc:                    # full disk, lost permission, damaged index
@@ -56,9 +85,23 @@ class TolerantCache(FunctionCache):
 
 
 def jit(func=None, *, cache: bool = True, **options):
-    """``numba.njit`` with :data:`JIT_OPTIONS` (overridden by ``options``) and, if
-    ``cache``, the tolerant disk cache (see the module docstring). Usable as ``@jit`` or
-    ``jit(f, ...)``."""
+    """``numba.njit`` with :data:`JIT_OPTIONS` and the tolerant disk cache (see the module
+    docstring). Usable as ``@jit`` or ``jit(f, ...)``.
+
+    Parameters
+    ----------
+    func : callable, optional
+        The function to compile (``None``: return a decorator).
+    cache : bool
+        Keep the compiled code on disk (:class:`TolerantCache`).
+    **options
+        numba options, overriding :data:`JIT_OPTIONS`.
+
+    Returns
+    -------
+    numba.core.registry.CPUDispatcher or callable
+        The compiled function, or a decorator without ``func``.
+    """
     opts = {**JIT_OPTIONS, **options}
 
     def compile_lazily(f):

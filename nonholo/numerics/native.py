@@ -48,8 +48,18 @@ _WARNED: set[str] = set()
 
 
 def digest(*texts: str) -> str:
-    """SHA-256 of what a native module is translated from (the Python sources and the
-    translator's): the module records it as ``SOURCE_DIGEST``."""
+    """SHA-256 of what a native module is translated from.
+
+    Parameters
+    ----------
+    *texts : str
+        The Python sources and the translator's.
+
+    Returns
+    -------
+    str
+        The hex digest; the module records it as ``SOURCE_DIGEST``.
+    """
     h = hashlib.sha256()
     for t in texts:
         h.update(hashlib.sha256(t.encode()).digest())
@@ -57,7 +67,18 @@ def digest(*texts: str) -> str:
 
 
 def enabled() -> bool:
-    """Whether native kernels are wanted (``NONHOLO_BACKEND`` is not ``numba``)."""
+    """Whether native kernels are wanted.
+
+    Returns
+    -------
+    bool
+        True unless ``NONHOLO_BACKEND`` is ``numba``.
+
+    Raises
+    ------
+    ValueError
+        If ``NONHOLO_BACKEND`` is neither ``native`` nor ``numba``.
+    """
     value = os.environ.get(BACKEND_ENV, "native").strip().lower()
     if value not in ("native", "numba"):
         raise ValueError(f"{BACKEND_ENV} must be 'native' or 'numba', not {value!r}")
@@ -65,8 +86,14 @@ def enabled() -> bool:
 
 
 def cache_dir() -> Path:
-    """The disk cache of compiled modules: ``$NONHOLO_CACHE_DIR``, else
-    ``$XDG_CACHE_HOME/nonholo/native``, else ``~/.cache/nonholo/native``."""
+    """The disk cache of compiled modules.
+
+    Returns
+    -------
+    pathlib.Path
+        ``$NONHOLO_CACHE_DIR``, else ``$XDG_CACHE_HOME/nonholo/native``, else
+        ``~/.cache/nonholo/native``.
+    """
     if os.environ.get(CACHE_ENV):
         return Path(os.environ[CACHE_ENV])
     base = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
@@ -74,7 +101,13 @@ def cache_dir() -> Path:
 
 
 def compiler() -> str | None:
-    """The C compiler: ``$CC``, Python's own, ``cc`` or ``gcc``, whichever is found first."""
+    """The C compiler: ``$CC``, Python's own, ``cc`` or ``gcc``, whichever is found first.
+
+    Returns
+    -------
+    str or None
+        Its path, ``None`` if none is found.
+    """
     for cand in (os.environ.get("CC"), (sysconfig.get_config_var("CC") or "").split(" ")[0], "cc", "gcc"):
         if cand and shutil.which(cand):
             return shutil.which(cand)
@@ -82,14 +115,28 @@ def compiler() -> str | None:
 
 
 def include_dirs() -> list[str]:
-    """The headers a native module needs: Python's and NumPy's."""
+    """The headers a native module needs: Python's and NumPy's.
+
+    Returns
+    -------
+    list of str
+        The include directories.
+    """
     import numpy
 
     return [sysconfig.get_paths()["include"], numpy.get_include()]
 
 
 def warn_once(key: str, message: str) -> None:
-    """A warning said once per process."""
+    """A warning said once per process.
+
+    Parameters
+    ----------
+    key : str
+        What the warning is about; a second warning with the key is not said.
+    message : str
+        The warning (a ``RuntimeWarning``).
+    """
     if key not in _WARNED:
         _WARNED.add(key)
         warnings.warn(message, RuntimeWarning, stacklevel=3)
@@ -104,6 +151,20 @@ def _import_file(name: str, path: Path):
 
 
 def installed(name: str, want: str):
+    """The module built at install, if it is of the sources' digest.
+
+    Parameters
+    ----------
+    name : str
+        The module's name in ``nonholo.generated.native``.
+    want : str
+        The digest of the sources (:func:`digest`).
+
+    Returns
+    -------
+    module or None
+        The module, ``None`` if it is absent or built from other sources.
+    """
     try:
         module = importlib.import_module(f"nonholo.generated.native.{name}")
     except ImportError:
@@ -112,8 +173,22 @@ def installed(name: str, want: str):
 
 
 def compile_module(name: str, source: str, target: Path) -> None:
-    """Compile ``source`` into the extension module file ``target`` (atomically); raises
-    :class:`RuntimeError` with the compiler's message on failure."""
+    """Compile C into an extension module file (atomically).
+
+    Parameters
+    ----------
+    name : str
+        The module's name.
+    source : str
+        Its C source.
+    target : pathlib.Path
+        The file to write.
+
+    Raises
+    ------
+    RuntimeError
+        With the compiler's message, if there is no compiler or the compilation fails.
+    """
     cc = compiler()
     if cc is None:
         raise RuntimeError("no C compiler found (set CC)")
@@ -130,9 +205,29 @@ def compile_module(name: str, source: str, target: Path) -> None:
 
 
 def load(name: str, want: str, source):
-    """The native module ``nonholo.generated.native.<name>`` whose ``SOURCE_DIGEST`` is
-    ``want`` (the module docstring says where it is found), or None; ``source()`` gives its
-    C source when it must be compiled."""
+    """The native module ``nonholo.generated.native.<name>`` of a digest (the module
+    docstring says where it is found).
+
+    Parameters
+    ----------
+    name : str
+        The module's name.
+    want : str
+        Its ``SOURCE_DIGEST``.
+    source : callable
+        ``source()``: its C source, when it must be compiled.
+
+    Returns
+    -------
+    module or None
+        The module; ``None`` where native kernels are not wanted or cannot be built (one
+        warning).
+
+    Raises
+    ------
+    ValueError
+        If ``NONHOLO_BACKEND`` is neither ``native`` nor ``numba`` (:func:`enabled`).
+    """
     if not enabled():
         return None
     key = f"{name}:{want}"

@@ -23,8 +23,14 @@ from . import examples
 @lru_cache(maxsize=1)
 def example_variational():
     """Example 1's initial control (Fourier, K = 2), its variational system and the central
-    differences ``(R_T(λ + ε e_k) R_T(λ − ε e_k)ᵀ)^∨ / 2ε`` of the simulated endpoint:
-    ``(example, controls, variational, differences)``."""
+    differences of the simulated endpoint.
+
+    Returns
+    -------
+    tuple
+        ``(example, controls, variational, differences)``: the differences
+        ``(R_T(λ + ε e_k) R_T(λ − ε e_k)ᵀ)^∨ / 2ε``, one column per parameter.
+    """
     ex = examples.get(1)
     controls = Fourier.fit(ex.initial_control, ex.T, ex.harmonics)
     var = simulation.variational(ex.R_start, controls, ex.T)
@@ -40,19 +46,36 @@ def example_variational():
 
 
 def sensitivity_error() -> float:
-    """Eq. (9) on Example 1: ``max |J − differences| / max |differences|``."""
+    """Eq. (9) on Example 1.
+
+    Returns
+    -------
+    float
+        ``max |J − differences| / max |differences|``.
+    """
     _, _, var, fd = example_variational()
     return float(np.max(np.abs(var.J - fd)) / np.max(np.abs(fd)))
 
 
 def mobility_error() -> float:
-    """Eqs. (10)–(11) on Example 1: ``M(T)`` by quadrature against the Lyapunov equation's
-    solution (DOP853), relative."""
+    """Eqs. (10)–(11) on Example 1.
+
+    Returns
+    -------
+    float
+        ``M(T)`` by quadrature against the Lyapunov equation's solution (DOP853), relative.
+    """
     ex, controls, var, _ = example_variational()
     M_lyap = resimulate.mobility_lyapunov(ex.R_start, controls, ex.T)
     return float(np.max(np.abs(var.M - M_lyap)) / np.max(np.abs(M_lyap)))
 
 
 def run() -> list[audit.Finding]:
-    """Every finding of :func:`derivations.audit.run`, the numeric checks included."""
+    """The audit of the appendix.
+
+    Returns
+    -------
+    list of derivations.audit.Finding
+        Every finding of :func:`derivations.audit.run`, the numeric checks included.
+    """
     return audit.run(sensitivity_error, mobility_error)

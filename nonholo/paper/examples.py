@@ -19,7 +19,31 @@ from ..spaces import so3
 
 @dataclass(frozen=True)
 class Example:
-    """One planning problem: reach ``R_goal`` from ``R_start`` in time ``T``."""
+    """One planning problem: reach ``R_goal`` from ``R_start`` in time ``T``.
+
+    Parameters
+    ----------
+    number : int
+        The example's number.
+    title, description : str
+        Its title and what the motion does.
+    rpy_start : tuple of float
+        The start's RPY angles (rad).
+    R_goal : numpy.ndarray
+        The goal.
+    rpy_goal : tuple of float, optional
+        The goal's RPY angles (rad).
+    T : float
+        The horizon (s).
+    harmonics : int
+        ``K`` of the Fourier basis.
+    initial_amplitude : float
+        ``A`` of the initial control.
+    methods : tuple of str
+        The methods ``nonholo reproduce`` plans it with.
+    must_succeed : bool
+        Whether a failure is an error of the reproduction.
+    """
 
     number: int
     title: str
@@ -35,10 +59,22 @@ class Example:
 
     @property
     def R_start(self) -> np.ndarray:
+        """The start, the rotation of ``rpy_start``."""
         return so3.from_rpy(*self.rpy_start)
 
     def initial_control(self, t) -> np.ndarray:
-        """``u_1 = A sin 2πt/T``, ``u_2 = A cos 2πt/T`` with ``A = 0.3`` (shape (n, 2))."""
+        """``u_1 = A sin 2πt/T``, ``u_2 = A cos 2πt/T`` with ``A = 0.3``.
+
+        Parameters
+        ----------
+        t : array_like
+            Times (s), shape ``(n,)``.
+
+        Returns
+        -------
+        numpy.ndarray
+            ``u(t)``, shape ``(n, 2)``.
+        """
         w = 2 * np.pi * np.asarray(t, dtype=float) / self.T
         return self.initial_amplitude * np.column_stack([np.sin(w), np.cos(w)])
 
@@ -52,6 +88,25 @@ def parallel_parking_goals(R0: np.ndarray, distance: float = 0.6,
     Writing the goal as ``exp([w]) R0`` with ``|w| = distance``, the two leg conditions cut
     finitely many points out of the sphere of such ``w``; each is found by least squares
     from a grid of directions (residual < 1e-13) and duplicates are merged.
+
+    Parameters
+    ----------
+    R0 : numpy.ndarray
+        The start.
+    distance : float
+        The geodesic distance (rad).
+    axis : sequence of float
+        The direction of the reference goal ``exp(distance [axis]) R0``.
+
+    Returns
+    -------
+    list of numpy.ndarray
+        The orientations, nearest to the reference first.
+
+    Raises
+    ------
+    RuntimeError
+        If no orientation satisfies the conditions.
     """
     R0 = np.asarray(R0, dtype=float)
     ref = so3.exp(distance * np.asarray(axis, dtype=float)) @ R0
@@ -79,13 +134,34 @@ def parallel_parking_goals(R0: np.ndarray, distance: float = 0.6,
 
 
 def parallel_parking_goal(R0: np.ndarray, distance: float = 0.6, axis=(1.0, 0.0, 0.0)) -> np.ndarray:
-    """Example 3's goal: the parking orientation nearest to ``exp(distance [axis]) R0``."""
+    """Example 3's goal: the parking orientation nearest to ``exp(distance [axis]) R0``.
+
+    Parameters
+    ----------
+    R0 : numpy.ndarray
+        The start.
+    distance : float
+        The geodesic distance (rad).
+    axis : sequence of float
+        The reference direction.
+
+    Returns
+    -------
+    numpy.ndarray
+        The first of :func:`parallel_parking_goals`.
+    """
     return parallel_parking_goals(R0, distance, axis)[0]
 
 
 @cache
 def examples() -> tuple[Example, ...]:
-    """Examples 1, 2, 3 and 4."""
+    """Examples 1, 2, 3 and 4.
+
+    Returns
+    -------
+    tuple of Example
+        The examples, in order.
+    """
     ex1 = Example(1, "Example 1", "yaw +0.5 rad and pitch -0.3 rad",
                   (0.5, 1.2, -0.5), so3.from_rpy(1.0, 0.9, -0.5), (1.0, 0.9, -0.5))
     ex2 = Example(2, "Example 2", "roll turned by -1 rad",
@@ -104,7 +180,23 @@ def examples() -> tuple[Example, ...]:
 
 
 def get(number: int) -> Example:
-    """Example ``number`` (1 to 4)."""
+    """One example by its number.
+
+    Parameters
+    ----------
+    number : int
+        1 to 4.
+
+    Returns
+    -------
+    Example
+        The example.
+
+    Raises
+    ------
+    ValueError
+        For another number.
+    """
     for ex in examples():
         if ex.number == number:
             return ex

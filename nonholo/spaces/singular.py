@@ -11,7 +11,19 @@ import numpy as np
 
 
 class SingularSet:
-    """``Δ(R, q) = 0`` of a mechanism; ``samples(R, q)`` evaluates ``Δ`` on stacks."""
+    """``Δ(R, q) = 0`` of a mechanism.
+
+    Parameters
+    ----------
+    samples : callable
+        ``samples(R, q)``: ``Δ`` on stacks, ``R`` ``(n, 3, 3)`` and ``q`` ``(n, k)`` or
+        ``None``, as an array ``(n,)``.
+    on_rotations : bool
+        Whether ``Δ`` is a function of the orientation (the set a surface in SO(3)); the
+        messages say so.
+    owner : str
+        The mechanism's name, for the messages of a set that is not on rotations.
+    """
 
     exists = True
 
@@ -27,24 +39,87 @@ class SingularSet:
             self.refusal = f"R0 lies on the singular set Δ = 0 of {owner!r}, where G is undefined"
 
     def values(self, R, q=None) -> np.ndarray:
-        """``Δ`` at every state of the stacks ``R`` ``(n, 3, 3)`` and ``q`` ``(n, k)``: ``(n,)``."""
+        """``Δ`` at every state of stacks.
+
+        Parameters
+        ----------
+        R : numpy.ndarray
+            Rotations, shape ``(n, 3, 3)``.
+        q : numpy.ndarray, optional
+            Coordinates, shape ``(n, k)``.
+
+        Returns
+        -------
+        numpy.ndarray
+            ``Δ``, shape ``(n,)``.
+        """
         return self._samples(R, q)
 
     def value(self, R, q=None) -> float:
-        """``Δ(R, q)`` at one state."""
+        """``Δ(R, q)`` at one state.
+
+        Parameters
+        ----------
+        R : array_like
+            A rotation matrix.
+        q : array_like, optional
+            Coordinates, shape ``(k,)``.
+
+        Returns
+        -------
+        float
+            ``Δ``.
+        """
         R = np.asarray(R, dtype=float)[None]
         return float(self.values(R, None if q is None else np.asarray(q, dtype=float)[None])[0])
 
     def sign(self, R, q=None) -> float:
-        """``sign Δ(R, q)``: the side of the singular set a motion from ``(R, q)`` keeps to."""
+        """``sign Δ(R, q)``: the side of the singular set a motion from ``(R, q)`` keeps to.
+
+        Parameters
+        ----------
+        R : array_like
+            A rotation matrix.
+        q : array_like, optional
+            Coordinates, shape ``(k,)``.
+
+        Returns
+        -------
+        float
+            ``-1.0``, ``0.0`` or ``1.0``.
+        """
         return float(np.sign(self.value(R, q)))
 
     def reported(self, least: float):
-        """The least ``sgnΔ`` of a motion as a result reports it."""
+        """The least ``sgnΔ`` of a motion as a result reports it.
+
+        Parameters
+        ----------
+        least : float or None
+            The least ``sgnΔ`` along the motion.
+
+        Returns
+        -------
+        float or None
+            ``least`` as a float (``None`` if nothing was simulated).
+        """
         return None if least is None else float(least)
 
     def clear(self, least: float, delta_min: float) -> bool:
-        """Whether a motion whose least ``sgnΔ`` is ``least`` keeps the clearance ``delta_min``."""
+        """Whether a motion whose least ``sgnΔ`` is ``least`` keeps the clearance ``delta_min``.
+
+        Parameters
+        ----------
+        least : float
+            The least ``sgnΔ`` along the motion.
+        delta_min : float
+            The clearance.
+
+        Returns
+        -------
+        bool
+            ``least ≥ delta_min``.
+        """
         return least >= delta_min
 
 
@@ -57,16 +132,84 @@ class NoSingularSet(SingularSet):
         super().__init__(None)
 
     def values(self, R, q=None) -> np.ndarray:
+        """``Δ ≡ +∞`` at every state of stacks.
+
+        Parameters
+        ----------
+        R : numpy.ndarray
+            Rotations, shape ``(n, 3, 3)``.
+        q : numpy.ndarray, optional
+            Coordinates (unused).
+
+        Returns
+        -------
+        numpy.ndarray
+            ``+∞``, shape ``(n,)``.
+        """
         return np.full(np.shape(R)[0], np.inf)
 
     def value(self, R, q=None) -> float:
+        """``Δ ≡ +∞``.
+
+        Parameters
+        ----------
+        R : array_like
+            A rotation matrix (unused).
+        q : array_like, optional
+            Coordinates (unused).
+
+        Returns
+        -------
+        float
+            ``inf``.
+        """
         return float("inf")
 
     def sign(self, R, q=None) -> float:
+        """The one side there is.
+
+        Parameters
+        ----------
+        R : array_like
+            A rotation matrix (unused).
+        q : array_like, optional
+            Coordinates (unused).
+
+        Returns
+        -------
+        float
+            ``1.0``.
+        """
         return 1.0
 
     def reported(self, least: float):
+        """Nothing to report without a singular set.
+
+        Parameters
+        ----------
+        least : float or None
+            The least ``sgnΔ`` along the motion (unused).
+
+        Returns
+        -------
+        None
+            Always.
+        """
         return None
 
     def clear(self, least: float, delta_min: float) -> bool:
+        """Always clear.
+
+        Parameters
+        ----------
+        least : float
+            The least ``sgnΔ`` along the motion (unused).
+        delta_min : float
+            The clearance (unused).
+
+        Returns
+        -------
+        bool
+            ``True``.
+        """
         return True

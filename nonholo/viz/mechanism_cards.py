@@ -14,9 +14,26 @@ from .style import NotebookFigure, styled
 
 @styled
 def mechanism_card_figure(mechanism: str, R=None, result=None, psi_slice: float = 0.0) -> Figure:
-    """One mechanism at a glance: the platform's schematic at ``R`` (default: identity) and
-    its singular set on the slice ``ψ = psi_slice``; for a mechanism without legs, the
-    paths of the body axes along ``result`` (a planned motion) and its inputs."""
+    """One mechanism at a glance: the platform's schematic and its singular set on a slice;
+    for a mechanism without legs, the paths of the body axes along a planned motion and its
+    inputs.
+
+    Parameters
+    ----------
+    mechanism : str
+        The mechanism's name.
+    R : array_like, optional
+        The platform's orientation (default: the identity).
+    result : PlanResult, optional
+        A planned motion, for a mechanism without legs.
+    psi_slice : float
+        The slice ``ψ = psi_slice`` of the singular set (rad).
+
+    Returns
+    -------
+    NotebookFigure
+        The figure.
+    """
     mech = catalog.get(mechanism)
     fig = NotebookFigure(figsize=(12.0, 5.2), layout="constrained")
     gs = fig.add_gridspec(1, 2, width_ratios=[1.0, 1.1])

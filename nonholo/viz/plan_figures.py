@@ -62,6 +62,18 @@ def _labels(results) -> list[str]:
 
 
 def has_trajectory(res) -> bool:
+    """Whether a result has a trajectory (samples ``t``).
+
+    Parameters
+    ----------
+    res : PlanResult
+        The result.
+
+    Returns
+    -------
+    bool
+        True if it has samples.
+    """
     return len(np.asarray(getattr(res, "t", ()))) > 0
 
 
@@ -103,7 +115,18 @@ def newton_switch(history) -> int | None:
 
     Taken from the records' ``"phase"`` (``"newton"``) when they have one, else from the
     step sizes: the first full step (``step ≥ 1``) preceded by shorter θ-flow steps
-    (the initial record, of step 0, does not count)."""
+    (the initial record, of step 0, does not count).
+
+    Parameters
+    ----------
+    history : list of dict
+        A result's history.
+
+    Returns
+    -------
+    int or None
+        The index of the first Newton step, ``None`` if there is none.
+    """
     if not history:
         return None
     if any("phase" in h for h in history):
@@ -129,7 +152,19 @@ def _errors(res) -> np.ndarray:
 
 def plot_convergence(ax, results, tol: float | None = None, labels=None) -> None:
     """``‖l_T‖`` against iteration (log scale); dotted verticals mark the switch from the
-    θ-flow to full Newton steps (see :func:`newton_switch`)."""
+    θ-flow to full Newton steps (see :func:`newton_switch`).
+
+    Parameters
+    ----------
+    ax : matplotlib.axes.Axes
+        The axes drawn into.
+    results : PlanResult or sequence of PlanResult
+        One or several results.
+    tol : float, optional
+        A dashed tolerance line (``None``: none).
+    labels : sequence of str, optional
+        The results' legend labels (default: by method and strategy).
+    """
     results = _as_list(results)
     labels = labels or _labels(results)
     annotated = False
@@ -165,7 +200,22 @@ def convergence_figure(results, tol: float | None = None, title: str | None = No
     """Terminal error ``‖l_T‖ = ‖log(R(T) R_dᵀ)‖`` against iteration for one or several
     results (log scale; colour and line style by result, legend by method): the
     exponential decrease of the θ-flow, then the quadratic Newton phase (the switch,
-    inferred from the step sizes, as a dotted vertical). ``tol``: a dashed tolerance line."""
+    inferred from the step sizes, as a dotted vertical).
+
+    Parameters
+    ----------
+    results : PlanResult or sequence of PlanResult
+        One or several results.
+    tol : float, optional
+        A dashed tolerance line (``None``: none).
+    title : str, optional
+        The figure's title.
+
+    Returns
+    -------
+    NotebookFigure
+        The figure.
+    """
     fig = NotebookFigure(figsize=(6.4, 4.4), layout="constrained")
     ax = fig.add_subplot()
     plot_convergence(ax, results, tol)
@@ -186,7 +236,19 @@ def _control_series(res):
 
 
 def plot_controls(ax, results, components=(0, 1), labels=None) -> None:
-    """``u_i(t)``: colour by input, line style by result."""
+    """``u_i(t)``: colour by input, line style by result.
+
+    Parameters
+    ----------
+    ax : matplotlib.axes.Axes
+        The axes drawn into.
+    results : PlanResult or sequence of PlanResult
+        One or several results.
+    components : sequence of int
+        The inputs drawn (from 0).
+    labels : sequence of str, optional
+        The results' legend labels (default: by method and strategy).
+    """
     results = _as_list(results)
     labels = labels or _labels(results)
     _no_trajectory(ax, results)
@@ -211,7 +273,20 @@ def controls_figure(results, title: str | None = None) -> Figure:
     """Controls ``u_1(t)`` (top) and ``u_2(t)`` (bottom) of one or several results
     (line style by result).
 
-    ``u_i = d(l_i²)/dt / (4ab)`` are the scaled leg-extension rates, in 1/s."""
+    ``u_i = d(l_i²)/dt / (4ab)`` are the scaled leg-extension rates, in 1/s.
+
+    Parameters
+    ----------
+    results : PlanResult or sequence of PlanResult
+        One or several results.
+    title : str, optional
+        The figure's title.
+
+    Returns
+    -------
+    NotebookFigure
+        The figure.
+    """
     results = _as_list(results)
     labels = _labels(results)
     legs = geometry_for(results, None) is not None
@@ -236,7 +311,18 @@ def controls_figure(results, title: str | None = None) -> Figure:
 
 
 def rpy_along(R) -> np.ndarray:
-    """RPY angles (n, 3) of a stack of rotations, unwrapped in time."""
+    """RPY angles (n, 3) of a stack of rotations, unwrapped in time.
+
+    Parameters
+    ----------
+    R : array_like
+        Rotations (n, 3, 3).
+
+    Returns
+    -------
+    numpy.ndarray
+        The RPY angles (n, 3), unwrapped in time.
+    """
     R = np.asarray(R, dtype=float)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", UserWarning)  # gimbal lock at ϑ = ±π/2
@@ -245,6 +331,18 @@ def rpy_along(R) -> np.ndarray:
 
 
 def plot_rpy(ax, results, labels=None) -> None:
+    """RPY angles of ``R(t)``: colour by angle, line style by result (as
+    :func:`rpy_figure`).
+
+    Parameters
+    ----------
+    ax : matplotlib.axes.Axes
+        The axes drawn into.
+    results : PlanResult or sequence of PlanResult
+        One or several results.
+    labels : sequence of str, optional
+        The results' legend labels (default: by method and strategy).
+    """
     results = _as_list(results)
     labels = labels or _labels(results)
     names = ("φ (about z)", "ϑ (about y)", "ψ (about x)")
@@ -278,7 +376,20 @@ def plot_rpy(ax, results, labels=None) -> None:
 def rpy_figure(results, title: str | None = None) -> Figure:
     """RPY angles ``(φ, ϑ, ψ)`` of ``R(t)`` (unwrapped; ``R = R(Z, φ) R(Y, ϑ) R(X, ψ)``),
     colour by angle, line style by result; circles at t = 0, squares at t = T, crosses at
-    the goal's angles (when the results carry the goal ``Rd``)."""
+    the goal's angles (when the results carry the goal ``Rd``).
+
+    Parameters
+    ----------
+    results : PlanResult or sequence of PlanResult
+        One or several results.
+    title : str, optional
+        The figure's title.
+
+    Returns
+    -------
+    NotebookFigure
+        The figure.
+    """
     fig = NotebookFigure(figsize=(6.4, 4.4), layout="constrained")
     plot_rpy(fig.add_subplot(), results)
     if title:
@@ -287,6 +398,21 @@ def rpy_figure(results, title: str | None = None) -> Figure:
 
 
 def plot_leg_lengths(ax, results, geometry=None, labels=None) -> None:
+    """Leg lengths ``l_i(t)`` in units of the sphere's radius: colour by leg, line style by
+    result (as :func:`leg_lengths_figure`).
+
+    Parameters
+    ----------
+    ax : matplotlib.axes.Axes
+        The axes drawn into.
+    results : PlanResult or sequence of PlanResult
+        One or several results.
+    geometry : object, optional
+        The platform's geometry, as :func:`~nonholo.viz.platform_drawing.as_geometry` takes
+        it (default: the results' mechanism's, else the paper's).
+    labels : sequence of str, optional
+        The results' legend labels (default: by method and strategy).
+    """
     results = _as_list(results)
     labels = labels or _labels(results)
     g = geometry_for(results, geometry)
@@ -318,7 +444,23 @@ def plot_leg_lengths(ax, results, geometry=None, labels=None) -> None:
 def leg_lengths_figure(results, geometry=None, title: str | None = None) -> Figure:
     """Leg lengths ``l_i(t) = |R(t) tip_i - base_i|`` in units of the sphere's radius
     (geometry: see :func:`as_geometry`; default from the result's mechanism, else the
-    paper's), colour by leg, line style by result."""
+    paper's), colour by leg, line style by result.
+
+    Parameters
+    ----------
+    results : PlanResult or sequence of PlanResult
+        One or several results.
+    geometry : object, optional
+        The platform's geometry, as :func:`~nonholo.viz.platform_drawing.as_geometry` takes
+        it (default: the results' mechanism's, else the paper's).
+    title : str, optional
+        The figure's title.
+
+    Returns
+    -------
+    NotebookFigure
+        The figure.
+    """
     fig = NotebookFigure(figsize=(6.4, 4.4), layout="constrained")
     plot_leg_lengths(fig.add_subplot(), results, geometry)
     if title:
@@ -333,7 +475,19 @@ def _singular(results) -> bool:
 
 
 def plot_delta(ax, results, threshold: float | None = 1e-2, labels=None) -> None:
-    """``Δ(R(t))`` with ``Δ = 0`` and the band ``|Δ| < threshold``."""
+    """``Δ(R(t))`` with ``Δ = 0`` and the band ``|Δ| < threshold``.
+
+    Parameters
+    ----------
+    ax : matplotlib.axes.Axes
+        The axes drawn into.
+    results : PlanResult or sequence of PlanResult
+        One or several results.
+    threshold : float, optional
+        Half-width of the band ``|Δ| < threshold`` drawn (``None``: none).
+    labels : sequence of str, optional
+        The results' legend labels (default: by method and strategy).
+    """
     results = _as_list(results)
     labels = labels or _labels(results)
     ax.set_xlabel("time t [s]")
@@ -371,7 +525,22 @@ def plot_delta(ax, results, threshold: float | None = 1e-2, labels=None) -> None
 @styled
 def delta_figure(results, threshold: float | None = 1e-2, title: str | None = None) -> Figure:
     """``Δ(R(t))`` along one or several results, with ``Δ = 0`` (thick) and the band
-    ``|Δ| < threshold`` (dashed lines ±threshold); triangles mark the minimum of ``|Δ|``."""
+    ``|Δ| < threshold`` (dashed lines ±threshold); triangles mark the minimum of ``|Δ|``.
+
+    Parameters
+    ----------
+    results : PlanResult or sequence of PlanResult
+        One or several results.
+    threshold : float, optional
+        Half-width of the band ``|Δ| < threshold`` drawn (``None``: none).
+    title : str, optional
+        The figure's title.
+
+    Returns
+    -------
+    NotebookFigure
+        The figure.
+    """
     fig = NotebookFigure(figsize=(6.4, 4.4), layout="constrained")
     plot_delta(fig.add_subplot(), results, threshold)
     if title:
@@ -380,7 +549,17 @@ def delta_figure(results, threshold: float | None = 1e-2, title: str | None = No
 
 
 def plot_body_axes(ax, results, labels=None) -> None:
-    """Paths of the body axes' tips ``R(t) e_k`` on the unit sphere (3D axes)."""
+    """Paths of the body axes' tips ``R(t) e_k`` on the unit sphere (3D axes).
+
+    Parameters
+    ----------
+    ax : mpl_toolkits.mplot3d.axes3d.Axes3D
+        The 3D axes drawn into.
+    results : PlanResult or sequence of PlanResult
+        One or several results.
+    labels : sequence of str, optional
+        The results' legend labels (default: by method and strategy).
+    """
     results = _as_list(results)
     labels = labels or _labels(results)
     uu, vv = np.meshgrid(np.linspace(0, 2 * np.pi, 25), np.linspace(0, np.pi, 13))
@@ -414,7 +593,20 @@ def plot_body_axes(ax, results, labels=None) -> None:
 @styled
 def body_axes_figure(results, title: str | None = None) -> Figure:
     """Paths of the tips of the body axes ``R(t) e_1, R(t) e_2, R(t) e_3`` on the unit
-    sphere (circle: start, square: end; line style by result)."""
+    sphere (circle: start, square: end; line style by result).
+
+    Parameters
+    ----------
+    results : PlanResult or sequence of PlanResult
+        One or several results.
+    title : str, optional
+        The figure's title.
+
+    Returns
+    -------
+    NotebookFigure
+        The figure.
+    """
     fig = NotebookFigure(figsize=(5.6, 5.4), layout="constrained")
     plot_body_axes(fig.add_subplot(projection="3d"), results)
     if title:
@@ -424,7 +616,19 @@ def body_axes_figure(results, title: str | None = None) -> Figure:
 
 def plot_min_delta(ax, results, threshold: float | None = 1e-2, labels=None) -> None:
     """``min_t |Δ(R(t))|`` of each iterate against iteration (log scale), from
-    ``history[i]["min_delta"]``: how close the planner's trajectories came to Δ = 0."""
+    ``history[i]["min_delta"]``: how close the planner's trajectories came to Δ = 0.
+
+    Parameters
+    ----------
+    ax : matplotlib.axes.Axes
+        The axes drawn into.
+    results : PlanResult or sequence of PlanResult
+        One or several results.
+    threshold : float, optional
+        Half-width of the band ``|Δ| < threshold`` drawn (``None``: none).
+    labels : sequence of str, optional
+        The results' legend labels (default: by method and strategy).
+    """
     results = _as_list(results)
     labels = labels or _labels(results)
     ax.set_xlabel("iteration [-]")
@@ -460,7 +664,20 @@ def global_route_figure(result, title: str | None = None) -> Figure:
     coordinates over the singular surface ``Δ = 0`` (axes as :func:`singular_set_figure`),
     the hops' ends marked; right, ``Δ`` along the motion and the controls — the stitched
     controls of the hops (thin, where the route was re-planned as one smooth control) and
-    the plan's — the hand-overs between hops dotted."""
+    the plan's — the hand-overs between hops dotted.
+
+    Parameters
+    ----------
+    result : PlanResult
+        A plan of the global route.
+    title : str, optional
+        The figure's title.
+
+    Returns
+    -------
+    NotebookFigure
+        The figure.
+    """
     par = result.hops
     smoothed = result.stitched is not None
     fig = NotebookFigure(figsize=(13.0, 5.6), layout="constrained")
@@ -512,7 +729,22 @@ def global_route_figure(result, title: str | None = None) -> Figure:
 def leg_limits_figure(free, limited, title: str | None = None) -> Figure:
     """Leg lengths ``l_i(t)`` of a plan without stroke limits (dashed) and of the same
     problem planned with ``leg_length`` (solid, ``limited.options["leg_length"]``, drawn as
-    grey lines), in the geometry's units."""
+    grey lines), in the geometry's units.
+
+    Parameters
+    ----------
+    free : PlanResult
+        The plan without stroke limits.
+    limited : PlanResult
+        The same problem planned with ``leg_length``.
+    title : str, optional
+        The figure's title.
+
+    Returns
+    -------
+    NotebookFigure
+        The figure.
+    """
     mech = catalog.get(limited.mechanism)
     lo, hi = limited.options["leg_length"]
     fig = NotebookFigure(figsize=(7.2, 4.4), layout="constrained")
@@ -540,7 +772,24 @@ def motion_quality_figure(plain, cheap, fast, title: str | None = None) -> Figur
     """Two refinements of one plan ``plain``: the inputs of ``cheap`` (``objective="energy"``,
     solid) against ``plain``'s (dashed), with their energies ``∫|u|² dt``; and the legs'
     speeds of ``fast`` (``plain`` re-timed in the least time under
-    ``fast.options["leg_speed"]``, solid) against ``plain``'s (dashed), with the bound."""
+    ``fast.options["leg_speed"]``, solid) against ``plain``'s (dashed), with the bound.
+
+    Parameters
+    ----------
+    plain : PlanResult
+        The plan.
+    cheap : PlanResult
+        The same problem planned with ``objective="energy"``.
+    fast : PlanResult
+        ``plain`` re-timed under ``leg_speed``.
+    title : str, optional
+        The figure's title.
+
+    Returns
+    -------
+    NotebookFigure
+        The figure.
+    """
     mech = catalog.get(plain.mechanism)
     fig = NotebookFigure(figsize=(12.0, 4.4), layout="constrained")
     left, right = fig.add_subplot(1, 2, 1), fig.add_subplot(1, 2, 2)
@@ -579,7 +828,27 @@ def example_overview_figure(results, title: str = "", geometry=None, tol: float 
     rates ``u_i = d(l_i²)/dt / (4ab)``), RPY angles, leg lengths, ``Δ(R(t))`` along the
     final trajectories, and the closest approach to ``Δ = 0`` of every iterate. Line
     style distinguishes the results; the title lists iterations, terminal error and
-    ``min |Δ|`` of each."""
+    ``min |Δ|`` of each.
+
+    Parameters
+    ----------
+    results : PlanResult or sequence of PlanResult
+        One or several results.
+    title : str
+        The figure's title.
+    geometry : object, optional
+        The platform's geometry, as :func:`~nonholo.viz.platform_drawing.as_geometry` takes
+        it (default: the results' mechanism's, else the paper's).
+    tol : float, optional
+        A dashed tolerance line (``None``: none).
+    threshold : float, optional
+        Half-width of the band ``|Δ| < threshold`` drawn (``None``: none).
+
+    Returns
+    -------
+    NotebookFigure
+        The figure.
+    """
     results = _as_list(results)
     labels = _labels(results)
     fig = NotebookFigure(figsize=(16.0, 9.4), layout="constrained")

@@ -20,8 +20,23 @@ ROW_HEIGHT = 2.2
 
 
 def error_text(result, mechanism, spec: str = ".2e") -> str:
-    """The terminal error in words with its units: ``|l_T| = 2e-11 rad`` on SO(3), else by
-    part (``rotation 1e-12 rad, coordinates 3e-12 radius``)."""
+    """The terminal error in words with its units.
+
+    Parameters
+    ----------
+    result : PlanResult
+        The plan.
+    mechanism : Mechanism
+        Its mechanism.
+    spec : str
+        The numbers' format spec.
+
+    Returns
+    -------
+    str
+        ``|l_T| = 2e-11 rad`` on SO(3), else by part (``rotation 1e-12 rad, coordinates
+        3e-12 radius``).
+    """
     space = mechanism.space
     if result.errors is None:
         return f"|l_T| = {space.amount(result.terminal_error, spec)}"
@@ -38,7 +53,23 @@ def _mechanism(result):
 
 def plot_plane_path(ax, result, mechanism=None) -> None:
     """A vehicle's path on the plane, to scale: start, goal and, for a global route, the
-    waypoints of its hops (``ValueError`` for a mechanism without a plane position)."""
+    waypoints of its hops.
+
+    Parameters
+    ----------
+    ax : matplotlib.axes.Axes
+        The axes drawn into.
+    result : PlanResult
+        The plan.
+    mechanism : Mechanism, optional
+        Its mechanism (default: the result's).
+
+    Raises
+    ------
+    ValueError
+        For a mechanism without a plane position, or one the result does not name in the
+        catalog.
+    """
     mech = _mechanism(result) if mechanism is None else mechanism
     plane = plane_position(mech)
     if plane is None:
@@ -126,9 +157,24 @@ def _legs(lengths_ax, speeds_ax, result, mech) -> None:
 
 @styled
 def plan_figure(result) -> NotebookFigure:
-    """One plan (a :class:`~nonholo.io.result.PlanResult` of any mechanism) at a glance: see
-    the module. The title names the mechanism, method and strategy and the terminal error
-    with its units."""
+    """One plan of any mechanism at a glance: see the module. The title names the
+    mechanism, method and strategy and the terminal error with its units.
+
+    Parameters
+    ----------
+    result : PlanResult
+        The plan (a :class:`~nonholo.io.result.PlanResult`).
+
+    Returns
+    -------
+    NotebookFigure
+        The figure.
+
+    Raises
+    ------
+    ValueError
+        If the result's mechanism is not in the catalog and it carries none.
+    """
     mech = _mechanism(result)
     drawn = len(result.R) > 0
     groups = unit_groups(mech)

@@ -28,10 +28,39 @@ def _resample(result, frames: int):
 
 def animate_platform(result, path, geometry=None, frames: int = 60, fps: int = 20,
                      dpi: int = 100, view: dict | None = None) -> Path:
-    """Write a GIF of the platform moving along ``result.R`` (``frames`` frames at ``fps``).
+    """Write a GIF of the platform moving along ``result.R``.
 
-    Each frame shows the mechanism (as in :func:`mechanism_figure`), the path of the body
-    z axis' tip so far, the current time and ``Δ(R(t))``. Returns the path written.
+    Each frame shows the mechanism (as in
+    :func:`~nonholo.viz.platform_drawing.mechanism_figure`), the path of the body z axis'
+    tip so far, the current time and ``Δ(R(t))``.
+
+    Parameters
+    ----------
+    result : PlanResult
+        The planned motion.
+    path : str or pathlib.Path
+        The GIF's path (its directory is created if needed).
+    geometry : Geometry, optional
+        The platform's geometry (default: the result's mechanism's).
+    frames : int
+        The number of frames.
+    fps : int
+        Frames per second.
+    dpi : int
+        The frames' resolution.
+    view : dict, optional
+        Overrides of :data:`~nonholo.viz.platform_drawing.MECHANISM_VIEW`.
+
+    Returns
+    -------
+    pathlib.Path
+        The path written.
+
+    Raises
+    ------
+    ValueError
+        If the result has no trajectory, or its mechanism no geometry to draw and none is
+        given.
     """
     from matplotlib.animation import FuncAnimation, PillowWriter
 

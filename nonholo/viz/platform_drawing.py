@@ -41,6 +41,23 @@ def as_geometry(geometry=None, a: float | None = None, b: float | None = None,
     with the six fields, or any object with the six attributes -- e.g. a symbolic
     ``PlatformGeometry``, whose symbols ``a, b, rho`` are replaced by the given numbers
     (default: the generated platforms' ``DRAWING_DIMENSIONS``).
+
+    Parameters
+    ----------
+    geometry : object, optional
+        The geometry in any of those forms.
+    a, b, rho : float, optional
+        The dimensions of a symbolic geometry.
+
+    Returns
+    -------
+    Geometry
+        The numeric geometry.
+
+    Raises
+    ------
+    ValueError
+        For a mechanism without a legs/disk geometry.
     """
     if isinstance(geometry, Geometry):
         return geometry
@@ -68,8 +85,21 @@ def as_geometry(geometry=None, a: float | None = None, b: float | None = None,
 
 
 def geometry_for(results, geometry) -> Geometry | None:
-    """The geometry given, else that of the results' mechanism (``None`` if it has no
-    legs or is unknown), else (results without a mechanism) the paper's."""
+    """The geometry to draw results with.
+
+    Parameters
+    ----------
+    results : sequence of PlanResult
+        The results.
+    geometry : object or None
+        A geometry as :func:`as_geometry` takes it.
+
+    Returns
+    -------
+    Geometry or None
+        The geometry given, else that of the results' mechanism (``None`` if it has no
+        legs or is unknown), else (results without a mechanism) the paper's.
+    """
     if geometry is not None:
         return as_geometry(geometry)
     if results and getattr(results[0], "mechanism", None) is not None:
@@ -79,12 +109,36 @@ def geometry_for(results, geometry) -> Geometry | None:
 
 
 def leg_lengths(R, geometry=None) -> np.ndarray:
-    """Leg lengths ``l_i = |R tip_i - base_i|``: shape (2,) for one ``R``, (n, 2) for a
-    stack of rotations (n, 3, 3)."""
+    """Leg lengths ``l_i = |R tip_i - base_i|``.
+
+    Parameters
+    ----------
+    R : array_like
+        One rotation or a stack of rotations (n, 3, 3).
+    geometry : object, optional
+        A geometry as :func:`as_geometry` takes it.
+
+    Returns
+    -------
+    numpy.ndarray
+        Shape (2,) for one ``R``, (n, 2) for a stack.
+    """
     return as_geometry(geometry).leg_lengths(R)
 
 
 def mechanism_named(name):
+    """The catalog's mechanism of a name.
+
+    Parameters
+    ----------
+    name : str or None
+        The name (``None``: ``"platform"``).
+
+    Returns
+    -------
+    Mechanism or None
+        The mechanism, ``None`` if the catalog does not know the name.
+    """
     try:
         return catalog.get(name if name is not None else "platform")
     except ValueError:
@@ -92,9 +146,20 @@ def mechanism_named(name):
 
 
 def result_mechanism(res):
-    """The :class:`Mechanism` of a result: the one it carries (``kinematics``) or its
-    controls were replayed with (a mechanism built in the session need not be in the
-    catalog), else the one its name gives (``None`` if unknown)."""
+    """The mechanism of a result.
+
+    Parameters
+    ----------
+    res : PlanResult
+        The result.
+
+    Returns
+    -------
+    Mechanism or None
+        The one it carries (``kinematics``) or its controls were replayed with (a
+        mechanism built in the session need not be in the catalog), else the one its name
+        gives (``None`` if unknown).
+    """
     for mech in (getattr(res, "kinematics", None),
                  getattr(getattr(res, "parametrisation", None), "mechanism", None)):
         if isinstance(mech, Mechanism):
@@ -103,8 +168,20 @@ def result_mechanism(res):
 
 
 def delta_along(R, mechanism="platform") -> np.ndarray | None:
-    """``Δ(R)`` for each rotation of a stack (n, 3, 3); ``None`` if the mechanism has no
-    singular set."""
+    """``Δ(R)`` for each rotation of a stack.
+
+    Parameters
+    ----------
+    R : array_like
+        Rotations (n, 3, 3).
+    mechanism : str
+        The mechanism's name.
+
+    Returns
+    -------
+    numpy.ndarray or None
+        ``Δ``, shape (n,); ``None`` if the mechanism has no singular set.
+    """
     mech = mechanism_named(mechanism)
     if mech is None or not mech.singular.exists:
         return None
@@ -137,9 +214,24 @@ def draw_platform(ax, R, geometry=None, *, labels: bool = True, disk_radius: flo
     thicker), the body axes ``x_b, y_b, z_b`` (columns of ``R``) as arrows, the legs as
     thick segments from their base joints (squares) to the platform joints (circles) with
     their lengths, and the disk (radius ``disk_radius · ρ``, in the plane orthogonal to its
-    axle) tangent to the sphere at the contact point, with its axle. ``view``: elevation
-    and azimuth in degrees (default :data:`MECHANISM_VIEW`); ``limit``: half-width of the
-    (cubic) box.
+    axle) tangent to the sphere at the contact point, with its axle.
+
+    Parameters
+    ----------
+    ax : mpl_toolkits.mplot3d.axes3d.Axes3D
+        The 3D axes.
+    R : array_like
+        The orientation.
+    geometry : object, optional
+        A geometry as :func:`as_geometry` takes it.
+    labels : bool
+        Label the legs, joints and axes.
+    disk_radius : float
+        The disk's radius as a fraction of ``ρ``.
+    limit : float, optional
+        Half-width of the (cubic) box.
+    view : dict, optional
+        Elevation and azimuth in degrees (default :data:`MECHANISM_VIEW`).
     """
     g = as_geometry(geometry)
     R = np.asarray(R, dtype=float)
@@ -249,6 +341,18 @@ MECHANISM_VIEW = {"elev": 24.0, "azim": 68.0}
 
 
 def rpy_text(R) -> str:
+    """An orientation's RPY angles as text.
+
+    Parameters
+    ----------
+    R : array_like
+        A rotation matrix.
+
+    Returns
+    -------
+    str
+        ``"RPY = (φ, ϑ, ψ) rad"``.
+    """
     phi, th, psi = so3.as_rpy(R)
     return f"RPY = ({phi:.2f}, {th:.2f}, {psi:.2f}) rad"
 
@@ -260,8 +364,27 @@ def mechanism_figure(R_start, R_goal=None, geometry=None, title: str | None = No
 
     Each panel shows the sphere with body-fixed grid lines, the body axes as arrows,
     both legs with their current lengths, and the rolling disk with its axle; the panel
-    titles give the RPY angles and ``Δ(R)`` (of ``mechanism``). ``geometry``: see
-    :func:`as_geometry` (default: the paper's). ``view``: ``elev``/``azim`` in degrees.
+    titles give the RPY angles and ``Δ(R)``.
+
+    Parameters
+    ----------
+    R_start : array_like
+        The start.
+    R_goal : array_like, optional
+        The goal.
+    geometry : object, optional
+        See :func:`as_geometry` (default: the paper's).
+    title : str, optional
+        The figure's title.
+    mechanism : str
+        The mechanism whose ``Δ`` the titles give.
+    view : dict, optional
+        ``elev``/``azim`` in degrees.
+
+    Returns
+    -------
+    NotebookFigure
+        The figure.
     """
     g = as_geometry(geometry)
     view = {**MECHANISM_VIEW, **(view or {})}

@@ -24,12 +24,36 @@ _PROBE_RPY = (0.31, -0.23, 0.17)
 
 
 def label(name: str, unit: str) -> str:
-    """``"name [unit]"``, or ``name`` alone without a unit."""
+    """An axis label with its unit.
+
+    Parameters
+    ----------
+    name : str
+        The quantity.
+    unit : str
+        Its unit (``""``: none).
+
+    Returns
+    -------
+    str
+        ``"name [unit]"``, or ``name`` alone without a unit.
+    """
     return f"{name} [{unit}]" if unit else name
 
 
 def coordinate_units(mechanism) -> tuple[str, ...]:
-    """The unit of each coordinate (``""`` for each when the mechanism gives none)."""
+    """The unit of each coordinate.
+
+    Parameters
+    ----------
+    mechanism : Mechanism
+        The mechanism.
+
+    Returns
+    -------
+    tuple of str
+        One unit per coordinate (``""`` for each when the mechanism gives none).
+    """
     return tuple(mechanism.units) or ("",) * mechanism.n_coordinates
 
 
@@ -40,8 +64,18 @@ def _probe_state(mechanism):
 
 
 def input_units(mechanism) -> tuple[str, ...]:
-    """The unit of each input of ``mechanism`` (see the module): ``("wheelbase/s",
-    "rad/s")`` for the car, ``("1/s", "1/s")`` for the platform."""
+    """The unit of each input of a mechanism (see the module).
+
+    Parameters
+    ----------
+    mechanism : Mechanism
+        The mechanism.
+
+    Returns
+    -------
+    tuple of str
+        ``("wheelbase/s", "rad/s")`` for the car, ``("1/s", "1/s")`` for the platform.
+    """
     m, k = mechanism.n_inputs, mechanism.n_coordinates
     if not k or mechanism.G is None:
         return ("1/s",) * m
@@ -61,8 +95,18 @@ def input_units(mechanism) -> tuple[str, ...]:
 
 
 def plane_position(mechanism) -> tuple[int, int] | None:
-    """The indices of the coordinates of a vehicle's position on the plane (see the
-    module), or ``None`` when no two coordinates qualify."""
+    """The coordinates of a vehicle's position on the plane (see the module).
+
+    Parameters
+    ----------
+    mechanism : Mechanism
+        The mechanism.
+
+    Returns
+    -------
+    tuple of int or None
+        Their indices, or ``None`` when no two coordinates qualify.
+    """
     k = mechanism.n_coordinates
     angles = tuple(mechanism.angles) or (False,) * k
     units = coordinate_units(mechanism)
@@ -75,8 +119,18 @@ def plane_position(mechanism) -> tuple[int, int] | None:
 
 
 def unit_groups(mechanism) -> list[tuple[str, list[int]]]:
-    """The coordinates grouped by unit, in order of first appearance: ``[(unit, indices)]``
-    (one axes each, so that every axes has one unit)."""
+    """The coordinates grouped by unit (one axes each, so that every axes has one unit).
+
+    Parameters
+    ----------
+    mechanism : Mechanism
+        The mechanism.
+
+    Returns
+    -------
+    list of tuple
+        ``[(unit, indices)]``, in order of first appearance.
+    """
     groups: dict[str, list[int]] = {}
     units = coordinate_units(mechanism)
     for i in range(mechanism.n_coordinates):

@@ -24,7 +24,18 @@ from .style import NEGATIVE_COLOR, POSITIVE_COLOR, NotebookFigure, styled
 
 
 def delta_rpy(phi, theta, psi):
-    """``Δ(RPY(φ, ϑ, ψ))`` (vectorised)."""
+    """The platform's ``Δ(RPY(φ, ϑ, ψ))``, vectorised.
+
+    Parameters
+    ----------
+    phi, theta, psi : array_like
+        RPY angles (rad), broadcast together.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``Δ``, of their broadcast shape.
+    """
     return platform_singularity.delta_rpy(phi, theta, psi)
 
 
@@ -41,7 +52,15 @@ def singular_set_points(n_theta: int = 91, n_psi: int = 181):
     (wrapped to ``[-π, π)``), and ``Δ > 0`` between them (``φ_0 < φ < φ_0 + π``).
     (Where ``P = Q = 0`` -- ``ϑ = 0, ψ ∈ {0, ±π}`` -- the whole line of ``φ`` lies on it.)
 
-    Returns ``(phi, theta, psi)``, each of shape ``(2, n_theta, n_psi)`` (the two sheets).
+    Parameters
+    ----------
+    n_theta, n_psi : int
+        Grid points of ``ϑ`` and ``ψ``.
+
+    Returns
+    -------
+    tuple of numpy.ndarray
+        ``(phi, theta, psi)``, each of shape ``(2, n_theta, n_psi)`` (the two sheets).
     """
     th, ps = np.meshgrid(np.linspace(-np.pi / 2, np.pi / 2, n_theta),
                          np.linspace(-np.pi, np.pi, n_psi), indexing="ij")
@@ -64,7 +83,19 @@ def _sheet_quads(X, Y, Z, jump=np.pi):
 
 
 def draw_singular_surface(ax, n_theta=61, n_psi=121, cmap="viridis", alpha: float = 1.0):
-    """The two sheets of Δ = 0 as height φ over (ψ, ϑ) (axes x = ψ, y = ϑ, z = φ)."""
+    """Draw the two sheets of Δ = 0 as height φ over (ψ, ϑ) (axes x = ψ, y = ϑ, z = φ).
+
+    Parameters
+    ----------
+    ax : mpl_toolkits.mplot3d.axes3d.Axes3D
+        The 3D axes.
+    n_theta, n_psi : int
+        Grid points of ``ϑ`` and ``ψ`` (:func:`singular_set_points`).
+    cmap : str
+        The colour map of φ.
+    alpha : float
+        The sheets' opacity.
+    """
     phi, th, ps = singular_set_points(n_theta, n_psi)
     quads = np.concatenate([_sheet_quads(phi[k], ps[k], th[k]) for k in range(2)])
     quads = quads[:, :, [1, 2, 0]]
@@ -116,6 +147,18 @@ def mechanism_delta_rpy(mechanism, phi, theta, psi) -> np.ndarray:
 
     The generated ``delta(R)`` reads the entries ``R[i, j]``: given a stack of rotations
     transposed to shape (3, 3, ...) it evaluates all of them at once.
+
+    Parameters
+    ----------
+    mechanism : str or Mechanism
+        The mechanism.
+    phi, theta, psi : array_like
+        RPY angles (rad), broadcast together.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``Δ``, of their broadcast shape.
     """
     mech = catalog.get(mechanism)
     phi, theta, psi = np.broadcast_arrays(*(np.asarray(a, dtype=float) for a in (phi, theta, psi)))
@@ -124,6 +167,26 @@ def mechanism_delta_rpy(mechanism, phi, theta, psi) -> np.ndarray:
 
 
 def draw_slice(ax, psi: float, n: int = 241, marks=None, mechanism: str = "platform"):
+    """Draw ``Δ(φ, ϑ, ψ)`` on the slice ``ψ = psi``: colour = value, thick black = ``Δ = 0``.
+
+    Parameters
+    ----------
+    ax : matplotlib.axes.Axes
+        The axes drawn into.
+    psi : float
+        The slice (rad).
+    n : int
+        Grid points per axis.
+    marks : dict, optional
+        ``{label: (φ, ϑ, marker)}``, points drawn on the slice.
+    mechanism : str
+        The mechanism (another than the platform's ``Δ`` is scaled to ``[-1, 1]``).
+
+    Returns
+    -------
+    matplotlib.contour.QuadContourSet
+        The filled contours (for a colour bar).
+    """
     F, T = np.meshgrid(np.linspace(-np.pi, np.pi, n), np.linspace(-np.pi / 2, np.pi / 2, n))
     if mechanism == "platform":
         D = delta_rpy(F, T, psi)
@@ -164,8 +227,21 @@ def singular_set_figure(psi_slice: float = -0.5, marks: dict | None = None,
     sheets ``φ = φ_0(ϑ, ψ)`` and ``φ_0 + π`` (see :func:`singular_set_points`; φ upwards,
     coloured by φ), with the sign of Δ painted on three faces of the box (red: Δ > 0,
     blue: Δ < 0; the surface meets them along the thin black curves) and the outline
-    of the slice plane ``ψ = psi_slice``. Right: ``Δ(φ, ϑ, psi_slice)`` with ``Δ = 0`` thick;
-    ``marks`` maps labels to ``(φ, ϑ, marker)`` points drawn on the slice.
+    of the slice plane ``ψ = psi_slice``. Right: ``Δ(φ, ϑ, psi_slice)`` with ``Δ = 0`` thick.
+
+    Parameters
+    ----------
+    psi_slice : float
+        The slice (rad).
+    marks : dict, optional
+        ``{label: (φ, ϑ, marker)}``, points drawn on the slice.
+    view : dict, optional
+        ``elev``/``azim`` of the 3D panel in degrees.
+
+    Returns
+    -------
+    NotebookFigure
+        The figure.
     """
     fig = NotebookFigure(figsize=(12.5, 5.6), layout="constrained")
     gs = fig.add_gridspec(1, 2, width_ratios=[1.25, 1.0])
@@ -211,8 +287,20 @@ def singular_set_figure(psi_slice: float = -0.5, marks: dict | None = None,
 
 def singular_slices_figure(psi_values=(-2.0, -0.5, 0.5, 2.0), marks: dict | None = None) -> Figure:
     """``Δ(φ, ϑ, ψ)`` on slices ``ψ = const``: colour = value (red Δ > 0, blue Δ < 0),
-    thick black = ``Δ = 0``. ``marks``: ``{label: (φ, ϑ, ψ, marker)}``, drawn on the slice
-    whose ψ is nearest."""
+    thick black = ``Δ = 0``.
+
+    Parameters
+    ----------
+    psi_values : sequence of float
+        The slices (rad).
+    marks : dict, optional
+        ``{label: (φ, ϑ, ψ, marker)}``, drawn on the slice whose ψ is nearest.
+
+    Returns
+    -------
+    NotebookFigure
+        The figure.
+    """
     psi_values = list(psi_values)
     ncols = min(len(psi_values), 2 if len(psi_values) == 4 else 3)
     nrows = -(-len(psi_values) // ncols)
@@ -236,8 +324,20 @@ def singular_slices_figure(psi_values=(-2.0, -0.5, 0.5, 2.0), marks: dict | None
 
 
 def normal_form_surface(n: int = 81, extent: float = 1.0):
-    """The surface ``z³ + x y = 0`` as the graph ``z = -∛(x y)`` over ``[-extent, extent]²``:
-    ``(x, y, z)`` arrays of shape ``(n, n)``."""
+    """The surface ``z³ + x y = 0`` as the graph ``z = -∛(x y)`` over ``[-extent, extent]²``.
+
+    Parameters
+    ----------
+    n : int
+        Grid points per axis.
+    extent : float
+        Half-width of the square.
+
+    Returns
+    -------
+    tuple of numpy.ndarray
+        ``(x, y, z)``, each of shape ``(n, n)``.
+    """
     x, y = np.meshgrid(np.linspace(-extent, extent, n), np.linspace(-extent, extent, n))
     return x, y, -np.cbrt(x * y)
 
@@ -246,8 +346,19 @@ def normal_form_image(radius: float = 0.6, n: int = 61):
     """Normal-form coordinates ``(x, y, z)`` of points of ``Δ = 0`` near the identity.
 
     The points are those of :func:`singular_set_points` (``n`` values of ϑ, ``2n`` of ψ)
-    and of the line ``ϑ = ψ = 0`` with ``|φ|, |ϑ|, |ψ| ≤ radius``, mapped by ``platform_singularity.normal_form``;
-    returns ``(rpy, xyz)``, each (k, 3).
+    and of the line ``ϑ = ψ = 0`` with ``|φ|, |ϑ|, |ψ| ≤ radius``, mapped by ``platform_singularity.normal_form``.
+
+    Parameters
+    ----------
+    radius : float
+        The largest ``|φ|, |ϑ|, |ψ|`` (rad).
+    n : int
+        Values of ϑ (and half the values of ψ) of the grid.
+
+    Returns
+    -------
+    tuple of numpy.ndarray
+        ``(rpy, xyz)``, each (k, 3).
     """
     phi, th, ps = singular_set_points(n, 2 * n)
     rpy = np.stack([phi.ravel(), th.ravel(), ps.ravel()], axis=1)
@@ -289,6 +400,20 @@ def normal_form_figure(extent: float = 1.0, radius: float = 0.6,
     surface. Right: its level curves ``x y = -z³`` (hyperbolas that switch quadrants as z
     changes sign; the two axes at z = 0), with the images of points of ``Δ = 0`` whose z
     is within 0.01 of the level.
+
+    Parameters
+    ----------
+    extent : float
+        Half-width of the square of ``(x, y)``.
+    radius : float
+        The largest ``|φ|, |ϑ|, |ψ|`` of the points mapped (rad).
+    view : dict, optional
+        ``elev``/``azim`` of the 3D panel in degrees.
+
+    Returns
+    -------
+    NotebookFigure
+        The figure.
     """
     fig = NotebookFigure(figsize=(12.5, 5.6), layout="constrained")
     gs = fig.add_gridspec(1, 2, width_ratios=[1.1, 1.0])

@@ -83,7 +83,25 @@ def ball_figure(result, frames: int = 9) -> NotebookFigure:
     """The ball's contact path on the plane z = 0 (left), with the ball's body axes
     ``R e₁``, ``R e₂`` projected on the plane at ``frames`` instants; right, the angles
     from the start and to the goal (``|log(R(t) R0ᵀ)|``, ``|log(R(t) R_dᵀ)|``) and the
-    inputs against time."""
+    inputs against time.
+
+    Parameters
+    ----------
+    result : PlanResult
+        A plan of ``rolling_ball``.
+    frames : int
+        The instants the body axes are drawn at.
+
+    Returns
+    -------
+    NotebookFigure
+        The figure.
+
+    Raises
+    ------
+    ValueError
+        If ``result`` is not a plan of ``rolling_ball`` with a trajectory.
+    """
     _check(result, "rolling_ball")
     from ..spaces.so3 import log
 
@@ -116,7 +134,25 @@ def _body(x, y, th, length=1.0, width=0.5):
 @styled
 def car_figure(result, frames: int = 8) -> NotebookFigure:
     """The car's path (the rear axle's midpoint) with its body and front wheels drawn at
-    ``frames`` instants (left); right, ``θ``, ``φ`` and the inputs against time."""
+    ``frames`` instants (left); right, ``θ``, ``φ`` and the inputs against time.
+
+    Parameters
+    ----------
+    result : PlanResult
+        A plan of ``car``.
+    frames : int
+        The instants the car is drawn at.
+
+    Returns
+    -------
+    NotebookFigure
+        The figure.
+
+    Raises
+    ------
+    ValueError
+        If ``result`` is not a plan of ``car`` with a trajectory.
+    """
     _check(result, "car")
     q, t = result.q, result.t
     fig, grid, ax = _layout()

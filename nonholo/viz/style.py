@@ -66,7 +66,18 @@ class NotebookFigure(Figure):
 
 
 def styled(func):
-    """Build the figure under :data:`STYLE` (rc settings are read when artists are made)."""
+    """Build the figure under :data:`STYLE` (rc settings are read when artists are made).
+
+    Parameters
+    ----------
+    func : callable
+        A figure function.
+
+    Returns
+    -------
+    callable
+        ``func`` run under :data:`STYLE`.
+    """
 
     @functools.wraps(func)
     def wrapper(*args, **kwargs):
@@ -77,10 +88,26 @@ def styled(func):
 
 
 def save_figure(fig: Figure, stem: str, outdir=".", dpi: int = 150) -> tuple[Path, Path]:
-    """Write ``fig`` as ``<outdir>/<stem>.png`` (``dpi``) and ``<outdir>/<stem>.pdf``.
+    """Write a figure as ``<outdir>/<stem>.png`` and ``<outdir>/<stem>.pdf``.
 
-    Creates ``outdir`` if needed and returns the two paths. Neither file records when it was
-    written (:data:`PDF_METADATA`): the same figure gives the same bytes.
+    Neither file records when it was written (:data:`PDF_METADATA`): the same figure gives
+    the same bytes.
+
+    Parameters
+    ----------
+    fig : matplotlib.figure.Figure
+        The figure.
+    stem : str
+        The files' name without suffix.
+    outdir : str or pathlib.Path
+        The directory, created if needed.
+    dpi : int
+        The PNG's resolution.
+
+    Returns
+    -------
+    tuple of pathlib.Path
+        The PNG's and the PDF's paths.
     """
     outdir = Path(outdir)
     outdir.mkdir(parents=True, exist_ok=True)
