@@ -30,7 +30,7 @@ from . import energy
 from . import route as global_route
 from .certification import certified
 from .constraints import first_refusal
-from .core import Evaluator, build_result
+from .core import build_result
 from .problem import (
     METHODS,
     OBJECTIVES,
@@ -62,8 +62,8 @@ def plan(R0, Rd, *, T: float | None = 1.0, method: str = "parametric", harmonics
       vectors of its coordinates (``"R^k"``) or pairs ``(R, q)`` (``"SO(3)xR^k"``), see
       :mod:`nonholo.spaces.groups`. There the error is the stacked ``(l, q_T − q_d)`` and the
       result reports it by part (``errors``); strategies ``"paper"`` and ``"robust"`` plan
-      in the physical inputs, and the global route, ``leg_length``, ``leg_speed`` and
-      ``objective`` are for SO(3) mechanisms only (``ValueError`` otherwise).
+      in the physical inputs, and ``leg_length`` and ``leg_speed`` are for SO(3) mechanisms
+      only (``ValueError`` otherwise).
     - ``mechanism``: a :class:`~nonholo.model.mechanism.Mechanism` or its name
       (:func:`nonholo.model.catalog.names`).
     - ``strategy``: ``"robust"`` (default, :mod:`nonholo.planning.strategy_robust`) or ``"paper"``
@@ -95,11 +95,12 @@ def plan(R0, Rd, *, T: float | None = 1.0, method: str = "parametric", harmonics
       ``T=None`` in the least time — the fastest leg at ``v`` throughout; with a given
       ``T`` only if the plan breaks the bound, and it fails saying the time needed if its
       path cannot keep it within ``T``. ``None`` (default): no bound.
-    - ``objective``: ``None`` (default): the plan as found; ``"energy"``: then the energy
-      ``∫|u|² dt`` of its physical inputs lowered with the goal, ``delta_min`` and the
-      stroke kept (:mod:`nonholo.planning.energy`: piecewise-constant inputs on
-      :data:`~nonholo.planning.energy.ENERGY_GRID` intervals, method ``"nonparametric"``
-      in the result).
+    - ``objective``: ``None`` (default): the plan as found; ``"energy"``: then the least
+      energy ``∫|u|² dt`` of its physical inputs that a search from several starts finds,
+      with the goal, ``delta_min`` and the stroke kept, within a budget of effort (the same
+      call gives the same plan on any machine) (:mod:`nonholo.planning.energy`:
+      piecewise-constant inputs on :data:`~nonholo.planning.energy.ENERGY_GRID` intervals,
+      method ``"nonparametric"`` in the result).
     - ``steps``: CF4 steps on ``[0, T]`` (default :func:`default_steps`).
     - ``callback(record)``: called after each accepted iteration of the local plan with the
       history record; returning a true value stops the run (and no global route is taken).
@@ -153,9 +154,7 @@ def solve_path(problem: Problem, callback: Callable[[dict], object] | None = Non
         return build_result(problem, None, False, refusal)
 
     solver = cls(options)
-    evaluator = Evaluator(problem.R0, problem.Rd, problem.T, mech, problem.method, problem.steps,
-                          options.delta_min, frame=solver.frame(mech), leg_limits=problem.leg_limits,
-                          q0=problem.q0, qd=problem.qd)
+    evaluator = problem.evaluator(frame=solver.frame(mech))
     start = solver.initial(evaluator, problem.controls, problem.u0_given)
     if problem.route == "global":
         outcome, local_reason = None, "not tried (route 'global')"

@@ -28,9 +28,8 @@ from ..model.mechanism import Mechanism
 from ..motion.simulation import DEFAULT_STEPS
 from ..numerics import effort
 from ..numerics.checks import MAX_STEPS, check_count, check_time
-from . import energy
 from .constraints import Clearance, LegSpeed, LegStroke, one_of
-from .core import Options, Strategy
+from .core import Evaluator, Options, Strategy
 from .strategy_paper import PaperStrategy
 from .strategy_robust import RobustStrategy
 
@@ -170,9 +169,6 @@ class Problem:
         grid = check_count(grid, "grid")
         R0, q0 = mech.parse_state(R0, "R0")
         Rd, qd = mech.parse_state(Rd, "Rd")
-        if objective is not None and not energy.supports(mech):
-            raise ValueError(f"objective {objective!r} is for mechanisms on SO(3); {mech.name!r} has "
-                             f"the state space {mech.space.name}")
         options = Options(gamma=solver.default_gamma if gamma is None else gamma, step=step, tol=tol,
                           max_iter=max_iter, newton_below=newton_below, min_step=min_step,
                           delta_min=delta_min)
@@ -214,6 +210,15 @@ class Problem:
             least_time=False, started=time.perf_counter(), started_effort=effort.seconds())
 
     # -- what the planner reads ---------------------------------------------------------
+
+    def evaluator(self, frame: bool = False, method: str | None = None, steps: int | None = None) -> Evaluator:
+        """The :class:`~nonholo.planning.core.Evaluator` of this problem: its start, goal,
+        horizon, clearance and stroke, controls in the frame coordinates (``frame``) or the
+        physical inputs, of ``method`` (default: the problem's) on ``steps`` integrator
+        steps (default: the problem's)."""
+        return Evaluator(self.R0, self.Rd, self.T, self.mechanism, method or self.method,
+                         self.steps if steps is None else steps, self.options.delta_min, frame=frame,
+                         leg_limits=self.leg_limits, q0=self.q0, qd=self.qd)
 
     @property
     def strategy(self) -> str:
