@@ -130,10 +130,13 @@ STATE_PROBLEMS = {
 
 def mechanism_cards():
     """``(figure, stem)`` of every mechanism: the platforms at a regular pose with their
-    singular sets, the others with a planned motion (RPY(0.1, 0.2, 0.3) → RPY(0.8, -0.4, 0.5))."""
+    singular sets, the others with a planned motion (RPY(0.1, 0.2, 0.3) → RPY(0.8, -0.4, 0.5));
+    of those beyond SO(3), the ones with a drawing (:data:`STATE_PROBLEMS`)."""
     for name in catalog.names():
         mech = catalog.get(name)
         if mech.space.k:
+            if name not in STATE_PROBLEMS:
+                continue
             start, goal = STATE_PROBLEMS[name]
             draw = state_figures.ball_figure if mech.space.has_orientation else state_figures.car_figure
             yield draw(plan(start, goal, mechanism=name, **STATE_OPTIONS[name])), f"mechanism_{name}"
