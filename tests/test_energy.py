@@ -13,7 +13,7 @@ import pytest
 
 from benchmarks import goalset
 from nonholo.certify import resimulate as verify
-from nonholo.controls.parametrisations import PiecewiseConstant
+from nonholo.controls.parametrisations import Fourier, PiecewiseConstant
 from nonholo.io.result import PlanResult
 from nonholo.model import catalog
 from nonholo.motion.simulation import variational
@@ -185,3 +185,79 @@ def test_the_same_call_gives_the_same_plan_in_any_process_under_any_load():
         burner.wait()
     quiet = run()
     assert loaded[0] == "True" and loaded == quiet
+
+
+# -- the known optima ------------------------------------------------------------------
+
+
+def confirmed_energy(res, name):
+    """The energy of ``res``'s controls, after DOP853 on the hand-written model (beyond
+    SO(3)) or the generated field (SO(3)) confirms that they reach the goal."""
+    mech = catalog.get(name)
+    if mech.space.k:
+        _, R, q, _ = verify.resimulate_state(res.start, res.controls, res.T, name, res.breakpoints)
+        assert max(verify.state_errors(name, R[-1], q[-1], res.Rd, res.qd).values()) <= 1e-8
+    else:
+        _, R, _ = verify.resimulate_path(res.R0, res.controls, res.T, name, res.breakpoints)
+        assert verify.terminal_error(R[-1], res.Rd) <= 1e-8
+    return quadrature_energy(res)
+
+
+def test_attitude_reaches_the_closed_form_extremal_energy():
+    """Body rates u(t) = (a cos ct − b sin ct, a sin ct + b cos ct) steer R₀ to R₀ exp([(a, b, c)])
+    exp(−[c e₃]) in T = 1 with energy a² + b², the least for |(a, b, c)| ≤ π (Boscain & Rossi
+    2008); the plan needs at most 1 % more (the 100 constant intervals cost ~3e-4)."""
+    a, b, c = 1.1, -0.7, 1.6
+    R0 = so3.from_rpy(0.3, -0.5, 1.2)
+    Rd = R0 @ so3.exp(np.array([a, b, c])) @ so3.exp(np.array([0.0, 0.0, -c]))
+    res = planner.plan(R0, Rd, mechanism="attitude", objective="energy")
+    assert res.success, res.reason
+    E = confirmed_energy(res, "attitude")
+    assert a * a + b * b <= E <= 1.01 * (a * a + b * b)
+
+
+@pytest.mark.parametrize("a", [0.5, -1.5])
+def test_brockett_reaches_the_circle(a):
+    """Brockett's integrator from (0, 0, 0) to (0, 0, a) in T = 1: the least energy is 2π|a|
+    (one circle of area |a|/2, an isoperimetric bound: no motion needs less)."""
+    res = planner.plan([0.0, 0.0, 0.0], [0.0, 0.0, a], mechanism="brockett", objective="energy")
+    assert res.success, res.reason
+    E = confirmed_energy(res, "brockett")
+    assert 2 * np.pi * abs(a) * (1 - 1e-9) <= E <= 1.01 * 2 * np.pi * abs(a)
+
+
+def test_rolling_ball_needs_no_more_than_the_circle():
+    """The goal the ball reaches when its contact point runs once round a circle of radius
+    0.5 at constant speed (DOP853 on the hand-written model): the plan needs at most 0.5 %
+    more than that circle's energy (2πρ)²/T."""
+    rho, T = 0.5, 1.0
+    c = np.zeros((2, 3))
+    c[0, 1], c[1, 2] = -rho * 2 * np.pi, rho * 2 * np.pi      # v = 2πρ (−sin ωt, cos ωt)
+    R0 = so3.from_rpy(0.2, 0.4, -0.3)
+    _, R, q, _ = verify.resimulate_state((R0, [0.0, 0.0]), Fourier(T, c), T, "rolling_ball")
+    res = planner.plan((R0, [0.0, 0.0]), (R[-1], q[-1]), mechanism="rolling_ball", objective="energy")
+    assert res.success, res.reason
+    assert confirmed_energy(res, "rolling_ball") <= 1.005 * (2 * np.pi * rho) ** 2 / T
+
+
+def test_node_sensitivities_agree_with_the_backward_pass_and_the_jacobian():
+    """The nodes' sensitivities (the barrier's derivatives): row i of node n against the
+    gradient of the i-th state variation at node n by the planner's backward pass, and the
+    last node against the Jacobian J of the variational system; grid and Fourier controls."""
+    from nonholo.planning.core import node_gradient, node_sensitivities
+    from nonholo.planning.problem import Problem
+
+    problem = Problem.build([0.0, 0.0, 0.0, 0.1], [1.0, 0.5, 0.2, 0.0], mechanism="car")
+    rng = np.random.default_rng(3)
+    for method, controls in (("nonparametric", PiecewiseConstant(1.0, 0.3 * rng.normal(size=(20, 2)))),
+                             ("parametric", Fourier(1.0, 0.1 * rng.normal(size=(2, 5))))):
+        ev = problem.evaluator(method=method, steps=40)
+        e = ev.evaluate(controls, full=True)
+        nodes = np.array([3, 17, 40])
+        s = node_sensitivities(ev, e, nodes)
+        np.testing.assert_allclose(s[-1], e.J, atol=1e-12)
+        for k, n in enumerate(nodes):
+            for i in range(4):
+                a = np.zeros((41, 4))
+                a[n, i] = 1.0
+                np.testing.assert_allclose(s[k, i], node_gradient(ev, e, a), rtol=1e-10, atol=1e-13)

@@ -53,7 +53,7 @@ def plan(R0, Rd, *, T: float | None = 1.0, method: str = "parametric", harmonics
          max_iter: int = 200, strategy="robust", mechanism="platform",
          delta_min: float = 1e-2, steps: int | None = None, newton_below: float = 1e-3,
          min_step: float = 1e-6, callback: Callable[[dict], object] | None = None,
-         route: str = "auto", leg_length=None, leg_speed=None, objective: str | None = None,
+         route: str = "auto", leg_length=None, leg_speed=None, objective: str | None = "auto",
          constraints=()) -> PlanResult:
     """Plan a control steering ``R0`` to ``Rd`` in time ``T`` (seconds).
 
@@ -95,12 +95,15 @@ def plan(R0, Rd, *, T: float | None = 1.0, method: str = "parametric", harmonics
       ``T=None`` in the least time — the fastest leg at ``v`` throughout; with a given
       ``T`` only if the plan breaks the bound, and it fails saying the time needed if its
       path cannot keep it within ``T``. ``None`` (default): no bound.
-    - ``objective``: ``None`` (default): the plan as found; ``"energy"``: then the least
-      energy ``∫|u|² dt`` of its physical inputs that a search from several starts finds,
-      with the goal, ``delta_min`` and the stroke kept, within a budget of effort (the same
-      call gives the same plan on any machine) (:mod:`nonholo.planning.energy`:
-      piecewise-constant inputs on :data:`~nonholo.planning.energy.ENERGY_GRID` intervals,
-      method ``"nonparametric"`` in the result).
+    - ``objective``: ``"energy"``: the plan, then the least energy ``∫|u|² dt`` of its
+      physical inputs that a search from several starts finds, with the goal,
+      ``delta_min`` and the stroke kept, within a budget of effort (the same call gives the
+      same plan on any machine) (:mod:`nonholo.planning.energy`: piecewise-constant inputs
+      on :data:`~nonholo.planning.energy.ENERGY_GRID` intervals, method ``"nonparametric"``
+      in the result); ``"auto"`` (default): the plan as found, unless a quick search of the
+      same kind finds a motion needing less than
+      :data:`~nonholo.planning.energy.REPLACE_BELOW` of its energy — then that motion
+      (``options["objective"]`` says so); ``None``: the plan as found.
     - ``steps``: CF4 steps on ``[0, T]`` (default :func:`default_steps`).
     - ``callback(record)``: called after each accepted iteration of the local plan with the
       history record; returning a true value stops the run (and no global route is taken).
@@ -164,7 +167,7 @@ def solve_path(problem: Problem, callback: Callable[[dict], object] | None = Non
             outcome = certified(outcome, evaluator, options)
         if outcome.success or problem.route == "local" or outcome.stopped:
             result = build_result(problem, outcome, outcome.success, outcome.reason, evaluator)
-            return energy.improve(problem, result) if problem.objective == "energy" else result
+            return objective(problem, result)
         local_reason = outcome.reason
 
     def hop(a, b, T_hop, hop_delta_min):
@@ -189,4 +192,12 @@ def solve_path(problem: Problem, callback: Callable[[dict], object] | None = Non
                             f"{local_reason}; the global route failed too: {steered.reason}", evaluator)
     smoothed = steered.smoothed or smooth(steered.controls, steered.certify_seconds)
     result = global_route.build_result(problem, steered, local_reason, smoothed)
-    return energy.improve(problem, result) if problem.objective == "energy" else result
+    return objective(problem, result)
+
+
+def objective(problem: Problem, result: PlanResult) -> PlanResult:
+    """``result`` (the plan of ``problem``) after the problem's objective
+    (:func:`nonholo.planning.energy.improve`): as it is for ``None``."""
+    if problem.objective is None:
+        return result
+    return energy.improve(problem, result, quick=problem.objective == "auto")

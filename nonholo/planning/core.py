@@ -311,6 +311,48 @@ def node_gradient(problem: Evaluator, ev: Evaluation, a: np.ndarray) -> np.ndarr
     return out
 
 
+def node_sensitivities(problem: Evaluator, ev: Evaluation, nodes: np.ndarray) -> np.ndarray:
+    """``s_n = ∂(state at node n)/∂λ`` at the ``nodes``, shape ``(len(nodes), d, p)``, from
+    ``ev``, a ``full`` evaluation: ``s_n = Z_n^{-1} S_n`` with ``S_n = Σ_{stages r before
+    t_n} W_r ∂U_r/∂λ`` (no extra simulation). For grid controls (each step's stages in one
+    interval ``j``, steps ``a_j … b_j − 1``) ``S_n``'s block of interval ``j`` is ``C(min(n,
+    b_j)) − C(min(n, a_j))``, ``C`` the running sum of the steps' contributions; otherwise
+    the contributions are summed over the steps before each node."""
+    N, m, D = problem.steps, problem.mechanism.n_inputs, problem.mechanism.n_rates
+    nodes = np.asarray(nodes, dtype=int)
+    W = ev.Wd.reshape(N, 3, D, m)
+    Bidx, Bval, sb, si = problem.stage_basis
+    p = problem.n_params
+    if Bidx.shape[0] and Bidx.shape[2] == 1 and np.all(Bidx[:, :, 0] == Bidx[:, :1, 0]):
+        j = Bidx[:, 0, 0]
+        C = np.zeros((N + 1, D, m))
+        np.cumsum(np.einsum("nc,ncdk->ndk", Bval[:, :, 0], W), axis=0, out=C[1:])
+        intervals = np.unique(j)
+        first = np.searchsorted(j, intervals, side="left")
+        last = np.searchsorted(j, intervals, side="right")
+        blocks = (C[np.minimum(nodes[:, None], last[None, :])]
+                  - C[np.minimum(nodes[:, None], first[None, :])])          # (k, J, D, m)
+        S = np.zeros((nodes.size, D, p))
+        cols = intervals[:, None] * sb + np.arange(m)[None, :] * si        # (J, m)
+        S[:, :, cols.ravel()] = np.moveaxis(blocks, 2, 1).reshape(nodes.size, D, -1)
+        return np.linalg.solve(ev.Z[nodes], S)
+    S = np.zeros((N + 1, D, p))
+    if Bidx.shape[0] == 0:                                  # dense basis (N, 3, nb)
+        nb = Bval.shape[2]
+        per = np.einsum("ncdk,ncb->ndkb", W, Bval)          # (N, D, m, nb)
+        cols = np.arange(nb)[None, :] * sb + np.arange(m)[:, None] * si
+        S[1:][:, :, cols.ravel()] = per.reshape(N, D, m * nb)
+    else:                                                   # sparse basis (N, 3, nq)
+        nq = Bidx.shape[2]
+        steps = np.broadcast_to(np.arange(1, N + 1)[:, None, None, None], (N, 3, nq, m))
+        cols = Bidx[..., None] * sb + np.arange(m) * si     # (N, 3, nq, m)
+        vals = Bval[:, :, :, None, None] * W[:, :, None, :, :]     # (N, 3, nq, D, m)
+        np.add.at(S, (steps.ravel(), slice(None), cols.ravel()),
+                  np.moveaxis(vals, 3, -1).reshape(-1, D))
+    np.cumsum(S, axis=0, out=S)
+    return np.linalg.solve(ev.Z[nodes], S[nodes])
+
+
 def step_scale(problem: Evaluator, controls: Controls) -> np.ndarray:
     """``S = W^{-1/2}`` of the metric the minimum norm is taken in: Euclidean on Fourier
     coefficients (parametric form, ``J^#``), L2 in time on grid controls (nonparametric

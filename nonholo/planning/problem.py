@@ -36,8 +36,10 @@ from .strategy_robust import RobustStrategy
 METHODS = ("parametric", "nonparametric")
 #: The routes :func:`nonholo.plan` takes to a goal.
 ROUTES = ("auto", "local", "global")
-#: What :func:`nonholo.plan` optimises once the goal is reached: nothing, or the energy ∫|u|² dt.
-OBJECTIVES = (None, "energy")
+#: What :func:`nonholo.plan` optimises once the goal is reached: nothing (the plan as found),
+#: the energy ∫|u|² dt, or (the default) the plan unless a quick search finds a motion of far
+#: less energy (:func:`nonholo.planning.energy.improve`).
+OBJECTIVES = (None, "energy", "auto")
 #: The strategies :func:`nonholo.plan` knows by name.
 STRATEGIES: dict[str, type[Strategy]] = {"paper": PaperStrategy, "robust": RobustStrategy}
 #: The planning horizon (s) of a plan asked for in the least time (``T=None``): the path is
@@ -111,7 +113,7 @@ class Problem:
     guess (``u0_given``: the caller's; ``gamma_given``: ``options.gamma`` is the caller's,
     not the strategy's default); ``strategy_class``; ``options``: the solver's
     settings; ``steps``: CF4 steps on ``[0, T]``; ``constraints``: what the motion keeps;
-    ``objective``: ``None`` or ``"energy"``; ``route``; ``least_time``: ``T`` is the
+    ``objective``: ``None``, ``"energy"`` or ``"auto"``; ``route``; ``least_time``: ``T`` is the
     planning horizon of a plan re-timed in the least time. ``started`` and
     ``started_effort``: when the problem was built (for the result's ``seconds`` and the
     global route's budget of effort).
@@ -144,7 +146,7 @@ class Problem:
               grid: int = 100, u0=None, gamma: float | None = None, step: float = 1.0, tol: float = 1e-10,
               max_iter: int = 200, strategy="robust", mechanism="platform", delta_min: float = 1e-2,
               steps: int | None = None, newton_below: float = 1e-3, min_step: float = 1e-6,
-              route: str = "auto", leg_length=None, leg_speed=None, objective: str | None = None,
+              route: str = "auto", leg_length=None, leg_speed=None, objective: str | None = "auto",
               constraints=()) -> "Problem":
         """The problem of :func:`nonholo.plan`'s keywords (see there), checked:
         ``ValueError`` naming the argument for bad input. ``constraints``: further
@@ -156,7 +158,7 @@ class Problem:
         if T is None and speed is None:
             raise ValueError("T=None asks for the least time, which needs a leg_speed to bound")
         if objective not in OBJECTIVES:
-            raise ValueError(f"unknown objective {objective!r}; known: None, 'energy'")
+            raise ValueError(f"unknown objective {objective!r}; known: None, 'energy', 'auto'")
         if route not in ROUTES:
             raise ValueError(f"unknown route {route!r}; known: {', '.join(ROUTES)}")
         stroke = LegStroke.of(leg_length, mech)
