@@ -98,10 +98,11 @@ MERIT_FACTOR = 2.0
 MAX_HALVINGS = 12
 #: ``objective="auto"`` (the default): the starts of the quick search (the plan's, then the
 #: loops of the first size), its budget (seconds of effort), and the fraction of the plan's
-#: energy a motion must need less than to replace it.
+#: energy a motion must need less than to replace it (below 1/3: a plan kept needs at most
+#: 2.5 times what the quick search found).
 QUICK_STARTS = 5
 QUICK_EFFORT = 0.15
-REPLACE_BELOW = 2.0 / 3.0
+REPLACE_BELOW = 0.4
 #: The barrier on the clearance from ``Δ = 0`` acts where ``sgnΔ`` is below this.
 BARRIER_DELTA = 0.1
 #: The barrier's weight ``ε`` relative to the energy (:class:`Objective`).
