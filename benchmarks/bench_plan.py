@@ -1,4 +1,4 @@
-"""Timing of the Jacobian planner on the examples of MODEL.md (run by hand).
+"""Timing of the Jacobian planner on the examples (:mod:`nonholo.paper.examples`; run by hand).
 
     python -m benchmarks.bench_plan [--repeat 30] [--cold-runs 3]
 

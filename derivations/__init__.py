@@ -7,6 +7,7 @@ mechanism's geometry:
 - :mod:`derivations.mechanisms`   the Mechanism class (SO(3), SO(3) × Rᵏ, Rᵏ); the platform's
   legs, disk, Δ(R), L(R)
 - :mod:`derivations.vehicles`     the rolling ball and the kinematic car
+- :mod:`derivations.equations`    a mechanism from its velocity field or its constraints, checked
 - :mod:`derivations.definitions`  the mechanisms the toolkit generates code for, by name
 - :mod:`derivations.singularity`  Δ in RPY coordinates and its normal form z³ + xy
 - :mod:`derivations.variational`  Q(R,u), A = Q + [Lu], B = L, P(l) (eqs. (6)-(9), (12))
@@ -14,4 +15,5 @@ mechanism's geometry:
 - :mod:`derivations.printed`      the appendix formulas transcribed as printed
 - :mod:`derivations.audit`        printed vs derived, equation by equation
 - :mod:`derivations.codegen`      numeric modules written into ``nonholo/generated``
+- :mod:`derivations.generator`    what keys a generated module: the generator's version, a definition's text
 """

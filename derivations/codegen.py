@@ -21,6 +21,7 @@ from . import definitions, singularity
 from .mechanisms import Mechanism, a, b, input_map, leg_length_squared, leg_rate_row, rho
 from .rotations import r
 from .state_space import Q_matrix
+from .variational import inputs
 
 GENERATED_DIR = Path(__file__).resolve().parent.parent / "nonholo" / "generated"
 
@@ -51,20 +52,28 @@ def _print(expr) -> str:
 
 
 def _function(name: str, args: str, unpack: dict[sp.Symbol, str], outputs: list[sp.Expr],
-              shape: tuple[int, ...] | None, doc: str) -> str:
+              shape: tuple[int, ...] | None, doc: str, auxiliaries=()) -> str:
     """Source of one generated function (two for an array output, see the module docstring).
 
     ``unpack`` maps input symbols to the Python expressions that read them; ``outputs``
     are the entries (row-major) of an array of ``shape`` or, with ``shape=None``, a scalar
-    (one output) or a tuple.
+    (one output) or a tuple. ``auxiliaries``: ``(symbol, expression)`` pairs, in order, for
+    symbols the outputs are written in; those needed are assigned after the unpacking.
     """
     subexprs, reduced = sp.cse(outputs, symbols=sp.numbered_symbols("x"), order="canonical")
     used = set().union(*(e.free_symbols for e in outputs)) if outputs else set()
+    needed = []
+    for sym, expr in reversed(auxiliaries):
+        if sym in used:
+            needed.insert(0, (sym, expr))
+            used |= expr.free_symbols
     header = f"def {name}({args}):" if shape is None else f"def {name}_into({args}, out):"
     lines = [header, f'    """{doc}"""' if shape is None else f'    """{doc} Fills ``out`` {shape}."""']
     for sym, src in unpack.items():
         if sym in used and str(sym) != src:
             lines.append(f"    {sym} = {src}")
+    for sym, expr in needed:
+        lines.append(f"    {sym} = {_print(expr)}")
     for sym, expr in subexprs:
         lines.append(f"    {sym} = {_print(expr)}")
     if shape is None:
@@ -152,12 +161,23 @@ def codegen_field(mechanism: Mechanism, name: str, G: sp.Matrix, doc: str) -> st
     v = sp.Matrix(sp.symbols(f"v1:{m + 1}", real=True))
     unpack = _unpack(mechanism)
     d = G.shape[0]
-    return (_function(name, "R, q", unpack, list(G), (d, m), doc)
+    forms, auxiliaries = _auxiliary(mechanism)
+    if name in forms:                       # the derivation's own forms (see Mechanism.derivation)
+        G = forms[name]
+        Q = forms[f"Q{name}"].xreplace(dict(zip(inputs(m), v)))
+    else:
+        Q = Q_matrix(mechanism, G, v)
+    return (_function(name, "R, q", unpack, list(G), (d, m), doc, auxiliaries)
             + "\n\n" +
             _function(f"Q{name}", "R, q, v", unpack | {v[k]: f"v[{k}]" for k in range(m)},
-                      list(Q_matrix(mechanism, G, v)), (d, d),
+                      list(Q), (d, d),
                       f"Q{name}(R, q, v) s = d/de {name}(exp(e[s_R]) R, q + e s_q) v at e = 0 "
-                      "(s = (s_R, s_q))."))
+                      "(s = (s_R, s_q)).", auxiliaries))
+
+
+def _auxiliary(mechanism: Mechanism) -> tuple[dict, tuple]:
+    """The derivation's ``auxiliary_forms`` and ``auxiliaries`` (none by default)."""
+    return mechanism.derivation.get("auxiliary_forms", {}), mechanism.derivation.get("auxiliaries", ())
 
 
 def codegen_paper_names(mechanism: Mechanism) -> str:
@@ -215,8 +235,10 @@ def mechanism_module(mechanism: Mechanism) -> str:
     unpack = _unpack(mechanism)
     field_name = "G" if mechanism.n_coordinates else "L"
     if mechanism.delta is not None:
-        parts.append(_function("delta", "R, q", unpack, [mechanism.delta], None,
-                               f"Δ = {sp.sstr(mechanism.delta)}; {field_name} is singular where Δ = 0."))
+        forms, auxiliaries = _auxiliary(mechanism)
+        parts.append(_function("delta", "R, q", unpack, [forms.get("delta", mechanism.delta)], None,
+                               f"Δ = {sp.sstr(mechanism.delta)}; {field_name} is singular where Δ = 0.",
+                               auxiliaries))
     rows = ("(ω, dq/dt)" if mechanism.orientation else "dq/dt") if mechanism.n_coordinates else "ω"
     parts.append(codegen_field(mechanism, "G", mechanism.field,
                                f"G(R, q): the state's rates per unit input, rows {rows}."))
@@ -230,8 +252,9 @@ def mechanism_module(mechanism: Mechanism) -> str:
             W = input_map(mechanism.field, mechanism.frame)
         parts.append(codegen_field(mechanism, "N", mechanism.frame,
                                    "N(R, q): the desingularised field, rates = N(R, q) w."))
-        parts.append(_function("W", "R, q", unpack, list(W), (m, m),
-                               "W(R, q): physical inputs u = W w for the rates N(R, q) w."))
+        forms, auxiliaries = _auxiliary(mechanism)
+        parts.append(_function("W", "R, q", unpack, list(forms.get("W", W)), (m, m),
+                               "W(R, q): physical inputs u = W w for the rates N(R, q) w.", auxiliaries))
     return "\n\n".join(parts)
 
 

@@ -1,7 +1,7 @@
 """The mechanisms the toolkit derives and generates code for, by name.
 
 Adding a mechanism means adding one entry here: a function returning a
-:class:`~derivations.mechanisms.Mechanism` (see ``notebooks/adding_a_mechanism.ipynb``).
+:class:`~derivations.mechanisms.Mechanism` (see ``notebooks/04_adding_a_mechanism.ipynb``).
 """
 from __future__ import annotations
 

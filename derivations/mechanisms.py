@@ -20,6 +20,8 @@ them gives ``L(R)`` and ``det C(R)`` gives ``Δ(R)``.
 """
 from __future__ import annotations
 
+import keyword
+import re
 from dataclasses import dataclass, field
 
 import sympy as sp
@@ -51,7 +53,10 @@ class Mechanism:
         units: the unit of each coordinate (for reports: ``"m"``, ``"rad"``, ...).
         angles: which coordinates are angles (errors of an angle are taken modulo 2π).
         X: k×m rates of the coordinates per unit input (``None``: no coordinates).
-        derivation: named intermediate results (leg rows, constraint matrix, ...).
+        derivation: named intermediate results (leg rows, constraint matrix, ...); the code
+            generator takes ``auxiliary_forms`` — the generated ``G``, ``QG`` (in the inputs
+            ``u1 … um``) and ``delta`` written in symbols of ``auxiliaries`` (pairs of a symbol
+            and its expression, in order) — where the derivation gives them.
     """
 
     name: str
@@ -68,10 +73,57 @@ class Mechanism:
     derivation: dict = field(default_factory=dict, compare=False, repr=False)
 
     def __post_init__(self):
+        """Refuse a definition the generated code could not run: which class of state it
+        is (an orientation needs ``L`` of 3 rows, coordinates need ``X``), shapes that do
+        not fit, and symbols that are neither ``R``'s entries nor coordinates (each named)."""
+        where = f"mechanism {self.name!r}"
         if self.L is None and self.X is None:
-            raise ValueError(f"mechanism {self.name!r}: give L (an orientation), X (coordinates) or both")
-        if (self.X is None) != (not self.coordinates):
-            raise ValueError(f"mechanism {self.name!r}: X needs one row per coordinate")
+            raise ValueError(f"{where}: give L (an orientation R: 3 rows in r11 … r33), X (the rates "
+                             "of coordinates=) or both; nonholo.Mechanism.from_equations builds either "
+                             "from equations")
+        if self.L is not None and self.L.shape[0] != 3:
+            raise ValueError(f"{where}: L is the angular velocity of an orientation R (3 rows in "
+                             f"r11 … r33), got {self.L.shape[0]} rows; a state of coordinates x has "
+                             "no L but X (ẋ = X u) with coordinates=, as "
+                             "nonholo.Mechanism.from_equations(name, coordinates=..., inputs=..., "
+                             "rates=...) builds it")
+        if (self.X is None) != (not self.coordinates) or (
+                self.X is not None and self.X.shape[0] != len(self.coordinates)):
+            raise ValueError(f"{where}: X needs one row per coordinate")
+        if self.L is not None and self.X is not None and self.L.shape[1] != self.X.shape[1]:
+            raise ValueError(f"{where}: L has {self.L.shape[1]} input columns, X {self.X.shape[1]}")
+        if len(self.inputs) != self.n_inputs:
+            raise ValueError(f"{where}: {len(self.inputs)} input names for {self.n_inputs} inputs")
+        for key in ("units", "angles"):
+            if getattr(self, key) and len(getattr(self, key)) != self.n_coordinates:
+                raise ValueError(f"{where}: {key} needs one entry per coordinate")
+        d = (3 if self.orientation else 0) + self.n_coordinates
+        for key, shape in (("frame", (d, self.n_inputs)), ("frame_inputs", (self.n_inputs, self.n_inputs))):
+            value = getattr(self, key)
+            if value is not None and value.shape != shape:
+                raise ValueError(f"{where}: {key} must be {shape[0]}×{shape[1]}, got "
+                                 f"{value.shape[0]}×{value.shape[1]}")
+        for x in self.coordinates:
+            if not isinstance(x, sp.Symbol) or not is_free_name(str(x)):
+                raise ValueError(f"{where}: the coordinate {x} needs another name: a Python identifier "
+                                 "other than those of the generated code (R, q, v, out, numpy, r_ij, s_i, "
+                                 "u_i, v_i)")
+        known = set(self.coordinates) | (set(r) if self.orientation else set())
+        for key in ("L", "X", "delta", "frame", "frame_inputs"):
+            value = getattr(self, key)
+            stray = set() if value is None else sp.sympify(value).free_symbols - known
+            if stray:
+                names = ", ".join(sorted(map(str, stray)))
+                if not self.orientation and stray & set(r):
+                    hint = "; only a state with an orientation R (L given) has the entries r_ij"
+                elif key == "L" and not self.coordinates:
+                    hint = ("; a state of coordinates x takes X (ẋ = X u) with coordinates=, as "
+                            "nonholo.Mechanism.from_equations(name, coordinates=..., inputs=..., "
+                            "rates=...) builds it")
+                else:
+                    hint = ": declare them as coordinates or give them values"
+                raise ValueError(f"{where}: {key} uses {names}, which {'is' if len(stray) == 1 else 'are'} "
+                                 f"neither a coordinate nor an entry of R{hint}")
 
     @property
     def orientation(self) -> bool:
@@ -106,6 +158,17 @@ class Mechanism:
         if not k:
             return "SO(3)"
         return f"SO(3)xR^{k}" if self.orientation else f"R^{k}"
+
+
+#: Names the generated code and the variational derivation use themselves: a coordinate
+#: may not take them (:func:`is_free_name`).
+TAKEN_NAMES = re.compile(r"(R|q|v|out|numpy|r[1-3][1-3]|[suv][0-9]+)")
+
+
+def is_free_name(name: str) -> bool:
+    """Whether a coordinate may be called ``name`` in a generated module: an identifier, not a
+    keyword, not one of :data:`TAKEN_NAMES`."""
+    return name.isidentifier() and not keyword.iskeyword(name) and not TAKEN_NAMES.fullmatch(name)
 
 
 # --------------------------------------------------------------------------------------
@@ -159,16 +222,18 @@ def leg_length_squared(base, tip, R: sp.Matrix = r) -> sp.Expr:
 
 
 def leg_rate_row(base, tip, R: sp.Matrix = r) -> sp.Matrix:
-    """Row ``c`` with ``d(l²)/dt = c ω`` along ``dR/dt = [ω] R``.
+    """Row ``c`` with ``d(l²)/dt = c ω`` along ``dR/dt = [ω] R``: ``c = -2 (R tip × base)ᵀ``.
 
-    Differentiates ``|R tip - base|²`` along the motion (no orthogonality needed: the
-    term ``(R tip)ᵀ [ω] R tip`` vanishes identically); equals ``-2 (R tip × base)ᵀ``.
+    Differentiating ``|R tip - base|²`` along the motion gives ``2 (R tip - base)ᵀ [ω] R tip``;
+    the term ``(R tip)ᵀ [ω] R tip`` vanishes identically (no orthogonality needed), and
+    ``-2 baseᵀ (ω × R tip) = -2 ω · (R tip × base)``. Linear in ``R``: any 3×3 matrix may
+    stand for it (``[e_k] R`` gives the row's derivative along ``∂R = [e_k] R``).
     """
-    w = sp.Matrix(sp.symbols("omega1:4", real=True))
+    # the coefficient of R_ij in component m: -2 tip_j (e_i × base)_m (no products of sums)
     A, P = sp.Matrix(base), sp.Matrix(tip)
-    d = R * P - A
-    rate = sp.expand(2 * (d.T * hat(w) * R * P)[0])
-    return sp.Matrix([[rate.coeff(w[k]) for k in range(3)]])
+    axes = [sp.eye(3).col(i).cross(A) for i in range(3)]
+    return sp.Matrix([[sp.expand(sp.Add(*(-2 * P[j] * axes[i][m] * R[i, j] for i in range(3) for j in range(3))))
+                       for m in range(3)]])
 
 
 def leg_input_scale(base, tip) -> sp.Expr:
@@ -224,21 +289,33 @@ def platform_mechanism(name: str, geometry: PlatformGeometry, description: str) 
     """Derive ``Δ(R)`` and ``L(R)`` of a two-leg/one-disk platform from its geometry.
 
     ``ω = C(R)^{-1} (u_1, u_2, 0)``, so ``L`` is the first two columns of
-    ``C^{-1} = adj(C) / det C`` and ``det C = κ Δ``.
+    ``C^{-1} = adj(C) / det C`` and ``det C = κ Δ``. Every admissible ``ω`` lies in the
+    plane the disk allows, spanned by the constant frame ``N``, and ``u = C₁₂(R) ω`` (the leg
+    rows of ``C``) gives the physical inputs of ``ω = N w`` exactly: ``W = C₁₂ N``,
+    polynomial (``(Nᵀ L)^{-1}``, :func:`input_map`, without inverting anything).
+
+    A geometry of numbers only (floats taken as the rationals they print as) is derived by
+    :func:`exact_platform`, which keeps ``L`` and ``Q`` in terms of the entries of ``C``
+    (no simplification of rational functions); a symbolic one (``a``, ``b``, ``ρ``) as
+    the appendix prints it.
     """
+    exact = exact_geometry(geometry)
+    if exact is not None:
+        return exact_platform(name, exact, description)
     C = constraint_matrix(geometry)
     delta, kappa = normalized_determinant(C)
     adj = C.adjugate()[:, :2]
     numerator = (adj / kappa).applyfunc(lambda x: sp.factor(sp.expand(x)))
     L = numerator / delta
+    frame = constraint_plane_frame(C.row(2))
     return Mechanism(
         name=name,
         description=description,
         L=L,
         delta=delta,
-        inputs=("u1 = d(l1^2)/dt / (4 |A1| |B1|)", "u2 = d(l2^2)/dt / (4 |A2| |B2|)"),
-        # every admissible ω lies in the plane the disk allows: a constant frame
-        frame=constraint_plane_frame(C.row(2)),
+        inputs=PLATFORM_INPUTS,
+        frame=frame,
+        frame_inputs=(C[:2, :] * frame).applyfunc(sp.factor),
         derivation={
             "geometry": geometry,
             "leg_length_squared": (leg_length_squared(geometry.base1, geometry.tip1),
@@ -246,6 +323,83 @@ def platform_mechanism(name: str, geometry: PlatformGeometry, description: str) 
             "constraint_matrix": C,
             "kappa": kappa,
             "L_numerator": numerator,
+        },
+    )
+
+
+#: The inputs of a two-leg platform: the legs' scaled rates.
+PLATFORM_INPUTS = ("u1 = d(l1^2)/dt / (4 |A1| |B1|)", "u2 = d(l2^2)/dt / (4 |A2| |B2|)")
+
+
+def exact_geometry(geometry: PlatformGeometry) -> PlatformGeometry | None:
+    """``geometry`` with exact numbers (a float as the rational of its printed digits,
+    ``0.3 → 3/10``), or ``None`` if any of its entries has a symbol."""
+    values = {}
+    for key in ("base1", "tip1", "base2", "tip2", "contact", "axle"):
+        vector = tuple(sp.sympify(x) for x in getattr(geometry, key))
+        if any(x.free_symbols for x in vector):
+            return None
+        values[key] = tuple(exact_number(x) for x in vector)
+    return PlatformGeometry(**values)
+
+
+def exact_number(x: sp.Expr) -> sp.Expr:
+    """``x`` with its floats as the rationals of their printed digits (``0.112 → 14/125``)."""
+    if isinstance(x, sp.Float):
+        return sp.Rational(repr(float(x)))
+    return x.xreplace({f: sp.Rational(repr(float(f))) for f in x.atoms(sp.Float)}) if x.has(sp.Float) else x
+
+
+def exact_platform(name: str, geometry: PlatformGeometry, description: str) -> Mechanism:
+    """:func:`platform_mechanism` of a geometry of exact numbers, without simplifying.
+
+    With symbols ``c_ij`` for the entries of the unscaled constraint matrix ``C₀(R)`` (leg
+    rows ``-2 (R tip_i × base_i)ᵀ``, disk row ``contact × axle``; ``C = diag(s₁, s₂, 1/|contact ×
+    axle|) C₀``, ``s_i = 1/k_i`` the inputs' scales): ``L = adj(C₀)[:, :2] diag(k) / det C₀`` and,
+    differentiating ``C ω = (u, 0)`` along ``∂R = [e_j] R`` (``C₀`` is linear in ``R``, its disk
+    row constant; ``d_j = C₀([e_j] R)``), the variational matrix
+    ``Q[:, j] = -adj(C₀) d_j L u / det C₀``; ``Δ = det C₀ / κ₀`` (leading coefficient 1, as
+    :func:`normalized_determinant`); ``W = diag(s) C₀[:2] N``. The derivation gives these forms in the symbols
+    (``auxiliary_forms``) with the symbols' definitions (``auxiliaries``: linear forms in
+    ``r_ij``, and the constants ``k_i``), so the generated code computes ``C₀``, its
+    adjugate and determinant once; the mechanism's ``L`` and ``Δ`` are the same in ``r_ij``.
+    """
+    g = geometry
+    legs = ((g.base1, g.tip1), (g.base2, g.tip2))
+    disk = sp.Matrix(g.contact).cross(sp.Matrix(g.axle)).T
+    C0 = sp.Matrix.vstack(*(leg_rate_row(base, tip) for base, tip in legs), disk)
+    c = sp.Matrix(3, 3, lambda i, j: sp.Symbol(f"c{i + 1}{j + 1}"))
+    det_c, adj_c = c.det(method="berkowitz"), c.adjugate()
+    det0 = sp.Poly(det_c.xreplace(dict(zip(c, C0))), *r)
+    kappa0 = det0.LC()
+    scales = [leg_input_scale(base, tip) for base, tip in legs]
+    k = sp.symbols("k1:3")
+    auxiliaries = [*zip(c, C0), *((ki, 1 / s) for ki, s in zip(k, scales))]
+    u = sp.symbols("u1:3", real=True)
+    # written out entry by entry: SymPy's matrix products of symbolic entries are slower
+    L_c = sp.Matrix(3, 2, lambda i, j: adj_c[i, j] * k[j] / det_c)
+    omega = [adj_c[i, 0] * k[0] * u[0] / det_c + adj_c[i, 1] * k[1] * u[1] / det_c for i in range(3)]
+    columns = []
+    for j, e in enumerate((e1, e2, e3)):
+        d = sp.Matrix(2, 3, lambda i, l: sp.Symbol(f"d{j + 1}{i + 1}{l + 1}"))
+        auxiliaries += zip(d, sp.Matrix.vstack(*(leg_rate_row(base, tip, hat(e) * r) for base, tip in legs)))
+        z = [sp.Add(*(d[i, l] * omega[l] for l in range(3))) for i in range(2)]
+        columns.append([-(adj_c[m, 0] * z[0] + adj_c[m, 1] * z[1]) / det_c for m in range(3)])
+    norm = sp.sqrt((disk * disk.T)[0])
+    frame = constraint_plane_frame(disk)
+    W_c = sp.Matrix(2, 2, lambda i, j: sp.Add(*(c[i, l] * frame[l, j] for l in range(3))) / k[i])
+    values = dict(auxiliaries)
+    return Mechanism(
+        name=name, description=description, L=L_c.xreplace(values),
+        delta=sp.expand(det0.as_expr() / kappa0), inputs=PLATFORM_INPUTS, frame=frame,
+        frame_inputs=sp.diag(*scales) * (C0[:2, :] * frame).applyfunc(sp.expand),
+        derivation={
+            "geometry": geometry,
+            "leg_length_squared": tuple(leg_length_squared(base, tip) for base, tip in legs),
+            "constraint_matrix": sp.Matrix.vstack(C0.row(0) * scales[0], C0.row(1) * scales[1], disk / norm),
+            "kappa": kappa0 * scales[0] * scales[1] / norm,
+            "auxiliaries": tuple(auxiliaries),
+            "auxiliary_forms": {"G": L_c, "QG": sp.Matrix(columns).T, "delta": det_c / kappa0, "W": W_c},
         },
     )
 

@@ -10,7 +10,8 @@ The numeric kinematics come from generated modules (``nonholo.generated``, writt
 - ``nonholo.retime(result, leg_speed, T=None)``: a plan re-timed so that no leg moves
   faster than ``leg_speed`` (:mod:`nonholo.planning.retime`);
 - :class:`~nonholo.model.mechanism.Mechanism`: a mechanism's numeric kinematics
-  (``Mechanism.from_symbolic`` builds one from a derivation); ``nonholo.mechanism_named``
+  (``Mechanism.from_equations`` builds one from its velocity field, ``from_constraints``
+  from Pfaffian constraints, ``from_symbolic`` from a derivation); ``nonholo.mechanism_named``
   looks one up by name, :func:`nonholo.model.catalog.names` lists them.
 """
 __version__ = "0.1.0"

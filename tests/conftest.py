@@ -1,9 +1,10 @@
 """Helpers shared by the test modules (plain functions: ``from conftest import example``).
 
-- :func:`example`: ``(R0, Rd)`` of an example of MODEL.md, from :mod:`nonholo.paper.examples`;
+- :func:`example`: ``(R0, Rd)`` of an example of :mod:`nonholo.paper.examples`;
 - :func:`check_solution`: a planner result confirmed by an independent DOP853 re-simulation;
 - :func:`verified`: the same check as the robust-strategy benchmark (dense path, ``|Δ|``);
 - :func:`reachable_goals`, :func:`paper_reachable_goals`: goals reachable by construction;
+- :func:`regular_motion`: a start, a reachable goal and a control, regular for a mechanism;
 - :func:`random_rotations`: random rotations away from a mechanism's singular set;
 - :func:`forbid_simulation`: make any simulation (or kernel compilation) fail the test;
 - fixture ``interpreted_kernels``: every system's kernels run by the interpreter (:mod:`kernel_runs`).
@@ -23,7 +24,7 @@ from nonholo.spaces import so3
 
 
 def example(k: int) -> tuple[np.ndarray, np.ndarray]:
-    """``(R0, Rd)`` of example ``k`` of MODEL.md (:func:`nonholo.paper.examples.get`)."""
+    """``(R0, Rd)`` of example ``k`` (:func:`nonholo.paper.examples.get`)."""
     ex = examples.get(k)
     return ex.R_start, ex.R_goal
 
@@ -36,7 +37,7 @@ def example_rpy_args(k: int) -> tuple[list[str], list[str]]:
 
 
 def platform_delta(R) -> float:
-    """The paper's ``Δ(R) = r12 r31 + r21 r32`` (MODEL.md), written out independently of
+    """The paper's ``Δ(R) = r12 r31 + r21 r32``, written out independently of
     the generated code."""
     return R[0, 1] * R[2, 0] + R[1, 0] * R[2, 1]
 
@@ -100,6 +101,27 @@ def reachable_goals(mechanism, count, seed):
             continue
         goals.append((R0, traj.R_T))
     return goals
+
+
+def regular_motion(mechanism, seed: int, clearance: float = 0.1):
+    """``(R0, Rd, u)`` for a mechanism on SO(3), whatever its regular region: a goal ``Rd``
+    reachable from ``R0`` (:func:`reachable_goals`) and a small random Fourier control ``u``
+    whose motion from ``R0`` over ``[0, 1]`` keeps ``|Δ| ≥ clearance`` (drawn again until it
+    does)."""
+    from nonholo import simulate
+
+    mech = catalog.get(mechanism)
+    rng = np.random.default_rng(seed)
+    for _ in range(100):
+        R0, Rd = reachable_goals(mech, 1, seed=int(rng.integers(1 << 31)))[0]
+        u = Fourier(1.0, rng.normal(scale=0.1, size=(mech.n_inputs, 5)))
+        try:
+            traj = simulate(R0, u, 1.0, mechanism=mech)
+        except ValueError:  # ran into Δ = 0
+            continue
+        if not mech.has_singular_set or np.min(np.abs(traj.delta)) >= clearance:
+            return R0, Rd, u
+    raise AssertionError(f"no regular start and control of {mech.name!r}")
 
 
 def paper_reachable_goals(count: int, seed: int = 0):

@@ -33,7 +33,7 @@ cms = _load_module()
 
 Delta = catalog.get("platform").delta      # the generated Δ(R), independent of the baseline's
 
-R0, RD = example(1)                         # MODEL.md's Example 1
+R0, RD = example(1)                         # Example 1 (nonholo.paper.examples)
 DELTA_MIN = 0.01
 
 

@@ -4,8 +4,9 @@ import subprocess
 import pytest
 
 
-@pytest.mark.parametrize("command", ["nonholo mechanisms | head -0", "nonholo audit | true",
-                                     "nonholo audit --json | head -1"])
+@pytest.mark.parametrize("command", ["nonholo mechanisms | head -0", "nonholo mechanisms | true",
+                                     "nonholo plan --from 0.1 0.2 0.3 --to 0.3 0.2 0.1 | head -1",
+                                     "nonholo audit --help | true"])
 def test_closed_stdout_is_not_an_error(command):
     out = subprocess.run(["bash", "-o", "pipefail", "-c", command], capture_output=True, text=True,
                          timeout=300)

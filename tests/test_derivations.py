@@ -130,7 +130,7 @@ def test_codegen_is_deterministic():
 
 
 def test_paper_instance_gives_the_papers_L():
-    """The general platform derivation at the paper's geometry gives MODEL.md's L(R)."""
+    """The general platform derivation at the paper's geometry gives the paper's L(R)."""
     m = definitions.get("platform")
     D = r[0, 1] * r[2, 0] + r[1, 0] * r[2, 1]
     L_paper = 2 / D * sp.Matrix([[r[1, 0], r[0, 1]], [-r[1, 0], -r[0, 1]], [-r[2, 0], r[2, 1]]])

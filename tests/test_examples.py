@@ -48,8 +48,11 @@ def test_reproduce_writes_summary_and_figures(tmp_path, capsys):
     assert main(["reproduce", "--out", str(tmp_path), "--no-audit"]) == 0
     rows = json.loads((tmp_path / "summary.json").read_text())
     keys = {"example", "method", "strategy", "success", "iterations", "terminal_error",
-            "min_delta", "seconds"}
-    assert all(keys <= set(r) for r in rows)
+            "min_delta"}
+    assert all(keys <= set(r) and "seconds" not in r for r in rows)   # times are printed, not kept
+    table = (tmp_path / "summary.md").read_text()
+    assert "time" not in table and len(table.splitlines()) == 2 + len(rows)
+    assert "time [s]" in capsys.readouterr().out
     for number in (1, 2):
         mine = [r for r in rows if r["example"] == number]
         assert {r["method"] for r in mine} == {"parametric", "nonparametric"}
@@ -68,6 +71,8 @@ def test_reproduce_writes_summary_and_figures(tmp_path, capsys):
     from nonholo.io.result import PlanResult
     again = PlanResult.load(tmp_path / "plans" / "example1_parametric.json")
     assert again.success and again.terminal_error <= 1e-10
+    for plan in (tmp_path / "plans").glob("*.json"):             # no wall time kept
+        assert json.loads(plan.read_text())["seconds"] is None, plan.name
     far = PlanResult.load(tmp_path / "plans" / "far_goal.json")
     assert far.success and far.route == "global"
     limited = PlanResult.load(tmp_path / "plans" / "leg_limits.json")

@@ -228,3 +228,155 @@ def test_mechanism_card(name):
     fig = viz.mechanism_card_figure(name)
     assert len(fig.axes) == 3  # schematic, slice, colour bar
     assert "[" in fig.axes[1].get_xlabel()
+
+
+# -- figures in notebooks, plans of any mechanism, units from the mechanism's data --------------
+
+def test_figures_show_themselves_as_images(results):
+    """IPython's display (a fresh formatter: no backend has registered anything) gets a PNG
+    of the figure's size from a library figure, and nothing but text from a plain one."""
+    import io
+
+    from IPython.core.formatters import DisplayFormatter
+
+    fig = viz.convergence_figure(results)
+    assert isinstance(fig, viz.NotebookFigure)
+    data, _ = DisplayFormatter().format(fig)
+    with Image.open(io.BytesIO(data["image/png"])) as im:
+        width, height = im.size
+    w, h = fig.get_size_inches() * fig.dpi      # trimmed to the artists, with a small pad
+    assert 0.7 * w <= width <= 1.2 * w and 0.7 * h <= height <= 1.2 * h
+    plain, _ = DisplayFormatter().format(Figure())
+    assert "image/png" not in plain
+
+
+def test_figures_are_made_without_pyplot():
+    """Building every kind of figure leaves pyplot unimported: no global state in scripts."""
+    import subprocess
+    import sys
+
+    code = ("import sys, nonholo\nfrom nonholo import viz\nfrom nonholo.cli import entry\n"
+            "r = nonholo.plan([0, 0, 0, 0], [0, 1, 0, 0], mechanism='car')\n"
+            "figs = [viz.plan_figure(r), viz.car_figure(r), viz.singular_slices_figure((0.0,)),"
+            " viz.mechanism_figure(__import__('numpy').eye(3))]\n"
+            "[f._repr_png_() for f in figs]\n"
+            "assert 'matplotlib.pyplot' not in sys.modules, 'pyplot imported'\n")
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=600)
+    assert done.returncode == 0, done.stderr[-2000:]
+
+
+def test_saved_figures_are_the_same_bytes_twice(results, tmp_path):
+    """No creation date in the PDF: the same figure saved twice (a second apart) is equal."""
+    import time
+
+    a = viz.save_figure(viz.rpy_figure(results), "a", tmp_path, dpi=50)
+    time.sleep(1.1)
+    b = viz.save_figure(viz.rpy_figure(results), "b", tmp_path, dpi=50)
+    for first, second in zip(a, b):
+        assert first.read_bytes() == second.read_bytes(), first.suffix
+    assert b"CreationDate" not in a[1].read_bytes()
+
+
+@pytest.fixture(scope="module")
+def car_plan():
+    import nonholo
+    return nonholo.plan([0.0, 0.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0], mechanism="car")
+
+
+def symbolic_input_units(name):
+    """Each input's unit from the symbolic field: the unit of the first coordinate whose
+    rate it drives (``X[i, j] ≠ 0``), per second; ``1/s`` if it drives none."""
+    from derivations import definitions
+
+    m = definitions.MECHANISMS[name]()
+    out = []
+    for j in range(len(m.inputs)):
+        rows = [i for i in range(len(m.coordinates)) if m.X is not None and m.X[i, j] != 0]
+        out.append(f"{m.units[rows[0]]}/s" if rows else "1/s")
+    return tuple(out)
+
+
+@pytest.mark.parametrize("name", catalog.names())
+def test_input_units_follow_the_field(name):
+    assert viz.input_units(catalog.get(name)) == symbolic_input_units(name)
+
+
+def test_units_come_from_the_data_not_the_name(car_plan):
+    """The car's data with other units and another name: the labels follow the data."""
+    import dataclasses
+
+    car = catalog.get("car")
+    other = dataclasses.replace(car, name="vehicle", units=("m", "m", "rad", "rad"))
+    assert viz.input_units(other) == ("m/s", "rad/s")
+    assert viz.plane_position(other) == (0, 1)
+    fig = Figure()
+    viz.plot_plane_path(fig.add_subplot(), car_plan, mechanism=other)
+    assert (fig.axes[0].get_xlabel(), fig.axes[0].get_ylabel()) == ("x [m]", "y [m]")
+    bare = dataclasses.replace(car, name="vehicle", units=("",) * 4)   # no units given: none shown
+    assert viz.input_units(bare) == ("", "") and viz.plane_position(bare) == (0, 1)
+    fig = Figure()
+    viz.plot_plane_path(fig.add_subplot(), car_plan, mechanism=bare)
+    assert (fig.axes[0].get_xlabel(), fig.axes[0].get_ylabel()) == ("x", "y")
+    turned = dataclasses.replace(car, name="vehicle", angles=(True, False, True, True))
+    assert viz.plane_position(turned) is None          # one length coordinate: no plane
+    mixed = dataclasses.replace(car, name="vehicle", units=("m", "wheelbase", "m", "rad"),
+                                angles=(False, False, False, True))
+    assert viz.plane_position(mixed) == (0, 2)          # the first two lengths in one unit
+
+
+def plane_axes(fig):
+    return [ax for ax in fig.axes if ax.get_aspect() == 1.0]
+
+
+def test_a_car_plans_figure_has_its_path_on_the_plane(car_plan, tmp_path):
+    fig = viz.plan_figure(car_plan)
+    (plane,) = plane_axes(fig)
+    assert (plane.get_xlabel(), plane.get_ylabel()) == ("x [wheelbase]", "y [wheelbase]")
+    np.testing.assert_array_equal(plane.lines[0].get_xydata(), car_plan.q[:, :2])
+    goal = [ln for ln in plane.lines if ln.get_label() == "goal"][0]
+    np.testing.assert_array_equal(goal.get_xydata()[0], car_plan.qd[:2])
+    labels = [ax.get_ylabel() for ax in fig.axes]
+    assert "x, y [wheelbase]" in labels and "theta, phi [rad]" in labels and "Δ [-]" in labels
+    legend = [t.get_text() for ax in fig.axes if ax.get_legend() for t in ax.get_legend().get_texts()]
+    assert any(t.endswith("[wheelbase/s]") for t in legend) and any(t.endswith("[rad/s]") for t in legend)
+    assert not any("1/s" in label for label in labels + legend)
+    assert "(wheelbase, rad)" in fig.get_suptitle()
+    png, pdf = viz.save_figure(fig, "car_plan", tmp_path, dpi=50)
+    assert png.stat().st_size > 1000
+
+
+def test_a_platform_plans_figure_has_no_plane(tmp_path):
+    import nonholo
+
+    res = nonholo.plan(*example(1), strategy="paper")
+    fig = viz.plan_figure(res)
+    assert not plane_axes(fig)
+    labels = [ax.get_ylabel() for ax in fig.axes]
+    assert labels[:2] == ["input u [1/s]", "RPY angles [rad]"]
+    assert "leg length [geometry units]" in labels and "|l_T| = " in fig.get_suptitle()
+    assert fig.get_suptitle().endswith(" rad")
+
+
+def test_the_balls_figures_measure_its_position_in_radii():
+    import nonholo
+    from nonholo.paper import reproduce
+
+    start, goal = reproduce.STATE_PROBLEMS["rolling_ball"]
+    res = nonholo.plan(start, goal, mechanism="rolling_ball", **reproduce.STATE_OPTIONS["rolling_ball"])
+    for fig in (viz.plan_figure(res), viz.ball_figure(res)):
+        (plane,) = plane_axes(fig)
+        assert (plane.get_xlabel(), plane.get_ylabel()) == ("p1 [radius]", "p2 [radius]")
+    legend = [t.get_text() for t in fig.axes[2].get_legend().get_texts()]
+    assert all(t.endswith("[radius/s]") for t in legend)
+    assert "rotation" in viz.plan_figure(res).get_suptitle()
+
+
+def test_reasons_give_errors_in_the_states_units(car_plan):
+    import nonholo
+
+    assert car_plan.success
+    assert "(wheelbase, rad) from the goal" in car_plan.reason
+    assert " rad from the goal" not in car_plan.reason
+    assert "(wheelbase, rad)" in repr(car_plan)
+    platform = nonholo.plan(*example(1), strategy="paper")
+    assert platform.reason.endswith(" rad") and "rad from the goal" in platform.reason

@@ -16,7 +16,7 @@ def test_into_forms_fill_out_with_the_allocating_result(name):
     assert {"G", "QG", "L", "Q"} <= set(checked)
     assert ("W" in checked) == mech.has_frame
     # the Mechanism's callables are the module's allocating forms (on SO(3), of R alone)
-    assert mech.L is mech.module.L and mech.Q is mech.module.Q and mech.G is mech.module.G
+    assert mech.L.generated is mech.module.L and mech.Q.generated is mech.module.Q and mech.G is mech.module.G
     if mech.has_frame:
         assert tuple(f.generated for f in (mech.frame.N, mech.frame.QN, mech.frame.W)) == (
             mech.module.N, mech.module.QN, mech.module.W)

@@ -3,12 +3,12 @@ import zlib
 
 import numpy as np
 import pytest
-from conftest import SO3_MECHANISMS, example, reachable_goals
+from conftest import SO3_MECHANISMS, example, reachable_goals, regular_motion
 
+from derivations.mechanisms import PlatformGeometry, platform_mechanism
 from nonholo import Mechanism, mechanism_named, plan
 from nonholo.certify import resimulate as verify
 from nonholo.cli.entry import main
-from nonholo.controls.parametrisations import Fourier
 from nonholo.generated import MECHANISMS
 from nonholo.model import catalog
 from nonholo.motion import simulation
@@ -67,11 +67,29 @@ def test_unknown_mechanism():
         plan(np.eye(3), np.eye(3), mechanism="no_such_thing")
 
 
-@pytest.mark.parametrize("name", SO3_MECHANISMS)
-def test_a_mechanism_object_works_wherever_its_name_does(name):
+#: A platform whose singular set separates example 1's start from its goal (Δ of opposite
+#: signs there): a start and control fixed for the paper's platform are not for it.
+ACROSS = PlatformGeometry(base1=(0.1, 1.4, 0.6), tip1=(0.0, 0.8, 0.1), base2=(2.8, 0.9, -0.7),
+                          tip2=(0.6, -0.2, 0.0), contact=(-2.3, -0.2, -1.2), axle=(-0.6, 0.2, 1.1))
+
+
+@pytest.fixture
+def named(request, monkeypatch):
+    """A mechanism's name: one of the package's, or the platform ``ACROSS`` added in the test."""
+    if request.param == "across":
+        monkeypatch.setattr(catalog, "_ADDED", {})
+        catalog.add(Mechanism.from_symbolic(platform_mechanism("across", ACROSS, "example 1 across its Δ = 0")))
+    return request.param
+
+
+@pytest.mark.parametrize("named", SO3_MECHANISMS + ("across",), indirect=True)
+def test_a_mechanism_object_works_wherever_its_name_does(named):
+    name = named
     mech = catalog.get(name)
-    R0, Rd = example(1)
-    u = Fourier(1.0, [[0.05, 0.1, 0.0, 0.0, 0.05], [-0.05, 0.0, 0.1, 0.05, 0.0]])
+    if name == "across":            # the fixed start and goal of example 1 would not do
+        R0, Rd = example(1)
+        assert mech.delta(R0) * mech.delta(Rd) < 0
+    R0, Rd, u = regular_motion(mech, seed=zlib.crc32(name.encode()))
     a = simulation.simulate(R0, u, 1.0, mechanism=mech)
     b = simulation.simulate(R0, u, 1.0, mechanism=name)
     np.testing.assert_array_equal(a.R, b.R)

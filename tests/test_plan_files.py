@@ -197,6 +197,20 @@ def test_a_byte_order_mark_is_accepted(tmp_path):
     assert PlanResult.load(path) == plan_of("robust")
 
 
+def test_a_plan_kept_without_its_wall_time_loads(tmp_path):
+    """``seconds`` null (as ``nonholo reproduce`` writes plans) is "not recorded"; the rest
+    of the plan is the same, and saving it again writes the same text."""
+    import dataclasses
+
+    plan = plan_of("paper")
+    path = dataclasses.replace(plan, seconds=None).save(tmp_path / "plan.json")
+    assert json.loads(path.read_text())["seconds"] is None
+    again = PlanResult.load(path)
+    assert again.seconds is None and "wall time not recorded" in repr(again)
+    assert dataclasses.replace(again, seconds=plan.seconds) == plan
+    assert again.to_json() == path.read_text()
+
+
 def _rotated(R, angle=1e-6):
     return (so3.exp([angle, -angle, 2 * angle]) @ np.asarray(R)).tolist()
 

@@ -32,10 +32,10 @@ from nonholo.spaces import so3
 
 METHODS = planner.METHODS
 STRATEGIES = ("paper", "robust")
-EXAMPLES = (1, 2)       # MODEL.md's examples solved by both strategies and both methods
+EXAMPLES = (1, 2)       # the examples (nonholo.paper.examples) solved by both strategies and both methods
 
 
-# -- the examples of MODEL.md ----------------------------------------------------------------
+# -- the examples (nonholo.paper.examples) ----------------------------------------------------
 
 @pytest.mark.parametrize("strategy", STRATEGIES)
 @pytest.mark.parametrize("k", EXAMPLES)
@@ -46,7 +46,7 @@ def test_examples_converge_and_resimulate(k, method, strategy):
     check_solution(res, R0, Rd)
     assert res.strategy == strategy
     assert res.iterations <= 20
-    assert res.min_delta >= 0.3          # MODEL.md: these stay well clear of Δ = 0
+    assert res.min_delta >= 0.3          # these stay well clear of Δ = 0
     kind = C.Fourier if method == "parametric" else C.PiecewiseConstant
     par = res.parametrisation
     if strategy == "robust":             # planned in the frame coordinates w, u = W(R) w
@@ -283,7 +283,7 @@ def test_a_new_strategy_plugs_in_without_touching_the_paper_one():
 
 
 def test_platform_mean_inputs_fix_r11_r22():
-    """u1 = −ṙ22/2, u2 = −ṙ11/2 (MODEL.md): J's oscillating Fourier columns have rank 1."""
+    """u1 = −ṙ22/2, u2 = −ṙ11/2: J's oscillating Fourier columns have rank 1."""
     R0, _ = example(1)
     u = C.Fourier(1.0, [[0.1, 0.3, -0.2, 0.1, 0.05], [-0.05, 0.1, 0.3, 0.0, -0.1]])
     var = S.variational(R0, u, 1.0)

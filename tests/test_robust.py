@@ -210,7 +210,7 @@ def test_paper_strategy_unchanged():
 
     The fixture was recorded before the robust strategy existed with::
 
-        for k, (a, b) in EXAMPLES.items():            # RPY angles of R0, Rd (MODEL.md)
+        for k, (a, b) in EXAMPLES.items():            # RPY angles of R0, Rd
             for method in planner.METHODS:
                 res = planner.plan(so3.from_rpy(*a), so3.from_rpy(*b), method=method)
                 record(res.iterations, [h[...] for h in res.history], res.params)

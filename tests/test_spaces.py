@@ -186,3 +186,22 @@ def test_the_catalog_spaces():
     assert catalog.get("car").space.name == "R^4"
     assert catalog.get("car").space.coordinates.angles == (False, False, True, True)
     assert catalog.get("rolling_ball").space.name == "SO(3)xR^2"
+
+
+def test_errors_are_written_with_their_units():
+    """An error's norm carries the unit its parts share, or the units it mixes."""
+    planar = Product.of(False, ("x", "y"), ("m", "m"))
+    car_like = Product.of(False, ("x", "y", "th"), ("m", "m", "rad"), (False, False, True))
+    ball_like = Product.of(True, ("p1", "p2"), ("radius", "radius"))
+    bare = Product.of(False, ("a", "b"))
+    assert planar.amount(1.5e-3) == "0.0015 m" and planar.error_unit == "m"
+    assert car_like.amount(2e-11, ".1e") == "2.0e-11 (m, rad)"
+    assert Product.of(True).amount(3e-12) == "3e-12 rad"
+    assert ball_like.units == ("rad", "rad", "rad", "radius", "radius")
+    assert ball_like.amount(1e-9, part="rotation") == "1e-09 rad"
+    assert ball_like.amount(1e-9, part="coordinates") == "1e-09 radius"
+    assert ball_like.amount(1e-9) == "1e-09 (rad, radius)"
+    assert bare.amount(0.25) == "0.25" and bare.amount(None) == "n/a"
+    with pytest.raises(ValueError, match="part"):
+        ball_like.amount(1.0, part="legs")
+    assert catalog.get("car").space.error_unit == "(wheelbase, rad)"

@@ -33,8 +33,53 @@ def test_bad_options_name_the_argument(name, value):
 
 
 def test_a_large_grid_is_refused_before_allocating():
-    with pytest.raises(ValueError, match="steps"):
+    with pytest.raises(ValueError, match="grid must be at most"):
         plan(R0, RD, method="nonparametric", grid=10**7)
+    with pytest.raises(ValueError, match="steps must be at most"):
+        plan(R0, RD, method="nonparametric", grid=10**5, steps=10**6)
+
+
+def test_a_basis_too_large_for_memory_is_refused_at_once():
+    """harmonics × steps whose Fourier basis would take GiB: refused, naming both, before
+    anything is allocated (the limit is the planner's, not the machine's)."""
+    with pytest.raises(ValueError, match=r"harmonics = 10000 on steps = 20000.*GiB"):
+        plan(R0, RD, harmonics=10000, steps=20000)
+
+
+@pytest.mark.parametrize("kwargs, match", [
+    ({"T": "1"}, "T must be"), ({"T": True}, "T must be"), ({"callback": 5}, "callback must be callable"),
+    ({"Rd": RD + 0j}, "Rd must be real"), ({"R0": R0.astype(bool)}, "R0 must be real"),
+])
+def test_strings_booleans_complex_and_uncallables_are_refused(kwargs, match):
+    args = {"R0": R0, "Rd": RD, **kwargs}
+    with pytest.raises((ValueError, TypeError), match=match):
+        plan(args.pop("R0"), args.pop("Rd"), **args)
+
+
+def test_numpy_scalars_are_numbers():
+    res = plan(R0, RD, tol=np.float32(1e-6), T=np.float64(1.0), harmonics=np.int64(2), max_iter=np.int32(3))
+    assert res.options["tol"] == pytest.approx(1e-6) and isinstance(res.options["tol"], float)
+
+
+def test_far_goals_beyond_so3_fail_with_a_reason():
+    """Goals so far that the straight path would take more hops than the route may plan:
+    a failed result saying so, not an OverflowError or MemoryError."""
+    car = plan([0, 0, 0, 0], [1e15, 0, 0, 0], mechanism="car")
+    ball = plan((np.eye(3), [0, 0]), (np.eye(3), [1e15, 0]), mechanism="rolling_ball")
+    for res in (car, ball):
+        assert not res.success and "hops" in res.reason, res.reason
+
+
+def test_the_mechanism_functions_check_their_argument():
+    from nonholo.model import catalog
+
+    mech = catalog.get("platform")
+    with pytest.raises(ValueError, match="R must be a 3×3"):
+        mech.L(np.eye(2))
+    with pytest.raises(ValueError, match="non-finite"):
+        mech.L(np.full((3, 3), np.nan))
+    with pytest.raises(ValueError, match="shape"):
+        mech.leg_lengths(np.eye(4))
 
 
 def test_simulate_bounds_its_steps():

@@ -30,6 +30,7 @@ from matplotlib.figure import Figure
 from scipy.spatial.transform import Rotation
 
 from ..model import catalog
+from ..viz.style import NotebookFigure
 
 #: The planner settings an atlas compares: name → options of :func:`nonholo.plan`.
 SETTINGS = {"paper": {"strategy": "paper", "route": "local"},
@@ -91,7 +92,7 @@ def axis_range(space, name: str) -> tuple[float, float]:
 
 
 def resolve_axis(space, name: str) -> str:
-    """``name`` as one of the space's :attr:`cli_names` (ASCII ``phi``/``theta``/``psi``
+    """``name`` as one of the space's :attr:`~nonholo.spaces.groups.Product.cli_names` (ASCII ``phi``/``theta``/``psi``
     accepted for the RPY angles); ``BadArgument`` naming ``axes`` otherwise."""
     names = space.cli_names
     if name in names:
@@ -286,7 +287,7 @@ def atlas_figure(table, quantity: str = "success") -> Figure:
     space = atlas.space
     singular = catalog.get(atlas.mechanism).singular
     rows, cols = len(atlas.slices), len(atlas.settings)
-    fig = Figure(figsize=(4.6 * cols + 1.2, 3.4 * rows + 0.8), layout="constrained")
+    fig = NotebookFigure(figsize=(4.6 * cols + 1.2, 3.4 * rows + 0.8), layout="constrained")
     axes = np.array(fig.subplots(rows, cols, squeeze=False, sharex=True, sharey=True))
     bx, by = atlas.extent[:2], atlas.extent[2:]
     edges_x = np.linspace(*bx, atlas.n + 1)

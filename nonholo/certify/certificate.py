@@ -112,7 +112,7 @@ def sensitivity(R0, par, T: float, mechanism, steps: int, U=None, sign: float | 
     the variational replay runs into ``Δ = 0``) and the replay's endpoint ``R_T``, from the
     variational system of the physical inputs (as :func:`nonholo.motion.simulation.variational`)
     on ``steps`` CF4 steps (``U``: their stage table, if known). The nodes of ``R`` are
-    those of :func:`replay` on the same steps. ``G`` is only as good as the grid resolves
+    those of :func:`~nonholo.motion.playback.replay` on the same steps. ``G`` is only as good as the grid resolves
     ``Φ``, which may take a finer grid than ``R_T`` does: :func:`resolved_sensitivity`.
     ``Φ`` is that of the stacked variation, ``d × d``, and the endpoint the state ``(R_T, q_T)``.
     """
@@ -242,8 +242,9 @@ def measure(R0, Rd, T: float, mechanism, par, steps: int, tol: float, delta_min:
         if hopeless or not est > ERROR_FRACTION * tol or 2 * M > cap:
             break
         R_half, M, U = (R[-1], q[-1]), 2 * M, None
-    l, errors = mechanism.space.error(R[-1], q[-1], Rd, qd)
-    err = mechanism.space.norm(errors)
+    space = mechanism.space
+    l, errors = space.error(R[-1], q[-1], Rd, qd)
+    err = space.norm(errors)
     bound = est + G * REPLAY_PERTURBATION
     dmin = singular.reported(dmin)
     reason = ""
@@ -257,10 +258,10 @@ def measure(R0, Rd, T: float, mechanism, par, steps: int, tol: float, delta_min:
                   f"the endpoint's conditioning is unknown")
     elif G * REPLAY_PERTURBATION > SENSITIVITY_FRACTION * tol:
         reason = (f"the motion is too ill-conditioned for tol = {tol:g}: its sensitivity "
-                  f"max|Φ(T,t)| = {G:.3g} amplifies an error of {REPLAY_PERTURBATION:g} rad (a careful "
-                  f"replay's) to {G * REPLAY_PERTURBATION:.2g} rad")
+                  f"max|Φ(T,t)| = {G:.3g} amplifies an error of {space.amount(REPLAY_PERTURBATION, 'g')} (a careful "
+                  f"replay's) to {space.amount(G * REPLAY_PERTURBATION)}")
     elif est > ERROR_FRACTION * tol:
-        reason = (f"the replay's integration error is still ~{est:.2g} rad with {M} steps "
+        reason = (f"the replay's integration error is still ~{space.amount(est)} with {M} steps "
                   f"(the most certified: {cap}); more than {ERROR_FRACTION:g}·tol")
     elif not singular.clear(dmin, delta_min):
         reason = (f"the physical replay comes within {dmin:.4g} of Δ = 0 (delta_min = {delta_min:g})")
@@ -268,7 +269,7 @@ def measure(R0, Rd, T: float, mechanism, par, steps: int, tol: float, delta_min:
         reason = (f"the physical replay leaves the legs' stroke: "
                   f"{leg_limits.describe(mechanism, R, np.arange(M + 1) * (T / M))}")
     elif err + bound > tol:
-        reason = (f"the physical replay ({M} steps) ends {err:.3g} rad from the goal "
+        reason = (f"the physical replay ({M} steps) ends {space.amount(err, '.3g')} from the goal "
                   f"(+ error bound {bound:.2g} > tol = {tol:g})")
         correctable = True
     return Certificate(M, err, bound, dmin, G, not reason, reason, correctable, l, R, U, q, errors)

@@ -109,8 +109,9 @@ class PlanChecks:
         integer_field(v, "steps", 1)
         if number_field(v, "T") <= 0:
             fail("T", f"must be a positive time (s), got {r.T}")
-        if number_field(v, "seconds") < 0:
-            fail("seconds", f"must be >= 0, got {r.seconds}")
+        seconds = number_field(v, "seconds", null=True)
+        if seconds is not None and seconds < 0:
+            fail("seconds", f"must be >= 0 (or null), got {r.seconds}")
         for key in ("terminal_error", "sensitivity", "error_bound"):
             x = number_field(v, key, null=True)
             if x is not None and x < 0:
@@ -136,10 +137,14 @@ class PlanChecks:
     def labels(self):
         """The mechanism; ``method``, ``strategy``, ``T``, ``steps``, ``R0`` against the controls."""
         r = self.r
-        try:
-            mech = catalog.get(r.mechanism)
-        except ValueError as exc:
-            fail("mechanism", f"is unknown: {exc}")
+        mech = getattr(r, "kinematics", None)
+        if mech is None:
+            try:
+                mech = catalog.get(r.mechanism)
+            except ValueError as exc:
+                fail("mechanism", f"is unknown: {exc}")
+        elif mech.name != r.mechanism:
+            fail("mechanism", f"is {r.mechanism!r}, but the plan's kinematics are of {mech.name!r}")
         par = r.parametrisation
         if isinstance(par, Retimed):
             self.retimed(par, mech)
@@ -359,7 +364,7 @@ class PlanChecks:
                 1.0 + (float(np.max(np.abs(Q_M))) if mech.space.k else 0.0))
             if not r.error_bound >= est - self.rounding:
                 fail("error_bound", f"({r.error_bound:.3g}) is below the replay's own error "
-                                     f"estimate ({est:.3g} rad with {M} steps)")
+                                     f"estimate ({mech.space.amount(est, '.3g')} with {M} steps)")
             #: the certified replay itself: its nodes, Richardson estimate and distance from
             #: the goal (as the certificate measures it), for the success check
             self.replayed, self.replay_T = R_M, T
@@ -432,20 +437,20 @@ class PlanChecks:
         else:
             if not self.end_error + r.error_bound <= tol:
                 fail("success", f"is true, but the controls replayed ({r.replay_steps} steps) end "
-                                 f"{self.end_error:.3g} rad from Rd: + error_bound {r.error_bound:.2g} "
+                                 f"{mech.space.amount(self.end_error, '.3g')} from the goal: + error_bound {r.error_bound:.2g} "
                                  f"> tol = {tol:g}")
             G = r.sensitivity
             if G is None:
                 fail("sensitivity", "is null, but a certified success has one")
             if not G * certify.REPLAY_PERTURBATION <= certify.SENSITIVITY_FRACTION * tol:
                 fail("sensitivity", f"({G:.3g}) is too large for a success at tol = {tol:g}: it amplifies "
-                                    f"{certify.REPLAY_PERTURBATION:g} rad to {G * certify.REPLAY_PERTURBATION:.2g} "
-                                    f"rad, more than {certify.SENSITIVITY_FRACTION:g}·tol (plan() certifies "
+                                    f"{mech.space.amount(certify.REPLAY_PERTURBATION, 'g')} to "
+                                    f"{mech.space.amount(G * certify.REPLAY_PERTURBATION)}, more than {certify.SENSITIVITY_FRACTION:g}·tol (plan() certifies "
                                     "no such motion)")
             least = self.estimate + G * certify.REPLAY_PERTURBATION
             if not r.error_bound >= least - self.rounding:
                 fail("error_bound", f"({r.error_bound:.3g}) is below the replay's error estimate plus the "
-                                     f"sensitivity's share ({least:.3g} rad)")
+                                     f"sensitivity's share ({mech.space.amount(least, '.3g')})")
             if not mech.singular.clear(self.dmin, dmin):
                 fail("success", f"is true, but the replayed motion comes within {self.dmin:.4g} of Δ = 0 "
                                  f"(delta_min = {dmin:g})")

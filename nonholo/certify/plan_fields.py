@@ -15,6 +15,7 @@ from ..motion.retimed import check_leg_speed
 from ..numerics.checks import MAX_STEPS, check_count, is_number
 from ..spaces import so3
 
+#: the format written (``PlanResult.save``)
 FORMAT = "nonholo.plan/3"
 #: the format before global routes (``route``, stitched controls): still loaded
 FORMAT_2 = "nonholo.plan/2"

@@ -91,13 +91,36 @@ def resimulate(R0, controls, T: float, mechanism="platform", breakpoints=None,
                *, rtol: float = RTOL, atol: float = ATOL) -> np.ndarray:
     """``R(T)`` of ``dR/dt = [L(R) u(t)] R``, ``R(0) = R0``, by DOP853 (tight tolerances).
 
-    ``controls`` is a vectorised ``u(t)`` (``(n,) -> (n, m)``), e.g. ``PlanResult.controls``
-    or a :class:`~nonholo.controls.parametrisations.Controls`; ``breakpoints`` (default: the controls'
-    ``breakpoints`` attribute, if any) are times where ``u`` may jump.
+    Parameters
+    ----------
+    R0 : array_like
+        The start, a rotation matrix.
+    controls : callable
+        A vectorised ``u(t)`` (``(n,) -> (n, m)``), e.g. ``PlanResult.controls`` or a
+        :class:`~nonholo.controls.parametrisations.Controls`.
+    T : float
+        The horizon (s).
+    mechanism : str or Mechanism
+        The mechanism or its name.
+    breakpoints : array_like, optional
+        Times where ``u`` may jump (default: the controls' ``breakpoints`` attribute, if
+        any); the integrator does not step across them.
+    rtol, atol : float
+        DOP853's tolerances.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``R(T)``, 3×3.
+
+    Raises
+    ------
+    RuntimeError
+        If DOP853 fails on a segment.
     """
     mech = catalog.get(mechanism)
     R0 = so3.check_rotation(R0, "R0")
-    L, m = mech.L, mech.n_inputs
+    L, m = mech.module.L, mech.n_inputs
 
     def rhs(a, b):
         u = _input(controls, a, b, m)
@@ -115,14 +138,31 @@ def resimulate_path(R0, controls, T: float, mechanism="platform", breakpoints=No
                     samples: int = 2001, *, rtol: float = RTOL, atol: float = ATOL):
     """The motion of :func:`resimulate` on ``samples`` uniform times (DOP853 dense output).
 
-    Returns ``(t, R, delta)``: ``t`` (n,), ``R`` (n, 3, 3) at ``t`` and at every step the
-    integrator took (``t`` sorted, ``t[-1] = T``), and ``Δ(R)`` there (``None`` for a
-    mechanism without a singular set) — the least ``|Δ|`` along the re-simulated motion is
-    ``abs(delta).min()`` up to the sampling.
+    Parameters
+    ----------
+    R0, controls, T, mechanism, breakpoints
+        As for :func:`resimulate`.
+    samples : int
+        Uniform sample times on ``[0, T]``.
+    rtol, atol : float
+        DOP853's tolerances.
+
+    Returns
+    -------
+    tuple
+        ``(t, R, delta)``: ``t`` (n,), ``R`` (n, 3, 3) at ``t`` and at every step the
+        integrator took (``t`` sorted, ``t[-1] = T``), and ``Δ(R)`` there (``None`` for a
+        mechanism without a singular set) — the least ``|Δ|`` along the re-simulated
+        motion is ``abs(delta).min()`` up to the sampling.
+
+    Raises
+    ------
+    RuntimeError
+        If DOP853 fails on a segment.
     """
     mech = catalog.get(mechanism)
     R0 = so3.check_rotation(R0, "R0")
-    L, m = mech.L, mech.n_inputs
+    L, m = mech.module.L, mech.n_inputs
     ts, Rs = [], []
     y = R0.ravel()
     grid = np.linspace(0.0, float(T), int(samples))
@@ -153,16 +193,40 @@ def resimulate_path(R0, controls, T: float, mechanism="platform", breakpoints=No
 
 
 def terminal_error(R_T, Rd) -> float:
-    """``|l_T|``, ``[l_T] = log(R_T R_dᵀ)``: the geodesic distance from ``R_T`` to ``R_d`` (rad)."""
+    """``|l_T|``, ``[l_T] = log(R_T R_dᵀ)``: the geodesic distance from ``R_T`` to ``R_d``.
+
+    Parameters
+    ----------
+    R_T, Rd : array_like
+        The endpoint and the goal, rotation matrices.
+
+    Returns
+    -------
+    float
+        The distance (rad).
+    """
     return float(np.linalg.norm(so3.log(np.asarray(R_T) @ np.asarray(Rd).T)))
 
 
 def mobility_lyapunov(R0, controls, T: float, mechanism="platform", breakpoints=None,
                       *, rtol: float = 1e-12, atol: float = 1e-12) -> np.ndarray:
-    """``M(T)`` from ``dM/dt = B Bᵀ + A M + M Aᵀ``, ``M(0) = 0`` (integrated with ``R``)."""
+    """``M(T)`` from ``dM/dt = B Bᵀ + A M + M Aᵀ``, ``M(0) = 0`` (integrated with ``R``).
+
+    Parameters
+    ----------
+    R0, controls, T, mechanism, breakpoints
+        As for :func:`resimulate`.
+    rtol, atol : float
+        DOP853's tolerances.
+
+    Returns
+    -------
+    numpy.ndarray
+        The mobility matrix ``M(T)``, 3×3.
+    """
     mech = catalog.get(mechanism)
     R0 = so3.check_rotation(R0, "R0")
-    L, Q, m = mech.L, mech.Q, mech.n_inputs
+    L, Q, m = mech.module.L, mech.module.Q, mech.n_inputs
 
     def rhs(a, b):
         u = _input(controls, a, b, m)
@@ -194,8 +258,31 @@ def resimulate_rk4(R0, controls, T: float, mechanism="platform", steps: int = RK
     and ``T`` (a number or ``P`` of them), all of one mechanism. ``controls``: a
     :class:`~nonholo.controls.parametrisations.Controls` or :class:`~nonholo.motion.frame_controls.FrameControls` (its stage
     table at the RK4 stage times ``t_n``, ``t_n + h/2``, ``t_n + h`` gives the inputs) or
-    ``PlanResult.parametrisation``. ``min_delta``: the least ``sgn(Δ(R0))·Δ`` over the
-    nodes (``None`` without a singular set); ``R(T)`` is NaN where ``L`` blew up.
+    ``PlanResult.parametrisation``.
+
+    Parameters
+    ----------
+    R0 : array_like
+        Starts, ``(3, 3)`` or ``(P, 3, 3)``.
+    controls : Controls or FrameControls or list
+        One per start.
+    T : float or array_like
+        Horizons, one or ``P``.
+    mechanism : str or Mechanism
+        The mechanism of every start.
+    steps : int
+        Equal RK4 steps.
+
+    Returns
+    -------
+    tuple
+        ``(R(T), min_delta)``: ``min_delta`` is the least ``sgn(Δ(R0))·Δ`` over the nodes
+        (``None`` without a singular set); ``R(T)`` is NaN where ``L`` blew up.
+
+    Raises
+    ------
+    ValueError
+        If the numbers of starts and of controls differ.
     """
     mech = catalog.get(mechanism)
     single = np.ndim(R0) == 2
@@ -246,15 +333,48 @@ def resimulate_rk4(R0, controls, T: float, mechanism="platform", steps: int = RK
 
 
 def rolling_ball_rates(R, p, v, radius: float = 1.0):
-    """The ball rolling on the plane z = 0 without slipping or spinning (MODEL.md): the
+    """The ball rolling on the plane z = 0 without slipping or spinning: the
     centre moves with ``ṗ = v`` and the spatial angular velocity is ``ω = (e₃ × v)/ρ``.
-    Returns ``(ω, ṗ)``."""
+
+    Parameters
+    ----------
+    R : numpy.ndarray
+        The orientation (unused: the rates do not depend on it).
+    p : numpy.ndarray
+        The centre's position on the plane.
+    v : numpy.ndarray
+        The inputs, the centre's velocity.
+    radius : float
+        The ball's radius ``ρ``.
+
+    Returns
+    -------
+    tuple of numpy.ndarray
+        ``(ω, ṗ)``.
+    """
     return np.array([-v[1], v[0], 0.0]) / radius, np.asarray(v, dtype=float)
 
 
 def car_rates(R, x, u, wheelbase: float = 1.0):
-    """The kinematic car ``x = (x, y, θ, φ)``, ``u = (v, φ̇)`` (MODEL.md): ``ẋ = v cos θ``,
-    ``ẏ = v sin θ``, ``θ̇ = (v/ℓ) tan φ``, ``φ̇ = u₂``. Returns ``(ω = 0, ẋ)``."""
+    """The kinematic car ``x = (x, y, θ, φ)``, ``u = (v, φ̇)``: ``ẋ = v cos θ``,
+    ``ẏ = v sin θ``, ``θ̇ = (v/ℓ) tan φ``, ``φ̇ = u₂``.
+
+    Parameters
+    ----------
+    R : numpy.ndarray
+        Unused (the car has no orientation in SO(3)).
+    x : numpy.ndarray
+        The state ``(x, y, θ, φ)``.
+    u : numpy.ndarray
+        The inputs ``(v, φ̇)``.
+    wheelbase : float
+        ``ℓ``.
+
+    Returns
+    -------
+    tuple of numpy.ndarray
+        ``(ω = 0, ẋ)``.
+    """
     _, _, th, ph = x
     v, dphi = u
     return np.zeros(3), np.array([v * np.cos(th), v * np.sin(th), v * np.tan(ph) / wheelbase, dphi])
@@ -288,9 +408,36 @@ def resimulate_state(start, controls, T: float, mechanism, breakpoints=None, sam
     model (:data:`MODELS`; nothing generated is used), from ``start`` (as
     :func:`nonholo.plan` takes it), with dense output on ``samples`` uniform times.
 
-    Returns ``(t, R, q, delta)``: times, orientations ``(n, 3, 3)`` (the identity without
-    orientation), coordinates ``(n, k)`` and the model's ``Δ`` there (``None`` without a
-    singular set); the last sample is the endpoint at ``T``.
+    Parameters
+    ----------
+    start
+        The start, as :func:`nonholo.plan` takes it.
+    controls : callable
+        A vectorised ``u(t)``.
+    T : float
+        The horizon (s).
+    mechanism : str
+        A name of :data:`MODELS`.
+    breakpoints : array_like, optional
+        Times where ``u`` may jump.
+    samples : int
+        Uniform sample times.
+    rtol, atol : float
+        DOP853's tolerances.
+
+    Returns
+    -------
+    tuple
+        ``(t, R, q, delta)``: times, orientations ``(n, 3, 3)`` (the identity without
+        orientation), coordinates ``(n, k)`` and the model's ``Δ`` there (``None`` without
+        a singular set); the last sample is the endpoint at ``T``.
+
+    Raises
+    ------
+    KeyError
+        For a mechanism without a hand-written model.
+    RuntimeError
+        If DOP853 fails on a segment.
     """
     mech = catalog.get(mechanism)
     rates, delta_of = MODELS[mech.name]
@@ -324,6 +471,21 @@ def resimulate_state(start, controls, T: float, mechanism, breakpoints=None, sam
 
 
 def state_errors(mechanism, R_T, q_T, Rd, qd) -> dict:
-    """The terminal error by part of an independently re-simulated endpoint:
-    ``{"rotation": rad, "coordinates": units}`` (angles wrapped, :mod:`nonholo.spaces.groups`)."""
+    """The terminal error by part of an independently re-simulated endpoint.
+
+    Parameters
+    ----------
+    mechanism : str or Mechanism
+        The mechanism.
+    R_T, q_T : numpy.ndarray
+        The endpoint.
+    Rd, qd : numpy.ndarray
+        The goal.
+
+    Returns
+    -------
+    dict
+        ``{"rotation": rad, "coordinates": units}`` (angles wrapped,
+        :mod:`nonholo.spaces.groups`).
+    """
     return catalog.get(mechanism).space.error(R_T, q_T, Rd, qd)[1]

@@ -8,9 +8,11 @@ Orientations are given as RPY angles ``φ ϑ ψ`` in radians, ``RPY(φ, ϑ, ψ) 
 R(Z, φ) R(Y, ϑ) R(X, ψ)``. A mechanism whose state goes beyond SO(3) takes its coordinates
 (``nonholo plan --mechanism car --from 0 0 0 0 --to 0 1 0 0``: ``x y θ φ``), after the RPY
 angles if it has an orientation too (``rolling_ball``: ``φ ϑ ψ p1 p2``); ``nonholo
-mechanisms`` lists each one's state. The strategy is ``robust`` unless ``--strategy paper`` asks for
-the appendix's algorithm as published (see :mod:`nonholo.robust`). One line is printed per accepted iteration (iteration, error
-``|l_T|`` in rad, the step ``γh``, least ``|Δ|`` along the trajectory), then a summary;
+mechanisms`` lists each one's state. The strategy is ``robust``
+(:mod:`nonholo.planning.strategy_robust`) unless ``--strategy paper`` asks for the
+appendix's algorithm as published (:mod:`nonholo.planning.strategy_paper`). One line is
+printed per accepted iteration (iteration, error ``|l_T|``, the step ``γh``, least ``|Δ|``
+along the trajectory), then a summary with the errors in the state's units;
 then the result is written to ``--out`` and the figure to ``--plot`` (each even if the
 other cannot be written). Every file is written by :mod:`nonholo.io.safe_write`: a regular
 file is replaced only once the new one is complete; a character device or FIFO
@@ -33,13 +35,12 @@ import os
 import sys
 from pathlib import Path
 
-import numpy as np
 
 from ..io import csv_export as export
 from ..io import safe_write
 from ..model import catalog
 from ..planning import api as planner
-from ..spaces import so3
+from .help_text import plain
 
 #: exit status of ``nonholo plan`` (see the module docstring)
 EXIT_SUCCESS, EXIT_FAILED, EXIT_BAD_INPUT, EXIT_WRITE_FAILED = 0, 1, 2, 3
@@ -49,7 +50,7 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     """Add the ``plan`` sub-command to an ``argparse`` sub-parsers object."""
     p = subparsers.add_parser(
         "plan", help="plan a motion R0 -> Rd (Jacobian algorithm of Tchoń & Jakubiak)",
-        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+        description=plain(__doc__), formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--from", dest="start", nargs="+", type=float, required=True, metavar="X",
                    help="the start: RPY angles φ ϑ ψ (rad) of the orientation, then the coordinates "
                         "of a mechanism whose state has them (see the description)")
@@ -80,12 +81,13 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     p.add_argument("--leg-speed", type=float, default=None, metavar="V",
                    help="keep every leg's speed |dl/dt| <= V (geometry units per second): the plan "
                         "is re-timed, in the least time with --T min")
-    p.add_argument("--objective", choices=("auto", "energy", "none"), default="auto",
+    p.add_argument("--objective", choices=("none", "energy", "auto"), default="none",
                    help="energy: then the least energy ∫|u|² dt a search finds, with the goal and limits "
-                        "kept; auto (default): the plan, unless a quick search finds a motion of far less "
-                        "energy; none: the plan as found")
+                        "kept; auto: the plan, unless a quick search finds a motion of far less "
+                        "energy; none (default): the plan as found")
     p.add_argument("--out", default=None, help="write the result as JSON to this file")
-    p.add_argument("--plot", default=None, help="write a figure (u, RPY, Δ against t) to this file")
+    p.add_argument("--plot", default=None, help="write a figure of the plan to this file (inputs, orientation, "
+                        "coordinates, Δ against t; a vehicle's path on the plane)")
     p.add_argument("--csv", default=None,
                    help="write the motion as CSV for an actuator controller (t, leg lengths and "
                         "speeds, u, quaternion qx qy qz qw, delta; only for a successful plan)")
@@ -111,10 +113,11 @@ def _fmt(x, spec: str) -> str:
 
 
 def _error_text(res, spec: str) -> str:
-    """The terminal error in words: ``|l_T|`` in rad, or by part beyond SO(3)."""
+    """The terminal error in words with its units: ``|l_T|`` in rad, or by part beyond SO(3)."""
+    space = catalog.get(res.mechanism).space
     if res.errors is None:
-        return f"|l_T| = {_fmt(res.terminal_error, spec)} rad"
-    return ", ".join(f"{part} {_fmt(value, spec)}" for part, value in res.errors.items())
+        return f"|l_T| = {space.amount(res.terminal_error, spec)}"
+    return ", ".join(f"{part} {space.amount(value, spec, part)}" for part, value in res.errors.items())
 
 
 def _say(text: str) -> None:
@@ -239,86 +242,26 @@ def run(args) -> int:
 
 
 def plot(res, path, argument: str = "--plot") -> None:
-    """Figure of a :class:`~nonholo.io.result.PlanResult`: ``u(t)``, ``RPY(t)`` (with an
-    orientation), the coordinates ``q(t)`` (beyond SO(3)), ``Δ(t)`` and, for a mechanism
-    with legs, the leg lengths and speeds against their limits (if the plan had them).
-    Written to ``path`` by :func:`nonholo.io.safe_write.write_bytes` in the format of its
-    extension (matplotlib's default format without one; the name is kept as given): a
-    path that is not a regular file, a character device or a FIFO is refused with a
-    ``ValueError`` naming ``argument`` before the figure is drawn."""
+    """The figure of a :class:`~nonholo.io.result.PlanResult`
+    (:func:`nonholo.viz.plan_summary.plan_figure`: inputs, orientation, coordinates, ``Δ``,
+    legs against time; a vehicle's path on the plane), written to ``path`` by
+    :func:`nonholo.io.safe_write.write_bytes` in the format of its extension (matplotlib's
+    default format without one; the name is kept as given): a path that is not a regular
+    file, a character device or a FIFO is refused with a ``ValueError`` naming
+    ``argument`` before the figure is drawn."""
     safe_write.check_target(path, argument)
     import io
 
     import matplotlib
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    from ..viz.plan_summary import plan_figure
 
-    mech = catalog.get(res.mechanism)
-    with_delta = res.delta is not None
-    legs = mech.has_legs and len(res.R) > 0
-    rows = 1 + len(mech.space.factors) + with_delta + 2 * legs
-    fig, axes = plt.subplots(rows, 1, sharex=True, figsize=(7, 2.4 * rows))
-    row = iter(axes[1:])
-    tt = np.linspace(0.0, res.T, 1001)
-    u = res.controls(tt)
-    for i in range(u.shape[1]):
-        axes[0].plot(tt, u[:, i], label=mech.inputs[i])
-    axes[0].set_ylabel("input u [1/s]")
-    axes[0].legend(fontsize="small")
-    axes[0].set_title(f"{res.mechanism}, {res.method}/{res.strategy}: " + _error_text(res, ".2e"))
-    if mech.space.has_orientation:
-        ax = next(row)
-        if len(res.R):
-            rpy = np.array([so3.as_rpy(R) for R in res.R])
-            for k, name in enumerate(("φ (Z)", "ϑ (Y)", "ψ (X)")):
-                line, = ax.plot(res.t, rpy[:, k], label=name)
-                ax.axhline(so3.as_rpy(res.Rd)[k], color=line.get_color(), ls=":", lw=0.8)
-            ax.legend(fontsize="small", title="dotted: goal", title_fontsize="small")
-        ax.set_ylabel("RPY angles [rad]")
-    if mech.space.k:
-        ax = next(row)
-        if len(res.q):
-            for k, name in enumerate(mech.coordinates):
-                line, = ax.plot(res.t, res.q[:, k], label=f"{name} [{mech.units[k]}]")
-                ax.axhline(res.qd[k], color=line.get_color(), ls=":", lw=0.8)
-            ax.legend(fontsize="small", title="dotted: goal", title_fontsize="small")
-        ax.set_ylabel("coordinates")
-    if with_delta:
-        ax = next(row)
-        ax.plot(res.t, res.delta, label="Δ at the integrator's steps")
-        dmin = res.options.get("delta_min", 0.0)
-        sgn = np.sign(res.delta[0]) if len(res.delta) else 1.0
-        ax.axhline(sgn * dmin, color="r", ls="--", label=f"threshold {sgn * dmin:+g}")
-        ax.axhline(0.0, color="k", lw=0.5)
-        ax.set_ylabel("Δ [-]")
-        ax.legend(fontsize="small")
-    if legs:
-        ax = next(row)
-        lengths = mech.leg_lengths(res.R)
-        for i in range(lengths.shape[1]):
-            ax.plot(res.t, lengths[:, i], label=f"l{i + 1}")
-        for k, y in enumerate(res.options.get("leg_length") or ()):
-            ax.axhline(y, color="r", ls="--", label="stroke limits" if k == 0 else None)
-        ax.set_ylabel("leg length")
-        ax.legend(fontsize="small")
-        ax = next(row)
-        speeds = mech.leg_speeds(res.R, res.u)
-        for i in range(speeds.shape[1]):
-            ax.plot(res.t, speeds[:, i], label=f"dl{i + 1}/dt")
-        v = res.options.get("leg_speed")
-        if v is not None:
-            for k, y in enumerate((v, -v)):
-                ax.axhline(y, color="r", ls="--", label="speed limit" if k == 0 else None)
-        ax.axhline(0.0, color="k", lw=0.5)
-        ax.set_ylabel("leg speed [1/s]")
-        ax.legend(fontsize="small")
-    axes[-1].set_xlabel("t [s]")
-    fig.tight_layout()
     buffer = io.BytesIO()
-    try:
-        fmt = Path(path).suffix[1:].lower() or matplotlib.rcParams["savefig.format"]
-        fig.savefig(buffer, dpi=100, format=fmt)
-    finally:
-        plt.close(fig)
+    fmt = Path(path).suffix[1:].lower() or matplotlib.rcParams["savefig.format"]
+    plan_figure(res).savefig(buffer, dpi=100, format=fmt, metadata=_metadata(fmt))
     safe_write.write_bytes(path, buffer.getvalue(), argument)
+
+
+def _metadata(fmt: str) -> dict | None:
+    """No date in the formats whose metadata would record one (the same plan, the same bytes)."""
+    return {"pdf": {"CreationDate": None}, "svg": {"Date": None}}.get(fmt)

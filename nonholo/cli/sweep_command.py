@@ -32,11 +32,12 @@ import sys
 from pathlib import Path
 
 from ..io import problems as problem_table
+from .help_text import plain
 
 
 def add_parsers(subparsers) -> None:
     p = subparsers.add_parser("sweep", help="plan every problem of a JSON Lines file, in parallel, into Parquet",
-                              description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+                              description=plain(__doc__), formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("problems", help="JSON Lines file: one problem per line (start, goal, mechanism, options)")
     p.add_argument("--out", required=True, help="results file (Parquet); resumed if a run was interrupted")
     p.add_argument("--workers", type=int, default=None, help="local worker processes (default: one per core)")
@@ -51,7 +52,7 @@ def add_parsers(subparsers) -> None:
     p.set_defaults(func=run_sweep)
 
     p = subparsers.add_parser("atlas", help="write an atlas's problems, or draw the maps of their sweep",
-                              description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+                              description=plain(__doc__), formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("results", nargs="?", help="results of a sweep of atlas problems (Parquet)")
     p.add_argument("--out", default="paper_figures", help="directory of the figures (default paper_figures)")
     p.add_argument("--problems", default=None, metavar="FILE",

@@ -106,7 +106,7 @@ class Stitched:
     def planned(self, t):
         """The pieces' controls in the coordinates they were planned in — the frame
         coordinates ``w`` of :class:`~nonholo.motion.frame_controls.FrameControls` pieces, ``u`` of the
-        others — re-timed like :meth:`__call__` (frame systems are driftless too). The
+        others — re-timed like calling the object (frame systems are driftless too). The
         initial guess of a re-plan of the whole motion (:func:`nonholo.planning.route.smooth`)."""
         return self._retimed(t, [getattr(p, "frame", p) for p in self.pieces])
 

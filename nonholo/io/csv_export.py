@@ -31,7 +31,6 @@ import math
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from ..model import catalog
 from ..motion.retimed import Retimed
 from ..motion.simulation import DELTA_STOP
 from ..numerics.checks import is_number
@@ -44,14 +43,48 @@ MAX_ROWS = 10_000_000
 
 
 def check_rate(rate) -> float:
-    """``rate`` if it is a positive, finite number of samples per second, else ``ValueError``."""
+    """``rate`` checked to be a positive, finite number of samples per second.
+
+    Parameters
+    ----------
+    rate : float
+        Samples per second.
+
+    Returns
+    -------
+    float
+        ``rate``.
+
+    Raises
+    ------
+    ValueError
+        Naming ``rate``, if it is not such a number.
+    """
     if not is_number(rate) or not math.isfinite(rate) or rate <= 0:
         raise ValueError(f"rate must be a positive number of samples per second, got {rate!r}")
     return float(rate)
 
 
 def sample_times(T: float, rate: float) -> np.ndarray:
-    """``t_k = k / rate`` on ``[0, T]``, and ``T`` itself if it is not one of them."""
+    """``t_k = k / rate`` on ``[0, T]``, and ``T`` itself if it is not one of them.
+
+    Parameters
+    ----------
+    T : float
+        The horizon (s).
+    rate : float
+        Samples per second.
+
+    Returns
+    -------
+    numpy.ndarray
+        The sample times.
+
+    Raises
+    ------
+    ValueError
+        For a bad ``rate``, or one that gives more rows than :data:`MAX_ROWS`.
+    """
     rate = check_rate(rate)
     n = math.floor(T * rate * (1 + 1e-12)) + 1
     if n > MAX_ROWS:
@@ -64,8 +97,26 @@ def states_at(result, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """``(R(t), q(t))`` of a simulated plan: one CF4 step of the physical system from the
     stored sample at or below each ``t`` (none where ``t`` is a sample time); ``q`` has no
     columns on SO(3). A re-timed plan (:class:`~nonholo.motion.retimed.Retimed`) moves along its
-    planned path: ``R(τ(t))``, stepped in the planned time ``τ`` with the planned controls."""
-    mech = catalog.get(result.mechanism)
+    planned path: ``R(τ(t))``, stepped in the planned time ``τ`` with the planned controls.
+
+    Parameters
+    ----------
+    result : PlanResult
+        A plan.
+    t : numpy.ndarray
+        Times in ``[0, T]``, sorted.
+
+    Returns
+    -------
+    tuple of numpy.ndarray
+        ``R(t)`` of shape ``(n, 3, 3)`` and ``q(t)`` of shape ``(n, k)``.
+
+    Raises
+    ------
+    ValueError
+        If the plan's motion does not reach ``T`` or runs into ``Δ = 0``.
+    """
+    mech = result.kinematics
     kern = mech.kernels(False)
     n_samples = len(result.t)
     if n_samples == 0 or t[-1] > result.t[-1] * (1 + 1e-12):
@@ -100,8 +151,19 @@ def states_at(result, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 
 def continuous_quaternions(R: np.ndarray) -> np.ndarray:
-    """Unit quaternions ``(x, y, z, w)`` of ``R`` (n, 3, 3), each with the sign nearer the
-    previous one's."""
+    """Unit quaternions of rotations, their signs kept continuous.
+
+    Parameters
+    ----------
+    R : numpy.ndarray
+        Rotations, shape ``(n, 3, 3)``.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(x, y, z, w)`` per rotation, shape ``(n, 4)``, each with the sign nearer the
+        previous one's.
+    """
     q = Rotation.from_matrix(R).as_quat()
     for k in range(1, len(q)):
         if np.dot(q[k], q[k - 1]) < 0.0:
@@ -111,11 +173,29 @@ def continuous_quaternions(R: np.ndarray) -> np.ndarray:
 
 def trajectory_table(result, rate: float = DEFAULT_RATE) -> dict[str, np.ndarray]:
     """The columns of the module docstring, in order, for ``result`` (a successful
-    :class:`~nonholo.io.result.PlanResult`) sampled at ``rate`` Hz. A failed plan is refused
-    (``ValueError`` with its reason): it is not a motion to play on a machine."""
+    :class:`~nonholo.io.result.PlanResult`) sampled at ``rate`` Hz.
+
+    Parameters
+    ----------
+    result : PlanResult
+        A plan.
+    rate : float
+        Samples per second.
+
+    Returns
+    -------
+    dict of str to numpy.ndarray
+        The columns by name, in order.
+
+    Raises
+    ------
+    ValueError
+        For a failed plan (with its reason: it is not a motion to play on a machine) or a
+        bad ``rate``.
+    """
     if not result.success:
         raise ValueError(f"the plan failed ({result.reason}): not exported")
-    mech = catalog.get(result.mechanism)
+    mech = result.kinematics
     t = sample_times(result.T, rate)
     R, q = states_at(result, t)
     u = np.asarray(result.controls(t), dtype=float).reshape(len(t), mech.n_inputs)
@@ -141,8 +221,25 @@ def trajectory_table(result, rate: float = DEFAULT_RATE) -> dict[str, np.ndarray
 
 
 def csv_text(result, rate: float = DEFAULT_RATE) -> str:
-    """:func:`trajectory_table` as CSV text: a header row, then one row per sample (floats
-    with ``repr`` precision)."""
+    """:func:`trajectory_table` as CSV text.
+
+    Parameters
+    ----------
+    result : PlanResult
+        A plan.
+    rate : float
+        Samples per second.
+
+    Returns
+    -------
+    str
+        A header row, then one row per sample (floats with ``repr`` precision).
+
+    Raises
+    ------
+    ValueError
+        As :func:`trajectory_table`.
+    """
     cols = trajectory_table(result, rate)
     out = io.StringIO()
     w = csv.writer(out, lineterminator="\n")

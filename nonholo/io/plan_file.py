@@ -36,7 +36,7 @@ controls(t)``, ``delta = Δ(R)``, and ``terminal_error``, ``min_delta``, ``succe
 rejected with a ``ValueError`` naming the field, so a plan cannot be changed — by a
 damaged byte or by hand — without the change being noticed (fields that are records, not
 results, are checked only for their type: ``reason``, ``history``, ``options``,
-``seconds``, ``sensitivity``; but ``options`` must hold every option the planner
+``seconds`` (``null``: the wall time not recorded), ``sensitivity``; but ``options`` must hold every option the planner
 records, with a value it accepts, and a success is judged from the replay at the plan's
 own ``tol``, with a ``sensitivity`` the certificate accepts for it). A missing field is refused, never taken as "unchecked". Files written by
 earlier versions of the format load, checked to the same standard: ``nonholo.plan/2``
@@ -229,15 +229,17 @@ def _controls(d, mech, where: str = "controls", timed: bool = True) -> Controls 
     else:
         _physical(d, mech, where)
     try:
-        return from_dict(d)
+        return from_dict(d, mech)
     except (ValueError, TypeError, KeyError, IndexError, AttributeError) as exc:
         fail(where, f"cannot be rebuilt: {exc}")
 
 
-def decode(d) -> tuple[dict, bool]:
+def decode(d, mechanism=None) -> tuple[dict, bool]:
     """The fields of the plan described by ``d`` (a plan file's object), each checked for its
     type and shape and the controls rebuilt, as keyword arguments of
-    :class:`~nonholo.io.result.PlanResult`; and whether ``d`` is of format
+    :class:`~nonholo.io.result.PlanResult` (``kinematics``: ``mechanism``, a
+    :class:`~nonholo.model.mechanism.Mechanism` of the name the file gives, for one that is
+    not in the catalog; by default the catalog's of that name); and whether ``d`` is of format
     ``nonholo.plan/1`` (no certificates). ``ValueError`` naming the field otherwise."""
     if not isinstance(d, dict):
         raise ValueError(f"not a nonholo plan file: expected a JSON object, got {json_type(d)}")
@@ -261,11 +263,8 @@ def decode(d) -> tuple[dict, bool]:
          "route": "local", "stitched": None, **d}
     if not isinstance(d["success"], bool):
         raise ValueError(f"invalid plan: 'success' must be true or false, got {short(d['success'])}")
-    mechanism = string_field(d, "mechanism")
-    try:
-        mech = catalog.get(mechanism)
-    except ValueError as exc:
-        raise ValueError(f"invalid plan: 'mechanism': {exc}") from None
+    name = string_field(d, "mechanism")
+    mech = _mechanism(name, mechanism)
     par = _controls(d["controls"], mech)
     stitched = None
     if d["stitched"] is not None:
@@ -288,16 +287,38 @@ def decode(d) -> tuple[dict, bool]:
         t=_array(d["t"], "t", (None,)), R=_array(d["R"], "R", (None, 3, 3)),
         u=_array(d["u"], "u", (None, m)),
         delta=None if delta is None else _array(delta, "delta", (None,)),
-        parametrisation=par, mechanism=mechanism, method=string_field(d, "method"),
+        parametrisation=par, mechanism=name, kinematics=mech, method=string_field(d, "method"),
         strategy=string_field(d, "strategy"), T=number_field(d, "T"),
         R0=_array(d["R0"], "R0", (3, 3)), Rd=_array(d["Rd"], "Rd", (3, 3)),
-        steps=integer_field(d, "steps", minimum=1), seconds=number_field(d, "seconds"),
+        steps=integer_field(d, "steps", minimum=1), seconds=number_field(d, "seconds", null=True),
         options=dict(options), sensitivity=number_field(d, "sensitivity", null=True),
         error_bound=number_field(d, "error_bound", null=True),
         replay_steps=None if d["replay_steps"] is None else integer_field(d, "replay_steps", minimum=2),
         route=string_field(d, "route"), stitched=stitched,
         **({} if not mech.space.k else _coordinates(d, mech)))
     return fields, d["format"] == FORMAT_1
+
+
+def _mechanism(name: str, mechanism):
+    """The mechanism of a plan whose file names ``name``: ``mechanism`` if given (it must be
+    of that name), else the catalog's; ``ValueError`` saying to pass ``mechanism=`` for a
+    name the catalog does not know."""
+    if mechanism is not None:
+        try:
+            mech = catalog.get(mechanism)
+        except ValueError as exc:
+            raise ValueError(f"mechanism: {exc}") from None
+        if mech.name != name:
+            raise ValueError(f"invalid plan: 'mechanism': the plan is of mechanism {name!r}, but the "
+                             f"mechanism given is {mech.name!r}")
+        return mech
+    try:
+        return catalog.get(name)
+    except ValueError:
+        raise ValueError(f"invalid plan: 'mechanism': unknown mechanism {name!r}; known: "
+                         f"{', '.join(catalog.names())}. A plan of a mechanism that is not in the catalog "
+                         f"loads with PlanResult.load(path, mechanism=m), m the nonholo.Mechanism "
+                         f"{name!r}") from None
 
 
 def parse(text: str):

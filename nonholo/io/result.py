@@ -15,6 +15,7 @@ from ..certify.plan_fields import FORMAT
 from ..controls.parametrisations import Controls
 from ..controls.stitched import Stitched
 from ..model import catalog
+from ..model.mechanism import Mechanism
 from ..motion.frame_controls import FrameControls
 from ..motion.retimed import Retimed
 from . import csv_export as export
@@ -23,52 +24,85 @@ from . import plan_file, safe_write
 
 @dataclass(eq=False)
 class PlanResult:
-    """Result of :func:`nonholo.planning.api.plan`.
+    """Result of :func:`nonholo.planning.api.plan`: the record of a plan.
 
-    - ``success``/``reason``: whether the plan is certified (:mod:`nonholo.certify.certificate`): its
-      physical controls, replayed on ``replay_steps`` CF4 steps, end within
-      ``terminal_error + error_bound ≤ tol`` of the goal and keep ``|Δ| ≥ delta_min`` —
-      and why not.
-    - ``terminal_error``: ``|l_T|`` (rad), ``[l_T] = log(R_T R_dᵀ)`` of the final
-      trajectory (``None`` if nothing was simulated, e.g. a goal across ``Δ = 0``): of the
-      certified replay for a success, of the planner's own trajectory otherwise.
-    - ``error_bound``, ``replay_steps`` (a success only, else ``None``): the bound on the
-      replay's own error at ``T`` (rad) and the CF4 steps of that replay; ``t``, ``R``,
-      ``delta`` are then the replay's nodes at the plan's ``steps`` step points.
-    - ``min_delta``: least ``|Δ|`` along the final trajectory, over every point where the
-      integrator evaluated ``L`` (``None`` for mechanisms without a singular set, or if
-      nothing was simulated).
-    - ``iterations``: accepted θ-steps; ``history``: one record per accepted iteration
-      (``iteration``, ``error``, ``step`` = ``γh`` used, ``min_delta``, ``phase`` =
-      ``"initial"``/``"flow"``/``"newton"``, ``rejected`` = step halvings before it;
-      strategy ``"robust"`` adds ``attempt``, the index of the initial guess, and one
-      record with phase ``"restart"`` where a new guess starts).
-    - ``t``, ``R``, ``u``, ``delta``: samples of the final trajectory at the integrator's
-      step points (``R`` spatial-frame rotations, ``u`` in the mechanism's input units);
-      ``steps`` is the number of integrator steps of that trajectory.
-    - ``sensitivity``: ``max_t |Φ(T, t)|_F`` of the physical system along the planned
-      motion — how much a perturbation of the orientation at ``t`` is amplified at ``T``
-      when the planned ``u(t)`` is played open loop (``|Φ(T,T)|_F = √3``); computed when
-      a converged plan is certified (``None`` otherwise).
-    - ``parametrisation``: the planned control (a :class:`~nonholo.controls.parametrisations.Controls`:
-      Fourier or grid controls of ``u``, or :class:`~nonholo.motion.frame_controls.FrameControls`
-      wrapping those of the frame coordinates ``w``, or for a global route a
-      :class:`~nonholo.controls.stitched.Stitched` of the hops' controls, with the route's
-      waypoints and the hops' breakpoints); :meth:`controls` evaluates the physical
-      inputs ``u(t)``.
-    - ``route``: ``"local"`` (one plan from ``R0`` to ``Rd``) or ``"global"`` (hops along a
-      path of orientations clear of ``Δ = 0``, :mod:`nonholo.planning.route`).
-    - ``stitched``: for a global route re-planned as one smooth control (the controls),
-      the stitched control of the route it was planned from (its hops, waypoints and
-      hand-overs; a record: the certificate is the smooth control's); ``None`` otherwise.
-      :attr:`hops` gives a global route's stitched control either way.
-    - ``q``, ``q0``, ``qd``, ``errors`` (a mechanism whose state goes beyond SO(3), else
-      ``None``): the coordinates at the samples ``(n, k)``, of the start and of the goal,
-      and the terminal error by part, ``{"rotation": rad, "coordinates": units}``
-      (:mod:`nonholo.spaces.groups`; ``terminal_error`` is then the norm of the stacked error,
-      which bounds both). ``R`` is the identity throughout for a state without
-      orientation. :attr:`start`, :attr:`goal` and :meth:`state` give states as
-      :func:`nonholo.plan` takes them.
+    :attr:`start`, :attr:`goal` and :meth:`state` give states as :func:`nonholo.plan` takes
+    them; :meth:`controls` evaluates the physical inputs ``u(t)``; :meth:`save` and
+    :meth:`load` write and read the plan file (:mod:`nonholo.io.plan_file`), :meth:`to_csv`
+    the motion for an actuator controller.
+
+    Parameters
+    ----------
+    success, reason : bool, str
+        Whether the plan is certified (:mod:`nonholo.certify.certificate`): its physical
+        controls, replayed on ``replay_steps`` CF4 steps, end within ``terminal_error +
+        error_bound ≤ tol`` of the goal and keep ``|Δ| ≥ delta_min`` — and why not.
+    terminal_error : float or None
+        ``|l_T|`` (rad), ``[l_T] = log(R_T R_dᵀ)`` of the final trajectory (``None`` if
+        nothing was simulated, e.g. a goal across ``Δ = 0``): of the certified replay for a
+        success, of the planner's own trajectory otherwise.
+    min_delta : float or None
+        Least ``|Δ|`` along the final trajectory, over every point where the integrator
+        evaluated ``L`` (``None`` for mechanisms without a singular set, or if nothing was
+        simulated).
+    iterations : int
+        Accepted θ-steps.
+    history : list of dict
+        One record per accepted iteration (``iteration``, ``error``, ``step`` = ``γh``
+        used, ``min_delta``, ``phase`` = ``"initial"``/``"flow"``/``"newton"``, ``rejected``
+        = step halvings before it; strategy ``"robust"`` adds ``attempt``, the index of the
+        initial guess, and one record with phase ``"restart"`` where a new guess starts).
+    t, R, u, delta : numpy.ndarray
+        Samples of the final trajectory at the integrator's step points (``R``
+        spatial-frame rotations, the identity throughout for a state without orientation;
+        ``u`` in the mechanism's input units; ``delta`` ``None`` without a singular set).
+        For a success, the certified replay's nodes at the plan's step points.
+    parametrisation : Controls, FrameControls or Stitched
+        The planned control: Fourier or grid controls of ``u``
+        (:class:`~nonholo.controls.parametrisations.Controls`),
+        :class:`~nonholo.motion.frame_controls.FrameControls` wrapping those of the frame
+        coordinates ``w``, or for a global route a
+        :class:`~nonholo.controls.stitched.Stitched` of the hops' controls, with the
+        route's waypoints and the hops' breakpoints.
+    mechanism, method, strategy : str
+        The names of the mechanism, the method and the strategy planned with.
+    T : float
+        The horizon (s).
+    R0, Rd : numpy.ndarray
+        The start's and the goal's orientations (the identity without one).
+    steps : int
+        The number of integrator steps of the final trajectory.
+    seconds : float or None
+        The planner's wall time; ``None`` when not recorded (a plan file kept without it,
+        as ``nonholo reproduce`` writes them, so that a second run writes the same bytes).
+    options : dict
+        The options :func:`nonholo.plan` was given, as a plan file records them.
+    sensitivity : float or None
+        ``max_t |Φ(T, t)|_F`` of the physical system along the planned motion — how much
+        a perturbation of the orientation at ``t`` is amplified at ``T`` when the planned
+        ``u(t)`` is played open loop (``|Φ(T,T)|_F = √3``); computed when a converged plan
+        is certified (``None`` otherwise).
+    error_bound, replay_steps : float or None, int or None
+        For a success: the bound on the replay's own error at ``T`` (rad) and the CF4 steps
+        of that replay; ``None`` otherwise.
+    route : {"local", "global"}
+        One plan from ``R0`` to ``Rd``, or hops along a path of orientations clear of
+        ``Δ = 0`` (:mod:`nonholo.planning.route`).
+    stitched : Stitched or None
+        For a global route re-planned as one smooth control (the controls), the stitched
+        control of the route it was planned from (its hops, waypoints and hand-overs; a
+        record: the certificate is the smooth control's); ``None`` otherwise. :attr:`hops`
+        gives a global route's stitched control either way.
+    q, q0, qd, errors : numpy.ndarray or dict or None
+        For a mechanism whose state goes beyond SO(3), else ``None``: the coordinates at
+        the samples ``(n, k)``, of the start and of the goal, and the terminal error by
+        part, ``{"rotation": rad, "coordinates": units}`` (:mod:`nonholo.spaces.groups`;
+        ``terminal_error`` is then the norm of the stacked error, which bounds both).
+    kinematics : Mechanism, optional
+        The :class:`~nonholo.model.mechanism.Mechanism` itself, which re-timing, export,
+        saving and checks use, so that a plan of a mechanism outside the catalog works as
+        one of the catalog's (by default the catalog's of that name; ``ValueError`` if it
+        has none).
     """
 
     success: bool
@@ -89,7 +123,7 @@ class PlanResult:
     R0: np.ndarray
     Rd: np.ndarray
     steps: int
-    seconds: float
+    seconds: float | None
     options: dict = field(default_factory=dict)
     sensitivity: float | None = None
     error_bound: float | None = None
@@ -100,6 +134,11 @@ class PlanResult:
     q0: np.ndarray | None = None
     qd: np.ndarray | None = None
     errors: dict | None = None
+    kinematics: Mechanism | None = field(default=None, repr=False)
+
+    def __post_init__(self):
+        if self.kinematics is None:
+            self.kinematics = catalog.get(self.mechanism)
 
     @property
     def start(self):
@@ -112,17 +151,39 @@ class PlanResult:
         return self._public(self.Rd, self.qd)
 
     def state(self, k: int = -1):
-        """Sample ``k`` of the trajectory as :func:`nonholo.plan` takes a state."""
+        """Sample ``k`` of the trajectory as :func:`nonholo.plan` takes a state.
+
+        Parameters
+        ----------
+        k : int
+            The sample's index (default: the last).
+
+        Returns
+        -------
+        numpy.ndarray or tuple
+            ``R``, ``q`` or ``(R, q)``, as the mechanism's space takes a state.
+        """
         return self._public(self.R[k], None if self.q is None else self.q[k])
 
     def _public(self, R, q):
         if q is None:
             return R
-        return catalog.get(self.mechanism).space.public(R, q)
+        return self.kinematics.space.public(R, q)
 
     # -- controls ----------------------------------------------------------------------
     def controls(self, t) -> np.ndarray:
-        """Planned input ``u(t)``: ``t`` of shape ``(n,)`` gives ``(n, m)`` (physical units)."""
+        """Planned input ``u(t)`` in physical units.
+
+        Parameters
+        ----------
+        t : array_like
+            Times, shape ``(n,)``.
+
+        Returns
+        -------
+        numpy.ndarray
+            ``u(t)``, shape ``(n, m)``.
+        """
         return self.parametrisation(t)
 
     @property
@@ -152,6 +213,13 @@ class PlanResult:
 
     # -- persistence -------------------------------------------------------------------
     def to_dict(self) -> dict:
+        """The plan file's JSON object (see :mod:`nonholo.io.plan_file`), not checked.
+
+        Returns
+        -------
+        dict
+            Plain Python values: lists for arrays, ``None`` for what does not exist.
+        """
         def arr(x):
             return None if x is None else np.asarray(x, dtype=float).tolist()
 
@@ -187,11 +255,29 @@ class PlanResult:
         }
 
     @classmethod
-    def from_dict(cls, d: dict) -> "PlanResult":
-        """The result described by ``d`` (a plan file's object, see :mod:`nonholo.io.plan_file`),
-        checked field by field (:func:`nonholo.io.plan_file.decode`) and for consistency
-        (:meth:`validate`); ``ValueError`` naming the field otherwise."""
-        values, legacy = plan_file.decode(d)
+    def from_dict(cls, d: dict, mechanism=None) -> "PlanResult":
+        """The result described by a plan file's object, checked.
+
+        Parameters
+        ----------
+        d : dict
+            A plan file's object (see :mod:`nonholo.io.plan_file`).
+        mechanism : Mechanism, optional
+            The :class:`~nonholo.model.mechanism.Mechanism` of a plan whose mechanism is
+            not in the catalog (see :meth:`load`).
+
+        Returns
+        -------
+        PlanResult
+            The result, checked field by field (:func:`nonholo.io.plan_file.decode`) and for
+            consistency (:meth:`validate`).
+
+        Raises
+        ------
+        ValueError
+            Naming the field that is wrong.
+        """
+        values, legacy = plan_file.decode(d, mechanism)
         res = cls(**values)
         plan_checks.check(res, legacy=legacy)
         return res
@@ -209,28 +295,47 @@ class PlanResult:
         the replay's Richardson estimate, a success is certified (``terminal_error +
         error_bound ≤ tol``), and the labels (mechanism, method, strategy, ``T``,
         ``steps``, ``R0``) agree with the controls.
-        Returns ``self``; raises ``ValueError`` naming the field otherwise."""
+
+        Returns
+        -------
+        PlanResult
+            ``self``.
+
+        Raises
+        ------
+        ValueError
+            Naming the field that is wrong.
+        """
         plan_checks.check(self)
         return self
 
     def to_json(self) -> str:
         """The plan file's text (format ``nonholo.plan/3``, see :mod:`nonholo.io.plan_file`),
         checked: it is decoded and checked exactly as :meth:`load` reads a file, so text
-        that :meth:`load` would refuse is never returned — ``ValueError`` naming the field
-        instead (and for a number JSON cannot hold)."""
+        that :meth:`load` would refuse is never returned.
+
+        Returns
+        -------
+        str
+            The JSON text.
+
+        Raises
+        ------
+        ValueError
+            Naming the field that would not load, or for a number JSON cannot hold.
+        """
         try:
             text = json.dumps(self.to_dict(), allow_nan=False, indent=1)
         except (ValueError, TypeError) as exc:
             raise ValueError(f"cannot save the plan: {exc}") from None
         try:
-            type(self).from_dict(plan_file.parse(text))
+            type(self).from_dict(plan_file.parse(text), self.kinematics)
         except ValueError as exc:
             raise ValueError(f"cannot save the plan, its file would not load: {exc}") from None
         return text
 
     def save(self, path) -> Path:
-        """Write the result as JSON (format ``nonholo.plan/3``, see :mod:`nonholo.io.plan_file`);
-        returns ``path``.
+        """Write the result as JSON (format ``nonholo.plan/3``, see :mod:`nonholo.io.plan_file`).
 
         Only what :meth:`load` accepts is written: the text is decoded and checked as a
         loaded file is (:meth:`to_json`) before anything is written, else ``ValueError``
@@ -242,6 +347,24 @@ class PlanResult:
         device or FIFO at ``path`` is written in place, never replaced; any other path
         that exists and is not a regular file (a directory) is refused with a
         ``ValueError`` naming ``path``, before anything is written.
+
+        Parameters
+        ----------
+        path : str or pathlib.Path
+            Where to write.
+
+        Returns
+        -------
+        pathlib.Path
+            ``path``.
+
+        Raises
+        ------
+        ValueError
+            If the result would not load (naming the field), or ``path`` is neither a
+            regular file, a character device nor a FIFO.
+        OSError
+            If writing fails; an existing file at ``path`` is then untouched.
         """
         safe_write.check_target(path, "path")
         return safe_write.write_text(path, self.to_json(), "path")
@@ -250,21 +373,61 @@ class PlanResult:
         """Write the motion sampled at ``rate`` Hz as CSV for an actuator controller: ``t``,
         leg lengths ``l_i`` and speeds ``dl_i_dt`` (geometry units), inputs ``u_i``, the
         orientation as a unit quaternion ``qx, qy, qz, qw`` (scalar last) and ``delta``
-        (see :mod:`nonholo.io.csv_export`). A failed plan or a bad ``rate`` raises ``ValueError``
-        before anything is written; the file is written atomically, like :meth:`save`."""
+        (see :mod:`nonholo.io.csv_export`). The file is written atomically, like :meth:`save`.
+
+        Parameters
+        ----------
+        path : str or pathlib.Path
+            Where to write.
+        rate : float
+            Samples per second.
+
+        Returns
+        -------
+        pathlib.Path
+            ``path``.
+
+        Raises
+        ------
+        ValueError
+            For a failed plan, a bad ``rate`` or a ``path`` that cannot be replaced, before
+            anything is written.
+        """
         safe_write.check_target(path, "path")
         text = export.csv_text(self, rate)
         return safe_write.write_text(path, text, "path")
 
     @classmethod
-    def load(cls, path) -> "PlanResult":
-        """Read and check a result written by :meth:`save` (see :meth:`from_dict`); a file
-        that is not one — malformed JSON, wrong or missing fields, numbers that disagree
-        with the controls — raises ``ValueError`` saying what is wrong. A UTF-8 byte-order
-        mark is accepted."""
+    def load(cls, path, mechanism=None) -> "PlanResult":
+        """Read and check a result written by :meth:`save` (see :meth:`from_dict`).
+
+        A UTF-8 byte-order mark is accepted.
+
+        Parameters
+        ----------
+        path : str or pathlib.Path
+            The plan file.
+        mechanism : Mechanism, optional
+            The :class:`~nonholo.model.mechanism.Mechanism` the plan was made with, for one
+            that is not in the catalog (built in the script, e.g. by
+            :meth:`~nonholo.model.mechanism.Mechanism.from_equations`); it must have the
+            name the file gives.
+
+        Returns
+        -------
+        PlanResult
+            The plan, its claimed success judged from its controls replayed.
+
+        Raises
+        ------
+        ValueError
+            For a file that is not a plan file — malformed JSON, wrong or missing fields,
+            numbers that disagree with the controls — saying what is wrong; for a
+            mechanism not in the catalog, without ``mechanism``, saying to pass it.
+        """
         d = plan_file.read(path)
         try:
-            return cls.from_dict(d)
+            return cls.from_dict(d, mechanism)
         except RecursionError:
             raise ValueError(f"{path}: invalid plan file: nested too deeply") from None
         except ValueError as exc:
@@ -275,6 +438,8 @@ class PlanResult:
         if not isinstance(other, PlanResult):
             return NotImplemented
         for f in fields(self):
+            if f.name == "kinematics":          # the mechanism itself: compared by name
+                continue
             a, b = getattr(self, f.name), getattr(other, f.name)
             if isinstance(a, np.ndarray) or isinstance(b, np.ndarray):
                 if a is None or b is None or not np.array_equal(a, b):
@@ -287,17 +452,21 @@ class PlanResult:
         def num(x, fmt):
             return "n/a" if x is None else format(x, fmt)
 
+        try:                             # errors in the state's units (rad on SO(3))
+            amount = catalog.get(self.mechanism).space.amount
+        except ValueError:               # a mechanism not in the catalog: numbers alone
+            amount = num
         status = "success" if self.success else "FAILED"
+        wall = "wall time not recorded" if self.seconds is None else f"{self.seconds * 1e3:.1f} ms"
         lines = [
             f"PlanResult({status}: {self.mechanism}, {self.method}/{self.strategy}, T={self.T:g} s, "
             f"{self.parametrisation!r}",
-            f"  terminal error |l_T| = {num(self.terminal_error, '.3e')} rad after "
-            f"{self.iterations} iterations, min |Δ| = {num(self.min_delta, '.4f')}, "
-            f"{self.seconds * 1e3:.1f} ms",
+            f"  terminal error |l_T| = {amount(self.terminal_error, '.3e')} after "
+            f"{self.iterations} iterations, min |Δ| = {num(self.min_delta, '.4f')}, {wall}",
         ]
         if self.replay_steps is not None:
             lines.append(f"  certified: physical controls replayed with {self.replay_steps} steps, "
-                         f"error bound {num(self.error_bound, '.1e')} rad, sensitivity "
+                         f"error bound {amount(self.error_bound, '.1e')}, sensitivity "
                          f"{num(self.sensitivity, '.3g')}")
         if not self.success:
             lines.append(f"  reason: {self.reason}")
@@ -323,8 +492,21 @@ def _plain(x):
 
 
 def coordinate_fields(mechanism, q, q0, qd, errors) -> dict:
-    """A result's fields that hold coordinates (:class:`PlanResult`'s ``q``, ``q0``, ``qd``,
-    ``errors``): none for a mechanism whose state has none (an SO(3) mechanism)."""
+    """A result's fields that hold coordinates.
+
+    Parameters
+    ----------
+    mechanism : Mechanism
+        The plan's mechanism.
+    q, q0, qd, errors
+        The values of :class:`PlanResult`'s fields of those names.
+
+    Returns
+    -------
+    dict
+        The fields by name; empty for a mechanism whose state has no coordinates (an SO(3)
+        mechanism).
+    """
     if not mechanism.space.k:
         return {}
     return {"q": q, "q0": q0, "qd": qd, "errors": errors}

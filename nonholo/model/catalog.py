@@ -16,7 +16,13 @@ _ADDED: dict[str, Mechanism] = {}
 
 
 def names() -> tuple[str, ...]:
-    """Names of every mechanism that can be planned: the package's, then those added."""
+    """Names of every mechanism that can be planned.
+
+    Returns
+    -------
+    tuple of str
+        The package's, then those added in this process (:func:`add`).
+    """
     return tuple(GENERATED) + tuple(n for n in _ADDED if n not in GENERATED)
 
 
@@ -26,8 +32,24 @@ def _generated(name: str) -> Mechanism:
 
 
 def get(mechanism="platform") -> Mechanism:
-    """The :class:`~nonholo.model.mechanism.Mechanism` ``mechanism`` (returned as it is) or the
-    one of that name (``ValueError`` lists the known names)."""
+    """A mechanism by name (``nonholo.mechanism_named``).
+
+    Parameters
+    ----------
+    mechanism : str or Mechanism
+        A name of :func:`names`, or a :class:`~nonholo.model.mechanism.Mechanism` (returned
+        as it is).
+
+    Returns
+    -------
+    Mechanism
+        The mechanism; a generated one is loaded once per process.
+
+    Raises
+    ------
+    ValueError
+        For an unknown name, listing the known ones.
+    """
     if isinstance(mechanism, Mechanism):
         return mechanism
     if isinstance(mechanism, str):
@@ -42,7 +64,24 @@ def get(mechanism="platform") -> Mechanism:
 def add(mechanism: Mechanism) -> Mechanism:
     """Make ``mechanism`` available by its name in this process (e.g. one built by
     :meth:`~nonholo.model.mechanism.Mechanism.from_symbolic`); adding again under the same name
-    replaces it. The package's own names cannot be taken."""
+    replaces it.
+
+    Parameters
+    ----------
+    mechanism : Mechanism
+        The mechanism to add.
+
+    Returns
+    -------
+    Mechanism
+        ``mechanism``.
+
+    Raises
+    ------
+    ValueError
+        If ``mechanism`` is not a :class:`~nonholo.model.mechanism.Mechanism` or takes a
+        name of the package's own mechanisms.
+    """
     if not isinstance(mechanism, Mechanism):
         raise ValueError(f"mechanism must be a nonholo.Mechanism, got {type(mechanism).__name__}")
     if mechanism.name in GENERATED:

@@ -32,6 +32,7 @@ take ``R`` alone (the paper's ``Δ(R)``, ``N(R)``, ``QN(R, w)``, ``W(R)``).
 from __future__ import annotations
 
 import hashlib
+import inspect
 import os
 import tempfile
 import types
@@ -44,6 +45,7 @@ import numpy as np
 
 from ..integrate import cf4
 from ..numerics import native
+from ..numerics.checks import real_array
 from ..spaces.groups import Product
 from ..spaces.singular import NoSingularSet, SingularSet
 
@@ -54,8 +56,17 @@ class Geometry:
     ``derivations.mechanisms.PlatformGeometry``): base joints ``base_i`` (world frame),
     platform joints ``tip_i`` (platform frame, world position ``R tip_i``), the disk's
     contact point ``contact`` on the sphere and its unit axle direction ``axle`` (world).
-    Lengths in the units of the derivation's drawing dimensions; the sphere's radius is
-    ``|contact|``."""
+    Lengths in the units of the derivation's drawing dimensions.
+
+    Parameters
+    ----------
+    base1, tip1, base2, tip2 : numpy.ndarray
+        The legs' base joints (world frame) and platform joints (platform frame), 3-vectors.
+    contact : numpy.ndarray
+        The disk's contact point on the sphere; the sphere's radius is ``|contact|``.
+    axle : numpy.ndarray
+        The disk's unit axle direction (world frame).
+    """
 
     base1: np.ndarray
     tip1: np.ndarray
@@ -68,25 +79,50 @@ class Geometry:
 
     @classmethod
     def from_mapping(cls, data) -> "Geometry":
-        """From a mapping of the six fields to 3-vectors (the generated ``GEOMETRY``)."""
+        """From a mapping of the six fields to 3-vectors (the generated ``GEOMETRY``).
+
+        Parameters
+        ----------
+        data : mapping
+            The six fields by name; ``axle`` is normalised.
+
+        Returns
+        -------
+        Geometry
+            The geometry.
+        """
         vals = {k: np.array(data[k], dtype=float) for k in cls.FIELDS}
         vals["axle"] = vals["axle"] / np.linalg.norm(vals["axle"])
         return cls(**vals)
 
     @property
     def radius(self) -> float:
+        """The sphere's radius ``|contact|``."""
         return float(np.linalg.norm(self.contact))
 
     @property
     def bases(self) -> tuple[np.ndarray, np.ndarray]:
+        """The legs' base joints ``(base1, base2)``."""
         return self.base1, self.base2
 
     @property
     def tips(self) -> tuple[np.ndarray, np.ndarray]:
+        """The legs' platform joints ``(tip1, tip2)``."""
         return self.tip1, self.tip2
 
     def leg_lengths(self, R) -> np.ndarray:
-        """``l_i = |R tip_i − base_i|``: shape (2,) for one ``R``, (n, 2) for a stack (n, 3, 3)."""
+        """The legs' lengths ``l_i = |R tip_i − base_i|``.
+
+        Parameters
+        ----------
+        R : array_like
+            One rotation ``(3, 3)`` or a stack ``(n, 3, 3)``.
+
+        Returns
+        -------
+        numpy.ndarray
+            Shape ``(2,)`` for one ``R``, ``(n, 2)`` for a stack.
+        """
         R = np.asarray(R, dtype=float)
         Rs = R[None] if R.ndim == 2 else R
         out = np.stack([np.linalg.norm(Rs @ tip - base, axis=-1)
@@ -98,7 +134,9 @@ def _on_stack(into, R, shape: tuple) -> np.ndarray:
     """A generated ``NAME_into(R, out)`` (plain arithmetic on the entries of ``R``) filling
     ``shape``: on one ``R`` (3, 3), or on a stack (n, 3, 3) at once, evaluated on ``(3, 3,
     n)`` into ``shape + (n,)``; shape ``shape`` or ``(n,) + shape``."""
-    R = np.asarray(R, dtype=float)
+    R = real_array(R, "R")
+    if R.shape[-2:] != (3, 3) or R.ndim not in (2, 3):
+        raise ValueError(f"R must be a rotation matrix (3, 3) or a stack of them (n, 3, 3), got shape {R.shape}")
     if R.ndim == 2:
         out = np.empty(shape)
         into(R, out)
@@ -109,9 +147,20 @@ def _on_stack(into, R, shape: tuple) -> np.ndarray:
 
 
 def on_rotation(function, module) -> Callable:
-    """A generated ``function(R, q, ...)`` of a mechanism on SO(3) as ``function(R, ...)``
-    (``q`` = the module's ``NO_COORDINATES``): the paper's ``Δ(R)``, ``N(R)``, ``QN(R, w)``,
-    ``W(R)``."""
+    """A generated ``function(R, q, ...)`` of a mechanism on SO(3) as ``function(R, ...)``.
+
+    Parameters
+    ----------
+    function : callable
+        A generated function of ``(R, q, ...)``.
+    module : module
+        Its generated module (``q`` is bound to its ``NO_COORDINATES``).
+
+    Returns
+    -------
+    callable
+        ``function(R, ...)``: the paper's ``Δ(R)``, ``N(R)``, ``QN(R, w)``, ``W(R)``.
+    """
     none = module.NO_COORDINATES
 
     def on_R(R, *args):
@@ -123,9 +172,34 @@ def on_rotation(function, module) -> Callable:
     return on_R
 
 
+def checked_on_R(function) -> Callable:
+    """A generated ``function(R, ...)`` (``L``, ``Q``) that refuses, with ``ValueError``
+    naming ``R``, what is not a finite real 3×3 matrix (or a ``(3, 3, n)`` stack)."""
+
+    def on_R(R, *args):
+        R = real_array(R, "R")
+        if R.shape[:2] != (3, 3) or R.ndim not in (2, 3):
+            raise ValueError(f"R must be a 3×3 matrix (or a (3, 3, n) stack), got shape {R.shape}")
+        if not np.all(np.isfinite(R)):
+            raise ValueError("R has non-finite entries (NaN or infinity)")
+        return function(R, *args)
+
+    on_R.__name__ = on_R.__qualname__ = function.__name__
+    on_R.__doc__ = function.__doc__
+    on_R.generated = function
+    return on_R
+
+
 @dataclass(frozen=True)
 class Frame:
-    """The desingularised input frame of a mechanism: ``ω = N(R) w``, ``u = W(R) w``."""
+    """The desingularised input frame of a mechanism: ``ω = N(R) w``, ``u = W(R) w``.
+
+    Parameters
+    ----------
+    N, QN, W : callable
+        The generated frame ``N(R)``, its variational matrix ``QN(R, w)`` and the physical
+        inputs ``W(R)``.
+    """
 
     N: Callable
     QN: Callable
@@ -136,11 +210,33 @@ class Frame:
 class Mechanism:
     """Numeric kinematics of one mechanism (see the module docstring).
 
-    ``delta`` is ``None`` without a singular set; ``frame`` is ``None`` without a
-    desingularised frame; ``geometry`` is ``None`` for a mechanism that is not a
-    two-leg platform. ``state_space`` names the state (``"SO(3)"``: an orientation ``R``).
-    ``module`` is the generated module the numbers come from (the integrator compiles
-    its ``*_into`` functions).
+    Built from a generated module (:meth:`from_module`) or a symbolic mechanism
+    (:meth:`from_symbolic`); looked up by name with :func:`nonholo.mechanism_named`.
+
+    Parameters
+    ----------
+    name, description : str
+        The mechanism's name and a phrase describing it.
+    inputs : tuple of str
+        The inputs' names.
+    L, Q : callable
+        ``L(R)`` and ``Q(R, u)`` of ``dR/dt = [L(R) u] R`` and eq. (12) (for a state
+        beyond SO(3), those of the stacked field).
+    delta : callable or None
+        ``Δ(R)``; ``None`` without a singular set.
+    frame : Frame or None
+        The desingularised input frame; ``None`` without one.
+    geometry : Geometry or None
+        ``None`` for a mechanism that is not a two-leg platform.
+    module : module
+        The generated module the numbers come from (the integrator compiles its
+        ``*_into`` functions).
+    state_space : str
+        Names the state: ``"SO(3)"`` (an orientation ``R``), ``"SO(3)xR^k"`` or ``"R^k"``.
+    coordinates, units, angles : tuple
+        Names, units and angle flags of the coordinates ``q`` (a state beyond SO(3)).
+    G : callable or None
+        The stacked field ``G(R, q)`` (rows ``(ω, q̇)``; ``G(R, q) = L(R)`` on SO(3)).
     """
 
     name: str
@@ -160,6 +256,19 @@ class Mechanism:
     #: the stacked field ``G(R, q)`` (rows ``(ω, q̇)``; ``G(R, q) = L(R)`` on SO(3))
     G: Callable | None = None
 
+    def __new__(cls, *args, **kwargs):
+        """Arguments that do not fit the fields raise a ``TypeError`` saying how a mechanism
+        is built (its fields are a generated module's functions)."""
+        try:
+            INIT_SIGNATURE.bind(None, *args, **kwargs)
+        except TypeError as exc:
+            raise TypeError(f"{exc}. A Mechanism holds the functions of a generated module; build one "
+                            "with Mechanism.from_equations (a velocity field: coordinates on R^k, an "
+                            "orientation on SO(3), or both), Mechanism.from_constraints (Pfaffian "
+                            "constraints), Mechanism.from_symbolic (a derivations.mechanisms.Mechanism) "
+                            "or Mechanism.from_module") from None
+        return super().__new__(cls)
+
     @cached_property
     def space(self) -> Product:
         """The state space (:mod:`nonholo.spaces.groups`): ``SO(3)``, ``SO(3) × Rᵏ`` or ``Rᵏ``."""
@@ -173,8 +282,25 @@ class Mechanism:
         return SingularSet(self.delta_samples, on_rotations=not self.space.k, owner=self.name)
 
     def parse_state(self, value, name: str):
-        """The caller's state ``value`` (argument ``name``) as ``(R, q)``
-        (:meth:`nonholo.spaces.groups.Product.parse`)."""
+        """The caller's state as ``(R, q)`` (:meth:`nonholo.spaces.groups.Product.parse`).
+
+        Parameters
+        ----------
+        value
+            A state as :func:`nonholo.plan` takes it.
+        name : str
+            The argument's name, for the error message.
+
+        Returns
+        -------
+        tuple
+            ``(R, q)``.
+
+        Raises
+        ------
+        ValueError
+            If ``value`` is not a state of the mechanism, naming ``name``.
+        """
         return self.space.parse(value, name, owner=f" for mechanism {self.name!r}")
 
     @property
@@ -189,6 +315,7 @@ class Mechanism:
 
     @property
     def n_coordinates(self) -> int:
+        """``k``: the number of coordinates ``q``."""
         return len(self.coordinates)
 
     @property
@@ -198,19 +325,38 @@ class Mechanism:
 
     @property
     def n_inputs(self) -> int:
+        """``m``: the number of inputs."""
         return len(self.inputs)
 
     @property
     def has_singular_set(self) -> bool:
+        """Whether the mechanism has a singularity function ``Δ``."""
         return self.delta is not None
 
     @property
     def has_frame(self) -> bool:
+        """Whether the mechanism has a desingularised input frame ``N``."""
         return self.frame is not None
 
     def kernels(self, frame: bool = False) -> cf4.Kernels:
-        """The compiled integrator kernels of ``(ω, q̇) = G(R, q) u`` (or, ``frame=True``, of
-        the desingularised ``N(R, q) w``); see :func:`nonholo.integrate.cf4.compile_system`."""
+        """The compiled integrator kernels (see :func:`nonholo.integrate.cf4.compile_system`).
+
+        Parameters
+        ----------
+        frame : bool
+            ``False``: of ``(ω, q̇) = G(R, q) u``; ``True``: of the desingularised
+            ``N(R, q) w``.
+
+        Returns
+        -------
+        nonholo.integrate.cf4.Kernels
+            The kernels, compiled once per process (native or numba).
+
+        Raises
+        ------
+        ValueError
+            If ``frame`` is asked of a mechanism without a desingularised frame.
+        """
         if frame and not self.has_frame:
             raise ValueError(f"mechanism {self.name!r} has no desingularised frame N(R)")
         return cf4.compile_system(self.module, frame)
@@ -221,18 +367,51 @@ class Mechanism:
         return bool(getattr(self.module, "HAS_LEGS", False))
 
     def leg_lengths(self, R) -> np.ndarray:
-        """``l_i(R) = |R tip_i − base_i|`` (the generated ``leg_lengths``, in the units of
-        :attr:`geometry`): shape ``(k,)`` for one ``R``, ``(n, k)`` for a stack ``(n, 3, 3)``."""
+        """The legs' lengths ``l_i(R) = |R tip_i − base_i|`` (the generated ``leg_lengths``).
+
+        Parameters
+        ----------
+        R : array_like
+            One rotation ``(3, 3)`` or a stack ``(n, 3, 3)``.
+
+        Returns
+        -------
+        numpy.ndarray
+            In the units of :attr:`geometry`: shape ``(k,)`` for one ``R``, ``(n, k)`` for a
+            stack.
+        """
         return self._legs("leg_lengths_into", R, ())
 
     def leg_gradients(self, R) -> np.ndarray:
-        """Rows ``G_i(R)`` with ``dl_i = G_i s`` along ``∂R = [s] R``: shape ``(k, 3)`` for one
-        ``R``, ``(n, k, 3)`` for a stack."""
+        """Rows ``G_i(R)`` with ``dl_i = G_i s`` along ``∂R = [s] R``.
+
+        Parameters
+        ----------
+        R : array_like
+            One rotation ``(3, 3)`` or a stack ``(n, 3, 3)``.
+
+        Returns
+        -------
+        numpy.ndarray
+            Shape ``(k, 3)`` for one ``R``, ``(n, k, 3)`` for a stack.
+        """
         return self._legs("leg_gradients_into", R, (3,))
 
     def leg_speeds(self, R, u) -> np.ndarray:
-        """``dl_i/dt = G_i(R) L(R) u`` for inputs ``u`` at ``R``: shape ``(k,)`` for one ``R``
-        and ``u`` (m,), ``(n, k)`` for stacks ``(n, 3, 3)`` and ``(n, m)``."""
+        """The legs' speeds ``dl_i/dt = G_i(R) L(R) u`` for inputs ``u`` at ``R``.
+
+        Parameters
+        ----------
+        R : array_like
+            One rotation ``(3, 3)`` or a stack ``(n, 3, 3)``.
+        u : array_like
+            The inputs, ``(m,)`` or ``(n, m)``.
+
+        Returns
+        -------
+        numpy.ndarray
+            Shape ``(k,)`` for one ``R``, ``(n, k)`` for stacks.
+        """
         R = np.asarray(R, dtype=float)
         u = np.asarray(u, dtype=float)
         one = R.ndim == 2
@@ -248,8 +427,21 @@ class Mechanism:
         return _on_stack(getattr(self.module, function), R, (len(self.geometry.bases), *tail))
 
     def delta_samples(self, R, q=None) -> np.ndarray | None:
-        """``Δ(R[n])`` (``Δ(R[n], q[n])`` beyond SO(3), ``q`` of shape ``(n, k)``) for a stack
-        ``R`` of shape ``(n, 3, 3)``; ``None`` without a singular set."""
+        """``Δ`` at every state of a stack.
+
+        Parameters
+        ----------
+        R : array_like
+            Rotations, shape ``(n, 3, 3)``.
+        q : array_like, optional
+            Coordinates beyond SO(3), shape ``(n, k)``.
+
+        Returns
+        -------
+        numpy.ndarray or None
+            ``Δ(R[n])`` (``Δ(R[n], q[n])`` beyond SO(3)), shape ``(n,)``; ``None`` without a
+            singular set.
+        """
         if self.delta is None:
             return None
         R = np.asarray(R, dtype=float)
@@ -262,12 +454,39 @@ class Mechanism:
         return np.broadcast_to(np.asarray(value, dtype=float), (R.shape[0],)).copy()
 
     def rates(self, R, q, u) -> np.ndarray:
-        """The stacked rates ``G(R, q) u`` (``(ω, q̇)``) of a state beyond SO(3)."""
+        """The stacked rates ``G(R, q) u`` of a state beyond SO(3).
+
+        Parameters
+        ----------
+        R : numpy.ndarray
+            The orientation (the identity without one).
+        q : numpy.ndarray
+            The coordinates.
+        u : numpy.ndarray
+            The inputs.
+
+        Returns
+        -------
+        numpy.ndarray
+            ``(ω, q̇)``, shape ``(d,)``.
+        """
         return self.G(np.asarray(R, dtype=float), np.asarray(q, dtype=float)) @ np.asarray(u, dtype=float)
 
     @classmethod
     def from_module(cls, module: types.ModuleType) -> "Mechanism":
-        """The mechanism of a generated module."""
+        """The mechanism of a generated module.
+
+        Parameters
+        ----------
+        module : module
+            A module written by the code generator (``nonholo derive`` or
+            :func:`generated_source`).
+
+        Returns
+        -------
+        Mechanism
+            Its numeric kinematics.
+        """
         delta = module.delta if module.HAS_SINGULAR_SET else None
         frame = Frame(module.N, module.QN, module.W) if module.HAS_FRAME else None
         if module.STATE_SPACE != "SO(3)":
@@ -279,7 +498,7 @@ class Mechanism:
             frame = Frame(*(on_rotation(f, module) for f in (module.N, module.QN, module.W)))
         geometry = getattr(module, "GEOMETRY", None)
         return cls(name=module.NAME, description=module.DESCRIPTION, inputs=tuple(module.INPUTS),
-                   L=module.L, Q=module.Q, delta=None if delta is None else on_rotation(delta, module),
+                   L=checked_on_R(module.L), Q=checked_on_R(module.Q), delta=None if delta is None else on_rotation(delta, module),
                    frame=frame, geometry=None if geometry is None else Geometry.from_mapping(geometry),
                    module=module, G=module.G)
 
@@ -288,24 +507,82 @@ class Mechanism:
         """The numeric mechanism of a symbolic :class:`derivations.mechanisms.Mechanism`, in one
         call: its module is generated (as ``nonholo derive`` would write it) and loaded
         in this process. With ``cache``, the generated source is kept on disk by a digest of
-        the definition (:func:`generated_source`), so a later run skips the generation; its
+        the definition and of the generator (:func:`generated_source`), so a later run skips
+        the generation; its
         kernels are compiled once and cached on disk too (:mod:`nonholo.numerics.native`).
         To add a mechanism for good, put it in ``derivations/definitions.py`` and run
         ``nonholo derive``. To look it up by name, :func:`nonholo.model.catalog.add` it.
+
+        Parameters
+        ----------
+        mechanism : derivations.mechanisms.Mechanism
+            The symbolic mechanism.
+        cache : bool
+            Keep the generated source on disk (and read it from there).
+
+        Returns
+        -------
+        Mechanism
+            Its numeric kinematics.
+
+        Raises
+        ------
+        TypeError
+            If ``mechanism`` is not a symbolic mechanism.
         """
         if type(mechanism).__name__ != "Mechanism" or not hasattr(mechanism, "field"):
-            raise TypeError(f"mechanism must be a symbolic derivations.mechanisms.Mechanism, "
-                            f"not {type(mechanism).__name__}")
-        source = generated_source(mechanism, cache)
-        module = types.ModuleType(f"nonholo_symbolic_{mechanism.name}")
-        module.SOURCE = source
-        exec(compile(source, f"<generated module of mechanism {mechanism.name!r}>", "exec"),
-             module.__dict__)
-        return cls.from_module(module)
+            raise TypeError(f"mechanism must be a symbolic derivations.mechanisms.Mechanism, not "
+                            f"{type(mechanism).__name__}; from equations, use Mechanism.from_equations "
+                            "(a velocity field) or Mechanism.from_constraints (Pfaffian constraints)")
+        return cls.from_module(load_source(generated_source(mechanism, cache), mechanism.name))
+
+    @classmethod
+    def from_equations(cls, name: str, *, inputs, coordinates=(), rates=(), omega=None, rotation=None,
+                       angles=(), parameters=None, delta=None, units=None, description: str | None = None,
+                       cache: bool = True) -> "Mechanism":
+        """The mechanism of a driftless field given by its equations (SymPy symbols and
+        expressions), e.g. the unicycle towing a trailer::
+
+            Mechanism.from_equations("trailer1", coordinates=[x, y, th0, th1], inputs=[v, w],
+                                     rates=[v*cos(th0), v*sin(th0), w, v*sin(th0 - th1)],
+                                     angles=[th0, th1])
+
+        ``coordinates`` and ``rates`` (``ẋ = G(x) u``) give a state in ``Rᵏ``; ``omega``, the
+        spatial angular velocity of an orientation in the entries of ``rotation``, a state
+        on SO(3) (or, with coordinates, on SO(3) × Rᵏ); ``parameters`` maps further symbols
+        to numbers; ``delta`` the singularity function (default: the factors of the field's
+        denominators). See :func:`derivations.equations.field_mechanism`, which checks the
+        equations: an undeclared symbol, a rate that is not linear in the inputs or an
+        argument of the wrong class of state raises ``ValueError`` naming it.
+
+        Generated like :meth:`from_symbolic`; with ``cache``, keyed by the equations as given
+        and the generator's version, so a later run neither derives nor generates.
+        """
+        arguments = dict(inputs=inputs, coordinates=coordinates, rates=rates, omega=omega, rotation=rotation,
+                         angles=angles, parameters=parameters, delta=delta, units=units, description=description)
+        return cls.from_module(load_source(equations_source("field_mechanism", name, arguments, cache), name))
+
+    @classmethod
+    def from_constraints(cls, name: str, *, coordinates, velocities, constraints, inputs, angles=(),
+                         parameters=None, units=None, description: str | None = None,
+                         cache: bool = True) -> "Mechanism":
+        """The mechanism whose rates (the symbols ``velocities``, one per coordinate) obey
+        linear ``constraints`` (expressions equal to zero): Pfaffian constraints
+        ``A(x) ẋ = 0`` with ``inputs`` chosen among the velocities, and equations defining
+        other inputs (a rolling speed). The velocities that are not inputs are solved for;
+        ``det A`` is the singularity function. See
+        :func:`derivations.equations.constraint_mechanism` (its checks) and
+        :meth:`from_equations` (the rest, caching included)."""
+        arguments = dict(coordinates=coordinates, velocities=velocities, constraints=constraints, inputs=inputs,
+                         angles=angles, parameters=parameters, units=units, description=description)
+        return cls.from_module(load_source(equations_source("constraint_mechanism", name, arguments, cache), name))
 
     def __repr__(self) -> str:
         return f"Mechanism({self.name!r}: {self.description})"
 
+
+#: The signature of :class:`Mechanism`'s fields (checked by ``Mechanism.__new__``).
+INIT_SIGNATURE = inspect.signature(Mechanism.__init__)
 
 #: The fields of a symbolic mechanism that define its generated module.
 DEFINING_FIELDS = ("name", "description", "L", "delta", "inputs", "frame", "frame_inputs",
@@ -313,34 +590,82 @@ DEFINING_FIELDS = ("name", "description", "L", "delta", "inputs", "frame", "fram
 
 
 def definition_digest(mechanism) -> str:
-    """SHA-256 of a symbolic mechanism's definition (its :data:`DEFINING_FIELDS` as SymPy
-    ``srepr``), of SymPy's version and of the code generator's source."""
+    """SHA-256 of a symbolic mechanism's definition and of the generator's version
+    (``derivations.generator.generator_version``).
+
+    Parameters
+    ----------
+    mechanism : derivations.mechanisms.Mechanism
+        The symbolic mechanism; its :data:`DEFINING_FIELDS` are hashed as SymPy ``srepr``.
+
+    Returns
+    -------
+    str
+        The hex digest.
+    """
     import sympy
 
-    from derivations import codegen
+    from derivations import generator
 
-    h = hashlib.sha256()
-    h.update(sympy.__version__.encode())
-    h.update(Path(codegen.__file__).read_bytes())
+    h = hashlib.sha256(generator.generator_version().encode())
     for name in DEFINING_FIELDS:
         h.update(f"{name}={sympy.srepr(getattr(mechanism, name, None))};".encode())
     return h.hexdigest()
 
 
 def generated_source(mechanism, cache: bool = True) -> str:
-    """The generated module's source of a symbolic mechanism (``derivations.codegen``); with
-    ``cache``, read from (or written to) ``<cache>/generated/<name>_<digest>.py`` (the cache
-    of :func:`nonholo.numerics.native.cache_dir`, written atomically)."""
+    """The generated module's source of a symbolic mechanism (``derivations.codegen``).
+
+    Parameters
+    ----------
+    mechanism : derivations.mechanisms.Mechanism
+        The symbolic mechanism.
+    cache : bool
+        Read the source from (or write it to) ``<cache>/generated/<name>_<digest>.py``
+        (the cache of :func:`nonholo.numerics.native.cache_dir`, written atomically).
+
+    Returns
+    -------
+    str
+        The module's source.
+    """
     from derivations import codegen  # SymPy: imported only when asked for
 
     if not cache:
         return codegen.mechanism_module(mechanism)
-    path = native.cache_dir().parent / "generated" / f"{mechanism.name}_{definition_digest(mechanism)[:24]}.py"
+    return cached_source(mechanism.name, definition_digest(mechanism),
+                         lambda: codegen.mechanism_module(mechanism))
+
+
+def equations_source(form: str, name, arguments: dict, cache: bool = True) -> str:
+    """The generated module's source of the mechanism ``derivations.equations.<form>(name,
+    **arguments)`` builds; cached (:func:`cached_source`) by a digest of the equations as
+    given and the generator's version (:mod:`derivations.generator`), so a cached mechanism
+    is neither derived nor generated again (nor the generator imported)."""
+    from derivations import generator
+
+    def build() -> str:
+        from derivations import codegen, equations
+
+        return codegen.mechanism_module(getattr(equations, form)(name, **arguments))
+
+    if not cache:
+        return build()
+    text = generator.definition_text(form, name, arguments)
+    digest = hashlib.sha256((generator.generator_version() + text).encode()).hexdigest()
+    return cached_source(name, digest, build)
+
+
+def cached_source(name: str, digest: str, build: Callable[[], str]) -> str:
+    """``build()`` read from (or written to) ``<name>_<digest[:24]>.py`` in
+    :func:`generated_cache_dir` (written atomically; a cache that cannot be written is
+    reported once and skipped)."""
+    path = generated_cache_dir() / f"{name}_{digest[:24]}.py"
     try:
         return path.read_text()
     except OSError:
         pass
-    source = codegen.mechanism_module(mechanism)
+    source = build()
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
         with tempfile.NamedTemporaryFile("w", dir=path.parent, delete=False, suffix=".tmp") as f:
@@ -348,5 +673,22 @@ def generated_source(mechanism, cache: bool = True) -> str:
         os.replace(f.name, path)
     except OSError as exc:
         native.warn_once("generated cache", f"nonholo: could not cache the generated module of "
-                                            f"{mechanism.name!r} ({exc})")
+                                            f"{name!r} ({exc})")
     return source
+
+
+def generated_cache_dir() -> Path:
+    """Where generated modules are cached: ``$NONHOLO_CACHE_DIR/generated`` when that is set
+    (beside the compiled kernels, :func:`nonholo.numerics.native.cache_dir`), else
+    ``generated`` beside the default kernel cache (``~/.cache/nonholo/generated``)."""
+    kernels = native.cache_dir()
+    return kernels / "generated" if os.environ.get(native.CACHE_ENV) else kernels.parent / "generated"
+
+
+def load_source(source: str, name: str) -> types.ModuleType:
+    """A generated module's ``source`` loaded as a module (not imported: it is not on disk in
+    the package); its text is kept as ``SOURCE``."""
+    module = types.ModuleType(f"nonholo_symbolic_{name}")
+    module.SOURCE = source
+    exec(compile(source, f"<generated module of mechanism {name!r}>", "exec"), module.__dict__)
+    return module

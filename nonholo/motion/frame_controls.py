@@ -221,14 +221,25 @@ def _aligned_indices(steps: int, nodes: int):
     return k, quarters, gather, expand
 
 
-def from_dict(d: dict):
+def from_dict(d: dict, mechanism=None):
     """Inverse of ``to_dict`` for a parametrisation (:func:`nonholo.controls.parametrisations.from_dict`), a
     :class:`FrameControls`, a :class:`~nonholo.controls.stitched.Stitched` of them, or any of those
-    :class:`~nonholo.motion.retimed.Retimed`."""
+    :class:`~nonholo.motion.retimed.Retimed`. Controls that name their mechanism are rebuilt
+    with ``mechanism`` (a :class:`~nonholo.model.mechanism.Mechanism`, which need not be in the
+    catalog; ``ValueError`` if the description names another) or, by default, the one of
+    that name."""
+    def rebuilt(p):
+        return from_dict(p, mechanism)
+
+    if d.get("kind") in (retimed.Retimed.kind, FrameControls.kind) and mechanism is not None:
+        mech = catalog.get(mechanism)
+        if d.get("mechanism") != mech.name:
+            raise ValueError(f"the controls are of mechanism {d.get('mechanism')!r}, not {mech.name!r}")
+    named = d.get("mechanism") if mechanism is None else mechanism
     if d.get("kind") == retimed.Retimed.kind:
-        return retimed.from_dict(d, from_dict)
+        return retimed.from_dict(d, rebuilt, named)
     if d.get("kind") == stitched.Stitched.kind:
-        return stitched.from_dict(d, from_dict)
+        return stitched.from_dict(d, rebuilt)
     if d.get("kind") == FrameControls.kind:
-        return FrameControls(controls_from_dict(d["frame"]), d["R0"], d["mechanism"], d["steps"])
+        return FrameControls(controls_from_dict(d["frame"]), d["R0"], named, d["steps"])
     return controls_from_dict(d)

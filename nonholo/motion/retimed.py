@@ -12,7 +12,7 @@ planned motion. Under a bound ``|dl_i/dt| ≤ v`` the fastest re-timing has
     ``dτ/dt = 1/ρ(τ)``,  ``ρ(τ) = max_i |s_i(τ)| / v``,  ``T̃ = ∫_0^T ρ(τ) dτ``:
 
 at every instant the fastest leg moves at ``v``, and no re-timing of the path takes less
-than ``T̃`` (:attr:`TimeMap.minimum_time`). A longer ``T`` is met by ``dτ/dt = 1/(cρ)``,
+than ``T̃`` (``TimeMap.minimum_time``). A longer ``T`` is met by ``dτ/dt = 1/(cρ)``,
 ``c = T/T̃ ≥ 1``: the fastest leg then moves at ``v/c`` throughout.
 
 How :class:`TimeMap` builds ``τ(t)``:
@@ -89,7 +89,7 @@ class TimeMap:
     """``t(τ)`` and its inverse for controls ``base`` (physical, on ``[0, T]``) played from
     ``R0`` with every leg at most ``leg_speed`` fast (see the module).
 
-    ``T``: the re-timed duration, ``None`` for the least (:attr:`minimum_time`); a ``T``
+    ``T``: the re-timed duration, ``None`` for the least (``minimum_time``); a ``T``
     below it raises ``ValueError`` saying the time needed.
     """
 
@@ -311,8 +311,9 @@ class Retimed:
                 f"{self.leg_speed:g} fast)")
 
 
-def from_dict(d: dict, base_from_dict) -> Retimed:
-    """Inverse of :meth:`Retimed.to_dict` (``base_from_dict`` reads the base controls); the
-    time map is rebuilt by the same computation."""
-    return Retimed(base_from_dict(d["base"]), d["R0"], d["mechanism"], d["leg_speed"], T=d["T"],
-                   nodes=d["nodes"])
+def from_dict(d: dict, base_from_dict, mechanism=None) -> Retimed:
+    """Inverse of :meth:`Retimed.to_dict` (``base_from_dict`` reads the base controls; the
+    mechanism is ``mechanism``, by default the one ``d`` names); the time map is rebuilt by
+    the same computation."""
+    return Retimed(base_from_dict(d["base"]), d["R0"], d["mechanism"] if mechanism is None else mechanism,
+                   d["leg_speed"], T=d["T"], nodes=d["nodes"])

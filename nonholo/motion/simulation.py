@@ -27,10 +27,10 @@ from ..controls.parametrisations import Controls
 from ..model import catalog
 from ..numerics.checks import MAX_STEPS, check_count, check_time
 
-#: Default number of CF4 steps on ``[0, T]``: chosen so that on the examples of MODEL.md
-#: (``T = 1``) the endpoint is within the planner's 1e-10 rad of a DOP853 solution
-#: (``benchmarks/results/bench_plan.md``). The method has order 4: the error grows like
-#: ``(h |ω|)⁴``, so larger inputs need more steps.
+#: Default number of CF4 steps on ``[0, T]``: chosen so that on the examples
+#: (:mod:`nonholo.paper.examples`, ``T = 1``) the endpoint is within the planner's 1e-10
+#: rad of a DOP853 solution (``benchmarks/results/bench_plan.md``). The method has order
+#: 4: the error grows like ``(h |ω|)⁴``, so larger inputs need more steps.
 DEFAULT_STEPS = 400
 
 #: ``simulate`` stops (with :class:`SingularTrajectoryError`) where ``|Δ|`` falls below this.
@@ -40,7 +40,12 @@ DELTA_STOP = 1e-9
 class SingularTrajectoryError(ValueError):
     """The trajectory reached the singular surface ``Δ = 0`` (or ``ω`` became non-finite).
 
-    ``trajectory`` holds the part simulated before that happened.
+    Parameters
+    ----------
+    message : str
+        What happened, and when.
+    trajectory : Trajectory
+        The part simulated before that happened.
     """
 
     def __init__(self, message: str, trajectory: "Trajectory"):
@@ -52,12 +57,30 @@ class SingularTrajectoryError(ValueError):
 class Trajectory:
     """Samples of a simulated motion at ``t_n = n T/steps``.
 
-    ``R`` has shape ``(n, 3, 3)``, ``u`` shape ``(n, m)`` (the inputs at ``t_n``, with
-    piecewise-constant controls the value on ``[t_n, t_{n+1})``), ``delta`` shape ``(n,)``
-    (``Δ(R(t_n))``, ``None`` for mechanisms without a singular set). ``min_delta`` is the
-    least ``|Δ|`` over every point where the integrator evaluated ``L`` (``None`` without a
-    singular set). ``q`` ``(n, k)``: the coordinates of a state beyond SO(3) (``None`` on
-    SO(3); ``R`` is then the identity throughout for a state without orientation).
+    Parameters
+    ----------
+    t : numpy.ndarray
+        The sample times, shape ``(n,)``.
+    R : numpy.ndarray
+        The orientations, shape ``(n, 3, 3)`` (the identity throughout for a state without
+        orientation).
+    u : numpy.ndarray
+        The inputs at ``t_n``, shape ``(n, m)``; with piecewise-constant controls the value
+        on ``[t_n, t_{n+1})``.
+    delta : numpy.ndarray or None
+        ``Δ`` at the samples, shape ``(n,)``; ``None`` for mechanisms without a singular
+        set.
+    min_delta : float or None
+        The least ``|Δ|`` over every point where the integrator evaluated ``L`` (``None``
+        without a singular set).
+    mechanism : str
+        The mechanism's name.
+    T : float
+        The horizon (s).
+    steps : int
+        CF4 steps on ``[0, T]``.
+    q : numpy.ndarray or None
+        The coordinates of a state beyond SO(3), shape ``(n, k)``; ``None`` on SO(3).
     """
 
     t: np.ndarray
@@ -72,7 +95,7 @@ class Trajectory:
 
     @property
     def R_T(self) -> np.ndarray:
-        """The endpoint ``R(T)``."""
+        """The endpoint ``R(T)``, a 3×3 matrix."""
         return self.R[-1]
 
 
@@ -80,8 +103,17 @@ class Trajectory:
 class Variational:
     """The trajectory with the variational system (9) along it (see :func:`variational`).
 
-    ``Z[n] = Φ(t_n, 0)^{-1}``; ``M`` is the mobility matrix ``M(T)``; ``J`` the Jacobian
-    ``∂s_T/∂λ`` (3 × len(λ)) of parametrised controls (``None`` for a plain ``u(t)``).
+    Parameters
+    ----------
+    trajectory : Trajectory
+        The simulated motion.
+    Z : numpy.ndarray
+        ``Z[n] = Φ(t_n, 0)^{-1}``, shape ``(n, d, d)``.
+    M : numpy.ndarray
+        The mobility matrix ``M(T)``.
+    J : numpy.ndarray or None
+        The Jacobian ``∂s_T/∂λ`` (d × len(λ)) of parametrised controls; ``None`` for a
+        plain ``u(t)``.
     """
 
     trajectory: Trajectory
@@ -96,11 +128,33 @@ class Variational:
 
 
 def stage_table(controls, T: float, steps: int, n_inputs: int) -> np.ndarray:
-    """The integrator's input table ``U`` (``(steps, 3, m)``, see :mod:`nonholo.numerics.kernels`).
+    """The integrator's input table ``U`` (see :mod:`nonholo.numerics.kernels`).
 
-    ``controls`` is a :class:`~nonholo.controls.parametrisations.Controls` or a
-    :class:`~nonholo.motion.frame_controls.FrameControls` (its ``T`` must equal ``T``) or a vectorised function ``u(t)``, ``t (n,) -> (n, m)``, evaluated at the stage times (use
-    a ``Controls`` for discontinuous inputs: it keeps each step on one side of a jump).
+    Parameters
+    ----------
+    controls
+        A :class:`~nonholo.controls.parametrisations.Controls` or a
+        :class:`~nonholo.motion.frame_controls.FrameControls` (its ``T`` must equal ``T``)
+        or a vectorised function ``u(t)``, ``t (n,) -> (n, m)``, evaluated at the stage
+        times (use a ``Controls`` for discontinuous inputs: it keeps each step on one side
+        of a jump).
+    T : float
+        The horizon (s).
+    steps : int
+        CF4 steps.
+    n_inputs : int
+        The mechanism's inputs ``m``.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``U``, shape ``(steps, 3, m)``: the inputs at each step's three stage times.
+
+    Raises
+    ------
+    ValueError
+        If the controls are defined on another interval, return the wrong shape, have
+        another number of inputs or non-finite values, or are not controls at all.
     """
     T = check_time(T)
     steps = check_count(steps, "steps", maximum=MAX_STEPS)
@@ -175,13 +229,34 @@ def simulate(R0, controls, T: float, *, mechanism="platform",
              steps: int = DEFAULT_STEPS) -> Trajectory:
     """Solve ``dR/dt = [L(R) u(t)] R``, ``R(0) = R0`` on ``[0, T]`` with ``steps`` CF4 steps.
 
-    ``R0``: the start — a rotation matrix, or for a mechanism whose state goes beyond
-    SO(3) its coordinates ``q0`` or the pair ``(R0, q0)`` (:meth:`nonholo.spaces.groups.Product.parse`;
-    the trajectory's ``q`` holds the coordinates). ``controls``: a :class:`~nonholo.controls.parametrisations.Controls`, a
-    :class:`~nonholo.motion.frame_controls.FrameControls` or a vectorised ``u(t)``; ``mechanism``: a
-    :class:`~nonholo.model.mechanism.Mechanism` or its name.
-    Raises ``ValueError`` for a bad ``R0``/``T``/``steps``/controls and
-    :class:`SingularTrajectoryError` if the motion runs into ``Δ = 0``.
+    Parameters
+    ----------
+    R0
+        The start: a rotation matrix, or for a mechanism whose state goes beyond SO(3) its
+        coordinates ``q0`` or the pair ``(R0, q0)``
+        (:meth:`nonholo.spaces.groups.Product.parse`; the trajectory's ``q`` holds the
+        coordinates).
+    controls
+        A :class:`~nonholo.controls.parametrisations.Controls`, a
+        :class:`~nonholo.motion.frame_controls.FrameControls` or a vectorised ``u(t)``.
+    T : float
+        The horizon in seconds.
+    mechanism : str or Mechanism
+        A :class:`~nonholo.model.mechanism.Mechanism` or its name.
+    steps : int
+        CF4 steps on ``[0, T]``.
+
+    Returns
+    -------
+    Trajectory
+        The samples at ``t_n = n T/steps``.
+
+    Raises
+    ------
+    ValueError
+        For a bad ``R0``, ``T``, ``steps`` or controls, naming it.
+    SingularTrajectoryError
+        If the motion runs into ``Δ = 0``; it holds the part simulated before.
     """
     mech, (R0, q0), T, steps, kern, sgn, U = _setup(R0, controls, T, mechanism, steps)
     Rs, Qs = kern.nodes(steps)
@@ -196,13 +271,27 @@ def variational(R0, controls, T: float, *, mechanism="platform",
                 steps: int = DEFAULT_STEPS) -> Variational:
     """Simulate and integrate the variational system (9) along the motion.
 
-    Returns a :class:`Variational` with ``Φ(T, t_n)`` (``.Phi``), ``M(T)`` (``.M``) and,
-    when ``controls`` is a :class:`~nonholo.controls.parametrisations.Controls` linear in its parameters
-    (Fourier or grid controls),
-    ``J = ∂s_T/∂λ`` (``.J``):
-    for a change ``δλ`` of the parameters the endpoint moves to ``exp([J δλ]) R_T`` to
-    first order. For grid controls the columns ``(j, i)`` of ``J`` are the
-    ``G_j = ∫_{I_j} Φ(T,t) B(t) dt`` of the nonparametric update.
+    Parameters
+    ----------
+    R0, controls, T, mechanism, steps
+        As for :func:`simulate`.
+
+    Returns
+    -------
+    Variational
+        ``Φ(T, t_n)`` (``.Phi``), ``M(T)`` (``.M``) and, when ``controls`` is a
+        :class:`~nonholo.controls.parametrisations.Controls` linear in its parameters
+        (Fourier or grid controls), ``J = ∂s_T/∂λ`` (``.J``): for a change ``δλ`` of the
+        parameters the endpoint moves to ``exp([J δλ]) R_T`` to first order. For grid
+        controls the columns ``(j, i)`` of ``J`` are the ``G_j = ∫_{I_j} Φ(T,t) B(t) dt`` of
+        the nonparametric update.
+
+    Raises
+    ------
+    ValueError
+        For bad arguments, as :func:`simulate`.
+    SingularTrajectoryError
+        If the motion runs into ``Δ = 0``.
     """
     mech, (R0, q0), T, steps, kern, sgn, U = _setup(R0, controls, T, mechanism, steps)
     d = mech.n_rates

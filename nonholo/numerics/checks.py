@@ -5,15 +5,51 @@ from __future__ import annotations
 import numpy as np
 
 
+#: The longest time accepted (s): about 30 years; a longer horizon scales the inputs
+#: towards underflow and is a mistake of units, not a slower motion.
+MAX_TIME = 1e9
+
+
 def check_time(T, name: str = "T") -> float:
-    """A positive finite time (s) as a float."""
+    """A positive finite time (s) as a float, at most :data:`MAX_TIME`: a real number
+    (Python or NumPy), not a boolean or a string."""
+    if not is_number(T):
+        raise ValueError(f"{name} must be a positive finite time in seconds, got {T!r}")
     try:
         T = float(T)
-    except (TypeError, ValueError, OverflowError):
-        raise ValueError(f"{name} must be a positive finite time in seconds, got {T!r}") from None
+    except OverflowError:                             # an int beyond the floats' range
+        raise ValueError(f"{name} must be a positive finite time, got {T}") from None
     if not np.isfinite(T) or T <= 0:
         raise ValueError(f"{name} must be a positive finite time, got {T}")
+    if T > MAX_TIME:
+        raise ValueError(f"{name} must be at most {MAX_TIME:g} s, got {T:g}")
     return T
+
+
+def real_array(value, name: str) -> np.ndarray:
+    """``value`` (an array or nested sequences of numbers) as a float array; booleans,
+    complex numbers, strings and other objects are refused with ``ValueError`` naming ``name``."""
+    if isinstance(value, (str, bytes)):
+        raise ValueError(f"{name} must be numbers, got a string")
+    try:
+        a = np.asarray(value)
+    except (TypeError, ValueError) as exc:         # ragged nesting
+        raise ValueError(f"{name} must be an array of numbers: {exc}") from None
+    if a.dtype.kind not in "iuf" or (not isinstance(value, np.ndarray) and _holds_booleans(value)):
+        what = {"b": "booleans", "c": "complex numbers", "U": "strings", "S": "strings"}.get(a.dtype.kind)
+        raise ValueError(f"{name} must be real numbers, got {what or 'booleans or other objects'}")
+    return a.astype(float)
+
+
+def _holds_booleans(value) -> bool:
+    """Whether nested sequences hold a boolean (NumPy casts ``[True, 0.5]`` to floats)."""
+    if isinstance(value, (bool, np.bool_)):
+        return True
+    if isinstance(value, (list, tuple)):
+        return any(_holds_booleans(v) for v in value)
+    if isinstance(value, np.ndarray):
+        return value.dtype.kind == "b"
+    return False
 
 
 #: Most integrator steps on ``[0, T]`` (the trajectory alone then takes 72 MB; more is a

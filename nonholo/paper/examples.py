@@ -1,9 +1,10 @@
-"""The planning examples of ``../shared/design/MODEL.md`` as data.
+"""The planning examples, as data: the problems ``nonholo reproduce`` solves.
 
 Examples 1 and 2 reconstruct the paper's two planning problems; Example 3 ("parallel
 parking") goes beyond it, and Example 4 is the other orientation that meets Example 3's
-conditions (two exist; MODEL.md's rule picks the one nearest to ``exp(0.6 [e_1]) R_0``). All use ``T = 1``, a Fourier basis with ``K = 2`` harmonics and
-the initial control ``u_1 = 0.3 sin 2πt/T``, ``u_2 = 0.3 cos 2πt/T``.
+conditions (two exist; Example 3 is the one nearest to ``exp(0.6 [e_1]) R_0``). All use
+``T = 1``, a Fourier basis with ``K = 2`` harmonics and the initial control
+``u_1 = 0.3 sin 2πt/T``, ``u_2 = 0.3 cos 2πt/T``.
 """
 from __future__ import annotations
 

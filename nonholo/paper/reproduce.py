@@ -17,7 +17,12 @@
 - ``summary.json``: one object per (example, method) with ``example``, ``method``,
   ``strategy``, ``success``, ``iterations``, ``terminal_error`` (after independent
   re-simulation with DOP853), ``planner_error`` (the planner's own ``|l_T|``),
-  ``min_delta``, ``seconds``, ``reason``; and ``summary.md``, the same as a table.
+  ``min_delta``, ``reason``; and ``summary.md``, the same as a table.
+
+A second run writes the same bytes (on the same machine and kernels): no file records when
+or how fast it was made — PDFs carry no creation date (:func:`nonholo.viz.style.save_figure`),
+plan files no wall time (``seconds`` is ``null``). The times go to the terminal: one line
+per plan on stderr and the summary table with a time column on stdout.
 
 The run fails (exit status 1) when the generated code is stale or Example 1 or 2 fails.
 """
@@ -26,7 +31,7 @@ from __future__ import annotations
 import json
 import sys
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
@@ -51,6 +56,7 @@ FAR_GOAL = ((-1.918, 0.336, -2.521), (1.433, -0.813, 1.324))
 #: planned again with :data:`LEG_LENGTH` (figure ``leg_limits``, ``plans/leg_limits.json``
 #: and ``.csv``).
 LIMITS_GOAL = ((0.5, 1.2, -0.5), (-0.4527, 1.4094, -1.3638))
+#: the legs' stroke of the limits example (:data:`LIMITS_GOAL`)
 LEG_LENGTH = (1.2, 2.0)
 #: The legs' speed bound the same goal's default plan is re-timed under (figure
 #: ``motion_quality``, ``plans/least_time.json`` and ``.csv``), geometry units per second.
@@ -78,11 +84,16 @@ class Solved:
         return {"example": self.example.number, "method": r.method, "strategy": r.strategy,
                 "success": self.ok, "iterations": r.iterations,
                 "terminal_error": self.resim_error, "planner_error": r.terminal_error,
-                "min_delta": r.min_delta, "seconds": round(r.seconds, 4), "reason": r.reason}
+                "min_delta": r.min_delta, "reason": r.reason}
 
 
 def _log(msg: str) -> None:
     print(msg, file=sys.stderr, flush=True)
+
+
+def keep(result, path: Path) -> Path:
+    """Save ``result`` to ``path`` without its wall time (see the module)."""
+    return replace(result, seconds=None).save(path)
 
 
 def solve(example: _examples.Example, method: str, strategy: str) -> Solved:
@@ -204,11 +215,11 @@ def write_figures(solved: list[Solved], outdir: Path, progress=_log) -> list[Pat
     else:
         progress(f"      note: the far goal took the {far.route} route ({far.reason[:120]}); no global_route figure")
     (outdir / "plans").mkdir(parents=True, exist_ok=True)
-    far.save(outdir / "plans" / "far_goal.json")
+    keep(far, outdir / "plans" / "far_goal.json")
     free, limited = plan_limits_goal()
     if free.success and limited.success:
         save(viz.leg_limits_figure(free, limited), "leg_limits")
-        limited.save(outdir / "plans" / "leg_limits.json")
+        keep(limited, outdir / "plans" / "leg_limits.json")
         limited.to_csv(outdir / "plans" / "leg_limits.csv", rate=100)
         progress("      wrote plans/leg_limits.json and plans/leg_limits.csv")
     else:
@@ -216,7 +227,7 @@ def write_figures(solved: list[Solved], outdir: Path, progress=_log) -> list[Pat
     if free.success:
         cheap, fast = plan_quality(free)
         save(viz.motion_quality_figure(free, cheap, fast), "motion_quality")
-        fast.save(outdir / "plans" / "least_time.json")
+        keep(fast, outdir / "plans" / "least_time.json")
         fast.to_csv(outdir / "plans" / "least_time.csv", rate=100)
         progress("      wrote plans/least_time.json and plans/least_time.csv")
     ex3 = [s for s in solved if s.example.number == 3 and len(s.result.R)]
@@ -228,17 +239,20 @@ def write_figures(solved: list[Solved], outdir: Path, progress=_log) -> list[Pat
     return written
 
 
-def summary_table(rows: list[dict]) -> str:
-    """Markdown table of the summary rows."""
+def summary_table(rows: list[dict], seconds: list[float] | None = None) -> str:
+    """Markdown table of the summary rows; with ``seconds`` (each row's wall time), a time
+    column too (for the terminal, not for a file)."""
+    timed = seconds is not None
     head = ("| example | method | strategy | success | iterations | re-simulated ‖l_T‖ [rad] "
-            "| min \\|Δ\\| | time [s] |\n|---|---|---|---|---|---|---|---|")
+            "| min \\|Δ\\| |" + (" time [s] |" if timed else "")
+            + "\n|---|---|---|---|---|---|---|" + ("---|" if timed else ""))
     lines = [head]
-    for r in rows:
+    for k, r in enumerate(rows):
         err = "–" if r["terminal_error"] is None else f"{r['terminal_error']:.1e}"
         md = "–" if r["min_delta"] is None else f"{r['min_delta']:.3f}"
         lines.append(f"| {r['example']} | {r['method']} | {r['strategy']} | "
-                     f"{'yes' if r['success'] else 'no'} | {r['iterations']} | {err} | {md} | "
-                     f"{r['seconds']:.3f} |")
+                     f"{'yes' if r['success'] else 'no'} | {r['iterations']} | {err} | {md} |"
+                     + (f" {seconds[k]:.3f} |" if timed else ""))
     return "\n".join(lines)
 
 
@@ -267,11 +281,11 @@ def run(outdir: Path = DEFAULT_OUTDIR, audit: bool = True, draw: bool = True) ->
     plans = outdir / "plans"
     plans.mkdir(exist_ok=True)
     for s in solved:
-        s.result.save(plans / f"example{s.example.number}_{s.result.method}.json")
+        keep(s.result, plans / f"example{s.example.number}_{s.result.method}.json")
     rows = [s.summary() for s in solved]
     (outdir / "summary.json").write_text(json.dumps(rows, indent=2) + "\n")
     (outdir / "summary.md").write_text(summary_table(rows) + "\n")
-    print(summary_table(rows), flush=True)
+    print(summary_table(rows, [s.result.seconds for s in solved]), flush=True)
     if draw:
         _log("drawing the figures ...")
         write_figures(solved, outdir)

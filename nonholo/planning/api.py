@@ -53,83 +53,132 @@ def plan(R0, Rd, *, T: float | None = 1.0, method: str = "parametric", harmonics
          max_iter: int = 200, strategy="robust", mechanism="platform",
          delta_min: float = 1e-2, steps: int | None = None, newton_below: float = 1e-3,
          min_step: float = 1e-6, callback: Callable[[dict], object] | None = None,
-         route: str = "auto", leg_length=None, leg_speed=None, objective: str | None = "auto",
+         route: str = "auto", leg_length=None, leg_speed=None, objective: str | None = None,
          constraints=()) -> PlanResult:
     """Plan a control steering ``R0`` to ``Rd`` in time ``T`` (seconds).
 
-    - ``R0``, ``Rd``: start and goal — rotation matrices for a mechanism on SO(3); for one
-      whose state goes beyond SO(3) (:attr:`~nonholo.model.mechanism.Mechanism.state_space`)
-      vectors of its coordinates (``"R^k"``) or pairs ``(R, q)`` (``"SO(3)xR^k"``), see
-      :mod:`nonholo.spaces.groups`. There the error is the stacked ``(l, q_T − q_d)`` and the
-      result reports it by part (``errors``); strategies ``"paper"`` and ``"robust"`` plan
-      in the physical inputs, and ``leg_length`` and ``leg_speed`` are for SO(3) mechanisms
-      only (``ValueError`` otherwise).
-    - ``mechanism``: a :class:`~nonholo.model.mechanism.Mechanism` or its name
-      (:func:`nonholo.model.catalog.names`).
-    - ``strategy``: ``"robust"`` (default, :mod:`nonholo.planning.strategy_robust`) or ``"paper"``
-      (the appendix's algorithm, :mod:`nonholo.planning.strategy_paper`), or a
-      :class:`~nonholo.planning.core.Strategy` subclass, itself or by its import path
-      ``"package.module:Class"`` (:func:`strategy_class`).
-    - ``method``: ``"parametric"`` (Fourier series with ``harmonics`` = K) or
-      ``"nonparametric"`` (piecewise constant on ``grid`` equal intervals) — of the
-      physical inputs ``u`` (``"paper"``) or of the frame coordinates ``w`` (``"robust"``;
-      the result's :meth:`~nonholo.io.result.PlanResult.controls` are physical either way).
-    - ``u0``: initial control in physical units (see :func:`initial_controls`; default:
-      the examples'). ``"robust"`` converts it to frame coordinates
-      (:func:`nonholo.planning.strategy_robust.to_frame`) and tries it first.
-    - ``gamma`` (γ), ``step`` (initial θ-step h): each flow step asks the error to shrink
-      by ``γh`` (default γ: the strategy's ``default_gamma``, 0.5 for ``"paper"`` as in
-      the paper's examples, 1 for ``"robust"``); ``newton_below``: below this ``|l_T|``
-      take full Newton steps (``γh = 1``);
-      ``min_step``: give up when a step halved below this ``γh``; ``tol``: stop when
-      ``|l_T| ≤ tol`` (rad); ``max_iter``: accepted steps at most.
-    - ``delta_min``: every trajectory accepted keeps ``|Δ| ≥ delta_min`` (ignored for
-      mechanisms without a singular set).
-    - ``leg_length``: ``(lo, hi)``, the legs' stroke (a platform's, in its geometry's
-      units, :meth:`~nonholo.model.mechanism.Mechanism.leg_lengths`): every leg keeps ``lo ≤
-      l_i(R(t)) ≤ hi`` along the certified motion (:mod:`nonholo.model.limits`); a start or goal
-      outside fails at once, naming the leg. ``None`` (default): no limits.
-    - ``leg_speed``: ``v``, the legs' top speed (a platform's, geometry units per second):
-      every leg keeps ``|dl_i/dt| ≤ v``. The path is planned as without it (in
-      :data:`PLANNING_TIME` when ``T=None``), then re-timed (:mod:`nonholo.planning.retime`): with
-      ``T=None`` in the least time — the fastest leg at ``v`` throughout; with a given
-      ``T`` only if the plan breaks the bound, and it fails saying the time needed if its
-      path cannot keep it within ``T``. ``None`` (default): no bound.
-    - ``objective``: ``"energy"``: the plan, then the least energy ``∫|u|² dt`` of its
-      physical inputs that a search from several starts finds, with the goal,
-      ``delta_min`` and the stroke kept, within a budget of effort (the same call gives the
-      same plan on any machine) (:mod:`nonholo.planning.energy`: piecewise-constant inputs
-      on :data:`~nonholo.planning.energy.ENERGY_GRID` intervals, method ``"nonparametric"``
-      in the result); ``"auto"`` (default): the plan as found, unless a quick search of the
-      same kind finds a motion needing less than
-      :data:`~nonholo.planning.energy.REPLACE_BELOW` of its energy — then that motion
-      (``options["objective"]`` says so); ``None``: the plan as found.
-    - ``steps``: CF4 steps on ``[0, T]`` (default :func:`default_steps`).
-    - ``callback(record)``: called after each accepted iteration of the local plan with the
-      history record; returning a true value stops the run (and no global route is taken).
-    - ``route``: ``"auto"`` (default) plans from ``R0`` to ``Rd`` and, if that fails, takes
-      the global route (:mod:`nonholo.planning.route`): hops along a path of orientations
-      through the start's component, clear of ``Δ = 0`` (beyond SO(3): along the straight
-      path of states, :mod:`nonholo.planning.state_path`), each planned like a local plan,
-      stitched into one control, then re-planned where it can as one smooth control from
-      the stitched one (the result's ``stitched`` keeps the hops); ``"local"`` plans from
-      ``R0`` to ``Rd`` only (the strategy alone); ``"global"`` takes only the global route.
-
-    Success is certified (:mod:`nonholo.certify.certificate`): the returned physical controls, replayed
-    with an error bound, end within ``tol`` of ``Rd`` and keep ``|Δ| ≥ delta_min``; a
-    plan converged on the planner's grid that cannot be certified is corrected or fails
-    with the reason. The result's ``error_bound`` and ``replay_steps`` record it.
-
     The keywords build a :class:`~nonholo.planning.problem.Problem` (:meth:`Problem.build
-    <nonholo.planning.problem.Problem.build>`), which :func:`solve` takes; ``constraints``:
-    further constraint objects (:mod:`nonholo.planning.constraints`).
+    <nonholo.planning.problem.Problem.build>`), which :func:`solve` plans. Success is
+    certified (:mod:`nonholo.certify.certificate`): the returned physical controls, replayed
+    with an error bound, end within ``tol`` of ``Rd`` and keep ``|Δ| ≥ delta_min``; a plan
+    converged on the planner's grid that cannot be certified is corrected or fails with
+    the reason. The result's ``error_bound`` and ``replay_steps`` record it.
 
-    Raises ``ValueError`` for bad input (``R0``/``Rd`` not rotations, ``Δ(R0) = 0``,
-    ``T ≤ 0``, ``harmonics``/``grid``/``steps`` < 1, unknown method/strategy/mechanism, bad
-    numerical options). A goal on or across the singular surface ``Δ = 0`` (or within
-    ``delta_min`` of it) returns at once a failed :class:`~nonholo.io.result.PlanResult`
-    with the reason.
+    Parameters
+    ----------
+    R0, Rd
+        Start and goal: rotation matrices for a mechanism on SO(3); for one whose state
+        goes beyond SO(3) (:attr:`~nonholo.model.mechanism.Mechanism.state_space`) vectors
+        of its coordinates (``"R^k"``) or pairs ``(R, q)`` (``"SO(3)xR^k"``), see
+        :mod:`nonholo.spaces.groups`. There the error is the stacked ``(l, q_T − q_d)`` and
+        the result reports it by part (``errors``); strategies ``"paper"`` and ``"robust"``
+        plan in the physical inputs, and ``leg_length`` and ``leg_speed`` are for SO(3)
+        mechanisms only.
+    T : float or None
+        The horizon in seconds; ``None`` only with ``leg_speed``: the least time.
+    method : {"parametric", "nonparametric"}
+        Fourier series with ``harmonics`` = K, or piecewise constant on ``grid`` equal
+        intervals — of the physical inputs ``u`` (``"paper"``) or of the frame coordinates
+        ``w`` (``"robust"``; the result's :meth:`~nonholo.io.result.PlanResult.controls` are
+        physical either way).
+    harmonics : int
+        Harmonics K of the parametric form.
+    grid : int
+        Intervals of the nonparametric form.
+    u0 : optional
+        Initial control in physical units (see :func:`~nonholo.planning.problem.initial_controls`; default: the
+        examples'). ``"robust"`` converts it to frame coordinates
+        (:func:`nonholo.planning.strategy_robust.to_frame`) and tries it first.
+    gamma : float, optional
+        γ: each flow step asks the error to shrink by ``γh`` (default: the strategy's
+        ``default_gamma``, 0.5 for ``"paper"`` as in the paper's examples, 1 for
+        ``"robust"``).
+    step : float
+        The initial θ-step h.
+    tol : float
+        Stop when ``|l_T| ≤ tol`` (rad).
+    max_iter : int
+        Accepted steps at most.
+    strategy : str or type
+        ``"robust"`` (default, :mod:`nonholo.planning.strategy_robust`) or ``"paper"`` (the
+        appendix's algorithm, :mod:`nonholo.planning.strategy_paper`), or a
+        :class:`~nonholo.planning.core.Strategy` subclass, itself or by its import path
+        ``"package.module:Class"`` (:func:`~nonholo.planning.problem.strategy_class`).
+    mechanism : str or Mechanism
+        A :class:`~nonholo.model.mechanism.Mechanism` or its name
+        (:func:`nonholo.model.catalog.names`).
+    delta_min : float
+        Every trajectory accepted keeps ``|Δ| ≥ delta_min`` (ignored for mechanisms without
+        a singular set).
+    steps : int, optional
+        CF4 steps on ``[0, T]`` (default :func:`~nonholo.planning.problem.default_steps`).
+    newton_below : float
+        Below this ``|l_T|`` take full Newton steps (``γh = 1``).
+    min_step : float
+        Give up when a step halved below this ``γh``.
+    callback : callable, optional
+        ``callback(record)``, called after each accepted iteration of the local plan with
+        the history record; returning a true value stops the run (and no global route is
+        taken).
+    route : {"auto", "local", "global"}
+        ``"auto"`` (default) plans from ``R0`` to ``Rd`` and, if that fails, takes the
+        global route (:mod:`nonholo.planning.route`): hops along a path of orientations
+        through the start's component, clear of ``Δ = 0`` (beyond SO(3): along the
+        straight path of states, :mod:`nonholo.planning.state_path`), each planned like a
+        local plan, stitched into one control, then re-planned where it can as one smooth
+        control from the stitched one (the result's ``stitched`` keeps the hops);
+        ``"local"`` plans from ``R0`` to ``Rd`` only (the strategy alone); ``"global"``
+        takes only the global route.
+    leg_length : tuple of float, optional
+        ``(lo, hi)``, the legs' stroke (a platform's, in its geometry's units,
+        :meth:`~nonholo.model.mechanism.Mechanism.leg_lengths`): every leg keeps ``lo ≤
+        l_i(R(t)) ≤ hi`` along the certified motion (:mod:`nonholo.model.limits`); a start
+        or goal outside fails at once, naming the leg. ``None`` (default): no limits.
+    leg_speed : float, optional
+        ``v``, the legs' top speed (a platform's, geometry units per second): every leg
+        keeps ``|dl_i/dt| ≤ v``. The path is planned as without it (in
+        :data:`~nonholo.planning.problem.PLANNING_TIME` when ``T=None``), then re-timed
+        (:mod:`nonholo.planning.retime`): with ``T=None`` in the least time — the fastest
+        leg at ``v`` throughout; with a given ``T`` only if the plan breaks the bound, and
+        it fails saying the time needed if its path cannot keep it within ``T``. ``None``
+        (default): no bound.
+    objective : {None, "energy", "auto"}
+        ``None`` (default): the plan as found. ``"energy"``: the plan, then the least energy
+        ``∫|u|² dt`` of its physical inputs that a search from several starts finds, with
+        the goal, ``delta_min`` and the stroke kept, within a budget of effort (the same call
+        gives the same plan on any machine) (:mod:`nonholo.planning.energy`:
+        piecewise-constant inputs on :data:`~nonholo.planning.energy.ENERGY_GRID` intervals,
+        method ``"nonparametric"`` in the result). ``"auto"``: the plan as found, unless a
+        quick search of the same kind finds a motion needing less than
+        :data:`~nonholo.planning.energy.REPLACE_BELOW` of its energy — then that motion
+        (``options["objective"]`` says so).
+    constraints : sequence
+        Further constraint objects (:mod:`nonholo.planning.constraints`).
+
+    Returns
+    -------
+    PlanResult
+        The plan, successful or not (``success``, ``reason``). A goal on or across the
+        singular surface ``Δ = 0`` (or within ``delta_min`` of it) returns at once a failed
+        result with the reason.
+
+    Raises
+    ------
+    ValueError
+        For bad input, naming the argument: ``R0``/``Rd`` not states of the mechanism,
+        ``Δ(R0) = 0``, ``T ≤ 0``, ``harmonics``/``grid``/``steps`` < 1, an unknown method,
+        strategy or mechanism, bad numerical options, a Fourier basis too large for memory;
+        ``leg_length`` or ``leg_speed`` for a mechanism beyond SO(3).
+    TypeError
+        For a ``callback`` that is not callable.
+
+    See Also
+    --------
+    solve : plans a :class:`~nonholo.planning.problem.Problem` built beforehand.
+    nonholo.retime : a stored plan re-timed under a leg-speed bound.
     """
+    if callback is not None and not callable(callback):
+        raise TypeError(f"callback must be callable (it is given each iteration's record), got {callback!r}")
     problem = Problem.build(R0, Rd, T=T, method=method, harmonics=harmonics, grid=grid, u0=u0,
                             gamma=gamma, step=step, tol=tol, max_iter=max_iter, strategy=strategy,
                             mechanism=mechanism, delta_min=delta_min, steps=steps,
@@ -141,7 +190,22 @@ def plan(R0, Rd, *, T: float | None = 1.0, method: str = "parametric", harmonics
 
 def solve(problem: Problem, callback: Callable[[dict], object] | None = None) -> PlanResult:
     """The plan of ``problem``: its path (:func:`solve_path`), re-timed under its legs'
-    speed if it has one (:func:`nonholo.planning.retime.limit_speed`)."""
+    speed if it has one (:func:`nonholo.planning.retime.limit_speed`).
+
+    Parameters
+    ----------
+    problem : Problem
+        The planning problem, checked when it was built
+        (:meth:`~nonholo.planning.problem.Problem.build`).
+    callback : callable, optional
+        ``callback(record)`` after each accepted iteration of the local plan; a true value
+        returned stops the run.
+
+    Returns
+    -------
+    PlanResult
+        The certified plan, or a failed one with its reason.
+    """
     result = solve_path(problem, callback)
     return limit_speed(result, problem.leg_speed, None if problem.least_time else problem.T)
 
@@ -149,7 +213,20 @@ def solve(problem: Problem, callback: Callable[[dict], object] | None = None) ->
 def solve_path(problem: Problem, callback: Callable[[dict], object] | None = None) -> PlanResult:
     """The path of ``problem`` in its time ``T``: refused at once where a constraint rules
     the goal out, else the strategy's local plan, then (route ``"auto"`` after a failure, or
-    ``"global"``) the global route, then the objective."""
+    ``"global"``) the global route, then the objective.
+
+    Parameters
+    ----------
+    problem : Problem
+        The planning problem (its ``leg_speed`` is not applied here).
+    callback : callable, optional
+        As for :func:`solve`.
+
+    Returns
+    -------
+    PlanResult
+        The plan of the path, not re-timed.
+    """
     mech, options, cls = problem.mechanism, problem.options, problem.strategy_class
     # goals that cannot be reached: decided before anything is simulated (or compiled)
     refusal = first_refusal(problem.constraints, mech, problem.start, problem.goal)

@@ -78,11 +78,12 @@ def certified(outcome: Outcome, problem: Evaluator, options: Options) -> Outcome
     if not cert.passed:
         return replace(outcome, success=False,
                        reason=f"{outcome.reason} on the planner's grid, but not certified: {cert.reason}")
-    return replace(outcome, evaluation=ev, certificate=cert, reason=outcome.reason + note(cert, corrections))
+    return replace(outcome, evaluation=ev, certificate=cert, reason=outcome.reason + note(cert, corrections, prob.mechanism.space))
 
 
-def note(cert: Certificate, corrections: int) -> str:
-    """What a success's reason says of its certificate."""
+def note(cert: Certificate, corrections: int, space) -> str:
+    """What a success's reason says of its certificate (errors in the units of ``space``,
+    the mechanism's :class:`~nonholo.spaces.groups.Product`)."""
     fixed = f" after {corrections} correction{'s' * (corrections > 1)}" if corrections else ""
     return (f"; certified{fixed}: the physical replay ({cert.replay_steps} steps) ends "
-            f"{cert.terminal_error:.2g} rad from the goal, error bound {cert.error_bound:.2g} rad")
+            f"{space.amount(cert.terminal_error)} from the goal, error bound {space.amount(cert.error_bound)}")

@@ -4,7 +4,7 @@ the legs' stroke and the legs' speed.
 
 Each constraint is checked against its mechanism when a :class:`~nonholo.planning.problem.Problem`
 is built (``ValueError`` naming the argument), and says whether a start and a goal can be
-joined at all (:meth:`refusal`, before anything is simulated). Along the motion the planner
+joined at all (their ``refusal``, before anything is simulated). Along the motion the planner
 and the certificate keep them (:mod:`nonholo.planning.core`, :mod:`nonholo.certify.certificate`);
 the legs' speed is kept by re-timing the planned path (:mod:`nonholo.planning.retime`).
 """

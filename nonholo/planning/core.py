@@ -46,7 +46,7 @@ from ..model.limits import LegLimits
 from ..model.mechanism import Mechanism
 from ..motion.frame_controls import FrameControls
 from ..numerics import kernels
-from ..numerics.checks import check_count
+from ..numerics.checks import check_count, is_number
 from ..spaces import so3
 from ..spaces.groups import NO_COORDINATES
 
@@ -66,12 +66,14 @@ class Options:
     def __post_init__(self):
         for name in ("gamma", "step", "tol", "min_step"):
             v = getattr(self, name)
-            if not (isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) and v > 0):
+            if not (is_number(v) and math.isfinite(v) and v > 0):
                 raise ValueError(f"{name} must be a positive number, got {v!r}")
+            object.__setattr__(self, name, float(v))
         for name in ("newton_below", "delta_min"):
             v = getattr(self, name)
-            if not (isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) and v >= 0):
+            if not (is_number(v) and math.isfinite(v) and v >= 0):
                 raise ValueError(f"{name} must be a non-negative number, got {v!r}")
+            object.__setattr__(self, name, float(v))
         object.__setattr__(self, "max_iter", check_count(self.max_iter, "max_iter", minimum=0))
 
 
@@ -478,7 +480,7 @@ class Outcome:
 
 
 class Strategy(ABC):
-    """A way of following the θ-flow (see :data:`nonholo.planning.api.STRATEGIES`).
+    """A way of following the θ-flow (see :data:`nonholo.planning.problem.STRATEGIES`).
 
     :meth:`frame` chooses the coordinates of the planned control (physical inputs ``u``
     of ``dR/dt = [L(R) u] R``, or frame coordinates ``w`` of ``dR/dt = [N(R) w] R``);
@@ -549,8 +551,8 @@ def build_result(request, outcome: Outcome | None, success: bool, reason: str,
         iterations=0 if outcome is None else outcome.iterations,
         history=[] if outcome is None else outcome.history,
         t=t, R=R, u=par(t).reshape(n, mech.n_inputs) if u is None else u, delta=mech.delta_samples(R, q),
-        parametrisation=par, mechanism=mech.name, method=request.method, strategy=request.strategy,
-        T=T, R0=request.R0, Rd=request.Rd, steps=n_steps,
+        parametrisation=par, mechanism=mech.name, kinematics=mech, method=request.method,
+        strategy=request.strategy, T=T, R0=request.R0, Rd=request.Rd, steps=n_steps,
         seconds=time.perf_counter() - request.started,
         options=request.recorded_options(),
         sensitivity=None if outcome is None or outcome.certificate is None else outcome.certificate.sensitivity,

@@ -36,9 +36,12 @@ from .strategy_robust import RobustStrategy
 METHODS = ("parametric", "nonparametric")
 #: The routes :func:`nonholo.plan` takes to a goal.
 ROUTES = ("auto", "local", "global")
+#: The most numbers the Fourier basis at the integrator's stages (``3·steps × (2·harmonics + 1)``)
+#: may hold: 2·10⁷ (160 MB); the planner keeps a few arrays of that size.
+MAX_BASIS = 2 * 10**7
 #: What :func:`nonholo.plan` optimises once the goal is reached: nothing (the plan as found),
-#: the energy ∫|u|² dt, or (the default) the plan unless a quick search finds a motion of far
-#: less energy (:func:`nonholo.planning.energy.improve`).
+#: the energy ∫|u|² dt, or the plan unless a quick search finds a motion of far less energy
+#: (:func:`nonholo.planning.energy.improve`).
 OBJECTIVES = (None, "energy", "auto")
 #: The strategies :func:`nonholo.plan` knows by name.
 STRATEGIES: dict[str, type[Strategy]] = {"paper": PaperStrategy, "robust": RobustStrategy}
@@ -47,10 +50,46 @@ STRATEGIES: dict[str, type[Strategy]] = {"paper": PaperStrategy, "robust": Robus
 PLANNING_TIME = 1.0
 
 
+def one_of_choices(value, choices) -> bool:
+    """Whether ``value`` is one of ``choices``, compared only as a string or None.
+
+    Parameters
+    ----------
+    value : object
+        What the caller passed (an array or a dict is simply not a choice: ``==`` would
+        compare it elementwise or fail to hash).
+    choices : sequence of str or None
+        The known names.
+
+    Returns
+    -------
+    bool
+        Whether ``value`` is one of them.
+    """
+    return (value is None or isinstance(value, str)) and value in choices
+
+
 def strategy_class(strategy) -> type[Strategy]:
-    """The :class:`~nonholo.planning.core.Strategy` subclass ``strategy``, the one of that
-    name in :data:`STRATEGIES`, or one given by its import path ``"package.module:Class"``
-    (so that a problem table, JSON, can name any strategy); ``ValueError`` lists them."""
+    """The strategy a name or a class stands for.
+
+    Parameters
+    ----------
+    strategy : str or type
+        A :class:`~nonholo.planning.core.Strategy` subclass, a name of :data:`STRATEGIES`,
+        or an import path ``"package.module:Class"`` (so that a problem table, JSON, can
+        name any strategy).
+
+    Returns
+    -------
+    type
+        The :class:`~nonholo.planning.core.Strategy` subclass.
+
+    Raises
+    ------
+    ValueError
+        For an unknown name (listing the known ones), a path that cannot be imported, or
+        a class that is not a strategy.
+    """
     if isinstance(strategy, type) and issubclass(strategy, Strategy):
         return strategy
     if isinstance(strategy, str) and strategy in STRATEGIES:
@@ -73,10 +112,32 @@ def strategy_class(strategy) -> type[Strategy]:
 def initial_controls(method: str, T: float, n_inputs: int, harmonics: int, grid: int, u0=None) -> Controls:
     """The initial control in the parametrisation of ``method``.
 
-    ``u0``: ``None`` (the examples' ``u_1 = 0.3 sin 2πt/T``, ``u_2 = 0.3 cos 2πt/T``), a
-    :class:`~nonholo.controls.parametrisations.Controls` of the right kind and size, or a vectorised
-    function ``u(t)`` (projected: least squares on the Fourier basis, interval means on
-    the grid).
+    Parameters
+    ----------
+    method : {"parametric", "nonparametric"}
+        The parametrisation: Fourier series or piecewise constant.
+    T : float
+        The horizon (s).
+    n_inputs : int
+        The mechanism's inputs.
+    harmonics, grid : int
+        The size of the parametrisation.
+    u0 : optional
+        ``None`` (the examples' ``u_1 = 0.3 sin 2πt/T``, ``u_2 = 0.3 cos 2πt/T``), a
+        :class:`~nonholo.controls.parametrisations.Controls` of the right kind and size,
+        or a vectorised function ``u(t)`` (projected: least squares on the Fourier basis,
+        interval means on the grid).
+
+    Returns
+    -------
+    Controls
+        The initial control.
+
+    Raises
+    ------
+    ValueError
+        For a ``u0`` of another kind, size, horizon or number of inputs, or that is
+        neither controls nor a function.
     """
     kind, size = (Fourier, harmonics) if method == "parametric" else (PiecewiseConstant, grid)
     if isinstance(u0, Controls):
@@ -97,7 +158,21 @@ def initial_controls(method: str, T: float, n_inputs: int, harmonics: int, grid:
 
 
 def default_steps(method: str, grid: int) -> int:
-    """:data:`~nonholo.motion.simulation.DEFAULT_STEPS`, rounded up to a multiple of ``grid`` for grid controls."""
+    """The default CF4 steps of a plan.
+
+    Parameters
+    ----------
+    method : {"parametric", "nonparametric"}
+        The parametrisation.
+    grid : int
+        Intervals of the nonparametric form.
+
+    Returns
+    -------
+    int
+        :data:`~nonholo.motion.simulation.DEFAULT_STEPS`, rounded up to a multiple of
+        ``grid`` for grid controls.
+    """
     if method == "nonparametric":
         return -(-DEFAULT_STEPS // grid) * grid
     return DEFAULT_STEPS
@@ -107,16 +182,38 @@ def default_steps(method: str, grid: int) -> int:
 class Problem:
     """One planning problem, checked (see the module; build it with :meth:`build`).
 
-    ``R0, q0`` and ``Rd, qd``: start and goal as states ``(R, q)``
-    (:mod:`nonholo.spaces.groups`); ``T``: the horizon (s); ``method``, ``harmonics``,
-    ``grid``: the parametrisation of the planned control, ``controls`` its physical initial
-    guess (``u0_given``: the caller's; ``gamma_given``: ``options.gamma`` is the caller's,
-    not the strategy's default); ``strategy_class``; ``options``: the solver's
-    settings; ``steps``: CF4 steps on ``[0, T]``; ``constraints``: what the motion keeps;
-    ``objective``: ``None``, ``"energy"`` or ``"auto"``; ``route``; ``least_time``: ``T`` is the
-    planning horizon of a plan re-timed in the least time. ``started`` and
-    ``started_effort``: when the problem was built (for the result's ``seconds`` and the
-    global route's budget of effort).
+    Parameters
+    ----------
+    mechanism : Mechanism
+        The mechanism.
+    R0, q0, Rd, qd : numpy.ndarray
+        Start and goal as states ``(R, q)`` (:mod:`nonholo.spaces.groups`).
+    T : float
+        The horizon (s).
+    method, harmonics, grid : str, int, int
+        The parametrisation of the planned control.
+    controls : Controls
+        Its physical initial guess.
+    u0_given, gamma_given : bool
+        Whether the initial guess, and ``options.gamma``, are the caller's (not the
+        strategy's defaults).
+    strategy_class : type
+        The :class:`~nonholo.planning.core.Strategy` subclass.
+    options : Options
+        The solver's settings.
+    steps : int
+        CF4 steps on ``[0, T]``.
+    constraints : tuple
+        What the motion keeps (:mod:`nonholo.planning.constraints`).
+    objective : {None, "energy", "auto"}
+        What is lowered once the plan is found.
+    route : {"auto", "local", "global"}
+        The route (see :func:`nonholo.plan`).
+    least_time : bool
+        ``T`` is the planning horizon of a plan re-timed in the least time.
+    started, started_effort : float
+        When the problem was built (for the result's ``seconds`` and the global route's
+        budget of effort, :mod:`nonholo.numerics.effort`).
     """
 
     mechanism: Mechanism
@@ -146,29 +243,49 @@ class Problem:
               grid: int = 100, u0=None, gamma: float | None = None, step: float = 1.0, tol: float = 1e-10,
               max_iter: int = 200, strategy="robust", mechanism="platform", delta_min: float = 1e-2,
               steps: int | None = None, newton_below: float = 1e-3, min_step: float = 1e-6,
-              route: str = "auto", leg_length=None, leg_speed=None, objective: str | None = "auto",
+              route: str = "auto", leg_length=None, leg_speed=None, objective: str | None = None,
               constraints=()) -> "Problem":
-        """The problem of :func:`nonholo.plan`'s keywords (see there), checked:
-        ``ValueError`` naming the argument for bad input. ``constraints``: further
-        constraint objects (:mod:`nonholo.planning.constraints`), besides those of
-        ``delta_min``, ``leg_length`` and ``leg_speed``."""
+        """The problem of :func:`nonholo.plan`'s keywords, checked.
+
+        Parameters
+        ----------
+        R0, Rd, T, method, harmonics, grid, u0, gamma, step, tol, max_iter, strategy
+            As for :func:`nonholo.plan`.
+        mechanism, delta_min, steps, newton_below, min_step, route, leg_length
+            As for :func:`nonholo.plan`.
+        leg_speed, objective
+            As for :func:`nonholo.plan`.
+        constraints : sequence
+            Further constraint objects (:mod:`nonholo.planning.constraints`), besides those
+            of ``delta_min``, ``leg_length`` and ``leg_speed``.
+
+        Returns
+        -------
+        Problem
+            The problem, every argument checked.
+
+        Raises
+        ------
+        ValueError
+            For bad input, naming the argument.
+        """
         started, started_effort = time.perf_counter(), effort.seconds()
         mech = catalog.get(mechanism)
         speed = LegSpeed.of(leg_speed, mech)
         if T is None and speed is None:
             raise ValueError("T=None asks for the least time, which needs a leg_speed to bound")
-        if objective not in OBJECTIVES:
+        if not one_of_choices(objective, OBJECTIVES):
             raise ValueError(f"unknown objective {objective!r}; known: None, 'energy', 'auto'")
-        if route not in ROUTES:
+        if not one_of_choices(route, ROUTES):
             raise ValueError(f"unknown route {route!r}; known: {', '.join(ROUTES)}")
         stroke = LegStroke.of(leg_length, mech)
-        if method not in METHODS:
+        if not one_of_choices(method, METHODS):
             raise ValueError(f"unknown method {method!r}; known: {', '.join(METHODS)}")
         solver = strategy_class(strategy)
         least_time = T is None
         T = check_time(PLANNING_TIME if least_time else T)
         harmonics = check_count(harmonics, "harmonics")
-        grid = check_count(grid, "grid")
+        grid = check_count(grid, "grid", maximum=MAX_STEPS // 2)     # at most the steps (below)
         R0, q0 = mech.parse_state(R0, "R0")
         Rd, qd = mech.parse_state(Rd, "Rd")
         options = Options(gamma=solver.default_gamma if gamma is None else gamma, step=step, tol=tol,
@@ -176,10 +293,17 @@ class Problem:
                           delta_min=delta_min)
         if mech.singular.value(R0, q0) == 0.0:
             raise ValueError(mech.singular.refusal)
-        steps = check_count(default_steps(method, grid) if steps is None else steps, "steps", maximum=MAX_STEPS)
+        # the planner checks its discretisation on twice the steps: half the integrator's limit
+        steps = check_count(default_steps(method, grid) if steps is None else steps, "steps",
+                            maximum=MAX_STEPS // 2)
         if method == "parametric" and 2 * harmonics > steps:
             raise ValueError(f"harmonics = {harmonics} is more than the integrator's steps = {steps} "
                              "can resolve (at most steps/2; raise steps or lower harmonics)")
+        basis = 3 * steps * (2 * harmonics + 1) if method == "parametric" else 0
+        if basis > MAX_BASIS:
+            raise ValueError(f"harmonics = {harmonics} on steps = {steps}: the Fourier basis at the "
+                             f"integrator's stages would hold {basis:.3g} numbers ({8 * basis / 2**30:.3g} GiB), "
+                             f"more than {MAX_BASIS:.0e}; lower harmonics or steps")
         controls = initial_controls(method, T, mech.n_inputs, harmonics, grid, u0)
         stages.check_steps(controls, steps)
         # the keywords' constraints are checked as they are built; the caller's ones here
@@ -197,7 +321,24 @@ class Problem:
         """A part of the global route, ``start → goal`` (states ``(R, q)``) in ``T``, planned
         locally with ``strategy`` and the clearance ``delta_min``, under this problem's other
         constraints but the legs' speed (kept by the whole plan's re-timing), with no
-        objective: the same settings, its own clock."""
+        objective: the same settings, its own clock.
+
+        Parameters
+        ----------
+        start, goal : tuple
+            States ``(R, q)``.
+        T : float
+            The part's horizon (s).
+        delta_min : float
+            The part's clearance from ``Δ = 0``.
+        strategy : str or type
+            The part's strategy.
+
+        Returns
+        -------
+        Problem
+            The part.
+        """
         mech = self.mechanism
         solver = strategy_class(strategy)
         options = dataclasses.replace(self.options, delta_min=delta_min,
@@ -229,14 +370,17 @@ class Problem:
 
     @property
     def start(self) -> tuple[np.ndarray, np.ndarray]:
+        """The start ``(R0, q0)``."""
         return self.R0, self.q0
 
     @property
     def goal(self) -> tuple[np.ndarray, np.ndarray]:
+        """The goal ``(Rd, qd)``."""
         return self.Rd, self.qd
 
     @property
     def delta_min(self) -> float:
+        """The clearance from ``Δ = 0`` the motion keeps."""
         return self.options.delta_min
 
     @property
@@ -247,12 +391,19 @@ class Problem:
 
     @property
     def leg_speed(self) -> float | None:
+        """The legs' top speed, or ``None``."""
         speed = one_of(self.constraints, LegSpeed)
         return None if speed is None else speed.v
 
     def recorded_options(self) -> dict:
-        """The options a result records: :class:`~nonholo.planning.core.Options`,
-        ``harmonics``, ``grid`` and, when set, ``leg_length``."""
+        """The options a result records.
+
+        Returns
+        -------
+        dict
+            :class:`~nonholo.planning.core.Options`, ``harmonics``, ``grid`` and, when set,
+            ``leg_length``.
+        """
         limits = self.leg_limits
         extra = {} if limits is None else {"leg_length": list(limits.as_tuple())}
         return {**asdict(self.options), "harmonics": self.harmonics, "grid": self.grid, **extra}

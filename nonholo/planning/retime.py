@@ -16,39 +16,77 @@ import time
 import numpy as np
 
 from ..io.result import PlanResult
-from ..model import catalog
 from ..motion.frame_controls import from_dict as controls_from_dict
 from ..motion.retimed import RETIME_NODES, Retimed, TimeMap, check_leg_speed
 from ..numerics.checks import check_time
 
 
 def planned_controls(result: PlanResult):
-    """The controls a plan was planned with (a re-timed plan's base)."""
+    """The controls a plan was planned with (a re-timed plan's base).
+
+    Parameters
+    ----------
+    result : PlanResult
+        A plan, re-timed or not.
+
+    Returns
+    -------
+    Controls or FrameControls
+        Its controls before any re-timing.
+    """
     par = result.parametrisation
     return par.base if isinstance(par, Retimed) else par
 
 
 def time_map(result: PlanResult, leg_speed: float, nodes: int = RETIME_NODES) -> TimeMap:
-    """The fastest re-timing of ``result``'s path under ``leg_speed``
-    (:attr:`~nonholo.motion.retimed.TimeMap.minimum_time`, :attr:`~nonholo.motion.retimed.TimeMap.peak_ratio`)."""
-    mech = catalog.get(result.mechanism)
+    """The fastest re-timing of ``result``'s path under ``leg_speed``.
+
+    Parameters
+    ----------
+    result : PlanResult
+        A plan of a mechanism with legs.
+    leg_speed : float
+        The legs' top speed (the geometry's length units per second).
+    nodes : int
+        Steps of the replay the legs' speeds are splined through.
+
+    Returns
+    -------
+    TimeMap
+        Its ``minimum_time`` and ``peak_ratio``.
+    """
+    mech = result.kinematics
     return TimeMap(planned_controls(result), result.R0, mech, check_leg_speed(leg_speed, mech), None, nodes)
 
 
 def retime(result: PlanResult, leg_speed: float, T: float | None = None) -> PlanResult:
-    """``result`` re-timed with every leg at most ``leg_speed`` fast (the geometry's length
-    units per second): in the least time (``T=None``) or in ``T`` seconds.
+    """``result`` re-timed with every leg at most ``leg_speed`` fast.
 
-    Returns a new :class:`~nonholo.io.result.PlanResult` whose controls are
-    :class:`~nonholo.motion.retimed.Retimed` (a re-timed plan is re-timed from its own base);
-    ``options`` records ``leg_speed``. ``ValueError`` for a failed plan, a mechanism
-    without legs, a bad ``leg_speed`` or ``T``, or a ``T`` shorter than the path needs (the
-    message says how long it needs).
+    Parameters
+    ----------
+    result : PlanResult
+        A successful plan of a mechanism with legs.
+    leg_speed : float
+        The legs' top speed (the geometry's length units per second).
+    T : float, optional
+        The time of the re-timed motion (s); ``None``: the least time.
+
+    Returns
+    -------
+    PlanResult
+        A new result whose controls are :class:`~nonholo.motion.retimed.Retimed` (a
+        re-timed plan is re-timed from its own base); ``options`` records ``leg_speed``.
+
+    Raises
+    ------
+    ValueError
+        For a failed plan, a mechanism without legs, a bad ``leg_speed`` or ``T``, or a
+        ``T`` shorter than the path needs (the message says how long it needs).
     """
     started = time.perf_counter()
     if not isinstance(result, PlanResult):
         raise ValueError(f"result must be a PlanResult, got {type(result).__name__}")
-    mech = catalog.get(result.mechanism)
+    mech = result.kinematics
     v = check_leg_speed(leg_speed, mech)
     if v is None:
         raise ValueError("leg_speed must be a positive finite speed, got None")
@@ -61,7 +99,7 @@ def retime(result: PlanResult, leg_speed: float, T: float | None = None) -> Plan
     # its description, the time map recomputed from that): the time map is computed from a
     # replay of the base, whose rounding a kink of the fastest leg can amplify, so samples
     # computed from any other copy need not be ``controls(t)`` of the loaded plan
-    timed = controls_from_dict(Retimed(base, result.R0, mech, v, T=T).to_dict())
+    timed = controls_from_dict(Retimed(base, result.R0, mech, v, T=T).to_dict(), mech)
     n = len(result.t)
     tau = np.arange(n) * (base.T / result.steps)
     tau[-1] = base.T
@@ -73,16 +111,27 @@ def retime(result: PlanResult, leg_speed: float, T: float | None = None) -> Plan
     return dataclasses.replace(
         result, parametrisation=timed, T=timed.T, t=t, u=timed(t).reshape(n, mech.n_inputs),
         reason=reason, options={**result.options, "leg_speed": v},
-        seconds=result.seconds + (time.perf_counter() - started))
+        seconds=None if result.seconds is None else result.seconds + (time.perf_counter() - started))
 
 
 def limit_speed(result: PlanResult, leg_speed: float | None, T: float | None) -> PlanResult:
-    """What :func:`nonholo.plan` returns for a ``leg_speed`` (``None``: ``result`` itself).
+    """What :func:`nonholo.plan` returns for a ``leg_speed``.
 
-    ``T=None``: a success re-timed in the least time. A given ``T``: a success whose legs
-    keep to the bound is returned as planned; one that does not is re-timed in ``T`` if its
-    path needs no more, else fails saying the time it needs. ``options`` records
-    ``leg_speed`` either way.
+    Parameters
+    ----------
+    result : PlanResult
+        The planned path.
+    leg_speed : float or None
+        The legs' top speed; ``None``: ``result`` itself is returned.
+    T : float or None
+        ``None``: a success re-timed in the least time. A given ``T``: a success whose legs
+        keep to the bound is returned as planned; one that does not is re-timed in ``T`` if
+        its path needs no more, else fails saying the time it needs.
+
+    Returns
+    -------
+    PlanResult
+        The plan under the bound; ``options`` records ``leg_speed`` either way.
     """
     if leg_speed is None:
         return result

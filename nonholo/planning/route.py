@@ -164,7 +164,8 @@ class RoadmapPaths:
                                             power=power, legs=leg_limits)
             yield None if path is None else [(R, NO_COORDINATES) for R in path]
 
-    def no_path(self, leg_limits) -> str:
+    def no_path(self, leg_limits, start, goal) -> str:
+        """Why no path of :meth:`paths` was given (``start``, ``goal``: its ends)."""
         within = "" if leg_limits is None else " and inside the legs' stroke limits"
         return f"no path of orientations clear of Δ = 0{within} joins the start and the goal on the roadmap"
 
@@ -189,15 +190,21 @@ class StraightPaths(RoadmapPaths):
     budget counted from the route's own start (the local attempt at a far goal can take
     the whole of :data:`TIME_BUDGET`)."""
 
-    unit = ""
     max_hop_sensitivity = state_path.MAX_HOP_SENSITIVITY
+
+    @property
+    def unit(self) -> str:
+        """The stacked error's unit (:attr:`nonholo.spaces.groups.Product.error_unit`), spaced."""
+        unit = self.mechanism.space.error_unit
+        return f" {unit}" if unit else ""
 
     def paths(self, start, goal, delta_min: float, leg_limits):
         yield state_path.straight_path(self.mechanism, start, goal, delta_min=delta_min)
 
-    def no_path(self, leg_limits) -> str:
-        return (f"the straight path of states comes within delta_min of the singular set Δ = 0 of "
-                f"{self.mechanism.name!r}")
+    def no_path(self, leg_limits, start, goal) -> str:
+        return state_path.too_far(self.mechanism, start, goal) or (
+            f"the straight path of states comes within delta_min of the singular set Δ = 0 of "
+            f"{self.mechanism.name!r}")
 
     def length(self, a, b) -> float:
         return state_path.length(self.mechanism, a, b)
@@ -350,7 +357,7 @@ def steer(mechanism: Mechanism, R0, Rd, T: float, local: Callable, *, tol: float
     provider = paths_for(mechanism)
     for path in provider.paths(start, goal, delta_min, leg_limits):
         if path is None:
-            return Steered(None, None, reason=provider.no_path(leg_limits))
+            return Steered(None, None, reason=provider.no_path(leg_limits, start, goal))
         if any(_same_path(p, path) for p in tried):
             continue        # steering is deterministic: the same path fails the same way
         tried.append(path)
@@ -501,8 +508,8 @@ def build_result(request, steered: Steered, local_reason: str,
         success=True, reason=reason, terminal_error=cert.terminal_error, min_delta=cert.min_delta,
         iterations=sum(h.iterations for h in hops), history=history,
         t=t, R=R, u=par(t).reshape(n, mech.n_inputs), delta=mech.delta_samples(R, q),
-        parametrisation=par, mechanism=mech.name, method=request.method, strategy=request.strategy,
-        T=T, R0=request.R0, Rd=request.Rd, steps=steps,
+        parametrisation=par, mechanism=mech.name, kinematics=mech, method=request.method,
+        strategy=request.strategy, T=T, R0=request.R0, Rd=request.Rd, steps=steps,
         seconds=time.perf_counter() - request.started,
         options=request.recorded_options(),
         sensitivity=cert.sensitivity, error_bound=cert.error_bound, replay_steps=cert.replay_steps,

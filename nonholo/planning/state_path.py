@@ -37,6 +37,9 @@ MAX_HOP_SENSITIVITY = 100.0
 TIME_BUDGET = 5.0
 #: Points of a hop at which the path's ``sgnΔ`` is checked.
 SAMPLES_PER_HOP = 16
+#: The most hops of a straight path: a goal farther than ``MAX_HOPS · MAX_HOP`` has no
+#: path (its hops could not be planned within :data:`TIME_BUDGET` anyway).
+MAX_HOPS = 1000
 
 
 def interpolate(mechanism, a, b, s) -> list[tuple[np.ndarray, np.ndarray]]:
@@ -54,10 +57,21 @@ def length(mechanism, a, b) -> float:
     return mechanism.space.distance(*a, *b)
 
 
+def too_far(mechanism, a, b, max_hop: float = MAX_HOP) -> str | None:
+    """Why the straight path ``a → b`` is not tried (more than :data:`MAX_HOPS` hops), or None."""
+    far = length(mechanism, a, b)
+    if not far <= MAX_HOPS * max_hop:
+        return (f"the goal is {far:.3g} from the start: its straight path would take more than "
+                f"{MAX_HOPS} hops of at most {max_hop:g}")
+    return None
+
+
 def straight_path(mechanism, a, b, *, delta_min: float, max_hop: float = MAX_HOP) -> list | None:
     """The straight path ``a → b`` as its ends and inner points, hops of at most ``max_hop``
     (``(R, q)`` pairs, ``a`` first, ``b`` last); ``None`` where a sample of it has ``sgnΔ <
-    delta_min`` (the sign of ``Δ`` at ``a``)."""
+    delta_min`` (the sign of ``Δ`` at ``a``) or the path is :func:`too_far`."""
+    if too_far(mechanism, a, b, max_hop) is not None:
+        return None
     hops = max(1, math.ceil(length(mechanism, a, b) / max_hop))
     if mechanism.singular.exists:
         s = np.linspace(0.0, 1.0, hops * SAMPLES_PER_HOP + 1)

@@ -312,7 +312,8 @@ class RobustStrategy(Strategy):
     # -- accuracy of the integrator -----------------------------------------------------
     def discretisation_error(self, problem: Evaluator, ev: Evaluation) -> float:
         """Richardson estimate of the integrator's error at ``R(T)`` for ``ev``'s control:
-        ``16/15`` of the distance between the endpoints with ``N`` and ``2N`` CF4 steps (rad)."""
+        ``16/15`` of the distance between the endpoints with ``N`` and ``2N`` CF4 steps (in the
+        state's units, :meth:`nonholo.spaces.groups.Product.amount`)."""
         N2 = 2 * problem.steps
         Rs, Qs, _ = problem.forward(stages.stage_table(ev.controls, N2), 0.5 * problem.h, -np.inf)
         return problem.mechanism.space.distance(Rs[N2], Qs[N2], ev.R[-1], ev.q[-1]) * 16.0 / 15.0
@@ -337,7 +338,7 @@ class RobustStrategy(Strategy):
             if d.status == "stopped" or trial.error > opt.tol:
                 return problem, ev, it, note + f"refinement to {fine.steps} steps failed: {d.reason}"
             note = (f"integrator refined to {fine.steps} steps (estimated discretisation error "
-                    f"{est:.2g} rad with {problem.steps})")
+                    f"{problem.mechanism.space.amount(est)} with {problem.steps})")
             problem, ev = fine, trial
             est = self.discretisation_error(problem, ev)
         return problem, ev, it, note
@@ -378,7 +379,7 @@ class RobustStrategy(Strategy):
                 if not cert.passed:
                     notes.append(f"{label}: converged on the planner's grid, but not certified: {cert.reason}")
                     continue
-                why += certificate_note(cert, corrections)
+                why += certificate_note(cert, corrections, problem.mechanism.space)
                 G = cert.sensitivity
                 if G <= self.max_sensitivity:
                     return Outcome(ev, True, why + tail, history, it,

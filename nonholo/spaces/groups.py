@@ -14,6 +14,9 @@ Conventions
   coordinates (an SO(3) mechanism is the product with ``k = 0``). The terminal error is
   the stacked vector ``e = (l, δq)`` of a variation ``s = (s_R, s_q)``; its parts are
   reported by name (``"rotation"`` in rad, ``"coordinates"`` in the mechanism's units).
+- Units: each coordinate has one (``Euclidean.units``, ``""`` if not given), the
+  rotation's rows are in rad; an error's norm is written with :meth:`Product.amount` (its
+  unit, or the units it mixes: ``"3e-11 (wheelbase, rad)"``).
 - The caller's form of a state: a rotation matrix for SO(3), the ``k`` numbers for
   ``Rᵏ``, the pair ``(R, q)`` for ``SO(3) × Rᵏ``; in JSON the same with nested lists
   (``[R, q]`` for the pair).
@@ -24,6 +27,7 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from ..numerics import kernels
+from ..numerics.checks import real_array
 from . import so3
 
 IDENTITY = np.eye(3)
@@ -33,6 +37,15 @@ NO_COORDINATES = np.zeros(0)
 def wrap(angle):
     """``angle`` wrapped into ``(−π, π]``."""
     return np.pi - np.mod(np.pi - angle, 2.0 * np.pi)
+
+
+def unit_of(units) -> str:
+    """The unit of a norm over quantities in ``units``: their one unit, the distinct ones in
+    parentheses when they mix (``"(wheelbase, rad)"``), ``""`` when none is given."""
+    found = list(dict.fromkeys(u for u in units if u))
+    if len(found) <= 1:
+        return found[0] if found else ""
+    return f"({', '.join(found)})"
 
 
 def _kind(value) -> str:
@@ -49,6 +62,8 @@ class SO3:
     dim = 3
     cli_names = ("φ", "ϑ", "ψ")
     name = "SO(3)"
+    #: the unit of each row of a variation ``s_R`` (and of the RPY angles)
+    units = ("rad", "rad", "rad")
 
     def describe(self) -> str:
         return "a rotation matrix (3×3)"
@@ -139,9 +154,9 @@ class Euclidean:
         ``want`` says what the whole state should be)."""
         want = want or f"{name} must be {self.describe()}"
         try:
-            q = np.array(value, dtype=float)
-        except (TypeError, ValueError):
-            raise ValueError(f"{want}, got {_kind(value)}") from None
+            q = real_array(value, name)
+        except ValueError as exc:
+            raise ValueError(f"{want}, got {_kind(value)} ({exc})") from None
         if q.shape != (self.dim,):
             raise ValueError(f"{want}: {name} has shape {q.shape}, expected ({self.dim},)")
         if not np.all(np.isfinite(q)):
@@ -241,6 +256,31 @@ class Product:
     def cli_names(self) -> tuple[str, ...]:
         """The numbers of a state on the command line, in order."""
         return tuple(n for f in self.factors for n in f.cli_names)
+
+    @property
+    def units(self) -> tuple[str, ...]:
+        """The unit of each row of a variation ``s = (s_R, s_q)`` (rad for the rotation's)."""
+        return (self.rotation.units if self.rotation is not None else ()) + self.coordinates.units
+
+    @property
+    def error_unit(self) -> str:
+        """The unit of the stacked error's norm ``|e|`` (:func:`unit_of` :attr:`units`)."""
+        return unit_of(self.units)
+
+    def part_unit(self, part: str) -> str:
+        """The unit of one part of :meth:`error` (``"rotation"``: rad; ``"coordinates"``)."""
+        if part == "rotation":
+            return unit_of(SO3.units)
+        if part == "coordinates":
+            return unit_of(self.coordinates.units)
+        raise ValueError(f"part must be 'rotation' or 'coordinates', got {part!r}")
+
+    def amount(self, value, spec: str = ".2g", part: str | None = None) -> str:
+        """``value``, a norm of errors of this space's states (of one ``part`` of them), with
+        its unit: ``"3e-11 rad"``, ``"2e-12 wheelbase"``, ``"4e-15 (wheelbase, rad)"``."""
+        unit = self.error_unit if part is None else self.part_unit(part)
+        text = "n/a" if value is None else format(value, spec)
+        return f"{text} {unit}" if unit else text
 
     def describe(self) -> str:
         if len(self.factors) == 1:

@@ -1,14 +1,19 @@
 """Figures of the mechanisms, their singular sets and planned motions, by job:
 
-- :mod:`~nonholo.viz.style` -- the house style, colours and :func:`save_figure`;
+- :mod:`~nonholo.viz.style` -- the house style, colours, the figure class
+  :class:`NotebookFigure` (displayed as an image in Jupyter) and :func:`save_figure`;
+- :mod:`~nonholo.viz.quantities` -- names and units of a mechanism's coordinates and inputs,
+  and a vehicle's plane position, read from its data;
 - :mod:`~nonholo.viz.platform_drawing` -- the platform's geometry and 3D schematic;
 - :mod:`~nonholo.viz.singular_set` -- the singular set ``Δ = 0`` and its normal form;
 - :mod:`~nonholo.viz.plan_figures` -- figures of plans (convergence, controls, RPY, legs,
   ``Δ``, body axes, global route, leg limits, motion quality, example overview);
 - :mod:`~nonholo.viz.mechanism_cards` -- one mechanism at a glance;
 - :mod:`~nonholo.viz.platform_animation` -- a GIF of a motion;
+- :mod:`~nonholo.viz.plan_summary` -- one plan of any mechanism at a glance (what
+  ``nonholo plan --plot`` writes), with a vehicle's path on the plane;
 - :mod:`~nonholo.viz.state_figures` -- plans whose state goes beyond SO(3) (the ball, the
-  car; imported on its own: it uses pyplot).
+  car).
 
 The public functions are re-exported here: ``from nonholo import viz; viz.rpy_figure(res)``.
 """
@@ -34,6 +39,7 @@ from .plan_figures import (
     rpy_along,
     rpy_figure,
 )
+from .plan_summary import plan_figure, plot_plane_path
 from .platform_animation import animate_platform
 from .platform_drawing import (
     MECHANISM_VIEW,
@@ -53,6 +59,8 @@ from .singular_set import (
     singular_set_points,
     singular_slices_figure,
 )
+from .quantities import input_units, plane_position
+from .state_figures import ball_figure, car_figure
 from .style import (
     NEGATIVE_COLOR,
     PAIR_COLORS,
@@ -61,12 +69,13 @@ from .style import (
     RESULT_STYLES,
     STYLE,
     TRIPLE_COLORS,
+    NotebookFigure,
     save_figure,
 )
 
 __all__ = [
     "STYLE", "RESULT_STYLES", "RESULT_COLORS", "PAIR_COLORS", "TRIPLE_COLORS", "POSITIVE_COLOR",
-    "NEGATIVE_COLOR", "save_figure",
+    "NEGATIVE_COLOR", "NotebookFigure", "save_figure", "input_units", "plane_position",
     "MECHANISM_VIEW", "as_geometry", "leg_lengths", "delta_along", "draw_platform", "mechanism_figure",
     "delta_rpy", "mechanism_delta_rpy", "singular_set_points", "singular_set_figure",
     "singular_slices_figure", "normal_form_surface", "normal_form_image", "normal_form_figure",
@@ -74,5 +83,6 @@ __all__ = [
     "plot_delta", "plot_body_axes", "plot_min_delta", "convergence_figure", "controls_figure",
     "rpy_figure", "leg_lengths_figure", "delta_figure", "body_axes_figure", "global_route_figure",
     "leg_limits_figure", "motion_quality_figure", "example_overview_figure",
-    "mechanism_card_figure", "animate_platform",
+    "mechanism_card_figure", "animate_platform", "plan_figure", "plot_plane_path",
+    "ball_figure", "car_figure",
 ]

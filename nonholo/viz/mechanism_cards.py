@@ -9,7 +9,7 @@ from ..model import catalog
 from .plan_figures import plot_body_axes, plot_controls
 from .platform_drawing import draw_platform, rpy_text
 from .singular_set import draw_slice
-from .style import styled
+from .style import NotebookFigure, styled
 
 
 @styled
@@ -18,7 +18,7 @@ def mechanism_card_figure(mechanism: str, R=None, result=None, psi_slice: float 
     its singular set on the slice ``ψ = psi_slice``; for a mechanism without legs, the
     paths of the body axes along ``result`` (a planned motion) and its inputs."""
     mech = catalog.get(mechanism)
-    fig = Figure(figsize=(12.0, 5.2), layout="constrained")
+    fig = NotebookFigure(figsize=(12.0, 5.2), layout="constrained")
     gs = fig.add_gridspec(1, 2, width_ratios=[1.0, 1.1])
     ax = fig.add_subplot(gs[0], projection="3d")
     R = np.eye(3) if R is None else np.asarray(R, dtype=float)

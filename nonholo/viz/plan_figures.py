@@ -33,7 +33,7 @@ from .platform_drawing import (
     result_mechanism,
 )
 from .singular_set import HALF_PI_TICKS, PI_TICKS, draw_singular_surface
-from .style import PAIR_COLORS, RESULT_COLORS, RESULT_STYLES, TRIPLE_COLORS, styled
+from .style import NotebookFigure, PAIR_COLORS, RESULT_COLORS, RESULT_STYLES, TRIPLE_COLORS, styled
 
 
 def _as_list(results):
@@ -166,7 +166,7 @@ def convergence_figure(results, tol: float | None = None, title: str | None = No
     results (log scale; colour and line style by result, legend by method): the
     exponential decrease of the θ-flow, then the quadratic Newton phase (the switch,
     inferred from the step sizes, as a dotted vertical). ``tol``: a dashed tolerance line."""
-    fig = Figure(figsize=(6.4, 4.4), layout="constrained")
+    fig = NotebookFigure(figsize=(6.4, 4.4), layout="constrained")
     ax = fig.add_subplot()
     plot_convergence(ax, results, tol)
     if title:
@@ -215,7 +215,7 @@ def controls_figure(results, title: str | None = None) -> Figure:
     results = _as_list(results)
     labels = _labels(results)
     legs = geometry_for(results, None) is not None
-    fig = Figure(figsize=(6.4, 5.2), layout="constrained")
+    fig = NotebookFigure(figsize=(6.4, 5.2), layout="constrained")
     axes = fig.subplots(2, 1)
     for j, ax in enumerate(axes):
         _no_trajectory(ax, results)
@@ -279,7 +279,7 @@ def rpy_figure(results, title: str | None = None) -> Figure:
     """RPY angles ``(φ, ϑ, ψ)`` of ``R(t)`` (unwrapped; ``R = R(Z, φ) R(Y, ϑ) R(X, ψ)``),
     colour by angle, line style by result; circles at t = 0, squares at t = T, crosses at
     the goal's angles (when the results carry the goal ``Rd``)."""
-    fig = Figure(figsize=(6.4, 4.4), layout="constrained")
+    fig = NotebookFigure(figsize=(6.4, 4.4), layout="constrained")
     plot_rpy(fig.add_subplot(), results)
     if title:
         fig.suptitle(title)
@@ -319,7 +319,7 @@ def leg_lengths_figure(results, geometry=None, title: str | None = None) -> Figu
     """Leg lengths ``l_i(t) = |R(t) tip_i - base_i|`` in units of the sphere's radius
     (geometry: see :func:`as_geometry`; default from the result's mechanism, else the
     paper's), colour by leg, line style by result."""
-    fig = Figure(figsize=(6.4, 4.4), layout="constrained")
+    fig = NotebookFigure(figsize=(6.4, 4.4), layout="constrained")
     plot_leg_lengths(fig.add_subplot(), results, geometry)
     if title:
         fig.suptitle(title)
@@ -343,7 +343,6 @@ def plot_delta(ax, results, threshold: float | None = 1e-2, labels=None) -> None
         ax.text(0.5, 0.5, f"no singular set ({results[0].mechanism})", transform=ax.transAxes,
                 ha="center", va="center", color="0.4")
         return
-    drawn = False
     for i, (res, lab) in enumerate(zip(results, labels)):
         if not has_trajectory(res):
             continue
@@ -352,7 +351,6 @@ def plot_delta(ax, results, threshold: float | None = 1e-2, labels=None) -> None
             d = delta_along(res.R, getattr(res, "mechanism", "platform"))
         if d is None:
             continue
-        drawn = True
         ax.plot(res.t, d, color=_color(i), ls=_ls(i), label=lab)
         k = int(np.argmin(np.abs(d)))
         ax.plot(res.t[k], d[k], "v", color=_color(i), ms=6)
@@ -374,7 +372,7 @@ def plot_delta(ax, results, threshold: float | None = 1e-2, labels=None) -> None
 def delta_figure(results, threshold: float | None = 1e-2, title: str | None = None) -> Figure:
     """``Δ(R(t))`` along one or several results, with ``Δ = 0`` (thick) and the band
     ``|Δ| < threshold`` (dashed lines ±threshold); triangles mark the minimum of ``|Δ|``."""
-    fig = Figure(figsize=(6.4, 4.4), layout="constrained")
+    fig = NotebookFigure(figsize=(6.4, 4.4), layout="constrained")
     plot_delta(fig.add_subplot(), results, threshold)
     if title:
         fig.suptitle(title)
@@ -417,7 +415,7 @@ def plot_body_axes(ax, results, labels=None) -> None:
 def body_axes_figure(results, title: str | None = None) -> Figure:
     """Paths of the tips of the body axes ``R(t) e_1, R(t) e_2, R(t) e_3`` on the unit
     sphere (circle: start, square: end; line style by result)."""
-    fig = Figure(figsize=(5.6, 5.4), layout="constrained")
+    fig = NotebookFigure(figsize=(5.6, 5.4), layout="constrained")
     plot_body_axes(fig.add_subplot(projection="3d"), results)
     if title:
         fig.suptitle(title)
@@ -465,7 +463,7 @@ def global_route_figure(result, title: str | None = None) -> Figure:
     the plan's — the hand-overs between hops dotted."""
     par = result.hops
     smoothed = result.stitched is not None
-    fig = Figure(figsize=(13.0, 5.6), layout="constrained")
+    fig = NotebookFigure(figsize=(13.0, 5.6), layout="constrained")
     gs = fig.add_gridspec(2, 2, width_ratios=[1.2, 1.0])
     ax = fig.add_subplot(gs[:, 0], projection="3d")
     draw_singular_surface(ax, n_theta=31, n_psi=61, cmap="Greys", alpha=0.25)
@@ -517,7 +515,7 @@ def leg_limits_figure(free, limited, title: str | None = None) -> Figure:
     grey lines), in the geometry's units."""
     mech = catalog.get(limited.mechanism)
     lo, hi = limited.options["leg_length"]
-    fig = Figure(figsize=(7.2, 4.4), layout="constrained")
+    fig = NotebookFigure(figsize=(7.2, 4.4), layout="constrained")
     ax = fig.add_subplot()
     for res, ls, what in ((free, "--", "without limits"), (limited, "-", f"leg_length = ({lo:g}, {hi:g})")):
         lengths = mech.leg_lengths(res.R)
@@ -544,7 +542,7 @@ def motion_quality_figure(plain, cheap, fast, title: str | None = None) -> Figur
     speeds of ``fast`` (``plain`` re-timed in the least time under
     ``fast.options["leg_speed"]``, solid) against ``plain``'s (dashed), with the bound."""
     mech = catalog.get(plain.mechanism)
-    fig = Figure(figsize=(12.0, 4.4), layout="constrained")
+    fig = NotebookFigure(figsize=(12.0, 4.4), layout="constrained")
     left, right = fig.add_subplot(1, 2, 1), fig.add_subplot(1, 2, 2)
     for res, ls, what in ((plain, "--", "as planned"), (cheap, "-", "least energy")):
         t = np.linspace(0.0, res.T, 2001)
@@ -584,7 +582,7 @@ def example_overview_figure(results, title: str = "", geometry=None, tol: float 
     ``min |Δ|`` of each."""
     results = _as_list(results)
     labels = _labels(results)
-    fig = Figure(figsize=(16.0, 9.4), layout="constrained")
+    fig = NotebookFigure(figsize=(16.0, 9.4), layout="constrained")
     axes = [fig.add_subplot(2, 3, k + 1) for k in range(5)]  # the sixth below
     plot_convergence(axes[0], results, tol, labels)
     plot_controls(axes[1], results, labels=labels)

@@ -16,7 +16,7 @@ from mpl_toolkits.mplot3d.art3d import Poly3DCollection
 from ..model import catalog
 from ..model.mechanism import Geometry, Mechanism
 from ..spaces import so3
-from .style import PAIR_COLORS, TRIPLE_COLORS, styled
+from .style import NotebookFigure, PAIR_COLORS, TRIPLE_COLORS, styled
 
 
 def _numeric_vector(v, dims) -> np.ndarray:
@@ -92,12 +92,13 @@ def mechanism_named(name):
 
 
 def result_mechanism(res):
-    """The :class:`Mechanism` of a result: the one its controls were replayed with (a
-    mechanism built in the session need not be in the catalog), else the one its name
-    gives (``None`` if unknown)."""
-    mech = getattr(getattr(res, "parametrisation", None), "mechanism", None)
-    if isinstance(mech, Mechanism):
-        return mech
+    """The :class:`Mechanism` of a result: the one it carries (``kinematics``) or its
+    controls were replayed with (a mechanism built in the session need not be in the
+    catalog), else the one its name gives (``None`` if unknown)."""
+    for mech in (getattr(res, "kinematics", None),
+                 getattr(getattr(res, "parametrisation", None), "mechanism", None)):
+        if isinstance(mech, Mechanism):
+            return mech
     return mechanism_named(getattr(res, "mechanism", "platform"))
 
 
@@ -265,7 +266,7 @@ def mechanism_figure(R_start, R_goal=None, geometry=None, title: str | None = No
     g = as_geometry(geometry)
     view = {**MECHANISM_VIEW, **(view or {})}
     poses = [("start", R_start)] if R_goal is None else [("start", R_start), ("goal", R_goal)]
-    fig = Figure(figsize=(5.2 * len(poses), 5.2), layout="constrained")
+    fig = NotebookFigure(figsize=(5.2 * len(poses), 5.2), layout="constrained")
     for k, (name, R) in enumerate(poses):
         ax = fig.add_subplot(1, len(poses), k + 1, projection="3d")
         R = so3.check_rotation(R, name)

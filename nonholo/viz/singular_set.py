@@ -20,7 +20,7 @@ from scipy.spatial.transform import Rotation
 
 from ..generated import platform_singularity
 from ..model import catalog
-from .style import NEGATIVE_COLOR, POSITIVE_COLOR, styled
+from .style import NEGATIVE_COLOR, POSITIVE_COLOR, NotebookFigure, styled
 
 
 def delta_rpy(phi, theta, psi):
@@ -167,7 +167,7 @@ def singular_set_figure(psi_slice: float = -0.5, marks: dict | None = None,
     of the slice plane ``ψ = psi_slice``. Right: ``Δ(φ, ϑ, psi_slice)`` with ``Δ = 0`` thick;
     ``marks`` maps labels to ``(φ, ϑ, marker)`` points drawn on the slice.
     """
-    fig = Figure(figsize=(12.5, 5.6), layout="constrained")
+    fig = NotebookFigure(figsize=(12.5, 5.6), layout="constrained")
     gs = fig.add_gridspec(1, 2, width_ratios=[1.25, 1.0])
     ax = fig.add_subplot(gs[0], projection="3d")
     _draw_sign_walls(ax)
@@ -216,7 +216,7 @@ def singular_slices_figure(psi_values=(-2.0, -0.5, 0.5, 2.0), marks: dict | None
     psi_values = list(psi_values)
     ncols = min(len(psi_values), 2 if len(psi_values) == 4 else 3)
     nrows = -(-len(psi_values) // ncols)
-    fig = Figure(figsize=(5.0 * ncols + 0.8, 3.4 * nrows + 0.5), layout="constrained")
+    fig = NotebookFigure(figsize=(5.0 * ncols + 0.8, 3.4 * nrows + 0.5), layout="constrained")
     axes = fig.subplots(nrows, ncols, squeeze=False)
     cs = None
     for k, ax in enumerate(axes.flat):
@@ -290,7 +290,7 @@ def normal_form_figure(extent: float = 1.0, radius: float = 0.6,
     changes sign; the two axes at z = 0), with the images of points of ``Δ = 0`` whose z
     is within 0.01 of the level.
     """
-    fig = Figure(figsize=(12.5, 5.6), layout="constrained")
+    fig = NotebookFigure(figsize=(12.5, 5.6), layout="constrained")
     gs = fig.add_gridspec(1, 2, width_ratios=[1.1, 1.0])
     ax = fig.add_subplot(gs[0], projection="3d")
     x, y, z = normal_form_surface(61, extent)

@@ -2,13 +2,18 @@
 plane with its orientation, and the car's path with its body drawn along it.
 
 Each function takes a successful :class:`~nonholo.io.result.PlanResult` of the mechanism and
-returns a Matplotlib figure (the caller saves or shows it).
+returns a :class:`~nonholo.viz.style.NotebookFigure` (the caller saves or shows it); names
+and units come from the mechanism's data (:mod:`nonholo.viz.quantities`).
 """
 from __future__ import annotations
 
-import matplotlib.pyplot as plt
+import matplotlib
 import numpy as np
 from matplotlib.patches import Polygon
+
+from .platform_drawing import result_mechanism
+from .quantities import coordinate_units, input_units, label
+from .style import NotebookFigure, styled
 
 
 def _check(result, mechanism: str):
@@ -20,9 +25,23 @@ def _check(result, mechanism: str):
 
 def _layout():
     """A state figure's figure, its 2×2 grid and the path panel (the left column)."""
-    fig = plt.figure(figsize=(10, 4.8))
+    fig = NotebookFigure(figsize=(10, 4.8))
     grid = fig.add_gridspec(2, 2, width_ratios=[1.1, 1])
     return fig, grid, fig.add_subplot(grid[:, 0])
+
+
+def _path_labels(ax, result, title: str, margin: float):
+    """The path panel's axes labelled with the first two coordinates and their units."""
+    mech = result_mechanism(result)
+    units = coordinate_units(mech)
+    _finish_path(ax, label(mech.coordinates[0], units[0]), label(mech.coordinates[1], units[1]),
+                 title, margin)
+
+
+def _input_labels(result) -> tuple:
+    """Each input's name with its unit."""
+    mech = result_mechanism(result)
+    return tuple(label(name, unit) for name, unit in zip(mech.inputs, input_units(mech)))
 
 
 def _mark_ends(ax, result):
@@ -41,25 +60,26 @@ def _finish_path(ax, xlabel: str, ylabel: str, title: str, margin: float):
     ax.legend(fontsize=8, loc="best")
 
 
-def _time_panels(fig, grid, result, title: str, angles: list, inputs: tuple, input_unit: str):
+def _time_panels(fig, grid, result, title: str, angles: list):
     """The right column of a state figure: ``angles`` (``(values, colour, label)`` each,
-    rad) above the two inputs (labelled ``inputs``) against time; then the layout."""
+    rad) above the two inputs (named, with their units) against time; then the layout."""
     top = fig.add_subplot(grid[0, 1])
-    for values, colour, label in angles:
-        top.plot(result.t, values, color=colour, label=label)
-    top.set_ylabel("angle (rad)")
+    for values, colour, name in angles:
+        top.plot(result.t, values, color=colour, label=name)
+    top.set_ylabel(label("angle", "rad"))
     top.set_title(title)
     top.legend(fontsize=8)
     bottom = fig.add_subplot(grid[1, 1], sharex=top)
-    for j, (colour, label) in enumerate(zip(("tab:blue", "tab:orange"), inputs)):
-        bottom.plot(result.t, result.u[:, j], color=colour, lw=1, label=label)
-    bottom.set_xlabel("t (s)")
-    bottom.set_ylabel(input_unit)
+    for j, (colour, name) in enumerate(zip(("tab:blue", "tab:orange"), _input_labels(result))):
+        bottom.plot(result.t, result.u[:, j], color=colour, lw=1, label=name)
+    bottom.set_xlabel(label("time t", "s"))
+    bottom.set_ylabel("input")
     bottom.legend(fontsize=8)
     fig.tight_layout()
 
 
-def ball_figure(result, frames: int = 9):
+@styled
+def ball_figure(result, frames: int = 9) -> NotebookFigure:
     """The ball's contact path on the plane z = 0 (left), with the ball's body axes
     ``R e₁``, ``R e₂`` projected on the plane at ``frames`` instants; right, the angles
     from the start and to the goal (``|log(R(t) R0ᵀ)|``, ``|log(R(t) R_dᵀ)|``) and the
@@ -79,11 +99,10 @@ def ball_figure(result, frames: int = 9):
             ax.annotate("", xy=p[k] + d, xytext=p[k], arrowprops={"arrowstyle": "->", "color": colour, "lw": 1})
     ax.plot([], [], color="tab:blue", label="R e₁ (projected)")
     ax.plot([], [], color="tab:orange", label="R e₂ (projected)")
-    _finish_path(ax, "p₁ (radii)", "p₂ (radii)", "contact path on the plane", 0.15)
+    _path_labels(ax, result, "contact path on the plane", 0.15)
     _time_panels(fig, grid, result, "orientation and inputs",
                  [([np.linalg.norm(log(Rk @ result.R0.T)) for Rk in R], "tab:green", "from the start"),
-                  ([np.linalg.norm(log(Rk @ result.Rd.T)) for Rk in R], "tab:red", "to the goal")],
-                 ("v₁ = dp₁/dt", "v₂ = dp₂/dt"), "input (radii/s)")
+                  ([np.linalg.norm(log(Rk @ result.Rd.T)) for Rk in R], "tab:red", "to the goal")])
     return fig
 
 
@@ -94,23 +113,24 @@ def _body(x, y, th, length=1.0, width=0.5):
     return pts @ np.array([[c, s], [-s, c]]) + np.array([x, y])
 
 
-def car_figure(result, frames: int = 8):
+@styled
+def car_figure(result, frames: int = 8) -> NotebookFigure:
     """The car's path (the rear axle's midpoint) with its body and front wheels drawn at
     ``frames`` instants (left); right, ``θ``, ``φ`` and the inputs against time."""
     _check(result, "car")
     q, t = result.q, result.t
     fig, grid, ax = _layout()
     ax.plot(q[:, 0], q[:, 1], color="0.3", lw=1.5, label="rear axle")
+    shades = matplotlib.colormaps["viridis"]
     for j, k in enumerate(np.linspace(0, len(t) - 1, frames).astype(int)):
         x, y, th, ph = q[k]
-        shade = plt.cm.viridis(j / max(frames - 1, 1))
+        shade = shades(j / max(frames - 1, 1))
         ax.add_patch(Polygon(_body(x, y, th), closed=True, fill=False, ec=shade, lw=1))
         fx, fy = x + np.cos(th), y + np.sin(th)
         d = 0.18 * np.array([np.cos(th + ph), np.sin(th + ph)])
         ax.plot([fx - d[0], fx + d[0]], [fy - d[1], fy + d[1]], color=shade, lw=2.5)
     _mark_ends(ax, result)
-    _finish_path(ax, "x (wheelbases)", "y (wheelbases)", "path, body and front wheels (dark → light)", 0.2)
+    _path_labels(ax, result, "path, body and front wheels (dark → light)", 0.2)
     _time_panels(fig, grid, result, "heading, steering and inputs",
-                 [(q[:, 2], "k", "heading θ"), (q[:, 3], "tab:purple", "steering φ")],
-                 ("v (wheelbases/s)", "dφ/dt (rad/s)"), "input")
+                 [(q[:, 2], "k", "heading θ"), (q[:, 3], "tab:purple", "steering φ")])
     return fig
