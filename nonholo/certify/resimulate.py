@@ -381,15 +381,43 @@ def car_rates(R, x, u, wheelbase: float = 1.0):
 
 
 def unicycle_rates(R, x, u):
-    """The unicycle ``x = (x, y, θ)``, ``u = (v, ω)``: ``ẋ = v cos θ``, ``ẏ = v sin θ``,
-    ``θ̇ = ω``. Returns ``(ω = 0, ẋ)``."""
+    """The unicycle: ``ẋ = v cos θ``, ``ẏ = v sin θ``, ``θ̇ = ω``.
+
+    Parameters
+    ----------
+    R : numpy.ndarray
+        Unused (no orientation in SO(3)).
+    x : numpy.ndarray
+        The state ``(x, y, θ)``.
+    u : numpy.ndarray
+        The inputs ``(v, ω)``.
+
+    Returns
+    -------
+    tuple of numpy.ndarray
+        ``(ω = 0, ẋ)``.
+    """
     v, w = u
     return np.zeros(3), np.array([v * np.cos(x[2]), v * np.sin(x[2]), w])
 
 
 def brockett_rates(R, x, u):
-    """Brockett's integrator ``x = (x, y, z)``: ``ẋ = u₁``, ``ẏ = u₂``, ``ż = x u₂ − y u₁``.
-    Returns ``(ω = 0, ẋ)``."""
+    """Brockett's integrator: ``ẋ = u₁``, ``ẏ = u₂``, ``ż = x u₂ − y u₁``.
+
+    Parameters
+    ----------
+    R : numpy.ndarray
+        Unused (no orientation in SO(3)).
+    x : numpy.ndarray
+        The state ``(x, y, z)``.
+    u : numpy.ndarray
+        The inputs ``(u₁, u₂)``.
+
+    Returns
+    -------
+    tuple of numpy.ndarray
+        ``(ω = 0, ẋ)``.
+    """
     u1, u2 = u
     return np.zeros(3), np.array([u1, u2, x[0] * u2 - x[1] * u1])
 

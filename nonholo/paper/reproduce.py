@@ -126,12 +126,12 @@ def solve_all(progress=_log) -> list[Solved]:
     return solved
 
 
-#: The classic problems of the mechanisms beyond SO(3) (start, goal): the ball turned by
-#: π/2 about a horizontal axis in place, the car parked one wheelbase sideways.
-#: Options of each such card's plan: the ball's default plan rolls 12 radii out and back;
+#: Options of the plan of each card of a mechanism beyond SO(3): the ball's default plan rolls 12 radii out and back;
 #: the paper's strategy with four harmonics finds one within 2 radii (a fraction of the
 #: default's energy ∫|v|² dt), the motion one wants to see.
 STATE_OPTIONS = {"rolling_ball": {"strategy": "paper", "harmonics": 4}, "car": {}}
+#: The classic problems of the mechanisms beyond SO(3) (start, goal): the ball turned by
+#: π/2 about a horizontal axis in place, the car parked one wheelbase sideways.
 STATE_PROBLEMS = {
     "rolling_ball": ((so3.from_rpy(0.4, -0.3, 0.2), (0.0, 0.0)),
                      (so3.exp(np.array([np.pi / 2, 0.0, 0.0])) @ so3.from_rpy(0.4, -0.3, 0.2), (0.0, 0.0))),

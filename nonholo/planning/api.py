@@ -273,8 +273,20 @@ def solve_path(problem: Problem, callback: Callable[[dict], object] | None = Non
 
 
 def objective(problem: Problem, result: PlanResult) -> PlanResult:
-    """``result`` (the plan of ``problem``) after the problem's objective
-    (:func:`nonholo.planning.energy.improve`): as it is for ``None``."""
+    """``result`` after the problem's objective (:func:`nonholo.planning.energy.improve`).
+
+    Parameters
+    ----------
+    problem : Problem
+        The problem planned.
+    result : PlanResult
+        Its plan.
+
+    Returns
+    -------
+    PlanResult
+        The plan as it is for the objective ``None``; else after the least-energy stage.
+    """
     if problem.objective is None:
         return result
     return energy.improve(problem, result, quick=problem.objective == "auto")

@@ -88,20 +88,22 @@ ENERGY_RTOL = 1e-9
 #: ... or when the energy's gradient is this close to the row space of ``J`` (relative, in
 #: the metric ``M⁻¹``: the first-order conditions).
 KKT_RTOL = 1e-8
-#: A quasi-Newton step longer than this many Gauss–Newton steps (metric M), or one the
-#: line search halved more than :data:`RESET_HALVINGS` times, resets the Hessian to ``2M``.
+#: A quasi-Newton step longer than this many Gauss–Newton steps (metric M) resets the
+#: Hessian to ``2M`` ...
 STEP_GROWTH = 4.0
+#: ... and so does one the line search halved more than this many times.
 RESET_HALVINGS = 3
 #: The merit's weight on ``|l_T|``: this many times the multiplier ``|ν|`` (at least).
 MERIT_FACTOR = 2.0
 #: Step halvings of the line search at most.
 MAX_HALVINGS = 12
-#: ``objective="auto"`` (the default): the starts of the quick search (the plan's, then the
-#: loops of the first size), its budget (seconds of effort), and the fraction of the plan's
-#: energy a motion must need less than to replace it (below 1/3: a plan kept needs at most
-#: 2.5 times what the quick search found).
+#: ``objective="auto"``: the starts of the quick search (the plan's, then the loops of the
+#: first size).
 QUICK_STARTS = 5
+#: ``objective="auto"``: the quick search's budget (seconds of effort).
 QUICK_EFFORT = 0.15
+#: ``objective="auto"``: the fraction of the plan's energy a motion the quick search finds
+#: must need less than to replace it (a plan kept needs at most 2.5 times what it found).
 REPLACE_BELOW = 0.4
 #: The barrier on the clearance from ``Δ = 0`` acts where ``sgnΔ`` is below this.
 BARRIER_DELTA = 0.1

@@ -356,9 +356,22 @@ class Problem:
 
     def evaluator(self, frame: bool = False, method: str | None = None, steps: int | None = None) -> Evaluator:
         """The :class:`~nonholo.planning.core.Evaluator` of this problem: its start, goal,
-        horizon, clearance and stroke, controls in the frame coordinates (``frame``) or the
-        physical inputs, of ``method`` (default: the problem's) on ``steps`` integrator
-        steps (default: the problem's)."""
+        horizon, clearance and stroke.
+
+        Parameters
+        ----------
+        frame : bool
+            Controls in the frame coordinates (else the physical inputs).
+        method : str, optional
+            ``"parametric"`` or ``"nonparametric"`` (default: the problem's).
+        steps : int, optional
+            Integrator steps on ``[0, T]`` (default: the problem's).
+
+        Returns
+        -------
+        Evaluator
+            The evaluator.
+        """
         return Evaluator(self.R0, self.Rd, self.T, self.mechanism, method or self.method,
                          self.steps if steps is None else steps, self.options.delta_min, frame=frame,
                          leg_limits=self.leg_limits, q0=self.q0, qd=self.qd)
