@@ -20,7 +20,7 @@ from .mechanisms import (
     rho,
 )
 from .rotations import e1, e2, e3
-from .vehicles import kinematic_car, rolling_ball
+from .vehicles import brockett_integrator, kinematic_car, rolling_ball, unicycle
 
 #: A second placement of the platform's legs and disk. The paper's legs are radial at
 #: the identity (base and platform joints on one line through O), which makes the
@@ -45,6 +45,9 @@ MECHANISMS: dict[str, Callable[[], Mechanism]] = {
     # state beyond SO(3) (derivations/vehicles.py)
     "rolling_ball": rolling_ball,
     "car": kinematic_car,
+    # the textbook systems whose least-energy motions are known in closed form
+    "brockett": brockett_integrator,
+    "unicycle": unicycle,
 }
 
 

@@ -1,13 +1,19 @@
-"""Two classic non-holonomic mechanisms beyond SO(3), derived from their rolling constraints.
+"""Classic non-holonomic mechanisms beyond SO(3), derived from their constraints.
 
 - :func:`rolling_ball`: a ball of radius ρ rolling without slipping or spinning on the
   plane z = 0; state ``(R, p) ∈ SO(3) × R²``, inputs ``v = ṗ``.
 - :func:`kinematic_car`: the kinematic car with the steering angle as a state,
   ``x = (x, y, θ, φ) ∈ R⁴``, inputs ``(v, φ̇)``; singular where ``cos φ = 0``.
+- :func:`unicycle`: the wheel rolling upright on the plane, ``(x, y, θ) ∈ R³``, inputs
+  ``(v, ω)``.
+- :func:`brockett_integrator`: Brockett's non-holonomic integrator, ``(x, y, z) ∈ R³``,
+  ``ẋ = u₁``, ``ẏ = u₂``, ``ż = x u₂ − y u₁``: the textbook system whose least-energy
+  motions (circles) are known in closed form.
 
 Each is built as the platform is (:mod:`derivations.mechanisms`): the constraints are
 written as linear equations in the unknown rates, solved symbolically, and the
-determinant of the constraint matrix gives the singularity function.
+determinant of the constraint matrix gives the singularity function (none vanishes for
+the last two).
 """
 from __future__ import annotations
 
@@ -86,4 +92,55 @@ def kinematic_car(wheelbase=1, name: str = "car") -> Mechanism:
         frame_inputs=input_map(X, frame).applyfunc(sp.simplify),
         derivation={"constraint_matrix": C, "constraint_rhs": rhs, "determinant": det,
                     "wheelbase": ell},
+    )
+
+
+def unicycle(name: str = "unicycle") -> Mechanism:
+    """The unicycle: a wheel rolling upright on the plane, contact point ``(x, y)``, heading
+    ``θ``; inputs the rolling speed ``v`` and the turning rate ``ω``.
+
+    Unknown: ``(ẋ, ẏ, θ̇)``. Constraints: the wheel rolls along its heading at the speed
+    ``v`` (``ẋ cos θ + ẏ sin θ = v``) without side slip (``−ẋ sin θ + ẏ cos θ = 0``) and
+    turns at ``θ̇ = ω``. The constraint matrix is a rotation (determinant 1): no singular
+    set. Solved: ``ẋ = v cos θ``, ``ẏ = v sin θ``, ``θ̇ = ω``.
+    """
+    x, y, th = sp.symbols("x y theta", real=True)
+    v, w = sp.symbols("v omega", real=True)
+    xd, yd, thd = sp.symbols("xdot ydot thetadot", real=True)
+    equations = [xd * sp.cos(th) + yd * sp.sin(th) - v, -xd * sp.sin(th) + yd * sp.cos(th), thd - w]
+    C, rhs = sp.linear_eq_to_matrix(equations, [xd, yd, thd])
+    det = sp.simplify(C.det())
+    rates = C.LUsolve(rhs).applyfunc(lambda e: sp.simplify(sp.trigsimp(e)))
+    X = rates.jacobian([v, w]).applyfunc(sp.simplify)
+    return Mechanism(
+        name=name,
+        description="unicycle: a wheel rolling upright on the plane without side slip",
+        inputs=("v = rolling speed", "omega = dtheta/dt"),
+        coordinates=(x, y, th), units=("m", "m", "rad"), angles=(False, False, True),
+        X=X, derivation={"constraint_matrix": C, "constraint_rhs": rhs, "determinant": det},
+    )
+
+
+def brockett_integrator(name: str = "brockett") -> Mechanism:
+    """Brockett's non-holonomic integrator: ``ẋ = u₁``, ``ẏ = u₂``, ``ż = x u₂ − y u₁``.
+
+    Unknown: ``(ẋ, ẏ, ż)``; the equations as linear constraints in them (the third:
+    ``z`` grows at twice the rate the area swept by ``(x, y)`` round the origin grows).
+    The constraint matrix is the identity: no singular set. The least energy from
+    ``(0, 0, 0)`` to ``(0, 0, a)`` in time ``T`` is ``2π|a|`` (one circle of area
+    ``|a|/2``), the benchmark of :mod:`benchmarks.optimality`.
+    """
+    x, y, z = sp.symbols("x y z", real=True)
+    u1, u2 = sp.symbols("u1 u2", real=True)
+    xd, yd, zd = sp.symbols("xdot ydot zdot", real=True)
+    equations = [xd - u1, yd - u2, zd - (x * u2 - y * u1)]
+    C, rhs = sp.linear_eq_to_matrix(equations, [xd, yd, zd])
+    rates = C.LUsolve(rhs)
+    X = rates.jacobian([u1, u2]).applyfunc(sp.expand)
+    return Mechanism(
+        name=name,
+        description="Brockett's non-holonomic integrator (x' = u1, y' = u2, z' = x u2 - y u1)",
+        inputs=("u1 = dx/dt", "u2 = dy/dt"),
+        coordinates=(x, y, z), units=("", "", ""), angles=(False, False, False),
+        X=X, derivation={"constraint_matrix": C, "constraint_rhs": rhs, "determinant": C.det()},
     )

@@ -176,7 +176,6 @@ def forbid_simulation(monkeypatch):
     ``ValueError``), so a ``pytest.raises(ValueError)`` around the call does not swallow it."""
     from nonholo.integrate import cf4
     from nonholo.model import mechanism
-    from nonholo.planning import api as planner
     from nonholo.planning import core
 
     def forbidden(*args, **kwargs):
@@ -185,7 +184,6 @@ def forbid_simulation(monkeypatch):
     monkeypatch.setattr(mechanism.Mechanism, "kernels", forbidden)
     monkeypatch.setattr(cf4, "compile_system", forbidden)
     monkeypatch.setattr(core.Evaluator, "__init__", forbidden)
-    monkeypatch.setattr(planner, "Evaluator", forbidden)
 
 
 def check_into_forms(module, rotations, rng):

@@ -18,6 +18,8 @@ from nonholo.model import catalog
 STARTS = {
     "car": (np.eye(3), np.array([0.1, 0.2, 0.3, 0.2])),
     "rolling_ball": (np.ascontiguousarray(example(1)[0]), np.array([0.1, -0.2])),
+    "unicycle": (np.eye(3), np.array([0.1, -0.2, 0.3])),
+    "brockett": (np.eye(3), np.array([0.1, -0.2, 0.3])),
 }
 SYSTEMS = [(name, frame) for name in catalog.names() for frame in (False, True)
            if not frame or catalog.get(name).has_frame]

@@ -167,8 +167,6 @@ def test_wrong_kind_of_state_says_what_is_expected():
         nonholo.plan([0, 0, 0], [0, 1, 0, 0], mechanism="car")
     with pytest.raises(ValueError, match="rotation matrix"):
         nonholo.plan((np.eye(3), [0, 0]), np.eye(3), mechanism="platform")
-    with pytest.raises(ValueError, match="objective 'energy' is for mechanisms on SO\\(3\\)"):
-        nonholo.plan([0, 0, 0, 0], [0, 1, 0, 0], mechanism="car", objective="energy")
 
 
 def test_far_car_goal_is_reached_by_the_global_route(tmp_path):

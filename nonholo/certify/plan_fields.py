@@ -36,7 +36,7 @@ OPTION_RULES = {"gamma": "positive", "step": "positive", "tol": "positive", "min
 #: the options a plan records only when they were given (absent: none)
 OPTIONAL_OPTIONS = ("leg_length", "leg_speed", "objective")
 #: the objectives a plan may record
-OBJECTIVES = ("energy",)
+OBJECTIVES = ("energy", "auto")
 #: ``R0``, ``Rd`` and the samples ``R``: ``|RᵀR − I| ≤`` this (as :func:`nonholo.plan` accepts)
 ROTATION_TOL = 1e-9
 

@@ -380,10 +380,54 @@ def car_rates(R, x, u, wheelbase: float = 1.0):
     return np.zeros(3), np.array([v * np.cos(th), v * np.sin(th), v * np.tan(ph) / wheelbase, dphi])
 
 
+def unicycle_rates(R, x, u):
+    """The unicycle: ``ẋ = v cos θ``, ``ẏ = v sin θ``, ``θ̇ = ω``.
+
+    Parameters
+    ----------
+    R : numpy.ndarray
+        Unused (no orientation in SO(3)).
+    x : numpy.ndarray
+        The state ``(x, y, θ)``.
+    u : numpy.ndarray
+        The inputs ``(v, ω)``.
+
+    Returns
+    -------
+    tuple of numpy.ndarray
+        ``(ω = 0, ẋ)``.
+    """
+    v, w = u
+    return np.zeros(3), np.array([v * np.cos(x[2]), v * np.sin(x[2]), w])
+
+
+def brockett_rates(R, x, u):
+    """Brockett's integrator: ``ẋ = u₁``, ``ẏ = u₂``, ``ż = x u₂ − y u₁``.
+
+    Parameters
+    ----------
+    R : numpy.ndarray
+        Unused (no orientation in SO(3)).
+    x : numpy.ndarray
+        The state ``(x, y, z)``.
+    u : numpy.ndarray
+        The inputs ``(u₁, u₂)``.
+
+    Returns
+    -------
+    tuple of numpy.ndarray
+        ``(ω = 0, ẋ)``.
+    """
+    u1, u2 = u
+    return np.zeros(3), np.array([u1, u2, x[0] * u2 - x[1] * u1])
+
+
 #: The hand-written models of the mechanisms beyond SO(3), and their singularity
 #: functions (``None``: no singular set), by mechanism name.
 MODELS = {"rolling_ball": (rolling_ball_rates, None),
-          "car": (car_rates, lambda R, x: np.cos(x[3]))}
+          "car": (car_rates, lambda R, x: np.cos(x[3])),
+          "unicycle": (unicycle_rates, None),
+          "brockett": (brockett_rates, None)}
 
 
 def resimulate_state(start, controls, T: float, mechanism, breakpoints=None, samples: int = 2001,

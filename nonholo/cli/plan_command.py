@@ -81,8 +81,10 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     p.add_argument("--leg-speed", type=float, default=None, metavar="V",
                    help="keep every leg's speed |dl/dt| <= V (geometry units per second): the plan "
                         "is re-timed, in the least time with --T min")
-    p.add_argument("--objective", choices=("energy",), default=None,
-                   help="then lower the energy ∫|u|² dt with the goal and limits kept")
+    p.add_argument("--objective", choices=("none", "energy", "auto"), default="none",
+                   help="energy: then the least energy ∫|u|² dt a search finds, with the goal and limits "
+                        "kept; auto: the plan, unless a quick search finds a motion of far less "
+                        "energy; none (default): the plan as found")
     p.add_argument("--out", default=None, help="write the result as JSON to this file")
     p.add_argument("--plot", default=None, help="write a figure of the plan to this file (inputs, orientation, "
                         "coordinates, Δ against t; a vehicle's path on the plane)")
@@ -195,7 +197,8 @@ def run(args) -> int:
             R0, Rd, T=args.T, method=args.method, harmonics=args.harmonics, grid=args.grid,
             strategy=args.strategy, mechanism=args.mechanism, gamma=args.gamma, tol=args.tol,
             max_iter=args.max_iter, delta_min=args.delta_min, steps=args.steps, route=args.route,
-            leg_length=args.leg_length, leg_speed=args.leg_speed, objective=args.objective,
+            leg_length=args.leg_length, leg_speed=args.leg_speed,
+            objective=None if args.objective == "none" else args.objective,
             callback=None if args.quiet else _print_record)
     except ValueError as exc:
         _error(str(exc))

@@ -127,12 +127,12 @@ def solve_all(progress=_log) -> list[Solved]:
     return solved
 
 
-#: The classic problems of the mechanisms beyond SO(3) (start, goal): the ball turned by
-#: π/2 about a horizontal axis in place, the car parked one wheelbase sideways.
-#: Options of each such card's plan: the ball's default plan rolls 12 radii out and back;
+#: Options of the plan of each card of a mechanism beyond SO(3): the ball's default plan rolls 12 radii out and back;
 #: the paper's strategy with four harmonics finds one within 2 radii (a fraction of the
 #: default's energy ∫|v|² dt), the motion one wants to see.
 STATE_OPTIONS = {"rolling_ball": {"strategy": "paper", "harmonics": 4}, "car": {}}
+#: The classic problems of the mechanisms beyond SO(3) (start, goal): the ball turned by
+#: π/2 about a horizontal axis in place, the car parked one wheelbase sideways.
 STATE_PROBLEMS = {
     "rolling_ball": ((so3.from_rpy(0.4, -0.3, 0.2), (0.0, 0.0)),
                      (so3.exp(np.array([np.pi / 2, 0.0, 0.0])) @ so3.from_rpy(0.4, -0.3, 0.2), (0.0, 0.0))),
@@ -142,10 +142,13 @@ STATE_PROBLEMS = {
 
 def mechanism_cards():
     """``(figure, stem)`` of every mechanism: the platforms at a regular pose with their
-    singular sets, the others with a planned motion (RPY(0.1, 0.2, 0.3) → RPY(0.8, -0.4, 0.5))."""
+    singular sets, the others with a planned motion (RPY(0.1, 0.2, 0.3) → RPY(0.8, -0.4, 0.5));
+    of those beyond SO(3), the ones with a drawing (:data:`STATE_PROBLEMS`)."""
     for name in catalog.names():
         mech = catalog.get(name)
         if mech.space.k:
+            if name not in STATE_PROBLEMS:
+                continue
             start, goal = STATE_PROBLEMS[name]
             draw = state_figures.ball_figure if mech.space.has_orientation else state_figures.car_figure
             yield draw(plan(start, goal, mechanism=name, **STATE_OPTIONS[name])), f"mechanism_{name}"

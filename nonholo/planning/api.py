@@ -30,7 +30,7 @@ from . import energy
 from . import route as global_route
 from .certification import certified
 from .constraints import first_refusal
-from .core import Evaluator, build_result
+from .core import build_result
 from .problem import (
     METHODS,
     OBJECTIVES,
@@ -72,8 +72,8 @@ def plan(R0, Rd, *, T: float | None = 1.0, method: str = "parametric", harmonics
         of its coordinates (``"R^k"``) or pairs ``(R, q)`` (``"SO(3)xR^k"``), see
         :mod:`nonholo.spaces.groups`. There the error is the stacked ``(l, q_T − q_d)`` and
         the result reports it by part (``errors``); strategies ``"paper"`` and ``"robust"``
-        plan in the physical inputs, and the global route, ``leg_length``, ``leg_speed``
-        and ``objective`` are for SO(3) mechanisms only.
+        plan in the physical inputs, and ``leg_length`` and ``leg_speed`` are for SO(3)
+        mechanisms only.
     T : float or None
         The horizon in seconds; ``None`` only with ``leg_speed``: the least time.
     method : {"parametric", "nonparametric"}
@@ -142,12 +142,16 @@ def plan(R0, Rd, *, T: float | None = 1.0, method: str = "parametric", harmonics
         leg at ``v`` throughout; with a given ``T`` only if the plan breaks the bound, and
         it fails saying the time needed if its path cannot keep it within ``T``. ``None``
         (default): no bound.
-    objective : {None, "energy"}
-        ``None`` (default): the plan as found; ``"energy"``: then the energy ``∫|u|² dt`` of
-        its physical inputs lowered with the goal, ``delta_min`` and the stroke kept
-        (:mod:`nonholo.planning.energy`: piecewise-constant inputs on
-        :data:`~nonholo.planning.energy.ENERGY_GRID` intervals, method ``"nonparametric"``
-        in the result).
+    objective : {None, "energy", "auto"}
+        ``None`` (default): the plan as found. ``"energy"``: the plan, then the least energy
+        ``∫|u|² dt`` of its physical inputs that a search from several starts finds, with
+        the goal, ``delta_min`` and the stroke kept, within a budget of effort (the same call
+        gives the same plan on any machine) (:mod:`nonholo.planning.energy`:
+        piecewise-constant inputs on :data:`~nonholo.planning.energy.ENERGY_GRID` intervals,
+        method ``"nonparametric"`` in the result). ``"auto"``: the plan as found, unless a
+        quick search of the same kind finds a motion needing less than
+        :data:`~nonholo.planning.energy.REPLACE_BELOW` of its energy — then that motion
+        (``options["objective"]`` says so).
     constraints : sequence
         Further constraint objects (:mod:`nonholo.planning.constraints`).
 
@@ -164,8 +168,7 @@ def plan(R0, Rd, *, T: float | None = 1.0, method: str = "parametric", harmonics
         For bad input, naming the argument: ``R0``/``Rd`` not states of the mechanism,
         ``Δ(R0) = 0``, ``T ≤ 0``, ``harmonics``/``grid``/``steps`` < 1, an unknown method,
         strategy or mechanism, bad numerical options, a Fourier basis too large for memory;
-        the global route, ``leg_length``, ``leg_speed`` or ``objective`` for a mechanism
-        beyond SO(3).
+        ``leg_length`` or ``leg_speed`` for a mechanism beyond SO(3).
     TypeError
         For a ``callback`` that is not callable.
 
@@ -231,9 +234,7 @@ def solve_path(problem: Problem, callback: Callable[[dict], object] | None = Non
         return build_result(problem, None, False, refusal)
 
     solver = cls(options)
-    evaluator = Evaluator(problem.R0, problem.Rd, problem.T, mech, problem.method, problem.steps,
-                          options.delta_min, frame=solver.frame(mech), leg_limits=problem.leg_limits,
-                          q0=problem.q0, qd=problem.qd)
+    evaluator = problem.evaluator(frame=solver.frame(mech))
     start = solver.initial(evaluator, problem.controls, problem.u0_given)
     if problem.route == "global":
         outcome, local_reason = None, "not tried (route 'global')"
@@ -243,7 +244,7 @@ def solve_path(problem: Problem, callback: Callable[[dict], object] | None = Non
             outcome = certified(outcome, evaluator, options)
         if outcome.success or problem.route == "local" or outcome.stopped:
             result = build_result(problem, outcome, outcome.success, outcome.reason, evaluator)
-            return energy.improve(problem, result) if problem.objective == "energy" else result
+            return objective(problem, result)
         local_reason = outcome.reason
 
     def hop(a, b, T_hop, hop_delta_min):
@@ -268,4 +269,24 @@ def solve_path(problem: Problem, callback: Callable[[dict], object] | None = Non
                             f"{local_reason}; the global route failed too: {steered.reason}", evaluator)
     smoothed = steered.smoothed or smooth(steered.controls, steered.certify_seconds)
     result = global_route.build_result(problem, steered, local_reason, smoothed)
-    return energy.improve(problem, result) if problem.objective == "energy" else result
+    return objective(problem, result)
+
+
+def objective(problem: Problem, result: PlanResult) -> PlanResult:
+    """``result`` after the problem's objective (:func:`nonholo.planning.energy.improve`).
+
+    Parameters
+    ----------
+    problem : Problem
+        The problem planned.
+    result : PlanResult
+        Its plan.
+
+    Returns
+    -------
+    PlanResult
+        The plan as it is for the objective ``None``; else after the least-energy stage.
+    """
+    if problem.objective is None:
+        return result
+    return energy.improve(problem, result, quick=problem.objective == "auto")

@@ -47,6 +47,7 @@ from ..model.mechanism import Mechanism
 from ..motion.frame_controls import FrameControls
 from ..numerics import kernels
 from ..numerics.checks import check_count, is_number
+from ..spaces import so3
 from ..spaces.groups import NO_COORDINATES
 
 
@@ -258,6 +259,100 @@ def _ones(p: int) -> np.ndarray:
     a = np.ones(p)
     a.setflags(write=False)
     return a
+
+
+def spatial_gradient_delta(mechanism, R: np.ndarray, eps: float = 1e-6, q=None) -> np.ndarray:
+    """``∇Δ`` at each ``R[n]``: ``Δ(exp([s]) R) = Δ(R) + ∇Δ·s + O(|s|²)`` (central differences
+    of the generated ``Δ``, error ``O(ε²)``), shape ``(n, 3)``; beyond SO(3), at each state
+    ``(R[n], q[n])`` along the stacked variation ``s = (s_R, s_q)``, shape ``(n, d)``."""
+    if not mechanism.space.k:
+        g = np.empty((len(R), 3))
+        for k in range(3):
+            e = np.zeros(3)
+            e[k] = eps
+            g[:, k] = (mechanism.delta_samples(so3.exp(e) @ R)
+                       - mechanism.delta_samples(so3.exp(-e) @ R)) / (2.0 * eps)
+        return g
+    r = 3 if mechanism.space.has_orientation else 0
+    g = np.empty((len(R), mechanism.n_rates))
+    for k in range(mechanism.n_rates):
+        if k < r:
+            e = np.zeros(3)
+            e[k] = eps
+            plus, minus = (mechanism.delta_samples(so3.exp(e) @ R, q),
+                           mechanism.delta_samples(so3.exp(-e) @ R, q))
+        else:
+            dq = np.zeros(mechanism.n_coordinates)
+            dq[k - r] = eps
+            plus, minus = mechanism.delta_samples(R, q + dq), mechanism.delta_samples(R, q - dq)
+        g[:, k] = (plus - minus) / (2.0 * eps)
+    return g
+
+
+def node_gradient(problem: Evaluator, ev: Evaluation, a: np.ndarray) -> np.ndarray:
+    """The gradient in ``λ`` of ``Σ_n a_n · s_n`` (``a``: ``(N+1, d)``, one row per node;
+    ``s_n``: the sensitivity of the state at node ``n`` to ``λ``) from ``ev``, a ``full``
+    evaluation. ``s_n = Z_n^{-1} S_n``, ``S_n = Σ_{stages r before t_n} W_r ∂U_r/∂λ``; with
+    ``μ_n = a_n Z_n^{-1}`` the gradient is ``Σ_r (ν_{n(r)} W_r) ∂U_r/∂λ``, ``ν_k = Σ_{n > k}
+    μ_n`` (suffix sums): one backward pass over the stored stages, no extra simulation."""
+    N, m, D = problem.steps, problem.mechanism.n_inputs, problem.mechanism.n_rates
+    mu = np.linalg.solve(np.transpose(ev.Z, (0, 2, 1)), a[:, :, None])[:, :, 0]    # a_n Z_n^{-1}
+    nu = np.cumsum(mu[::-1], axis=0)[::-1]                  # Σ_{n ≥ k} μ_n
+    nu = nu[1:]                                              # Σ_{n > k} μ_n, k = 0 … N−1
+    v = np.einsum("ni,ncik->nck", nu, ev.Wd.reshape(N, 3, D, m)).reshape(3 * N, m)
+    Bidx, Bval, sb, si = problem.stage_basis
+    out = np.zeros(problem.n_params)
+    if Bidx.shape[0] == 0:                                  # dense basis
+        G = v.T @ Bval.reshape(3 * N, -1)                    # (m, nb)
+        cols = np.arange(G.shape[1])[None, :] * sb + np.arange(m)[:, None] * si
+        out[cols.ravel()] = G.ravel()
+        return out
+    nq = Bidx.shape[2]
+    cols = Bidx.reshape(3 * N, nq, 1) * sb + np.arange(m)[None, None, :] * si
+    np.add.at(out, cols.ravel(), (Bval.reshape(3 * N, nq, 1) * v[:, None, :]).ravel())
+    return out
+
+
+def node_sensitivities(problem: Evaluator, ev: Evaluation, nodes: np.ndarray) -> np.ndarray:
+    """``s_n = ∂(state at node n)/∂λ`` at the ``nodes``, shape ``(len(nodes), d, p)``, from
+    ``ev``, a ``full`` evaluation: ``s_n = Z_n^{-1} S_n`` with ``S_n = Σ_{stages r before
+    t_n} W_r ∂U_r/∂λ`` (no extra simulation). For grid controls (each step's stages in one
+    interval ``j``, steps ``a_j … b_j − 1``) ``S_n``'s block of interval ``j`` is ``C(min(n,
+    b_j)) − C(min(n, a_j))``, ``C`` the running sum of the steps' contributions; otherwise
+    the contributions are summed over the steps before each node."""
+    N, m, D = problem.steps, problem.mechanism.n_inputs, problem.mechanism.n_rates
+    nodes = np.asarray(nodes, dtype=int)
+    W = ev.Wd.reshape(N, 3, D, m)
+    Bidx, Bval, sb, si = problem.stage_basis
+    p = problem.n_params
+    if Bidx.shape[0] and Bidx.shape[2] == 1 and np.all(Bidx[:, :, 0] == Bidx[:, :1, 0]):
+        j = Bidx[:, 0, 0]
+        C = np.zeros((N + 1, D, m))
+        np.cumsum(np.einsum("nc,ncdk->ndk", Bval[:, :, 0], W), axis=0, out=C[1:])
+        intervals = np.unique(j)
+        first = np.searchsorted(j, intervals, side="left")
+        last = np.searchsorted(j, intervals, side="right")
+        blocks = (C[np.minimum(nodes[:, None], last[None, :])]
+                  - C[np.minimum(nodes[:, None], first[None, :])])          # (k, J, D, m)
+        S = np.zeros((nodes.size, D, p))
+        cols = intervals[:, None] * sb + np.arange(m)[None, :] * si        # (J, m)
+        S[:, :, cols.ravel()] = np.moveaxis(blocks, 2, 1).reshape(nodes.size, D, -1)
+        return np.linalg.solve(ev.Z[nodes], S)
+    S = np.zeros((N + 1, D, p))
+    if Bidx.shape[0] == 0:                                  # dense basis (N, 3, nb)
+        nb = Bval.shape[2]
+        per = np.einsum("ncdk,ncb->ndkb", W, Bval)          # (N, D, m, nb)
+        cols = np.arange(nb)[None, :] * sb + np.arange(m)[:, None] * si
+        S[1:][:, :, cols.ravel()] = per.reshape(N, D, m * nb)
+    else:                                                   # sparse basis (N, 3, nq)
+        nq = Bidx.shape[2]
+        steps = np.broadcast_to(np.arange(1, N + 1)[:, None, None, None], (N, 3, nq, m))
+        cols = Bidx[..., None] * sb + np.arange(m) * si     # (N, 3, nq, m)
+        vals = Bval[:, :, :, None, None] * W[:, :, None, :, :]     # (N, 3, nq, D, m)
+        np.add.at(S, (steps.ravel(), slice(None), cols.ravel()),
+                  np.moveaxis(vals, 3, -1).reshape(-1, D))
+    np.cumsum(S, axis=0, out=S)
+    return np.linalg.solve(ev.Z[nodes], S[nodes])
 
 
 def step_scale(problem: Evaluator, controls: Controls) -> np.ndarray:

@@ -1,56 +1,124 @@
-"""``objective="energy"``: a plan's goal kept, its energy ``∫_0^T |u|² dt`` lowered.
+"""The least-energy stage: a plan's goal kept, its energy ``∫_0^T |u|² dt`` brought to the least.
 
-After a certified plan (local or global), its physical inputs ``u`` are projected on
-piecewise-constant controls on :data:`ENERGY_GRID` equal intervals (interval means) and
-moved toward the least energy among the controls that end at the goal, by Gauss–Newton
-sequential quadratic programming in the parameters ``λ`` (the interval values):
+The least-energy motion of a driftless system ``ẋ = G(x) u`` between two states is a
+sub-Riemannian geodesic. It is sought among piecewise-constant physical inputs on
+:data:`ENERGY_GRID` equal intervals (parameters ``λ``, the interval values; ``∫|u|² =
+λᵀMλ``, ``M = diag(h_j)``) by sequential quadratic programming (:func:`descend`): each
+step is the least of the quadratic model ``gᵀd + ½dᵀBd`` on the linearised endpoint
+condition ``l_T + J d = 0`` (``l_T`` the stacked terminal error, ``J = ∂s_T/∂λ`` from the
+variational system, as in the planner; :func:`qp_step`). ``B`` starts as the energy's
+Hessian ``2M`` — the Gauss–Newton step ``λ⁺ = M⁻¹Jᵀ(JM⁻¹Jᵀ)⁻¹(Jλ − l_T)``, the
+least-energy point of the linearised condition — and learns the curvature of the
+endpoint map by damped BFGS updates of the Lagrangian's Hessian (reset to ``2M`` when
+its step runs away). A fixed point satisfies ``Mλ = Jᵀν``, ``l_T = 0``: the first-order
+conditions of the least energy with the endpoint fixed (the discrete Pontryagin
+condition ``u = Gᵀp``). Steps are damped by a backtracking line search on the merit
+``F + μ|l_T|`` (``μ`` above the multiplier ``|ν|``), with a second-order correction of a
+rejected full step, and shortened until the trajectory is admissible — ``|Δ| ≥
+delta_min``, the legs inside their stroke — so every iterate is; the iteration need not
+start at the goal. Where the motion comes close to those limits, ``F`` is the energy
+plus a small log barrier on the clearances (:class:`Objective`): an optimum that rides a
+limit is approached from inside instead of stalling against it.
 
-    ``λ⁺ = M⁻¹Jᵀ (J M⁻¹ Jᵀ)⁻¹ (Jλ − l_T)``,
-
-the least-energy point of the linearised endpoint condition ``l_T + J(λ⁺ − λ) = 0``
-(``∫|u|² = λᵀMλ``, ``M = diag(h_j)``; ``J = ∂s_T/∂λ`` from the variational system, as in
-the planner). A fixed point satisfies ``Mλ = Jᵀν`` and ``l_T = 0``: the first-order
-conditions of the least energy with the endpoint fixed. The step ``λ⁺ − λ`` is damped by
-a backtracking line search on the merit ``E + μ|l_T|`` (``μ`` above the multiplier
-``|ν|``) and shortened until the trajectory is admissible — ``|Δ| ≥ delta_min``, the legs
-inside their stroke — so every iterate is. The iteration stops when the energy no
-longer drops by :data:`ENERGY_RTOL` and ``|l_T|`` is below the planner's ``tol`` (then the
-result is certified like any plan: :mod:`nonholo.planning.certification`), or after
-:data:`MAX_ITERATIONS` / :data:`ENERGY_TIME`.
+Such an iteration finds *a* critical point near its start; the least one is looked for
+from several starts (:func:`starts`): the certified plan's inputs, then the drift toward
+the goal plus loops of a few sizes and frequency ratios in either sense (the motions
+that reach the bracket directions at the least cost), then seeded random Fourier inputs.
+Each start is iterated :data:`PROBE_ITERATIONS` times, then the run heading for the least
+energy is continued, round by round, while it may beat the best finished one
+(:func:`search`); the least-energy run at the goal that is certified
+(:mod:`nonholo.planning.certification`) is the result. Everything is budgeted in effort
+(:mod:`nonholo.numerics.effort`, :data:`ENERGY_EFFORT`), not in wall time, so the same call
+gives the same plan on any machine under any load.
 
 The result's controls are those grid controls (method ``"nonparametric"``) of the
-physical inputs; if the stage cannot end at a certified control at least as cheap as
-the plan's, the plan is returned as it was, its reason saying why.
+physical inputs; if no start ends at a certified control at least as cheap as the plan's,
+the plan is returned as it was, its reason saying why. :func:`improve` runs the stage
+for ``objective="energy"`` and, quickly, for the default ``objective="auto"``, which keeps
+the plan unless it needs far more energy than a motion the quick search finds.
 """
 from __future__ import annotations
 
-import time
-from dataclasses import replace
+import itertools
+import math
+from dataclasses import dataclass, field, replace
 
 import numpy as np
+from scipy.linalg import cho_factor, cho_solve
 
-from ..controls.parametrisations import PiecewiseConstant
+from ..controls.parametrisations import Controls, Fourier, PiecewiseConstant
 from ..io.result import PlanResult
+from ..model.limits import BARRIER_CLEARANCE
+from ..motion.frame_controls import FrameControls
+from ..numerics import effort
 from .certification import certified
-from .core import Evaluation, Options, Outcome, Evaluator, build_result, record
+from .core import (
+    Evaluation,
+    Evaluator,
+    Options,
+    Outcome,
+    build_result,
+    node_sensitivities,
+    record,
+    spatial_gradient_delta,
+)
 
 #: Intervals of the piecewise-constant controls the energy is lowered over (the plan's
 #: integrator steps are rounded up to a multiple of it).
 ENERGY_GRID = 100
-#: SQP iterations at most.
-MAX_ITERATIONS = 60
-#: Wall time of the stage at most (s).
-ENERGY_TIME = 0.5
+#: SQP iterations of one start at most.
+MAX_ITERATIONS = 80
+#: SQP iterations of every start before any is continued, and of each round after.
+PROBE_ITERATIONS = 12
+#: Runs at the goal polished and certified at most, the cheapest first.
+FINALISTS = 3
+#: A probe is near the goal when its terminal error is below this (in the error's units).
+NEAR_GOAL = 1e-3
+#: A start whose projection on the grid ends closer to the goal than this is brought onto
+#: it by Newton steps before the iteration.
+POLISH_BELOW = 0.05
+#: Seconds of effort (:mod:`nonholo.numerics.effort`) the stage may take.
+ENERGY_EFFORT = 1.0
+#: Seconds of effort an iteration's linear algebra counts, besides its simulations (about
+#: its time on the reference machine).
+ITERATION_EFFORT = 1e-3
 #: The iteration has converged when an accepted step lowers the energy by less than this
 #: fraction (and the endpoint is within ``tol``).
 ENERGY_RTOL = 1e-9
+#: ... or when the energy's gradient is this close to the row space of ``J`` (relative, in
+#: the metric ``M⁻¹``: the first-order conditions).
+KKT_RTOL = 1e-8
+#: A quasi-Newton step longer than this many Gauss–Newton steps (metric M) resets the
+#: Hessian to ``2M`` ...
+STEP_GROWTH = 4.0
+#: ... and so does one the line search halved more than this many times.
+RESET_HALVINGS = 3
+#: The merit's weight on ``|l_T|``: this many times the multiplier ``|ν|`` (at least).
+MERIT_FACTOR = 2.0
 #: Step halvings of the line search at most.
 MAX_HALVINGS = 12
-
-
-def supports(mechanism) -> bool:
-    """Whether the least-energy stage handles ``mechanism``: a state on SO(3) alone."""
-    return not mechanism.space.k
+#: ``objective="auto"``: the starts of the quick search (the plan's, then the loops of the
+#: first size).
+QUICK_STARTS = 5
+#: ``objective="auto"``: the quick search's budget (seconds of effort).
+QUICK_EFFORT = 0.15
+#: ``objective="auto"``: the fraction of the plan's energy a motion the quick search finds
+#: must need less than to replace it (a plan kept needs at most 2.5 times what it found).
+REPLACE_BELOW = 0.4
+#: The barrier on the clearance from ``Δ = 0`` acts where ``sgnΔ`` is below this.
+BARRIER_DELTA = 0.1
+#: The barrier's weight ``ε`` relative to the energy (:class:`Objective`).
+BARRIER_WEIGHT = 1e-3
+#: Its derivatives are taken with ``r`` at least this (a node on the limit's edge would
+#: make its curvature swamp the model in rounding).
+MIN_BARRIER_R = 1e-4
+#: Loop sizes of the starts, relative to the loop that encloses the goal's offset.
+LOOP_SCALES = (1.0, 0.5, 2.0)
+#: Frequencies (in ``2π/T``) of the first two inputs of the loops of the starts.
+LOOP_FREQUENCIES = ((1, 1), (1, 2), (2, 1))
+#: Seeded random Fourier starts after the deterministic ones.
+RANDOM_STARTS = 4
+RANDOM_SEED = 20240226
 
 
 def energy(ev: Evaluation, metric: np.ndarray) -> float:
@@ -58,100 +126,437 @@ def energy(ev: Evaluation, metric: np.ndarray) -> float:
     return float(np.dot(metric, ev.params ** 2))
 
 
-def sqp_target(ev: Evaluation, inverse_metric: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The least-energy ``λ⁺`` on the linearised endpoint condition, and the multiplier
-    ``ν`` (``Mλ⁺ = Jᵀν``)."""
-    J = ev.J
-    JW = J * inverse_metric
-    rhs = J @ ev.params - ev.l
-    nu = np.linalg.solve(JW @ J.T, rhs)
-    return JW.T @ nu, nu
+def barrier_terms(problem: Evaluator, ev: Evaluation) -> tuple[float, np.ndarray, np.ndarray, np.ndarray]:
+    """The barrier ``Φ = Σ_{n ≥ 1} h ψ(r_n)`` of ``ev``'s nodes on the clearance from
+    ``Δ = 0`` (``r = (sgnΔ − delta_min)/(d₀ − delta_min)``, ``d₀`` = :data:`BARRIER_DELTA`)
+    and on the legs' clearances from their stroke (``r = c/c₀``, ``c₀`` =
+    :data:`~nonholo.model.limits.BARRIER_CLEARANCE`), ``ψ(r) = r − 1 − log r`` below 1 and 0
+    above (zero with its slope at ``r = 1``). Returns ``(Φ, nodes, r, rows)`` with the
+    terms within reach: their nodes, ``r``, and ``dr/ds`` at the node (rows of ``d``)."""
+    mech = problem.mechanism
+    nodes, rs, rows = [], [], []
+    if problem.singular.exists:
+        d = problem.sign * mech.delta_samples(ev.R, ev.q)
+        span = BARRIER_DELTA - problem.delta_min
+        r = (d - problem.delta_min) / span
+        near = np.nonzero(r < 1.0)[0]
+        near = near[near > 0]
+        if near.size:
+            grad = spatial_gradient_delta(mech, ev.R[near], q=ev.q[near])
+            nodes.append(near), rs.append(r[near]), rows.append((problem.sign / span) * grad)
+    if problem.leg_limits is not None:
+        terms = problem.leg_limits.clearance_terms(mech, ev.R, BARRIER_CLEARANCE)
+        if terms is not None:
+            at, c, g = terms
+            keep = at > 0
+            nodes.append(at[keep]), rs.append(c[keep] / BARRIER_CLEARANCE), rows.append(g[keep] / BARRIER_CLEARANCE)
+    if not nodes:
+        empty = np.zeros(0)
+        return 0.0, empty.astype(int), empty, np.zeros((0, mech.n_rates))
+    nodes, r, rows = np.concatenate(nodes), np.maximum(np.concatenate(rs), 1e-300), np.concatenate(rows)
+    return float(problem.h * np.sum(r - 1.0 - np.log(r))), nodes, r, rows
 
 
-def lower(problem: Evaluator, physical, options: Options, grid: int | None = None,
-          deadline: float | None = None) -> tuple[Outcome | None, str]:
-    """Lower the energy of the physical controls ``physical`` (any control of ``problem``'s
-    mechanism that reaches its goal) on ``grid`` intervals (see the module).
+class Objective:
+    """What a run lowers: ``F = E + τΦ``, the energy plus ``τ`` times the barrier
+    (:func:`barrier_terms`), ``τ = ε E/T`` with ``ε`` = :data:`BARRIER_WEIGHT` and ``E`` the
+    run's energy when the iteration set it (the barrier costs at most about ``εE`` of
+    energy). Its gradient and the Gauss–Newton Hessian of the barrier, ``τ h Σ ψ''(r_n)
+    g_n g_nᵀ`` (``g_n = ∂r_n/∂λ``, from the nodes' sensitivities), make the steps of the
+    quadratic model see the limits the motion comes close to."""
 
-    Returns ``(outcome, note)``: a certified success with the cheaper grid controls, or
-    ``None`` with the reason the stage gave up.
-    """
-    started = time.perf_counter()
-    deadline = started + ENERGY_TIME if deadline is None else deadline
-    grid = ENERGY_GRID if grid is None else grid
-    controls = PiecewiseConstant.fit(physical, problem.T, grid, problem.mechanism.n_inputs)
-    metric = controls.metric()
-    inverse = 1.0 / metric
-    ev = problem.evaluate(controls)
-    if not problem.admissible(ev):
-        return None, f"its projection on {grid} intervals is not admissible: {problem.why_not(ev)}"
-    start_energy = energy(ev, metric)
-    history = [record(0, ev, 0.0, "energy", 0, energy=start_energy)]
-    mu = 0.0
-    converged = False
-    for it in range(1, MAX_ITERATIONS + 1):
-        if time.perf_counter() > deadline:
+    def __init__(self, problem: Evaluator, metric: np.ndarray):
+        self.problem, self.metric = problem, metric
+        self.constrained = problem.singular.exists or problem.leg_limits is not None
+        self.tau = 0.0
+
+    def near(self, ev: Evaluation) -> bool:
+        """Whether the barrier may act on the next evaluations (they then keep what its
+        derivatives need)."""
+        if not self.constrained:
+            return False
+        problem = self.problem
+        near_delta = (problem.singular.exists and ev.min_delta is not None
+                      and ev.min_delta < 2.0 * BARRIER_DELTA)
+        near_legs = ev.min_clearance is not None and ev.min_clearance < 2.0 * BARRIER_CLEARANCE
+        return near_delta or near_legs
+
+    def value(self, ev: Evaluation) -> float:
+        E = energy(ev, self.metric)
+        if not self.constrained or self.tau == 0.0:
+            return E
+        return E + self.tau * barrier_terms(self.problem, ev)[0]
+
+    def derivatives(self, ev: Evaluation) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
+        """``(∇E, τ∇Φ, τ∇²Φ)`` at ``ev`` (a full evaluation where :meth:`near`; the last
+        ``None`` where no term is within reach)."""
+        gE = 2.0 * self.metric * ev.params
+        zero = np.zeros_like(gE)
+        if not self.constrained or ev.Z is None:
+            return gE, zero, None
+        _, nodes, r, rows = barrier_terms(self.problem, ev)
+        if not nodes.size:
+            return gE, zero, None
+        at, where = np.unique(nodes, return_inverse=True)
+        s = node_sensitivities(self.problem, ev, at)
+        G = np.einsum("kd,kdp->kp", rows, s[where])           # ∂r_n/∂λ
+        h = self.problem.h * self.tau
+        r = np.maximum(r, MIN_BARRIER_R)
+        return gE, h * (1.0 - 1.0 / r) @ G, (G.T * (h / r ** 2)) @ G
+
+
+@dataclass(eq=False)
+class Run:
+    """One start's SQP iteration: its label, last evaluation, energy, whether it
+    converged (or can make no further step), its history, the merit's weight ``mu``, the
+    quasi-Newton Hessian ``B`` of the Lagrangian, the barrier's weight ``tau`` and the first
+    step of the next line search ``alpha`` (carried from round to round), and the
+    first-order residual ``kkt`` of its last iterate."""
+
+    label: str
+    evaluation: Evaluation
+    energy: float
+    converged: bool = False
+    stuck: bool = False
+    history: list = field(default_factory=list)
+    mu: float = 0.0
+    B: np.ndarray | None = None
+    tau: float | None = None
+    kkt: float = float("inf")
+    alpha: float = 1.0
+
+
+def qp_step(B: np.ndarray, g: np.ndarray, J: np.ndarray, l: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The step ``d`` of the quadratic model ``min gᵀd + ½dᵀBd`` subject to ``l + Jd = 0``
+    and its multiplier ``ν`` (``Bd + g = Jᵀν``); ``B`` positive definite, a matrix or the
+    vector of a diagonal one."""
+    if B.ndim == 1:
+        Hg, HJ = g / B, J.T / B[:, None]
+    else:
+        factor = cho_factor(B)
+        Hg, HJ = cho_solve(factor, g), cho_solve(factor, J.T)
+    nu = np.linalg.lstsq(J @ HJ, J @ Hg - l, rcond=None)[0]
+    return HJ @ nu - Hg, nu
+
+
+def line_search(problem: Evaluator, ev: Evaluation, d: np.ndarray, objective: Objective, mu: float,
+                slope: float, alpha: float = 1.0) -> tuple[Evaluation | None, float, int]:
+    """The step along ``d`` from ``ev`` the merit ``F + μ|l_T|`` accepts (Armijo; ``F`` the
+    :class:`Objective`), halved until the trajectory is admissible and the merit drops; a
+    full step the merit rejects is first retried with a second-order correction (the
+    least-energy ``c`` with ``J c = −l_T`` at the trial point: the merit's non-smooth term
+    would otherwise reject the full steps of the fast local convergence). Returns
+    ``(evaluation, α, rejected)``, the evaluation ``None`` when :data:`MAX_HALVINGS`
+    halvings do not do. ``alpha``: the first step tried (the run's last accepted one,
+    doubled: a run whose model overshoots does not pay the same halvings at every
+    iteration)."""
+    merit0 = objective.value(ev) + mu * ev.error
+    full = objective.near(ev)
+    rejected = 0
+    for _ in range(MAX_HALVINGS):
+        trial = problem.evaluate(ev.params + alpha * d, full=full)
+        if problem.admissible(trial):
+            bound = merit0 + 1e-4 * alpha * min(slope, 0.0)
+            if objective.value(trial) + mu * trial.error <= bound:
+                return trial, alpha, rejected
+            if alpha == 1.0:
+                second = problem.evaluate(trial.params + correction(ev, objective.metric), full=full)
+                if problem.admissible(second) and objective.value(second) + mu * second.error <= bound:
+                    return second, alpha, rejected
+        alpha *= 0.5
+        rejected += 1
+    return None, alpha, rejected
+
+
+def descend(problem: Evaluator, run: Run, options: Options, iterations: int, deadline: float) -> Run:
+    """At most ``iterations`` more SQP iterations of ``run`` (see the module), stopping at
+    convergence, at a step the line search cannot accept, or past ``deadline`` (an
+    :func:`nonholo.numerics.effort.seconds` reading)."""
+    ev = run.evaluation
+    metric = ev.parametrisation.metric()
+    objective = Objective(problem, metric)
+    gn_hessian = 2.0 * metric            # the Gauss–Newton Hessian 2M, diagonal
+    if run.B is None:
+        run.B = gn_hessian
+    it0 = run.history[-1]["iteration"] if run.history else 0
+    for it in range(it0 + 1, it0 + iterations + 1):
+        if run.converged or run.stuck or effort.seconds() > deadline:
             break
-        target, nu = sqp_target(ev, inverse)
-        mu = max(mu, 2.0 * float(np.linalg.norm(nu)))
+        # the iteration's own work (the model, its factorisations, the limits' terms) counts
+        # beside the kernels' steps
+        effort.add(ITERATION_EFFORT * effort.STEPS_PER_SECOND)
+        if objective.near(ev) and ev.Z is None:
+            ev = problem.evaluate(ev.params, full=True)
+        if run.tau is None:
+            run.tau = BARRIER_WEIGHT * max(energy(ev, metric), 1e-12) / problem.T
+        objective.tau = run.tau
+        gE, gB, HB = objective.derivatives(ev)
+        g = gE + gB
+        model = run.B if HB is None else (np.diag(run.B) if run.B.ndim == 1 else run.B) + HB
+        try:
+            d, nu = qp_step(model, g, ev.J, ev.l)
+        except np.linalg.LinAlgError:       # the updates lost definiteness to rounding
+            run.B = gn_hessian
+            d, nu = qp_step(gn_hessian, g, ev.J, ev.l)
+        if run.B.ndim == 2:
+            gn = qp_step(gn_hessian if HB is None else np.diag(gn_hessian) + HB, g, ev.J, ev.l)
+            if np.dot(metric * d, d) > STEP_GROWTH ** 2 * np.dot(metric * gn[0], gn[0]):
+                run.B = gn_hessian
+                d, nu = gn
+        run.mu = max(run.mu, MERIT_FACTOR * float(np.linalg.norm(nu)))
         E0 = energy(ev, metric)
-        merit0 = E0 + mu * ev.error
-        d = target - ev.params
-        # the merit's derivative along d: the energy's, and −|l_T| (d zeroes the linearised l_T)
-        slope = 2.0 * float(np.dot(metric * ev.params, d)) - mu * ev.error
-        alpha, rejected, accepted = 1.0, 0, None
-        for _ in range(MAX_HALVINGS):
-            trial = problem.evaluate(ev.params + alpha * d)
-            if problem.admissible(trial):
-                merit = energy(trial, metric) + mu * trial.error
-                if merit <= merit0 + 1e-4 * alpha * min(slope, 0.0):
-                    accepted = trial
-                    break
-            alpha *= 0.5
-            rejected += 1
+        slope = float(np.dot(g, d)) - run.mu * ev.error
+        accepted, alpha, rejected = line_search(problem, ev, d, objective, run.mu, slope, run.alpha)
         if accepted is None:
+            run.stuck = True
             break
+        run.alpha = min(1.0, 2.0 * alpha)
+        if objective.near(accepted) and accepted.Z is None:
+            accepted = problem.evaluate(accepted.params, full=True)
+        gE1, gB1, _ = objective.derivatives(accepted)
+        g1 = gE1 + gB1
+        if rejected > RESET_HALVINGS:
+            run.B = gn_hessian
+        else:
+            # damped BFGS update of the Hessian of the energy's Lagrangian E − νᵀs_T (Powell);
+            # the barrier's is taken as it is
+            step = accepted.params - ev.params
+            y = (gE1 - accepted.J.T @ nu) - (gE - ev.J.T @ nu)
+            B = np.diag(run.B) if run.B.ndim == 1 else run.B
+            Bs = B @ step
+            sBs, sy = float(step @ Bs), float(step @ y)
+            if sBs > 0.0:
+                if sy < 0.2 * sBs:
+                    theta = 0.8 * sBs / (sBs - sy)
+                    y = theta * y + (1.0 - theta) * Bs
+                    sy = float(step @ y)
+                run.B = B + np.outer(y, y) / sy - np.outer(Bs, Bs) / sBs
         E1 = energy(accepted, metric)
         ev = accepted
-        history.append(record(it, ev, alpha, "energy", rejected, energy=E1))
-        if ev.error <= options.tol and abs(E0 - E1) <= ENERGY_RTOL * E0:
-            converged = True
+        # first-order conditions: the gradient in the row space of J (in the metric M⁻¹)
+        JW = ev.J / metric
+        lam = np.linalg.lstsq(JW @ ev.J.T, JW @ g1, rcond=None)[0]
+        resid = g1 - ev.J.T @ lam
+        run.kkt = float(np.sqrt(np.dot(resid / metric, resid) / max(np.dot(g1 / metric, g1), 1e-300)))
+        run.history.append(record(it, ev, alpha, "energy", rejected, energy=E1, start=run.label))
+        settled = run.kkt <= KKT_RTOL or abs(E0 - E1) <= ENERGY_RTOL * E0
+        if settled and options.tol < ev.error <= NEAR_GOAL:
+            # the energy has settled and the goal is near: Newton steps end on it
+            run.evaluation = ev
+            ev = polish(problem, run, options).evaluation
+        if settled and ev.error <= options.tol:
+            run.converged = True
+    run.evaluation, run.energy = ev, energy(ev, metric)
+    return run
+
+
+def begin(problem: Evaluator, label: str, controls: Controls, options: Options) -> Run | None:
+    """A run from the physical ``controls`` projected on the grid, or ``None`` where that
+    projection's motion is not admissible. A projection that ends near the goal (a plan's)
+    is first brought onto it (:func:`polish`): the iteration then lowers the energy of
+    motions that reach the goal instead of trading the goal for energy."""
+    grid = PiecewiseConstant.fit(controls, problem.T, ENERGY_GRID, problem.mechanism.n_inputs)
+    ev = problem.evaluate(grid)
+    if not problem.admissible(ev):
+        return None
+    E = energy(ev, grid.metric())
+    run = Run(label, ev, E, history=[record(0, ev, 0.0, "energy", 0, energy=E, start=label)])
+    if ev.error <= POLISH_BELOW:
+        polish(problem, run, options)
+    return run
+
+
+def correction(ev: Evaluation, metric: np.ndarray) -> np.ndarray:
+    """The least-energy change ``c`` of the parameters with ``J c = −l_T`` (a Newton step
+    toward the goal)."""
+    JW = ev.J / metric
+    return -JW.T @ np.linalg.lstsq(JW @ ev.J.T, ev.l, rcond=None)[0]
+
+
+def estimate(run: Run) -> float:
+    """The energy ``run`` is heading for: its parameters' after a Newton step to the goal
+    (its energy itself when at the goal)."""
+    ev = run.evaluation
+    metric = ev.parametrisation.metric()
+    return float(np.dot(metric, (ev.params + correction(ev, metric)) ** 2))
+
+
+def polish(problem: Evaluator, run: Run, options: Options, steps: int = 4) -> Run:
+    """Newton steps of least energy toward the goal (:func:`correction`) while they lower
+    ``|l_T|`` and it is above ``tol``: an iteration stopped by its budget close to the goal
+    ends on it."""
+    ev = run.evaluation
+    metric = ev.parametrisation.metric()
+    for _ in range(steps):
+        if ev.error <= options.tol:
             break
-    if ev.error > options.tol:
-        return None, (f"the controls projected on {grid} intervals end {history[0]['error']:.2g} rad from "
-                      f"the goal, and the iteration stopped {ev.error:.2g} rad from it (tol = {options.tol:g})")
-    final_energy = energy(ev, metric)
-    if final_energy > start_energy:
-        return None, "the energy iteration did not lower the energy"
-    how = "converged" if converged else f"stopped after {len(history) - 1} iterations"
-    outcome = Outcome(evaluation=ev, success=True,
-                      reason=f"energy lowered on {grid} intervals from {start_energy:.6g} to "
-                             f"{final_energy:.6g} ({how})",
-                      history=history, iterations=len(history) - 1)
-    outcome = certified(outcome, problem, options)
-    if not outcome.success:
-        return None, outcome.reason
-    return outcome, ""
+        trial = problem.evaluate(ev.params + correction(ev, metric))
+        if not (problem.admissible(trial) and trial.error < ev.error):
+            break
+        ev = trial
+        run.history.append(record(run.history[-1]["iteration"] + 1, ev, 1.0, "energy", 0,
+                                  energy=energy(ev, metric), start=run.label))
+    run.evaluation, run.energy = ev, energy(ev, metric)
+    return run
 
 
-def improve(request, result: PlanResult) -> PlanResult:
-    """``result`` (a certified plan of ``request``) with its energy lowered by :func:`lower`,
-    or as it was with a reason saying why not; ``options`` records the objective."""
-    options = {**result.options, "objective": "energy"}
+def loop_starts(problem: Evaluator):
+    """Labelled physical initial controls of the search: the drift ``ū = G(x₀)^# δ/T``
+    toward the goal (``δ`` the offset of the goal from the start, a least-squares fit of
+    the field at the start) plus loops ``u_i = A sin(k_i ωt ± iπ/2)`` (``ω = 2π/T``) of
+    the frequencies :data:`LOOP_FREQUENCIES` (equal ones reach the first brackets, a 1:2
+    pair the second), in either sense, of the sizes :data:`LOOP_SCALES` times the one whose
+    enclosed area matches ``|δ|``; then :data:`RANDOM_STARTS` seeded random Fourier inputs
+    of that size around the drift. For a mechanism on SO(3) with a desingularised frame
+    these are the frame coordinates ``w`` (``G = N``), played as the physical inputs
+    ``u = W(R) w`` along their motion (:class:`~nonholo.motion.frame_controls.FrameControls`):
+    loops of ``u`` itself would run into ``Δ = 0``, where ``L`` blows up."""
+    mech, T = problem.mechanism, problem.T
+    m = mech.n_inputs
+    in_frame = mech.has_frame and not mech.space.k
+    offset = mech.space.offset(problem.R0, problem.q0, problem.Rd, problem.qd)
+    field = mech.frame.N(problem.R0) if in_frame else mech.G(problem.R0, problem.q0)
+    drift = np.linalg.lstsq(field, offset, rcond=None)[0] / T
+    omega = 2.0 * np.pi / T
+    size = omega * np.sqrt(max(float(np.linalg.norm(offset)), 1e-2) / np.pi)
+
+    def physical(w: Fourier) -> Controls:
+        return FrameControls(w, problem.R0, mech, problem.steps) if in_frame else w
+
+    for scale in LOOP_SCALES:
+        for pair in LOOP_FREQUENCIES:
+            k = np.resize(np.asarray(pair, dtype=float), m)
+            for sense in (1.0, -1.0):
+                shift = 0.5 * np.pi * sense * np.arange(m)
+
+                def loop(t, A=scale * size, k=k, shift=shift):
+                    t = np.asarray(t, dtype=float)
+                    return drift + A * np.sin(omega * k * t[..., None] + shift)
+
+                label = f"loop {scale:g} {pair[0]}:{pair[1]}{'+' if sense > 0 else '-'}"
+                yield label, physical(Fourier.fit(loop, T, int(max(pair)), m))
+    rng = np.random.default_rng(RANDOM_SEED)
+    for j in range(RANDOM_STARTS):
+        K = 1 + j % 3
+        c = rng.standard_normal((m, 2 * K + 1))
+        c *= size / np.sqrt(np.sum(c[:, 0] ** 2) + 0.5 * np.sum(c[:, 1:] ** 2))
+        c[:, 0] += drift
+        yield f"random {j + 1}", physical(Fourier(T, c))
+
+
+def starts(problem: Evaluator, plan: Controls | None):
+    """The starts of the search: the certified plan's physical inputs (when given), then
+    :func:`loop_starts`."""
+    if plan is not None:
+        yield "plan", plan
+    yield from loop_starts(problem)
+
+
+def search(problem: Evaluator, initial, options: Options, budget: float,
+           ceiling: float = math.inf) -> tuple[Outcome | None, str]:
+    """The least-energy certified control of ``problem`` from the labelled physical
+    controls ``initial`` (see the module) within ``budget`` seconds of effort, if its
+    energy is below ``ceiling``: ``(outcome, "")``, or ``(None, why)``.
+
+    Every start is iterated :data:`PROBE_ITERATIONS` times; then, in rounds of as many, the
+    unfinished run heading for the least energy (:func:`estimate`), while it heads below
+    every finished run at the goal and the budget lasts. The runs at the goal (after
+    :func:`polish`), cheapest first, are certified until one is."""
+    deadline = effort.seconds() + budget
+    runs, skipped = [], 0
+    for label, controls in initial:
+        if effort.seconds() > deadline:
+            break
+        run = begin(problem, label, controls, options)
+        if run is None:
+            skipped += 1
+            continue
+        runs.append(descend(problem, run, options, PROBE_ITERATIONS, deadline))
+    while effort.seconds() <= deadline:
+        open_runs = [r for r in runs if not (r.converged or r.stuck) and len(r.history) <= MAX_ITERATIONS]
+        if not open_runs:
+            break
+        heading = [estimate(r) for r in open_runs]
+        k = int(np.argmin(heading))
+        finished = [r.energy for r in runs if r.evaluation.error <= options.tol and r not in open_runs]
+        if finished and heading[k] >= min(finished):
+            break
+        descend(problem, open_runs[k], options, PROBE_ITERATIONS, deadline)
+    near = sorted((r for r in runs if r.evaluation.error <= NEAR_GOAL), key=lambda r: r.energy)
+    why = ""
+    tried = f"{len(runs)} starts" + (f", {skipped} not admissible" if skipped else "")
+    for run in near[:FINALISTS]:
+        if run.energy >= ceiling:
+            why = why or f"the least energy found, {run.energy:.6g}, is not below {ceiling:.6g}"
+            break
+        polish(problem, run, options)
+        if run.evaluation.error > options.tol:
+            why = why or f"the iteration from '{run.label}' ended {run.evaluation.error:.2g} from the goal"
+            continue
+        how = "converged" if run.converged else f"stopped after {run.history[-1]['iteration']} iterations"
+        first = run.history[0]["energy"]
+        outcome = Outcome(evaluation=run.evaluation, success=True,
+                          reason=(f"least energy {run.energy:.6g} on {ENERGY_GRID} intervals, from the "
+                                  f"start '{run.label}' (energy {first:.6g}; {how}; {tried})"),
+                          history=run.history, iterations=len(run.history) - 1)
+        outcome = certified(outcome, problem, options)
+        if outcome.success:
+            return outcome, ""
+        why = outcome.reason
+    if not why:
+        best = min((r.evaluation.error for r in runs), default=float("nan"))
+        why = (f"no start's iteration ended within tol = {options.tol:g} of the goal on "
+               f"{ENERGY_GRID} intervals ({tried}, the closest {best:.2g} from it)")
+    return None, why
+
+
+def improve(request, result: PlanResult, quick: bool = False, budget: float | None = None) -> PlanResult:
+    """``result`` (a certified plan of ``request``) with its energy brought to the least
+    :func:`search` finds (``objective="energy"``), or as it was with a reason saying why not;
+    ``options`` records the objective.
+
+    ``quick`` (``objective="auto"``, the default of :func:`nonholo.plan`): the search from the
+    first :data:`QUICK_STARTS` starts within :data:`QUICK_EFFORT`, and the plan replaced only
+    by a motion needing less than :data:`REPLACE_BELOW` of its energy; otherwise it is
+    returned unchanged."""
+    objective = "auto" if quick else "energy"
+    options = {**result.options, "objective": objective}
     if not result.success:
-        return replace(result, options=options)
-    mech = request.mechanism
+        return result if quick else replace(result, options=options)
     grid = ENERGY_GRID
-    steps = -(-result.steps // grid) * grid
-    problem = Evaluator(request.R0, request.Rd, request.T, mech, "nonparametric", steps,
-                      request.options.delta_min, frame=False, leg_limits=request.leg_limits)
-    outcome, why = lower(problem, result.parametrisation, request.options, grid)
+    steps = -(-request.steps // grid) * grid
+    problem = request.evaluator(method="nonparametric", steps=steps)
+    plan_energy = plan_energy_of(result)
+    initial = starts(problem, result.parametrisation)
+    if quick:
+        initial = itertools.islice(initial, QUICK_STARTS)
+        budget = QUICK_EFFORT if budget is None else budget
+        ceiling = REPLACE_BELOW * plan_energy
+    else:
+        budget = ENERGY_EFFORT if budget is None else budget
+        ceiling = plan_energy
+    outcome, why = search(problem, initial, request.options, budget, ceiling)
     if outcome is None:
+        if quick:
+            return result
         return replace(result, reason=f"{result.reason}; energy not lowered: {why}", options=options)
     outcome = replace(outcome, history=result.history + outcome.history,
                       iterations=result.iterations + outcome.iterations,
-                      reason=f"{result.reason}; {outcome.reason}")
+                      reason=f"{result.reason}; then the plan's energy {plan_energy:.6g} lowered: {outcome.reason}")
     lowered = build_result(replace(request, method="nonparametric", grid=grid, steps=steps), outcome, True,
                            outcome.reason, problem)
-    return replace(lowered, options={**lowered.options, "objective": "energy"}, route=result.route,
+    return replace(lowered, options={**lowered.options, "objective": objective}, route=result.route,
                    stitched=result.hops)
+
+
+def plan_energy_of(result: PlanResult) -> float:
+    """``∫|u|² dt`` of a plan's physical controls: 8-point Gauss–Legendre between the
+    breakpoints (exact for piecewise-polynomial controls of degree up to 7)."""
+    T = result.T
+    x, w = np.polynomial.legendre.leggauss(8)
+    bps = result.breakpoints if result.breakpoints is not None else []
+    b = np.unique(np.concatenate([[0.0, T], np.asarray(bps, dtype=float)]))
+    a, c = b[:-1], b[1:]
+    t = (0.5 * (a + c))[:, None] + (0.5 * (c - a))[:, None] * x[None, :]
+    u = np.asarray(result.controls(t.ravel())).reshape(len(a), len(x), -1)
+    return float(np.sum(0.5 * (c - a)[:, None] * w[None, :] * np.sum(u ** 2, axis=2)))

@@ -28,9 +28,8 @@ from ..model.mechanism import Mechanism
 from ..motion.simulation import DEFAULT_STEPS
 from ..numerics import effort
 from ..numerics.checks import MAX_STEPS, check_count, check_time
-from . import energy
 from .constraints import Clearance, LegSpeed, LegStroke, one_of
-from .core import Options, Strategy
+from .core import Evaluator, Options, Strategy
 from .strategy_paper import PaperStrategy
 from .strategy_robust import RobustStrategy
 
@@ -40,8 +39,10 @@ ROUTES = ("auto", "local", "global")
 #: The most numbers the Fourier basis at the integrator's stages (``3·steps × (2·harmonics + 1)``)
 #: may hold: 2·10⁷ (160 MB); the planner keeps a few arrays of that size.
 MAX_BASIS = 2 * 10**7
-#: What :func:`nonholo.plan` optimises once the goal is reached: nothing, or the energy ∫|u|² dt.
-OBJECTIVES = (None, "energy")
+#: What :func:`nonholo.plan` optimises once the goal is reached: nothing (the plan as found),
+#: the energy ∫|u|² dt, or the plan unless a quick search finds a motion of far less energy
+#: (:func:`nonholo.planning.energy.improve`).
+OBJECTIVES = (None, "energy", "auto")
 #: The strategies :func:`nonholo.plan` knows by name.
 STRATEGIES: dict[str, type[Strategy]] = {"paper": PaperStrategy, "robust": RobustStrategy}
 #: The planning horizon (s) of a plan asked for in the least time (``T=None``): the path is
@@ -204,7 +205,7 @@ class Problem:
         CF4 steps on ``[0, T]``.
     constraints : tuple
         What the motion keeps (:mod:`nonholo.planning.constraints`).
-    objective : {None, "energy"}
+    objective : {None, "energy", "auto"}
         What is lowered once the plan is found.
     route : {"auto", "local", "global"}
         The route (see :func:`nonholo.plan`).
@@ -274,7 +275,7 @@ class Problem:
         if T is None and speed is None:
             raise ValueError("T=None asks for the least time, which needs a leg_speed to bound")
         if not one_of_choices(objective, OBJECTIVES):
-            raise ValueError(f"unknown objective {objective!r}; known: None, 'energy'")
+            raise ValueError(f"unknown objective {objective!r}; known: None, 'energy', 'auto'")
         if not one_of_choices(route, ROUTES):
             raise ValueError(f"unknown route {route!r}; known: {', '.join(ROUTES)}")
         stroke = LegStroke.of(leg_length, mech)
@@ -287,9 +288,6 @@ class Problem:
         grid = check_count(grid, "grid", maximum=MAX_STEPS // 2)     # at most the steps (below)
         R0, q0 = mech.parse_state(R0, "R0")
         Rd, qd = mech.parse_state(Rd, "Rd")
-        if objective is not None and not energy.supports(mech):
-            raise ValueError(f"objective {objective!r} is for mechanisms on SO(3); {mech.name!r} has "
-                             f"the state space {mech.space.name}")
         options = Options(gamma=solver.default_gamma if gamma is None else gamma, step=step, tol=tol,
                           max_iter=max_iter, newton_below=newton_below, min_step=min_step,
                           delta_min=delta_min)
@@ -355,6 +353,28 @@ class Problem:
             least_time=False, started=time.perf_counter(), started_effort=effort.seconds())
 
     # -- what the planner reads ---------------------------------------------------------
+
+    def evaluator(self, frame: bool = False, method: str | None = None, steps: int | None = None) -> Evaluator:
+        """The :class:`~nonholo.planning.core.Evaluator` of this problem: its start, goal,
+        horizon, clearance and stroke.
+
+        Parameters
+        ----------
+        frame : bool
+            Controls in the frame coordinates (else the physical inputs).
+        method : str, optional
+            ``"parametric"`` or ``"nonparametric"`` (default: the problem's).
+        steps : int, optional
+            Integrator steps on ``[0, T]`` (default: the problem's).
+
+        Returns
+        -------
+        Evaluator
+            The evaluator.
+        """
+        return Evaluator(self.R0, self.Rd, self.T, self.mechanism, method or self.method,
+                         self.steps if steps is None else steps, self.options.delta_min, frame=frame,
+                         leg_limits=self.leg_limits, q0=self.q0, qd=self.qd)
 
     @property
     def strategy(self) -> str:

@@ -305,9 +305,7 @@ def smooth(request, stitched: Stitched, strategy: type, deadline: float,
     for guess in smoothing_guesses(stitched, request.method, request.harmonics, request.grid, request.steps):
         if effort.seconds() > deadline:
             return None
-        problem = Evaluator(request.R0, request.Rd, request.T, request.mechanism, request.method, request.steps,
-                          opts.delta_min, frame=frame, leg_limits=request.leg_limits, q0=request.q0,
-                          qd=request.qd)
+        problem = request.evaluator(frame=frame)
         outcome = solver.solve(problem, Start(guess, True), out_of_time)
         if outcome.success and outcome.certificate is None:
             outcome = certified(outcome, problem, opts)

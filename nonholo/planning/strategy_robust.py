@@ -72,7 +72,6 @@ from ..controls.parametrisations import (
 from ..model.limits import BARRIER_CLEARANCE
 from ..motion.simulation import DELTA_STOP, SingularTrajectoryError, simulate
 from ..numerics import kernels
-from ..spaces import so3
 from .certification import certify
 from .certification import note as certificate_note
 from .core import (
@@ -82,7 +81,9 @@ from .core import (
     Start,
     Strategy,
     descend,
+    node_gradient,
     record,
+    spatial_gradient_delta,
     step_scale,
 )
 
@@ -119,34 +120,6 @@ def to_frame(problem: Evaluator, controls: Controls) -> Controls:
     return PiecewiseConstant(problem.T, values)
 
 
-def spatial_gradient_delta(mechanism, R: np.ndarray, eps: float = 1e-6, q=None) -> np.ndarray:
-    """``∇Δ`` at each ``R[n]``: ``Δ(exp([s]) R) = Δ(R) + ∇Δ·s + O(|s|²)`` (central differences
-    of the generated ``Δ``, error ``O(ε²)``), shape ``(n, 3)``; beyond SO(3), at each state
-    ``(R[n], q[n])`` along the stacked variation ``s = (s_R, s_q)``, shape ``(n, d)``."""
-    if not mechanism.space.k:
-        g = np.empty((len(R), 3))
-        for k in range(3):
-            e = np.zeros(3)
-            e[k] = eps
-            g[:, k] = (mechanism.delta_samples(so3.exp(e) @ R)
-                       - mechanism.delta_samples(so3.exp(-e) @ R)) / (2.0 * eps)
-        return g
-    r = 3 if mechanism.space.has_orientation else 0
-    g = np.empty((len(R), mechanism.n_rates))
-    for k in range(mechanism.n_rates):
-        if k < r:
-            e = np.zeros(3)
-            e[k] = eps
-            plus, minus = (mechanism.delta_samples(so3.exp(e) @ R, q),
-                           mechanism.delta_samples(so3.exp(-e) @ R, q))
-        else:
-            dq = np.zeros(mechanism.n_coordinates)
-            dq[k - r] = eps
-            plus, minus = mechanism.delta_samples(R, q + dq), mechanism.delta_samples(R, q - dq)
-        g[:, k] = (plus - minus) / (2.0 * eps)
-    return g
-
-
 def barrier_gradient(problem: Evaluator, ev: Evaluation, d0: float) -> np.ndarray | None:
     """Gradient in ``λ`` of the barrier ``φ = Σ_{n=1..N} h ψ(d_n)``, ``d_n = sgn(Δ(R0)) Δ(R(t_n))``,
     ``ψ(d) = −log(d/d₀)`` for ``d < d₀`` and 0 above, plus the same barrier on the legs'
@@ -162,7 +135,7 @@ def barrier_gradient(problem: Evaluator, ev: Evaluation, d0: float) -> np.ndarra
     """
     if not ev.complete or ev.Z is None:
         return None
-    N, h, m = problem.steps, problem.h, problem.mechanism.n_inputs
+    N, h = problem.steps, problem.h
     D = problem.mechanism.n_rates
     a = np.zeros((N + 1, D))
     any_active = False
@@ -183,27 +156,7 @@ def barrier_gradient(problem: Evaluator, ev: Evaluation, d0: float) -> np.ndarra
             any_active = any_active or bool(keep.any())
     if not any_active:
         return None
-    mu = np.linalg.solve(np.transpose(ev.Z, (0, 2, 1)), a[:, :, None])[:, :, 0]    # a_n Z_n^{-1}
-    nu = np.cumsum(mu[::-1], axis=0)[::-1]                  # Σ_{n ≥ k} μ_n
-    nu = nu[1:]                                              # Σ_{n > k} μ_n, k = 0 … N−1
-    v = np.einsum("ni,ncik->nck", nu, ev.Wd.reshape(N, 3, D, m)).reshape(3 * N, m)
-    return _contract(problem, v)
-
-
-def _contract(problem: Evaluator, v: np.ndarray) -> np.ndarray:
-    """``Σ_r Σ_k v[r, k] ∂U[r, k]/∂λ`` over the stage rows ``r = 3n + c`` (a vector in ``λ``)."""
-    Bidx, Bval, sb, si = problem.stage_basis
-    N, m = problem.steps, v.shape[1]
-    out = np.zeros(problem.n_params)
-    if Bidx.shape[0] == 0:                                  # dense basis
-        G = v.T @ Bval.reshape(3 * N, -1)                    # (m, nb)
-        cols = np.arange(G.shape[1])[None, :] * sb + np.arange(m)[:, None] * si
-        out[cols.ravel()] = G.ravel()
-        return out
-    nq = Bidx.shape[2]
-    cols = Bidx.reshape(3 * N, nq, 1) * sb + np.arange(m)[None, None, :] * si
-    np.add.at(out, cols.ravel(), (Bval.reshape(3 * N, nq, 1) * v[:, None, :]).ravel())
-    return out
+    return node_gradient(problem, ev, a)
 
 
 def _like(controls: Controls, func, T: float, harmonics: int | None = None) -> Controls:

@@ -1,0 +1,396 @@
+"""How close to the least energy the plans are: ``plan(..., objective="energy")`` against
+known optima, against CasADi/IPOPT, and the default ``plan()`` against both.
+
+Run::
+
+    python -m benchmarks.optimality [--quick] [--no-casadi] [--sets attitude,brockett,...]
+
+The sets (each case planned twice: with ``objective="energy"`` and with the defaults):
+
+- ``attitude``: the closed-form sub-Riemannian extremals of the attitude mechanism (body
+  rates about e₁, e₂): ``R(T) = R₀ exp(T[(a, b, c)]) exp(−T[c e₃])``, body rates ``u(t) =
+  (a cos ct − b sin ct, a sin ct + b cos ct)``, energy ``(a² + b²) T``, minimising for
+  ``|(a, b, c)| T ≤ π`` (Boscain & Rossi, SIAM J. Control Optim. 47(4), 2008); ``R₀``
+  uniform, ``(a, b, c)`` uniform in direction with ``|(a, b, c)| T`` uniform in [0.3, π];
+- ``brockett``: ``(0, 0, 0) → (0, 0, a)`` in ``T = 1``; least energy ``2π|a|`` (a circle);
+- ``rolling_ball``: the goal reached when the contact point runs once round a circle of
+  radius ``ρ`` at constant speed (``R₀`` uniform, the circle's phase random); that motion's
+  energy ``(2πρ)²/T`` is an upper bound of the least (the plan must need no more);
+- ``platform`` (near and far bands of ``benchmarks/goals.json``) and ``car`` (near: goals
+  within 1 wheelbase and 1 rad, far: within 3 and π, steering |φ| ≤ 0.5 at both ends):
+  against CasADi/IPOPT's minimum energy with the same clearance from Δ = 0 (the platform:
+  :func:`benchmarks.casadi_ms.solve`, fine setting: 40 intervals, 8 substeps, Δ at the
+  substeps; the car: the same multiple shooting written here for its four coordinates);
+- ``random``: uniform random pairs of every catalog mechanism (same component of
+  ``Δ ≠ 0``, ``|Δ| ≥ 0.1`` at both ends).
+
+Every claimed success is re-simulated by DOP853 (rtol = atol = 1e-13, SciPy; on the
+hand-written models beyond SO(3)): *solved* = final error ≤ 1e-8 and ``sgnΔ ≥ delta_min``
+along the dense path. Energies ``∫|u|² dt`` by Gauss–Legendre quadrature between the
+controls' breakpoints. Times per call, after a warm-up call per mechanism.
+
+Writes ``benchmarks/results/optimality.md`` and ``optimality.json``.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+import time
+
+import numpy as np
+
+from nonholo.certify import resimulate as verify
+from nonholo.controls.parametrisations import Fourier
+from nonholo.model import catalog
+from nonholo.planning import api as planner
+from nonholo.spaces import so3
+
+from . import goalset
+from .limits import controls_energy
+from .report import RESULTS_DIR, Report
+
+DELTA_MIN = 1e-2
+SUCCESS_TOL = 1e-8
+SEED = 20260226
+#: Cases per set (``--quick``: the second number).
+SIZES = {"attitude": (12, 4), "brockett": (8, 3), "rolling_ball": (8, 3), "platform": (8, 2), "car": (6, 2),
+         "random": (4, 1)}
+SETS = tuple(SIZES)
+
+
+def _log(msg: str) -> None:
+    print(f"[optimality] {msg}", file=sys.stderr, flush=True)
+
+
+# --------------------------------------------------------------------------------------
+# The cases: (mechanism, start, goal, T, reference energy or None, label)
+# --------------------------------------------------------------------------------------
+
+def attitude_cases(n: int, rng) -> list[dict]:
+    out = []
+    while len(out) < n:
+        v = rng.normal(size=3)
+        v *= rng.uniform(0.3, np.pi) / np.linalg.norm(v)
+        a, b, c = v
+        if a * a + b * b < 0.05 * float(v @ v):
+            continue
+        R0 = so3.exp(rng.normal(size=3) * 2.0)
+        Rd = R0 @ so3.exp(v) @ so3.exp(np.array([0.0, 0.0, -c]))
+        out.append({"mechanism": "attitude", "start": R0, "goal": Rd, "T": 1.0, "reference": a * a + b * b,
+                    "label": f"|v|T = {np.linalg.norm(v):.3f}", "band": "extremal"})
+    return out
+
+
+def brockett_cases(n: int, rng) -> list[dict]:
+    values = [0.1, -0.5, 1.0, -2.0, 0.3, 1.5, -0.8, 3.0][:n]
+    return [{"mechanism": "brockett", "start": np.zeros(3), "goal": np.array([0.0, 0.0, a]), "T": 1.0,
+             "reference": 2 * np.pi * abs(a), "label": f"a = {a:g}", "band": "circle"} for a in values]
+
+
+def ball_cases(n: int, rng) -> list[dict]:
+    out = []
+    radii = [0.5, 1.0, 0.25, 0.75, 1.25, 0.4, 0.9, 1.5][:n]
+    for rho in radii:
+        T, w, phase = 1.0, 2 * np.pi, rng.uniform(0, 2 * np.pi)
+        sense = rng.choice([-1.0, 1.0])
+        # v(t) = ρω (−sin(ωt + φ), cos(ωt + φ)) (a sense): the contact point runs once round the circle
+        c = np.zeros((2, 3))
+        c[0, 1], c[0, 2] = -rho * w * np.cos(phase), -rho * w * np.sin(phase)
+        c[1, 1], c[1, 2] = -rho * w * np.sin(phase) * sense, rho * w * np.cos(phase) * sense
+        R0 = so3.exp(rng.normal(size=3) * 2.0)
+        start = (R0, np.zeros(2))
+        _, R, q, _ = verify.resimulate_state(start, Fourier(T, c), T, "rolling_ball")
+        out.append({"mechanism": "rolling_ball", "start": start, "goal": (R[-1], q[-1]), "T": T,
+                    "reference": (2 * np.pi * rho) ** 2 / T, "label": f"ρ = {rho:g}", "band": "circle"})
+    return out
+
+
+def platform_cases(n: int, rng) -> list[dict]:
+    out = []
+    for band in ("near", "far"):
+        goals = [g for g in goalset.load_goals() if g["band"] == band]
+        for g in [goals[i] for i in rng.choice(len(goals), size=n, replace=False)]:
+            out.append({"mechanism": "platform", "start": np.array(g["R0"]), "goal": np.array(g["Rd"]),
+                        "T": g["T"], "reference": None, "label": g["id"], "band": band})
+    return out
+
+
+def car_cases(n: int, rng) -> list[dict]:
+    out = []
+    for band, (box, ang) in (("near", (1.0, 1.0)), ("far", (3.0, np.pi))):
+        for _ in range(n):
+            q0 = np.zeros(4)
+            qd = np.array([*rng.uniform(-box, box, 2), rng.uniform(-ang, ang), rng.uniform(-0.5, 0.5)])
+            out.append({"mechanism": "car", "start": q0, "goal": qd, "T": 1.0, "reference": None,
+                        "label": f"({qd[0]:.2f}, {qd[1]:.2f}, {qd[2]:.2f}, {qd[3]:.2f})", "band": band})
+    return out
+
+
+def random_cases(n: int, rng) -> list[dict]:
+    out = []
+    for name in catalog.names():
+        mech = catalog.get(name)
+        while sum(c["mechanism"] == name for c in out) < n:
+            (Ra, qa), (Rb, qb) = mech.space.sample(rng, 2)
+            if mech.singular.exists:
+                da, db = mech.singular.value(Ra, qa), mech.singular.value(Rb, qb)
+                if min(abs(da), abs(db)) < 0.1 or np.sign(da) != np.sign(db):
+                    continue
+            start = Ra if not mech.space.k else (qa if not mech.orientation else (Ra, qa))
+            goal = Rb if not mech.space.k else (qb if not mech.orientation else (Rb, qb))
+            out.append({"mechanism": name, "start": start, "goal": goal, "T": 1.0, "reference": None,
+                        "label": "random", "band": "random"})
+    return out
+
+
+MAKERS = {"attitude": attitude_cases, "brockett": brockett_cases, "rolling_ball": ball_cases,
+          "platform": platform_cases, "car": car_cases, "random": random_cases}
+
+
+# --------------------------------------------------------------------------------------
+# Checks
+# --------------------------------------------------------------------------------------
+
+def check(case: dict, controls, breakpoints, T: float) -> dict:
+    """DOP853 with a dense path: the final error and the least ``sgnΔ`` (``inf`` without a
+    singular set); a failed integration is infinitely far, on ``Δ = 0``."""
+    mech = catalog.get(case["mechanism"])
+    try:
+        if not mech.space.k:
+            _, R, d = verify.resimulate_path(case["start"], controls, T, mech, breakpoints)
+            final = verify.terminal_error(R[-1], case["goal"])
+            least = math.inf if d is None or not mech.singular.exists else float(np.min(np.sign(d[0]) * d))
+        else:
+            _, R, q, d = verify.resimulate_state(case["start"], controls, T, mech.name, breakpoints)
+            Rd, qd = mech.parse_state(case["goal"], "goal")
+            final = max(verify.state_errors(mech.name, R[-1], q[-1], Rd, qd).values())
+            least = math.inf if d is None else float(np.min(np.sign(d[0]) * d))
+    except (RuntimeError, FloatingPointError, ValueError, ZeroDivisionError):
+        return {"final_error": math.inf, "least_delta": 0.0}
+    return {"final_error": float(final), "least_delta": least}
+
+
+def run_plan(case: dict, energy: bool) -> dict:
+    """``plan`` with ``objective="energy"`` or with the defaults (``energy`` false)."""
+    t = time.perf_counter()
+    extra = {"objective": "energy"} if energy else {}
+    res = planner.plan(case["start"], case["goal"], T=case["T"], mechanism=case["mechanism"],
+                       delta_min=DELTA_MIN, **extra)
+    wall = time.perf_counter() - t
+    c = check(case, res.controls, res.breakpoints, res.T) if res.success else None
+    solved = c is not None and c["final_error"] <= SUCCESS_TOL and c["least_delta"] >= DELTA_MIN
+    return {"seconds": wall, "claimed": bool(res.success), "solved": solved,
+            "energy": controls_energy(res.controls, res.breakpoints, res.T) if solved else None,
+            "method": res.method, "reason": res.reason[-240:]}
+
+
+# --------------------------------------------------------------------------------------
+# CasADi: the platform's baseline, and the same multiple shooting for the car
+# --------------------------------------------------------------------------------------
+
+CASADI_FINE = {"N": 40, "substeps": 8, "delta_min": DELTA_MIN, "path_at_substeps": True, "max_iter": 500,
+               "tol": 1e-10}
+
+
+class _PiecewiseControls:
+    """Piecewise-constant controls on the grid ``t_grid`` (a CasADi solution's)."""
+
+    def __init__(self, t_grid, values):
+        self.t_grid, self.values = np.asarray(t_grid, float), np.asarray(values, float)
+
+    def __call__(self, t):
+        t = np.atleast_1d(np.asarray(t, dtype=float))
+        j = np.clip(np.searchsorted(self.t_grid, t, side="right") - 1, 0, len(self.values) - 1)
+        return self.values[j]
+
+
+def casadi_car(q0, qd, T: float, N: int = 40, substeps: int = 8, delta_min: float = DELTA_MIN,
+               max_iter: int = 500, tol: float = 1e-10):
+    """Minimum ``∫|u|² dt`` of the kinematic car (``ẋ = v cos θ``, ``ẏ = v sin θ``, ``θ̇ = v tan φ``,
+    ``φ̇ = u₂``) by multiple shooting with RK4 substeps and ``cos φ ≥ delta_min`` at every
+    substep, solved by IPOPT (exact Hessians); states initialised on the straight line.
+    Returns ``(success, controls, breakpoints, status)``."""
+    import casadi as ca
+
+    opti = ca.Opti()
+    X, U = opti.variable(4, N + 1), opti.variable(2, N)
+    h = T / N / substeps
+
+    def f(x, u):
+        return ca.vertcat(u[0] * ca.cos(x[2]), u[0] * ca.sin(x[2]), u[0] * ca.tan(x[3]), u[1])
+
+    for k in range(N):
+        x = X[:, k]
+        for _ in range(substeps):
+            k1 = f(x, U[:, k])
+            k2 = f(x + h / 2 * k1, U[:, k])
+            k3 = f(x + h / 2 * k2, U[:, k])
+            k4 = f(x + h * k3, U[:, k])
+            x = x + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
+            opti.subject_to(ca.cos(x[3]) >= delta_min)
+        opti.subject_to(X[:, k + 1] == x)
+    opti.subject_to(X[:, 0] == np.asarray(q0, float))
+    opti.subject_to(X[:, N] == np.asarray(qd, float))
+    opti.minimize(T / N * ca.sumsqr(U))
+    s = np.linspace(0, 1, N + 1)
+    opti.set_initial(X, np.outer(np.asarray(q0, float), 1 - s) + np.outer(np.asarray(qd, float), s))
+    opti.set_initial(U, np.vstack([np.full(N, np.hypot(qd[0] - q0[0], qd[1] - q0[1]) / T), np.zeros(N)]))
+    opti.solver("ipopt", {"print_time": False}, {"print_level": 0, "max_iter": max_iter, "tol": tol,
+                                                 "sb": "yes"})
+    grid = np.linspace(0.0, T, N + 1)
+    try:
+        sol = opti.solve()
+        return True, _PiecewiseControls(grid, np.asarray(sol.value(U)).T), grid, "Solve_Succeeded"
+    except RuntimeError as exc:
+        return False, None, grid, str(exc)[-120:]
+
+
+def run_casadi(case: dict) -> dict:
+    t = time.perf_counter()
+    if case["mechanism"] == "platform":
+        from . import casadi_ms
+
+        res = casadi_ms.solve(case["start"], case["goal"], T=case["T"], **CASADI_FINE)
+        ok, controls, bps, status = bool(res.success), res.controls, res.t_grid, res.status
+    else:
+        kw = {k: v for k, v in CASADI_FINE.items() if k != "path_at_substeps"}
+        ok, controls, bps, status = casadi_car(case["start"], case["goal"], case["T"], **kw)
+    wall = time.perf_counter() - t
+    c = check(case, controls, bps, case["T"]) if ok else None
+    solved = c is not None and c["final_error"] <= SUCCESS_TOL and c["least_delta"] >= DELTA_MIN
+    return {"seconds": wall, "claimed": ok, "solved": solved,
+            "energy": controls_energy(controls, bps, case["T"]) if solved else None, "reason": status}
+
+
+# --------------------------------------------------------------------------------------
+# The run and the report
+# --------------------------------------------------------------------------------------
+
+def _stats(xs) -> str:
+    xs = [x for x in xs if x is not None and math.isfinite(x)]
+    if not xs:
+        return "–"
+    return f"{np.median(xs):.4f} / {max(xs):.4f}"
+
+
+def _ms(xs) -> str:
+    return "–" if not xs else f"{1e3 * float(np.median(xs)):.0f}"
+
+
+def main(argv=None) -> int:
+    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    p.add_argument("--quick", action="store_true", help="a few cases per set")
+    p.add_argument("--no-casadi", action="store_true", help="skip the CasADi baselines")
+    p.add_argument("--sets", default=",".join(SETS), help=f"comma-separated, of {', '.join(SETS)}")
+    args = p.parse_args(argv)
+    sets = [s for s in args.sets.split(",") if s]
+    unknown = [s for s in sets if s not in SETS]
+    if unknown:
+        p.error(f"unknown set(s) {unknown}; known: {', '.join(SETS)}")
+    rng = np.random.default_rng(SEED)
+    cases = []
+    for name in SETS:                       # every set drawn, so that a subset keeps its cases
+        made = MAKERS[name](SIZES[name][1 if args.quick else 0], rng)
+        if name in sets:
+            cases += [{**c, "set": name} for c in made]
+    warmed = set()
+    records = []
+    for i, case in enumerate(cases):
+        peer = case["set"] in ("platform", "car") and not args.no_casadi
+        if case["mechanism"] not in warmed:
+            run_plan(case, True)
+            run_plan(case, False)
+            if peer:
+                run_casadi(case)
+            warmed.add(case["mechanism"])
+        rec = {k: case[k] for k in ("set", "mechanism", "band", "label", "reference", "T")}
+        rec["energy"] = run_plan(case, True)
+        rec["default"] = run_plan(case, False)
+        if peer:
+            rec["casadi"] = run_casadi(case)
+        records.append(rec)
+        e, d = rec["energy"]["energy"], rec["default"]["energy"]
+        _log(f"{i + 1}/{len(cases)} {case['set']} {case['mechanism']} {case['label']}: energy {e} "
+             f"({rec['energy']['seconds']:.2f} s), default {d}, reference {case['reference']}"
+             + (f", casadi {rec['casadi']['energy']}" if "casadi" in rec else ""))
+    report(records, argv, args)
+    return 0
+
+
+def report(records: list[dict], argv, args) -> None:
+    rep = Report("optimality.md", "Least-energy plans against known optima and CasADi", "benchmarks.optimality",
+                 argv, extra_packages=("casadi",))
+    rep.paragraph(
+        "Each case planned by `plan(start, goal, T, delta_min=0.01, objective=\"energy\")` (*energy*) and by "
+        "`plan(start, goal, T, delta_min=0.01)` (*default*), timed per call after a warm-up call per mechanism. "
+        f"Every claimed success re-simulated by DOP853 (rtol = atol = 1e-13): *solved* = final error ≤ "
+        f"{SUCCESS_TOL:g} and sgnΔ ≥ {DELTA_MIN:g} along the dense path. Energy ∫|u|² dt by quadrature of the "
+        "returned controls. Ratios: median / max. The sets: see the module docstring "
+        "(`benchmarks/optimality.py`).")
+    rep.heading("Against the known optima")
+    rows = []
+    for name, what in (("attitude", "closed-form extremal (a² + b²)T"), ("brockett", "circle 2π|a|"),
+                       ("rolling_ball", "circle of the contact point (2πρ)²/T, an upper bound")):
+        rs = [r for r in records if r["set"] == name]
+        if not rs:
+            continue
+        ok = [r for r in rs if r["energy"]["solved"]]
+        rows.append([name, what, len(rs), len(ok),
+                     _stats([r["energy"]["energy"] / r["reference"] for r in ok]),
+                     _ms([r["energy"]["seconds"] for r in rs]),
+                     sum(r["default"]["solved"] for r in rs),
+                     _stats([r["default"]["energy"] / r["reference"] for r in rs if r["default"]["solved"]])])
+    if rows:
+        rep.table(["set", "reference", "cases", "energy solved", "energy / reference", "energy median ms",
+                   "default solved", "default / reference"], rows, align="llrrrrrr")
+    peers = [r for r in records if "casadi" in r]
+    if peers:
+        rep.heading("Against CasADi/IPOPT (the same clearance from Δ = 0)")
+        rows = []
+        for mech in ("platform", "car"):
+            for band in ("near", "far"):
+                rs = [r for r in peers if r["mechanism"] == mech and r["band"] == band]
+                if not rs:
+                    continue
+                both = [r for r in rs if r["energy"]["solved"] and r["casadi"]["solved"]]
+                t_ours = [r["energy"]["seconds"] for r in rs]
+                t_peer = [r["casadi"]["seconds"] for r in rs]
+                rows.append([mech, band, len(rs), sum(r["energy"]["solved"] for r in rs),
+                             sum(r["casadi"]["solved"] for r in rs),
+                             sum(r["casadi"]["claimed"] and not r["casadi"]["solved"] for r in rs),
+                             _stats([r["energy"]["energy"] / r["casadi"]["energy"] for r in both]),
+                             _ms(t_ours), _ms(t_peer),
+                             f"{np.median(t_peer) / np.median(t_ours):.1f}×"])
+        rep.table(["mechanism", "band", "cases", "energy solved", "casadi solved", "casadi false claims",
+                   "energy / casadi", "energy median ms", "casadi median ms", "time ratio"], rows,
+                  align="llrrrrrrrr")
+    rep.heading("The default plan against the least-energy plan")
+    rows = []
+    for name in SETS:
+        for mech in sorted({r["mechanism"] for r in records if r["set"] == name}):
+            rs = [r for r in records if r["set"] == name and r["mechanism"] == mech]
+            both = [r for r in rs if r["energy"]["solved"] and r["default"]["solved"]]
+            ratios = [r["default"]["energy"] / r["energy"]["energy"] for r in both]
+            rows.append([name, mech, len(rs), sum(r["default"]["solved"] for r in rs),
+                         sum(r["energy"]["solved"] for r in rs), _stats(ratios),
+                         sum(x > 3.0 for x in ratios),
+                         _ms([r["default"]["seconds"] for r in rs]), _ms([r["energy"]["seconds"] for r in rs])])
+    rep.table(["set", "mechanism", "cases", "default solved", "energy solved", "default / energy",
+               "above 3×", "default median ms", "energy median ms"], rows, align="llrrrrrrr")
+    false = [(r, k) for r in records for k in ("energy", "default") if r[k]["claimed"] and not r[k]["solved"]]
+    rep.paragraph(f"False claims (a claimed success DOP853 does not confirm): {len(false)}.")
+    missed = [r for r in records if not r["energy"]["solved"] or not r["default"]["solved"]]
+    if missed:
+        rep.heading("Cases not solved")
+        rep.table(["set", "mechanism", "case", "energy", "default"],
+                  [[r["set"], r["mechanism"], r["label"], r["energy"]["reason"][-120:] if not r["energy"]["solved"]
+                    else "solved", r["default"]["reason"][-120:] if not r["default"]["solved"] else "solved"]
+                   for r in missed], align="lllll")
+    rep.write()
+    (RESULTS_DIR / "optimality.json").write_text(json.dumps({"records": records}, indent=1, default=float))
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
