@@ -7,6 +7,7 @@ docstring convention, a gallery copy that is not current).
 """
 from __future__ import annotations
 
+import shutil
 import sys
 from pathlib import Path
 
@@ -42,6 +43,9 @@ exclude_patterns = ["_build", "ext", "**.ipynb_checkpoints", "jupyter_execute"]
 templates_path = ["_templates"]
 
 # -- the API reference: one page per public module, class and function ----------------------
+# autosummary writes its pages into api/generated/ and keeps pages of names that are gone:
+# every build starts without them, so a removed function leaves no page that fails to import
+shutil.rmtree(Path(__file__).resolve().parent / "api" / "generated", ignore_errors=True)
 autosummary_generate = True
 autosummary_imported_members = False
 autosummary_ignore_module_all = True

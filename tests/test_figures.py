@@ -285,15 +285,15 @@ def car_plan():
 
 def symbolic_input_units(name):
     """Each input's unit from the symbolic field: the unit of the first coordinate whose
-    rate it drives (``X[i, j] ≠ 0``), per second; ``1/s`` if it drives none or that
-    coordinate is a pure number."""
+    rate it drives (``X[i, j] ≠ 0``), per second (none shown where that coordinate has no
+    unit given); ``1/s`` if it drives none."""
     from derivations import definitions
 
     m = definitions.MECHANISMS[name]()
     out = []
     for j in range(len(m.inputs)):
         rows = [i for i in range(len(m.coordinates)) if m.X is not None and m.X[i, j] != 0]
-        out.append(f"{m.units[rows[0]]}/s" if rows and m.units[rows[0]] else "1/s")
+        out.append(("" if not m.units[rows[0]] else f"{m.units[rows[0]]}/s") if rows else "1/s")
     return tuple(out)
 
 

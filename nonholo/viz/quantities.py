@@ -90,7 +90,7 @@ def input_units(mechanism) -> tuple[str, ...]:
             units.append("1/s")
             continue
         unit = coordinate_units(mechanism)[moved[0]]
-        units.append(f"{unit}/s" if unit else "1/s")        # a number per second
+        units.append(f"{unit}/s" if unit else "")
     return tuple(units)
 
 
