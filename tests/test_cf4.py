@@ -141,3 +141,14 @@ def test_kernels_against_dop853_on_the_generated_field(name, frame):
     assert np.abs(Qs[-1] - q_T).max(initial=0.0) < 1e-10
     assert np.abs(J - J_ref).max() < 1e-10 * max(1.0, np.abs(J_ref).max())
     assert np.abs(M - M_ref).max() < 1e-10 * max(1.0, np.abs(M_ref).max())
+
+
+def test_the_certificate_replay_passes_no_dense_basis_without_stage_weights():
+    """``certificate.sensitivity`` asks for no Jacobian: its basis must not read as a dense
+    one (``Bidx`` of zero rows, ``Bval`` of ``steps`` rows), whose contraction reads
+    ``3·steps`` rows of ``Wd`` — out of bounds of the empty ``Wd`` it passes."""
+    from nonholo.certify import certificate
+
+    steps = 8
+    Bidx, Bval, _, _ = certificate.no_basis(steps)
+    assert not (Bidx.shape[0] == 0 and Bval.shape[0] == steps)

@@ -201,7 +201,7 @@ def sensitivity(R0, par, T: float, mechanism, steps: int, U=None, sign: float | 
     Zs = np.empty((steps + 1, d, d))
     n, _, _ = kern.forward_variational(
         R, q, np.ascontiguousarray(U), T / steps, sign, 0.0,
-        _NO_INDEX, np.zeros((steps, 3, 0)), 0, 0, Rs, Qs, Zs, np.empty((d, 0)),
+        *no_basis(steps), Rs, Qs, Zs, np.empty((d, 0)),
         np.empty((d, d)), np.empty((0, d * m)), True)
     if n < steps:
         return float("inf"), None
@@ -290,7 +290,12 @@ def resolved_sensitivity(R0, par, T: float, mechanism, steps: int, U=None, sign:
         k *= 2
 
 
-_NO_INDEX = np.zeros((0, 3, 0), np.int64)
+def no_basis(steps: int) -> tuple:
+    """An empty *sparse* stage basis of ``steps`` steps for the variational kernel (no
+    Jacobian): ``Bidx`` of shape ``(steps, 3, 0)``. (An index of zero rows with ``Bval`` of
+    ``steps`` rows would be read as a dense basis, whose contraction reads ``3·steps`` rows
+    of the stage weights ``Wd``, of which an empty ``Wd`` has none.)"""
+    return np.zeros((steps, 3, 0), np.int64), np.zeros((steps, 3, 0)), 0, 0
 
 
 def measure(R0, Rd, T: float, mechanism, par, steps: int, tol: float, delta_min: float,
