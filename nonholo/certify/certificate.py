@@ -294,7 +294,18 @@ def no_basis(steps: int) -> tuple:
     """An empty *sparse* stage basis of ``steps`` steps for the variational kernel (no
     Jacobian): ``Bidx`` of shape ``(steps, 3, 0)``. (An index of zero rows with ``Bval`` of
     ``steps`` rows would be read as a dense basis, whose contraction reads ``3·steps`` rows
-    of the stage weights ``Wd``, of which an empty ``Wd`` has none.)"""
+    of the stage weights ``Wd``, of which an empty ``Wd`` has none.)
+
+    Parameters
+    ----------
+    steps : int
+        The integrator steps.
+
+    Returns
+    -------
+    tuple
+        ``(Bidx, Bval, 0, 0)``, the basis arguments of ``forward_variational``.
+    """
     return np.zeros((steps, 3, 0), np.int64), np.zeros((steps, 3, 0)), 0, 0
 
 
