@@ -35,11 +35,11 @@ CASES = [
     ("plan(harmonics=10000, steps=20000)", "refused", "harmonics",
      "out = nonholo.plan(R0, Rd, harmonics=10000, steps=20000)"),
     ("plan(method='nonparametric', grid=10**6, steps=10**6, mechanism='car')", "refused", "grid",
-     "out = nonholo.plan([0, 0, 0, 0], [0, 1, 0, 0], method='nonparametric', grid=10**6, steps=10**6, "
-     "mechanism='car')"),
+     ("out = nonholo.plan([0, 0, 0, 0], [0, 1, 0, 0], method='nonparametric', grid=10**6, steps=10**6, "
+      "mechanism='car')")),
     ("plan(method='nonparametric', grid=10**6, steps=10**6, mechanism='rolling_ball')", "refused", "grid",
-     "out = nonholo.plan((np.eye(3), [0, 0]), (np.eye(3), [0, 1]), method='nonparametric', grid=10**6, "
-     "steps=10**6, mechanism='rolling_ball')"),
+     ("out = nonholo.plan((np.eye(3), [0, 0]), (np.eye(3), [0, 1]), method='nonparametric', grid=10**6, "
+      "steps=10**6, mechanism='rolling_ball')")),
     ("car goal at x = 1e15", "failed result", "",
      "out = nonholo.plan([0, 0, 0, 0], [1e15, 0, 0, 0], mechanism='car')"),
     ("ball goal at p = (1e15, 0)", "failed result", "",
@@ -49,13 +49,13 @@ CASES = [
     ("Mechanism.from_symbolic('platform')", "refused", "mechanism",
      "out = nonholo.Mechanism.from_symbolic('platform')"),
     ("sweep(rows, out, client='tcp://x')", "refused", "client",
-     "from nonholo.batch.sweep import sweep\n"
-     "out = sweep([{'start': R0.tolist(), 'goal': Rd.tolist()}], tmp + '/r.parquet', client='tcp://x')"),
+     ("from nonholo.batch.sweep import sweep\n"
+      "out = sweep([{'start': R0.tolist(), 'goal': Rd.tolist()}], tmp + '/r.parquet', client='tcp://x')")),
     ("sweep(None, out)", "refused", "problems",
      "from nonholo.batch.sweep import sweep\nout = sweep(None, tmp + '/r.parquet')"),
     ("sweep(rows, an existing folder)", "refused", "out",
-     "from nonholo.batch.sweep import sweep\n"
-     "out = sweep([{'start': R0.tolist(), 'goal': Rd.tolist()}], tmp)"),
+     ("from nonholo.batch.sweep import sweep\n"
+      "out = sweep([{'start': R0.tolist(), 'goal': Rd.tolist()}], tmp)")),
     ("mechanism.L(np.eye(2))", "refused", "R",
      "out = nonholo.mechanism_named('platform').L(np.eye(2))"),
     ("mechanism.L(a NaN matrix)", "refused", "R",

@@ -5,7 +5,6 @@ results: each ends with every row exactly once, equal to an uninterrupted run's,
 clear refusal; no worker outlives its sweep.
 
 The problems are the car's (they plan in a fraction of a second each)."""
-import contextlib
 import fcntl
 import json
 import os
@@ -17,9 +16,10 @@ import time
 import warnings
 
 import numpy as np
-import pyarrow.parquet as pq
 import pytest
 
+from benchmarks.sweep_faults import processes_naming
+from benchmarks.sweep_faults import survivors as gone
 from nonholo.batch import sweep
 from nonholo.io import problems
 
@@ -43,34 +43,6 @@ def reference(tmp_path_factory):
 
 def command(path, out, *flags):
     return [sys.executable, "-m", "nonholo.cli", "sweep", str(path), "--out", str(out), "--quiet", *flags]
-
-
-def processes_naming(text):
-    """The pids of the processes (but this one) whose command line holds ``text``: a sweep's
-    parent and its forked workers hold the output's path."""
-    found = []
-    for d in os.listdir("/proc"):
-        if d.isdigit() and int(d) != os.getpid():
-            try:
-                with open(f"/proc/{d}/cmdline", "rb") as f:
-                    if text.encode() in f.read():
-                        found.append(int(d))
-            except OSError:
-                pass
-    return found
-
-
-def gone(text, within=5.0):
-    """The processes naming ``text`` still there after ``within`` seconds (killed then, so
-    that a failing test leaves none behind)."""
-    deadline = time.monotonic() + within
-    while processes_naming(text) and time.monotonic() < deadline:
-        time.sleep(0.05)
-    left = processes_naming(text)
-    for pid in left:
-        with contextlib.suppress(OSError):
-            os.kill(pid, signal.SIGKILL)
-    return left
 
 
 def assert_complete(out, reference_table):
