@@ -46,7 +46,14 @@ def Q_matrix(mechanism: Mechanism, G: sp.Matrix | None = None,
         d = sum(sp.diff(e, r[i, j]) * dR[i, j] for i in range(3) for j in range(3))
         d += sum(sp.diff(e, x) * s[k0 + c] for c, x in enumerate(mechanism.coordinates))
         rows.append(sp.expand(d))
-    return sp.Matrix(rows).jacobian(s).applyfunc(sp.simplify)
+    return sp.Matrix(rows).jacobian(s).applyfunc(simplified)
+
+
+def simplified(e: sp.Expr) -> sp.Expr:
+    """``sp.simplify(e)`` where ``e`` is a sum; a single term of the expanded derivative is
+    kept as it is, since ``simplify`` costs a second on its first call (it imports
+    ``sympy.physics``) and a mechanism of one's own is derived on every first run."""
+    return sp.simplify(e) if isinstance(e, sp.Add) else e
 
 
 def A_matrix(mechanism: Mechanism, u: sp.Matrix | None = None) -> sp.Matrix:

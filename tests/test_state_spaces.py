@@ -239,6 +239,14 @@ def test_state_space_derivation_is_shared():
     assert sp.simplify(A[:3, :3] - hat(ball.Omega * u)) == sp.zeros(3, 3)
 
 
+def test_only_sums_are_simplified():
+    """The variational matrix simplifies a sum (sin² + cos² → 1) and keeps a single term."""
+    x, u = sp.symbols("x u", real=True)
+    assert state_space.simplified(u * sp.sin(x) ** 2 + u * sp.cos(x) ** 2) == u
+    term = u * sp.cos(x - 1)
+    assert state_space.simplified(term) is term
+
+
 def test_figures_draw_the_plans(tmp_path):
     import matplotlib
     matplotlib.use("Agg")
