@@ -71,7 +71,6 @@ NOT_YET_NUMPYDOC = [
     r"^nonholo\.numerics\.kernels\.",
     r"^nonholo\.paper\.reproduce\.",
     r"^nonholo\.planning\.certification\.",
-    r"^nonholo\.planning\.constraints\.",
     r"^nonholo\.planning\.core\.",
     r"^nonholo\.planning\.energy\.",
     r"^nonholo\.planning\.roadmap\.",
