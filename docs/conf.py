@@ -62,21 +62,14 @@ numpydoc_validation_checks = {"GL08", "PR01", "PR02", "RT01", "YD01"}
 # Modules whose docstrings are not yet in the convention's sections; every other public
 # object is checked (numpydoc's checks above and the Raises check of docs/ext/reference.py).
 NOT_YET_NUMPYDOC = [
-    r"^nonholo\.certify\.plan_fields\.",
-    r"^nonholo\.cli\.plan_command\.",
     r"^nonholo\.integrate\.cf4\.",
     r"^nonholo\.integrate\.native_kernels\.",
     r"^nonholo\.numerics\.c_translation\.",
-    r"^nonholo\.numerics\.effort\.",
     r"^nonholo\.numerics\.kernels\.",
     r"^nonholo\.paper\.reproduce\.",
-    r"^nonholo\.planning\.certification\.",
-    r"^nonholo\.planning\.core\.",
     r"^nonholo\.planning\.energy\.",
     r"^nonholo\.planning\.roadmap\.",
     r"^nonholo\.planning\.route\.",
-    r"^nonholo\.planning\.state_path\.",
-    r"^nonholo\.planning\.strategy_paper\.",
     r"^nonholo\.planning\.strategy_robust\.",
 ]
 # NotebookFigure is matplotlib's Figure: its parameters and the set() matplotlib writes for
