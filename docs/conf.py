@@ -68,9 +68,7 @@ NOT_YET_NUMPYDOC = [
     r"^nonholo\.numerics\.kernels\.",
     r"^nonholo\.paper\.reproduce\.",
     r"^nonholo\.planning\.energy\.",
-    r"^nonholo\.planning\.roadmap\.",
     r"^nonholo\.planning\.route\.",
-    r"^nonholo\.planning\.strategy_robust\.",
 ]
 # NotebookFigure is matplotlib's Figure: its parameters and the set() matplotlib writes for
 # every subclass are matplotlib's, documented there
