@@ -67,7 +67,6 @@ NOT_YET_NUMPYDOC = [
     r"^nonholo\.numerics\.c_translation\.",
     r"^nonholo\.numerics\.kernels\.",
     r"^nonholo\.paper\.reproduce\.",
-    r"^nonholo\.planning\.energy\.",
 ]
 # NotebookFigure is matplotlib's Figure: its parameters and the set() matplotlib writes for
 # every subclass are matplotlib's, documented there
