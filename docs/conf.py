@@ -66,7 +66,6 @@ NOT_YET_NUMPYDOC = [
     r"^nonholo\.integrate\.native_kernels\.",
     r"^nonholo\.numerics\.c_translation\.",
     r"^nonholo\.numerics\.kernels\.",
-    r"^nonholo\.paper\.reproduce\.",
 ]
 # NotebookFigure is matplotlib's Figure: its parameters and the set() matplotlib writes for
 # every subclass are matplotlib's, documented there
