@@ -210,7 +210,9 @@ class Objective:
         self.tau = 0.0
 
     def near(self, ev: Evaluation) -> bool:
-        """Whether the barrier may act on the next evaluations (they then keep what its derivatives need).
+        """Whether the barrier may act on the next evaluations.
+
+        They then keep what its derivatives need.
 
         Parameters
         ----------
@@ -546,7 +548,7 @@ def begin(problem: Evaluator, label: str, controls: Controls, options: Options) 
 
 
 def correction(ev: Evaluation, metric: np.ndarray) -> np.ndarray:
-    """The least-energy change ``c`` of the parameters with ``J c = −l_T`` (a Newton step toward the goal).
+    """The least-energy parameter change ``c`` with ``J c = −l_T`` (a Newton step to the goal).
 
     Parameters
     ----------

@@ -186,7 +186,9 @@ class RoadmapPaths:
         self.mechanism = mechanism
 
     def paths(self, start, goal, delta_min: float, leg_limits):
-        """The paths :func:`steer` tries in turn: the roadmap's of every cost of :data:`nonholo.planning.roadmap.CONDITIONING_POWERS`.
+        """The paths :func:`steer` tries in turn: the roadmap's, one per cost.
+
+        The costs are those of :data:`nonholo.planning.roadmap.CONDITIONING_POWERS`, in order.
 
         Parameters
         ----------
