@@ -59,30 +59,10 @@ numpydoc_show_class_members = False
 numpydoc_class_members_toctree = False
 numpydoc_xref_param_type = False
 numpydoc_validation_checks = {"GL08", "PR01", "PR02", "RT01", "YD01"}
-# Modules whose docstrings are not yet in the convention's sections; every other public
-# object is checked (numpydoc's checks above and the Raises check of docs/ext/reference.py).
-NOT_YET_NUMPYDOC = [
-    r"^nonholo\.certify\.plan_fields\.",
-    r"^nonholo\.cli\.plan_command\.",
-    r"^nonholo\.integrate\.cf4\.",
-    r"^nonholo\.integrate\.native_kernels\.",
-    r"^nonholo\.numerics\.c_translation\.",
-    r"^nonholo\.numerics\.effort\.",
-    r"^nonholo\.numerics\.kernels\.",
-    r"^nonholo\.paper\.reproduce\.",
-    r"^nonholo\.planning\.certification\.",
-    r"^nonholo\.planning\.constraints\.",
-    r"^nonholo\.planning\.core\.",
-    r"^nonholo\.planning\.energy\.",
-    r"^nonholo\.planning\.roadmap\.",
-    r"^nonholo\.planning\.route\.",
-    r"^nonholo\.planning\.state_path\.",
-    r"^nonholo\.planning\.strategy_paper\.",
-    r"^nonholo\.planning\.strategy_robust\.",
-]
-# NotebookFigure is matplotlib's Figure: its parameters and the set() matplotlib writes for
-# every subclass are matplotlib's, documented there
-numpydoc_validation_exclude = set(NOT_YET_NUMPYDOC) | {r"^nonholo\.viz\.style\.NotebookFigure(\.|$)"}
+# Every public object is checked (numpydoc's checks above and the Raises check of
+# docs/ext/reference.py) but NotebookFigure, which is matplotlib's Figure: its parameters
+# and the set() matplotlib writes for every subclass are matplotlib's, documented there
+numpydoc_validation_exclude = {r"^nonholo\.viz\.style\.NotebookFigure(\.|$)"}
 
 nitpicky = True
 nitpick_ignore_regex = [

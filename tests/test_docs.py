@@ -1,15 +1,24 @@
-"""The documentation site: the gallery's staleness check, the ``Raises`` check, and the
-build itself (``sphinx-build -W``) with every internal link of the built site resolved."""
+"""The documentation site: the gallery's staleness check, the ``Raises`` check, the build
+itself (``sphinx-build -W``) with every internal link of the built site resolved, and the
+landing page opened in a headless Chromium (when there is one)."""
 from __future__ import annotations
 
+import functools
 import html.parser
+import http.server
 import importlib.util
 import os
+import shutil
+import struct
 import subprocess
 import sys
+import threading
+import urllib.error
+import urllib.request
 from pathlib import Path
-from urllib.parse import unquote, urlsplit
+from urllib.parse import unquote, urljoin, urlsplit
 
+import numpy as np
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -144,15 +153,22 @@ class Links(html.parser.HTMLParser):
                 self.links.append(attrs[key])
 
 
-def test_the_site_builds_without_warnings_and_its_internal_links_resolve(tmp_path):
+@pytest.fixture(scope="module")
+def site(tmp_path_factory) -> Path:
+    """The site built once for the tests of this module (the build is the slow part): its
+    ``html`` folder."""
     pytest.importorskip("sphinx")
     pytest.importorskip("myst_nb")
-    out = tmp_path / "html"
+    out = tmp_path_factory.mktemp("site") / "html"
     env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")]))
     run = subprocess.run([sys.executable, "-m", "sphinx", "-W", "--keep-going", "-q", "-j", "auto", "-b", "html",
-                          str(ROOT / "docs"), str(out)], cwd=ROOT, env=env, capture_output=True, text=True)
+                          str(ROOT / "docs"), str(out)], check=False, cwd=ROOT, env=env, capture_output=True, text=True)
     assert run.returncode == 0, run.stderr[-6000:]
+    return out
 
+
+def test_the_site_builds_without_warnings_and_its_internal_links_resolve(site):
+    out = site
     pages = {p: Links() for p in out.rglob("*.html") if "_static" not in p.relative_to(out).parts}
     for path, parser in pages.items():
         parser.feed(path.read_text(encoding="utf-8"))
@@ -189,3 +205,156 @@ def test_the_site_builds_without_warnings_and_its_internal_links_resolve(tmp_pat
     plan = (out / "api" / "generated" / "nonholo.planning.api.plan.html").read_text(encoding="utf-8")
     for section in ("Parameters", "Returns", "Raises"):
         assert section in plan
+
+
+# -- the landing page in a real browser --------------------------------------------------------
+
+#: Chromium, if installed (Debian's package, else one on the PATH).
+CHROMIUM = next((c for c in ("/usr/bin/chromium", shutil.which("chromium"), shutil.which("chromium-browser"))
+                 if c and os.path.exists(c)), None)
+#: Headless, offline, nothing of a user's profile (root needs ``--no-sandbox``).
+CHROMIUM_FLAGS = ("--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
+                  "--disable-background-networking", "--disable-component-update", "--disable-sync",
+                  "--hide-scrollbars", "--window-size=1280,1400")
+#: The landing page's figure and the top-level entries of its navigation.
+LANDING_FIGURE = "example3_overview.png"
+NAVIGATION = ("guide/index.html", "gallery/index.html", "api/index.html", "benchmarks/index.html")
+PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
+
+
+class Served(http.server.SimpleHTTPRequestHandler):
+    """A static file server of the built site that keeps every request's path and status."""
+
+    requests: list
+
+    def log_request(self, code="-", size="-"):
+        self.requests.append((urlsplit(self.path).path, int(code) if isinstance(code, int) else code))
+
+    def log_message(self, format, *args):
+        pass
+
+
+class Server(http.server.ThreadingHTTPServer):
+    """The local server; a browser that exits before reading a reply (its favicon's) is no error."""
+
+    daemon_threads = True
+
+    def handle_error(self, request, client_address):
+        if not isinstance(sys.exc_info()[1], ConnectionError):
+            super().handle_error(request, client_address)
+
+
+class Rendered(html.parser.HTMLParser):
+    """What a rendered page holds: its images, and its links (in or out of a ``<nav>``)."""
+
+    def __init__(self):
+        super().__init__()
+        self.images, self.links, self.nav_links = [], [], []
+        self.nav_depth = 0
+
+    def handle_starttag(self, tag, attrs):
+        attrs = dict(attrs)
+        if tag == "nav":
+            self.nav_depth += 1
+        if tag == "img" and attrs.get("src"):
+            self.images.append(attrs["src"])
+        for key in ("href", "src"):
+            if attrs.get(key) and not (tag == "link" and attrs.get("rel") == "preload"):
+                self.links.append(attrs[key])
+        if tag == "a" and attrs.get("href") and self.nav_depth:
+            self.nav_links.append(attrs["href"])
+
+    def handle_endtag(self, tag):
+        if tag == "nav" and self.nav_depth:
+            self.nav_depth -= 1
+
+
+def chromium(tmp_path: Path, name: str, *args: str) -> subprocess.CompletedProcess:
+    """Chromium headless with a new empty profile ``tmp_path / name``."""
+    profile = tmp_path / name
+    profile.mkdir()
+    run = subprocess.run([CHROMIUM, *CHROMIUM_FLAGS, f"--user-data-dir={profile}", *args],
+                         check=False, capture_output=True, text=True, timeout=60)
+    assert run.returncode == 0, run.stderr[-3000:]
+    return run
+
+
+def fetch(url: str) -> tuple[int, bytes]:
+    """``(status, body)`` of a GET from the local server."""
+    try:
+        with urllib.request.urlopen(url, timeout=10) as response:
+            return response.status, response.read()
+    except urllib.error.HTTPError as exc:
+        return exc.code, b""
+
+
+def png_size(data: bytes) -> tuple[int, int]:
+    """A PNG's width and height from its header (``(0, 0)`` if it is not a PNG)."""
+    if not (data.startswith(PNG_SIGNATURE) and data[12:16] == b"IHDR"):
+        return 0, 0
+    return struct.unpack(">II", data[16:24])
+
+
+def read_png(path: Path) -> np.ndarray:
+    """A PNG's pixels, by Pillow if installed, else by matplotlib."""
+    try:
+        from PIL import Image
+    except ImportError:
+        import matplotlib.image
+
+        return np.asarray(matplotlib.image.imread(path))
+    with Image.open(path) as image:
+        return np.asarray(image.convert("RGB"))
+
+
+@pytest.mark.skipif(CHROMIUM is None, reason="no Chromium (/usr/bin/chromium, or chromium on the PATH): "
+                                             "the landing page is not opened in a browser")
+def test_the_landing_page_in_a_headless_browser_shows_the_figure_and_the_navigation(site, tmp_path):
+    requests: list = []
+    handler = functools.partial(type("Site", (Served,), {"requests": requests}), directory=str(site))
+    server = Server(("127.0.0.1", 0), handler)
+    thread = threading.Thread(target=server.serve_forever, daemon=True)
+    thread.start()
+    try:
+        base = f"http://127.0.0.1:{server.server_address[1]}/"
+        landing = base + "index.html"
+        dom = chromium(tmp_path, "dom", "--dump-dom", landing).stdout
+        shot = tmp_path / "landing.png"
+        chromium(tmp_path, "shot", f"--screenshot={shot}", landing)
+
+        page = Rendered()
+        page.feed(dom)
+        # the figure: in the rendered DOM, served, a PNG of a non-zero size
+        figures = [urljoin(landing, src) for src in page.images if src.endswith(LANDING_FIGURE)]
+        assert figures, f"no <img> of {LANDING_FIGURE} in the rendered landing page"
+        status, data = fetch(figures[0])
+        assert status == 200, (figures[0], status)
+        width, height = png_size(data)
+        assert width > 0 and height > 0, f"{figures[0]} is not a PNG of a non-zero size"
+        assert (urlsplit(figures[0]).path, 200) in requests, "the browser did not load the figure"
+        # the navigation: the toctree's top entries, as links in a <nav> of the rendered page
+        nav = {urlsplit(urljoin(landing, href)).path for href in page.nav_links}
+        missing = [p for p in NAVIGATION if urlsplit(urljoin(base, p)).path not in nav]
+        assert not missing, f"the navigation lacks {missing} (has {sorted(nav)})"
+        # every internal link of the rendered page answers 200
+        internal = set()
+        for link in page.links:
+            url = urljoin(landing, link)
+            if url.startswith(base):
+                internal.add(url.split("#", 1)[0])
+        broken = [(url, status) for url in sorted(internal) if (status := fetch(url)[0]) != 200]
+        assert not broken, broken
+        # what the browser itself asked for while rendering was served (but the favicon it
+        # asks for unasked)
+        failed = [(p, c) for p, c in requests if c != 200 and p != "/favicon.ico"]
+        assert not failed, failed
+    finally:
+        server.shutdown()
+        server.server_close()
+        thread.join(5)
+
+    # the screenshot shows something: not one colour
+    pixels = read_png(shot)
+    assert pixels.ndim == 3 and pixels.shape[0] > 0 and pixels.shape[1] > 0
+    flat = pixels.reshape(-1, pixels.shape[2])
+    assert (flat != flat[0]).any(), "the screenshot of the landing page is blank (one colour)"

@@ -42,12 +42,36 @@ ROTATION_TOL = 1e-9
 
 
 def fail(field: str, message: str):
-    """Raise the ``ValueError`` of a bad plan field."""
+    """Raise the ``ValueError`` of a bad plan field.
+
+    Parameters
+    ----------
+    field : str
+        The field's name.
+    message : str
+        What is wrong with it.
+
+    Raises
+    ------
+    ValueError
+        Always: ``invalid plan: '<field>' <message>``.
+    """
     raise ValueError(f"invalid plan: {field!r} {message}")
 
 
 def short(x) -> str:
-    """``repr(x)``, cut to 60 characters."""
+    """``repr(x)``, cut to 60 characters.
+
+    Parameters
+    ----------
+    x : object
+        Any value.
+
+    Returns
+    -------
+    str
+        Its ``repr``, at most 60 characters.
+    """
     try:
         text = repr(x)
     except ValueError:             # an integer too long to print
@@ -56,7 +80,18 @@ def short(x) -> str:
 
 
 def json_type(x) -> str:
-    """What ``x`` is, in JSON's words (for messages)."""
+    """What ``x`` is, in JSON's words (for messages).
+
+    Parameters
+    ----------
+    x : object
+        A value decoded from JSON.
+
+    Returns
+    -------
+    str
+        ``null``, ``true``/``false``, ``an object``, ``an array``, the string or the number.
+    """
     if x is None:
         return "null"
     if isinstance(x, bool):
@@ -71,7 +106,29 @@ def json_type(x) -> str:
 
 
 def string_field(d: dict, key: str, empty: bool = False, where: str = "") -> str:
-    """``d[key]``, a (non-empty unless ``empty``) string."""
+    """``d[key]``, a (non-empty unless ``empty``) string.
+
+    Parameters
+    ----------
+    d : dict
+        The plan's (or a part's) fields.
+    key : str
+        The field.
+    empty : bool, default False
+        Whether the empty string is accepted.
+    where : str, default ""
+        A prefix of the field's name in messages (``"controls."``).
+
+    Returns
+    -------
+    str
+        The value.
+
+    Raises
+    ------
+    ValueError
+        If the value is not such a string.
+    """
     v = d[key]
     if not isinstance(v, str) or (not v and not empty):
         fail(where + key, f"must be a {'' if empty else 'non-empty '}string, got {json_type(v)}")
@@ -79,7 +136,29 @@ def string_field(d: dict, key: str, empty: bool = False, where: str = "") -> str
 
 
 def number_field(d: dict, key: str, null: bool = False, where: str = "") -> float | None:
-    """``d[key]``, a finite number (or ``None`` if ``null``), as a float."""
+    """``d[key]``, a finite number (or ``None`` if ``null``), as a float.
+
+    Parameters
+    ----------
+    d : dict
+        The plan's (or a part's) fields.
+    key : str
+        The field.
+    null : bool, default False
+        Whether ``None`` is accepted.
+    where : str, default ""
+        A prefix of the field's name in messages.
+
+    Returns
+    -------
+    float or None
+        The value.
+
+    Raises
+    ------
+    ValueError
+        If the value is not a finite number (nor an accepted ``None``).
+    """
     v = d[key]
     if v is None and null:
         return None
@@ -95,7 +174,29 @@ def number_field(d: dict, key: str, null: bool = False, where: str = "") -> floa
 
 
 def integer_field(d: dict, key: str, minimum: int, where: str = "") -> int:
-    """``d[key]``, an integer ``>= minimum`` (``steps``: at most ``MAX_STEPS``)."""
+    """``d[key]``, an integer ``>= minimum`` (``steps``: at most ``MAX_STEPS``).
+
+    Parameters
+    ----------
+    d : dict
+        The plan's (or a part's) fields.
+    key : str
+        The field.
+    minimum : int
+        The least value accepted.
+    where : str, default ""
+        A prefix of the field's name in messages.
+
+    Returns
+    -------
+    int
+        The value.
+
+    Raises
+    ------
+    ValueError
+        If the value is not such an integer.
+    """
     v = d[key]
     if not isinstance(v, (int, np.integer)) or isinstance(v, (bool, np.bool_)) or v < minimum:
         fail(where + key, f"must be an integer >= {minimum}, got {json_type(v)}")
@@ -105,7 +206,20 @@ def integer_field(d: dict, key: str, minimum: int, where: str = "") -> int:
 
 
 def rotation_field(R, field: str) -> None:
-    """``R`` is a rotation within :data:`ROTATION_TOL`."""
+    """Check that ``R`` is a rotation within :data:`ROTATION_TOL`.
+
+    Parameters
+    ----------
+    R : array_like
+        The field's value, a 3×3 matrix.
+    field : str
+        The field's name, for the message.
+
+    Raises
+    ------
+    ValueError
+        If ``R`` is not such a rotation.
+    """
     try:
         so3.check_rotation(R, repr(field), ROTATION_TOL)
     except ValueError as exc:
@@ -113,7 +227,20 @@ def rotation_field(R, field: str) -> None:
 
 
 def scan_finite(value, field: str) -> None:
-    """Every number inside the JSON value ``value`` is finite (iteratively: no recursion)."""
+    """Check that every number inside a JSON value is finite (iteratively: no recursion).
+
+    Parameters
+    ----------
+    value : object
+        A value decoded from JSON.
+    field : str
+        The field's name, for the message.
+
+    Raises
+    ------
+    ValueError
+        If a number inside is not finite.
+    """
     stack = [value]
     while stack:
         x = stack.pop()
@@ -126,10 +253,25 @@ def scan_finite(value, field: str) -> None:
 
 
 def check_options(options, mechanism) -> None:
-    """``options``, a plan's record of the options it was planned with, holds every option
-    of :data:`OPTION_RULES` with a value :func:`nonholo.plan` accepts (checked by its own
-    rules), and otherwise only ``leg_length``, ``leg_speed`` (as ``plan()`` checks them for
-    ``mechanism``) and ``objective``: a missing option is refused, never taken as unchecked."""
+    """Check a plan's record of the options it was planned with.
+
+    It holds every option of :data:`OPTION_RULES` with a value :func:`nonholo.plan` accepts
+    (checked by its own rules), and otherwise only ``leg_length``, ``leg_speed`` (as
+    ``plan()`` checks them for ``mechanism``) and ``objective``: a missing option is
+    refused, never taken as unchecked.
+
+    Parameters
+    ----------
+    options : dict
+        The plan's ``options`` field.
+    mechanism : Mechanism
+        The mechanism planned.
+
+    Raises
+    ------
+    ValueError
+        If an option is missing, unknown or has a bad value.
+    """
     if not isinstance(options, dict):
         fail("options", f"must be an object, got {json_type(options)}")
     missing = [k for k in OPTION_RULES if k not in options]

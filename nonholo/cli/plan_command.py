@@ -47,7 +47,18 @@ EXIT_SUCCESS, EXIT_FAILED, EXIT_BAD_INPUT, EXIT_WRITE_FAILED = 0, 1, 2, 3
 
 
 def add_parser(subparsers) -> argparse.ArgumentParser:
-    """Add the ``plan`` sub-command to an ``argparse`` sub-parsers object."""
+    """Add the ``plan`` sub-command to an ``argparse`` sub-parsers object.
+
+    Parameters
+    ----------
+    subparsers : argparse._SubParsersAction
+        What ``ArgumentParser.add_subparsers`` returned.
+
+    Returns
+    -------
+    argparse.ArgumentParser
+        The sub-command's parser (it runs :func:`run`).
+    """
     p = subparsers.add_parser(
         "plan", help="plan a motion R0 -> Rd (Jacobian algorithm of Tchoń & Jakubiak)",
         description=plain(__doc__), formatter_class=argparse.RawDescriptionHelpFormatter)
@@ -130,6 +141,7 @@ def _say(text: str) -> None:
 
 
 def discard_stdout() -> None:
+    """Send all later output to stdout, and what is still buffered, to the null device."""
     # the descriptor itself is redirected: what is still buffered, and the flush at exit,
     # then go to the null device too (no "Exception ignored ... BrokenPipeError")
     try:
@@ -169,8 +181,27 @@ def _plot_format_error(path) -> str | None:
 
 
 def state_of(mechanism, values, flag: str):
-    """The state ``values`` (numbers given to ``flag``) of ``mechanism`` as :func:`nonholo.plan`
-    takes it (see the module): ``ValueError`` naming ``flag`` and what it needs otherwise."""
+    """The state given on the command line, as :func:`nonholo.plan` takes it (see the module).
+
+    Parameters
+    ----------
+    mechanism : str
+        The mechanism's name in the catalog.
+    values : sequence of float
+        The numbers given to ``flag``.
+    flag : str
+        The option (``--from``, ``--to``), for the message.
+
+    Returns
+    -------
+    object
+        The state: a rotation matrix, or the mechanism's state beyond SO(3).
+
+    Raises
+    ------
+    ValueError
+        Naming ``flag`` and the numbers it takes, if there are not as many values.
+    """
     space = catalog.get(mechanism).space
     names = space.cli_names
     if len(values) != len(names):
@@ -180,7 +211,18 @@ def state_of(mechanism, values, flag: str):
 
 
 def run(args) -> int:
-    """Run the ``plan`` sub-command for parsed ``args``; returns the exit status."""
+    """Run the ``plan`` sub-command.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed command line.
+
+    Returns
+    -------
+    int
+        The exit status (see the module).
+    """
     why = _plot_format_error(args.plot) if args.plot else None
     if why is None and args.csv:
         try:
@@ -242,13 +284,30 @@ def run(args) -> int:
 
 
 def plot(res, path, argument: str = "--plot") -> None:
-    """The figure of a :class:`~nonholo.io.result.PlanResult`
-    (:func:`nonholo.viz.plan_summary.plan_figure`: inputs, orientation, coordinates, ``Δ``,
-    legs against time; a vehicle's path on the plane), written to ``path`` by
-    :func:`nonholo.io.safe_write.write_bytes` in the format of its extension (matplotlib's
-    default format without one; the name is kept as given): a path that is not a regular
-    file, a character device or a FIFO is refused with a ``ValueError`` naming
-    ``argument`` before the figure is drawn."""
+    """Write the figure of a :class:`~nonholo.io.result.PlanResult` to a file.
+
+    The figure is :func:`nonholo.viz.plan_summary.plan_figure`'s (inputs, orientation,
+    coordinates, ``Δ``, legs against time; a vehicle's path on the plane), written by
+    :func:`nonholo.io.safe_write.write_bytes` in the format of the path's extension
+    (matplotlib's default format without one; the name is kept as given).
+
+    Parameters
+    ----------
+    res : PlanResult
+        The plan.
+    path : str or pathlib.Path
+        The file.
+    argument : str, default "--plot"
+        The option named in messages.
+
+    Raises
+    ------
+    ValueError
+        Naming ``argument``, before the figure is drawn, if ``path`` is not a regular file,
+        a character device or a FIFO.
+    OSError
+        If the file cannot be written.
+    """
     safe_write.check_target(path, argument)
     import io
 

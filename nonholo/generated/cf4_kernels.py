@@ -7,13 +7,32 @@ file differs from a fresh generation.
 
 
 def forward(R0, q0, U, h, sgn, delta_stop, Rs, Qs):
-    """CF4 over ``N = len(U)`` steps from ``(R0, q0)``; ``Rs[n]``, ``Qs[n]`` = the state at
-    ``t_n`` (shapes ``(N+1, 3, 3)``, ``(N+1, k)``).
+    """CF4 over ``N = len(U)`` steps from ``(R0, q0)``.
 
-    Returns ``(n_done, min sgnΔ, t_stop)``: the number of completed steps (``N`` unless the
-    trajectory reached ``sgnΔ < delta_stop`` or a non-finite rate), the least ``sgnΔ`` over
-    all evaluation points of the completed steps, and the stage time where it stopped
-    (``-1`` if it did not).
+    Parameters
+    ----------
+    R0, q0 : numpy.ndarray
+        The start.
+    U : numpy.ndarray
+        The stage table, ``(N, 3, m)``.
+    h : float
+        The step.
+    sgn : float
+        The sign of ``Δ`` at the start.
+    delta_stop : float
+        Stop where ``sgnΔ`` falls below this.
+    Rs, Qs : numpy.ndarray
+        The output: the state at every ``t_n``, shapes ``(N+1, 3, 3)``, ``(N+1, k)``.
+
+    Returns
+    -------
+    n_done : int
+        The number of completed steps (``N`` unless the trajectory reached ``sgnΔ <
+        delta_stop`` or a non-finite rate).
+    dmin : float
+        The least ``sgnΔ`` over all evaluation points of the completed steps.
+    t_stop : float
+        The stage time where it stopped (``-1`` if it did not).
     """
     N = U.shape[0]
     m = U.shape[2]
@@ -133,6 +152,44 @@ def forward_variational(R0, q0, U, h, sgn, delta_stop, Bidx, Bval, stride_b, str
     so ``∫_0^T Z B v dt ≈ Σ W_c v(t_n + c h)`` for any ``v`` — or ``(0, d·m)``. Returns what
     :func:`forward` returns; ``J``, ``Mq``, ``Wd`` and ``Zs[N]`` are valid only if the run
     completed (NaN where ``Z(T)`` is singular or not finite: the motion blew up).
+
+    Parameters
+    ----------
+    R0, q0 : numpy.ndarray
+        The start.
+    U : numpy.ndarray
+        The stage table, ``(N, 3, m)``.
+    h : float
+        The step.
+    sgn : float
+        The sign of ``Δ`` at the start.
+    delta_stop : float
+        Stop where ``sgnΔ`` falls below this.
+    Bidx, Bval : numpy.ndarray
+        The stage basis' indices and values.
+    stride_b, stride_i : int
+        The stage basis' strides.
+    Rs, Qs : numpy.ndarray
+        The nodes (output).
+    Zs : numpy.ndarray
+        ``Z(t_n)`` (output).
+    J : numpy.ndarray
+        ``∂s_T/∂λ`` (output), d × p.
+    Mq : numpy.ndarray
+        ``M(T)`` (output), d×d.
+    Wd : numpy.ndarray
+        The stage weights (output), ``(3N, d·m)`` or ``(0, d·m)``.
+    full : bool
+        Whether to keep ``Z(t_n)`` at every node and ``M(T)``.
+
+    Returns
+    -------
+    n_done : int
+        The number of completed steps.
+    dmin : float
+        The least ``sgnΔ`` over all evaluation points of the completed steps.
+    t_stop : float
+        The stage time where it stopped (``-1`` if it did not).
     """
     N = U.shape[0]
     m = U.shape[2]
@@ -394,8 +451,24 @@ def frame_inputs(nodes, qnodes, idx, s, Wst, w_end, Rout, Qout, out):
     qnodes)`` advanced by one CF4 step (:func:`cf4_step`) of length ``s[k]`` (none if
     ``s[k] == 0``) with frame inputs ``Wst[k, 0]``, ``Wst[k, 1]``, ``Wst[k, 2]`` at its start,
     middle and end — the same local approximation as a step of the integrator, ``O(s⁵)``
-    from the exact motion. Outputs ``Rout[k]``, ``Qout[k]`` (the state at ``t_k``) and
-    ``out[k] = W(R(t_k), q(t_k)) w_end[k]``.
+    from the exact motion.
+
+    Parameters
+    ----------
+    nodes, qnodes : numpy.ndarray
+        The CF4 trajectory's nodes.
+    idx : numpy.ndarray
+        The node of every sample.
+    s : numpy.ndarray
+        The partial step from it, every sample.
+    Wst : numpy.ndarray
+        The frame inputs at the partial step's start, middle and end, ``(n, 3, m)``.
+    w_end : numpy.ndarray
+        The frame inputs at the samples, ``(n, m)``.
+    Rout, Qout : numpy.ndarray
+        The state at every ``t_k`` (output).
+    out : numpy.ndarray
+        ``out[k] = W(R(t_k), q(t_k)) w_end[k]`` (output).
     """
     n_t = idx.shape[0]
     m = Wst.shape[2]

@@ -104,20 +104,72 @@ from .native_kernels import kernel_source, native_kernels
 
 
 def _placeholder(*args):
+    """A name the kernels call, bound per system by :func:`compile_system` (see the module).
+
+    Parameters
+    ----------
+    *args : object
+        The arguments of the function bound in its place.
+
+    Raises
+    ------
+    NotImplementedError
+        Always: the name is not bound.
+    """
     raise NotImplementedError("placeholder: bound per system by nonholo.integrate.cf4.compile_system")
 
 
 #: ``field_into(R, q, out)``: ``out = G(R, q)`` (d×m), the mechanism's generated ``G_into``
 #: or, for the frame system, ``N_into``.
+#:
+#: Parameters
+#: ----------
+#: *args : object
+#:     ``(R, q, out)``: the state and the output, d×m.
+#:
+#: Raises
+#: ------
+#: NotImplementedError
+#:     Until :func:`compile_system` binds the name (see the module).
 field_into = _placeholder
 #: ``field_derivative_into(R, q, v, out)``: ``out = QG(R, q, v)`` (d×d) with
 #: ``d/dε G(exp(ε[s_R]) R, q + ε s_q) v = QG s``: the generated ``QG_into`` (eq. (12) on
 #: SO(3)) or ``QN_into``.
+#:
+#: Parameters
+#: ----------
+#: *args : object
+#:     ``(R, q, v, out)``: the state, the inputs and the output, d×d.
+#:
+#: Raises
+#: ------
+#: NotImplementedError
+#:     Until :func:`compile_system` binds the name (see the module).
 field_derivative_into = _placeholder
 #: ``delta(R, q)``: the mechanism's singularity function (``+inf`` without one).
+#:
+#: Parameters
+#: ----------
+#: *args : object
+#:     ``(R, q)``: the state; it returns ``Δ(R, q)``.
+#:
+#: Raises
+#: ------
+#: NotImplementedError
+#:     Until :func:`compile_system` binds the name (see the module).
 delta = _placeholder
 #: ``W_into(R, q, out)``: ``out = W(R, q)`` (m×m), physical inputs ``u = W w`` of frame
 #: coordinates ``w`` (frame system only).
+#:
+#: Parameters
+#: ----------
+#: *args : object
+#:     ``(R, q, out)``: the state and the output, m×m.
+#:
+#: Raises
+#: ------
+#: NotImplementedError
+#:     Until :func:`compile_system` binds the name (see the module).
 W_into = _placeholder
 #: Whether the state has an orientation ``R``; the dimension ``d`` of a variation; the row
 #: of the first coordinate rate in ``G`` (3 with orientation, else 0).
@@ -127,12 +179,40 @@ OFFSET = 3
 
 
 def no_singularity(R, q):
-    """``Δ ≡ +inf``: the singularity function of a mechanism without a singular set."""
+    """``Δ ≡ +inf``: the singularity function of a mechanism without a singular set.
+
+    Parameters
+    ----------
+    R : numpy.ndarray
+        The orientation.
+    q : numpy.ndarray
+        The coordinates.
+
+    Returns
+    -------
+    float
+        ``inf``.
+    """
     return np.inf
 
 
 def rates(B, v, out):
-    """``out = B v`` (d×m times m); ``False`` if not finite."""
+    """``out = B v`` (d×m times m).
+
+    Parameters
+    ----------
+    B : numpy.ndarray
+        The field, d×m.
+    v : numpy.ndarray
+        The inputs, m entries.
+    out : numpy.ndarray
+        The output, d entries.
+
+    Returns
+    -------
+    bool
+        ``False`` if a rate is not finite.
+    """
     m = B.shape[1]
     ok = True
     for i in range(D):
@@ -145,17 +225,62 @@ def rates(B, v, out):
 
 
 def advance(q, a, f, out):
-    """``out = q + a ḟ`` for the coordinates, ``ḟ = f[OFFSET:]`` the coordinate rates of a
-    stage's stacked rates ``f``."""
+    """``out = q + a ḟ`` for the coordinates, ``ḟ = f[OFFSET:]`` the coordinate rates of a stage.
+
+    Parameters
+    ----------
+    q : numpy.ndarray
+        The coordinates, k entries.
+    a : float
+        The step.
+    f : numpy.ndarray
+        The stage's stacked rates, d entries.
+    out : numpy.ndarray
+        The output, k entries.
+    """
     for i in range(q.shape[0]):
         out[i] = q[i] + a * f[OFFSET + i]
 
 
 def cf4_stage(ax, ay, az, base, Y, P, v, sgn, delta_stop, dmin, B, F, E):
-    """One stage of :func:`cf4_step`: the stage orientation ``Y = exp([a]) base`` (with
-    ``ROTATION``; the coordinates ``P`` are filled by the caller), its ``sgnΔ`` (lowering
-    ``dmin``), the field ``B = G(Y, P)`` and the rates ``F = B v``. Returns ``(ok, dmin)``:
-    ``ok`` is false where ``sgnΔ < delta_stop`` (or is NaN) or a rate is not finite."""
+    """One stage of :func:`cf4_step`.
+
+    The stage orientation ``Y = exp([a]) base`` (with ``ROTATION``; the coordinates ``P``
+    are filled by the caller), its ``sgnΔ`` (lowering ``dmin``), the field ``B = G(Y, P)``
+    and the rates ``F = B v``.
+
+    Parameters
+    ----------
+    ax, ay, az : float
+        The rotation vector ``a``.
+    base : numpy.ndarray
+        The orientation the stage starts from.
+    Y : numpy.ndarray
+        The stage orientation (output).
+    P : numpy.ndarray
+        The stage coordinates.
+    v : numpy.ndarray
+        The inputs.
+    sgn : float
+        The sign of ``Δ`` at the start.
+    delta_stop : float
+        The least ``sgnΔ`` accepted.
+    dmin : float
+        The least ``sgnΔ`` so far.
+    B : numpy.ndarray
+        The field (output), d×m.
+    F : numpy.ndarray
+        The rates (output), d entries.
+    E : numpy.ndarray
+        Scratch, 3×3.
+
+    Returns
+    -------
+    ok : bool
+        False where ``sgnΔ < delta_stop`` (or is NaN) or a rate is not finite.
+    dmin : float
+        ``dmin`` lowered to the stage's ``sgnΔ``.
+    """
     ok = False
     if ROTATION:
         exp_times(ax, ay, az, base, E, Y)
@@ -169,9 +294,23 @@ def cf4_stage(ax, ay, az, base, Y, P, v, sgn, delta_stop, dmin, B, F, E):
 
 @jit
 def cf4_close(F1, F2, F3, F4, h12, R, E, Rh, Rn):
-    """CF4's two closing exponentials: ``Rn = exp(h/12 (−ω1 + 2ω2 + 2ω3 + 3ω4)) exp(h/12 (3ω1
-    + 2ω2 + 2ω3 − ω4)) R`` from the stage rates ``F1 … F4`` (``ω_i``: the first three
-    entries of each; ``h12 = h/12``; ``E``, ``Rh``: scratch)."""
+    """CF4's two closing exponentials, from the stage rates ``F1 … F4``.
+
+    ``Rn = exp(h/12 (−ω1 + 2ω2 + 2ω3 + 3ω4)) exp(h/12 (3ω1 + 2ω2 + 2ω3 − ω4)) R``.
+
+    Parameters
+    ----------
+    F1, F2, F3, F4 : numpy.ndarray
+        The stage rates (``ω_i``: the first three entries of each).
+    h12 : float
+        ``h/12``.
+    R : numpy.ndarray
+        The orientation at the start of the step.
+    E, Rh : numpy.ndarray
+        Scratch, 3×3.
+    Rn : numpy.ndarray
+        The output, 3×3.
+    """
     exp_times(h12 * (3.0 * F1[0] + 2.0 * F2[0] + 2.0 * F3[0] - F4[0]),
               h12 * (3.0 * F1[1] + 2.0 * F2[1] + 2.0 * F3[1] - F4[1]),
               h12 * (3.0 * F1[2] + 2.0 * F2[2] + 2.0 * F3[2] - F4[2]), R, E, Rh)
@@ -184,15 +323,47 @@ def cf4_step(R, q, Rn, qn, v0, v1, v2, h, sgn, delta_stop, dmin, Y2, Y3, Y4, P2,
              B1, B2, B3, B4, F1, F2, F3, F4):
     """One CF4 step of length ``h`` from ``(R, q)`` into ``(Rn, qn)`` (see the module docstring).
 
-    ``v0``, ``v1``, ``v2``: the inputs at the start, middle and end of the step. Fills the
-    stage points ``(Y_i, P_i)``, the fields ``B_i = G(Y_i, P_i)`` (``(Y1, P1) = (R, q)``) and
-    the stacked rates ``F_i = B_i v`` (``Rh``, ``E``: scratch). Returns ``(stop, dmin)``:
-    ``dmin`` lowered to every ``sgnΔ`` evaluated (at the stage points 2–4 and the new
-    node); ``stop = -1`` if the step completed, else the fraction of the step (0, ½ or 1)
-    where ``sgnΔ < delta_stop`` or a rate was not finite. (The workspace is passed array
-    by array: views into one larger array would cost a reference count pair each, per
-    step. Written with ``break`` rather than early returns so that it can be inlined, see
+    Fills the stage points ``(Y_i, P_i)``, the fields ``B_i = G(Y_i, P_i)`` (``(Y1, P1) =
+    (R, q)``) and the stacked rates ``F_i = B_i v``. (The workspace is passed array by
+    array: views into one larger array would cost a reference count pair each, per step.
+    Written with ``break`` rather than early returns so that it can be inlined, see
     :mod:`nonholo.integrate.inliner`.)
+
+    Parameters
+    ----------
+    R, q : numpy.ndarray
+        The state at the start of the step.
+    Rn, qn : numpy.ndarray
+        The state at its end (output).
+    v0, v1, v2 : numpy.ndarray
+        The inputs at the start, middle and end of the step.
+    h : float
+        The step's length.
+    sgn : float
+        The sign of ``Δ`` at the start of the motion.
+    delta_stop : float
+        The least ``sgnΔ`` accepted.
+    dmin : float
+        The least ``sgnΔ`` so far.
+    Y2, Y3, Y4 : numpy.ndarray
+        The stage orientations (output).
+    P2, P3, P4 : numpy.ndarray
+        The stage coordinates (output).
+    Rh, E : numpy.ndarray
+        Scratch, 3×3.
+    B1, B2, B3, B4 : numpy.ndarray
+        The stage fields (output), d×m.
+    F1, F2, F3, F4 : numpy.ndarray
+        The stage rates (output), d entries.
+
+    Returns
+    -------
+    stop : float
+        ``-1`` if the step completed, else the fraction of the step (0, ½ or 1) where
+        ``sgnΔ < delta_stop`` or a rate was not finite.
+    dmin : float
+        ``dmin`` lowered to every ``sgnΔ`` evaluated (at the stage points 2–4 and the new
+        node).
     """
     stop = -1.0
     for _ in range(1):
@@ -246,9 +417,24 @@ def cf4_step(R, q, Rn, qn, v0, v1, v2, h, sgn, delta_stop, dmin, Y2, Y3, Y4, P2,
 
 @jit
 def step_workspace(R0, k, d, m):
-    """The arrays :func:`cf4_step` fills besides ``(R, q)``: ``(Rn, qn, Y2, Y3, Y4, P2, P3, P4,
-    Rh, E, B1, B2, B3, B4, F1, F2, F3, F4)`` for ``k`` coordinates, ``d`` rates and ``m``
-    inputs; the orientations start as ``R0`` (they stay so without orientation)."""
+    """The arrays :func:`cf4_step` fills besides ``(R, q)``.
+
+    Parameters
+    ----------
+    R0 : numpy.ndarray
+        The orientations' first value (they stay so without orientation).
+    k : int
+        Coordinates.
+    d : int
+        Rates.
+    m : int
+        Inputs.
+
+    Returns
+    -------
+    tuple of numpy.ndarray
+        ``(Rn, qn, Y2, Y3, Y4, P2, P3, P4, Rh, E, B1, B2, B3, B4, F1, F2, F3, F4)``.
+    """
     return (R0.copy(), np.empty(k), R0.copy(), R0.copy(), R0.copy(), np.empty(k), np.empty(k),
             np.empty(k), np.empty((3, 3)), np.empty((3, 3)), np.empty((d, m)), np.empty((d, m)),
             np.empty((d, m)), np.empty((d, m)), np.empty(d), np.empty(d), np.empty(d), np.empty(d))
@@ -260,13 +446,32 @@ def step_workspace(R0, k, d, m):
 
 
 def forward(R0, q0, U, h, sgn, delta_stop, Rs, Qs):
-    """CF4 over ``N = len(U)`` steps from ``(R0, q0)``; ``Rs[n]``, ``Qs[n]`` = the state at
-    ``t_n`` (shapes ``(N+1, 3, 3)``, ``(N+1, k)``).
+    """CF4 over ``N = len(U)`` steps from ``(R0, q0)``.
 
-    Returns ``(n_done, min sgnΔ, t_stop)``: the number of completed steps (``N`` unless the
-    trajectory reached ``sgnΔ < delta_stop`` or a non-finite rate), the least ``sgnΔ`` over
-    all evaluation points of the completed steps, and the stage time where it stopped
-    (``-1`` if it did not).
+    Parameters
+    ----------
+    R0, q0 : numpy.ndarray
+        The start.
+    U : numpy.ndarray
+        The stage table, ``(N, 3, m)``.
+    h : float
+        The step.
+    sgn : float
+        The sign of ``Δ`` at the start.
+    delta_stop : float
+        Stop where ``sgnΔ`` falls below this.
+    Rs, Qs : numpy.ndarray
+        The output: the state at every ``t_n``, shapes ``(N+1, 3, 3)``, ``(N+1, k)``.
+
+    Returns
+    -------
+    n_done : int
+        The number of completed steps (``N`` unless the trajectory reached ``sgnΔ <
+        delta_stop`` or a non-finite rate).
+    dmin : float
+        The least ``sgnΔ`` over all evaluation points of the completed steps.
+    t_stop : float
+        The stage time where it stopped (``-1`` if it did not).
     """
     N = U.shape[0]
     m = U.shape[2]
@@ -299,15 +504,46 @@ def forward(R0, q0, U, h, sgn, delta_stop, Rs, Qs):
 
 
 def zpredict(Z, a, f, out):
-    """``out = Z + a f`` (d×d): the value of ``Z`` at a stage of RK4."""
+    """``out = Z + a f`` (d×d): the value of ``Z`` at a stage of RK4.
+
+    Parameters
+    ----------
+    Z : numpy.ndarray
+        ``Z`` at the start of the step.
+    a : float
+        The stage's step.
+    f : numpy.ndarray
+        The previous stage's ``dZ/dt``.
+    out : numpy.ndarray
+        The output, d×d.
+    """
     for i in range(D):
         for j in range(D):
             out[i, j] = Z[i, j] + a * f[i, j]
 
 
 def zstage(Zc, Y, P, v, F, B, Qm, f, K):
-    """One stage of ``dZ/dt = -Z A``, ``A = QG(Y, P, v) + [ω] ⊕ 0`` (``ω = F[:3]``):
-    ``f = -Zc A``; and ``K = Zc B``."""
+    """One stage of ``dZ/dt = -Z A``, ``A = QG(Y, P, v) + [ω] ⊕ 0`` (``ω = F[:3]``).
+
+    Parameters
+    ----------
+    Zc : numpy.ndarray
+        ``Z`` at the stage.
+    Y, P : numpy.ndarray
+        The stage's state.
+    v : numpy.ndarray
+        The inputs.
+    F : numpy.ndarray
+        The stage's rates.
+    B : numpy.ndarray
+        The stage's field, d×m.
+    Qm : numpy.ndarray
+        Scratch, d×d (``QG``).
+    f : numpy.ndarray
+        The output ``-Zc A``, d×d.
+    K : numpy.ndarray
+        The output ``Zc B``, d×m.
+    """
     field_derivative_into(Y, P, v, Qm)
     m = B.shape[1]
     if OFFSET == D:
@@ -368,6 +604,44 @@ def forward_variational(R0, q0, U, h, sgn, delta_stop, Bidx, Bval, stride_b, str
     so ``∫_0^T Z B v dt ≈ Σ W_c v(t_n + c h)`` for any ``v`` — or ``(0, d·m)``. Returns what
     :func:`forward` returns; ``J``, ``Mq``, ``Wd`` and ``Zs[N]`` are valid only if the run
     completed (NaN where ``Z(T)`` is singular or not finite: the motion blew up).
+
+    Parameters
+    ----------
+    R0, q0 : numpy.ndarray
+        The start.
+    U : numpy.ndarray
+        The stage table, ``(N, 3, m)``.
+    h : float
+        The step.
+    sgn : float
+        The sign of ``Δ`` at the start.
+    delta_stop : float
+        Stop where ``sgnΔ`` falls below this.
+    Bidx, Bval : numpy.ndarray
+        The stage basis' indices and values.
+    stride_b, stride_i : int
+        The stage basis' strides.
+    Rs, Qs : numpy.ndarray
+        The nodes (output).
+    Zs : numpy.ndarray
+        ``Z(t_n)`` (output).
+    J : numpy.ndarray
+        ``∂s_T/∂λ`` (output), d × p.
+    Mq : numpy.ndarray
+        ``M(T)`` (output), d×d.
+    Wd : numpy.ndarray
+        The stage weights (output), ``(3N, d·m)`` or ``(0, d·m)``.
+    full : bool
+        Whether to keep ``Z(t_n)`` at every node and ``M(T)``.
+
+    Returns
+    -------
+    n_done : int
+        The number of completed steps.
+    dmin : float
+        The least ``sgnΔ`` over all evaluation points of the completed steps.
+    t_stop : float
+        The stage time where it stopped (``-1`` if it did not).
     """
     N = U.shape[0]
     m = U.shape[2]
@@ -559,8 +833,24 @@ def frame_inputs(nodes, qnodes, idx, s, Wst, w_end, Rout, Qout, out):
     qnodes)`` advanced by one CF4 step (:func:`cf4_step`) of length ``s[k]`` (none if
     ``s[k] == 0``) with frame inputs ``Wst[k, 0]``, ``Wst[k, 1]``, ``Wst[k, 2]`` at its start,
     middle and end — the same local approximation as a step of the integrator, ``O(s⁵)``
-    from the exact motion. Outputs ``Rout[k]``, ``Qout[k]`` (the state at ``t_k``) and
-    ``out[k] = W(R(t_k), q(t_k)) w_end[k]``.
+    from the exact motion.
+
+    Parameters
+    ----------
+    nodes, qnodes : numpy.ndarray
+        The CF4 trajectory's nodes.
+    idx : numpy.ndarray
+        The node of every sample.
+    s : numpy.ndarray
+        The partial step from it, every sample.
+    Wst : numpy.ndarray
+        The frame inputs at the partial step's start, middle and end, ``(n, 3, m)``.
+    w_end : numpy.ndarray
+        The frame inputs at the samples, ``(n, m)``.
+    Rout, Qout : numpy.ndarray
+        The state at every ``t_k`` (output).
+    out : numpy.ndarray
+        ``out[k] = W(R(t_k), q(t_k)) w_end[k]`` (output).
     """
     n_t = idx.shape[0]
     m = Wst.shape[2]
@@ -604,7 +894,28 @@ def frame_inputs(nodes, qnodes, idx, s, Wst, w_end, Rout, Qout, out):
 class Kernels:
     """The compiled kernels of one system of a mechanism: ``(ω, q̇) = G(R, q) u`` or, with
     ``frame``, its desingularised field ``N(R, q) w`` (then :attr:`frame_inputs` evaluates
-    ``u = W(R, q) w``). Arguments: those of the functions of the same names."""
+    ``u = W(R, q) w``). Arguments: those of the functions of the same names.
+
+    Parameters
+    ----------
+    name : str
+        The mechanism's name.
+    frame : bool
+        Whether the system is the frame's.
+    n_inputs : int
+        ``m``.
+    has_singular_set : bool
+        Whether ``Δ`` is watched.
+    forward, forward_variational : callable
+        The kernels :func:`forward` and :func:`forward_variational`.
+    frame_inputs : callable or None
+        The kernel :func:`frame_inputs` (frame systems).
+    n_coordinates : int, default 0
+        ``k``, the number of coordinates ``q`` of the state (0 on SO(3)).
+    backend : str, default "numba"
+        ``"native"`` (C translated from these kernels,
+        :mod:`nonholo.integrate.native_kernels`) or ``"numba"``.
+    """
 
     name: str
     frame: bool
@@ -620,7 +931,20 @@ class Kernels:
     backend: str = "numba"
 
     def nodes(self, steps: int) -> tuple[np.ndarray, np.ndarray]:
-        """Node arrays ``(Rs (steps+1, 3, 3), Qs (steps+1, k))`` for a kernel's trajectory."""
+        """Node arrays for a kernel's trajectory.
+
+        Parameters
+        ----------
+        steps : int
+            The steps.
+
+        Returns
+        -------
+        Rs : numpy.ndarray
+            ``(steps+1, 3, 3)``, uninitialised.
+        Qs : numpy.ndarray
+            ``(steps+1, k)``, uninitialised.
+        """
         return np.empty((steps + 1, 3, 3)), np.empty((steps + 1, self.n_coordinates))
 
 
@@ -636,8 +960,26 @@ _WRITTEN = (rates, advance, zpredict, cf4_stage, cf4_step, zstage, forward, forw
 
 
 def specialise(template, namespace: dict, bindings: dict, tag: str, cache: bool):
-    """A compiled copy of ``template`` whose globals are ``namespace`` (a kernel module's
-    globals) with the system's names bound (``bindings``)."""
+    """A compiled copy of a kernel with the system's names bound.
+
+    Parameters
+    ----------
+    template : function
+        The kernel.
+    namespace : dict
+        A kernel module's globals.
+    bindings : dict
+        The system's names.
+    tag : str
+        The system's tag (:func:`system_tag`): the copy's own cache entry.
+    cache : bool
+        Whether numba caches it on disk.
+
+    Returns
+    -------
+    numba.core.registry.CPUDispatcher
+        The compiled copy.
+    """
     f = types.FunctionType(template.__code__, {**namespace, **bindings}, template.__name__)
     f.__qualname__ = f"{template.__name__}__{tag}"        # its own cache entry
     f.__module__ = namespace["__name__"]
@@ -646,13 +988,37 @@ def specialise(template, namespace: dict, bindings: dict, tag: str, cache: bool)
 
 
 def system_tag(module, frame: bool) -> str:
-    """The cache name of a system: mechanism, system and a hash of the generated source."""
+    """The cache name of a system: mechanism, system and a hash of the generated source.
+
+    Parameters
+    ----------
+    module : module
+        The mechanism's generated module.
+    frame : bool
+        Whether the system is the frame's.
+
+    Returns
+    -------
+    str
+        The tag.
+    """
     src = inspect.getsource(module) if importable(module) else module.SOURCE
     return f"{module.NAME}{'_frame' if frame else ''}_{hashlib.sha256(src.encode()).hexdigest()[:12]}"
 
 
 def importable(module) -> bool:
-    """Whether ``module`` can be re-imported by name (a cached kernel refers to it by name)."""
+    """Whether a module can be re-imported by name (a cached kernel refers to it by name).
+
+    Parameters
+    ----------
+    module : module
+        A generated module.
+
+    Returns
+    -------
+    bool
+        Whether ``sys.modules`` holds it under its name.
+    """
     return sys.modules.get(getattr(module, "__name__", None)) is module
 
 
@@ -679,9 +1045,32 @@ def compile_system(module, frame: bool = False, inlined: bool = True, fast_deriv
     cached): LLVM may then reorder its arithmetic differently wherever it is inlined, so
     only these kernels are bit for bit the same in both forms.
 
-    ``backend``: ``"native"`` — the same kernels translated to C and compiled ahead of
-    time (:mod:`nonholo.integrate.native_kernels`) — or ``"numba"``; by default native
-    where available (a C compiler, ``NONHOLO_BACKEND`` not ``numba``), else numba.
+    Parameters
+    ----------
+    module : module
+        The mechanism's generated module.
+    frame : bool, default False
+        Whether to compile the frame system.
+    inlined : bool, default True
+        Whether to compile the inlined kernels.
+    fast_derivative : bool, default True
+        Whether to compile ``QG`` with fast-math.
+    backend : str, optional
+        ``"native"`` — the same kernels translated to C and compiled ahead of time
+        (:mod:`nonholo.integrate.native_kernels`) — or ``"numba"``; by default native where
+        available (a C compiler, ``NONHOLO_BACKEND`` not ``numba``), else numba.
+
+    Returns
+    -------
+    Kernels
+        The kernels.
+
+    Raises
+    ------
+    ValueError
+        For an unknown ``backend``, or ``frame`` for a mechanism without a frame.
+    RuntimeError
+        If ``backend="native"`` and native kernels are unavailable.
     """
     if backend not in (None, "native", "numba"):
         raise ValueError(f"backend must be 'native', 'numba' or None, not {backend!r}")
@@ -709,14 +1098,32 @@ _NATIVE: dict[tuple, Kernels] = {}
 
 
 def native_parts() -> dict:
-    """The pieces of this module the native kernels are translated from besides the inlined
-    kernels (see :func:`nonholo.integrate.native_kernels.functions`)."""
+    """The pieces of this module the native kernels are translated from besides the inlined kernels.
+
+    Returns
+    -------
+    dict
+        ``rates``, ``zstage``, ``no_singularity``, ``step_workspace`` by name (see
+        :func:`nonholo.integrate.native_kernels.functions`).
+    """
     return {"rates": rates, "zstage": zstage, "no_singularity": no_singularity, "step_workspace": step_workspace}
 
 
 def native_source(module, kernels_text: str | None = None) -> str:
-    """The C source of the native kernels of the generated ``module`` (``nonholo derive``;
-    ``kernels_text``: the inlined kernels' source, by default the generated module's)."""
+    """The C source of the native kernels of a generated module (``nonholo derive``).
+
+    Parameters
+    ----------
+    module : module
+        The mechanism's generated module.
+    kernels_text : str, optional
+        The inlined kernels' source (by default :mod:`nonholo.generated.cf4_kernels`').
+
+    Returns
+    -------
+    str
+        The C source.
+    """
     return kernel_source(module, native_parts(), kernels_text)
 
 
@@ -773,8 +1180,22 @@ def _compile(module, frame: bool, templates, tag: str, cache: bool, fast_derivat
 
 
 def metered(kernel, weight: float, counted: int):
-    """``kernel`` counting its effort (:mod:`nonholo.numerics.effort`): ``weight`` per element of its
-    argument number ``counted`` (the stage table's steps; ``frame_inputs``' node indices)."""
+    """A kernel counting its effort (:mod:`nonholo.numerics.effort`).
+
+    Parameters
+    ----------
+    kernel : callable
+        The kernel.
+    weight : float
+        Effort per element of the counted argument.
+    counted : int
+        The argument's position (the stage table's steps; ``frame_inputs``' node indices).
+
+    Returns
+    -------
+    callable
+        The kernel, counting (the kernel itself as its ``kernel`` attribute).
+    """
 
     def run(*args):
         effort.add(weight * len(args[counted]))

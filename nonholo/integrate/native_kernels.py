@@ -52,22 +52,73 @@ EXPORTED = ("forward", "forward_variational", "frame_inputs")
 
 
 def module_name(module) -> str:
-    """The native module's name (under ``nonholo.generated.native``) for a generated module."""
+    """The native module's name (under ``nonholo.generated.native``) for a generated module.
+
+    Parameters
+    ----------
+    module : module
+        The mechanism's generated module.
+
+    Returns
+    -------
+    str
+        The mechanism's name.
+    """
     return str(module.NAME)
 
 
 def systems(module) -> list[str]:
-    """The systems of a mechanism: ``physical`` and, if it has a frame, ``frame``."""
+    """The systems of a mechanism: ``physical`` and, if it has a frame, ``frame``.
+
+    Parameters
+    ----------
+    module : module
+        The mechanism's generated module.
+
+    Returns
+    -------
+    list of str
+        The systems' names.
+    """
     return ["physical", "frame"] if getattr(module, "HAS_FRAME", False) else ["physical"]
 
 
 def module_text(module) -> str:
-    """The source of a generated module (its ``SOURCE`` if built in memory, else its file)."""
+    """The source of a generated module (its ``SOURCE`` if built in memory, else its file).
+
+    Parameters
+    ----------
+    module : module
+        The mechanism's generated module.
+
+    Returns
+    -------
+    str
+        The source.
+    """
     return module.SOURCE if hasattr(module, "SOURCE") else Path(module.__file__).read_text()
 
 
 def function_source(text: str, name: str) -> str:
-    """The source of the top-level function ``name`` in the module source ``text``."""
+    """The source of a top-level function in a module's source.
+
+    Parameters
+    ----------
+    text : str
+        The module's source.
+    name : str
+        The function's name.
+
+    Returns
+    -------
+    str
+        The function's source.
+
+    Raises
+    ------
+    ValueError
+        If there is no such function.
+    """
     functions = _functions(text)
     if name not in functions:
         raise ValueError(f"no function {name!r} in the generated module")
@@ -82,10 +133,23 @@ def _functions(text: str) -> dict[str, str]:
 
 
 def functions(module, parts: dict, kernels_text: str | None = None) -> list:
-    """The functions of the native module of ``module`` in translation order; ``parts``:
-    the kernels' own pieces of :mod:`nonholo.integrate.cf4` (``rates``, ``zstage``,
-    ``no_singularity``, ``step_workspace``), passed by it; ``kernels_text``: the inlined
-    kernels' source (by default :mod:`nonholo.generated.cf4_kernels`')."""
+    """The functions of the native module of a generated module, in translation order.
+
+    Parameters
+    ----------
+    module : module
+        The mechanism's generated module.
+    parts : dict
+        The kernels' own pieces of :mod:`nonholo.integrate.cf4` (``rates``, ``zstage``,
+        ``no_singularity``, ``step_workspace``), passed by it.
+    kernels_text : str, optional
+        The inlined kernels' source (by default :mod:`nonholo.generated.cf4_kernels`').
+
+    Returns
+    -------
+    list of Function
+        The :class:`~nonholo.numerics.c_translation.Function` objects to translate.
+    """
     text = module_text(module)
     kernels_text = kernels_text if kernels_text is not None else Path(inlined.__file__).read_text()
     helpers = [Function(getattr(small, n), f"nh_{n}", kinds, exported=False,
@@ -121,8 +185,23 @@ def functions(module, parts: dict, kernels_text: str | None = None) -> list:
 
 
 def source_digest(module, parts: dict, kernels_text: str | None = None) -> str:
-    """The digest of what the native module of ``module`` is translated from: the generated
-    module's source, the kernels' and helpers' modules, and the translator's."""
+    """The digest of what the native module of a generated module is translated from.
+
+    Parameters
+    ----------
+    module : module
+        The mechanism's generated module.
+    parts : dict
+        The kernels' own pieces of :mod:`nonholo.integrate.cf4`.
+    kernels_text : str, optional
+        The inlined kernels' source (by default :mod:`nonholo.generated.cf4_kernels`').
+
+    Returns
+    -------
+    str
+        :func:`nonholo.numerics.native.digest` of the generated module's source, the
+        kernels' and helpers' modules, and the translator's.
+    """
     from ..numerics import c_translation
 
     cf4 = sys.modules[parts["rates"].__module__]
@@ -133,7 +212,22 @@ def source_digest(module, parts: dict, kernels_text: str | None = None) -> str:
 
 
 def kernel_source(module, parts: dict, kernels_text: str | None = None) -> str:
-    """The C source of the native module of the generated ``module``."""
+    """The C source of the native module of a generated module.
+
+    Parameters
+    ----------
+    module : module
+        The mechanism's generated module.
+    parts : dict
+        The kernels' own pieces of :mod:`nonholo.integrate.cf4`.
+    kernels_text : str, optional
+        The inlined kernels' source (by default :mod:`nonholo.generated.cf4_kernels`').
+
+    Returns
+    -------
+    str
+        The C source.
+    """
     header = (f"Native CF4 kernels of the mechanism {module.NAME!r}. Generated by `nonholo derive` "
               f"(nonholo/integrate/native_kernels.py, nonholo/numerics/c_translation.py) from "
               f"its generated module and nonholo/generated/cf4_kernels.py. Do not edit.")
@@ -142,9 +236,23 @@ def kernel_source(module, parts: dict, kernels_text: str | None = None) -> str:
 
 
 def native_kernels(module, frame: bool, parts: dict):
-    """The native kernels ``{"forward": …, "forward_variational": …, "frame_inputs": …}`` of a
-    system of ``module``, or None where native kernels are unavailable (see
-    :func:`nonholo.numerics.native.load`)."""
+    """The native kernels of a system of a generated module.
+
+    Parameters
+    ----------
+    module : module
+        The mechanism's generated module.
+    frame : bool
+        Whether the system is the frame's.
+    parts : dict
+        The kernels' own pieces of :mod:`nonholo.integrate.cf4`.
+
+    Returns
+    -------
+    dict or None
+        ``{"forward": …, "forward_variational": …, "frame_inputs": …}``, or ``None`` where
+        native kernels are unavailable (see :func:`nonholo.numerics.native.load`).
+    """
     if not native.enabled():
         return None
     lib = native.load(module_name(module), source_digest(module, parts), lambda: kernel_source(module, parts))

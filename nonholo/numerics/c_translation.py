@@ -60,15 +60,44 @@ class TranslationError(ValueError):
 
 @dataclass
 class Array:
-    """A C array: element type, pointer expression name and shape expressions."""
+    """A C array: element type and shape expressions.
+
+    Parameters
+    ----------
+    ctype : str
+        The C element type.
+    shape : list of str
+        The C expressions of its dimensions.
+    """
     ctype: str
     shape: list
 
 
 @dataclass
 class Function:
-    """A Python function to translate: its source, C name, argument kinds, and the names
-    it reads that are bound to other functions (C names) or to constants."""
+    """A Python function to translate.
+
+    Parameters
+    ----------
+    func : function or str
+        The function, or its source.
+    cname : str
+        Its C name.
+    kinds : dict
+        The kind (:data:`KINDS`) of every argument, by name.
+    calls : dict
+        The names it reads that are bound to other functions (C names, or a function whose
+        body returns a tuple of new arrays, expanded in place).
+    constants : dict
+        The names it reads that are bound to constants.
+    exported : bool, default True
+        Whether the extension module exposes it.
+    returns : tuple
+        Filled by :func:`translate`: the C types of the returned values.
+    written : frozenset
+        Filled by :func:`translate`: the array arguments the function writes (itself or
+        through a callee).
+    """
     func: object
     cname: str
     kinds: dict
@@ -751,8 +780,25 @@ class _Translator:
 
 
 def translate(functions: list[Function]) -> tuple[str, dict]:
-    """C definitions of ``functions`` (callees first: a function may call only those before
-    it). Returns the C text and the functions by C name (with their return types)."""
+    """C definitions of functions (callees first: a function may call only those before it).
+
+    Parameters
+    ----------
+    functions : list of Function
+        The functions, in order.
+
+    Returns
+    -------
+    code : str
+        The C text.
+    known : dict
+        The functions by C name (with their return types).
+
+    Raises
+    ------
+    TranslationError
+        For a construct outside the translated subset.
+    """
     known: dict[str, Function] = {}
     out = []
     for fn in functions:
@@ -887,9 +933,30 @@ static PyObject *nh_tuple(Py_ssize_t n, ...)
 
 
 def extension_source(module_name: str, header: str, functions: list[Function], digest: str) -> str:
-    """The C source of a CPython extension module ``module_name`` (its last dotted part is
-    the init name) exposing the exported ``functions`` (translated in order) under their C
-    names, with the attribute ``SOURCE_DIGEST = digest`` (of what it was translated from)."""
+    """The C source of a CPython extension module exposing translated functions.
+
+    Parameters
+    ----------
+    module_name : str
+        The module's full name (its last dotted part is the init name).
+    header : str
+        The comment at the top of the source.
+    functions : list of Function
+        The functions, translated in order; the exported ones are exposed under their C
+        names.
+    digest : str
+        The module's attribute ``SOURCE_DIGEST`` (of what it was translated from).
+
+    Returns
+    -------
+    str
+        The C source.
+
+    Raises
+    ------
+    TranslationError
+        For a construct outside the translated subset.
+    """
     body, _ = translate(functions)
     short = module_name.rsplit(".", 1)[-1]
     exported = [f for f in functions if f.exported]

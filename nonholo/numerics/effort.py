@@ -28,10 +28,22 @@ _count = [0.0]
 
 
 def add(steps: float) -> None:
-    """Count ``steps`` (in variational steps)."""
+    """Count effort.
+
+    Parameters
+    ----------
+    steps : float
+        The effort, in variational steps.
+    """
     _count[0] += steps
 
 
 def seconds() -> float:
-    """The effort so far, in seconds of the reference machine."""
+    """The effort so far, in seconds of the reference machine.
+
+    Returns
+    -------
+    float
+        The count divided by :data:`STEPS_PER_SECOND`.
+    """
     return _count[0] / STEPS_PER_SECOND

@@ -25,7 +25,15 @@ from .jit import jit
 
 @jit
 def rodrigues(wx, wy, wz, E):
-    """``E = exp([w])`` (Rodrigues; Taylor series for small angles)."""
+    """``E = exp([w])`` (Rodrigues; Taylor series for small angles).
+
+    Parameters
+    ----------
+    wx, wy, wz : float
+        The rotation vector ``w``.
+    E : numpy.ndarray
+        The output, 3×3.
+    """
     a2 = wx * wx + wy * wy + wz * wz
     if a2 < 1e-8:
         c1 = 1.0 - a2 / 6.0 + a2 * a2 / 120.0
@@ -53,7 +61,19 @@ def rodrigues(wx, wy, wz, E):
 
 @jit
 def exp_times(wx, wy, wz, R, E, out):
-    """``out = exp([w]) R`` (``E`` is scratch; ``out`` must not alias ``R``)."""
+    """``out = exp([w]) R``.
+
+    Parameters
+    ----------
+    wx, wy, wz : float
+        The rotation vector ``w``.
+    R : numpy.ndarray
+        A 3×3 matrix.
+    E : numpy.ndarray
+        Scratch, 3×3.
+    out : numpy.ndarray
+        The output, 3×3; must not alias ``R``.
+    """
     rodrigues(wx, wy, wz, E)
     for i in range(3):
         e0 = E[i, 0]
@@ -65,7 +85,15 @@ def exp_times(wx, wy, wz, R, E, out):
 
 @jit
 def inv33(Z, out):
-    """``out = Z^{-1}`` (cofactors)."""
+    """``out = Z^{-1}`` (cofactors).
+
+    Parameters
+    ----------
+    Z : numpy.ndarray
+        A 3×3 matrix.
+    out : numpy.ndarray
+        The output, 3×3.
+    """
     c00 = Z[1, 1] * Z[2, 2] - Z[1, 2] * Z[2, 1]
     c01 = Z[1, 2] * Z[2, 0] - Z[1, 0] * Z[2, 2]
     c02 = Z[1, 0] * Z[2, 1] - Z[1, 1] * Z[2, 0]
@@ -83,8 +111,15 @@ def inv33(Z, out):
 
 @jit
 def inverse_into(A, out):
-    """``out = A^{-1}`` (n×n, Gauss–Jordan with partial pivoting); all NaN where ``A`` is
-    singular or not finite."""
+    """``out = A^{-1}`` (n×n, Gauss–Jordan with partial pivoting).
+
+    Parameters
+    ----------
+    A : numpy.ndarray
+        An n×n matrix.
+    out : numpy.ndarray
+        The output, n×n; all NaN where ``A`` is singular or not finite.
+    """
     n = A.shape[0]
     M = A.copy()
     for i in range(n):
@@ -120,6 +155,13 @@ def log_rotation_into(R, out):
 
     ``sin α · a = vee(R − Rᵀ)/2`` and ``cos α = (tr R − 1)/2`` give ``α = atan2``; near
     ``α = π`` the axis comes from the symmetric part ``(R + Rᵀ)/2 − cos α I = (1 − cos α) a aᵀ``.
+
+    Parameters
+    ----------
+    R : numpy.ndarray
+        A rotation, 3×3.
+    out : numpy.ndarray
+        The output ``l``, 3 entries.
     """
     sx = 0.5 * (R[2, 1] - R[1, 2])
     sy = 0.5 * (R[0, 2] - R[2, 0])
@@ -151,7 +193,20 @@ def log_rotation_into(R, out):
 
 @jit
 def log_error_into(R, Rd, l):
-    """``l`` with ``[l] = log(R Rdᵀ)``: the planner's error ``l_T``; returns its norm (rad)."""
+    """``l`` with ``[l] = log(R Rdᵀ)``: the planner's error ``l_T``.
+
+    Parameters
+    ----------
+    R, Rd : numpy.ndarray
+        Rotations, 3×3.
+    l : numpy.ndarray
+        The output ``l``, 3 entries.
+
+    Returns
+    -------
+    float
+        ``|l|`` (rad).
+    """
     P = np.empty((3, 3))
     for i in range(3):
         for j in range(3):
@@ -223,7 +278,17 @@ CHOLESKY_PIVOT = 1e-10
 
 @jit
 def scaled_gram_into(J, scale, A):
-    """``A = J S² Jᵀ`` (3×3), ``S = diag(scale)``."""
+    """``A = J S² Jᵀ`` (3×3), ``S = diag(scale)``.
+
+    Parameters
+    ----------
+    J : numpy.ndarray
+        3 × p.
+    scale : numpy.ndarray
+        The diagonal of ``S``, p entries.
+    A : numpy.ndarray
+        The output, 3×3.
+    """
     p = J.shape[1]
     for i in range(3):
         for j in range(3):
@@ -246,7 +311,19 @@ def scaled_gram_into(J, scale, A):
 
 @jit
 def scaled_back_into(J, y, scale, x):
-    """``x = S² Jᵀ y``: the step from the solution ``y`` of ``J S² Jᵀ y = l``."""
+    """``x = S² Jᵀ y``: the step from the solution ``y`` of ``J S² Jᵀ y = l``.
+
+    Parameters
+    ----------
+    J : numpy.ndarray
+        3 × p.
+    y : numpy.ndarray
+        3 entries.
+    scale : numpy.ndarray
+        The diagonal of ``S``, p entries.
+    x : numpy.ndarray
+        The output, p entries.
+    """
     p = J.shape[1]
     for k in range(p):
         x[k] = scale[k] * scale[k] * (J[0, k] * y[0] + J[1, k] * y[1] + J[2, k] * y[2])
@@ -254,8 +331,25 @@ def scaled_back_into(J, y, scale, x):
 
 @jit
 def cholesky_into(J, l, scale, x):
-    """``x = S² Jᵀ (J S² Jᵀ)^{-1} l`` by Cholesky; returns ``False`` (``x`` unset) when a
-    pivot falls below :data:`CHOLESKY_PIVOT` times the largest diagonal entry."""
+    """``x = S² Jᵀ (J S² Jᵀ)^{-1} l`` by Cholesky.
+
+    Parameters
+    ----------
+    J : numpy.ndarray
+        3 × p.
+    l : numpy.ndarray
+        3 entries.
+    scale : numpy.ndarray
+        The diagonal of ``S``, p entries.
+    x : numpy.ndarray
+        The output, p entries.
+
+    Returns
+    -------
+    bool
+        ``False`` (``x`` unset) when a pivot falls below :data:`CHOLESKY_PIVOT` times the
+        largest diagonal entry.
+    """
     A = np.empty((3, 3))
     scaled_gram_into(J, scale, A)
     y = np.empty(3)
@@ -294,8 +388,21 @@ def cholesky_into(J, l, scale, x):
 
 @jit
 def pinv_into(J, l, scale, x):
-    """``x = S² Jᵀ (J S² Jᵀ)^# l`` by the eigen pseudo-inverse (eigenvalues below
-    ``1e-14·max`` dropped)."""
+    """``x = S² Jᵀ (J S² Jᵀ)^# l`` by the eigen pseudo-inverse.
+
+    Eigenvalues below ``1e-14·max`` are dropped.
+
+    Parameters
+    ----------
+    J : numpy.ndarray
+        3 × p.
+    l : numpy.ndarray
+        3 entries.
+    scale : numpy.ndarray
+        The diagonal of ``S``, p entries.
+    x : numpy.ndarray
+        The output, p entries.
+    """
     A = np.empty((3, 3))
     scaled_gram_into(J, scale, A)
     y = np.empty(3)
@@ -317,7 +424,23 @@ def min_norm_step(J, l, scale):
     pseudo-inverse from an eigen decomposition instead (:func:`pinv_step`), so a
     rank-deficient ``J`` gives the minimum-norm least-squares step rather than a blow-up.
     (The fallback is called from here rather than from the compiled code so that it is
-    compiled only by a run that needs it.)
+    compiled only by a run that needs it.) For ``d ≠ 3`` rows (a state beyond SO(3)) the
+    pseudo-inverse of ``J S`` is NumPy's (singular values below :data:`PINV_RCOND`
+    relative dropped).
+
+    Parameters
+    ----------
+    J : numpy.ndarray
+        The Jacobian, d × p.
+    l : numpy.ndarray
+        The right-hand side, d entries.
+    scale : numpy.ndarray
+        The diagonal of ``S``, p entries.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``x``, p entries.
     """
     if J.shape[0] != 3:
         # a state beyond SO(3) (d rows): the pseudo-inverse of J S by NumPy's SVD
@@ -329,7 +452,18 @@ def min_norm_step(J, l, scale):
 
 @jit
 def all_finite_jit(A) -> bool:
-    """Whether every entry of the 2-d array ``A`` is finite."""
+    """Whether every entry of a 2-d array is finite (compiled).
+
+    Parameters
+    ----------
+    A : numpy.ndarray
+        A 2-d array.
+
+    Returns
+    -------
+    bool
+        Whether every entry is finite.
+    """
     for i in range(A.shape[0]):
         for j in range(A.shape[1]):
             if not np.isfinite(A[i, j]):
@@ -355,7 +489,13 @@ NATIVE = {
 
 
 def native_functions() -> list:
-    """The functions of :data:`NATIVE` to translate, in order."""
+    """The functions of :data:`NATIVE` to translate, in order.
+
+    Returns
+    -------
+    list of Function
+        One :class:`~nonholo.numerics.c_translation.Function` per entry of :data:`NATIVE`.
+    """
     from .c_translation import Function
 
     calls = {name: name for name in NATIVE}
@@ -365,7 +505,13 @@ def native_functions() -> list:
 
 
 def native_source() -> str:
-    """The C source of ``nonholo.generated.native.numerics``."""
+    """The C source of ``nonholo.generated.native.numerics``.
+
+    Returns
+    -------
+    str
+        The source (:func:`nonholo.numerics.c_translation.extension_source`).
+    """
     from .c_translation import extension_source
 
     header = ("Native small numerics of nonholo/numerics/kernels.py. Generated by `nonholo derive` "
@@ -374,7 +520,13 @@ def native_source() -> str:
 
 
 def native_digest() -> str:
-    """The digest of what the native numerics are translated from (this module, the translator)."""
+    """The digest of what the native numerics are translated from (this module, the translator).
+
+    Returns
+    -------
+    str
+        :func:`nonholo.numerics.native.digest` of the two sources.
+    """
     from pathlib import Path
 
     from . import c_translation
@@ -386,8 +538,13 @@ _LIB: list = []
 
 
 def native_lib():
-    """The native module of these numerics, or None (numba then: no compiler, or
-    ``NONHOLO_BACKEND=numba``)."""
+    """The native module of these numerics.
+
+    Returns
+    -------
+    module or None
+        The module, or ``None`` (numba then: no compiler, or ``NONHOLO_BACKEND=numba``).
+    """
     if not native.enabled():
         return None
     if not _LIB:
@@ -396,7 +553,18 @@ def native_lib():
 
 
 def log_rotation(R):
-    """Rotation vector ``l`` with ``exp([l]) = R``, ``|l| ≤ π`` (see :func:`log_rotation_into`)."""
+    """Rotation vector ``l`` with ``exp([l]) = R``, ``|l| ≤ π`` (see :func:`log_rotation_into`).
+
+    Parameters
+    ----------
+    R : array_like
+        A rotation, 3×3.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``l``, 3 entries.
+    """
     out = np.empty(3)
     lib = native_lib()
     (lib.log_rotation_into if lib is not None else log_rotation_into)(np.ascontiguousarray(R, dtype=float), out)
@@ -404,7 +572,20 @@ def log_rotation(R):
 
 
 def log_error(R, Rd):
-    """``(l, |l|)`` with ``[l] = log(R Rdᵀ)``: the planner's error ``l_T`` and its norm (rad)."""
+    """The planner's error ``l_T``, ``[l] = log(R Rdᵀ)``, and its norm.
+
+    Parameters
+    ----------
+    R, Rd : numpy.ndarray
+        Rotations, 3×3.
+
+    Returns
+    -------
+    l : numpy.ndarray
+        3 entries.
+    norm : float
+        ``|l|`` (rad).
+    """
     l = np.empty(3)
     lib = native_lib()
     norm = (lib.log_error_into if lib is not None else log_error_into)(R, Rd, l)
@@ -412,22 +593,67 @@ def log_error(R, Rd):
 
 
 def scaled_gram(J, scale):
-    """``A = J S² Jᵀ`` (3×3), ``S = diag(scale)``."""
+    """``A = J S² Jᵀ`` (3×3), ``S = diag(scale)``.
+
+    Parameters
+    ----------
+    J : numpy.ndarray
+        3 × p.
+    scale : numpy.ndarray
+        The diagonal of ``S``, p entries.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``A``, 3×3.
+    """
     A = np.empty((3, 3))
     scaled_gram_into(J, scale, A)
     return A
 
 
 def scaled_back(J, y, scale):
-    """``x = S² Jᵀ y``: the step from the solution ``y`` of ``J S² Jᵀ y = l``."""
+    """``x = S² Jᵀ y``: the step from the solution ``y`` of ``J S² Jᵀ y = l``.
+
+    Parameters
+    ----------
+    J : numpy.ndarray
+        3 × p.
+    y : numpy.ndarray
+        3 entries.
+    scale : numpy.ndarray
+        The diagonal of ``S``, p entries.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``x``, p entries.
+    """
     x = np.empty(J.shape[1])
     scaled_back_into(J, y, scale, x)
     return x
 
 
 def cholesky_step(J, l, scale):
-    """``(x, True)`` with ``x = S² Jᵀ (J S² Jᵀ)^{-1} l`` by Cholesky, or ``(·, False)`` when a
-    pivot falls below :data:`CHOLESKY_PIVOT` times the largest diagonal entry."""
+    """``x = S² Jᵀ (J S² Jᵀ)^{-1} l`` by Cholesky.
+
+    Parameters
+    ----------
+    J : numpy.ndarray
+        3 × p.
+    l : numpy.ndarray
+        3 entries.
+    scale : numpy.ndarray
+        The diagonal of ``S``, p entries.
+
+    Returns
+    -------
+    x : numpy.ndarray
+        p entries (meaningless unless ``ok``).
+    ok : bool
+        ``False`` when a pivot falls below :data:`CHOLESKY_PIVOT` times the largest
+        diagonal entry.
+    """
     x = np.empty(J.shape[1])
     lib = native_lib()
     ok = (lib.cholesky_into if lib is not None else cholesky_into)(J, l, scale, x)
@@ -435,14 +661,42 @@ def cholesky_step(J, l, scale):
 
 
 def pinv_step(J, l, scale):
-    """``x = S² Jᵀ (J S² Jᵀ)^# l`` by the eigen pseudo-inverse (eigenvalues below
-    ``1e-14·max`` dropped; compiled by numba on first use: a rank-deficient fallback)."""
+    """``x = S² Jᵀ (J S² Jᵀ)^# l`` by the eigen pseudo-inverse.
+
+    Eigenvalues below ``1e-14·max`` are dropped; compiled by numba on first use: a
+    rank-deficient fallback.
+
+    Parameters
+    ----------
+    J : numpy.ndarray
+        3 × p.
+    l : numpy.ndarray
+        3 entries.
+    scale : numpy.ndarray
+        The diagonal of ``S``, p entries.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``x``, p entries.
+    """
     x = np.empty(J.shape[1])
     pinv_into(J, l, scale, x)
     return x
 
 
 def all_finite(A) -> bool:
-    """Whether every entry of the 2-d array ``A`` is finite."""
+    """Whether every entry of a 2-d array is finite.
+
+    Parameters
+    ----------
+    A : numpy.ndarray
+        A 2-d array.
+
+    Returns
+    -------
+    bool
+        Whether every entry is finite.
+    """
     lib = native_lib()
     return bool((lib.all_finite_jit if lib is not None else all_finite_jit)(A))

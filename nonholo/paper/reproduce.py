@@ -65,22 +65,49 @@ LEG_SPEED = 0.5
 
 
 def strongest_strategy() -> str:
-    """``"robust"`` when the project has it, else ``"paper"``."""
+    """The strongest strategy there is.
+
+    Returns
+    -------
+    str
+        ``"robust"`` when the project has it, else ``"paper"``.
+    """
     return "robust" if "robust" in STRATEGIES else "paper"
 
 
 @dataclass
 class Solved:
+    """One example planned with one method, and the plan re-simulated independently.
+
+    Parameters
+    ----------
+    example : Example
+        The example (:class:`nonholo.paper.examples.Example`).
+    result : PlanResult
+        Its plan.
+    resim_error : float or None
+        The terminal error of the plan re-simulated by DOP853 (``None``: no samples).
+    """
+
     example: _examples.Example
     result: object  # PlanResult
     resim_error: float | None
 
     @property
     def ok(self) -> bool:
+        """Whether the plan succeeded and its re-simulation ends within :data:`RESIM_TOL`."""
         return bool(self.result.success and self.resim_error is not None
                     and self.resim_error <= RESIM_TOL)
 
     def summary(self) -> dict:
+        """The row of ``summary.json`` (see the module).
+
+        Returns
+        -------
+        dict
+            ``example``, ``method``, ``strategy``, ``success``, ``iterations``,
+            ``terminal_error``, ``planner_error``, ``min_delta``, ``reason``.
+        """
         r = self.result
         return {"example": self.example.number, "method": r.method, "strategy": r.strategy,
                 "success": self.ok, "iterations": r.iterations,
@@ -93,12 +120,40 @@ def _log(msg: str) -> None:
 
 
 def keep(result, path: Path) -> Path:
-    """Save ``result`` to ``path`` without its wall time (see the module)."""
+    """Save a plan without its wall time (see the module).
+
+    Parameters
+    ----------
+    result : PlanResult
+        The plan.
+    path : pathlib.Path
+        The plan file.
+
+    Returns
+    -------
+    pathlib.Path
+        The file written.
+    """
     return replace(result, seconds=None).save(path)
 
 
 def solve(example: _examples.Example, method: str, strategy: str) -> Solved:
-    """Plan one example with one method and re-simulate the plan independently."""
+    """Plan one example with one method and re-simulate the plan independently.
+
+    Parameters
+    ----------
+    example : Example
+        The example.
+    method : str
+        ``"parametric"`` or ``"nonparametric"``.
+    strategy : str
+        The strategy.
+
+    Returns
+    -------
+    Solved
+        The plan and its re-simulated error.
+    """
     result = plan(example.R_start, example.R_goal, T=example.T, method=method,
                   harmonics=example.harmonics, strategy=strategy)
     resim = None
@@ -110,7 +165,18 @@ def solve(example: _examples.Example, method: str, strategy: str) -> Solved:
 
 
 def solve_all(progress=_log) -> list[Solved]:
-    """Every example with each of its methods (Example 3: the strongest strategy)."""
+    """Every example with each of its methods (Example 3: the strongest strategy).
+
+    Parameters
+    ----------
+    progress : callable, optional
+        Called with a line of progress (default: printed on stderr).
+
+    Returns
+    -------
+    list of Solved
+        The plans, in the examples' order.
+    """
     jobs = [(ex, m, "paper" if ex.must_succeed else strongest_strategy())
             for ex in _examples.examples() for m in ex.methods]
     solved = []
@@ -143,7 +209,15 @@ STATE_PROBLEMS = {
 def mechanism_cards():
     """``(figure, stem)`` of every mechanism: the platforms at a regular pose with their
     singular sets, the others with a planned motion (RPY(0.1, 0.2, 0.3) → RPY(0.8, -0.4, 0.5));
-    of those beyond SO(3), the ones with a drawing (:data:`STATE_PROBLEMS`)."""
+    of those beyond SO(3), the ones with a drawing (:data:`STATE_PROBLEMS`).
+
+    Yields
+    ------
+    figure : matplotlib.figure.Figure
+        The mechanism's card.
+    stem : str
+        Its file's stem, ``mechanism_<name>``.
+    """
     for name in catalog.names():
         mech = catalog.get(name)
         if mech.space.k:
@@ -162,25 +236,69 @@ def mechanism_cards():
 
 
 def plan_limits_goal():
-    """:data:`LIMITS_GOAL` planned with the defaults, without and with ``leg_length=LEG_LENGTH``."""
+    """:data:`LIMITS_GOAL` planned with the defaults, without and with ``leg_length=LEG_LENGTH``.
+
+    Returns
+    -------
+    free : PlanResult
+        The plan without limits.
+    limited : PlanResult
+        The plan within :data:`LEG_LENGTH`.
+    """
     R0, Rd = (so3.from_rpy(*a) for a in LIMITS_GOAL)
     return plan(R0, Rd), plan(R0, Rd, leg_length=LEG_LENGTH)
 
 
 def plan_quality(free):
-    """:data:`LIMITS_GOAL` planned with ``objective="energy"``, and ``free`` (its default plan)
-    re-timed in the least time under :data:`LEG_SPEED`."""
+    """:data:`LIMITS_GOAL` of least energy, and its default plan re-timed in the least time.
+
+    Parameters
+    ----------
+    free : PlanResult
+        :data:`LIMITS_GOAL`'s default plan.
+
+    Returns
+    -------
+    cheap : PlanResult
+        The goal planned with ``objective="energy"``.
+    fast : PlanResult
+        ``free`` re-timed in the least time under :data:`LEG_SPEED`.
+    """
     R0, Rd = (so3.from_rpy(*a) for a in LIMITS_GOAL)
     return plan(R0, Rd, objective="energy"), retime(free, LEG_SPEED)
 
 
 def plan_far_goal():
-    """:data:`FAR_GOAL` planned by :func:`nonholo.plan` with its defaults."""
+    """:data:`FAR_GOAL` planned by :func:`nonholo.plan` with its defaults.
+
+    Returns
+    -------
+    PlanResult
+        The plan.
+    """
     return plan(so3.from_rpy(*FAR_GOAL[0]), so3.from_rpy(*FAR_GOAL[1]))
 
 
 def write_figures(solved: list[Solved], outdir: Path, progress=_log) -> list[Path]:
-    """All figures of the mechanism, the singular set and the examples."""
+    """Write all figures of the mechanism, the singular set and the examples.
+
+    Also the plans of the far goal, the stroke-limits goal and the least-time plan (see
+    the module).
+
+    Parameters
+    ----------
+    solved : list of Solved
+        The examples' plans.
+    outdir : pathlib.Path
+        The output folder.
+    progress : callable, optional
+        Called with a line of progress (default: printed on stderr).
+
+    Returns
+    -------
+    list of pathlib.Path
+        The figure files written.
+    """
     written: list[Path] = []
 
     def save(fig, stem):
@@ -241,8 +359,20 @@ def write_figures(solved: list[Solved], outdir: Path, progress=_log) -> list[Pat
 
 
 def summary_table(rows: list[dict], seconds: list[float] | None = None) -> str:
-    """Markdown table of the summary rows; with ``seconds`` (each row's wall time), a time
-    column too (for the terminal, not for a file)."""
+    """Markdown table of the summary rows.
+
+    Parameters
+    ----------
+    rows : list of dict
+        The rows (:meth:`Solved.summary`).
+    seconds : list of float, optional
+        Each row's wall time: a time column too (for the terminal, not for a file).
+
+    Returns
+    -------
+    str
+        The table.
+    """
     timed = seconds is not None
     head = ("| example | method | strategy | success | iterations | re-simulated ‖l_T‖ [rad] "
             "| min \\|Δ\\| |" + (" time [s] |" if timed else "")
@@ -258,7 +388,22 @@ def summary_table(rows: list[dict], seconds: list[float] | None = None) -> str:
 
 
 def run(outdir: Path = DEFAULT_OUTDIR, audit: bool = True, draw: bool = True) -> int:
-    """The whole job; returns the exit status."""
+    """The whole job (see the module).
+
+    Parameters
+    ----------
+    outdir : pathlib.Path, default DEFAULT_OUTDIR
+        The output folder.
+    audit : bool, default True
+        Whether to audit the appendix against the derivation.
+    draw : bool, default True
+        Whether to draw the figures.
+
+    Returns
+    -------
+    int
+        The exit status: 1 when the generated code is stale or Example 1 or 2 fails, else 0.
+    """
     from derivations import audit as _audit
     from derivations import codegen
 

@@ -26,17 +26,47 @@ MAX_CORRECTIONS = 4
 
 
 def physical(problem: Evaluator, ev: Evaluation):
-    """The physical inputs of ``ev``'s control: the control itself, or for a plan in frame
-    coordinates the :class:`~nonholo.motion.frame_controls.FrameControls` along ``ev``'s nodes."""
+    """The physical inputs of an evaluation's control.
+
+    Parameters
+    ----------
+    problem : Evaluator
+        The problem.
+    ev : Evaluation
+        The evaluation.
+
+    Returns
+    -------
+    Controls
+        The control itself, or for a plan in frame coordinates the
+        :class:`~nonholo.motion.frame_controls.FrameControls` along ``ev``'s nodes.
+    """
     if not problem.frame:
         return ev.controls
     return FrameControls(ev.controls, problem.R0, problem.mechanism, problem.steps, nodes=ev.R)
 
 
 def certify(problem: Evaluator, ev: Evaluation, options: Options) -> tuple[Evaluation, Certificate, int]:
-    """The certificate of the converged (complete) ``ev``, after corrections where they
-    help (see the module). Returns ``(evaluation, certificate, corrections)``: the
-    evaluation the certificate belongs to, which is ``ev`` unless corrected."""
+    """The certificate of a converged plan, after corrections where they help (see the module).
+
+    Parameters
+    ----------
+    problem : Evaluator
+        The problem.
+    ev : Evaluation
+        The converged (complete) evaluation.
+    options : Options
+        The run's settings (``tol``, ``delta_min``).
+
+    Returns
+    -------
+    evaluation : Evaluation
+        The evaluation the certificate belongs to: ``ev`` unless corrected.
+    certificate : Certificate
+        Its certificate.
+    corrections : int
+        The corrections made.
+    """
     mech = problem.mechanism
 
     def measure(ev: Evaluation, steps: int, G=None) -> Certificate:
@@ -71,8 +101,23 @@ def certify(problem: Evaluator, ev: Evaluation, options: Options) -> tuple[Evalu
 
 
 def certified(outcome: Outcome, problem: Evaluator, options: Options) -> Outcome:
-    """``outcome`` (a success without a certificate) certified: with its certificate and the
-    evaluation it belongs to, or turned into a failure whose reason says why."""
+    """A success without a certificate, certified.
+
+    Parameters
+    ----------
+    outcome : Outcome
+        The success.
+    problem : Evaluator
+        The problem, unless the outcome names its own.
+    options : Options
+        The run's settings.
+
+    Returns
+    -------
+    Outcome
+        With its certificate and the evaluation it belongs to, or turned into a failure
+        whose reason says why.
+    """
     prob = outcome.problem if outcome.problem is not None else problem
     ev, cert, corrections = certify(prob, outcome.evaluation, options)
     if not cert.passed:
@@ -82,8 +127,23 @@ def certified(outcome: Outcome, problem: Evaluator, options: Options) -> Outcome
 
 
 def note(cert: Certificate, corrections: int, space) -> str:
-    """What a success's reason says of its certificate (errors in the units of ``space``,
-    the mechanism's :class:`~nonholo.spaces.groups.Product`)."""
+    """What a success's reason says of its certificate.
+
+    Parameters
+    ----------
+    cert : Certificate
+        The certificate.
+    corrections : int
+        The corrections made.
+    space : Product
+        The mechanism's state space (:class:`~nonholo.spaces.groups.Product`), whose units
+        the errors are given in.
+
+    Returns
+    -------
+    str
+        The text appended to the reason.
+    """
     fixed = f" after {corrections} correction{'s' * (corrections > 1)}" if corrections else ""
     return (f"; certified{fixed}: the physical replay ({cert.replay_steps} steps) ends "
             f"{space.amount(cert.terminal_error)} from the goal, error bound {space.amount(cert.error_bound)}")

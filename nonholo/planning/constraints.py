@@ -23,7 +23,18 @@ from ..numerics.checks import is_number
 @dataclass(frozen=True)
 class Clearance:
     """``sgnΔ ≥ delta_min`` along the motion (``sgn`` the sign of ``Δ`` at the start); nothing
-    for a mechanism without a singular set."""
+    for a mechanism without a singular set.
+
+    Parameters
+    ----------
+    delta_min : float
+        The clearance.
+
+    Raises
+    ------
+    ValueError
+        If ``delta_min`` is not a finite number.
+    """
 
     delta_min: float
 
@@ -32,10 +43,35 @@ class Clearance:
             raise ValueError(f"delta_min must be a finite number, got {self.delta_min!r}")
 
     def check(self, mechanism) -> "Clearance":
+        """The constraint, checked against ``mechanism`` (any mechanism takes a clearance).
+
+        Parameters
+        ----------
+        mechanism : Mechanism
+            The mechanism planned.
+
+        Returns
+        -------
+        Clearance
+            ``self``.
+        """
         return self
 
     def refusal(self, mechanism, start, goal) -> str | None:
-        """Why no motion keeping the clearance can join ``start`` and ``goal`` (``None``: it may)."""
+        """Why no motion keeping the clearance can join ``start`` and ``goal``.
+
+        Parameters
+        ----------
+        mechanism : Mechanism
+            The mechanism planned.
+        start, goal : tuple
+            States ``(R, q)``.
+
+        Returns
+        -------
+        str or None
+            The reason, or ``None``: they may be joined.
+        """
         singular = mechanism.singular
         if not singular.exists:
             return None
@@ -57,48 +93,172 @@ class Clearance:
 
 @dataclass(frozen=True)
 class LegStroke:
-    """``lo ≤ l_i(R) ≤ hi`` for every leg at every point of the motion (a platform's legs,
-    :class:`~nonholo.model.limits.LegLimits`)."""
+    """``lo ≤ l_i(R) ≤ hi`` for every leg at every point of the motion.
+
+    Parameters
+    ----------
+    limits : LegLimits
+        A platform's stroke (:class:`~nonholo.model.limits.LegLimits`).
+    """
 
     limits: LegLimits
 
     @classmethod
     def of(cls, value, mechanism) -> "LegStroke | None":
-        """From ``leg_length = (lo, hi)`` as :func:`nonholo.plan` takes it (``None``: none)."""
+        """From ``leg_length`` as :func:`nonholo.plan` takes it.
+
+        Parameters
+        ----------
+        value : tuple of float or None
+            ``(lo, hi)``, or ``None``: no limits.
+        mechanism : Mechanism
+            The mechanism planned.
+
+        Returns
+        -------
+        LegStroke or None
+            The constraint, or ``None``.
+
+        Raises
+        ------
+        ValueError
+            Naming ``leg_length``, for bad limits or a mechanism without legs.
+        """
         limits = LegLimits.from_argument(value, mechanism)
         return None if limits is None else cls(limits)
 
     def check(self, mechanism) -> "LegStroke":
+        """The constraint, checked against ``mechanism``.
+
+        Parameters
+        ----------
+        mechanism : Mechanism
+            The mechanism planned.
+
+        Returns
+        -------
+        LegStroke
+            ``self``.
+
+        Raises
+        ------
+        ValueError
+            For a mechanism without legs.
+        """
         LegLimits.from_argument(self.limits.as_tuple(), mechanism)
         return self
 
     def refusal(self, mechanism, start, goal) -> str | None:
+        """Why ``start`` or ``goal`` is outside the stroke, naming the leg.
+
+        Parameters
+        ----------
+        mechanism : Mechanism
+            The mechanism planned.
+        start, goal : tuple
+            States ``(R, q)``.
+
+        Returns
+        -------
+        str or None
+            The reason, or ``None``: they may be joined.
+        """
         return (self.limits.violation(mechanism, start[0], "the start")
                 or self.limits.violation(mechanism, goal[0], "the goal"))
 
 
 @dataclass(frozen=True)
 class LegSpeed:
-    """``|dl_i/dt| ≤ v`` for every leg: kept by re-timing the planned path."""
+    """``|dl_i/dt| ≤ v`` for every leg: kept by re-timing the planned path.
+
+    Parameters
+    ----------
+    v : float
+        The legs' top speed (the geometry's units per second).
+    """
 
     v: float
 
     @classmethod
     def of(cls, value, mechanism) -> "LegSpeed | None":
-        """From ``leg_speed = v`` as :func:`nonholo.plan` takes it (``None``: none)."""
+        """From ``leg_speed`` as :func:`nonholo.plan` takes it.
+
+        Parameters
+        ----------
+        value : float or None
+            ``v``, or ``None``: no bound.
+        mechanism : Mechanism
+            The mechanism planned.
+
+        Returns
+        -------
+        LegSpeed or None
+            The constraint, or ``None``.
+
+        Raises
+        ------
+        ValueError
+            Naming ``leg_speed``, for a bad speed or a mechanism without legs.
+        """
         speed = check_leg_speed(value, mechanism)
         return None if speed is None else cls(speed)
 
     def check(self, mechanism) -> "LegSpeed":
+        """The constraint, checked against ``mechanism``.
+
+        Parameters
+        ----------
+        mechanism : Mechanism
+            The mechanism planned.
+
+        Returns
+        -------
+        LegSpeed
+            ``self``.
+
+        Raises
+        ------
+        ValueError
+            For a mechanism without legs.
+        """
         check_leg_speed(self.v, mechanism)
         return self
 
     def refusal(self, mechanism, start, goal) -> str | None:
+        """Never a reason: any path can be re-timed to keep the speed.
+
+        Parameters
+        ----------
+        mechanism : Mechanism
+            The mechanism planned.
+        start, goal : tuple
+            States ``(R, q)``.
+
+        Returns
+        -------
+        str or None
+            The reason, or ``None``: they may be joined.
+        """
         return None
 
 
 def first_refusal(constraints, mechanism, start, goal) -> str | None:
-    """The first constraint's reason why ``start`` and ``goal`` cannot be joined, or ``None``."""
+    """The first constraint's reason why ``start`` and ``goal`` cannot be joined.
+
+    Parameters
+    ----------
+    constraints : sequence
+        Constraint objects.
+    mechanism : Mechanism
+        The mechanism planned.
+    start, goal : tuple
+        States ``(R, q)``.
+
+    Returns
+    -------
+    str or None
+        The reason, or ``None`` if no constraint rules the goal out.
+    """
     for constraint in constraints:
         reason = constraint.refusal(mechanism, start, goal)
         if reason is not None:
@@ -107,7 +267,25 @@ def first_refusal(constraints, mechanism, start, goal) -> str | None:
 
 
 def one_of(constraints, kind):
-    """The constraint of type ``kind`` in ``constraints`` (``None`` if there is none)."""
+    """The constraint of type ``kind`` in ``constraints``.
+
+    Parameters
+    ----------
+    constraints : sequence
+        Constraint objects.
+    kind : type
+        A constraint class.
+
+    Returns
+    -------
+    object or None
+        The one constraint of that type, or ``None`` if there is none.
+
+    Raises
+    ------
+    ValueError
+        If there is more than one.
+    """
     found = [c for c in constraints if isinstance(c, kind)]
     if len(found) > 1:
         raise ValueError(f"constraints has {len(found)} {kind.__name__} constraints; give at most one")

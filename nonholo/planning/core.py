@@ -53,7 +53,31 @@ from ..spaces.groups import NO_COORDINATES
 
 @dataclass(frozen=True)
 class Options:
-    """Numerical settings of a planning run (see :func:`nonholo.plan`)."""
+    """Numerical settings of a planning run (see :func:`nonholo.plan`).
+
+    Parameters
+    ----------
+    gamma : float, default 0.5
+        The decay rate ``γ`` of the θ-flow.
+    step : float, default 1.0
+        The initial (and largest) step ``h`` of the θ-flow.
+    tol : float, default 1e-10
+        The terminal error ``|l_T|`` at which a run has converged.
+    max_iter : int, default 200
+        Accepted steps at most.
+    newton_below : float, default 1e-3
+        Full Newton steps once ``|l_T|`` is below this.
+    min_step : float, default 1e-6
+        A run gives up once ``γh`` falls below this.
+    delta_min : float, default 1e-2
+        The clearance ``|Δ| ≥ delta_min`` kept along the motion.
+
+    Raises
+    ------
+    ValueError
+        If a number is not positive (``gamma``, ``step``, ``tol``, ``min_step``), negative
+        (``newton_below``, ``delta_min``) or ``max_iter`` not a count.
+    """
 
     gamma: float = 0.5
     step: float = 1.0
@@ -93,6 +117,27 @@ class Evaluation:
     :func:`nonholo.integrate.cf4.forward_variational`) only when the evaluation was asked for
     them (``full``): with them the sensitivity of ``R(t_n)`` to ``λ`` is
     ``s_n = Z_n^{-1} Σ_{stages r before t_n} W_r ∂U_r/∂λ``.
+
+    Parameters
+    ----------
+    params : numpy.ndarray
+        The control's parameters ``λ``.
+    parametrisation : Controls
+        The parametrisation they are read in.
+    complete : bool
+        Whether the trajectory reached ``T``.
+    steps_done : int
+        Integrator steps taken.
+    t_stop : float or None
+        Where the kernel stopped early (``None``: complete).
+    min_delta : float or None
+        Least ``sgn(Δ(R0))·Δ`` along the trajectory.
+    R : numpy.ndarray
+        The orientations at the nodes, ``(n, 3, 3)``.
+    controls : Controls, optional
+        The control itself, if already built.
+    q : numpy.ndarray, optional
+        The coordinates at the nodes, ``(n, k)``; none on SO(3).
     """
 
     __slots__ = ("params", "parametrisation", "complete", "steps_done", "t_stop", "min_delta",
@@ -124,10 +169,12 @@ class Evaluation:
 
     @property
     def R_T(self) -> np.ndarray | None:
+        """The orientation at ``T`` (``None`` unless complete)."""
         return self.R[-1] if self.complete else None
 
     @property
     def q_T(self) -> np.ndarray | None:
+        """The coordinates at ``T`` (``None`` unless complete)."""
         return self.q[-1] if self.complete else None
 
 
@@ -143,6 +190,27 @@ class Evaluator:
     ``None``. ``q0``, ``qd``: the coordinates of start and goal of a mechanism whose state
     goes beyond SO(3) (:mod:`nonholo.spaces.groups`; ``R0 = Rd = I`` without orientation); then
     ``l_T`` is the stacked error ``(l, δq)`` and ``J`` has ``d`` rows.
+
+    Parameters
+    ----------
+    R0, Rd : numpy.ndarray
+        Start and goal orientations.
+    T : float
+        The time horizon.
+    mechanism : Mechanism
+        The mechanism planned.
+    method : str
+        ``"parametric"`` or ``"nonparametric"``.
+    steps : int
+        Integrator steps on ``[0, T]``.
+    delta_min : float
+        The clearance kept.
+    frame : bool, default False
+        Whether to integrate in the frame coordinates ``w``.
+    leg_limits : LegLimits or None, optional
+        The legs' stroke limits, if any.
+    q0, qd : numpy.ndarray, optional
+        Start and goal coordinates beyond SO(3).
     """
 
     def __init__(self, R0, Rd, T: float, mechanism: Mechanism, method: str, steps: int,
@@ -173,35 +241,98 @@ class Evaluator:
         self.evaluations = 0
 
     def error_of(self, R, q) -> tuple[np.ndarray, dict]:
-        """The terminal error of the state ``(R, q)`` from the goal and its parts
-        (:meth:`nonholo.spaces.groups.Product.error`)."""
+        """The terminal error of the state ``(R, q)`` from the goal and its parts.
+
+        Parameters
+        ----------
+        R : numpy.ndarray
+            An orientation.
+        q : numpy.ndarray
+            Coordinates.
+
+        Returns
+        -------
+        l : numpy.ndarray
+            The stacked error (:meth:`nonholo.spaces.groups.Product.error`).
+        errors : dict
+            The norms of its parts.
+        """
         return self.mechanism.space.error(R, q, self.Rd, self.qd)
 
     def forward(self, U, h: float, stop: float):
-        """The motion of the stage table ``U`` with steps ``h`` (no variational system):
-        ``(R nodes, q nodes, steps done)``."""
+        """The motion of a stage table (no variational system).
+
+        Parameters
+        ----------
+        U : numpy.ndarray
+            The stage table, ``(N, 3, m)``.
+        h : float
+            The step.
+        stop : float
+            Stop where ``sgnΔ`` falls below this.
+
+        Returns
+        -------
+        Rs : numpy.ndarray
+            The orientations at the nodes.
+        Qs : numpy.ndarray
+            The coordinates at the nodes.
+        n : int
+            Steps done.
+        """
         Rs, Qs = self.kernels.nodes(U.shape[0])
         n, _, _ = self.kernels.forward(self.R0, self.q0, U, h, self.sign, stop, Rs, Qs)
         return Rs, Qs, int(n)
 
     def refined(self, steps: int) -> "Evaluator":
-        """The same problem on a grid of ``steps`` integrator steps."""
+        """The same problem on another grid.
+
+        Parameters
+        ----------
+        steps : int
+            Integrator steps on ``[0, T]``.
+
+        Returns
+        -------
+        Evaluator
+            The problem on that grid.
+        """
         return Evaluator(self.R0, self.Rd, self.T, self.mechanism, self.method, steps, self.delta_min,
                        self.frame, self.leg_limits, self.q0, self.qd)
 
     def use(self, controls: Controls) -> None:
-        """Interpret parameter vectors passed to :meth:`evaluate` in ``controls``' parametrisation."""
+        """Interpret parameter vectors passed to :meth:`evaluate` in a parametrisation.
+
+        Parameters
+        ----------
+        controls : Controls
+            The parametrisation.
+        """
         self.parametrisation = controls
         self._fill = stages.stage_function(controls, self.steps)
         self.stage_basis = stages.kernel_basis(controls, self.steps)
         self.n_params = controls.params.size
 
     def evaluate(self, x, delta_stop: float | None = None, full: bool = False) -> Evaluation:
-        """Simulate a control: a :class:`~nonholo.controls.parametrisations.Controls` (which becomes the
-        parametrisation, see :meth:`use`) or a flat parameter vector ``λ`` in the current
-        parametrisation. Stops early where ``sgnΔ < delta_stop`` (default ``delta_min``).
-        ``full``: keep ``Z(t_n)`` at every node and the stage weights (:attr:`Evaluation.Z`,
-        :attr:`Evaluation.Wd`)."""
+        """Simulate a control with the variational system.
+
+        Parameters
+        ----------
+        x : Controls or numpy.ndarray
+            A :class:`~nonholo.controls.parametrisations.Controls` (which becomes the
+            parametrisation, see :meth:`use`) or a flat parameter vector ``λ`` in the
+            current parametrisation.
+        delta_stop : float, optional
+            Stop early where ``sgnΔ`` falls below this (default ``delta_min``).
+        full : bool, default False
+            Keep ``Z(t_n)`` at every node and the stage weights (:attr:`Evaluation.Z`,
+            :attr:`Evaluation.Wd`).
+
+        Returns
+        -------
+        Evaluation
+            The simulation, with ``l_T`` and ``J`` if complete.
+        """
         given = None
         if isinstance(x, Controls):
             if x is not self.parametrisation:
@@ -234,13 +365,35 @@ class Evaluator:
         return ev
 
     def admissible(self, ev: Evaluation) -> bool:
-        """Complete, ``|Δ| ≥ delta_min`` along the whole trajectory and every node inside
-        the legs' stroke limits (if any)."""
+        """Whether an evaluation is admissible.
+
+        Parameters
+        ----------
+        ev : Evaluation
+            The evaluation.
+
+        Returns
+        -------
+        bool
+            Complete, ``|Δ| ≥ delta_min`` along the whole trajectory and every node inside
+            the legs' stroke limits (if any).
+        """
         return (ev.complete and self.singular.clear(ev.min_delta, self.delta_min)
                 and (self.leg_limits is None or ev.min_clearance >= 0.0))
 
     def why_not(self, ev: Evaluation) -> str:
-        """Why ``ev`` is not admissible."""
+        """Why an evaluation is not admissible.
+
+        Parameters
+        ----------
+        ev : Evaluation
+            The evaluation.
+
+        Returns
+        -------
+        str
+            The reason (``"admissible"`` if it is).
+        """
         if self.singular.exists and (ev.min_delta is None or not self.singular.clear(ev.min_delta, self.delta_min)):
             where = f" at t ≈ {ev.t_stop:.4g} s" if ev.t_stop is not None else ""
             if ev.min_delta <= 0.0:
@@ -262,9 +415,27 @@ def _ones(p: int) -> np.ndarray:
 
 
 def spatial_gradient_delta(mechanism, R: np.ndarray, eps: float = 1e-6, q=None) -> np.ndarray:
-    """``∇Δ`` at each ``R[n]``: ``Δ(exp([s]) R) = Δ(R) + ∇Δ·s + O(|s|²)`` (central differences
-    of the generated ``Δ``, error ``O(ε²)``), shape ``(n, 3)``; beyond SO(3), at each state
-    ``(R[n], q[n])`` along the stacked variation ``s = (s_R, s_q)``, shape ``(n, d)``."""
+    """``∇Δ`` at each ``R[n]``: ``Δ(exp([s]) R) = Δ(R) + ∇Δ·s + O(|s|²)``.
+
+    Central differences of the generated ``Δ``, error ``O(ε²)``; beyond SO(3), at each
+    state ``(R[n], q[n])`` along the stacked variation ``s = (s_R, s_q)``.
+
+    Parameters
+    ----------
+    mechanism : Mechanism
+        The mechanism.
+    R : numpy.ndarray
+        Orientations, ``(n, 3, 3)``.
+    eps : float, default 1e-6
+        The differences' step ``ε``.
+    q : numpy.ndarray, optional
+        Coordinates, ``(n, k)``, beyond SO(3).
+
+    Returns
+    -------
+    numpy.ndarray
+        The gradients, ``(n, 3)``; ``(n, d)`` beyond SO(3).
+    """
     if not mechanism.space.k:
         g = np.empty((len(R), 3))
         for k in range(3):
@@ -290,11 +461,26 @@ def spatial_gradient_delta(mechanism, R: np.ndarray, eps: float = 1e-6, q=None) 
 
 
 def node_gradient(problem: Evaluator, ev: Evaluation, a: np.ndarray) -> np.ndarray:
-    """The gradient in ``λ`` of ``Σ_n a_n · s_n`` (``a``: ``(N+1, d)``, one row per node;
-    ``s_n``: the sensitivity of the state at node ``n`` to ``λ``) from ``ev``, a ``full``
-    evaluation. ``s_n = Z_n^{-1} S_n``, ``S_n = Σ_{stages r before t_n} W_r ∂U_r/∂λ``; with
+    """The gradient in ``λ`` of ``Σ_n a_n · s_n``, ``s_n`` the sensitivity of node ``n``'s state.
+
+    ``s_n = Z_n^{-1} S_n``, ``S_n = Σ_{stages r before t_n} W_r ∂U_r/∂λ``; with
     ``μ_n = a_n Z_n^{-1}`` the gradient is ``Σ_r (ν_{n(r)} W_r) ∂U_r/∂λ``, ``ν_k = Σ_{n > k}
-    μ_n`` (suffix sums): one backward pass over the stored stages, no extra simulation."""
+    μ_n`` (suffix sums): one backward pass over the stored stages, no extra simulation.
+
+    Parameters
+    ----------
+    problem : Evaluator
+        The problem.
+    ev : Evaluation
+        A ``full`` evaluation.
+    a : numpy.ndarray
+        The weights, ``(N+1, d)``, one row per node.
+
+    Returns
+    -------
+    numpy.ndarray
+        The gradient, one entry per parameter.
+    """
     N, m, D = problem.steps, problem.mechanism.n_inputs, problem.mechanism.n_rates
     mu = np.linalg.solve(np.transpose(ev.Z, (0, 2, 1)), a[:, :, None])[:, :, 0]    # a_n Z_n^{-1}
     nu = np.cumsum(mu[::-1], axis=0)[::-1]                  # Σ_{n ≥ k} μ_n
@@ -314,12 +500,28 @@ def node_gradient(problem: Evaluator, ev: Evaluation, a: np.ndarray) -> np.ndarr
 
 
 def node_sensitivities(problem: Evaluator, ev: Evaluation, nodes: np.ndarray) -> np.ndarray:
-    """``s_n = ∂(state at node n)/∂λ`` at the ``nodes``, shape ``(len(nodes), d, p)``, from
-    ``ev``, a ``full`` evaluation: ``s_n = Z_n^{-1} S_n`` with ``S_n = Σ_{stages r before
-    t_n} W_r ∂U_r/∂λ`` (no extra simulation). For grid controls (each step's stages in one
-    interval ``j``, steps ``a_j … b_j − 1``) ``S_n``'s block of interval ``j`` is ``C(min(n,
-    b_j)) − C(min(n, a_j))``, ``C`` the running sum of the steps' contributions; otherwise
-    the contributions are summed over the steps before each node."""
+    """``s_n = ∂(state at node n)/∂λ`` at some nodes, from a ``full`` evaluation.
+
+    ``s_n = Z_n^{-1} S_n`` with ``S_n = Σ_{stages r before t_n} W_r ∂U_r/∂λ`` (no extra
+    simulation). For grid controls (each step's stages in one interval ``j``, steps ``a_j …
+    b_j − 1``) ``S_n``'s block of interval ``j`` is ``C(min(n, b_j)) − C(min(n, a_j))``,
+    ``C`` the running sum of the steps' contributions; otherwise the contributions are
+    summed over the steps before each node.
+
+    Parameters
+    ----------
+    problem : Evaluator
+        The problem.
+    ev : Evaluation
+        A ``full`` evaluation.
+    nodes : array_like of int
+        The nodes.
+
+    Returns
+    -------
+    numpy.ndarray
+        The sensitivities, ``(len(nodes), d, p)``.
+    """
     N, m, D = problem.steps, problem.mechanism.n_inputs, problem.mechanism.n_rates
     nodes = np.asarray(nodes, dtype=int)
     W = ev.Wd.reshape(N, 3, D, m)
@@ -356,16 +558,51 @@ def node_sensitivities(problem: Evaluator, ev: Evaluation, nodes: np.ndarray) ->
 
 
 def step_scale(problem: Evaluator, controls: Controls) -> np.ndarray:
-    """``S = W^{-1/2}`` of the metric the minimum norm is taken in: Euclidean on Fourier
-    coefficients (parametric form, ``J^#``), L2 in time on grid controls (nonparametric
-    form, eq. (11): ``W = diag(h_j)``)."""
+    """``S = W^{-1/2}`` of the metric the minimum norm is taken in.
+
+    Euclidean on Fourier coefficients (parametric form, ``J^#``), L2 in time on grid
+    controls (nonparametric form, eq. (11): ``W = diag(h_j)``).
+
+    Parameters
+    ----------
+    problem : Evaluator
+        The problem (its ``method``).
+    controls : Controls
+        The parametrisation.
+
+    Returns
+    -------
+    numpy.ndarray
+        The diagonal of ``S``, one entry per parameter (read-only).
+    """
     if problem.method == "parametric":
         return _ones(controls.params.size)
     return 1.0 / np.sqrt(controls.metric())
 
 
 def record(iteration: int, ev: Evaluation, step: float, phase: str, rejected: int, **extra) -> dict:
-    """One entry of a result's ``history`` (see :class:`~nonholo.io.result.PlanResult`)."""
+    """One entry of a result's ``history`` (see :class:`~nonholo.io.result.PlanResult`).
+
+    Parameters
+    ----------
+    iteration : int
+        The step's number.
+    ev : Evaluation
+        The accepted evaluation.
+    step : float
+        The step taken, ``γh`` (1 for Newton).
+    phase : str
+        ``"flow"``, ``"newton"``, ``"initial"``, or a strategy's own.
+    rejected : int
+        Trial steps rejected before it.
+    **extra
+        Further entries (a strategy's tags).
+
+    Returns
+    -------
+    dict
+        The entry.
+    """
     return {"iteration": iteration, "error": ev.error, "step": step,
             "min_delta": ev.min_delta, "phase": phase, "rejected": rejected, **extra}
 
@@ -375,8 +612,31 @@ def backtrack(problem: Evaluator, ev: Evaluation, direction: np.ndarray, scale: 
     """Step control of the θ-flow: halve ``scale`` until ``λ − scale·direction`` is
     admissible (reaches ``T`` with ``|Δ| ≥ delta_min``) and lowers ``|l_T|``.
 
-    Returns ``(trial, scale, halvings, None)``, or ``(None, scale, halvings, reason)`` once
-    ``scale`` falls below ``min_step``.
+    Parameters
+    ----------
+    problem : Evaluator
+        The problem.
+    ev : Evaluation
+        The current evaluation, with parameters ``λ``.
+    direction : numpy.ndarray
+        The step direction.
+    scale : float
+        The first step's scale.
+    min_step : float
+        Give up once ``scale`` falls below this.
+    full : bool, default False
+        Whether trial evaluations are ``full``.
+
+    Returns
+    -------
+    trial : Evaluation or None
+        The accepted evaluation, ``None`` when giving up.
+    scale : float
+        The scale of the accepted step (or the last one tried).
+    halvings : int
+        Steps rejected.
+    reason : str or None
+        Why it gave up, ``None`` on success.
     """
     rejected = 0
     while True:
@@ -396,7 +656,19 @@ def backtrack(problem: Evaluator, ev: Evaluation, direction: np.ndarray, scale: 
 class Descent:
     """How :func:`descend` ended: ``status`` is ``"converged"``, ``"budget"`` (``budget``
     steps taken), ``"stalled"``, ``"failed"`` (a step below ``min_step``) or
-    ``"stopped"`` (by the callback); ``evaluation`` is the last accepted one."""
+    ``"stopped"`` (by the callback); ``evaluation`` is the last accepted one.
+
+    Parameters
+    ----------
+    evaluation : Evaluation
+        The last accepted evaluation.
+    steps : int
+        Steps accepted.
+    status : str
+        How it ended.
+    reason : str
+        The ending in words.
+    """
 
     evaluation: Evaluation
     steps: int
@@ -416,6 +688,36 @@ def descend(problem: Evaluator, ev: Evaluation, options: Options,
     less than a factor ``ratio`` over the last ``window`` steps. Each accepted step is
     appended to ``history`` (numbered from ``first + 1``, with ``tags``) and passed to
     ``callback``, whose true return value stops the loop.
+
+    Parameters
+    ----------
+    problem : Evaluator
+        The problem.
+    ev : Evaluation
+        An admissible evaluation to start from.
+    options : Options
+        The run's settings.
+    direction : callable
+        ``direction(ev, newton)``, the step direction.
+    budget : int
+        Steps at most.
+    history : list
+        The run's history, appended to.
+    callback : callable, optional
+        Called with each new history entry.
+    first : int, default 0
+        The number of the step before the first.
+    full : callable, optional
+        ``full(ev)``: whether trial evaluations are ``full``.
+    stall : tuple of (int, float), optional
+        ``(window, ratio)``.
+    tags : dict, optional
+        Entries added to each history entry.
+
+    Returns
+    -------
+    Descent
+        How the loop ended.
     """
     h = options.step
     it = 0
@@ -453,7 +755,17 @@ def descend(problem: Evaluator, ev: Evaluation, options: Options,
 class Start:
     """The initial control of a run in the strategy's coordinates: ``given`` if it is the
     caller's ``u0`` (converted), with a ``note`` on what happened to a ``u0`` that could
-    not be used."""
+    not be used.
+
+    Parameters
+    ----------
+    controls : Controls
+        The initial control.
+    given : bool, default False
+        Whether it is the caller's ``u0``.
+    note : str, default ""
+        What happened to a ``u0`` that could not be used.
+    """
 
     controls: Controls
     given: bool = False
@@ -462,7 +774,29 @@ class Start:
 
 @dataclass
 class Outcome:
-    """What a strategy returns to :func:`nonholo.plan`."""
+    """What a strategy returns to :func:`nonholo.plan`.
+
+    Parameters
+    ----------
+    evaluation : Evaluation
+        The final evaluation.
+    success : bool
+        Whether the run converged.
+    reason : str
+        The ending in words.
+    history : list
+        The history entries (:func:`record`).
+    iterations : int, default 0
+        Steps accepted.
+    problem : Evaluator or None, optional
+        The problem the final evaluation belongs to, when not the one
+        :func:`nonholo.plan` built (e.g. a finer integrator grid).
+    certificate : Certificate or None, optional
+        The certificate of a success (:mod:`nonholo.planning.certification`); a success
+        without one is certified by :func:`nonholo.plan`.
+    stopped : bool, default False
+        The caller's callback stopped the run (no further route is tried).
+    """
 
     evaluation: Evaluation
     success: bool
@@ -486,6 +820,11 @@ class Strategy(ABC):
     of ``dR/dt = [L(R) u] R``, or frame coordinates ``w`` of ``dR/dt = [N(R) w] R``);
     :meth:`initial` turns the (validated, physical) initial control into those
     coordinates; :meth:`solve` plans. A strategy object holds only its options.
+
+    Parameters
+    ----------
+    options : Options
+        The run's settings.
     """
 
     name: ClassVar[str] = ""
@@ -496,25 +835,84 @@ class Strategy(ABC):
         self.options = options
 
     def frame(self, mechanism: Mechanism) -> bool:
-        """Plan in the desingularised frame coordinates ``w`` (``False``: physical inputs)."""
+        """Whether to plan in the desingularised frame coordinates ``w``.
+
+        Parameters
+        ----------
+        mechanism : Mechanism
+            The mechanism planned.
+
+        Returns
+        -------
+        bool
+            ``True`` for frame coordinates, ``False`` for physical inputs.
+        """
         return False
 
     def initial(self, problem: Evaluator, controls: Controls, given: bool) -> Start:
-        """The initial control in this strategy's coordinates, from the physical ``controls``
-        (the default initial control, or the caller's ``u0`` when ``given``)."""
+        """The initial control in this strategy's coordinates.
+
+        Parameters
+        ----------
+        problem : Evaluator
+            The problem.
+        controls : Controls
+            The physical initial control (the default one, or the caller's ``u0``).
+        given : bool
+            Whether it is the caller's ``u0``.
+
+        Returns
+        -------
+        Start
+            The initial control.
+        """
         return Start(controls, given)
 
     @abstractmethod
     def solve(self, problem: Evaluator, start: Start,
               callback: Callable[[dict], object] | None = None) -> Outcome:
-        """Plan from ``start``; call ``callback(record)`` per accepted step."""
+        """Plan from ``start``.
+
+        Parameters
+        ----------
+        problem : Evaluator
+            The problem.
+        start : Start
+            The initial control.
+        callback : callable, optional
+            Called as ``callback(record)`` per accepted step; a true value stops the run.
+
+        Returns
+        -------
+        Outcome
+            The run's outcome.
+        """
 
 
 def build_result(request, outcome: Outcome | None, success: bool, reason: str,
                  problem: Evaluator | None = None) -> PlanResult:
-    """The :class:`~nonholo.io.result.PlanResult` of a run of ``request`` (a
-    :class:`~nonholo.planning.problem.Problem`; ``outcome=None``: nothing simulated).
-    A success's samples are those of its certified replay."""
+    """The :class:`~nonholo.io.result.PlanResult` of a run.
+
+    A success's samples are those of its certified replay.
+
+    Parameters
+    ----------
+    request : Problem
+        The problem (:class:`~nonholo.planning.problem.Problem`).
+    outcome : Outcome or None
+        The run's outcome; ``None``: nothing simulated.
+    success : bool
+        Whether the plan succeeded.
+    reason : str
+        The result's reason.
+    problem : Evaluator or None, optional
+        The evaluator of the run, unless the outcome names its own.
+
+    Returns
+    -------
+    PlanResult
+        The result.
+    """
     mech, T = request.mechanism, request.T
     ev = outcome.evaluation if outcome is not None else None
     cert = outcome.certificate if outcome is not None and success else None

@@ -122,7 +122,20 @@ RANDOM_SEED = 20240226
 
 
 def energy(ev: Evaluation, metric: np.ndarray) -> float:
-    """``∫|u|² dt = Σ metric_k λ_k²`` of grid controls."""
+    """``∫|u|² dt = Σ metric_k λ_k²`` of grid controls.
+
+    Parameters
+    ----------
+    ev : Evaluation
+        An evaluation of grid controls.
+    metric : numpy.ndarray
+        The interval lengths ``h_j``, one per parameter.
+
+    Returns
+    -------
+    float
+        The energy.
+    """
     return float(np.dot(metric, ev.params ** 2))
 
 
@@ -131,8 +144,26 @@ def barrier_terms(problem: Evaluator, ev: Evaluation) -> tuple[float, np.ndarray
     ``Δ = 0`` (``r = (sgnΔ − delta_min)/(d₀ − delta_min)``, ``d₀`` = :data:`BARRIER_DELTA`)
     and on the legs' clearances from their stroke (``r = c/c₀``, ``c₀`` =
     :data:`~nonholo.model.limits.BARRIER_CLEARANCE`), ``ψ(r) = r − 1 − log r`` below 1 and 0
-    above (zero with its slope at ``r = 1``). Returns ``(Φ, nodes, r, rows)`` with the
-    terms within reach: their nodes, ``r``, and ``dr/ds`` at the node (rows of ``d``)."""
+    above (zero with its slope at ``r = 1``).
+
+    Parameters
+    ----------
+    problem : Evaluator
+        The problem.
+    ev : Evaluation
+        The evaluation.
+
+    Returns
+    -------
+    phi : float
+        The barrier ``Φ``.
+    nodes : numpy.ndarray
+        The nodes of the terms within reach.
+    r : numpy.ndarray
+        Their ``r``.
+    rows : numpy.ndarray
+        Their ``dr/ds`` at the node, rows of ``d``.
+    """
     mech = problem.mechanism
     nodes, rs, rows = [], [], []
     if problem.singular.exists:
@@ -163,7 +194,15 @@ class Objective:
     run's energy when the iteration set it (the barrier costs at most about ``εE`` of
     energy). Its gradient and the Gauss–Newton Hessian of the barrier, ``τ h Σ ψ''(r_n)
     g_n g_nᵀ`` (``g_n = ∂r_n/∂λ``, from the nodes' sensitivities), make the steps of the
-    quadratic model see the limits the motion comes close to."""
+    quadratic model see the limits the motion comes close to.
+
+    Parameters
+    ----------
+    problem : Evaluator
+        The problem.
+    metric : numpy.ndarray
+        The interval lengths ``h_j``, one per parameter.
+    """
 
     def __init__(self, problem: Evaluator, metric: np.ndarray):
         self.problem, self.metric = problem, metric
@@ -171,8 +210,20 @@ class Objective:
         self.tau = 0.0
 
     def near(self, ev: Evaluation) -> bool:
-        """Whether the barrier may act on the next evaluations (they then keep what its
-        derivatives need)."""
+        """Whether the barrier may act on the next evaluations.
+
+        They then keep what its derivatives need.
+
+        Parameters
+        ----------
+        ev : Evaluation
+            The current evaluation.
+
+        Returns
+        -------
+        bool
+            Whether its motion comes within twice a barrier's reach of a limit.
+        """
         if not self.constrained:
             return False
         problem = self.problem
@@ -182,14 +233,40 @@ class Objective:
         return near_delta or near_legs
 
     def value(self, ev: Evaluation) -> float:
+        """``F = E + τΦ`` at an evaluation.
+
+        Parameters
+        ----------
+        ev : Evaluation
+            The evaluation.
+
+        Returns
+        -------
+        float
+            The objective's value.
+        """
         E = energy(ev, self.metric)
         if not self.constrained or self.tau == 0.0:
             return E
         return E + self.tau * barrier_terms(self.problem, ev)[0]
 
     def derivatives(self, ev: Evaluation) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
-        """``(∇E, τ∇Φ, τ∇²Φ)`` at ``ev`` (a full evaluation where :meth:`near`; the last
-        ``None`` where no term is within reach)."""
+        """The objective's derivatives at an evaluation.
+
+        Parameters
+        ----------
+        ev : Evaluation
+            The evaluation (a full one where :meth:`near`).
+
+        Returns
+        -------
+        grad_energy : numpy.ndarray
+            ``∇E``.
+        grad_barrier : numpy.ndarray
+            ``τ∇Φ``.
+        hess_barrier : numpy.ndarray or None
+            ``τ∇²Φ`` (Gauss–Newton), ``None`` where no term is within reach.
+        """
         gE = 2.0 * self.metric * ev.params
         zero = np.zeros_like(gE)
         if not self.constrained or ev.Z is None:
@@ -211,7 +288,33 @@ class Run:
     converged (or can make no further step), its history, the merit's weight ``mu``, the
     quasi-Newton Hessian ``B`` of the Lagrangian, the barrier's weight ``tau`` and the first
     step of the next line search ``alpha`` (carried from round to round), and the
-    first-order residual ``kkt`` of its last iterate."""
+    first-order residual ``kkt`` of its last iterate.
+
+    Parameters
+    ----------
+    label : str
+        The start's label.
+    evaluation : Evaluation
+        The last evaluation.
+    energy : float
+        Its energy.
+    converged : bool, default False
+        Whether the iteration converged.
+    stuck : bool, default False
+        Whether it can make no further step.
+    history : list
+        Its history entries.
+    mu : float, default 0.0
+        The merit's weight on ``|l_T|``.
+    B : numpy.ndarray or None
+        The quasi-Newton Hessian of the Lagrangian (a vector: diagonal).
+    tau : float or None
+        The barrier's weight, once set.
+    kkt : float, default inf
+        The first-order residual of the last iterate.
+    alpha : float, default 1.0
+        The first step of the next line search.
+    """
 
     label: str
     evaluation: Evaluation
@@ -227,9 +330,26 @@ class Run:
 
 
 def qp_step(B: np.ndarray, g: np.ndarray, J: np.ndarray, l: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The step ``d`` of the quadratic model ``min gᵀd + ½dᵀBd`` subject to ``l + Jd = 0``
-    and its multiplier ``ν`` (``Bd + g = Jᵀν``); ``B`` positive definite, a matrix or the
-    vector of a diagonal one."""
+    """The step of the quadratic model ``min gᵀd + ½dᵀBd`` subject to ``l + Jd = 0``.
+
+    Parameters
+    ----------
+    B : numpy.ndarray
+        Positive definite: a matrix, or the vector of a diagonal one.
+    g : numpy.ndarray
+        The gradient.
+    J : numpy.ndarray
+        The Jacobian of the endpoint.
+    l : numpy.ndarray
+        The terminal error ``l_T``.
+
+    Returns
+    -------
+    d : numpy.ndarray
+        The step.
+    nu : numpy.ndarray
+        Its multiplier ``ν`` (``Bd + g = Jᵀν``).
+    """
     if B.ndim == 1:
         Hg, HJ = g / B, J.T / B[:, None]
     else:
@@ -245,11 +365,35 @@ def line_search(problem: Evaluator, ev: Evaluation, d: np.ndarray, objective: Ob
     :class:`Objective`), halved until the trajectory is admissible and the merit drops; a
     full step the merit rejects is first retried with a second-order correction (the
     least-energy ``c`` with ``J c = −l_T`` at the trial point: the merit's non-smooth term
-    would otherwise reject the full steps of the fast local convergence). Returns
-    ``(evaluation, α, rejected)``, the evaluation ``None`` when :data:`MAX_HALVINGS`
-    halvings do not do. ``alpha``: the first step tried (the run's last accepted one,
-    doubled: a run whose model overshoots does not pay the same halvings at every
-    iteration)."""
+    would otherwise reject the full steps of the fast local convergence).
+
+    Parameters
+    ----------
+    problem : Evaluator
+        The problem.
+    ev : Evaluation
+        The current evaluation.
+    d : numpy.ndarray
+        The step.
+    objective : Objective
+        ``F``.
+    mu : float
+        The merit's weight ``μ``.
+    slope : float
+        The merit's directional derivative along ``d``.
+    alpha : float, default 1.0
+        The first step tried (the run's last accepted one, doubled: a run whose model
+        overshoots does not pay the same halvings at every iteration).
+
+    Returns
+    -------
+    evaluation : Evaluation or None
+        The accepted evaluation, ``None`` when :data:`MAX_HALVINGS` halvings do not do.
+    alpha : float
+        The step ``α``.
+    rejected : int
+        Halvings.
+    """
     merit0 = objective.value(ev) + mu * ev.error
     full = objective.near(ev)
     rejected = 0
@@ -269,9 +413,28 @@ def line_search(problem: Evaluator, ev: Evaluation, d: np.ndarray, objective: Ob
 
 
 def descend(problem: Evaluator, run: Run, options: Options, iterations: int, deadline: float) -> Run:
-    """At most ``iterations`` more SQP iterations of ``run`` (see the module), stopping at
-    convergence, at a step the line search cannot accept, or past ``deadline`` (an
-    :func:`nonholo.numerics.effort.seconds` reading)."""
+    """More SQP iterations of a run (see the module).
+
+    It stops at convergence, at a step the line search cannot accept, or past ``deadline``.
+
+    Parameters
+    ----------
+    problem : Evaluator
+        The problem.
+    run : Run
+        The run, updated.
+    options : Options
+        The run's settings.
+    iterations : int
+        Iterations at most.
+    deadline : float
+        An :func:`nonholo.numerics.effort.seconds` reading.
+
+    Returns
+    -------
+    Run
+        ``run``.
+    """
     ev = run.evaluation
     metric = ev.parametrisation.metric()
     objective = Objective(problem, metric)
@@ -351,10 +514,28 @@ def descend(problem: Evaluator, run: Run, options: Options, iterations: int, dea
 
 
 def begin(problem: Evaluator, label: str, controls: Controls, options: Options) -> Run | None:
-    """A run from the physical ``controls`` projected on the grid, or ``None`` where that
-    projection's motion is not admissible. A projection that ends near the goal (a plan's)
-    is first brought onto it (:func:`polish`): the iteration then lowers the energy of
-    motions that reach the goal instead of trading the goal for energy."""
+    """A run from physical controls projected on the grid.
+
+    A projection that ends near the goal (a plan's) is first brought onto it
+    (:func:`polish`): the iteration then lowers the energy of motions that reach the goal
+    instead of trading the goal for energy.
+
+    Parameters
+    ----------
+    problem : Evaluator
+        The problem (grid controls).
+    label : str
+        The start's label.
+    controls : Controls
+        The physical controls.
+    options : Options
+        The run's settings.
+
+    Returns
+    -------
+    Run or None
+        The run, or ``None`` where the projection's motion is not admissible.
+    """
     grid = PiecewiseConstant.fit(controls, problem.T, ENERGY_GRID, problem.mechanism.n_inputs)
     ev = problem.evaluate(grid)
     if not problem.admissible(ev):
@@ -367,24 +548,65 @@ def begin(problem: Evaluator, label: str, controls: Controls, options: Options) 
 
 
 def correction(ev: Evaluation, metric: np.ndarray) -> np.ndarray:
-    """The least-energy change ``c`` of the parameters with ``J c = −l_T`` (a Newton step
-    toward the goal)."""
+    """The least-energy parameter change ``c`` with ``J c = −l_T`` (a Newton step to the goal).
+
+    Parameters
+    ----------
+    ev : Evaluation
+        A complete evaluation.
+    metric : numpy.ndarray
+        The interval lengths ``h_j``.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``c``.
+    """
     JW = ev.J / metric
     return -JW.T @ np.linalg.lstsq(JW @ ev.J.T, ev.l, rcond=None)[0]
 
 
 def estimate(run: Run) -> float:
-    """The energy ``run`` is heading for: its parameters' after a Newton step to the goal
-    (its energy itself when at the goal)."""
+    """The energy a run is heading for.
+
+    Parameters
+    ----------
+    run : Run
+        The run.
+
+    Returns
+    -------
+    float
+        Its parameters' energy after a Newton step to the goal (its energy itself when at
+        the goal).
+    """
     ev = run.evaluation
     metric = ev.parametrisation.metric()
     return float(np.dot(metric, (ev.params + correction(ev, metric)) ** 2))
 
 
 def polish(problem: Evaluator, run: Run, options: Options, steps: int = 4) -> Run:
-    """Newton steps of least energy toward the goal (:func:`correction`) while they lower
-    ``|l_T|`` and it is above ``tol``: an iteration stopped by its budget close to the goal
-    ends on it."""
+    """Newton steps of least energy toward the goal (:func:`correction`).
+
+    While they lower ``|l_T|`` and it is above ``tol``: an iteration stopped by its budget
+    close to the goal ends on it.
+
+    Parameters
+    ----------
+    problem : Evaluator
+        The problem.
+    run : Run
+        The run, updated.
+    options : Options
+        The run's settings.
+    steps : int, default 4
+        Steps at most.
+
+    Returns
+    -------
+    Run
+        ``run``.
+    """
     ev = run.evaluation
     metric = ev.parametrisation.metric()
     for _ in range(steps):
@@ -410,7 +632,20 @@ def loop_starts(problem: Evaluator):
     of that size around the drift. For a mechanism on SO(3) with a desingularised frame
     these are the frame coordinates ``w`` (``G = N``), played as the physical inputs
     ``u = W(R) w`` along their motion (:class:`~nonholo.motion.frame_controls.FrameControls`):
-    loops of ``u`` itself would run into ``Δ = 0``, where ``L`` blows up."""
+    loops of ``u`` itself would run into ``Δ = 0``, where ``L`` blows up.
+
+    Parameters
+    ----------
+    problem : Evaluator
+        The problem.
+
+    Yields
+    ------
+    label : str
+        The start's label.
+    controls : Controls
+        Its physical controls.
+    """
     mech, T = problem.mechanism, problem.T
     m = mech.n_inputs
     in_frame = mech.has_frame and not mech.space.k
@@ -445,8 +680,22 @@ def loop_starts(problem: Evaluator):
 
 
 def starts(problem: Evaluator, plan: Controls | None):
-    """The starts of the search: the certified plan's physical inputs (when given), then
-    :func:`loop_starts`."""
+    """The starts of the search: the certified plan's physical inputs, then :func:`loop_starts`.
+
+    Parameters
+    ----------
+    problem : Evaluator
+        The problem.
+    plan : Controls or None
+        The plan's physical controls, if any.
+
+    Yields
+    ------
+    label : str
+        The start's label.
+    controls : Controls
+        Its physical controls.
+    """
     if plan is not None:
         yield "plan", plan
     yield from loop_starts(problem)
@@ -461,7 +710,28 @@ def search(problem: Evaluator, initial, options: Options, budget: float,
     Every start is iterated :data:`PROBE_ITERATIONS` times; then, in rounds of as many, the
     unfinished run heading for the least energy (:func:`estimate`), while it heads below
     every finished run at the goal and the budget lasts. The runs at the goal (after
-    :func:`polish`), cheapest first, are certified until one is."""
+    :func:`polish`), cheapest first, are certified until one is.
+
+    Parameters
+    ----------
+    problem : Evaluator
+        The problem (grid controls).
+    initial : iterable of tuple
+        Labelled physical controls ``(label, controls)``.
+    options : Options
+        The run's settings.
+    budget : float
+        Seconds of effort.
+    ceiling : float, default inf
+        The energy to beat.
+
+    Returns
+    -------
+    outcome : Outcome or None
+        The certified least-energy outcome, or ``None``.
+    why : str
+        Why there is none (empty if there is).
+    """
     deadline = effort.seconds() + budget
     runs, skipped = [], 0
     for label, controls in initial:
@@ -518,7 +788,24 @@ def improve(request, result: PlanResult, quick: bool = False, budget: float | No
     ``quick`` (``objective="auto"``, the default of :func:`nonholo.plan`): the search from the
     first :data:`QUICK_STARTS` starts within :data:`QUICK_EFFORT`, and the plan replaced only
     by a motion needing less than :data:`REPLACE_BELOW` of its energy; otherwise it is
-    returned unchanged."""
+    returned unchanged.
+
+    Parameters
+    ----------
+    request : Problem
+        The run's problem.
+    result : PlanResult
+        Its certified plan.
+    quick : bool, default False
+        The quick search of ``objective="auto"``.
+    budget : float, optional
+        Seconds of effort (default :data:`ENERGY_EFFORT`, quick: :data:`QUICK_EFFORT`).
+
+    Returns
+    -------
+    PlanResult
+        The plan of least energy found, or ``result``.
+    """
     objective = "auto" if quick else "energy"
     options = {**result.options, "objective": objective}
     if not result.success:
@@ -550,8 +837,21 @@ def improve(request, result: PlanResult, quick: bool = False, budget: float | No
 
 
 def plan_energy_of(result: PlanResult) -> float:
-    """``∫|u|² dt`` of a plan's physical controls: 8-point Gauss–Legendre between the
-    breakpoints (exact for piecewise-polynomial controls of degree up to 7)."""
+    """``∫|u|² dt`` of a plan's physical controls.
+
+    8-point Gauss–Legendre between the breakpoints (exact for piecewise-polynomial
+    controls of degree up to 7).
+
+    Parameters
+    ----------
+    result : PlanResult
+        The plan.
+
+    Returns
+    -------
+    float
+        The energy.
+    """
     T = result.T
     x, w = np.polynomial.legendre.leggauss(8)
     bps = result.breakpoints if result.breakpoints is not None else []

@@ -107,7 +107,24 @@ def _survey(mech, sign: float, Ra: np.ndarray, Rb: np.ndarray, level, power: flo
 class Roadmap:
     """The roadmap of one mechanism at one clearance (see the module): ``R`` (nodes,
     ``(n, 3, 3)``), ``sign`` (``sgnΔ`` of each), ``edges`` (node pairs) and their
-    :meth:`costs`."""
+    :meth:`costs`.
+
+    Parameters
+    ----------
+    mechanism : Mechanism or str
+        The mechanism, or its name in the catalog.
+    clearance : float
+        The least ``|Δ|`` of the nodes and of every checked point of the edges.
+    samples : int, default ROADMAP_SAMPLES
+        Orientations sampled.
+    seed : int, default ROADMAP_SEED
+        The samples' seed.
+
+    Raises
+    ------
+    ValueError
+        If the mechanism has no singular set.
+    """
 
     def __init__(self, mechanism, clearance: float, samples: int = ROADMAP_SAMPLES, seed: int = ROADMAP_SEED):
         mech = catalog.get(mechanism)
@@ -148,8 +165,18 @@ class Roadmap:
         self._inside: dict = {}
 
     def inside(self, legs) -> np.ndarray:
-        """Which edges keep every checked point at least :data:`LEG_CLEARANCE` inside the
-        stroke limits ``legs`` (all, without limits; cached per limits)."""
+        """Which edges keep every checked point at least :data:`LEG_CLEARANCE` inside stroke limits.
+
+        Parameters
+        ----------
+        legs : LegLimits or None
+            The stroke limits (:class:`~nonholo.model.limits.LegLimits`), or ``None``.
+
+        Returns
+        -------
+        numpy.ndarray
+            One bool per edge (all true without limits; cached per limits).
+        """
         if legs is None:
             return np.ones(len(self.edges), dtype=bool)
         if legs not in self._inside:
@@ -163,7 +190,18 @@ class Roadmap:
         return self._inside[legs]
 
     def costs(self, power: float) -> np.ndarray:
-        """The edges' costs ``∫ ds / |Δ|^power`` (cached per ``power``)."""
+        """The edges' costs ``∫ ds / |Δ|^power`` (cached per ``power``).
+
+        Parameters
+        ----------
+        power : float
+            The power of ``|Δ|``.
+
+        Returns
+        -------
+        numpy.ndarray
+            One cost per edge.
+        """
         if power not in self._costs:
             self._costs[power] = _cost(self._profile, self._length, power)
         return self._costs[power]
@@ -188,10 +226,24 @@ class Roadmap:
         return np.full(ok.sum(), node_index), j[ok], cost[ok]
 
     def path(self, R0, Rd, level: float, power: float = CONDITIONING_POWERS[0], legs=None) -> np.ndarray | None:
-        """The cheapest roadmap path ``R0 → … → Rd`` (``(k, 3, 3)``, ends included) whose
-        links to the start and goal keep ``sgnΔ ≥ level`` (and, with stroke limits ``legs``,
-        whose every checked point is inside them: see :meth:`inside`); ``None`` if none
-        joins them."""
+        """The cheapest roadmap path ``R0 → … → Rd``.
+
+        Parameters
+        ----------
+        R0, Rd : numpy.ndarray
+            Start and goal orientations.
+        level : float
+            The least ``sgnΔ`` of the links to the start and goal.
+        power : float, default CONDITIONING_POWERS[0]
+            The power of the cost ``∫ ds / |Δ|^power``.
+        legs : LegLimits or None, optional
+            Stroke limits every checked point keeps inside (see :meth:`inside`).
+
+        Returns
+        -------
+        numpy.ndarray or None
+            The path, ``(k, 3, 3)``, ends included; ``None`` if none joins them.
+        """
         sign = float(np.sign(self.mechanism.delta(R0)))
         n = len(self.R)
         s_i, s_j, s_l = self._links(R0, sign, level, n, power, legs)
@@ -213,17 +265,47 @@ class Roadmap:
 
 @lru_cache(maxsize=8)
 def roadmap(mechanism, clearance: float) -> Roadmap:
-    """The cached :class:`Roadmap` of a mechanism (a :class:`~nonholo.model.mechanism.Mechanism`)."""
+    """The cached :class:`Roadmap` of a mechanism.
+
+    Parameters
+    ----------
+    mechanism : Mechanism
+        The mechanism (:class:`~nonholo.model.mechanism.Mechanism`).
+    clearance : float
+        The roadmap's clearance.
+
+    Returns
+    -------
+    Roadmap
+        The roadmap.
+    """
     return Roadmap(mechanism, clearance)
 
 
 def via_nodes(mechanism, R0, Rd, count: int, legs=None) -> np.ndarray:
-    """Up to ``count`` nodes of the mechanism's roadmap (default clearance) in the start's
-    component (with stroke limits ``legs``, at least :data:`LEG_CLEARANCE` inside them), in
-    the order they were sampled — Haar-uniform, so a random order fixed by the roadmap's
-    seed: intermediate orientations for a route of two legs (the last stage of
-    :func:`nonholo.planning.route.steer`). ``(k, 3, 3)``; none without a singular set, or
-    where ``R0`` and ``Rd`` lie on different sides of ``Δ = 0``."""
+    """Up to ``count`` nodes of the mechanism's roadmap (default clearance) in the start's component.
+
+    In the order they were sampled — Haar-uniform, so a random order fixed by the
+    roadmap's seed: intermediate orientations for a route of two legs (the last stage of
+    :func:`nonholo.planning.route.steer`).
+
+    Parameters
+    ----------
+    mechanism : Mechanism or str
+        The mechanism.
+    R0, Rd : numpy.ndarray
+        Start and goal orientations.
+    count : int
+        Nodes at most.
+    legs : LegLimits or None, optional
+        Stroke limits the nodes keep at least :data:`LEG_CLEARANCE` inside.
+
+    Returns
+    -------
+    numpy.ndarray
+        The nodes, ``(k, 3, 3)``; none without a singular set, or where ``R0`` and ``Rd``
+        lie on different sides of ``Δ = 0``.
+    """
     mech = catalog.get(mechanism)
     if not mech.singular.exists:
         return np.empty((0, 3, 3))
@@ -238,7 +320,18 @@ def via_nodes(mechanism, R0, Rd, count: int, legs=None) -> np.ndarray:
 
 
 def default_clearance(mechanism) -> float:
-    """:data:`CLEARANCE_QUANTILE` of ``|Δ|`` over Haar-uniform orientations (fixed seed)."""
+    """A roadmap's clearance by default.
+
+    Parameters
+    ----------
+    mechanism : Mechanism or str
+        The mechanism.
+
+    Returns
+    -------
+    float
+        :data:`CLEARANCE_QUANTILE` of ``|Δ|`` over Haar-uniform orientations (fixed seed).
+    """
     return _clearance(catalog.get(mechanism))
 
 
@@ -250,9 +343,30 @@ def _clearance(mech) -> float:
 
 def shortcut(mech, sign: float, path: np.ndarray, level: float, power: float = CONDITIONING_POWERS[0],
              legs=None) -> np.ndarray:
-    """``path`` with every waypoint dropped that a clear geodesic of no greater cost
-    (``∫ ds / |Δ|^power``) can skip (greedy, from the start: the farthest such waypoint is
-    the next); with stroke limits ``legs``, a clear geodesic keeps inside them too."""
+    """A path with every waypoint dropped that a clear geodesic of no greater cost can skip.
+
+    Greedy, from the start: the farthest such waypoint is the next.
+
+    Parameters
+    ----------
+    mech : Mechanism
+        The mechanism.
+    sign : float
+        ``sgnΔ`` of the path's component.
+    path : numpy.ndarray
+        The waypoints, ``(k, 3, 3)``.
+    level : float
+        The least ``sgnΔ`` of a clear geodesic.
+    power : float, default CONDITIONING_POWERS[0]
+        The power of the cost ``∫ ds / |Δ|^power``.
+    legs : LegLimits or None, optional
+        Stroke limits a clear geodesic keeps inside too.
+
+    Returns
+    -------
+    numpy.ndarray
+        The waypoints kept, ends included.
+    """
     _, hops = _survey(mech, sign, path[:-1], path[1:], -np.inf, power)
     along = np.concatenate([[0.0], np.cumsum(hops)])
     out = [0]
@@ -266,7 +380,20 @@ def shortcut(mech, sign: float, path: np.ndarray, level: float, power: float = C
 
 
 def subdivide(path: np.ndarray, max_hop: float) -> np.ndarray:
-    """``path`` with points inserted along its geodesics so that no hop exceeds ``max_hop``."""
+    """A path with points inserted along its geodesics so that no hop exceeds ``max_hop``.
+
+    Parameters
+    ----------
+    path : numpy.ndarray
+        The waypoints, ``(k, 3, 3)``.
+    max_hop : float
+        The longest hop (rad).
+
+    Returns
+    -------
+    numpy.ndarray
+        The points, ends included.
+    """
     out = [path[0]]
     for Ra, Rb in zip(path[:-1], path[1:]):
         k = max(1, int(np.ceil(so3.distance(Ra, Rb) / max_hop)))
@@ -277,13 +404,40 @@ def subdivide(path: np.ndarray, max_hop: float) -> np.ndarray:
 def orientation_path(mechanism, R0, Rd, *, delta_min: float = 1e-2, clearance: float | None = None,
                      max_hop: float = MAX_HOP, power: float = CONDITIONING_POWERS[0],
                      legs=None) -> np.ndarray | None:
-    """A path of orientations from ``R0`` to ``Rd`` in the start's component (see the
-    module): the cheapest in ``∫ ds / |Δ|^power`` on the roadmap, shortcut, ``(k + 1, 3,
-    3)`` with ``R0`` first, ``Rd`` last and hops of at most ``max_hop`` rad, every point of its geodesics with ``sgnΔ ≥ clearance`` (default
-    :func:`default_clearance`) but near the ends, where it may drop to what they have
-    (never below ``delta_min``); with stroke limits ``legs``
-    (:class:`~nonholo.model.limits.LegLimits`), every point inside them as well. ``None`` if the
-    roadmap joins no such path."""
+    """A path of orientations from ``R0`` to ``Rd`` in the start's component (see the module).
+
+    The cheapest in ``∫ ds / |Δ|^power`` on the roadmap, shortcut, every point of its
+    geodesics with ``sgnΔ ≥ clearance`` but near the ends, where it may drop to what they
+    have (never below ``delta_min``).
+
+    Parameters
+    ----------
+    mechanism : Mechanism or str
+        The mechanism.
+    R0, Rd : array_like
+        Start and goal orientations.
+    delta_min : float, default 1e-2
+        The least ``sgnΔ`` anywhere.
+    clearance : float, optional
+        The roadmap's clearance (default :func:`default_clearance`).
+    max_hop : float, default MAX_HOP
+        The longest hop (rad).
+    power : float, default CONDITIONING_POWERS[0]
+        The power of the cost.
+    legs : LegLimits or None, optional
+        Stroke limits (:class:`~nonholo.model.limits.LegLimits`) every point keeps inside.
+
+    Returns
+    -------
+    numpy.ndarray or None
+        The path, ``(k + 1, 3, 3)``, ``R0`` first, ``Rd`` last, hops of at most
+        ``max_hop`` rad; ``None`` if the roadmap joins no such path.
+
+    Raises
+    ------
+    ValueError
+        If ``R0`` or ``Rd`` is not a rotation.
+    """
     mech = catalog.get(mechanism)
     R0 = so3.check_rotation(R0, "R0")
     Rd = so3.check_rotation(Rd, "Rd")

@@ -114,8 +114,31 @@ SMOOTHING_TIME = 0.5
 
 @dataclass
 class Steered:
-    """What :func:`steer` made of a route: the stitched control (``None`` if a hop failed),
-    its certificate, the hops' results and why it failed."""
+    """What :func:`steer` made of a route.
+
+    Parameters
+    ----------
+    controls : Stitched or None
+        The stitched control (``None`` if a hop failed or it was not certified).
+    certificate : Certificate or None
+        Its certificate.
+    hops : list of PlanResult
+        The hops' results.
+    reason : str
+        Why the route failed.
+    path : numpy.ndarray or None
+        The path's orientations.
+    certify_seconds : float, default 0.0
+        Seconds of effort the stitched control's last certification took.
+    draft : Stitched or None
+        The stitched control of a route whose hops all succeeded but whose stitched control
+        was not certified (``controls`` is then ``None``).
+    smoothed : tuple or None
+        The route re-planned as one smooth control (:func:`smooth`), when ``steer`` was
+        given a ``rescue`` that succeeded on the ``draft``.
+    two_legs : bool, default False
+        Whether the route is the last stage's two legs through an intermediate orientation.
+    """
 
     controls: Stitched | None
     certificate: Certificate | None
@@ -148,7 +171,13 @@ def _end(res: PlanResult) -> tuple:
 class RoadmapPaths:
     """The route's paths for a state on SO(3) alone: the roadmap's paths of orientations
     (:mod:`nonholo.planning.roadmap`), hops measured in rad, the budget counted from the
-    start of :func:`nonholo.plan`."""
+    start of :func:`nonholo.plan`.
+
+    Parameters
+    ----------
+    mechanism : Mechanism
+        The mechanism planned.
+    """
 
     unit = " rad"
     max_hop_sensitivity = MAX_HOP_SENSITIVITY
@@ -157,30 +186,103 @@ class RoadmapPaths:
         self.mechanism = mechanism
 
     def paths(self, start, goal, delta_min: float, leg_limits):
-        """The paths :func:`steer` tries in turn (lists of states ``(R, q)``, ``None`` for
-        none): the roadmap's of every cost of :data:`nonholo.planning.roadmap.CONDITIONING_POWERS`."""
+        """The paths :func:`steer` tries in turn: the roadmap's, one per cost.
+
+        The costs are those of :data:`nonholo.planning.roadmap.CONDITIONING_POWERS`, in order.
+
+        Parameters
+        ----------
+        start, goal : tuple
+            The ends, states ``(R, q)``.
+        delta_min : float
+            The least ``sgnΔ`` anywhere.
+        leg_limits : LegLimits or None
+            Stroke limits the paths keep inside.
+
+        Yields
+        ------
+        list of tuple or None
+            A path of states ``(R, q)``, or ``None`` for none.
+        """
         for power in roadmap.CONDITIONING_POWERS:
             path = roadmap.orientation_path(self.mechanism, start[0], goal[0], delta_min=delta_min,
                                             power=power, legs=leg_limits)
             yield None if path is None else [(R, NO_COORDINATES) for R in path]
 
     def no_path(self, leg_limits, start, goal) -> str:
-        """Why no path of :meth:`paths` was given (``start``, ``goal``: its ends)."""
+        """Why no path of :meth:`paths` was given.
+
+        Parameters
+        ----------
+        leg_limits : LegLimits or None
+            The stroke limits.
+        start, goal : tuple
+            The ends, states ``(R, q)``.
+
+        Returns
+        -------
+        str
+            The reason.
+        """
         within = "" if leg_limits is None else " and inside the legs' stroke limits"
         return f"no path of orientations clear of Δ = 0{within} joins the start and the goal on the roadmap"
 
     def length(self, a, b) -> float:
-        """The length of the hop ``a → b`` (rad)."""
+        """The length of the hop ``a → b`` (rad).
+
+        Parameters
+        ----------
+        a, b : tuple
+            The ends, states ``(R, q)``.
+
+        Returns
+        -------
+        float
+            The geodesic angle between their orientations.
+        """
         return so3.distance(a[0], b[0])
 
     def midpoint(self, a, b) -> tuple:
+        """The state halfway between ``a`` and ``b``, where a failed hop is split.
+
+        Parameters
+        ----------
+        a, b : tuple
+            The ends, states ``(R, q)``.
+
+        Returns
+        -------
+        tuple
+            The state ``(R, q)``.
+        """
         return self.mechanism.space.interpolate(a, b, [0.5])[0]
 
     def time_budget(self, plan_started: float) -> tuple[float, float]:
-        """When the route's clock starts and its budget (seconds of effort)."""
+        """When the route's clock starts and its budget (seconds of effort).
+
+        Parameters
+        ----------
+        plan_started : float
+            The :func:`nonholo.numerics.effort.seconds` reading at the start of
+            :func:`nonholo.plan`.
+
+        Returns
+        -------
+        started : float
+            When the route's clock starts: ``plan_started``.
+        budget : float
+            :data:`TIME_BUDGET`.
+        """
         return plan_started, TIME_BUDGET
 
     def through(self) -> str:
+        """What the route goes through, for the result's reason.
+
+        Returns
+        -------
+        str
+            ``"a path of orientations clear of Δ = 0"``.
+        """
         return "a path of orientations clear of Δ = 0"
 
 
@@ -188,7 +290,13 @@ class StraightPaths(RoadmapPaths):
     """The route's paths for a state with coordinates: the straight path of states
     (:mod:`nonholo.planning.state_path`), hops measured in the stacked error's norm, the
     budget counted from the route's own start (the local attempt at a far goal can take
-    the whole of :data:`TIME_BUDGET`)."""
+    the whole of :data:`TIME_BUDGET`).
+
+    Parameters
+    ----------
+    mechanism : Mechanism
+        The mechanism planned.
+    """
 
     max_hop_sensitivity = state_path.MAX_HOP_SENSITIVITY
 
@@ -199,46 +307,156 @@ class StraightPaths(RoadmapPaths):
         return f" {unit}" if unit else ""
 
     def paths(self, start, goal, delta_min: float, leg_limits):
+        """The one path :func:`steer` tries: the straight path of states.
+
+        Parameters
+        ----------
+        start, goal : tuple
+            The ends, states ``(R, q)``.
+        delta_min : float
+            The least ``sgnΔ`` anywhere.
+        leg_limits : LegLimits or None
+            Not used (no mechanism with coordinates has legs).
+
+        Yields
+        ------
+        list of tuple or None
+            The path (:func:`nonholo.planning.state_path.straight_path`), or ``None``.
+        """
         yield state_path.straight_path(self.mechanism, start, goal, delta_min=delta_min)
 
     def no_path(self, leg_limits, start, goal) -> str:
+        """Why there is no straight path.
+
+        Parameters
+        ----------
+        leg_limits : LegLimits or None
+            Not used.
+        start, goal : tuple
+            The ends, states ``(R, q)``.
+
+        Returns
+        -------
+        str
+            The reason: too far, or too close to ``Δ = 0``.
+        """
         return state_path.too_far(self.mechanism, start, goal) or (
             f"the straight path of states comes within delta_min of the singular set Δ = 0 of "
             f"{self.mechanism.name!r}")
 
     def length(self, a, b) -> float:
+        """The length of the hop ``a → b``, in the stacked error's norm.
+
+        Parameters
+        ----------
+        a, b : tuple
+            The ends, states ``(R, q)``.
+
+        Returns
+        -------
+        float
+            The length (:func:`nonholo.planning.state_path.length`).
+        """
         return state_path.length(self.mechanism, a, b)
 
     def time_budget(self, plan_started: float) -> tuple[float, float]:
+        """When the route's clock starts and its budget (seconds of effort).
+
+        Parameters
+        ----------
+        plan_started : float
+            Not used: the clock starts now.
+
+        Returns
+        -------
+        started : float
+            The :func:`nonholo.numerics.effort.seconds` reading now.
+        budget : float
+            :data:`nonholo.planning.state_path.TIME_BUDGET`.
+        """
         return effort.seconds(), state_path.TIME_BUDGET
 
     def through(self) -> str:
+        """What the route goes through, for the result's reason.
+
+        Returns
+        -------
+        str
+            ``"a straight path of states"``, clear of ``Δ = 0`` where there is a singular set.
+        """
         return "a straight path of states" + (" clear of Δ = 0" if self.mechanism.singular.exists else "")
 
 
 def paths_for(mechanism: Mechanism) -> RoadmapPaths:
-    """The route's path provider for ``mechanism``'s space, chosen once: the roadmap of
-    orientations for a state on SO(3) alone, the straight path of states otherwise."""
+    """The route's path provider for a mechanism's space.
+
+    Parameters
+    ----------
+    mechanism : Mechanism
+        The mechanism.
+
+    Returns
+    -------
+    RoadmapPaths
+        The roadmap of orientations for a state on SO(3) alone, the straight path of
+        states (:class:`StraightPaths`) otherwise.
+    """
     return StraightPaths(mechanism) if mechanism.space.k else RoadmapPaths(mechanism)
 
 
 def time_budget(mechanism: Mechanism, plan_started: float) -> tuple[float, float]:
-    """When the route's clock starts and its budget, seconds of effort (:func:`paths_for`)."""
+    """When the route's clock starts and its budget, seconds of effort (:func:`paths_for`).
+
+    Parameters
+    ----------
+    mechanism : Mechanism
+        The mechanism.
+    plan_started : float
+        The :func:`nonholo.numerics.effort.seconds` reading at the start of :func:`nonholo.plan`.
+
+    Returns
+    -------
+    started : float
+        When the route's clock starts.
+    budget : float
+        Its budget.
+    """
     return paths_for(mechanism).time_budget(plan_started)
 
 
 def max_hop_sensitivity(mechanism: Mechanism) -> float:
-    """The largest sensitivity of a hop the route keeps (a larger one is split):
-    :data:`MAX_HOP_SENSITIVITY` on SO(3), :data:`nonholo.planning.state_path.MAX_HOP_SENSITIVITY`
-    with coordinates (see there why it is larger)."""
+    """The largest sensitivity of a hop the route keeps (a larger one is split).
+
+    Parameters
+    ----------
+    mechanism : Mechanism
+        The mechanism.
+
+    Returns
+    -------
+    float
+        :data:`MAX_HOP_SENSITIVITY` on SO(3),
+        :data:`nonholo.planning.state_path.MAX_HOP_SENSITIVITY` with coordinates (see there
+        why it is larger).
+    """
     return paths_for(mechanism).max_hop_sensitivity
 
 
 @lru_cache(maxsize=8)
 def hop_strategy(cls: type, limit: float = MAX_HOP_SENSITIVITY) -> type:
-    """The strategy ``cls`` for hops: where it weighs the conditioning of its plans
-    (``max_sensitivity``), it keeps searching until a hop's is below ``limit``
-    (:func:`max_hop_sensitivity`)."""
+    """A strategy for hops: the strategy class ``cls`` with a sensitivity ``limit``.
+
+    Parameters
+    ----------
+    limit : float, default MAX_HOP_SENSITIVITY
+        The largest sensitivity of a hop (:func:`max_hop_sensitivity`).
+
+    Returns
+    -------
+    type
+        Where the strategy weighs the conditioning of its plans (``max_sensitivity``), a
+        subclass that keeps searching until a hop's is below ``limit``; else ``cls``.
+    """
     if not hasattr(cls, "max_sensitivity"):
         return cls
     return type(cls.__name__, (cls,), {"max_sensitivity": limit, "__module__": cls.__module__})
@@ -246,9 +464,14 @@ def hop_strategy(cls: type, limit: float = MAX_HOP_SENSITIVITY) -> type:
 
 @lru_cache(maxsize=8)
 def quick_strategy(cls: type) -> type:
-    """The strategy ``cls`` trying only its first :data:`VIA_ATTEMPTS` initial guesses (a
-    strategy without several, :meth:`attempts`, as it is): the legs of the route's last
-    stage."""
+    """A strategy for the legs of the route's last stage, from the strategy class ``cls``.
+
+    Returns
+    -------
+    type
+        A subclass trying only its first :data:`VIA_ATTEMPTS` initial guesses (``cls``
+        itself for a strategy without several, ``attempts``).
+    """
     if not hasattr(cls, "attempts"):
         return cls
 
@@ -260,9 +483,16 @@ def quick_strategy(cls: type) -> type:
 
 @lru_cache(maxsize=8)
 def smoothing_strategy(cls: type) -> type:
-    """The strategy ``cls`` descending from the given initial control alone (a strategy
-    with several initial guesses, :meth:`attempts`, tries only that one): a smooth re-plan
-    is wanted near the stitched control, not anywhere."""
+    """A strategy for the smooth re-plan, from the strategy class ``cls``.
+
+    The re-plan is wanted near the stitched control, not anywhere.
+
+    Returns
+    -------
+    type
+        A subclass descending from the given initial control alone (``cls`` itself for a
+        strategy without several initial guesses, ``attempts``).
+    """
     if not hasattr(cls, "attempts"):
         return cls
 
@@ -273,9 +503,28 @@ def smoothing_strategy(cls: type) -> type:
 
 
 def smoothing_guesses(stitched: Stitched, method: str, harmonics: int, grid: int, steps: int) -> list:
-    """The initial controls of :func:`smooth`: the stitched control's planned coordinates
-    projected on :data:`SMOOTHING_HARMONICS` harmonics (those above the run's ``harmonics``
-    that ``steps`` resolve) or, for method ``"nonparametric"``, on the run's grid."""
+    """The initial controls of :func:`smooth`.
+
+    Parameters
+    ----------
+    stitched : Stitched
+        The stitched control.
+    method : str
+        The run's method.
+    harmonics : int
+        The run's harmonics.
+    grid : int
+        The run's grid.
+    steps : int
+        The run's integrator steps.
+
+    Returns
+    -------
+    list of Controls
+        The stitched control's planned coordinates projected on :data:`SMOOTHING_HARMONICS`
+        harmonics (those above ``harmonics`` that ``steps`` resolve) or, for method
+        ``"nonparametric"``, on the run's grid.
+    """
     T, m = stitched.T, stitched.n_inputs
     if method == "nonparametric":
         return [PiecewiseConstant.fit(stitched.planned, T, grid, m)]
@@ -284,13 +533,31 @@ def smoothing_guesses(stitched: Stitched, method: str, harmonics: int, grid: int
 
 def smooth(request, stitched: Stitched, strategy: type, deadline: float,
            reserve: float = 0.0) -> tuple[Outcome, Evaluator] | None:
-    """The route's motion re-planned as one control (see the module): the certified outcome
-    and its problem, or ``None`` when no guess of :func:`smoothing_guesses` converged to a
-    certified plan in time. ``deadline``: an :func:`nonholo.numerics.effort.seconds` reading by which the
-    smoothing must be done; ``reserve``: seconds of effort kept for the certification after a
-    descent converges (about what the stitched control's took), which cannot be
-    interrupted. Nothing is tried unless :data:`SMOOTHING_TIME` and ``reserve`` fit before
-    ``deadline``; a descent stops at its first iteration past :data:`SMOOTHING_TIME`."""
+    """The route's motion re-planned as one control (see the module).
+
+    Nothing is tried unless :data:`SMOOTHING_TIME` and ``reserve`` fit before
+    ``deadline``; a descent stops at its first iteration past :data:`SMOOTHING_TIME`.
+
+    Parameters
+    ----------
+    request : Problem
+        The run's problem.
+    stitched : Stitched
+        The stitched control.
+    strategy : type
+        The run's strategy class.
+    deadline : float
+        An :func:`nonholo.numerics.effort.seconds` reading by which the smoothing must be done.
+    reserve : float, default 0.0
+        Seconds of effort kept for the certification after a descent converges (about what
+        the stitched control's took), which cannot be interrupted.
+
+    Returns
+    -------
+    tuple of (Outcome, Evaluator) or None
+        The certified outcome and its problem, or ``None`` when no guess of
+        :func:`smoothing_guesses` converged to a certified plan in time.
+    """
     now = effort.seconds()
     if now + SMOOTHING_TIME + reserve > deadline:
         return None
@@ -315,9 +582,23 @@ def smooth(request, stitched: Stitched, strategy: type, deadline: float,
 
 
 def hop_delta_min(mechanism: Mechanism, a, b, delta_min: float) -> float:
-    """The ``delta_min`` of a hop between the states ``a → b`` (pairs ``(R, q)``):
-    :data:`HOP_DELTA_MIN`, or half the least ``|Δ|`` of its ends if that is less, never
-    below the run's ``delta_min`` (which is all a mechanism without a singular set has)."""
+    """The ``delta_min`` of a hop between two states.
+
+    Parameters
+    ----------
+    mechanism : Mechanism
+        The mechanism.
+    a, b : tuple
+        The hop's ends, states ``(R, q)``.
+    delta_min : float
+        The run's ``delta_min``.
+
+    Returns
+    -------
+    float
+        :data:`HOP_DELTA_MIN`, or half the least ``|Δ|`` of its ends if that is less, never
+        below the run's ``delta_min`` (which is all a mechanism without a singular set has).
+    """
     if not mechanism.singular.exists:
         return delta_min
     R = np.stack([a[0], b[0]])
@@ -330,23 +611,55 @@ def steer(mechanism: Mechanism, R0, Rd, T: float, local: Callable, *, tol: float
           sign: float, budget: float | None = None, started: float | None = None,
           leg_limits=None, rescue: Callable | None = None, q0=None, qd=None,
           leg: Callable | None = None) -> Steered:
-    """The route ``R0 → Rd`` steered hop by hop (see the module) along the path of the
-    first cost of :data:`nonholo.planning.roadmap.CONDITIONING_POWERS`, then along the path of the
-    next (one not tried yet) while the route fails; beyond SO(3) (``q0``, ``qd``: the
-    coordinates of start and goal), along the straight path of states.
-    ``local(start, goal, T, delta_min)`` plans one hop between two states ``(R, q)`` (a
-    :class:`~nonholo.io.result.PlanResult`); ``budget``: seconds of effort (default
-    :data:`TIME_BUDGET`) after
-    ``started`` (an :func:`nonholo.numerics.effort.seconds` reading; default: now) after which no further
-    hop is tried. ``leg_limits``: stroke limits (:class:`~nonholo.model.limits.LegLimits`) the
-    path of orientations and the stitched replay keep (``local`` keeps them in each hop).
-    ``rescue(draft, seconds)``: called when a path's hops all succeed but their stitched
-    control is not certified (``seconds``: what its certification took); a smooth re-plan
-    from it (:func:`smooth`: an ``(outcome, problem)``, or ``None``) ends the search
-    (``Steered.smoothed``) — one smooth control is often far better conditioned than the
-    product of its hops'. ``leg(start, goal, T, delta_min, quick)``: plans a leg of the last
-    stage (see the module) with the run's strategy, without the hops' cap, ``quick``: with
-    :func:`quick_strategy`; without it (or beyond SO(3)) there is no last stage."""
+    """The route ``R0 → Rd`` steered hop by hop (see the module).
+
+    Along the path of the first cost of :data:`nonholo.planning.roadmap.CONDITIONING_POWERS`,
+    then along the path of the next (one not tried yet) while the route fails; beyond
+    SO(3), along the straight path of states.
+
+    Parameters
+    ----------
+    mechanism : Mechanism
+        The mechanism.
+    R0, Rd : array_like
+        Start and goal orientations.
+    T : float
+        The time horizon.
+    local : callable
+        ``local(start, goal, T, delta_min)`` plans one hop between two states ``(R, q)`` (a
+        :class:`~nonholo.io.result.PlanResult`).
+    tol : float
+        The run's ``tol``.
+    delta_min : float
+        The run's ``delta_min``.
+    sign : float
+        ``sgnΔ`` of the start.
+    budget : float, optional
+        Seconds of effort (default :data:`TIME_BUDGET`) after ``started`` after which no
+        further hop is tried.
+    started : float, optional
+        An :func:`nonholo.numerics.effort.seconds` reading (default: now).
+    leg_limits : LegLimits or None, optional
+        Stroke limits (:class:`~nonholo.model.limits.LegLimits`) the path of orientations and
+        the stitched replay keep (``local`` keeps them in each hop).
+    rescue : callable, optional
+        ``rescue(draft, seconds)``: called when a path's hops all succeed but their stitched
+        control is not certified (``seconds``: what its certification took); a smooth
+        re-plan from it (:func:`smooth`: an ``(outcome, problem)``, or ``None``) ends the
+        search (``Steered.smoothed``) — one smooth control is often far better conditioned
+        than the product of its hops'.
+    q0, qd : numpy.ndarray, optional
+        The coordinates of start and goal beyond SO(3).
+    leg : callable, optional
+        ``leg(start, goal, T, delta_min, quick)``: plans a leg of the last stage (see the
+        module) with the run's strategy, without the hops' cap, ``quick``: with
+        :func:`quick_strategy`; without it (or beyond SO(3)) there is no last stage.
+
+    Returns
+    -------
+    Steered
+        What became of the route.
+    """
     if started is None:
         started = effort.seconds()
     if budget is None:
@@ -471,11 +784,30 @@ def _via(mechanism: Mechanism, start, goal, T: float, leg: Callable, *, tol: flo
 
 def build_result(request, steered: Steered, local_reason: str,
                  smoothed: tuple[Outcome, Evaluator] | None = None) -> PlanResult:
-    """The :class:`~nonholo.io.result.PlanResult` of a certified global route: the hops'
-    histories one after another (each record tagged with its ``hop``), then, if the route
-    was ``smoothed`` (:func:`smooth`), the smooth re-plan's (tagged ``"hop": None``) and
-    that plan with the stitched control as its record; otherwise the stitched control and
-    its certified replay sampled at ``k·N`` steps (``N``: the hops' finest grid)."""
+    """The :class:`~nonholo.io.result.PlanResult` of a certified global route.
+
+    Its history: the hops' histories one after another (each record tagged with its
+    ``hop``), then, if the route was ``smoothed`` (:func:`smooth`), the smooth re-plan's
+    (tagged ``"hop": None``).
+
+    Parameters
+    ----------
+    request : Problem
+        The run's problem.
+    steered : Steered
+        The certified route.
+    local_reason : str
+        Why the local planner alone did not reach the goal.
+    smoothed : tuple of (Outcome, Evaluator), optional
+        The smooth re-plan.
+
+    Returns
+    -------
+    PlanResult
+        The smooth re-plan with the stitched control as its record, if ``smoothed``;
+        otherwise the stitched control and its certified replay sampled at ``k·N`` steps
+        (``N``: the hops' finest grid).
+    """
     mech, T, cert = request.mechanism, request.T, steered.certificate
     hops = steered.hops
     history = [{**rec, "hop": i} for i, h in enumerate(hops) for rec in h.history]

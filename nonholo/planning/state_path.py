@@ -43,22 +43,78 @@ MAX_HOPS = 1000
 
 
 def interpolate(mechanism, a, b, s) -> list[tuple[np.ndarray, np.ndarray]]:
-    """The states of the straight path ``a → b`` (pairs ``(R, q)``) at the fractions ``s``."""
+    """The states of the straight path ``a → b`` at some fractions of it.
+
+    Parameters
+    ----------
+    mechanism : Mechanism
+        The mechanism.
+    a, b : tuple
+        The ends, states ``(R, q)``.
+    s : array_like
+        Fractions in ``[0, 1]``.
+
+    Returns
+    -------
+    list of tuple
+        The states ``(R, q)``.
+    """
     return mechanism.space.interpolate(a, b, s)
 
 
 def midpoint(mechanism, a, b) -> tuple[np.ndarray, np.ndarray]:
-    """The state halfway along the straight path ``a → b``."""
+    """The state halfway along the straight path ``a → b``.
+
+    Parameters
+    ----------
+    mechanism : Mechanism
+        The mechanism.
+    a, b : tuple
+        The ends, states ``(R, q)``.
+
+    Returns
+    -------
+    tuple
+        The state ``(R, q)``.
+    """
     return interpolate(mechanism, a, b, [0.5])[0]
 
 
 def length(mechanism, a, b) -> float:
-    """The straight path's length: the norm of the stacked error between its ends."""
+    """The straight path's length: the norm of the stacked error between its ends.
+
+    Parameters
+    ----------
+    mechanism : Mechanism
+        The mechanism.
+    a, b : tuple
+        The ends, states ``(R, q)``.
+
+    Returns
+    -------
+    float
+        The length.
+    """
     return mechanism.space.distance(*a, *b)
 
 
 def too_far(mechanism, a, b, max_hop: float = MAX_HOP) -> str | None:
-    """Why the straight path ``a → b`` is not tried (more than :data:`MAX_HOPS` hops), or None."""
+    """Why the straight path ``a → b`` is not tried (more than :data:`MAX_HOPS` hops).
+
+    Parameters
+    ----------
+    mechanism : Mechanism
+        The mechanism.
+    a, b : tuple
+        The ends, states ``(R, q)``.
+    max_hop : float, default MAX_HOP
+        The longest hop.
+
+    Returns
+    -------
+    str or None
+        The reason, or ``None``: it is tried.
+    """
     far = length(mechanism, a, b)
     if not far <= MAX_HOPS * max_hop:
         return (f"the goal is {far:.3g} from the start: its straight path would take more than "
@@ -67,9 +123,25 @@ def too_far(mechanism, a, b, max_hop: float = MAX_HOP) -> str | None:
 
 
 def straight_path(mechanism, a, b, *, delta_min: float, max_hop: float = MAX_HOP) -> list | None:
-    """The straight path ``a → b`` as its ends and inner points, hops of at most ``max_hop``
-    (``(R, q)`` pairs, ``a`` first, ``b`` last); ``None`` where a sample of it has ``sgnΔ <
-    delta_min`` (the sign of ``Δ`` at ``a``) or the path is :func:`too_far`."""
+    """The straight path ``a → b`` as its ends and inner points, hops of at most ``max_hop``.
+
+    Parameters
+    ----------
+    mechanism : Mechanism
+        The mechanism.
+    a, b : tuple
+        The ends, states ``(R, q)``.
+    delta_min : float
+        The clearance every sample keeps (``sgnΔ``, the sign of ``Δ`` at ``a``).
+    max_hop : float, default MAX_HOP
+        The longest hop.
+
+    Returns
+    -------
+    list of tuple or None
+        The states ``(R, q)``, ``a`` first, ``b`` last; ``None`` where a sample has
+        ``sgnΔ < delta_min`` or the path is :func:`too_far`.
+    """
     if too_far(mechanism, a, b, max_hop) is not None:
         return None
     hops = max(1, math.ceil(length(mechanism, a, b) / max_hop))

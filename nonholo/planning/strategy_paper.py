@@ -26,11 +26,33 @@ from .core import Outcome, Strategy, descend, record, step_scale
 
 
 class PaperStrategy(Strategy):
-    """The appendix's algorithm: Euler steps of the θ-flow (11), then Newton steps."""
+    """The appendix's algorithm: Euler steps of the θ-flow (11), then Newton steps.
+
+    Parameters
+    ----------
+    options : Options
+        The run's settings.
+    """
 
     name = "paper"
 
     def solve(self, problem, start, callback=None):
+        """Plan from ``start`` in the physical inputs, with the minimum-norm step ``J^#``.
+
+        Parameters
+        ----------
+        problem : Evaluator
+            The problem.
+        start : Start
+            The initial control.
+        callback : callable, optional
+            Called as ``callback(record)`` per accepted step; a true value stops the run.
+
+        Returns
+        -------
+        Outcome
+            The run's outcome.
+        """
         opt = self.options
         ev = problem.evaluate(start.controls, delta_stop=DELTA_STOP)
         if not problem.admissible(ev):

@@ -100,9 +100,25 @@ def to_frame(problem: Evaluator, controls: Controls) -> Controls:
 
     ``w = N(R)ᵀ ω`` with ``ω = L(R) u`` along the physical motion (simulated with
     ``problem.steps`` CF4 steps), projected on the parametrisation of ``controls``
-    (least squares on the Fourier basis; interval means on the grid). Raises
-    :class:`~nonholo.motion.simulation.SingularTrajectoryError` if the physical motion runs into
-    ``Δ = 0``.
+    (least squares on the Fourier basis; interval means on the grid).
+
+    Parameters
+    ----------
+    problem : Evaluator
+        The problem.
+    controls : Controls
+        The physical control.
+
+    Returns
+    -------
+    Controls
+        The frame control, in the parametrisation of ``controls``.
+
+    Raises
+    ------
+    SingularTrajectoryError
+        If the physical motion runs into ``Δ = 0``
+        (:class:`~nonholo.motion.simulation.SingularTrajectoryError`).
     """
     mech = problem.mechanism
     tr = simulate(problem.R0, controls, problem.T, mechanism=mech, steps=problem.steps)
@@ -121,17 +137,33 @@ def to_frame(problem: Evaluator, controls: Controls) -> Controls:
 
 
 def barrier_gradient(problem: Evaluator, ev: Evaluation, d0: float) -> np.ndarray | None:
-    """Gradient in ``λ`` of the barrier ``φ = Σ_{n=1..N} h ψ(d_n)``, ``d_n = sgn(Δ(R0)) Δ(R(t_n))``,
+    """Gradient in ``λ`` of the barrier ``φ = Σ_{n=1..N} h ψ(d_n)``, ``d_n = sgn(Δ(R0)) Δ(R(t_n))``.
+
     ``ψ(d) = −log(d/d₀)`` for ``d < d₀`` and 0 above, plus the same barrier on the legs'
     clearances from their stroke limits where the problem has them
     (:meth:`nonholo.model.limits.LegLimits.clearance_terms`, below
-    :data:`nonholo.model.limits.BARRIER_CLEARANCE`); ``None`` if no node is that close.
+    :data:`nonholo.model.limits.BARRIER_CLEARANCE`).
 
     ``ev`` must hold ``Z`` and the stage weights ``Wd`` (``full`` evaluation). The
     sensitivity of a node is ``s_n = Z_n^{-1} S_n``, ``S_n = Σ_{stages r before t_n} W_r
     ∂U_r/∂λ``; with ``a_n = h ψ'(d_n) sgn ∇Δ(R_n)`` (plus ``h ψ'(c) ∇c`` per active clearance) and ``μ_n = a_n Z_n^{-1}``,
     ``∇φ = Σ_n μ_n S_n = Σ_r (ν_{n(r)} W_r) ∂U_r/∂λ`` where ``ν_k = Σ_{n > k} μ_n`` (suffix
     sums) — one backward pass over the stored stages, no extra simulation.
+
+    Parameters
+    ----------
+    problem : Evaluator
+        The problem.
+    ev : Evaluation
+        A ``full`` evaluation.
+    d0 : float
+        The barrier's reach ``d₀``.
+
+    Returns
+    -------
+    numpy.ndarray or None
+        The gradient, one entry per parameter; ``None`` if no node is that close (or
+        ``ev`` is not complete and full).
     """
     if not ev.complete or ev.Z is None:
         return None
@@ -180,7 +212,13 @@ def _loop(T: float, m: int, amplitude: float, phase: float = 0.0, mean=None):
 
 
 class RobustStrategy(Strategy):
-    """Jacobian method in the desingularised frame coordinates, with restarts (see the module)."""
+    """Jacobian method in the desingularised frame coordinates, with restarts (see the module).
+
+    Parameters
+    ----------
+    options : Options
+        The run's settings.
+    """
 
     name = "robust"
     #: ``γ = 1``: a flow step asks for the whole error (a damped Newton step with the
@@ -211,13 +249,42 @@ class RobustStrategy(Strategy):
     max_sensitivity = 100.0
 
     def frame(self, mechanism) -> bool:
+        """Whether to plan in the frame coordinates ``w``: for a mechanism with a frame, on SO(3).
+
+        Parameters
+        ----------
+        mechanism : Mechanism
+            The mechanism planned.
+
+        Returns
+        -------
+        bool
+            ``True`` for frame coordinates, ``False`` for physical inputs.
+        """
         # beyond SO(3) the physical inputs are planned (the barrier keeps Δ away) and the
         # frame is not used yet
         return mechanism.has_frame and not mechanism.space.k
 
     def initial(self, problem, controls, given):
-        """In frame coordinates: ``u0`` (physical) converted by :func:`to_frame`; without
-        ``u0`` the default loop ``w = 0.3 (sin ωt, cos ωt)``."""
+        """The initial control in this strategy's coordinates.
+
+        In frame coordinates: ``u0`` (physical) converted by :func:`to_frame`; without
+        ``u0`` the default loop ``w = 0.3 (sin ωt, cos ωt)``.
+
+        Parameters
+        ----------
+        problem : Evaluator
+            The problem.
+        controls : Controls
+            The physical initial control (the default one, or the caller's ``u0``).
+        given : bool
+            Whether it is the caller's ``u0``.
+
+        Returns
+        -------
+        Start
+            The initial control, with a note if ``u0`` could not be used.
+        """
         if not (given and problem.frame):
             return Start(controls, given)
         try:
@@ -228,7 +295,22 @@ class RobustStrategy(Strategy):
 
     # -- initial guesses -----------------------------------------------------------------
     def attempts(self, problem: Evaluator, start: Start) -> Iterator[tuple[str, Controls]]:
-        """The initial controls tried in turn: ``start``'s, then other loops and drifts."""
+        """The initial controls tried in turn: ``start``'s, then other loops and drifts.
+
+        Parameters
+        ----------
+        problem : Evaluator
+            The problem.
+        start : Start
+            The initial control.
+
+        Yields
+        ------
+        label : str
+            The guess's kind (``"u0"``, ``"drift"``, ``"loop"``, ``"harmonics"``, ``"random"``).
+        controls : Controls
+            The guess.
+        """
         first = start.controls
         T, m = problem.T, first.n_inputs
         mech = problem.mechanism
@@ -260,13 +342,42 @@ class RobustStrategy(Strategy):
 
     # -- one descent ----------------------------------------------------------------------
     def wants_full(self, problem: Evaluator, ev: Evaluation) -> bool:
-        """Whether the next evaluations should keep ``Z`` and the stage weights (for the barrier)."""
+        """Whether the next evaluations should keep ``Z`` and the stage weights (for the barrier).
+
+        Parameters
+        ----------
+        problem : Evaluator
+            The problem.
+        ev : Evaluation
+            The current evaluation.
+
+        Returns
+        -------
+        bool
+            Whether they should be ``full``.
+        """
         return self.barrier and self.near_limits(problem, ev, 2.0)
 
     def near_limits(self, problem: Evaluator, ev: Evaluation, factor: float = 1.0) -> bool:
-        """Whether ``ev``'s trajectory comes within ``factor`` times a barrier's reach of
-        ``Δ = 0`` (:attr:`barrier_d0`) or of the legs' stroke limits
-        (:data:`nonholo.model.limits.BARRIER_CLEARANCE`)."""
+        """Whether a trajectory comes within ``factor`` times a barrier's reach of a limit.
+
+        The limits: ``Δ = 0`` (:attr:`barrier_d0`) and the legs' stroke limits
+        (:data:`nonholo.model.limits.BARRIER_CLEARANCE`).
+
+        Parameters
+        ----------
+        problem : Evaluator
+            The problem.
+        ev : Evaluation
+            The evaluation.
+        factor : float, default 1.0
+            The multiple of the barriers' reach.
+
+        Returns
+        -------
+        bool
+            Whether it comes that close.
+        """
         near_delta = problem.singular.exists and ev.min_delta is not None and ev.min_delta < factor * self.barrier_d0
         near_legs = ev.min_clearance is not None and ev.min_clearance < factor * BARRIER_CLEARANCE
         return near_delta or near_legs
@@ -281,6 +392,22 @@ class RobustStrategy(Strategy):
         ``S^{-2}``-orthogonal projection of ``−S²∇φ`` on the null space of ``J``
         (:func:`barrier_gradient`): it leaves ``l_T`` unchanged to first order and moves
         the trajectory away from ``Δ = 0``.
+
+        Parameters
+        ----------
+        problem : Evaluator
+            The problem.
+        ev : Evaluation
+            The current (complete) evaluation.
+        scale : numpy.ndarray
+            The diagonal of ``S``.
+        newton : bool, default False
+            Whether it is a Newton step (no barrier term).
+
+        Returns
+        -------
+        numpy.ndarray
+            The direction.
         """
         d = kernels.min_norm_step(ev.J, ev.l, scale)
         if newton or not self.barrier or not self.near_limits(problem, ev):
@@ -298,8 +425,33 @@ class RobustStrategy(Strategy):
 
     def descend(self, problem: Evaluator, ev: Evaluation, attempt: int, first: int, budget: int,
                 history: list, callback):
-        """Flow then Newton steps from the admissible ``ev`` (:func:`~nonholo.planning.core.descend`
-        with this strategy's direction, barrier evaluations and stall rule)."""
+        """Flow then Newton steps from an admissible evaluation.
+
+        :func:`~nonholo.planning.core.descend` with this strategy's direction, barrier
+        evaluations and stall rule.
+
+        Parameters
+        ----------
+        problem : Evaluator
+            The problem.
+        ev : Evaluation
+            The admissible evaluation to start from.
+        attempt : int
+            The attempt's number (a tag of the history entries).
+        first : int
+            The number of the step before the first.
+        budget : int
+            Steps at most.
+        history : list
+            The run's history, appended to.
+        callback : callable or None
+            Called with each new history entry.
+
+        Returns
+        -------
+        Descent
+            How the loop ended.
+        """
         scale = step_scale(problem, ev.parametrisation)
         d = descend(problem, ev, self.options, lambda ev, newton: self.direction(problem, ev, scale, newton),
                     budget=budget, history=history, callback=callback, first=first,
@@ -311,18 +463,58 @@ class RobustStrategy(Strategy):
 
     # -- accuracy of the integrator -----------------------------------------------------
     def discretisation_error(self, problem: Evaluator, ev: Evaluation) -> float:
-        """Richardson estimate of the integrator's error at ``R(T)`` for ``ev``'s control:
-        ``16/15`` of the distance between the endpoints with ``N`` and ``2N`` CF4 steps (in the
-        state's units, :meth:`nonholo.spaces.groups.Product.amount`)."""
+        """Richardson estimate of the integrator's error at ``R(T)`` for an evaluation's control.
+
+        Parameters
+        ----------
+        problem : Evaluator
+            The problem.
+        ev : Evaluation
+            The (complete) evaluation.
+
+        Returns
+        -------
+        float
+            ``16/15`` of the distance between the endpoints with ``N`` and ``2N`` CF4 steps
+            (in the state's units, :meth:`nonholo.spaces.groups.Product.amount`).
+        """
         N2 = 2 * problem.steps
         Rs, Qs, _ = problem.forward(stages.stage_table(ev.controls, N2), 0.5 * problem.h, -np.inf)
         return problem.mechanism.space.distance(Rs[N2], Qs[N2], ev.R[-1], ev.q[-1]) * 16.0 / 15.0
 
     def refine(self, problem: Evaluator, ev: Evaluation, attempt: int, it0: int, history: list,
                callback) -> tuple[Evaluator, Evaluation, int, str]:
-        """Double the integrator's steps while the endpoint's discretisation error (see
-        :meth:`discretisation_error`) exceeds :attr:`refine_above`, re-converging with Newton
-        steps on each finer grid. Returns ``(problem, evaluation, accepted steps, note)``."""
+        """Double the integrator's steps while the endpoint's discretisation error is too large.
+
+        While it (see :meth:`discretisation_error`) exceeds :attr:`refine_above`, the
+        plan re-converges with Newton steps on each finer grid.
+
+        Parameters
+        ----------
+        problem : Evaluator
+            The problem.
+        ev : Evaluation
+            The converged evaluation.
+        attempt : int
+            The attempt's number.
+        it0 : int
+            Steps accepted before.
+        history : list
+            The run's history, appended to.
+        callback : callable or None
+            Called with each new history entry.
+
+        Returns
+        -------
+        problem : Evaluator
+            The problem on the finest grid reached.
+        evaluation : Evaluation
+            The plan on it.
+        steps : int
+            Steps accepted.
+        note : str
+            What the refinement did (empty if nothing).
+        """
         opt = self.options
         it = 0
         note = ""
@@ -344,6 +536,22 @@ class RobustStrategy(Strategy):
         return problem, ev, it, note
 
     def solve(self, problem, start, callback=None):
+        """Plan from ``start``: attempt after attempt, each refined and certified (see the module).
+
+        Parameters
+        ----------
+        problem : Evaluator
+            The problem.
+        start : Start
+            The initial control.
+        callback : callable, optional
+            Called as ``callback(record)`` per accepted step; a true value stops the run.
+
+        Returns
+        -------
+        Outcome
+            The run's outcome.
+        """
         opt = self.options
         history: list = []
         it = 0

@@ -2440,6 +2440,6 @@ PyMODINIT_FUNC PyInit_car(void)
     import_array();
     PyObject *m = PyModule_Create(&moduledef);
     if (m == NULL) return NULL;
-    if (PyModule_AddStringConstant(m, "SOURCE_DIGEST", "8a3d39be6fab1b544799c6c00e3706b50186f945323c8fe88e57ac3c91428ed5") < 0) { Py_DECREF(m); return NULL; }
+    if (PyModule_AddStringConstant(m, "SOURCE_DIGEST", "8728589292312c81f28f639f0869403c88fa9985de95824973bd4494d9d7abec") < 0) { Py_DECREF(m); return NULL; }
     return m;
 }

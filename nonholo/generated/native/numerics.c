@@ -384,6 +384,6 @@ PyMODINIT_FUNC PyInit_numerics(void)
     import_array();
     PyObject *m = PyModule_Create(&moduledef);
     if (m == NULL) return NULL;
-    if (PyModule_AddStringConstant(m, "SOURCE_DIGEST", "70f4ced6c3ed9d9504e8527b67f2eacb366d85390159ca6876c9b621f5d29d0b") < 0) { Py_DECREF(m); return NULL; }
+    if (PyModule_AddStringConstant(m, "SOURCE_DIGEST", "7ab35c416c27c525b94f2f792a27faa58c6616e01e35dcf029da60d6bd669786") < 0) { Py_DECREF(m); return NULL; }
     return m;
 }

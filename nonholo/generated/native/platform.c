@@ -2565,6 +2565,6 @@ PyMODINIT_FUNC PyInit_platform(void)
     import_array();
     PyObject *m = PyModule_Create(&moduledef);
     if (m == NULL) return NULL;
-    if (PyModule_AddStringConstant(m, "SOURCE_DIGEST", "a2743e7ad5dd2094c03cfbec605476d2e73ef5eb24aea872ab685c3f6174f254") < 0) { Py_DECREF(m); return NULL; }
+    if (PyModule_AddStringConstant(m, "SOURCE_DIGEST", "449859de8f06b1e5705848c7b48860aa19e143918d7107a63783bb2b8f83792d") < 0) { Py_DECREF(m); return NULL; }
     return m;
 }

@@ -2583,6 +2583,6 @@ PyMODINIT_FUNC PyInit_platform_raised(void)
     import_array();
     PyObject *m = PyModule_Create(&moduledef);
     if (m == NULL) return NULL;
-    if (PyModule_AddStringConstant(m, "SOURCE_DIGEST", "3447468f63ce76c460e3115a8c5da56e648356c7ad8cd993e0ef2b809ef34dc5") < 0) { Py_DECREF(m); return NULL; }
+    if (PyModule_AddStringConstant(m, "SOURCE_DIGEST", "35e55940f9301fa9f4dab9fb61be9f8bb2db42db998af1ab28c3f8a6366e2c56") < 0) { Py_DECREF(m); return NULL; }
     return m;
 }

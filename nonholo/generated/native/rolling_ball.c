@@ -1201,6 +1201,6 @@ PyMODINIT_FUNC PyInit_rolling_ball(void)
     import_array();
     PyObject *m = PyModule_Create(&moduledef);
     if (m == NULL) return NULL;
-    if (PyModule_AddStringConstant(m, "SOURCE_DIGEST", "d4acb9d36846f039fc18a26708cb8f7bcc82eaa7d75d113d098e2f177a4b1b30") < 0) { Py_DECREF(m); return NULL; }
+    if (PyModule_AddStringConstant(m, "SOURCE_DIGEST", "79fc6dd8ff21434ebf5da06482e22d227f1396b2f733573ca98d0411fbbba22e") < 0) { Py_DECREF(m); return NULL; }
     return m;
 }
