@@ -462,9 +462,11 @@ class _Wheeled(RollingModel):
 
     def wheel(self, name: str, pos, axis="0 1 0", driven=False) -> str:
         r = float(self.WHEEL)
+        # a driven wheel's rotor: the tracking's inertia, whatever the contact transmits
+        rotor = f' armature="{float(dict(self.driven)[name])!r}"' if driven else ""
         return "\n".join([
             f'      <body name="{name}" pos="{pos}">',
-            f'        <joint name="{name}" type="hinge" axis="{axis}"/>',
+            f'        <joint name="{name}" type="hinge" axis="{axis}"{rotor}/>',
             f'        <geom name="{name}" type="sphere" size="{r!r}" mass="{float(self.WHEEL_MASS)!r}" '
             f'rgba="{"0.8 0.3 0.2 1" if driven else "0.2 0.2 0.2 1"}"/>',
             "      </body>"])
@@ -520,7 +522,7 @@ class CarModel(_Wheeled):
             self.wheel("rear_left", f"0 {w / 2!r} 0"),
             self.wheel("rear_right", f"0 {-w / 2!r} 0"),
             f'      <body name="steering" pos="{L!r} 0 0">',
-            '        <joint name="steer" type="hinge" axis="0 0 1" armature="0.01"/>',
+            f'        <joint name="steer" type="hinge" axis="0 0 1" armature="{float(dict(self.driven)["steer"])!r}"/>',
             '        <geom name="fork" type="cylinder" size="0.02 0.1" pos="0 0 0.1" mass="0.05" '
             'contype="0" conaffinity="0"/>',
             self.wheel("front", "0 0 0", driven=True).replace("\n      ", "\n        "),
