@@ -24,6 +24,7 @@ from ..model.limits import LegLimits
 from ..motion import playback
 from ..motion.frame_controls import FrameControls
 from ..motion.retimed import Retimed
+from ..motion.time_change import RestToRest, is_time_change, planned, played_time
 from ..numerics import kernels
 from ..spaces.groups import NO_COORDINATES
 from . import certificate as certify
@@ -175,6 +176,10 @@ class PlanChecks:
         elif mech.name != r.mechanism:
             fail("mechanism", f"is {r.mechanism!r}, but the plan's kinematics are of {mech.name!r}")
         par = r.parametrisation
+        if isinstance(par, RestToRest):
+            if r.replay_steps is None:
+                fail("controls", "are played rest to rest, which only the path of a certified plan can be")
+            par = par.base
         if isinstance(par, Retimed):
             self.retimed(par, mech)
             par = par.base
@@ -327,12 +332,13 @@ class PlanChecks:
         if n > r.steps + 1:
             fail("t", f"has {n} samples, more than the {r.steps + 1} step points of {r.steps} steps")
         par = r.parametrisation
-        if isinstance(par, Retimed):
-            # the planned step points, at their re-timed instants
-            tau = np.arange(n) * (par.base.T / r.steps)
+        if is_time_change(par):
+            # the planned step points, at their played instants
+            T_planned = planned(par).T
+            tau = np.arange(n) * (T_planned / r.steps)
             if n == r.steps + 1:
-                tau[-1] = par.base.T
-            expected = par.time(tau)
+                tau[-1] = T_planned
+            expected = played_time(par, tau)
             expected[0] = 0.0
         else:
             expected = np.arange(n) * (r.T / r.steps)
@@ -340,7 +346,7 @@ class PlanChecks:
             expected[-1] = r.T
         if n and np.max(np.abs(r.t - expected)) > TIME_RTOL * r.T:
             k = int(np.argmax(np.abs(r.t - expected)))
-            what = ("the re-timed instants of the step points" if isinstance(par, Retimed)
+            what = ("the played instants of the step points" if is_time_change(par)
                     else "the integrator's step points k·T/steps")
             fail("t", f"must hold {what}: t[{k}] = {r.t[k]!r}, expected {expected[k]!r}")
         if n:
@@ -383,9 +389,7 @@ class PlanChecks:
             The number of samples.
         """
         r = self.r
-        par = r.parametrisation
-        if isinstance(par, Retimed):
-            par = par.base             # the same path: replayed as planned
+        par = planned(r.parametrisation)      # the same path: replayed as planned
         T = par.T
         frame = isinstance(par, FrameControls) and r.replay_steps is None
         q0 = np.ascontiguousarray(r.q0 if mech.space.k else NO_COORDINATES, dtype=float)

@@ -31,7 +31,7 @@ import math
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from ..motion.retimed import Retimed
+from ..motion.time_change import planned, planned_time
 from ..motion.simulation import DELTA_STOP
 from ..numerics.checks import is_number
 from ..spaces.groups import NO_COORDINATES
@@ -96,8 +96,9 @@ def sample_times(T: float, rate: float) -> np.ndarray:
 def states_at(result, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """``(R(t), q(t))`` of a simulated plan: one CF4 step of the physical system from the
     stored sample at or below each ``t`` (none where ``t`` is a sample time); ``q`` has no
-    columns on SO(3). A re-timed plan (:class:`~nonholo.motion.retimed.Retimed`) moves along its
-    planned path: ``R(τ(t))``, stepped in the planned time ``τ`` with the planned controls.
+    columns on SO(3). A time-changed plan (re-timed or rest-to-rest,
+    :mod:`nonholo.motion.time_change`) moves along its planned path: ``R(τ(t))``, stepped in
+    the planned time ``τ`` with the planned controls.
 
     Parameters
     ----------
@@ -122,9 +123,10 @@ def states_at(result, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     if n_samples == 0 or t[-1] > result.t[-1] * (1 + 1e-12):
         raise ValueError("the plan's motion does not reach T (a failed plan): nothing to export")
     controls, T, asked = result.controls, result.T, t
-    if isinstance(result.parametrisation, Retimed):
-        controls, T = result.parametrisation.base, result.parametrisation.base.T
-        t = result.parametrisation.tau(t)[0]
+    if result.parametrisation is not planned(result.parametrisation):
+        controls = planned(result.parametrisation)
+        T = controls.T
+        t = planned_time(result.parametrisation, t)
     h = T / result.steps
     idx = np.minimum(np.floor(t / h + 1e-9).astype(np.int64), n_samples - 1)
     s = t - idx * h

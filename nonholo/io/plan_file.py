@@ -13,8 +13,12 @@ planned in frame coordinates (strategy ``"robust"``), ``{"kind": "frame", "T",
 "mechanism", "steps", "R0", "frame": <the w parametrisation>}``, or, for a global route
 (``"route": "global"``), ``{"kind": "stitched", "T", "pieces": [<one of those per hop>],
 "waypoints"}``, unless the route was re-planned as one smooth control: then ``controls``
-is that control and ``"stitched"`` the route's stitched control (absent otherwise); see :mod:`nonholo.controls.parametrisations`, :mod:`nonholo.motion.frame_controls` and
-:mod:`nonholo.controls.stitched`) from which ``controls(t)`` is rebuilt (identically: the frame
+is that control and ``"stitched"`` the route's stitched control (absent otherwise); a
+time-changed plan wraps one of those as ``{"kind": "retimed", "T", "leg_speed", "nodes",
+"mechanism", "R0", "base"}`` (a leg-speed bound) and/or ``{"kind": "rest_to_rest", "T",
+"base"}`` (played from rest to rest); see :mod:`nonholo.controls.parametrisations`,
+:mod:`nonholo.motion.frame_controls`, :mod:`nonholo.controls.stitched` and
+:mod:`nonholo.motion.time_change`) from which ``controls(t)`` is rebuilt (identically: the frame
 motion's nodes are recomputed by the same kernel). Floats are written with
 ``repr`` precision, so a save/load round trip reproduces every number exactly. Quantities
 that do not exist (``min_delta`` for a mechanism without a singular set, the terminal
@@ -68,6 +72,7 @@ from ..controls.stitched import Stitched
 from ..model import catalog
 from ..motion.frame_controls import FrameControls, from_dict
 from ..motion.retimed import Retimed
+from ..motion.time_change import RestToRest
 from ..numerics.checks import is_number
 
 #: the fields of a plan file
@@ -86,7 +91,8 @@ _CONTROL_FIELDS = {"fourier": ("kind", "T", "harmonics", "coeffs"),
                    "piecewise_constant": ("kind", "T", "grid", "values"),
                    "frame": ("kind", "T", "mechanism", "steps", "R0", "frame"),
                    "stitched": ("kind", "T", "pieces", "waypoints"),
-                   "retimed": ("kind", "T", "leg_speed", "nodes", "mechanism", "R0", "base")}
+                   "retimed": ("kind", "T", "leg_speed", "nodes", "mechanism", "R0", "base"),
+                   "rest_to_rest": ("kind", "T", "base")}
 
 
 
@@ -199,10 +205,17 @@ def _physical(d, mech, where: str) -> None:
         _parametrisation(d, where, m)
 
 
-def _controls(d, mech, where: str = "controls", timed: bool = True) -> Controls | FrameControls | Stitched | Retimed:
+def _controls(d, mech, where: str = "controls", timed: bool = True,
+              rest: bool = True) -> Controls | FrameControls | Stitched | Retimed | RestToRest:
     """The ``controls`` field (or another field ``where`` holding controls) of a plan of
-    mechanism ``mech``, checked, as an object (``timed``: may be re-timed)."""
-    if isinstance(d, dict) and d.get("kind") == Retimed.kind and timed:
+    mechanism ``mech``, checked, as an object (``timed``: may be re-timed; ``rest``: may be
+    played rest to rest)."""
+    if isinstance(d, dict) and d.get("kind") == RestToRest.kind and rest:
+        _fields(d, _CONTROL_FIELDS["rest_to_rest"], where)
+        if number_field(d, "T", where=f"{where}.") <= 0:
+            fail(f"{where}.T", f"must be positive, got {d['T']}")
+        _controls(d["base"], mech, f"{where}.base", timed=timed, rest=False)
+    elif isinstance(d, dict) and d.get("kind") == Retimed.kind and timed:
         _fields(d, _CONTROL_FIELDS["retimed"], where)
         for key in ("T", "leg_speed"):
             if number_field(d, key, where=f"{where}.") <= 0:
@@ -211,7 +224,7 @@ def _controls(d, mech, where: str = "controls", timed: bool = True) -> Controls 
         if string_field(d, "mechanism", where=f"{where}.") != mech.name:
             fail(f"{where}.mechanism", f"is {d['mechanism']!r}, but the plan's 'mechanism' is {mech.name!r}")
         rotation_field(_array(d["R0"], f"{where}.R0", (3, 3)), f"{where}.R0")
-        _controls(d["base"], mech, f"{where}.base", timed=False)
+        _controls(d["base"], mech, f"{where}.base", timed=False, rest=False)
     elif isinstance(d, dict) and d.get("kind") == Stitched.kind:
         _fields(d, _CONTROL_FIELDS["stitched"] + (("coordinates",) if mech.space.k else ()), where)
         if number_field(d, "T", where=f"{where}.") <= 0:

@@ -17,7 +17,7 @@ from ..controls.stitched import Stitched
 from ..model import catalog
 from ..model.mechanism import Mechanism
 from ..motion.frame_controls import FrameControls
-from ..motion.retimed import Retimed
+from ..motion.time_change import planned
 from . import csv_export as export
 from . import plan_file, safe_write
 
@@ -198,7 +198,7 @@ class PlanResult:
         hand-overs): the controls themselves, or the record :attr:`stitched` of a smoothed
         route; ``None`` for a local plan."""
         par = self.parametrisation
-        par = par.base if isinstance(par, Retimed) else par
+        par = planned(par)
         return par if isinstance(par, Stitched) else self.stitched
 
     @property

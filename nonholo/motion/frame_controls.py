@@ -20,7 +20,7 @@ from ..controls.parametrisations import from_dict as controls_from_dict
 from ..model import catalog
 from ..numerics.checks import check_times
 from ..spaces import so3
-from . import retimed
+from . import retimed, time_change
 
 
 class FrameControls:
@@ -303,7 +303,8 @@ def _aligned_indices(steps: int, nodes: int):
 def from_dict(d: dict, mechanism=None):
     """Inverse of ``to_dict`` for a parametrisation (:func:`nonholo.controls.parametrisations.from_dict`), a
     :class:`FrameControls`, a :class:`~nonholo.controls.stitched.Stitched` of them, or any of those
-    :class:`~nonholo.motion.retimed.Retimed`.
+    :class:`~nonholo.motion.retimed.Retimed` or
+    :class:`~nonholo.motion.time_change.RestToRest`.
 
     Parameters
     ----------
@@ -315,7 +316,7 @@ def from_dict(d: dict, mechanism=None):
 
     Returns
     -------
-    Controls, FrameControls, Stitched or Retimed
+    Controls, FrameControls, Stitched, Retimed or RestToRest
         The controls.
 
     Raises
@@ -334,6 +335,8 @@ def from_dict(d: dict, mechanism=None):
     named = d.get("mechanism") if mechanism is None else mechanism
     if d.get("kind") == retimed.Retimed.kind:
         return retimed.from_dict(d, rebuilt, named)
+    if d.get("kind") == time_change.RestToRest.kind:
+        return time_change.from_dict(d, rebuilt)
     if d.get("kind") == stitched.Stitched.kind:
         return stitched.from_dict(d, rebuilt)
     if d.get("kind") == FrameControls.kind:

@@ -1,12 +1,16 @@
-"""``retime()``: a successful plan played as fast as its legs allow, or in a given time.
+"""``retime()``: a successful plan played as fast as its legs allow, in a given time, or
+from rest to rest.
 
-:func:`retime` wraps a plan's controls in :class:`~nonholo.motion.retimed.Retimed`: the same path
-of orientations, with every leg at most ``leg_speed`` fast — at that speed throughout for
-the least time (``T=None``), at ``leg_speed · T̃/T`` for a longer ``T``. The path is the
-plan's, so its certificate carries over unchanged: the re-timed motion ends where the
-plan's does, with the same error bound, least ``|Δ|``, sensitivity and legs' lengths. The
-result's samples are the plan's, at the re-timed instants ``t(τ_k)`` of its step points.
-:func:`limit_speed` is what :func:`nonholo.plan` does with a ``leg_speed``.
+:func:`retime` wraps a plan's controls in a time change (:mod:`nonholo.motion.time_change`):
+:class:`~nonholo.motion.retimed.Retimed` keeps every leg at most ``leg_speed`` fast — at that
+speed throughout for the least time (``T=None``), at ``leg_speed · T̃/T`` for a longer
+``T``; ``rest_to_rest=True`` plays the motion by the smoothstep time change
+(:class:`~nonholo.motion.time_change.RestToRest`), which starts and ends at zero speed, for any
+mechanism. The path is the plan's, so its certificate carries over unchanged: the re-timed
+motion ends where the plan's does, with the same error bound, least ``|Δ|``, sensitivity
+and legs' lengths. The result's samples are the plan's, at the played instants ``t(τ_k)``
+of its step points. :func:`limit_speed` is what :func:`nonholo.plan` does with a
+``leg_speed``.
 """
 from __future__ import annotations
 
@@ -18,6 +22,7 @@ import numpy as np
 from ..io.result import PlanResult
 from ..motion.frame_controls import from_dict as controls_from_dict
 from ..motion.retimed import RETIME_NODES, Retimed, TimeMap, check_leg_speed
+from ..motion.time_change import PEAK_RATIO, RestToRest, planned, played_time
 from ..numerics.checks import check_time
 
 
@@ -34,8 +39,7 @@ def planned_controls(result: PlanResult):
     Controls or FrameControls
         Its controls before any re-timing.
     """
-    par = result.parametrisation
-    return par.base if isinstance(par, Retimed) else par
+    return planned(result.parametrisation)
 
 
 def time_map(result: PlanResult, leg_speed: float, nodes: int = RETIME_NODES) -> TimeMap:
@@ -59,58 +63,85 @@ def time_map(result: PlanResult, leg_speed: float, nodes: int = RETIME_NODES) ->
     return TimeMap(planned_controls(result), result.R0, mech, check_leg_speed(leg_speed, mech), None, nodes)
 
 
-def retime(result: PlanResult, leg_speed: float, T: float | None = None) -> PlanResult:
-    """``result`` re-timed with every leg at most ``leg_speed`` fast.
+def retime(result: PlanResult, leg_speed: float | None = None, T: float | None = None, *,
+           rest_to_rest: bool = False) -> PlanResult:
+    """``result`` re-timed: every leg at most ``leg_speed`` fast, and/or from rest to rest.
 
     Parameters
     ----------
     result : PlanResult
-        A successful plan of a mechanism with legs.
-    leg_speed : float
-        The legs' top speed (the geometry's length units per second).
+        A successful plan (of a mechanism with legs, for a ``leg_speed``).
+    leg_speed : float, optional
+        The legs' top speed (the geometry's length units per second). With
+        ``rest_to_rest``, ``None`` keeps the bound the plan's options record, if any.
     T : float, optional
-        The time of the re-timed motion (s); ``None``: the least time.
+        The time of the re-timed motion (s); ``None``: the least time under ``leg_speed``,
+        or, rest to rest without a bound, the plan's time.
+    rest_to_rest : bool
+        Play the motion by the smoothstep time change
+        (:class:`~nonholo.motion.time_change.RestToRest`): its inputs are zero at ``0`` and
+        ``T``. Under a ``leg_speed`` it wraps the fastest re-timing, stretched by the
+        smoothstep's peak ratio 15/8 so that no leg exceeds the bound.
 
     Returns
     -------
     PlanResult
-        A new result whose controls are :class:`~nonholo.motion.retimed.Retimed` (a
-        re-timed plan is re-timed from its own base); ``options`` records ``leg_speed``.
+        A new result whose controls are :class:`~nonholo.motion.retimed.Retimed` and/or
+        :class:`~nonholo.motion.time_change.RestToRest` of the planned controls (a re-timed
+        plan is re-timed from its planned controls); ``options`` records ``leg_speed``.
 
     Raises
     ------
     ValueError
-        For a failed plan, a mechanism without legs, a bad ``leg_speed`` or ``T``, or a
-        ``T`` shorter than the path needs (the message says how long it needs).
+        For a failed plan, a mechanism without legs under a ``leg_speed``, no
+        ``leg_speed`` without ``rest_to_rest``, a bad ``leg_speed``, ``T`` or
+        ``rest_to_rest``, or a ``T`` shorter than the path needs under ``leg_speed`` (the
+        message says how long it needs).
     """
     started = time.perf_counter()
     if not isinstance(result, PlanResult):
         raise ValueError(f"result must be a PlanResult, got {type(result).__name__}")
+    if not isinstance(rest_to_rest, (bool, np.bool_)):
+        raise ValueError(f"rest_to_rest must be True or False, got {rest_to_rest!r}")
     mech = result.kinematics
+    if leg_speed is None and rest_to_rest:
+        leg_speed = result.options.get("leg_speed")
     v = check_leg_speed(leg_speed, mech)
-    if v is None:
-        raise ValueError("leg_speed must be a positive finite speed, got None")
+    if v is None and not rest_to_rest:
+        raise ValueError("leg_speed must be a positive finite speed, got None (or pass rest_to_rest=True)")
     if T is not None:
         T = check_time(T)
     if not result.success:
         raise ValueError(f"only a successful plan can be re-timed; this one failed: {result.reason}")
     base = planned_controls(result)
-    # the re-timed controls exactly as a plan file rebuilds them (its base read back from
-    # its description, the time map recomputed from that): the time map is computed from a
-    # replay of the base, whose rounding a kink of the fastest leg can amplify, so samples
-    # computed from any other copy need not be ``controls(t)`` of the loaded plan
-    timed = controls_from_dict(Retimed(base, result.R0, mech, v, T=T).to_dict(), mech)
+    timed, how = base, []
+    if v is not None:
+        # the re-timed controls exactly as a plan file rebuilds them (its base read back from
+        # its description, the time map recomputed from that): the time map is computed from a
+        # replay of the base, whose rounding a kink of the fastest leg can amplify, so samples
+        # computed from any other copy need not be ``controls(t)`` of the loaded plan
+        timed = controls_from_dict(Retimed(base, result.R0, mech, v, T=None if rest_to_rest else T).to_dict(),
+                                   mech)
+        needs = timed.map.minimum_time * (PEAK_RATIO if rest_to_rest else 1.0)
+        if rest_to_rest and T is not None and T < needs:
+            raise ValueError(f"T = {T:g} s is shorter than the {needs:.6g} s this path needs from rest to rest "
+                             f"with every leg at most {v:g} fast")
+        how.append(f"with every leg at most {v:g} fast (the path needs {needs:.6g} s"
+                   + (" from rest to rest)" if rest_to_rest else ")"))
+    if rest_to_rest:
+        duration = T if T is not None else timed.T * (PEAK_RATIO if v is not None else 1.0)
+        timed = controls_from_dict(RestToRest(timed, duration).to_dict(), mech)
+        how.insert(0, "from rest to rest")
+    how.insert(0, "in the least time" if T is None and v is not None else f"in T = {timed.T:g} s")
     n = len(result.t)
     tau = np.arange(n) * (base.T / result.steps)
     tau[-1] = base.T
-    t = timed.time(tau)
+    t = played_time(timed, tau)
     t[0], t[-1] = 0.0, timed.T
-    how = "in the least time" if T is None else f"in T = {timed.T:g} s"
-    reason = (f"{result.reason}; re-timed {how} with every leg at most {v:g} fast "
-              f"(the path needs {timed.map.minimum_time:.6g} s)")
+    options = result.options if v is None else {**result.options, "leg_speed": v}
     return dataclasses.replace(
         result, parametrisation=timed, T=timed.T, t=t, u=timed(t).reshape(n, mech.n_inputs),
-        reason=reason, options={**result.options, "leg_speed": v},
+        reason=f"{result.reason}; re-timed {' '.join(how)}", options=options,
         seconds=None if result.seconds is None else result.seconds + (time.perf_counter() - started))
 
 
