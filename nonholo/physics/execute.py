@@ -2,7 +2,7 @@
 :class:`Execution`.
 
 The plan is played from rest to rest: re-timed so that its inputs vanish at both ends, in
-``duration`` seconds, on the model of its mechanism (:func:`nonholo.physics.models.model_for`).
+``duration`` seconds (:func:`nonholo.planning.retime.retime` with ``rest_to_rest``), on the model of its mechanism (:func:`nonholo.physics.models.model_for`).
 The model starts at rest at the plan's start, settled; after the motion it is left to
 settle again and its state is measured. That is the open-loop stage. Each touch-up then
 re-plans from the measured state to the plan's goal — with the plan's own options — and
@@ -15,7 +15,6 @@ real-time factor (simulated over wall time).
 """
 from __future__ import annotations
 
-import dataclasses
 import inspect
 import json
 import math
@@ -26,10 +25,9 @@ import numpy as np
 from ..io import safe_write
 from ..io.csv_export import states_at
 from ..io.result import PlanResult
-from ..motion.retimed import Retimed
 from ..numerics.checks import check_time, is_number
 from ..planning.api import plan
-from ..planning.retime import planned_controls
+from ..planning.retime import planned_controls, retime
 from .contact import Contact
 from .models import model_for
 
@@ -42,92 +40,6 @@ REPLAN_OPTIONS = ("gamma", "step", "tol", "max_iter", "newton_below", "min_step"
                   "harmonics", "grid", "steps", "route", "leg_length", "leg_speed", "objective")
 #: The format tag of a saved execution.
 FORMAT = "nonholo.execution/1"
-
-
-# -- rest-to-rest re-timing ------------------------------------------------------------------
-
-def smoothstep(s):
-    """``σ(s) = 10s³ − 15s⁴ + 6s⁵`` and ``σ'(s)``: from 0 to 1 on ``[0, 1]`` with zero first
-    and second derivatives at both ends.
-
-    Parameters
-    ----------
-    s : array_like
-        Points of ``[0, 1]`` (clipped to it).
-
-    Returns
-    -------
-    tuple of numpy.ndarray
-        ``σ(s)`` and ``σ'(s)``.
-    """
-    s = np.clip(np.asarray(s, dtype=float), 0.0, 1.0)
-    return s ** 3 * (10 - 15 * s + 6 * s * s), 30 * s * s * (1 - s) ** 2
-
-
-class _Smoothstep(Retimed):
-    """A plan's controls played in ``T`` by the time change ``τ = T_b σ(t/T)``:
-    ``ũ(t) = u(τ(t)) τ'(t)``, zero at ``0`` and ``T``, along the same path."""
-
-    kind = "smoothstep"
-
-    def __init__(self, base, T: float):
-        self.base = base
-        self.T = float(T)
-        self.mechanism = None
-
-    @property
-    def leg_speed(self):
-        return None
-
-    def tau(self, t):
-        s, ds = smoothstep(np.asarray(t, dtype=float) / self.T)
-        return self.base.T * s, self.base.T * ds / self.T
-
-    def time(self, tau):
-        target = np.clip(np.asarray(tau, dtype=float) / self.base.T, 0.0, 1.0)
-        lo, hi = np.zeros_like(target), np.ones_like(target)
-        for _ in range(60):
-            mid = 0.5 * (lo + hi)
-            below = smoothstep(mid)[0] < target
-            lo, hi = np.where(below, mid, lo), np.where(below, hi, mid)
-        return self.T * 0.5 * (lo + hi)
-
-    @property
-    def breakpoints(self):
-        return np.array([0.0, self.T])
-
-    def to_dict(self):
-        return {"kind": self.kind, "T": self.T, "base": self.base.to_dict()}
-
-    def __repr__(self):
-        return f"Smoothstep({self.base!r} on [0, {self.T:.6g}])"
-
-
-def rest_to_rest(result: PlanResult, duration: float) -> PlanResult:
-    """``result`` re-timed to take ``duration`` seconds from rest to rest (the same path,
-    the inputs zero at both ends).
-
-    Parameters
-    ----------
-    result : PlanResult
-        A successful plan.
-    duration : float
-        The time of the motion (s).
-
-    Returns
-    -------
-    PlanResult
-        The re-timed plan.
-    """
-    base = planned_controls(result)
-    timed = _Smoothstep(base, duration)
-    n = len(result.t)
-    tau = np.arange(n) * (base.T / result.steps)
-    tau[-1] = base.T
-    t = timed.time(tau)
-    t[0], t[-1] = 0.0, timed.T
-    return dataclasses.replace(result, parametrisation=timed, T=timed.T, t=t,
-                               u=timed(t).reshape(n, result.kinematics.n_inputs))
 
 
 # -- the record ------------------------------------------------------------------------------
@@ -437,7 +349,8 @@ def execute(result, touch_ups=0, duration=None, contact=None, progress=None) -> 
             if progress is not None:
                 progress(dict(record, stage=i))
             break
-        played = rest_to_rest(current, duration if duration is not None else SLOWDOWN * planned_controls(current).T)
+        played = retime(current, T=duration if duration is not None else SLOWDOWN * planned_controls(current).T,
+                        rest_to_rest=True)
         numbers, trace, R, q = _stage(sim, played, R, q)
         record = {"error": _error(mech, R, q, Rd, qd), **numbers, "planned": True}
         stages.append(record)
