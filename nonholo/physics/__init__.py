@@ -16,4 +16,4 @@ from .contact import Contact
 from .execute import Execution, execute
 from .models import model_for, write_mjcf
 
-__all__ = ["execute", "Execution", "Contact", "model_for", "write_mjcf"]
+__all__ = ["Contact", "Execution", "execute", "model_for", "write_mjcf"]

@@ -16,6 +16,7 @@ velocity fed forward (the joint moves as planned up to the contact forces over t
 stiffness); ``"servo"`` is a softer position servo with velocity damping and no feed-forward,
 which lags.
 """
+# ruff: noqa: TRY004 (bad input is refused by a ValueError naming the argument, as across the package)
 from __future__ import annotations
 
 import dataclasses
@@ -27,37 +28,65 @@ import numpy as np
 #: The actuation modes of :attr:`Contact.actuators`.
 ACTUATORS = ("prescribed", "servo")
 
+#: The calibrated settings: a field of :class:`Contact` left ``None`` takes its value here,
+#: the mechanism's own (:data:`CALIBRATED`) before the common one.
+DEFAULTS = {
+    "timestep": 1e-3,
+    "solref": (0.002, 1.0),
+    "solimp": (0.99, 0.999, 1e-4, 0.5, 2.0),
+    "friction": 1.0,
+    "noslip_iterations": 20,
+    "impratio": 10.0,
+    "preload": 10.0,
+    "radius_compensation": True,
+    "actuators": "prescribed",
+    "settle": 0.5,
+}
+
+#: Settings of particular mechanisms that differ from :data:`DEFAULTS`: the two-leg
+#: platforms' sphere is turned through one small disk, which needs a finer step, a stiffer
+#: contact and a firmer press.
+CALIBRATED = {
+    name: {"timestep": 5e-4, "solref": (0.001, 1.0), "solimp": (0.99, 0.999, 0.001, 0.5, 2.0),
+           "preload": 100.0}
+    for name in ("platform", "platform_raised")
+}
+
 
 @dataclass(frozen=True)
 class Contact:
     """Contact and actuation settings of a physics model (see the module).
 
+    Every field left ``None`` takes the calibrated value for the mechanism played
+    (:meth:`resolved`: :data:`CALIBRATED`, else :data:`DEFAULTS`).
+
     Parameters
     ----------
-    timestep : float
+    timestep : float, optional
         The simulation step (s).
-    solref : tuple of float
+    solref : tuple of float, optional
         MuJoCo's ``solref`` of every contact: ``(time constant (s), damping ratio)``; a time
         constant below twice ``timestep`` is raised to it by MuJoCo.
-    solimp : tuple of float
+    solimp : tuple of float, optional
         MuJoCo's ``solimp`` of every contact (five numbers).
-    friction : float
+    friction : float, optional
         The sliding friction coefficient of the rolling contacts.
-    noslip_iterations : int
+    noslip_iterations : int, optional
         Iterations of MuJoCo's post-solver no-slip pass, which removes the creep of
         regularised friction (0: none).
-    impratio : float
+    impratio : float, optional
         Frictional over normal impedance of the elliptic friction cones (≥ 1).
-    preload : float
+    preload : float, optional
         Force (N) pressing the rolling body on: the ball's top plate down on it, a
-        vehicle's chassis down on its wheels, in addition to gravity.
-    radius_compensation : bool
+        vehicle's chassis down on its wheels, the platform's disk on its sphere, in
+        addition to gravity.
+    radius_compensation : bool, optional
         Measure the effective rolling radius ``ρ − δ/2`` of each driven rolling contact
         once the mechanism has settled and scale the commanded motion by it.
-    actuators : {"prescribed", "servo"}
+    actuators : {"prescribed", "servo"}, optional
         Stiff tracking of the planned joint motion with its velocity fed forward, or a
         softer position servo that lags.
-    settle : float
+    settle : float, optional
         Time (s) the mechanism is left at rest before a motion and after it, before its
         state is measured.
 
@@ -67,19 +96,21 @@ class Contact:
         Naming the field that is out of range.
     """
 
-    timestep: float = 1e-3
-    solref: tuple = (0.002, 1.0)
-    solimp: tuple = (0.99, 0.999, 1e-4, 0.5, 2.0)
-    friction: float = 1.0
-    noslip_iterations: int = 20
-    impratio: float = 10.0
-    preload: float = 10.0
-    radius_compensation: bool = True
-    actuators: str = "prescribed"
-    settle: float = 0.5
+    timestep: float | None = None
+    solref: tuple | None = None
+    solimp: tuple | None = None
+    friction: float | None = None
+    noslip_iterations: int | None = None
+    impratio: float | None = None
+    preload: float | None = None
+    radius_compensation: bool | None = None
+    actuators: str | None = None
+    settle: float | None = None
 
     def __post_init__(self):
         def positive(name, value, finite=True):
+            if value is None:
+                return
             if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)) \
                     or not (value > 0) or (finite and not math.isfinite(value)):
                 raise ValueError(f"{name} must be a positive finite number, got {value!r}")
@@ -89,6 +120,8 @@ class Contact:
         positive("friction", self.friction)
         positive("settle", self.settle)
         for name, size in (("solref", 2), ("solimp", 5)):
+            if getattr(self, name) is None:
+                continue
             try:
                 values = tuple(float(x) for x in getattr(self, name))
             except (TypeError, ValueError):
@@ -96,29 +129,51 @@ class Contact:
             if len(values) != size or not all(math.isfinite(x) for x in values):
                 raise ValueError(f"{name} must be {size} finite numbers, got {getattr(self, name)!r}")
             object.__setattr__(self, name, values)
-        if not (self.solref[0] > 0 and self.solref[1] > 0):
+        if self.solref is not None and not (self.solref[0] > 0 and self.solref[1] > 0):
             raise ValueError(f"solref must be (time constant > 0, damping ratio > 0), got {self.solref}")
-        if not (0 < self.solimp[0] < 1 and 0 < self.solimp[1] < 1 and self.solimp[2] > 0):
+        if self.solimp is not None and not (0 < self.solimp[0] < 1 and 0 < self.solimp[1] < 1
+                                            and self.solimp[2] > 0):
             raise ValueError(f"solimp must have impedances in (0, 1) and a width > 0, got {self.solimp}")
         n = self.noslip_iterations
-        if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 0:
-            raise ValueError(f"noslip_iterations must be a whole number >= 0, got {n!r}")
-        object.__setattr__(self, "noslip_iterations", int(n))
+        if n is not None:
+            if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 0:
+                raise ValueError(f"noslip_iterations must be a whole number >= 0, got {n!r}")
+            object.__setattr__(self, "noslip_iterations", int(n))
         positive("impratio", self.impratio)
-        if self.impratio < 1:
+        if self.impratio is not None and self.impratio < 1:
             raise ValueError(f"impratio must be >= 1, got {self.impratio!r}")
         p = self.preload
-        if isinstance(p, bool) or not isinstance(p, (int, float, np.integer, np.floating)) \
-                or not math.isfinite(p) or p < 0:
-            raise ValueError(f"preload must be a finite force >= 0, got {p!r}")
-        object.__setattr__(self, "preload", float(p))
-        if not isinstance(self.radius_compensation, (bool, np.bool_)):
-            raise ValueError(f"radius_compensation must be True or False, got {self.radius_compensation!r}")
-        object.__setattr__(self, "radius_compensation", bool(self.radius_compensation))
-        if self.actuators not in ACTUATORS:
+        if p is not None:
+            if isinstance(p, bool) or not isinstance(p, (int, float, np.integer, np.floating)) \
+                    or not math.isfinite(p) or p < 0:
+                raise ValueError(f"preload must be a finite force >= 0, got {p!r}")
+            object.__setattr__(self, "preload", float(p))
+        if self.radius_compensation is not None:
+            if not isinstance(self.radius_compensation, (bool, np.bool_)):
+                raise ValueError(f"radius_compensation must be True or False, got {self.radius_compensation!r}")
+            object.__setattr__(self, "radius_compensation", bool(self.radius_compensation))
+        if self.actuators is not None and self.actuators not in ACTUATORS:
             raise ValueError(f"actuators must be one of {ACTUATORS}, got {self.actuators!r}")
 
-    def replace(self, **changes) -> "Contact":
+    def resolved(self, mechanism: str | None = None) -> Contact:
+        """These settings with every ``None`` field at its calibrated value.
+
+        Parameters
+        ----------
+        mechanism : str, optional
+            The mechanism's name (its :data:`CALIBRATED` values before :data:`DEFAULTS`).
+
+        Returns
+        -------
+        Contact
+            Settings without ``None``.
+        """
+        own = CALIBRATED.get(mechanism, {})
+        return dataclasses.replace(self, **{
+            f.name: own.get(f.name, DEFAULTS[f.name]) for f in dataclasses.fields(self)
+            if getattr(self, f.name) is None})
+
+    def replace(self, **changes) -> Contact:
         """A copy with some fields changed (checked as a new one).
 
         Parameters
@@ -145,7 +200,7 @@ class Contact:
                 for f in dataclasses.fields(self)}
 
     @classmethod
-    def from_dict(cls, d: dict) -> "Contact":
+    def from_dict(cls, d: dict) -> Contact:
         """Inverse of :meth:`to_dict`.
 
         Parameters
@@ -172,8 +227,8 @@ class Contact:
         return cls(**{k: tuple(v) if isinstance(v, list) else v for k, v in d.items()})
 
     def option_xml(self) -> str:
-        """The MJCF ``<option>`` element of these settings (implicit-in-velocity integrator,
-        elliptic cones, gravity along ``−z``).
+        """The MJCF ``<option>`` element of these (resolved) settings: implicit-in-velocity
+        integrator, elliptic cones, gravity along ``−z``.
 
         Returns
         -------
@@ -185,8 +240,8 @@ class Contact:
                 f'gravity="0 0 -9.81"/>')
 
     def geom_attributes(self) -> str:
-        """The attributes of a rolling contact's geom: ``condim`` 3, friction, ``solref``,
-        ``solimp``.
+        """The attributes of a rolling contact's geom (resolved settings): ``condim`` 3,
+        friction, ``solref``, ``solimp``.
 
         Returns
         -------

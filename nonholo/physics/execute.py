@@ -13,6 +13,7 @@ Everything recorded is a function of the inputs alone — MuJoCo runs single-thr
 deterministically, and no wall-clock time enters the simulation — except each stage's
 real-time factor (simulated over wall time).
 """
+# ruff: noqa: TRY004 (bad input is refused by a ValueError naming the argument, as across the package)
 from __future__ import annotations
 
 import inspect
@@ -59,7 +60,7 @@ class Execution:
         (simulated over wall time), ``duration`` (s of motion, settling aside) and
         ``planned`` (``False`` for a touch-up whose plan failed: nothing was played).
     contact : Contact
-        The settings played with.
+        The settings played with (resolved: no field ``None``).
     traces : list of dict, optional
         Per stage, samples of the motion every :data:`SAMPLE` s: ``t`` (from the stage's
         start), the planned states ``R_planned``, ``q_planned`` (held at the end after
@@ -90,7 +91,7 @@ class Execution:
                 "contact": self.contact.to_dict()}
 
     @classmethod
-    def from_dict(cls, d: dict) -> "Execution":
+    def from_dict(cls, d: dict) -> Execution:
         """Inverse of :meth:`to_dict`.
 
         Parameters
@@ -162,7 +163,7 @@ class Execution:
         return safe_write.write_text(path, text + "\n", "path")
 
     @classmethod
-    def load(cls, path) -> "Execution":
+    def load(cls, path) -> Execution:
         """Read a record written by :meth:`save`.
 
         Parameters
@@ -257,9 +258,9 @@ def _stage(sim, played, R, q):
     model.follow(played, R, q)
     h = float(m.opt.timestep)
     T = float(played.T)
-    n_move = int(math.ceil(T / h - 1e-9))
-    n_total = n_move + int(round(model.contact.settle / h))
-    every = max(1, int(round(SAMPLE / h)))
+    n_move = math.ceil(T / h - 1e-9)
+    n_total = n_move + round(model.contact.settle / h)
+    every = max(1, round(SAMPLE / h))
     times, Rs, qs, slips = [0.0], [], [], []
     R0, q0 = model.state(m, d)
     Rs.append(R0)
@@ -307,7 +308,8 @@ def execute(result, touch_ups=0, duration=None, contact=None, progress=None) -> 
         Seconds each stage's motion takes, settling aside (default: :data:`SLOWDOWN`
         times the plan's ``T``).
     contact : Contact, optional
-        The contact and actuation settings (default: ``Contact()``).
+        The contact and actuation settings (default: ``Contact()``; fields left ``None``
+        take the mechanism's calibrated values, :meth:`Contact.resolved`).
     progress : callable, optional
         Called with each stage's record (a dict with ``stage``, its index) once played.
 
@@ -329,6 +331,8 @@ def execute(result, touch_ups=0, duration=None, contact=None, progress=None) -> 
     touch_ups, duration = _check(result, touch_ups, duration, contact, progress)
     mech = result.kinematics
     model = model_for(mech, contact)
+    if hasattr(model, "rest_to_rest"):
+        model.rest_to_rest = False          # a model that can re-time: the stages are re-timed already
     m = mujoco.MjModel.from_xml_string(model.mjcf())
     d = mujoco.MjData(m)
     sim = (model, m, d)

@@ -19,6 +19,7 @@ The rolling ball, the car and the unicycle have the models of
 ``geometry``) has :class:`nonholo.physics.platform_model.PlatformModel`, imported when
 asked for.
 """
+# ruff: noqa: TRY004 (bad input is refused by a ValueError naming the argument, as across the package)
 from __future__ import annotations
 
 from ..io import safe_write
@@ -40,7 +41,8 @@ def model_for(mechanism, contact: Contact | None = None):
     mechanism : str or Mechanism
         A mechanism or its name.
     contact : Contact, optional
-        The contact and actuation settings (default: ``Contact()``).
+        The contact and actuation settings (default: ``Contact()``); the model gets them
+        resolved for the mechanism (:meth:`Contact.resolved`).
 
     Returns
     -------
@@ -64,11 +66,11 @@ def model_for(mechanism, contact: Contact | None = None):
     if not isinstance(contact, Contact):
         raise ValueError(f"contact must be a Contact, got {type(contact).__name__}")
     if mech.name in VEHICLES:
-        return VEHICLES[mech.name](mech, contact)
+        return VEHICLES[mech.name](mech, contact.resolved(mech.name))
     if getattr(mech, "geometry", None) is not None:
         from .platform_model import PlatformModel
 
-        return PlatformModel(mech, contact)
+        return PlatformModel(mech, contact.resolved(mech.name))
     known = sorted(VEHICLES) + ["a two-leg platform (a mechanism with a geometry)"]
     raise ValueError(f"mechanism {mech.name!r} has no physics model; there are models for "
                      f"{', '.join(known)}")

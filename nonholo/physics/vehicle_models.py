@@ -24,6 +24,7 @@ mechanism should be: the rolling contacts alone carry the motion to the state me
 The wheels are spheres on hinges: each touches the floor at one point below its centre,
 so its rolling radius is that of a ball, ``r − δ/2`` on a soft contact.
 """
+# ruff: noqa: TRY004 (bad input is refused by a ValueError naming the argument, as across the package)
 from __future__ import annotations
 
 import numpy as np
@@ -31,7 +32,7 @@ from scipy.integrate import cumulative_trapezoid
 
 from ..io.csv_export import states_at
 from . import contact as contacts
-from .contact import Contact, numbers
+from .contact import Contact
 
 #: Natural frequency (rad/s) of the tracking of a driven joint, "prescribed" actuators, at
 #: most :data:`STIFF_STEP` over the time step.
@@ -105,7 +106,7 @@ class Targets:
         self.duration = float(duration)
 
     @classmethod
-    def hold(cls, positions) -> "Targets":
+    def hold(cls, positions) -> Targets:
         """Targets that hold ``positions`` at rest.
 
         Parameters
@@ -160,7 +161,7 @@ class RollingModel:
     mechanism : Mechanism
         The numeric mechanism.
     contact : Contact, optional
-        The settings (default: ``Contact()``).
+        The settings (default: ``Contact()``), resolved for the mechanism.
     """
 
     name = ""
@@ -171,9 +172,10 @@ class RollingModel:
 
     def __init__(self, mechanism, contact: Contact | None = None):
         self.mechanism = mechanism
-        self.contact = Contact() if contact is None else contact
-        if not isinstance(self.contact, Contact):
-            raise ValueError(f"contact must be a Contact, got {type(self.contact).__name__}")
+        contact = Contact() if contact is None else contact
+        if not isinstance(contact, Contact):
+            raise ValueError(f"contact must be a Contact, got {type(contact).__name__}")
+        self.contact = contact.resolved(self.name)
         self.radii = {label: r for label, _, _, r in self.rolling}
         self._targets = None
         self._hold = np.zeros(len(self.driven))
@@ -270,7 +272,7 @@ class RollingModel:
         self._hold = data.qpos[ids["qpos"]].copy()
         self._targets = Targets.hold(self._hold)
         self.pressing(model, data)
-        for _ in range(int(round(self.contact.settle / model.opt.timestep))):
+        for _ in range(round(self.contact.settle / model.opt.timestep)):
             self.drive(model, data, 0.0)
             mujoco.mj_step(model, data)
         mujoco.mj_forward(model, data)
@@ -408,15 +410,15 @@ class BallModel(RollingModel):
         return "\n".join([
             f'    <body name="ball" pos="0 0 {r!r}">',
             '      <freejoint name="ball"/>',
-            f'      <geom name="ball" type="sphere" size="{r!r}" mass="{float(self.BALL_MASS)!r}" '
-            'rgba="0.2 0.4 0.8 1"/>',
+            (f'      <geom name="ball" type="sphere" size="{r!r}" mass="{float(self.BALL_MASS)!r}" '
+             'rgba="0.2 0.4 0.8 1"/>'),
             "    </body>",
             f'    <body name="plate" pos="0 0 {2 * r!r}">',
             '      <joint name="plate_x" type="slide" axis="1 0 0"/>',
             '      <joint name="plate_y" type="slide" axis="0 1 0"/>',
             '      <joint name="plate_z" type="slide" axis="0 0 1"/>',
-            f'      <geom name="plate" type="box" size="{w!r} {w!r} 0.05" pos="0 0 0.05" '
-            f'mass="{float(self.PLATE_MASS)!r}" rgba="0.6 0.6 0.6 0.4"/>',
+            (f'      <geom name="plate" type="box" size="{w!r} {w!r} 0.05" pos="0 0 0.05" '
+             f'mass="{float(self.PLATE_MASS)!r}" rgba="0.6 0.6 0.6 0.4"/>'),
             "    </body>"])
 
     def extra_actuators(self) -> str:
@@ -467,8 +469,8 @@ class _Wheeled(RollingModel):
         return "\n".join([
             f'      <body name="{name}" pos="{pos}">',
             f'        <joint name="{name}" type="hinge" axis="{axis}"{rotor}/>',
-            f'        <geom name="{name}" type="sphere" size="{r!r}" mass="{float(self.WHEEL_MASS)!r}" '
-            f'rgba="{"0.8 0.3 0.2 1" if driven else "0.2 0.2 0.2 1"}"/>',
+            (f'        <geom name="{name}" type="sphere" size="{r!r}" mass="{float(self.WHEEL_MASS)!r}" '
+             f'rgba="{"0.8 0.3 0.2 1" if driven else "0.2 0.2 0.2 1"}"/>'),
             "      </body>"])
 
     def heading(self, model, data) -> float:
@@ -516,15 +518,15 @@ class CarModel(_Wheeled):
         return "\n".join([
             f'    <body name="chassis" pos="0 0 {float(self.WHEEL)!r}">',
             '      <freejoint name="chassis"/>',
-            f'      <geom name="frame" type="box" size="{L / 2 + 0.1!r} {w / 2 - 0.05!r} 0.03" '
-            f'pos="{L / 2!r} 0 0.12" mass="{float(self.CHASSIS_MASS)!r}" contype="0" conaffinity="0" '
-            'rgba="0.3 0.6 0.3 1"/>',
+            (f'      <geom name="frame" type="box" size="{L / 2 + 0.1!r} {w / 2 - 0.05!r} 0.03" '
+             f'pos="{L / 2!r} 0 0.12" mass="{float(self.CHASSIS_MASS)!r}" contype="0" conaffinity="0" '
+             'rgba="0.3 0.6 0.3 1"/>'),
             self.wheel("rear_left", f"0 {w / 2!r} 0"),
             self.wheel("rear_right", f"0 {-w / 2!r} 0"),
             f'      <body name="steering" pos="{L!r} 0 0">',
             f'        <joint name="steer" type="hinge" axis="0 0 1" armature="{float(dict(self.driven)["steer"])!r}"/>',
-            '        <geom name="fork" type="cylinder" size="0.02 0.1" pos="0 0 0.1" mass="0.05" '
-            'contype="0" conaffinity="0"/>',
+            ('        <geom name="fork" type="cylinder" size="0.02 0.1" pos="0 0 0.1" mass="0.05" '
+             'contype="0" conaffinity="0"/>'),
             self.wheel("front", "0 0 0", driven=True).replace("\n      ", "\n        "),
             "      </body>",
             "    </body>"])
@@ -575,8 +577,8 @@ class UnicycleModel(_Wheeled):
         return "\n".join([
             f'    <body name="chassis" pos="0 0 {r!r}">',
             '      <freejoint name="chassis"/>',
-            f'      <geom name="frame" type="box" size="0.45 {b - 0.05!r} 0.03" pos="0 0 0.12" '
-            f'mass="{float(self.CHASSIS_MASS)!r}" contype="0" conaffinity="0" rgba="0.3 0.3 0.6 1"/>',
+            (f'      <geom name="frame" type="box" size="0.45 {b - 0.05!r} 0.03" pos="0 0 0.12" '
+             f'mass="{float(self.CHASSIS_MASS)!r}" contype="0" conaffinity="0" rgba="0.3 0.3 0.6 1"/>'),
             f'      <geom name="caster_front" pos="0.4 0 {c - r!r}" {caster}/>',
             f'      <geom name="caster_back" pos="-0.4 0 {c - r!r}" {caster}/>',
             self.wheel("left", f"0 {b!r} 0", driven=True),
