@@ -7,6 +7,7 @@ default settings are ``benchmarks/physics.py``'s.
 from __future__ import annotations
 
 import dataclasses
+import importlib
 import importlib.util
 import json
 
@@ -213,3 +214,16 @@ def test_only_a_successful_plan_is_played(car_plan):
         execute(car_plan.to_dict())
     with pytest.raises(ValueError, match="result"):
         execute(dataclasses.replace(car_plan, success=False, reason="made up"))
+
+
+def test_a_touch_up_that_cannot_be_planned_ends_the_run(unicycle_plan, monkeypatch):
+    module = importlib.import_module("nonholo.physics.execute")     # the package's execute is the function
+
+    def refuse(*args, **kwargs):
+        raise ValueError("no plan from here")
+
+    monkeypatch.setattr(module, "plan", refuse)
+    ex = execute(unicycle_plan, touch_ups=3, contact=COARSE, duration=5.0)
+    assert [s["planned"] for s in ex.stages] == [True, False]
+    assert ex.stages[1]["error"] == ex.stages[0]["error"] and "no plan" in ex.stages[1]["reason"]
+    assert ex.traces[1] is None

@@ -58,7 +58,8 @@ class Execution:
         mechanism's units), ``max_slip`` (largest tangential speed at a rolling contact,
         units per second), ``max_contact_force`` (N), ``sim_time`` (s), ``real_time_factor``
         (simulated over wall time), ``duration`` (s of motion, settling aside) and
-        ``planned`` (``False`` for a touch-up whose plan failed: nothing was played).
+        ``planned`` (``False`` for a touch-up that could not be planned, with its ``reason``:
+        nothing was played, and no further touch-up is tried).
     contact : Contact
         The settings played with (resolved: no field ``None``).
     traces : list of dict, optional
@@ -343,11 +344,17 @@ def execute(result, touch_ups=0, duration=None, contact=None, progress=None) -> 
     stages, traces = [], []
     current = result
     for i in range(touch_ups + 1):
+        reason = None
         if i > 0:
-            current = plan(mech.space.public(R, q), result.goal, mechanism=mech, **options)
-        if not current.success:
+            try:
+                current = plan(mech.space.public(R, q), result.goal, mechanism=mech, **options)
+                reason = None if current.success else current.reason
+            except ValueError as exc:          # e.g. a measured state the planner refuses
+                reason = str(exc)
+        if reason is not None:
             record = {"error": _error(mech, R, q, Rd, qd), "max_slip": 0.0, "max_contact_force": 0.0,
-                      "sim_time": 0.0, "real_time_factor": 0.0, "duration": 0.0, "planned": False}
+                      "sim_time": 0.0, "real_time_factor": 0.0, "duration": 0.0, "planned": False,
+                      "reason": reason}
             stages.append(record)
             traces.append(None)
             if progress is not None:

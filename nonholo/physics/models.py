@@ -16,8 +16,8 @@ A model is any object with this protocol (duck-typed):
 
 The rolling ball, the car and the unicycle have the models of
 :mod:`nonholo.physics.vehicle_models`; a two-leg platform (a mechanism with a
-``geometry``) has :class:`nonholo.physics.platform_model.PlatformModel`, imported when
-asked for.
+``geometry``) has ``PlatformModel`` of this package's module ``platform_model``, imported
+when asked for.
 """
 # ruff: noqa: TRY004 (bad input is refused by a ValueError naming the argument, as across the package)
 from __future__ import annotations

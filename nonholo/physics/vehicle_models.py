@@ -182,15 +182,34 @@ class RollingModel:
 
     # -- the model file ---------------------------------------------------------------------
     def bodies(self) -> str:
-        """The mechanism's bodies (MJCF, inside ``<worldbody>``)."""
+        """The mechanism's bodies.
+
+        Returns
+        -------
+        str
+            MJCF elements inside ``<worldbody>``.
+        """
         raise NotImplementedError
 
     def extra_actuators(self) -> str:
-        """Actuators besides the driven joints' (MJCF)."""
+        """Actuators besides the driven joints'.
+
+        Returns
+        -------
+        str
+            MJCF elements inside ``<actuator>`` (none by default).
+        """
         return ""
 
     def gains(self) -> list[tuple[float, float]]:
-        """``(kp, kv)`` of each driven joint for :attr:`Contact.actuators`."""
+        """The tracking gains: a critically damped natural frequency on each driven joint's
+        inertia, :data:`STIFF` or :data:`SERVO`, at most :data:`STIFF_STEP` per time step.
+
+        Returns
+        -------
+        list of tuple of float
+            ``(kp, kv)`` per driven joint.
+        """
         wn = min(STIFF if self.contact.actuators == "prescribed" else SERVO,
                  STIFF_STEP / self.contact.timestep)
         return [(inertia * wn * wn, 2.0 * inertia * wn) for _, inertia in self.driven]
@@ -222,7 +241,7 @@ class RollingModel:
             "  </worldbody>",
             "  <actuator>",
             *acts,
-            self.extra_actuators(),
+            *[line for line in [self.extra_actuators()] if line],
             "  </actuator>",
             "</mujoco>",
             ""])
@@ -248,7 +267,15 @@ class RollingModel:
 
     # -- the protocol -------------------------------------------------------------------------
     def place(self, model, data, R, q) -> None:
-        """Put the mechanism at ``(R, q)`` at rest, just touching the floor (``data.qpos``)."""
+        """Put the mechanism at ``(R, q)``, just touching the floor.
+
+        Parameters
+        ----------
+        model, data : mujoco.MjModel, mujoco.MjData
+            The simulation (``data.qpos`` is set).
+        R, q : numpy.ndarray
+            The state.
+        """
         raise NotImplementedError
 
     def reset(self, model, data, R, q) -> None:
@@ -282,7 +309,13 @@ class RollingModel:
                 self.radii[label] = r - 0.5 * contacts.penetration(model, data, gid, oid)
 
     def pressing(self, model, data) -> None:
-        """Apply :attr:`Contact.preload` (``data.ctrl`` or ``data.xfrc_applied``)."""
+        """Apply :attr:`Contact.preload` (through ``data.ctrl`` or ``data.xfrc_applied``).
+
+        Parameters
+        ----------
+        model, data : mujoco.MjModel, mujoco.MjData
+            The simulation.
+        """
 
     def drive(self, model, data, t: float) -> None:
         """Set the actuators' targets for time ``t`` of the motion being followed.
@@ -307,8 +340,22 @@ class RollingModel:
         return cached[1]
 
     def displacements(self, played, t, R, q) -> tuple[np.ndarray, np.ndarray]:
-        """The driven joints' displacements from their start and velocities along ``played``
-        at times ``t`` (shape ``(n, a)`` each)."""
+        """The driven joints' positions (up to a constant) and velocities along ``played``.
+
+        Parameters
+        ----------
+        played : PlanResult
+            The motion.
+        t : numpy.ndarray
+            The time grid, ``(n,)``.
+        R, q : numpy.ndarray
+            The measured state it starts from.
+
+        Returns
+        -------
+        tuple of numpy.ndarray
+            Positions and velocities, ``(n, a)`` each.
+        """
         raise NotImplementedError
 
     def follow(self, played, R, q) -> None:
@@ -363,7 +410,18 @@ class RollingModel:
         return contacts.max_normal_force(model, data)
 
     def state(self, model, data) -> tuple[np.ndarray, np.ndarray]:
-        """The measured state ``(R, q)`` in the mechanism's convention."""
+        """The measured state in the mechanism's convention.
+
+        Parameters
+        ----------
+        model, data : mujoco.MjModel, mujoco.MjData
+            The simulation.
+
+        Returns
+        -------
+        tuple of numpy.ndarray
+            ``R`` (3, 3), the identity without an orientation, and ``q`` (k,).
+        """
         raise NotImplementedError
 
 
@@ -527,7 +585,7 @@ class CarModel(_Wheeled):
             f'        <joint name="steer" type="hinge" axis="0 0 1" armature="{float(dict(self.driven)["steer"])!r}"/>',
             ('        <geom name="fork" type="cylinder" size="0.02 0.1" pos="0 0 0.1" mass="0.05" '
              'contype="0" conaffinity="0"/>'),
-            self.wheel("front", "0 0 0", driven=True).replace("\n      ", "\n        "),
+            "\n".join("  " + line for line in self.wheel("front", "0 0 0", driven=True).split("\n")),
             "      </body>",
             "    </body>"])
 
