@@ -27,6 +27,8 @@ so its rolling radius is that of a ball, ``r − δ/2`` on a soft contact.
 # ruff: noqa: TRY004 (bad input is refused by a ValueError naming the argument, as across the package)
 from __future__ import annotations
 
+import abc
+
 import numpy as np
 from scipy.integrate import cumulative_trapezoid
 
@@ -82,7 +84,18 @@ def yaw_quaternion(theta: float) -> np.ndarray:
 
 
 def wrap(angle):
-    """``angle`` wrapped into ``[−π, π)``."""
+    """An angle wrapped into ``[−π, π)``.
+
+    Parameters
+    ----------
+    angle : float or array_like
+        Angles (rad).
+
+    Returns
+    -------
+    numpy.ndarray
+        The wrapped angles.
+    """
     return (np.asarray(angle) + np.pi) % (2 * np.pi) - np.pi
 
 
@@ -147,7 +160,19 @@ class Targets:
                 (1 - f) * self.velocities[i] + f * self.velocities[i + 1])
 
 
-class RollingModel:
+def _documented(cls):
+    """``cls`` with the docstrings of its base classes' methods on its overrides that have none."""
+    for name, member in vars(cls).items():
+        if callable(member) and not member.__doc__:
+            for base in cls.__mro__[1:]:
+                doc = getattr(getattr(base, name, None), "__doc__", None)
+                if doc:
+                    member.__doc__ = doc
+                    break
+    return cls
+
+
+class RollingModel(abc.ABC):
     """What the rolling models share: the MJCF frame, actuators tracking targets, settling,
     slip and force measurements (the model protocol of :mod:`nonholo.physics.models`).
 
@@ -181,6 +206,7 @@ class RollingModel:
         self._hold = np.zeros(len(self.driven))
 
     # -- the model file ---------------------------------------------------------------------
+    @abc.abstractmethod
     def bodies(self) -> str:
         """The mechanism's bodies.
 
@@ -189,7 +215,6 @@ class RollingModel:
         str
             MJCF elements inside ``<worldbody>``.
         """
-        raise NotImplementedError
 
     def extra_actuators(self) -> str:
         """Actuators besides the driven joints'.
@@ -266,6 +291,7 @@ class RollingModel:
         }
 
     # -- the protocol -------------------------------------------------------------------------
+    @abc.abstractmethod
     def place(self, model, data, R, q) -> None:
         """Put the mechanism at ``(R, q)``, just touching the floor.
 
@@ -276,7 +302,6 @@ class RollingModel:
         R, q : numpy.ndarray
             The state.
         """
-        raise NotImplementedError
 
     def reset(self, model, data, R, q) -> None:
         """Place the mechanism at ``(R, q)`` at rest and let it settle for
@@ -339,6 +364,7 @@ class RollingModel:
             self._cached = cached
         return cached[1]
 
+    @abc.abstractmethod
     def displacements(self, played, t, R, q) -> tuple[np.ndarray, np.ndarray]:
         """The driven joints' positions (up to a constant) and velocities along ``played``.
 
@@ -356,7 +382,6 @@ class RollingModel:
         tuple of numpy.ndarray
             Positions and velocities, ``(n, a)`` each.
         """
-        raise NotImplementedError
 
     def follow(self, played, R, q) -> None:
         """Precompute the actuators' targets for playing ``played`` from the measured state
@@ -409,6 +434,7 @@ class RollingModel:
         """
         return contacts.max_normal_force(model, data)
 
+    @abc.abstractmethod
     def state(self, model, data) -> tuple[np.ndarray, np.ndarray]:
         """The measured state in the mechanism's convention.
 
@@ -422,7 +448,6 @@ class RollingModel:
         tuple of numpy.ndarray
             ``R`` (3, 3), the identity without an orientation, and ``q`` (k,).
         """
-        raise NotImplementedError
 
 
 def planned(played, t) -> tuple[np.ndarray, np.ndarray]:
@@ -443,6 +468,7 @@ def planned(played, t) -> tuple[np.ndarray, np.ndarray]:
     return states_at(played, np.minimum(np.asarray(t, dtype=float), float(played.t[-1])))
 
 
+@_documented
 class BallModel(RollingModel):
     """The rolling ball between the floor and a top plate (see the module).
 
@@ -506,6 +532,7 @@ class BallModel(RollingModel):
         return R, np.array(data.xpos[b][:2])
 
 
+@_documented
 class _Wheeled(RollingModel):
     """A chassis on a free joint carrying sphere wheels on hinges; its origin at wheel-centre
     height above the point the state's ``(x, y)`` names, its ``x`` axis the heading."""
@@ -554,6 +581,7 @@ class _Wheeled(RollingModel):
         self._heading = float(theta)
 
 
+@_documented
 class CarModel(_Wheeled):
     """The car as a tricycle (see the module).
 
@@ -611,6 +639,7 @@ class CarModel(_Wheeled):
         return np.eye(3), np.array([x, y, self.heading(model, data), float(data.qpos[model.jnt_qposadr[j]])])
 
 
+@_documented
 class UnicycleModel(_Wheeled):
     """The unicycle as a differential-drive robot (see the module).
 
