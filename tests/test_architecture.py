@@ -159,7 +159,7 @@ def test_layer_of_every_module():
 #: The subpackages from the bottom up: a module may import from its own layer and the layers
 #: below it, never from a layer above (``nonholo`` itself, the public face, is the top).
 LAYERS = ("generated", "numerics", "spaces", "integrate", "controls", "model", "motion", "certify",
-          "io", "planning", "viz", "batch", "paper", "cli", "nonholo")
+          "io", "planning", "physics", "viz", "batch", "paper", "cli", "nonholo")
 
 #: At most this many modules directly in ``nonholo/`` besides the subpackages.
 MAX_TOP_MODULES = 12

@@ -1,0 +1,229 @@
+"""nonholo.physics: plans played on MuJoCo models, compared with the planned motion and
+the mechanisms' kinematics (orders of magnitude only: MuJoCo versions shift digits).
+
+The runs use a coarse time step (:data:`COARSE`); the acceptance measurements at the
+default settings are ``benchmarks/physics.py``'s.
+"""
+from __future__ import annotations
+
+import dataclasses
+import importlib
+import importlib.util
+import json
+
+import numpy as np
+import pytest
+
+import nonholo
+from nonholo.physics import Contact, Execution, execute, model_for, write_mjcf
+from nonholo.spaces import so3
+
+mujoco = pytest.importorskip("mujoco")
+
+#: A coarse step (and the stiffest contact it allows) keeps the tests fast.
+COARSE = Contact(timestep=0.005, solref=(0.01, 1.0))
+BALL_R0 = so3.from_rpy(0.4, -0.3, 0.2)
+BALL_RD = so3.exp(np.array([np.pi / 2, 0, 0])) @ BALL_R0
+
+
+@pytest.fixture(scope="module")
+def ball_plan():
+    res = nonholo.plan((BALL_R0, (0.0, 0.0)), (BALL_RD, (0.0, 0.0)), mechanism="rolling_ball",
+                       strategy="paper", harmonics=4)
+    assert res.success
+    return res
+
+
+@pytest.fixture(scope="module")
+def ball_run(ball_plan):
+    return execute(ball_plan, touch_ups=1, contact=COARSE)
+
+
+@pytest.fixture(scope="module")
+def car_plan():
+    res = nonholo.plan((0.0, 0.0, 0.0, 0.0), (0.0, 1.0, 0.0, 0.0), mechanism="car")
+    assert res.success
+    return res
+
+
+@pytest.fixture(scope="module")
+def car_run(car_plan):
+    return execute(car_plan, touch_ups=1, contact=COARSE)
+
+
+@pytest.fixture(scope="module")
+def unicycle_plan():
+    res = nonholo.plan((0.0, 0.0, 0.0), (0.0, 1.0, 0.0), mechanism="unicycle")
+    assert res.success
+    return res
+
+
+def rotation_gap(Ra, Rb) -> np.ndarray:
+    """``|log(R_a R_bᵀ)|`` of two stacks of rotations."""
+    return np.array([np.linalg.norm(so3.log(a @ b.T)) for a, b in zip(Ra, Rb)])
+
+
+# -- the ball --------------------------------------------------------------------------------
+
+def test_the_ball_rolls_along_the_planned_motion(ball_run):
+    tr = ball_run.traces[0]
+    assert np.max(rotation_gap(tr["R"], tr["R_planned"])) < 5e-2
+    assert np.max(np.abs(tr["q"] - tr["q_planned"])) < 5e-2
+    assert ball_run.stages[0]["error"]["rotation"] < 2e-2
+
+
+def test_a_touch_up_from_rest_cuts_the_ball_error_by_orders(ball_run):
+    first, second = (s["error"]["rotation"] for s in ball_run.stages)
+    assert second < 1e-2 * first
+    assert second < 1e-4
+    assert ball_run.stages[1]["error"]["coordinates"] < 1e-4
+
+
+def test_stage_errors_are_those_of_the_final_state(ball_run):
+    for stage, tr in zip(ball_run.stages, ball_run.traces):
+        assert stage["error"]["rotation"] == pytest.approx(rotation_gap(tr["R"][-1:], [BALL_RD])[0], abs=1e-12)
+        assert stage["error"]["coordinates"] == pytest.approx(np.linalg.norm(tr["q"][-1]), abs=1e-12)
+        assert stage["sim_time"] == pytest.approx(tr["t"][-1])
+
+
+def test_radius_compensation_measures_the_rolling_radius_of_the_soft_contacts():
+    """Rolling radii ``ρ − δ/2`` from the settled ball's height and the plate's."""
+    model = model_for("rolling_ball", COARSE)
+    m = mujoco.MjModel.from_xml_string(model.mjcf())
+    d = mujoco.MjData(m)
+    model.reset(m, d, BALL_R0, np.zeros(2))
+    z = d.xpos[mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_BODY, "ball")][2]
+    plate = d.xpos[mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_BODY, "plate")][2]
+    assert 0 < 1 - z < 1e-2 and 0 < z + 1 - plate < 1e-2      # the contacts are soft
+    assert model.radii["floor"] == pytest.approx((1 + z) / 2, abs=1e-9)
+    assert model.radii["plate"] == pytest.approx((plate - z + 1) / 2, abs=1e-9)
+    R, q = model.state(m, d)
+    assert rotation_gap([R], [BALL_R0])[0] < 1e-6 and np.linalg.norm(q) < 1e-6
+
+
+def test_played_too_fast_the_ball_slips(ball_plan, ball_run):
+    fast = execute(ball_plan, duration=1.0, contact=COARSE)
+    assert fast.stages[0]["error"]["rotation"] > 0.1
+    assert fast.stages[0]["max_slip"] > 100 * ball_run.stages[0]["max_slip"]
+
+
+# -- the car and the unicycle ----------------------------------------------------------------
+
+def test_the_car_parks(car_run):
+    tr = car_run.traces[0]
+    assert np.max(np.abs(tr["q"] - tr["q_planned"])) < 5e-2
+    first, second = (s["error"]["coordinates"] for s in car_run.stages)
+    assert first < 5e-2
+    assert second < 1e-2 and second < first / 10
+
+
+def test_two_runs_are_identical(unicycle_plan):
+    seen = []
+    a = execute(unicycle_plan, contact=COARSE, duration=5.0, progress=seen.append)
+    b = execute(unicycle_plan, contact=COARSE, duration=5.0)
+    assert [s["stage"] for s in seen] == [0]
+    assert a == b
+    strip = [{k: v for k, v in s.items() if k != "real_time_factor"} for s in a.stages]
+    assert strip == [{k: v for k, v in s.items() if k != "real_time_factor"} for s in b.stages]
+    assert np.array_equal(a.traces[0]["q"], b.traces[0]["q"])
+    assert a.stages[0]["error"]["coordinates"] < 1e-2
+
+
+# -- the record --------------------------------------------------------------------------------
+
+def test_the_record_saves_and_loads(car_run, tmp_path):
+    d = car_run.to_dict()
+    assert set(d) >= {"mechanism", "stages", "contact"} and d["mechanism"] == "car"
+    assert set(d["stages"][0]) >= {"error", "max_slip", "max_contact_force", "sim_time", "real_time_factor"}
+    assert d["contact"]["timestep"] == COARSE.timestep
+    path = car_run.save(tmp_path / "run.json")
+    assert json.loads(path.read_text())["stages"] == json.loads(json.dumps(d["stages"]))
+    back = Execution.load(path)
+    assert back == car_run and back.contact == COARSE.resolved("car") and back.traces is None
+    with pytest.raises(ValueError, match="stages"):
+        Execution.from_dict({**d, "stages": []})
+
+
+# -- settings, models, refusals -----------------------------------------------------------------
+
+@pytest.mark.parametrize("field, value", [("timestep", 0.0), ("timestep", float("nan")), ("solref", (1.0,)),
+                                          ("solimp", (2, 0.9, 0.001, 0.5, 2)), ("friction", -1.0),
+                                          ("noslip_iterations", -1), ("noslip_iterations", 1.5),
+                                          ("impratio", 0.5), ("preload", -1.0), ("radius_compensation", 1),
+                                          ("actuators", "magic"), ("settle", 0)])
+def test_bad_contact_settings_are_refused(field, value):
+    with pytest.raises(ValueError, match=field):
+        Contact(**{field: value})
+
+
+def test_contact_settings_round_trip_and_resolve():
+    c = Contact(timestep=0.002, actuators="servo", radius_compensation=False)
+    assert Contact.from_dict(json.loads(json.dumps(c.to_dict()))) == c
+    car = c.resolved("car")
+    assert None not in car.to_dict().values()
+    assert (car.timestep, car.actuators, car.radius_compensation) == (0.002, "servo", False)
+    assert model_for("car", c).contact == car
+    assert Contact().resolved("platform").timestep < Contact().resolved("car").timestep
+    with pytest.raises(ValueError, match="unknown"):
+        Contact.from_dict({"stiffness": 1})
+
+
+@pytest.mark.parametrize("name", ["rolling_ball", "car", "unicycle"])
+def test_the_models_load_and_hold_their_state(name, tmp_path):
+    """A written model file loads, and a model placed at a state measures that state back."""
+    mech = nonholo.mechanism_named(name)
+    path = write_mjcf(mech, tmp_path / f"{name}.xml", contact=COARSE)
+    m = mujoco.MjModel.from_xml_path(str(path))
+    d = mujoco.MjData(m)
+    model = model_for(name, COARSE)
+    R = BALL_R0 if mech.space.rotation is not None else np.eye(3)
+    q = {"rolling_ball": [0.5, -0.25], "car": [0.5, -0.25, 0.3, 0.2], "unicycle": [0.5, -0.25, 0.3]}[name]
+    model.reset(m, d, R, np.array(q))
+    R_m, q_m = model.state(m, d)
+    assert rotation_gap([R_m], [R])[0] < 1e-5
+    assert np.max(np.abs(q_m - q)) < 1e-4
+    assert model.slip(m, d) < 1e-3 and model.contact_force(m, d) > 0
+
+
+def test_a_mechanism_without_a_model_is_refused():
+    with pytest.raises(ValueError, match="mechanism 'brockett'"):
+        model_for("brockett")
+    with pytest.raises(ValueError, match="contact"):
+        model_for("car", contact={"timestep": 0.01})
+
+
+@pytest.mark.skipif(importlib.util.find_spec("nonholo.physics.platform_model") is None,
+                    reason="no platform model in this checkout")
+def test_the_platform_has_a_model():
+    model = model_for("platform", COARSE)
+    assert type(model).__name__ == "PlatformModel"
+    mujoco.MjModel.from_xml_string(model.mjcf())
+
+
+@pytest.mark.parametrize("kwargs, word", [({"touch_ups": -1}, "touch_ups"), ({"touch_ups": 1.5}, "touch_ups"),
+                                          ({"touch_ups": True}, "touch_ups"), ({"duration": 0.0}, "duration"),
+                                          ({"duration": -2.0}, "duration"), ({"contact": "soft"}, "contact"),
+                                          ({"progress": 3}, "progress")])
+def test_bad_arguments_are_refused(car_plan, kwargs, word):
+    with pytest.raises(ValueError, match=word):
+        execute(car_plan, **kwargs)
+
+
+def test_only_a_successful_plan_is_played(car_plan):
+    with pytest.raises(ValueError, match="result"):
+        execute(car_plan.to_dict())
+    with pytest.raises(ValueError, match="result"):
+        execute(dataclasses.replace(car_plan, success=False, reason="made up"))
+
+
+def test_a_touch_up_that_cannot_be_planned_ends_the_run(unicycle_plan, monkeypatch):
+    module = importlib.import_module("nonholo.physics.execute")     # the package's execute is the function
+
+    def refuse(*args, **kwargs):
+        raise ValueError("no plan from here")
+
+    monkeypatch.setattr(module, "plan", refuse)
+    ex = execute(unicycle_plan, touch_ups=3, contact=COARSE, duration=5.0)
+    assert [s["planned"] for s in ex.stages] == [True, False]
+    assert ex.stages[1]["error"] == ex.stages[0]["error"] and "no plan" in ex.stages[1]["reason"]
+    assert ex.traces[1] is None
