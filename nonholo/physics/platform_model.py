@@ -39,6 +39,7 @@ import numpy as np
 
 from ..io.csv_export import states_at
 from ..model import catalog
+from ..spaces import so3
 
 #: The calibrated contact and drive settings used when no ``contact`` is given.
 DEFAULTS = {
@@ -243,11 +244,11 @@ class PlatformModel:
         Raises
         ------
         ValueError
-            If ``q`` is not empty.
+            If ``R`` is not a rotation or ``q`` is not empty.
         """
         if np.size(q):
             raise ValueError(f"q must be empty for a platform on SO(3), got shape {np.shape(q)}")
-        R = np.asarray(R, dtype=float)
+        R = so3.check_rotation(R, "R")
         mujoco.mj_resetData(model, data)
         quat = np.empty(4)
         mujoco.mju_mat2Quat(quat, np.ascontiguousarray(R).ravel())
@@ -318,10 +319,15 @@ class PlatformModel:
         Raises
         ------
         ValueError
-            If ``q`` is not empty.
+            If ``played`` is a plan of another mechanism or did not reach its end, ``R`` is
+            not a rotation or ``q`` is not empty.
         """
         if np.size(q):
             raise ValueError(f"q must be empty for a platform on SO(3), got shape {np.shape(q)}")
+        R = so3.check_rotation(R, "R")
+        name = getattr(played.kinematics, "name", None)
+        if name != self.mechanism.name:
+            raise ValueError(f"played is a plan of mechanism {name!r}, this model is of {self.mechanism.name!r}")
         T = float(played.T)
         dt = float(self.settings["timestep"])
         n = int(np.ceil(T / dt - 1e-9))
@@ -329,8 +335,8 @@ class PlatformModel:
         tau = T * _smoothstep(t / T)
         Rs, _ = states_at(played, tau)
         lengths = self.geometry.leg_lengths(Rs)
-        start = self.geometry.leg_lengths(np.asarray(R, dtype=float)) if self._hold is None else self._hold
-        targets = lengths - self.geometry.leg_lengths(np.asarray(R, dtype=float)) + start
+        here = self.geometry.leg_lengths(R)
+        targets = lengths - here + (here if self._hold is None else self._hold)
         speeds = np.gradient(targets, dt, axis=0) if n > 1 else np.zeros_like(targets)
         accelerations = np.gradient(speeds, dt, axis=0) if n > 1 else np.zeros_like(targets)
         self._grid = (t, targets, speeds, accelerations)
