@@ -21,9 +21,11 @@
   taken up by the disk's spin), free spin about the normal. Every other geom collides with
   nothing. Elliptic friction cones; ``impratio`` and ``noslip_iterations`` of the contact
   settings; their ``solref``/``solimp`` for the pair and the two ``connect`` equalities.
-- *Drive*: one position actuator per leg slide. ``"prescribed"`` is stiff position tracking
-  with a velocity feed-forward (the control is ``l + (k_v/k_p) dl/dt``, so the damping
-  acts on the tracking error only); ``"servo"`` has finite gains and no feed-forward.
+- *Drive*: one position actuator per leg slide, on a slide with armature (reflected
+  inertia without weight). ``"prescribed"`` is as stiff as the time step allows, with
+  feed-forward: the control is ``l + (k_v dl/dt + m_a d²l/dt²)/k_p`` (``m_a`` the armature),
+  so the damping and the slide's own inertia act on the tracking error only; ``"servo"``
+  has finite gains and is fed the length alone.
 
 :meth:`PlatformModel.follow` samples the plan's orientations on the model's time grid,
 re-timed rest to rest (``τ = T σ(t/T)``, ``σ = 10s³ − 15s⁴ + 6s⁵``: the same path, at rest
@@ -108,8 +110,20 @@ class PlatformModel:
     contact : object, optional
         Contact and drive settings: any object with attributes ``timestep, solref, solimp,
         friction, noslip_iterations, impratio, preload, actuators`` (``"prescribed"`` or
-        ``"servo"``); a missing attribute takes its value in :data:`DEFAULTS`. ``None``:
-        :data:`DEFAULTS`.
+        ``"servo"``); an attribute missing or ``None`` takes its value in :data:`DEFAULTS`.
+        ``None``: :data:`DEFAULTS`. ``friction`` is ``μ``, ``(μ, torsional, rolling)`` or
+        MuJoCo's five values.
+
+    Attributes
+    ----------
+    mechanism : Mechanism
+        The mechanism.
+    contact : object
+        The ``contact`` given (a namespace of :data:`DEFAULTS` for ``None``).
+    geometry : Geometry
+        ``mechanism.geometry``.
+    settings : dict
+        The settings in force: ``contact``'s, completed by :data:`DEFAULTS`.
 
     Raises
     ------
@@ -125,7 +139,8 @@ class PlatformModel:
                              "a PlatformModel needs a two-leg platform with a rolling disk")
         self.mechanism = mech
         self.geometry = geometry
-        given = {k: getattr(contact, k, v) for k, v in DEFAULTS.items()} if contact is not None else dict(DEFAULTS)
+        given = {k: getattr(contact, k, None) for k in DEFAULTS}
+        given = {k: DEFAULTS[k] if v is None else v for k, v in given.items()}
         if given["actuators"] not in DRIVES:
             raise ValueError(f"contact.actuators must be one of {sorted(DRIVES)}, got {given['actuators']!r}")
         self.contact = contact if contact is not None else SimpleNamespace(**DEFAULTS)
@@ -156,8 +171,11 @@ class PlatformModel:
         s, g = self.settings, self.geometry
         kp, kv = self.gains()
         rho, rd = self.radius, self.disk_radius
-        mu = np.resize(np.asarray(s["friction"], dtype=float), 3)
-        friction = _fmt([mu[0], mu[0], mu[1], mu[2], mu[2]])
+        mu = np.atleast_1d(np.asarray(s["friction"], dtype=float))
+        if mu.size < 5:                        # (sliding, torsional, rolling), defaults after
+            mu = np.concatenate([mu, DEFAULTS["friction"][mu.size:]])
+            mu = np.array([mu[0], mu[0], mu[1], mu[2], mu[2]])
+        friction = _fmt(mu[:5])
         soft = f'solref="{_fmt(s["solref"])}" solimp="{_fmt(s["solimp"])}"'
         legs, connects, drives = [], [], []
         for i, (base, tip, d, l0) in enumerate(zip(g.bases, g.tips, self.directions, self.rest_lengths), 1):
@@ -207,7 +225,7 @@ class PlatformModel:
   </equality>
   <actuator>
 {chr(10).join(drives)}
-    <general name="preload" joint="disk_press" gainprm="0" biastype="affine" biasprm="{_fmt(-float(s['preload'] or 0.0))} 0 0"/>
+    <general name="preload" joint="disk_press" gainprm="0" biastype="affine" biasprm="{_fmt(-float(s['preload']))} 0 0"/>
   </actuator>
 </mujoco>
 """
