@@ -124,6 +124,9 @@ class PlatformModel:
         ``mechanism.geometry``.
     settings : dict
         The settings in force: ``contact``'s, completed by :data:`DEFAULTS`.
+    rest_to_rest : bool
+        Whether :meth:`follow` re-times a plan rest to rest (default); ``False`` plays it
+        in its own time (for a plan that is re-timed already).
 
     Raises
     ------
@@ -155,6 +158,7 @@ class PlatformModel:
             d = tip - base
             n = np.linalg.norm(d)
             self.directions.append(d / n if n > 1e-9 else np.array([0.0, 0.0, 1.0]))
+        self.rest_to_rest = True
         self._grid = None                      # follow(): targets on the time grid
         self._hold = None                      # the legs' commands now (their lengths + offset)
 
@@ -321,7 +325,8 @@ class PlatformModel:
 
     def follow(self, played, R, q) -> None:
         """Prepare to play the plan ``played`` from the measured state ``(R, q)``: its
-        orientations re-timed rest to rest on the model's time grid, as the legs' lengths.
+        orientations on the model's time grid (re-timed rest to rest unless
+        :attr:`rest_to_rest` is false), as the legs' lengths.
         The legs' commands start at their present values (those of :meth:`reset` or of the
         end of the last play), offset from the plan's lengths by the difference at the start.
 
@@ -350,7 +355,7 @@ class PlatformModel:
         dt = float(self.settings["timestep"])
         n = int(np.ceil(T / dt - 1e-9))
         t = np.arange(n + 1) * dt
-        tau = T * _smoothstep(t / T)
+        tau = T * _smoothstep(t / T) if self.rest_to_rest else np.minimum(t, T)
         Rs, _ = states_at(played, tau)
         lengths = self.geometry.leg_lengths(Rs)
         here = self.geometry.leg_lengths(R)
