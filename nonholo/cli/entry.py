@@ -1,4 +1,4 @@
-"""Command line: ``nonholo derive | audit | mechanisms | plan | reproduce | sweep | atlas``."""
+"""Command line: ``nonholo derive | audit | mechanisms | plan | execute | reproduce | sweep | atlas``."""
 from __future__ import annotations
 
 import argparse
@@ -8,6 +8,7 @@ import time
 from pathlib import Path
 
 from ..model import catalog
+from . import execute_command as cli_execute
 from . import plan_command as cli_plan
 from . import reproduce_command as cli_reproduce
 from . import sweep_command as cli_sweep
@@ -90,6 +91,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.set_defaults(func=_mechanisms)
 
     cli_plan.add_parser(sub)
+    cli_execute.add_parser(sub)
     cli_reproduce.add_parser(sub)
     cli_sweep.add_parsers(sub)
     return parser

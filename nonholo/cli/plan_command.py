@@ -167,8 +167,19 @@ def _print_record(rec: dict) -> None:
          f"step = {rec['step']:<8.4g} min|Δ| = {_fmt(rec['min_delta'], '.4f')}  {rec['phase']}")
 
 
-def _plot_format_error(path) -> str | None:
-    """Why matplotlib cannot write a figure to ``path`` (its extension), or ``None``."""
+def plot_format_error(path) -> str | None:
+    """Why matplotlib cannot write a figure to ``path`` (its extension), or ``None``.
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        The figure's file.
+
+    Returns
+    -------
+    str or None
+        The reason, naming ``--plot``; ``None`` for a format matplotlib writes.
+    """
     suffix = Path(path).suffix[1:].lower()
     if not suffix:
         return None                                  # matplotlib's default format
@@ -223,7 +234,7 @@ def run(args) -> int:
     int
         The exit status (see the module).
     """
-    why = _plot_format_error(args.plot) if args.plot else None
+    why = plot_format_error(args.plot) if args.plot else None
     if why is None and args.csv:
         try:
             export.check_rate(args.csv_rate)
@@ -309,15 +320,36 @@ def plot(res, path, argument: str = "--plot") -> None:
         If the file cannot be written.
     """
     safe_write.check_target(path, argument)
+    from ..viz.plan_summary import plan_figure
+
+    write_figure(plan_figure(res), path, argument)
+
+
+def write_figure(fig, path, argument: str = "--plot") -> None:
+    """A figure written to ``path`` in the format of its extension (matplotlib's default
+    without one), with no date in its metadata, by :func:`nonholo.io.safe_write.write_bytes`.
+
+    Parameters
+    ----------
+    fig : matplotlib.figure.Figure
+        The figure.
+    path : str or pathlib.Path
+        The file (a regular file, a character device or a FIFO).
+    argument : str
+        The option naming ``path``, for messages.
+
+    Raises
+    ------
+    ValueError
+        If ``path`` is not a file that may be written.
+    """
     import io
 
     import matplotlib
 
-    from ..viz.plan_summary import plan_figure
-
     buffer = io.BytesIO()
     fmt = Path(path).suffix[1:].lower() or matplotlib.rcParams["savefig.format"]
-    plan_figure(res).savefig(buffer, dpi=100, format=fmt, metadata=_metadata(fmt))
+    fig.savefig(buffer, dpi=100, format=fmt, metadata=_metadata(fmt))
     safe_write.write_bytes(path, buffer.getvalue(), argument)
 
 
