@@ -1,0 +1,168 @@
+"""``nonholo execute``: play a saved plan on the physics model of its mechanism.
+
+Example::
+
+    nonholo plan --from 0.5 1.2 -0.5 --to 1.0 0.9 -0.5 --out plan.json
+    nonholo execute plan.json --touch-ups 3 --json report.json --plot execution.png
+
+The plan is played from rest to rest on a MuJoCo model generated from its mechanism's data
+(:mod:`nonholo.physics`; needs the ``physics`` extra), left to settle and measured; each
+touch-up re-plans from the measured state to the goal and plays again. One line is printed
+per stage: the error from the goal by part, the largest slip and the real-time factor.
+``--json`` writes the record (``{"stages": [{"error": {"rotation": …, "coordinates": …},
+"max_slip": …, …}, …]}``, the open-loop stage first), ``--plot`` its figure
+(:func:`nonholo.viz.execution_figures.execution_figure`), ``--mjcf`` the model file, which
+loads in plain ``mujoco.MjModel.from_xml_path``. Files are written as ``nonholo plan``
+writes them (:mod:`nonholo.io.safe_write`).
+
+Exit status: 0 when every stage was played, 1 if a touch-up could not be planned, 2 on bad
+input (or without MuJoCo), 3 if ``--json``, ``--plot`` or ``--mjcf`` could not be written.
+"""
+from __future__ import annotations
+
+import argparse
+import sys
+
+from ..io import safe_write
+from ..io.result import PlanResult
+from . import plan_command
+from .help_text import plain
+
+#: exit status of ``nonholo execute`` (see the module docstring)
+EXIT_PLAYED, EXIT_TOUCH_UP_FAILED, EXIT_BAD_INPUT, EXIT_WRITE_FAILED = 0, 1, 2, 3
+
+
+def add_parser(subparsers) -> argparse.ArgumentParser:
+    """Add ``nonholo execute``.
+
+    Parameters
+    ----------
+    subparsers : argparse._SubParsersAction
+        The subcommands of the ``nonholo`` parser.
+
+    Returns
+    -------
+    argparse.ArgumentParser
+        The subcommand's parser.
+    """
+    p = subparsers.add_parser("execute", help="play a saved plan on a MuJoCo model of its mechanism",
+                              description=plain(__doc__), formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("plan", help="a plan file written by `nonholo plan --out`")
+    p.add_argument("--touch-ups", type=int, default=0, metavar="N",
+                   help="re-plan from the measured state and play again N times (default 0)")
+    p.add_argument("--duration", type=float, default=None, metavar="S",
+                   help="seconds each stage's motion takes (default: 10 times the plan's T)")
+    p.add_argument("--actuators", choices=("prescribed", "servo"), default=None,
+                   help="stiff tracking of the planned joints (the default) or servos with finite gains")
+    p.add_argument("--mjcf", metavar="FILE", help="write the model's MJCF file")
+    p.add_argument("--json", metavar="FILE", help="write the record of the stages (JSON)")
+    p.add_argument("--plot", metavar="FILE", help="write the execution's figure (format by extension)")
+    p.add_argument("-q", "--quiet", action="store_true", help="no line per stage")
+    p.set_defaults(func=run)
+    return p
+
+
+def describe(record: dict, name: str, units: dict) -> str:
+    """One stage's line: its error by part, slip and real-time factor.
+
+    Parameters
+    ----------
+    record : dict
+        The stage's record (:class:`~nonholo.physics.execute.Execution`).
+    name : str
+        The stage's name.
+    units : dict
+        The unit of each error part.
+
+    Returns
+    -------
+    str
+        The line.
+    """
+    if not record.get("planned", True):
+        return f"{name}: not planned ({record.get('reason')})"
+    error = ", ".join(f"{part} {value:.2e} {units[part]}".rstrip() for part, value in record["error"].items())
+    return (f"{name}: error {error}; max slip {record['max_slip']:.2e}/s; "
+            f"real-time factor {record['real_time_factor']:.2f}")
+
+
+def run(args) -> int:
+    """Run ``nonholo execute`` for parsed ``args``.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed arguments.
+
+    Returns
+    -------
+    int
+        The exit status.
+    """
+    try:
+        import mujoco  # noqa: F401  (the physics extra)
+    except ImportError:
+        _error("MuJoCo is not installed: python -m pip install 'nonholo[physics]'")
+        return EXIT_BAD_INPUT
+    from ..physics import Contact, execute, write_mjcf
+    from ..viz.execution_figures import execution_figure, stage_names
+
+    why = plan_command.plot_format_error(args.plot) if args.plot else None
+    if why:
+        _error(why)
+        return EXIT_BAD_INPUT
+    try:
+        for path, option in ((args.json, "--json"), (args.mjcf, "--mjcf"), (args.plot, "--plot")):
+            if path:
+                safe_write.check_target(path, option)
+        try:
+            result = PlanResult.load(args.plan)
+        except OSError as exc:
+            raise ValueError(f"cannot read the plan {args.plan}: {exc.strerror or exc}") from exc
+        contact = Contact(actuators=args.actuators)
+        units = {part: result.kinematics.space.part_unit(part) for part in ("rotation", "coordinates")}
+        counter = iter(stage_names(args.touch_ups + 1 if args.touch_ups >= 0 else 1))
+
+        def progress(record):
+            if not args.quiet:
+                print(describe(record, next(counter), units), flush=True)
+
+        status = EXIT_PLAYED
+        if args.mjcf:
+            try:
+                write_mjcf(result, args.mjcf, contact)
+            except OSError as exc:
+                _cannot_write(args.mjcf, exc)
+                status = EXIT_WRITE_FAILED
+        run_ = execute(result, touch_ups=args.touch_ups, duration=args.duration, contact=contact,
+                       progress=progress)
+    except ValueError as exc:
+        _error(str(exc))
+        return EXIT_BAD_INPUT
+    if not all(s.get("planned", True) for s in run_.stages):
+        status = EXIT_TOUCH_UP_FAILED
+    if args.json:
+        try:
+            run_.save(args.json)
+        except (OSError, ValueError) as exc:
+            _cannot_write(args.json, exc)
+            status = EXIT_WRITE_FAILED
+        else:
+            print(f"wrote {args.json}", file=sys.stderr)
+    if args.plot:
+        try:
+            plan_command.write_figure(execution_figure(run_), args.plot, "--plot")
+        except (OSError, ValueError) as exc:
+            _cannot_write(args.plot, exc)
+            status = EXIT_WRITE_FAILED
+        else:
+            print(f"wrote {args.plot}", file=sys.stderr)
+    return status
+
+
+def _error(message: str) -> None:
+    print(f"nonholo execute: error: {' '.join(message.split())}", file=sys.stderr, flush=True)
+
+
+def _cannot_write(path, exc: Exception) -> None:
+    _error(f"cannot write {path}: {exc.strerror if isinstance(exc, OSError) and exc.strerror else exc}")

@@ -1,0 +1,156 @@
+"""The figure of a plan played on a physics model (:func:`nonholo.physics.execute`).
+
+:func:`execution_figure` takes an :class:`~nonholo.physics.execute.Execution` with its
+traces (the samples kept by a run; a record loaded from a file has none) and draws four
+panels: the error from the goal after each stage on a log scale (its parts: rotation,
+coordinates), the simulated state's distance from the played plan along each stage's
+motion, the motion itself (the first two coordinates in the plane where the state has them,
+else the roll–pitch–yaw angles against time), planned and simulated, and the slip at the
+rolling contacts along each stage.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from ..model import catalog
+from ..spaces import so3
+from .quantities import coordinate_units, label
+from .style import RESULT_COLORS, TRIPLE_COLORS, NotebookFigure, styled
+
+#: Errors and distances below this are drawn at it (a log axis has no zero).
+FLOOR = 1e-16
+
+
+def stage_names(n: int) -> list[str]:
+    """``["open loop", "touch-up 1", …]`` for ``n`` stages.
+
+    Parameters
+    ----------
+    n : int
+        The number of stages.
+
+    Returns
+    -------
+    list of str
+        The stages' names.
+    """
+    return ["open loop"] + [f"touch-up {i}" for i in range(1, n)]
+
+
+def tracking_distance(mechanism, trace: dict) -> dict:
+    """The simulated state's distance from the played plan at each sample, by part.
+
+    Parameters
+    ----------
+    mechanism : Mechanism
+        The mechanism played.
+    trace : dict
+        One stage's samples (``R``, ``q``, ``R_planned``, ``q_planned``).
+
+    Returns
+    -------
+    dict
+        ``{part: array}`` with the parts of ``mechanism.space.error`` (``rotation`` in
+        rad, ``coordinates`` in the mechanism's units).
+    """
+    rows = [mechanism.space.error(R, q, Rp, qp)[1]
+            for R, q, Rp, qp in zip(trace["R"], trace["q"], trace["R_planned"], trace["q_planned"])]
+    return {part: np.array([r[part] for r in rows], dtype=float) for part in rows[0]}
+
+
+@styled
+def execution_figure(execution, title: str | None = None) -> NotebookFigure:
+    """Errors per stage, tracking, the motion and the slip of a played plan (module docstring).
+
+    Parameters
+    ----------
+    execution : Execution
+        A run of :func:`nonholo.physics.execute`, with its traces.
+    title : str, optional
+        The figure's title (default: the mechanism and the number of touch-ups).
+
+    Returns
+    -------
+    NotebookFigure
+        The figure.
+
+    Raises
+    ------
+    ValueError
+        If ``execution`` has no traces (a record read back from a file) or no stage.
+    """
+    traces = getattr(execution, "traces", None)
+    if not traces or traces[0] is None:
+        raise ValueError("execution has no traces to draw (a record loaded from a file keeps only "
+                         "its numbers): draw the figure from the run itself")
+    mech = catalog.get(execution.mechanism)
+    stages = execution.stages
+    names = stage_names(len(stages))
+    fig = NotebookFigure(figsize=(10.5, 7.2))
+    grid = fig.add_gridspec(2, 2)
+
+    ax = fig.add_subplot(grid[0, 0])
+    parts = list(stages[0]["error"])
+    x = np.arange(len(stages))
+    units = {part: mech.space.part_unit(part) for part in parts}
+    for j, part in enumerate(parts):
+        values = np.maximum([s["error"][part] for s in stages], FLOOR)
+        ax.semilogy(x, values, "o-", color=RESULT_COLORS[j], label=label(part, units[part]))
+    ax.set_xticks(x, names, rotation=20 if len(stages) > 3 else 0)
+    ax.set_ylabel("error from the goal")
+    ax.set_title("after each stage (at rest)")
+    ax.legend(fontsize=8)
+
+    ax = fig.add_subplot(grid[0, 1])
+    offset = 0.0
+    for i, trace in enumerate(traces):
+        if trace is None:
+            continue
+        distance = tracking_distance(mech, trace)
+        for j, part in enumerate(parts):
+            ax.semilogy(offset + trace["t"], np.maximum(distance[part], FLOOR), color=RESULT_COLORS[j],
+                        lw=1.0, label=label(part, units[part]) if i == 0 else None)
+        if i:
+            ax.axvline(offset, color="0.5", lw=0.8, ls=":")
+        offset += trace["t"][-1]
+    ax.set_xlabel(label("time, stages one after another", "s"))
+    ax.set_ylabel("simulated − played plan")
+    ax.set_title("tracking along the motion")
+    ax.legend(fontsize=8)
+
+    ax = fig.add_subplot(grid[1, 0])
+    first = traces[0]
+    if mech.space.k >= 2:
+        cu = coordinate_units(mech)
+        ax.plot(first["q_planned"][:, 0], first["q_planned"][:, 1], "--", color="0.3", label="plan")
+        ax.plot(first["q"][:, 0], first["q"][:, 1], color=RESULT_COLORS[0], lw=1.2, label="simulated")
+        ax.set_aspect("equal", adjustable="datalim")
+        ax.set_xlabel(label(mech.coordinates[0], cu[0]))
+        ax.set_ylabel(label(mech.coordinates[1], cu[1]))
+    else:
+        planned, simulated = so3.as_rpy(first["R_planned"]), so3.as_rpy(first["R"])
+        for j, (colour, name) in enumerate(zip(TRIPLE_COLORS, ("φ (roll)", "ϑ (pitch)", "ψ (yaw)"))):
+            ax.plot(first["t"], planned[:, j], "--", color=colour, lw=1.0)
+            ax.plot(first["t"], simulated[:, j], color=colour, lw=1.2, label=name)
+        ax.set_xlabel(label("time t", "s"))
+        ax.set_ylabel(label("angle", "rad"))
+    ax.set_title("open loop: plan (dashed) and simulated")
+    ax.legend(fontsize=8)
+
+    ax = fig.add_subplot(grid[1, 1])
+    offset = 0.0
+    for i, trace in enumerate(traces):
+        if trace is None:
+            continue
+        ax.semilogy(offset + trace["t"], np.maximum(trace["slip"], FLOOR), color=RESULT_COLORS[i % len(RESULT_COLORS)],
+                    lw=1.0, label=names[i])
+        offset += trace["t"][-1]
+    ax.set_xlabel(label("time, stages one after another", "s"))
+    ax.set_ylabel("slip speed at the contacts")
+    ax.set_title("slip")
+    ax.legend(fontsize=8)
+
+    fig.suptitle(title or f"{mech.name} on its physics model: open loop and {len(stages) - 1} touch-up"
+                 + ("" if len(stages) == 2 else "s"))
+    fig.tight_layout()
+    return fig
