@@ -6,12 +6,12 @@ import numpy as np
 import pytest
 
 pytest.importorskip("mujoco")
-import mujoco  # noqa: E402
+import mujoco
 
-import nonholo  # noqa: E402
-from nonholo.cli.entry import main  # noqa: E402
-from nonholo.physics import Execution  # noqa: E402
-from nonholo.viz.execution_figures import execution_figure, tracking_distance  # noqa: E402
+import nonholo
+from nonholo.cli.entry import main
+from nonholo.physics import Execution
+from nonholo.viz.execution_figures import execution_figure, tracking_distance
 
 
 @pytest.fixture(scope="module")
