@@ -1,11 +1,14 @@
-"""Plans played on the MuJoCo models of the rolling mechanisms (:mod:`nonholo.physics`), open
-loop and with touch-ups.
+"""Plans played on the MuJoCo models of the mechanisms (:mod:`nonholo.physics`), open loop and
+with touch-ups.
 
 Run::
 
     python -m benchmarks.physics [--touch-ups 3]
 
-Cases: the rolling ball's in-place reorientation by ``π/2`` about ``x`` (planned with
+Cases: the platform's Examples 1 and 3 (:mod:`nonholo.paper.examples`), Example 3 with servo
+actuators and without the no-slip pass (the friction under the legs' weight creeps), and a
+plan of ``platform_raised`` (``I → exp([0.3, 0.1, 0.2])``), whose model is written from its
+geometry like any other; the rolling ball's in-place reorientation by ``π/2`` about ``x`` (planned with
 ``strategy="paper", harmonics=4``) played in 10 s and in 1 s, without radius compensation and
 with servo actuators; the car's parking problem ``(0, 0, 0, 0) → (0, 1, 0, 0)`` with both
 kinds of actuators; the unicycle's ``(0, 0, 0) → (0, 1, 0)``. Each case: :func:`nonholo.physics.execute`
@@ -25,6 +28,7 @@ import time
 import numpy as np
 
 import nonholo
+from nonholo.paper import examples
 from nonholo.physics import Contact, execute, model_for
 from nonholo.physics.vehicle_models import CarModel
 from nonholo.spaces import so3
@@ -37,7 +41,13 @@ BALL_RD = so3.exp(np.array([np.pi / 2, 0.0, 0.0])) @ BALL_R0
 
 def problems() -> dict:
     """The plans played, by name."""
+    ex1, ex3 = examples.get(1), examples.get(3)
     return {
+        "platform, Example 1": nonholo.plan(ex1.R_start, ex1.R_goal, T=ex1.T, method=ex1.methods[0],
+                                            harmonics=ex1.harmonics),
+        "platform, Example 3": nonholo.plan(ex3.R_start, ex3.R_goal, T=ex3.T, method=ex3.methods[0],
+                                            harmonics=ex3.harmonics),
+        "platform_raised": nonholo.plan(np.eye(3), so3.exp(np.array([0.3, 0.1, 0.2])), mechanism="platform_raised"),
         "rolling_ball": nonholo.plan((BALL_R0, (0.0, 0.0)), (BALL_RD, (0.0, 0.0)), mechanism="rolling_ball",
                                      strategy="paper", harmonics=4),
         "car": nonholo.plan((0.0, 0.0, 0.0, 0.0), (0.0, 1.0, 0.0, 0.0), mechanism="car"),
@@ -47,6 +57,11 @@ def problems() -> dict:
 
 #: (mechanism, setting, duration or None for the default, contact settings).
 CASES = [
+    ("platform, Example 1", "played in 10 s", 10.0, Contact()),
+    ("platform, Example 3", "played in 10 s", 10.0, Contact()),
+    ("platform, Example 3", "10 s, servo actuators", 10.0, Contact(actuators="servo")),
+    ("platform, Example 3", "10 s, no no-slip pass (creep)", 10.0, Contact(noslip_iterations=0, impratio=1.0)),
+    ("platform_raised", "played in 10 s", 10.0, Contact()),
     ("rolling_ball", "played in 10 s", 10.0, Contact()),
     ("rolling_ball", "played in 1 s", 1.0, Contact()),
     ("rolling_ball", "10 s, no radius compensation", 10.0, Contact(radius_compensation=False)),
@@ -84,6 +99,7 @@ def main(argv=None) -> int:
     rep = Report("physics.md", "Plans played on MuJoCo models, with touch-ups", "benchmarks.physics", argv,
                  extra_packages=("mujoco",))
     base = Contact().resolved("rolling_ball")
+    own = Contact().resolved("platform")
     rep.paragraph(
         "Each plan is played from rest to rest (re-timed by the smoothstep time change) on its "
         "mechanism's model, left to settle, and measured; each touch-up re-plans from the measured "
@@ -96,7 +112,9 @@ def main(argv=None) -> int:
         "of the open-loop play (the only figure that varies between runs). Contact settings: "
         f"time step {base.timestep:g} s, solref {base.solref}, solimp {base.solimp}, friction "
         f"{base.friction:g}, no-slip iterations {base.noslip_iterations}, impratio {base.impratio:g}, "
-        f"preload {base.preload:g} N, settling {base.settle:g} s, but for the setting named.")
+        f"preload {base.preload:g} N, settling {base.settle:g} s; the platforms' own: time step "
+        f"{own.timestep:g} s, solref {own.solref}, solimp {own.solimp}, preload {own.preload:g} N; "
+        "but for the setting named.")
     rows, runs = [], {}
     for mech, setting, duration, contact in CASES:
         started = time.perf_counter()

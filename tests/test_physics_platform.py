@@ -1,7 +1,7 @@
 """The MuJoCo model of a two-leg platform (:mod:`nonholo.physics.platform_model`): its MJCF
 loads, :meth:`reset` puts it where asked, a short plan played open loop ends near its goal,
 a touch-up brings it nearer, and a run repeats bit for bit. Coarse time step; orders of
-magnitude only (the full measurement: ``benchmarks/physics_platform.py``)."""
+magnitude only (the full measurement: ``benchmarks/physics.py``)."""
 from __future__ import annotations
 
 from types import SimpleNamespace

@@ -12,6 +12,11 @@
 - ``motion_quality``: the same goal's default plan, its least-energy plan
   (``objective="energy"``) and the plan re-timed in the least time under the legs' speed
   bound :data:`LEG_SPEED` (figure; ``plans/least_time.json`` and ``plans/least_time.csv``);
+- ``physics_example3``, ``physics_rolling_ball``, ``physics_car``: Example 3, the ball's
+  reorientation in place and the car's parking played on their mechanisms' MuJoCo models
+  with three touch-ups (:func:`nonholo.physics.execute`; figures of
+  :func:`nonholo.viz.execution_figures.execution_figure`), when MuJoCo is installed (the
+  ``physics`` extra; without it a note says they were skipped);
 - ``plans/example<k>_<method>.json``: every planned result (reload with
   :meth:`nonholo.io.result.PlanResult.load`);
 - ``summary.json``: one object per (example, method) with ``example``, ``method``,
@@ -355,6 +360,54 @@ def write_figures(solved: list[Solved], outdir: Path, progress=_log) -> list[Pat
         viz.animate_platform(ex3[0].result, gif)
         written.append(gif)
         progress(f"      wrote {gif.name}")
+    written.extend(physics_figures(ex3[0].result if ex3 else None, outdir, progress))
+    return written
+
+
+#: Touch-ups of the executions :func:`physics_figures` draws.
+PHYSICS_TOUCH_UPS = 3
+
+
+def physics_figures(example3, outdir: Path, progress=_log) -> list[Path]:
+    """Example 3, the ball's reorientation and the car's parking played on physics models.
+
+    Parameters
+    ----------
+    example3 : PlanResult or None
+        Example 3's plan (``None``: not drawn).
+    outdir : pathlib.Path
+        The output folder.
+    progress : callable, optional
+        Called with a line of progress.
+
+    Returns
+    -------
+    list of pathlib.Path
+        The figure files written (none without MuJoCo).
+    """
+    try:
+        import mujoco  # noqa: F401  (the physics extra)
+    except ImportError:
+        progress("      note: MuJoCo is not installed (python -m pip install -e '.[physics]'): "
+                 "no physics figures")
+        return []
+    from ..physics import execute
+
+    runs = [("physics_example3", "Example 3 on the platform's physics model", example3)]
+    for name in ("rolling_ball", "car"):
+        start, goal = STATE_PROBLEMS[name]
+        runs.append((f"physics_{name}", None, plan(start, goal, mechanism=name, **STATE_OPTIONS[name])))
+    written = []
+    for stem, title, result in runs:
+        if result is None or not result.success:
+            progress(f"      note: no plan to play for {stem}")
+            continue
+        record = execute(result, touch_ups=PHYSICS_TOUCH_UPS)
+        errors = ", ".join(f"{s['error'][k]:.1e}" for s in record.stages for k in ("rotation", "coordinates")
+                           if k in s["error"])
+        progress(f"      played {stem[8:]}: errors after each stage {errors}")
+        written.extend(viz.save_figure(viz.execution_figure(record, title=title), stem, outdir))
+        progress(f"      wrote {stem}.png/.pdf")
     return written
 
 

@@ -362,7 +362,11 @@ class PlatformModel:
         targets = lengths - here + (here if self._hold is None else self._hold)
         speeds = np.gradient(targets, dt, axis=0) if n > 1 else np.zeros_like(targets)
         accelerations = np.gradient(speeds, dt, axis=0) if n > 1 else np.zeros_like(targets)
-        self._grid = (t, targets, speeds, accelerations)
+        commands = targets
+        if self.settings["actuators"] == "prescribed":
+            kp, kv = self.gains()
+            commands = targets + (kv * speeds + ARMATURE["slide"] * accelerations) / kp
+        self._grid = (dt, targets, commands)
 
     def drive(self, model, data, t: float) -> None:
         """Set the legs' controls for time ``t`` of the play prepared by :meth:`follow` (held
@@ -379,20 +383,14 @@ class PlatformModel:
             if self._hold is not None:
                 data.ctrl[:2] = self._hold
             return
-        grid, targets, speeds, accelerations = self._grid
-        k = np.clip((float(t) - grid[0]) / (grid[1] - grid[0]) if len(grid) > 1 else 0.0, 0.0, len(grid) - 1)
-        i = min(int(k), len(grid) - 2) if len(grid) > 1 else 0
+        dt, targets, commands = self._grid
+        last = len(targets) - 1
+        k = min(max(float(t) / dt, 0.0), float(last))
+        i = min(int(k), max(last - 1, 0))
         f = k - i
-        j = min(i + 1, len(grid) - 1)
-        length = (1 - f) * targets[i] + f * targets[j]
-        self._hold = length
-        if self.settings["actuators"] == "prescribed":
-            kp, kv = self.gains()
-            speed = (1 - f) * speeds[i] + f * speeds[j]
-            acceleration = (1 - f) * accelerations[i] + f * accelerations[j]
-            data.ctrl[:2] = length + (kv * speed + ARMATURE["slide"] * acceleration) / kp
-        else:
-            data.ctrl[:2] = length
+        j = min(i + 1, last)
+        self._hold = (1 - f) * targets[i] + f * targets[j]
+        data.ctrl[:2] = (1 - f) * commands[i] + f * commands[j]
 
     # -- measurements -------------------------------------------------------------------------
 
