@@ -1,4 +1,5 @@
 """The examples' data, and the main job `nonholo reproduce` end to end."""
+import importlib.util
 import json
 
 import numpy as np
@@ -64,6 +65,8 @@ def test_reproduce_writes_summary_and_figures(tmp_path, capsys):
         f"example{k}_{what}" for k in (1, 2, 3) for what in
         ("mechanism", "overview", "convergence", "controls", "rpy", "leg_lengths", "delta")] + ["global_route",
                                                                                          "leg_limits"]
+    if importlib.util.find_spec("mujoco") is not None:        # the physics extra
+        stems += ["physics_example3", "physics_rolling_ball", "physics_car"]
     for stem in stems:
         for ext in ("png", "pdf"):
             assert (tmp_path / f"{stem}.{ext}").stat().st_size > 5000, stem

@@ -45,6 +45,7 @@ from ..model import catalog
 from ..numerics.checks import check_count, check_time, check_times, is_number
 from ..spaces import so3
 from . import playback
+from .time_change import TimeChange
 
 #: Nodes of the replay that samples the legs' speeds, at least (rounded up to a multiple of
 #: the controls' grid): the spline's error in ``ρ`` is ``O((T/nodes)⁶)``.
@@ -312,7 +313,7 @@ def _kinks(spline: PPoly) -> np.ndarray:
     return np.unique(np.concatenate(roots)) if roots else np.empty(0)
 
 
-class Retimed:
+class Retimed(TimeChange):
     """Physical controls re-timed so that every leg moves at most ``leg_speed`` fast:
     ``ũ(t) = u(τ(t)) dτ/dt`` on ``[0, T]`` (:class:`TimeMap`).
 
@@ -360,21 +361,6 @@ class Retimed:
         """``v``, the legs' top speed."""
         return self.map.leg_speed
 
-    @property
-    def n_inputs(self) -> int:
-        """``m``, the number of inputs."""
-        return self.base.n_inputs
-
-    @property
-    def params(self) -> np.ndarray:
-        """The base controls' parameters."""
-        return self.base.params
-
-    @property
-    def grid(self) -> None:
-        """Re-timed jumps fall anywhere: no grid to align steps with."""
-        return None
-
     def tau(self, t) -> tuple[np.ndarray, np.ndarray]:
         """The planned time at re-timed times (:meth:`TimeMap.tau`).
 
@@ -405,12 +391,6 @@ class Retimed:
         """
         return self.map.time(tau)
 
-    def __call__(self, t):
-        scalar = np.ndim(t) == 0
-        tau, rate = self.tau(np.reshape(t, -1))
-        u = np.asarray(self.base(tau), dtype=float).reshape(-1, self.n_inputs) * rate[:, None]
-        return u[0] if scalar else u.reshape(np.shape(t) + (self.n_inputs,))
-
     @property
     def breakpoints(self) -> np.ndarray:
         """The re-timed images of the base controls' breakpoints and of the instants where
@@ -433,11 +413,6 @@ class Retimed:
         """
         return {"kind": self.kind, "T": self.T, "leg_speed": self.leg_speed, "nodes": self.map.nodes,
                 "mechanism": self.mechanism.name, "R0": self.R0.tolist(), "base": self.base.to_dict()}
-
-    def __eq__(self, other) -> bool:
-        return type(self) is type(other) and self.to_dict() == other.to_dict()
-
-    __hash__ = None
 
     def __repr__(self) -> str:
         return (f"Retimed({self.base!r} on [0, {self.T:.6g}], every leg at most "

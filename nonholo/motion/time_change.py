@@ -21,7 +21,6 @@ from __future__ import annotations
 import numpy as np
 
 from ..numerics.checks import check_time
-from .retimed import Retimed
 
 #: Bisection steps that invert ``σ`` (each halves the bracket of ``[0, 1]``: below the
 #: spacing of doubles after 53, so the inverse is exact to round-off).
@@ -72,7 +71,59 @@ def inverse_smoothstep(y) -> np.ndarray:
     return s
 
 
-class RestToRest:
+class TimeChange:
+    """Controls ``ũ(t) = u(τ(t)) dτ/dt`` of base controls ``u`` (the attribute ``base``), on
+    ``[0, T]``: what every time change shares. A subclass gives :meth:`tau` and ``time``.
+
+    Evaluates like a control (``u = self(t)``, vectorised).
+    """
+
+    base = None
+    T: float
+
+    @property
+    def n_inputs(self) -> int:
+        """``m``, the number of inputs."""
+        return self.base.n_inputs
+
+    @property
+    def params(self) -> np.ndarray:
+        """The base controls' parameters."""
+        return self.base.params
+
+    @property
+    def grid(self) -> None:
+        """The base's jumps move off any grid: none to align steps with."""
+        return None
+
+    def tau(self, t) -> tuple[np.ndarray, np.ndarray]:
+        """The base's time at these times.
+
+        Parameters
+        ----------
+        t : array_like
+            Times in ``[0, T]``.
+
+        Returns
+        -------
+        tuple of numpy.ndarray
+            ``(τ(t), dτ/dt)``.
+        """
+        raise NotImplementedError
+
+    def __call__(self, t):
+        scalar = np.ndim(t) == 0
+        tau, rate = self.tau(np.reshape(t, -1))
+        u = np.asarray(self.base(tau), dtype=float).reshape(-1, self.n_inputs) * rate[:, None]
+        return u[0] if scalar else u.reshape(np.shape(t) + (self.n_inputs,))
+
+    def __eq__(self, other) -> bool:
+        return type(self) is type(other) and self.to_dict() == other.to_dict()
+
+    __hash__ = None
+
+
+class RestToRest(TimeChange):
     """Controls played from rest to rest: ``ũ(t) = u(τ(t)) dτ/dt``, ``τ = T_b σ(t/T)``
     (module docstring).
 
@@ -99,21 +150,6 @@ class RestToRest:
             raise ValueError("base is rest-to-rest already: time its own base instead")
         self.base = base
         self.T = check_time(T)
-
-    @property
-    def n_inputs(self) -> int:
-        """``m``, the number of inputs."""
-        return self.base.n_inputs
-
-    @property
-    def params(self) -> np.ndarray:
-        """The base controls' parameters."""
-        return self.base.params
-
-    @property
-    def grid(self) -> None:
-        """The base's jumps move off any grid: none to align steps with."""
-        return None
 
     def tau(self, t) -> tuple[np.ndarray, np.ndarray]:
         """The base's time at played times.
@@ -146,12 +182,6 @@ class RestToRest:
         """
         return self.T * inverse_smoothstep(np.asarray(tau, dtype=float) / self.base.T)
 
-    def __call__(self, t):
-        scalar = np.ndim(t) == 0
-        tau, rate = self.tau(np.reshape(t, -1))
-        u = np.asarray(self.base(tau), dtype=float).reshape(-1, self.n_inputs) * rate[:, None]
-        return u[0] if scalar else u.reshape(np.shape(t) + (self.n_inputs,))
-
     @property
     def breakpoints(self) -> np.ndarray:
         """The played images of the base's breakpoints (and of ``0``, ``T_b``)."""
@@ -170,11 +200,6 @@ class RestToRest:
             ``{"kind": "rest_to_rest", "T", "base"}``.
         """
         return {"kind": self.kind, "T": self.T, "base": self.base.to_dict()}
-
-    def __eq__(self, other) -> bool:
-        return type(self) is type(other) and self.to_dict() == other.to_dict()
-
-    __hash__ = None
 
     def __repr__(self) -> str:
         return f"RestToRest({self.base!r} on [0, {self.T:.6g}], from rest to rest)"
@@ -209,9 +234,10 @@ def is_time_change(controls) -> bool:
     Returns
     -------
     bool
-        ``True`` for :class:`RestToRest` and :class:`~nonholo.motion.retimed.Retimed`.
+        ``True`` for a :class:`TimeChange` (:class:`RestToRest`,
+        :class:`~nonholo.motion.retimed.Retimed`).
     """
-    return isinstance(controls, (RestToRest, Retimed))
+    return isinstance(controls, TimeChange)
 
 
 def planned(controls):
