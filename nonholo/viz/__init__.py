@@ -13,10 +13,13 @@
 - :mod:`~nonholo.viz.plan_summary` -- one plan of any mechanism at a glance (what
   ``nonholo plan --plot`` writes), with a vehicle's path on the plane;
 - :mod:`~nonholo.viz.state_figures` -- plans whose state goes beyond SO(3) (the ball, the
-  car).
+  car);
+- :mod:`~nonholo.viz.execution_figures` -- a plan played on its physics model
+  (:func:`nonholo.physics.execute`): error per stage, tracking, the motion, slip.
 
 The public functions are re-exported here: ``from nonholo import viz; viz.rpy_figure(res)``.
 """
+from .execution_figures import execution_figure
 from .mechanism_cards import mechanism_card_figure
 from .plan_figures import (
     body_axes_figure,
@@ -84,5 +87,5 @@ __all__ = [
     "rpy_figure", "leg_lengths_figure", "delta_figure", "body_axes_figure", "global_route_figure",
     "leg_limits_figure", "motion_quality_figure", "example_overview_figure",
     "mechanism_card_figure", "animate_platform", "plan_figure", "plot_plane_path",
-    "ball_figure", "car_figure",
+    "ball_figure", "car_figure", "execution_figure",
 ]
