@@ -13,7 +13,9 @@
 - :mod:`~nonholo.viz.plan_summary` -- one plan of any mechanism at a glance (what
   ``nonholo plan --plot`` writes), with a vehicle's path on the plane;
 - :mod:`~nonholo.viz.state_figures` -- plans whose state goes beyond SO(3) (the ball, the
-  car).
+  car);
+- :mod:`~nonholo.viz.execution_figures` -- a plan played on its physics model
+  (:func:`nonholo.physics.execute`): error per stage, tracking, the motion, slip.
 
 The public functions are re-exported here: ``from nonholo import viz; viz.rpy_figure(res)``.
 """
