@@ -93,9 +93,10 @@ def execution_figure(execution, title: str | None = None) -> NotebookFigure:
     parts = list(stages[0]["error"])
     x = np.arange(len(stages))
     units = {part: mech.space.part_unit(part) for part in parts}
+    names_of = {part: (f"{part} {unit}" if unit.startswith("(") else label(part, unit)) for part, unit in units.items()}
     for j, part in enumerate(parts):
         values = np.maximum([s["error"][part] for s in stages], FLOOR)
-        ax.semilogy(x, values, "o-", color=RESULT_COLORS[j], label=label(part, units[part]))
+        ax.semilogy(x, values, "o-", color=RESULT_COLORS[j], label=names_of[part])
     ax.set_xticks(x, names, rotation=20 if len(stages) > 3 else 0)
     ax.set_ylabel("error from the goal")
     ax.set_title("after each stage (at rest)")
@@ -109,7 +110,7 @@ def execution_figure(execution, title: str | None = None) -> NotebookFigure:
         distance = tracking_distance(mech, trace)
         for j, part in enumerate(parts):
             ax.semilogy(offset + trace["t"], np.maximum(distance[part], FLOOR), color=RESULT_COLORS[j],
-                        lw=1.0, label=label(part, units[part]) if i == 0 else None)
+                        lw=1.0, label=names_of[part] if i == 0 else None)
         if i:
             ax.axvline(offset, color="0.5", lw=0.8, ls=":")
         offset += trace["t"][-1]
