@@ -217,7 +217,7 @@ def test_only_a_successful_plan_is_played(car_plan):
 
 
 def test_a_touch_up_that_cannot_be_planned_ends_the_run(unicycle_plan, monkeypatch):
-    module = importlib.import_module("nonholo.physics.execute")     # the package's execute is the function
+    module = importlib.import_module("nonholo.physics.execution")
 
     def refuse(*args, **kwargs):
         raise ValueError("no plan from here")

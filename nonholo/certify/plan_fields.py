@@ -1,4 +1,4 @@
-"""A plan's fields, value by value: the format's names (:data:`FORMAT` and the earlier
+"""A plan's fields, value by value: the format's names (:data:`~nonholo.certify.plan_fields.FORMAT` and the earlier
 formats still read), the routes and methods a plan may record, and the typed checks of
 one field (a string, number, integer, rotation, finite JSON value), each raising
 ``ValueError("invalid plan: '<field>' ...")``. Shared by the plan file's decoding

@@ -68,7 +68,7 @@ def describe(record: dict, name: str, units: dict) -> str:
     Parameters
     ----------
     record : dict
-        The stage's record (:class:`~nonholo.physics.execute.Execution`).
+        The stage's record (:class:`~nonholo.physics.execution.Execution`).
     name : str
         The stage's name.
     units : dict
@@ -118,7 +118,8 @@ def run(args) -> int:
         try:
             result = PlanResult.load(args.plan)
         except OSError as exc:
-            raise ValueError(f"cannot read the plan {args.plan}: {exc.strerror or exc}") from exc
+            _error(f"cannot read the plan {args.plan}: {exc.strerror or exc}")
+            return EXIT_BAD_INPUT
         contact = Contact(actuators=args.actuators)
         units = {part: result.kinematics.space.part_unit(part) for part in ("rotation", "coordinates")}
         counter = iter(stage_names(args.touch_ups + 1 if args.touch_ups >= 0 else 1))

@@ -108,6 +108,11 @@ class TimeChange:
         -------
         tuple of numpy.ndarray
             ``(τ(t), dτ/dt)``.
+
+        Raises
+        ------
+        NotImplementedError
+            Here: each time change defines its own.
         """
         raise NotImplementedError
 

@@ -14,7 +14,7 @@
   bound :data:`LEG_SPEED` (figure; ``plans/least_time.json`` and ``plans/least_time.csv``);
 - ``physics_example3``, ``physics_rolling_ball``, ``physics_car``: Example 3, the ball's
   reorientation in place and the car's parking played on their mechanisms' MuJoCo models
-  with three touch-ups (:func:`nonholo.physics.execute`; figures of
+  with three touch-ups (:func:`nonholo.physics.execution.execute`; figures of
   :func:`nonholo.viz.execution_figures.execution_figure`), when MuJoCo is installed (the
   ``physics`` extra; without it a note says they were skipped);
 - ``plans/example<k>_<method>.json``: every planned result (reload with

@@ -3,7 +3,7 @@
 
 - :func:`execute` plays a plan from rest to rest on its mechanism's model, lets it settle,
   measures where it ended, and re-plans from there to the goal for each touch-up
-  (:mod:`nonholo.physics.execute`), recording each stage in an :class:`Execution`;
+  (:mod:`nonholo.physics.execution`), recording each stage in an :class:`Execution`;
 - :class:`Contact` holds every contact and actuation setting
   (:mod:`nonholo.physics.contact`);
 - :func:`model_for` gives a mechanism's model, :func:`write_mjcf` writes its MJCF file
@@ -13,7 +13,7 @@
 MuJoCo is imported only when a model is simulated.
 """
 from .contact import Contact
-from .execute import Execution, execute
+from .execution import Execution, execute
 from .models import model_for, write_mjcf
 
 __all__ = ["Contact", "Execution", "execute", "model_for", "write_mjcf"]

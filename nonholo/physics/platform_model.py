@@ -106,7 +106,7 @@ class PlatformModel:
     Parameters
     ----------
     mechanism : Mechanism or str
-        A mechanism with a :attr:`~nonholo.model.mechanism.Mechanism.geometry` (or its name).
+        A mechanism with a ``geometry`` (:class:`~nonholo.model.mechanism.Geometry`), or its name.
     contact : object, optional
         Contact and drive settings: any object with attributes ``timestep, solref, solimp,
         friction, noslip_iterations, impratio, preload, actuators`` (``"prescribed"`` or
@@ -326,7 +326,7 @@ class PlatformModel:
     def follow(self, played, R, q) -> None:
         """Prepare to play the plan ``played`` from the measured state ``(R, q)``: its
         orientations on the model's time grid (re-timed rest to rest unless
-        :attr:`rest_to_rest` is false), as the legs' lengths.
+        ``rest_to_rest`` is false), as the legs' lengths.
         The legs' commands start at their present values (those of :meth:`reset` or of the
         end of the last play), offset from the plan's lengths by the difference at the start.
 

@@ -533,9 +533,17 @@ class BallModel(RollingModel):
 
 
 @_documented
-class _Wheeled(RollingModel):
+class WheeledModel(RollingModel):
     """A chassis on a free joint carrying sphere wheels on hinges; its origin at wheel-centre
-    height above the point the state's ``(x, y)`` names, its ``x`` axis the heading."""
+    height above the point the state's ``(x, y)`` names, its ``x`` axis the heading.
+
+    Parameters
+    ----------
+    mechanism : Mechanism
+        The numeric mechanism.
+    contact : Contact, optional
+        The settings (default: ``Contact()``), resolved for the mechanism.
+    """
 
     WHEEL = 0.15
     CHASSIS_MASS = 2.0
@@ -548,6 +556,24 @@ class _Wheeled(RollingModel):
         data.xfrc_applied[b] = [0.0, 0.0, -self.contact.preload, 0.0, 0.0, 0.0]
 
     def wheel(self, name: str, pos, axis="0 1 0", driven=False) -> str:
+        """The MJCF of one sphere wheel on a hinge.
+
+        Parameters
+        ----------
+        name : str
+            The wheel's body, joint and geom name.
+        pos : str
+            Its position in the chassis frame (MJCF numbers).
+        axis : str
+            The hinge's axis in the chassis frame.
+        driven : bool
+            Whether an actuator drives it (its rotor inertia is then the tracking's).
+
+        Returns
+        -------
+        str
+            The ``<body>`` element.
+        """
         r = float(self.WHEEL)
         # a driven wheel's rotor: the tracking's inertia, whatever the contact transmits
         rotor = f' armature="{float(dict(self.driven)[name])!r}"' if driven else ""
@@ -559,6 +585,18 @@ class _Wheeled(RollingModel):
             "      </body>"])
 
     def heading(self, model, data) -> float:
+        """The chassis's heading, continued from the last one read (no jump of 2π).
+
+        Parameters
+        ----------
+        model, data : mujoco.MjModel, mujoco.MjData
+            The model and its data.
+
+        Returns
+        -------
+        float
+            The heading (rad).
+        """
         import mujoco
 
         b = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, "chassis")
@@ -570,19 +608,42 @@ class _Wheeled(RollingModel):
         return theta
 
     def chassis_xy(self, model, data) -> np.ndarray:
+        """The chassis origin's ``(x, y)``.
+
+        Parameters
+        ----------
+        model, data : mujoco.MjModel, mujoco.MjData
+            The model and its data.
+
+        Returns
+        -------
+        numpy.ndarray
+            Shape ``(2,)``.
+        """
         import mujoco
 
         b = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, "chassis")
         return np.array(data.xpos[b][:2])
 
     def place_chassis(self, data, x, y, theta) -> None:
+        """Put the chassis at ``(x, y)`` with heading ``theta``, its wheels on the floor.
+
+        Parameters
+        ----------
+        data : mujoco.MjData
+            The model's data.
+        x, y : float
+            The position.
+        theta : float
+            The heading (rad).
+        """
         data.qpos[0:3] = [x, y, self.WHEEL]
         data.qpos[3:7] = yaw_quaternion(theta)
         self._heading = float(theta)
 
 
 @_documented
-class CarModel(_Wheeled):
+class CarModel(WheeledModel):
     """The car as a tricycle (see the module).
 
     Parameters
@@ -597,7 +658,7 @@ class CarModel(_Wheeled):
     WHEELBASE = 1.0
     TRACK = 0.6
     driven = (("steer", 0.02), ("front", 0.05))
-    rolling = (("front", "front", "floor", _Wheeled.WHEEL),)
+    rolling = (("front", "front", "floor", WheeledModel.WHEEL),)
 
     def bodies(self) -> str:
         L, w = float(self.WHEELBASE), float(self.TRACK)
@@ -640,7 +701,7 @@ class CarModel(_Wheeled):
 
 
 @_documented
-class UnicycleModel(_Wheeled):
+class UnicycleModel(WheeledModel):
     """The unicycle as a differential-drive robot (see the module).
 
     Parameters
@@ -655,7 +716,7 @@ class UnicycleModel(_Wheeled):
     HALF_TRACK = 0.3
     CASTER = 0.05
     driven = (("left", 0.05), ("right", 0.05))
-    rolling = (("left", "left", "floor", _Wheeled.WHEEL), ("right", "right", "floor", _Wheeled.WHEEL))
+    rolling = (("left", "left", "floor", WheeledModel.WHEEL), ("right", "right", "floor", WheeledModel.WHEEL))
 
     def bodies(self) -> str:
         b, r, c = float(self.HALF_TRACK), float(self.WHEEL), float(self.CASTER)

@@ -15,7 +15,7 @@
 - :mod:`~nonholo.viz.state_figures` -- plans whose state goes beyond SO(3) (the ball, the
   car);
 - :mod:`~nonholo.viz.execution_figures` -- a plan played on its physics model
-  (:func:`nonholo.physics.execute`): error per stage, tracking, the motion, slip.
+  (:func:`nonholo.physics.execution.execute`): error per stage, tracking, the motion, slip.
 
 The public functions are re-exported here: ``from nonholo import viz; viz.rpy_figure(res)``.
 """

@@ -1,6 +1,6 @@
-"""The figure of a plan played on a physics model (:func:`nonholo.physics.execute`).
+"""The figure of a plan played on a physics model (:func:`nonholo.physics.execution.execute`).
 
-:func:`execution_figure` takes an :class:`~nonholo.physics.execute.Execution` with its
+:func:`execution_figure` takes an :class:`~nonholo.physics.execution.Execution` with its
 traces (the samples kept by a run; a record loaded from a file has none) and draws four
 panels: the error from the goal after each stage on a log scale (its parts: rotation,
 coordinates), the simulated state's distance from the played plan along each stage's
@@ -65,7 +65,7 @@ def execution_figure(execution, title: str | None = None) -> NotebookFigure:
     Parameters
     ----------
     execution : Execution
-        A run of :func:`nonholo.physics.execute`, with its traces.
+        A run of :func:`nonholo.physics.execution.execute`, with its traces.
     title : str, optional
         The figure's title (default: the mechanism and the number of touch-ups).
 

@@ -308,7 +308,7 @@ def execute(result, touch_ups=0, duration=None, contact=None, progress=None) -> 
         Re-plans from the measured state to the plan's goal after the open-loop stage,
         each played like it.
     duration : float, optional
-        Seconds each stage's motion takes, settling aside (default: :data:`SLOWDOWN`
+        Seconds each stage's motion takes, settling aside (default: ``SLOWDOWN``
         times the plan's ``T``).
     contact : Contact, optional
         The contact and actuation settings (default: ``Contact()``; fields left ``None``
@@ -320,7 +320,7 @@ def execute(result, touch_ups=0, duration=None, contact=None, progress=None) -> 
     -------
     Execution
         Per stage: the error by part, slip, contact force, simulated time, real-time factor;
-        the motions' samples in :attr:`Execution.traces`.
+        the motions' samples in ``Execution.traces``.
 
     Raises
     ------
