@@ -11,7 +11,7 @@ plan of ``platform_raised`` (``I → exp([0.3, 0.1, 0.2])``), whose model is wri
 geometry like any other; the rolling ball's in-place reorientation by ``π/2`` about ``x`` (planned with
 ``strategy="paper", harmonics=4``) played in 10 s and in 1 s, without radius compensation and
 with servo actuators; the car's parking problem ``(0, 0, 0, 0) → (0, 1, 0, 0)`` with both
-kinds of actuators; the unicycle's ``(0, 0, 0) → (0, 1, 0)``. Each case: :func:`nonholo.physics.execute`
+kinds of actuators; the unicycle's ``(0, 0, 0) → (0, 1, 0)``. Each case: :func:`nonholo.physics.execution.execute`
 with the calibrated contact settings but for the one named, ``--touch-ups`` re-plans from
 the measured state. Reported: the state's error from the goal by part after the open-loop
 play and after each touch-up, the largest slip speed at a rolling contact over all plays,
