@@ -29,6 +29,8 @@ from ..model.mechanism import Mechanism
 from .contact import Contact
 from .vehicle_models import BallModel, CarModel, UnicycleModel
 
+#: The calibration (:data:`~nonholo.physics.contact.CALIBRATED`) of every two-leg platform's model.
+PLATFORM_CALIBRATION = "platform"
 #: The rolling mechanisms' models, by mechanism name.
 VEHICLES = {"rolling_ball": BallModel, "car": CarModel, "unicycle": UnicycleModel}
 
@@ -70,7 +72,8 @@ def model_for(mechanism, contact: Contact | None = None):
     if getattr(mech, "geometry", None) is not None:
         from .platform_model import PlatformModel
 
-        return PlatformModel(mech, contact.resolved(mech.name))
+        # every two-leg platform, one of one's own geometry too, takes the platforms' calibration
+        return PlatformModel(mech, contact.resolved(PLATFORM_CALIBRATION))
     known = sorted(VEHICLES) + ["a two-leg platform (a mechanism with a geometry)"]
     raise ValueError(f"mechanism {mech.name!r} has no physics model; there are models for "
                      f"{', '.join(known)}")
