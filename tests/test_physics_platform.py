@@ -15,6 +15,7 @@ import nonholo
 from nonholo.model import catalog
 from nonholo.paper import examples
 from nonholo.physics.platform_model import DEFAULTS, PlatformModel
+from nonholo.planning.retime import retime
 from nonholo.spaces import so3
 
 #: Contact settings of the tests: a coarse step (the drive's gains follow it).
@@ -30,6 +31,7 @@ def built(mechanism="platform", contact=COARSE):
 def play(pm, model, data, res, R, settle=0.2):
     """Play ``res`` from the measured ``R``, hold the final targets ``settle`` seconds; the
     measured orientation."""
+    res = retime(res, T=res.T, rest_to_rest=True)
     pm.follow(res, R, np.zeros(0))
     start = data.time
     steps = round(res.T / model.opt.timestep) + round(settle / model.opt.timestep)

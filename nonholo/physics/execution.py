@@ -334,8 +334,6 @@ def execute(result, touch_ups=0, duration=None, contact=None, progress=None) -> 
     touch_ups, duration = _check(result, touch_ups, duration, contact, progress)
     mech = result.kinematics
     model = model_for(mech, contact)
-    if hasattr(model, "rest_to_rest"):
-        model.rest_to_rest = False          # a model that can re-time: the stages are re-timed already
     m = mujoco.MjModel.from_xml_string(model.mjcf())
     d = mujoco.MjData(m)
     sim = (model, m, d)

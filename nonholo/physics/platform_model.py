@@ -27,10 +27,11 @@
   so the damping and the slide's own inertia act on the tracking error only; ``"servo"``
   has finite gains and is fed the length alone.
 
-:meth:`PlatformModel.follow` samples the plan's orientations on the model's time grid,
-re-timed rest to rest (``τ = T σ(t/T)``, ``σ = 10s³ − 15s⁴ + 6s⁵``: the same path, at rest
-at both ends, so the soft constraints' lag cancels there) and turns them into the legs'
-lengths, offset so that the legs start where they are commanded now.
+:meth:`PlatformModel.follow` samples the played plan's orientations on the model's time
+grid — :func:`nonholo.physics.execution.execute` plays plans re-timed rest to rest
+(:mod:`nonholo.motion.time_change`: the same path, at rest at both ends, so the soft
+constraints' lag cancels there) — and turns them into the legs' lengths, offset so that the
+legs start where they are commanded now.
 """
 from __future__ import annotations
 
@@ -81,12 +82,6 @@ def _fmt(v) -> str:
     return " ".join(repr(float(x)) for x in np.atleast_1d(np.asarray(v, dtype=float)))
 
 
-def _smoothstep(s: np.ndarray) -> np.ndarray:
-    """``σ(s) = 10s³ − 15s⁴ + 6s⁵`` on ``s`` clipped to ``[0, 1]``."""
-    s = np.clip(s, 0.0, 1.0)
-    return s**3 * (10.0 - 15.0 * s + 6.0 * s * s)
-
-
 def _turn(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """The quaternion (w, x, y, z) of the least rotation taking unit ``a`` to unit ``b``."""
     c = float(np.dot(a, b))
@@ -124,9 +119,6 @@ class PlatformModel:
         ``mechanism.geometry``.
     settings : dict
         The settings in force: ``contact``'s, completed by :data:`DEFAULTS`.
-    rest_to_rest : bool
-        Whether :meth:`follow` re-times a plan rest to rest (default); ``False`` plays it
-        in its own time (for a plan that is re-timed already).
 
     Raises
     ------
@@ -158,7 +150,6 @@ class PlatformModel:
             d = tip - base
             n = np.linalg.norm(d)
             self.directions.append(d / n if n > 1e-9 else np.array([0.0, 0.0, 1.0]))
-        self.rest_to_rest = True
         self._grid = None                      # follow(): targets on the time grid
         self._hold = None                      # the legs' commands now (their lengths + offset)
 
@@ -325,8 +316,8 @@ class PlatformModel:
 
     def follow(self, played, R, q) -> None:
         """Prepare to play the plan ``played`` from the measured state ``(R, q)``: its
-        orientations on the model's time grid (re-timed rest to rest unless
-        ``rest_to_rest`` is false), as the legs' lengths.
+        orientations on the model's time grid, as the legs' lengths (a plan to be played from
+        rest to rest is re-timed so first: ``retime(result, T=…, rest_to_rest=True)``).
         The legs' commands start at their present values (those of :meth:`reset` or of the
         end of the last play), offset from the plan's lengths by the difference at the start.
 
@@ -355,8 +346,7 @@ class PlatformModel:
         dt = float(self.settings["timestep"])
         n = int(np.ceil(T / dt - 1e-9))
         t = np.arange(n + 1) * dt
-        tau = T * _smoothstep(t / T) if self.rest_to_rest else np.minimum(t, T)
-        Rs, _ = states_at(played, tau)
+        Rs, _ = states_at(played, np.minimum(t, T))
         lengths = self.geometry.leg_lengths(Rs)
         here = self.geometry.leg_lengths(R)
         targets = lengths - here + (here if self._hold is None else self._hold)
