@@ -26,6 +26,7 @@ from __future__ import annotations
 from typing import Callable
 
 from ..io.result import PlanResult
+from ..numerics.blas import one_thread
 from . import energy
 from . import route as global_route
 from .certification import certified
@@ -190,7 +191,8 @@ def plan(R0, Rd, *, T: float | None = 1.0, method: str = "parametric", harmonics
 
 def solve(problem: Problem, callback: Callable[[dict], object] | None = None) -> PlanResult:
     """The plan of ``problem``: its path (:func:`solve_path`), re-timed under its legs'
-    speed if it has one (:func:`nonholo.planning.retime.limit_speed`).
+    speed if it has one (:func:`nonholo.planning.retime.limit_speed`), with BLAS on one
+    thread (:func:`nonholo.numerics.blas.one_thread`).
 
     Parameters
     ----------
@@ -206,8 +208,9 @@ def solve(problem: Problem, callback: Callable[[dict], object] | None = None) ->
     PlanResult
         The certified plan, or a failed one with its reason.
     """
-    result = solve_path(problem, callback)
-    return limit_speed(result, problem.leg_speed, None if problem.least_time else problem.T)
+    with one_thread():
+        result = solve_path(problem, callback)
+        return limit_speed(result, problem.leg_speed, None if problem.least_time else problem.T)
 
 
 def solve_path(problem: Problem, callback: Callable[[dict], object] | None = None) -> PlanResult:

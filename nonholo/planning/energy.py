@@ -97,9 +97,13 @@ RESET_HALVINGS = 3
 MERIT_FACTOR = 2.0
 #: Step halvings of the line search at most.
 MAX_HALVINGS = 12
+#: Newton steps that bring a trial step of a run at the goal back onto it, at most.
+RESTORE_STEPS = 3
 #: ``objective="auto"``: the starts of the quick search (the plan's, then the loops of the
 #: first size).
 QUICK_STARTS = 5
+#: ``objective="auto"``: SQP iterations of every start before any is continued.
+QUICK_PROBE = PROBE_ITERATIONS
 #: ``objective="auto"``: the quick search's budget (seconds of effort).
 QUICK_EFFORT = 0.15
 #: ``objective="auto"``: the fraction of the plan's energy a motion the quick search finds
@@ -412,6 +416,61 @@ def line_search(problem: Evaluator, ev: Evaluation, d: np.ndarray, objective: Ob
     return None, alpha, rejected
 
 
+def restoring_search(problem: Evaluator, ev: Evaluation, d: np.ndarray, objective: Objective, slope: float,
+                     alpha: float, options: Options) -> tuple[Evaluation | None, float, int]:
+    """The step along ``d`` from ``ev`` at the goal, brought back onto it: each trial
+    ``λ + αd`` is followed by Newton steps of least energy (:func:`correction`) until it
+    ends within ``tol``; it is accepted where it is admissible and ``F`` drops (Armijo),
+    else ``α`` is halved. The iterates of a run at the goal stay at it, and ``F`` falls
+    at every one of them: a step cannot trade the goal for energy.
+
+    Parameters
+    ----------
+    problem : Evaluator
+        The problem.
+    ev : Evaluation
+        The current evaluation, within ``tol`` of the goal.
+    d : numpy.ndarray
+        The step.
+    objective : Objective
+        ``F``.
+    slope : float
+        ``F``'s directional derivative along ``d``.
+    alpha : float
+        The first step tried.
+    options : Options
+        The run's settings (``tol``).
+
+    Returns
+    -------
+    evaluation : Evaluation or None
+        The accepted evaluation, ``None`` when :data:`MAX_HALVINGS` halvings do not do.
+    alpha : float
+        The step ``α``.
+    rejected : int
+        Halvings.
+    """
+    F0 = objective.value(ev)
+    full = objective.near(ev)
+    metric = objective.metric
+    rejected = 0
+    for _ in range(MAX_HALVINGS):
+        trial = problem.evaluate(ev.params + alpha * d, full=full)
+        for _ in range(RESTORE_STEPS):
+            if not problem.admissible(trial) or trial.error <= options.tol:
+                break
+            restored = problem.evaluate(trial.params + correction(trial, metric), full=full)
+            if not restored.complete or restored.error >= trial.error:
+                break
+            trial = restored
+        if (problem.admissible(trial) and trial.error <= options.tol
+                and objective.value(trial) <= F0 + 1e-4 * alpha * min(slope, 0.0)):
+            return trial, alpha, rejected
+        alpha *= 0.5
+        rejected += 1
+    return None, alpha, rejected
+
+
 def descend(problem: Evaluator, run: Run, options: Options, iterations: int, deadline: float) -> Run:
     """More SQP iterations of a run (see the module).
 
@@ -468,8 +527,12 @@ def descend(problem: Evaluator, run: Run, options: Options, iterations: int, dea
                 d, nu = gn
         run.mu = max(run.mu, MERIT_FACTOR * float(np.linalg.norm(nu)))
         E0 = energy(ev, metric)
-        slope = float(np.dot(g, d)) - run.mu * ev.error
-        accepted, alpha, rejected = line_search(problem, ev, d, objective, run.mu, slope, run.alpha)
+        if ev.error <= options.tol:
+            accepted, alpha, rejected = restoring_search(problem, ev, d, objective, float(np.dot(g, d)),
+                                                         run.alpha, options)
+        else:
+            slope = float(np.dot(g, d)) - run.mu * ev.error
+            accepted, alpha, rejected = line_search(problem, ev, d, objective, run.mu, slope, run.alpha)
         if accepted is None:
             run.stuck = True
             break
@@ -503,8 +566,9 @@ def descend(problem: Evaluator, run: Run, options: Options, iterations: int, dea
         run.kkt = float(np.sqrt(np.dot(resid / metric, resid) / max(np.dot(g1 / metric, g1), 1e-300)))
         run.history.append(record(it, ev, alpha, "energy", rejected, energy=E1, start=run.label))
         settled = run.kkt <= KKT_RTOL or abs(E0 - E1) <= ENERGY_RTOL * E0
-        if settled and options.tol < ev.error <= NEAR_GOAL:
-            # the energy has settled and the goal is near: Newton steps end on it
+        if options.tol < ev.error <= POLISH_BELOW:
+            # the goal is near: Newton steps end on it, and the run goes on at it
+            # (restoring_search)
             run.evaluation = ev
             ev = polish(problem, run, options).evaluation
         if settled and ev.error <= options.tol:
@@ -702,7 +766,7 @@ def starts(problem: Evaluator, plan: Controls | None):
 
 
 def search(problem: Evaluator, initial, options: Options, budget: float,
-           ceiling: float = math.inf) -> tuple[Outcome | None, str]:
+           ceiling: float = math.inf, probe: int = PROBE_ITERATIONS) -> tuple[Outcome | None, str]:
     """The least-energy certified control of ``problem`` from the labelled physical
     controls ``initial`` (see the module) within ``budget`` seconds of effort, if its
     energy is below ``ceiling``: ``(outcome, "")``, or ``(None, why)``.
@@ -741,7 +805,7 @@ def search(problem: Evaluator, initial, options: Options, budget: float,
         if run is None:
             skipped += 1
             continue
-        runs.append(descend(problem, run, options, PROBE_ITERATIONS, deadline))
+        runs.append(descend(problem, run, options, probe, deadline))
     while effort.seconds() <= deadline:
         open_runs = [r for r in runs if not (r.converged or r.stuck) and len(r.history) <= MAX_ITERATIONS]
         if not open_runs:
@@ -751,7 +815,7 @@ def search(problem: Evaluator, initial, options: Options, budget: float,
         finished = [r.energy for r in runs if r.evaluation.error <= options.tol and r not in open_runs]
         if finished and heading[k] >= min(finished):
             break
-        descend(problem, open_runs[k], options, PROBE_ITERATIONS, deadline)
+        descend(problem, open_runs[k], options, probe, deadline)
     near = sorted((r for r in runs if r.evaluation.error <= NEAR_GOAL), key=lambda r: r.energy)
     why = ""
     tried = f"{len(runs)} starts" + (f", {skipped} not admissible" if skipped else "")
@@ -819,10 +883,12 @@ def improve(request, result: PlanResult, quick: bool = False, budget: float | No
         initial = itertools.islice(initial, QUICK_STARTS)
         budget = QUICK_EFFORT if budget is None else budget
         ceiling = REPLACE_BELOW * plan_energy
+        probe = QUICK_PROBE
     else:
         budget = ENERGY_EFFORT if budget is None else budget
         ceiling = plan_energy
-    outcome, why = search(problem, initial, request.options, budget, ceiling)
+        probe = PROBE_ITERATIONS
+    outcome, why = search(problem, initial, request.options, budget, ceiling, probe)
     if outcome is None:
         if quick:
             return result
