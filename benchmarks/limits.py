@@ -46,6 +46,7 @@ from nonholo.planning import api as planner
 from nonholo.spaces import so3
 from nonholo.certify import resimulate as verify
 from nonholo.planning import energy
+from nonholo.planning.energy import controls_energy
 from nonholo.planning.retime import retime
 
 from . import goalset
@@ -219,17 +220,6 @@ def run_speed_peers(goals, v: float, stretch: float, least: dict, casadi: bool) 
                         "solved": solved, "reason": reason[-200:],
                         "excess": None if c is None else c["excess"]})
     return out
-
-
-def controls_energy(controls, breakpoints, T: float) -> float:
-    """``∫_0^T |u|² dt`` by 8-point Gauss–Legendre between consecutive breakpoints (exact for
-    piecewise-constant controls)."""
-    x, w = np.polynomial.legendre.leggauss(8)
-    b = np.unique(np.concatenate([[0.0, T], [] if breakpoints is None else np.asarray(breakpoints, float)]))
-    a, c = b[:-1], b[1:]
-    t = (0.5 * (a + c))[:, None] + (0.5 * (c - a))[:, None] * x[None, :]
-    u = np.asarray(controls(t.ravel())).reshape(len(a), len(x), -1)
-    return float(np.sum(0.5 * (c - a)[:, None] * w[None, :] * np.sum(u ** 2, axis=2)))
 
 
 def run_energy(goals, casadi: bool) -> list[dict]:

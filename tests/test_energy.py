@@ -263,3 +263,38 @@ def test_node_sensitivities_agree_with_the_backward_pass_and_the_jacobian():
                 a = np.zeros((41, 4))
                 a[n, i] = 1.0
                 np.testing.assert_allclose(s[k, i], node_gradient(ev, e, a), rtol=1e-10, atol=1e-13)
+
+
+def test_controls_energy_is_the_metric_form_of_fourier_and_grid_controls():
+    """The quadrature of ``∫|u|² dt`` against the closed form ``λᵀMλ`` (``M`` the basis's L2
+    Gram diagonal): many harmonics on one piece, and jumps at the grid's breakpoints."""
+    rng = np.random.default_rng(3)
+    fourier = Fourier(2.0, rng.standard_normal((2, 2 * 12 + 1)))
+    closed = float(fourier.metric() @ fourier.params ** 2)
+    assert energy.controls_energy(fourier, None, 2.0) == pytest.approx(closed, rel=1e-12)
+    grid = PiecewiseConstant(2.0, rng.standard_normal((37, 2)))
+    closed = float(grid.metric() @ grid.params ** 2)
+    assert energy.controls_energy(grid, grid.breakpoints, 2.0) == pytest.approx(closed, rel=1e-12)
+
+
+def test_a_run_at_the_goal_stays_at_it():
+    """The car from its plan: once a run of the least-energy stage reaches the goal, every later
+    iterate of it ends within ``tol`` of the goal (a step is brought back onto it), and the
+    energy it ends with is below the one it reached the goal with."""
+    res = planner.plan(np.zeros(4), np.array([0.76, 0.93, -0.49, 0.29]), mechanism="car",
+                       objective="energy")
+    assert res.success, res.reason
+    runs = {}
+    for h in res.history:
+        if h.get("phase") == "energy":
+            runs.setdefault(h["start"], []).append(h)
+    checked = 0
+    for records in runs.values():
+        at = [i for i, h in enumerate(records) if h["error"] <= 1e-10]
+        if not at:
+            continue
+        after = records[at[0]:]
+        assert all(h["error"] <= 1e-10 for h in after)
+        assert after[-1]["energy"] < after[0]["energy"]
+        checked += len(after)
+    assert checked > 5

@@ -266,7 +266,9 @@ class PlanChecks:
         inner = par.frame if frame else par
         if not isinstance(inner, (Fourier, PiecewiseConstant)):
             fail(where, f"must be Fourier, piecewise-constant or frame controls, got {type(par).__name__}")
-        if r.method != METHOD_OF_KIND[inner.kind]:
+        # a record's pieces keep the method the route planned them with (a plan lowered by
+        # the energy stage afterwards has the method of its own controls)
+        if r.method != METHOD_OF_KIND[inner.kind] and not where.startswith("stitched"):
             fail("method", f"is {r.method!r}, but the controls are {inner.kind!r} "
                             f"(method {METHOD_OF_KIND[inner.kind]!r})")
         if frame:

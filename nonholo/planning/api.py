@@ -150,9 +150,9 @@ def plan(R0, Rd, *, T: float | None = 1.0, method: str = "parametric", harmonics
         gives the same plan on any machine) (:mod:`nonholo.planning.energy`:
         piecewise-constant inputs on :data:`~nonholo.planning.energy.ENERGY_GRID` intervals,
         method ``"nonparametric"`` in the result). ``"auto"``: the plan as found, unless a
-        quick search of the same kind finds a motion needing less than
-        :data:`~nonholo.planning.energy.REPLACE_BELOW` of its energy — then that motion
-        (``options["objective"]`` says so).
+        quick search of the same kind (within :data:`~nonholo.planning.energy.QUICK_EFFORT`)
+        finds a motion needing less than :data:`~nonholo.planning.energy.REPLACE_BELOW` of
+        its energy — then that motion (``options["objective"]`` says so).
     constraints : sequence
         Further constraint objects (:mod:`nonholo.planning.constraints`).
 

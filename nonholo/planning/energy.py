@@ -16,7 +16,10 @@ condition ``u = Gᵀp``). Steps are damped by a backtracking line search on the 
 ``F + μ|l_T|`` (``μ`` above the multiplier ``|ν|``), with a second-order correction of a
 rejected full step, and shortened until the trajectory is admissible — ``|Δ| ≥
 delta_min``, the legs inside their stroke — so every iterate is; the iteration need not
-start at the goal. Where the motion comes close to those limits, ``F`` is the energy
+start at the goal. Once a run comes within :data:`POLISH_BELOW` of the goal, Newton steps
+of least energy bring it onto it, and from there on it stays at the goal: each trial step
+is brought back by such steps and accepted where the energy falls
+(:func:`restoring_search`), so a run at the goal never trades it for energy. Where the motion comes close to those limits, ``F`` is the energy
 plus a small log barrier on the clearances (:class:`Objective`): an optimum that rides a
 limit is approached from inside instead of stalling against it.
 
@@ -74,8 +77,8 @@ PROBE_ITERATIONS = 12
 FINALISTS = 3
 #: A probe is near the goal when its terminal error is below this (in the error's units).
 NEAR_GOAL = 1e-3
-#: A start whose projection on the grid ends closer to the goal than this is brought onto
-#: it by Newton steps before the iteration.
+#: A start whose projection on the grid ends closer to the goal than this, or a run's
+#: iterate, is brought onto it by Newton steps.
 POLISH_BELOW = 0.05
 #: Seconds of effort (:mod:`nonholo.numerics.effort`) the stage may take.
 ENERGY_EFFORT = 1.0
@@ -102,13 +105,12 @@ RESTORE_STEPS = 3
 #: ``objective="auto"``: the starts of the quick search (the plan's, then the loops of the
 #: first size).
 QUICK_STARTS = 5
-#: ``objective="auto"``: SQP iterations of every start before any is continued.
-QUICK_PROBE = PROBE_ITERATIONS
 #: ``objective="auto"``: the quick search's budget (seconds of effort).
-QUICK_EFFORT = 0.15
+QUICK_EFFORT = 0.3
 #: ``objective="auto"``: the fraction of the plan's energy a motion the quick search finds
-#: must need less than to replace it (a plan kept needs at most 2.5 times what it found).
-REPLACE_BELOW = 0.4
+#: must need less than to replace it (a plan kept needs at most 1/0.6 ≈ 1.7 times what it
+#: found).
+REPLACE_BELOW = 0.6
 #: The barrier on the clearance from ``Δ = 0`` acts where ``sgnΔ`` is below this.
 BARRIER_DELTA = 0.1
 #: The barrier's weight ``ε`` relative to the energy (:class:`Objective`).
@@ -766,7 +768,7 @@ def starts(problem: Evaluator, plan: Controls | None):
 
 
 def search(problem: Evaluator, initial, options: Options, budget: float,
-           ceiling: float = math.inf, probe: int = PROBE_ITERATIONS) -> tuple[Outcome | None, str]:
+           ceiling: float = math.inf) -> tuple[Outcome | None, str]:
     """The least-energy certified control of ``problem`` from the labelled physical
     controls ``initial`` (see the module) within ``budget`` seconds of effort, if its
     energy is below ``ceiling``: ``(outcome, "")``, or ``(None, why)``.
@@ -805,7 +807,7 @@ def search(problem: Evaluator, initial, options: Options, budget: float,
         if run is None:
             skipped += 1
             continue
-        runs.append(descend(problem, run, options, probe, deadline))
+        runs.append(descend(problem, run, options, PROBE_ITERATIONS, deadline))
     while effort.seconds() <= deadline:
         open_runs = [r for r in runs if not (r.converged or r.stuck) and len(r.history) <= MAX_ITERATIONS]
         if not open_runs:
@@ -815,7 +817,7 @@ def search(problem: Evaluator, initial, options: Options, budget: float,
         finished = [r.energy for r in runs if r.evaluation.error <= options.tol and r not in open_runs]
         if finished and heading[k] >= min(finished):
             break
-        descend(problem, open_runs[k], options, probe, deadline)
+        descend(problem, open_runs[k], options, PROBE_ITERATIONS, deadline)
     near = sorted((r for r in runs if r.evaluation.error <= NEAR_GOAL), key=lambda r: r.energy)
     why = ""
     tried = f"{len(runs)} starts" + (f", {skipped} not admissible" if skipped else "")
@@ -883,12 +885,10 @@ def improve(request, result: PlanResult, quick: bool = False, budget: float | No
         initial = itertools.islice(initial, QUICK_STARTS)
         budget = QUICK_EFFORT if budget is None else budget
         ceiling = REPLACE_BELOW * plan_energy
-        probe = QUICK_PROBE
     else:
         budget = ENERGY_EFFORT if budget is None else budget
         ceiling = plan_energy
-        probe = PROBE_ITERATIONS
-    outcome, why = search(problem, initial, request.options, budget, ceiling, probe)
+    outcome, why = search(problem, initial, request.options, budget, ceiling)
     if outcome is None:
         if quick:
             return result
@@ -903,10 +903,7 @@ def improve(request, result: PlanResult, quick: bool = False, budget: float | No
 
 
 def plan_energy_of(result: PlanResult) -> float:
-    """``∫|u|² dt`` of a plan's physical controls.
-
-    8-point Gauss–Legendre between the breakpoints (exact for piecewise-polynomial
-    controls of degree up to 7).
+    """``∫|u|² dt`` of a plan's physical controls (:func:`controls_energy`).
 
     Parameters
     ----------
@@ -918,11 +915,40 @@ def plan_energy_of(result: PlanResult) -> float:
     float
         The energy.
     """
-    T = result.T
+    return controls_energy(result.controls, result.breakpoints, result.T)
+
+
+#: Panels of :func:`controls_energy`'s quadrature on ``[0, T]`` at least.
+ENERGY_PANELS = 64
+
+
+def controls_energy(controls, breakpoints, T: float) -> float:
+    """``∫_0^T |u|² dt`` of controls by 8-point Gauss–Legendre on panels.
+
+    The panels split ``[0, T]`` at the controls' breakpoints and at least
+    :data:`ENERGY_PANELS` equal steps: exact for piecewise-polynomial controls of degree up to
+    7, and within rounding for Fourier series of a few dozen harmonics and for frame
+    controls played along their motion.
+
+    Parameters
+    ----------
+    controls : callable
+        ``controls(t)``: the physical inputs at the times ``t``, one row per time.
+    breakpoints : array_like or None
+        Where the controls may jump.
+    T : float
+        The horizon.
+
+    Returns
+    -------
+    float
+        The energy.
+    """
     x, w = np.polynomial.legendre.leggauss(8)
-    bps = result.breakpoints if result.breakpoints is not None else []
-    b = np.unique(np.concatenate([[0.0, T], np.asarray(bps, dtype=float)]))
+    bps = [] if breakpoints is None else np.asarray(breakpoints, dtype=float)
+    b = np.unique(np.concatenate([np.linspace(0.0, T, ENERGY_PANELS + 1), bps]))
+    b = b[(b >= 0.0) & (b <= T)]
     a, c = b[:-1], b[1:]
     t = (0.5 * (a + c))[:, None] + (0.5 * (c - a))[:, None] * x[None, :]
-    u = np.asarray(result.controls(t.ravel())).reshape(len(a), len(x), -1)
+    u = np.asarray(controls(t.ravel())).reshape(len(a), len(x), -1)
     return float(np.sum(0.5 * (c - a)[:, None] * w[None, :] * np.sum(u ** 2, axis=2)))
