@@ -17,11 +17,12 @@ condition ``u = Gᵀp``). Steps are damped by a backtracking line search on the 
 rejected full step, and shortened until the trajectory is admissible — ``|Δ| ≥
 delta_min``, the legs inside their stroke — so every iterate is; the iteration need not
 start at the goal. Once a run comes within :data:`POLISH_BELOW` of the goal, Newton steps
-of least energy bring it onto it, and from there on it stays at the goal: each trial step
-is brought back by such steps and accepted where the energy falls
-(:func:`restoring_search`), so a run at the goal never trades it for energy. Where the motion comes close to those limits, ``F`` is the energy
-plus a small log barrier on the clearances (:class:`Objective`): an optimum that rides a
-limit is approached from inside instead of stalling against it.
+of least energy bring it onto it (:func:`newton_steps`), and from there on it stays at the
+goal: each trial step is brought back by such steps and accepted where the objective
+falls (:func:`restoring_search`), so a run at the goal never trades it for energy. Where
+the motion comes close to those limits, ``F`` is the energy plus a small log barrier on
+the clearances (:class:`Objective`): an optimum that rides a limit is approached from
+inside instead of stalling against it.
 
 Such an iteration finds *a* critical point near its start; the least one is looked for
 from several starts (:func:`starts`): the certified plan's inputs, then the drift toward
@@ -458,13 +459,8 @@ def restoring_search(problem: Evaluator, ev: Evaluation, d: np.ndarray, objectiv
     rejected = 0
     for _ in range(MAX_HALVINGS):
         trial = problem.evaluate(ev.params + alpha * d, full=full)
-        for _ in range(RESTORE_STEPS):
-            if not problem.admissible(trial) or trial.error <= options.tol:
-                break
-            restored = problem.evaluate(trial.params + correction(trial, metric), full=full)
-            if not restored.complete or restored.error >= trial.error:
-                break
-            trial = restored
+        if problem.admissible(trial):
+            trial = newton_steps(problem, trial, metric, options.tol, RESTORE_STEPS, full=full)
         if (problem.admissible(trial) and trial.error <= options.tol
                 and objective.value(trial) <= F0 + 1e-4 * alpha * min(slope, 0.0)):
             return trial, alpha, rejected
@@ -673,19 +669,54 @@ def polish(problem: Evaluator, run: Run, options: Options, steps: int = 4) -> Ru
     Run
         ``run``.
     """
-    ev = run.evaluation
-    metric = ev.parametrisation.metric()
+    metric = run.evaluation.parametrisation.metric()
+
+    def note(ev):
+        run.history.append(record(run.history[-1]["iteration"] + 1, ev, 1.0, "energy", 0,
+                                  energy=energy(ev, metric), start=run.label))
+
+    ev = newton_steps(problem, run.evaluation, metric, options.tol, steps, note=note)
+    run.evaluation, run.energy = ev, energy(ev, metric)
+    return run
+
+
+def newton_steps(problem: Evaluator, ev: Evaluation, metric: np.ndarray, tol: float, steps: int,
+                 full: bool = False, note=None) -> Evaluation:
+    """Newton steps of least energy toward the goal (:func:`correction`) from ``ev``, while
+    ``|l_T|`` is above ``tol`` and each step is admissible and lowers it.
+
+    Parameters
+    ----------
+    problem : Evaluator
+        The problem.
+    ev : Evaluation
+        The evaluation to start from.
+    metric : numpy.ndarray
+        The interval lengths ``h_j``.
+    tol : float
+        The goal's tolerance.
+    steps : int
+        Steps at most.
+    full : bool, default False
+        Keep the nodes' sensitivities (:meth:`~nonholo.planning.core.Evaluator.evaluate`).
+    note : callable, optional
+        ``note(evaluation)``, called after each step taken.
+
+    Returns
+    -------
+    Evaluation
+        The last evaluation taken.
+    """
     for _ in range(steps):
-        if ev.error <= options.tol:
+        if ev.error <= tol:
             break
-        trial = problem.evaluate(ev.params + correction(ev, metric))
+        trial = problem.evaluate(ev.params + correction(ev, metric), full=full)
         if not (problem.admissible(trial) and trial.error < ev.error):
             break
         ev = trial
-        run.history.append(record(run.history[-1]["iteration"] + 1, ev, 1.0, "energy", 0,
-                                  energy=energy(ev, metric), start=run.label))
-    run.evaluation, run.energy = ev, energy(ev, metric)
-    return run
+        if note is not None:
+            note(ev)
+    return ev
 
 
 def loop_starts(problem: Evaluator):
