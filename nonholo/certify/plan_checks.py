@@ -214,7 +214,7 @@ class PlanChecks:
             if not np.array_equal(hops.waypoints[0], r.R0):
                 fail("R0", f"differs from the first waypoint of the stitched controls ({where!r})")
             for i, piece in enumerate(hops.pieces):
-                self.piece(piece, mech, f"{where}.pieces[{i}]", None, None)
+                self.piece(piece, mech, f"{where}.pieces[{i}]", None, None, record=not stitched)
         if stitched:
             if r.steps % par.grid:
                 fail("steps", f"({r.steps}) must be a multiple of the stitched controls' grid ({par.grid})")
@@ -244,7 +244,7 @@ class PlanChecks:
             fail("options", f"record leg_speed = {short(r.options.get('leg_speed'))}, the controls "
                              f"are re-timed for {par.leg_speed!r}")
 
-    def piece(self, par, mech, where: str, steps: int | None, R0) -> None:
+    def piece(self, par, mech, where: str, steps: int | None, R0, record: bool = False) -> None:
         """One piece of physical controls against the plan's ``method``, ``strategy``,
         ``mechanism`` (and ``steps``, ``R0``, when the piece is the whole plan).
 
@@ -260,15 +260,17 @@ class PlanChecks:
             The plan's ``steps`` (``None``: a piece of a stitched route).
         R0 : numpy.ndarray or None
             The plan's ``R0`` (``None``: a piece of a stitched route).
+        record : bool, default False
+            A piece of the plan's record ``stitched`` of its route (it keeps the
+            method the route planned it with; a plan lowered by the energy stage afterwards
+            has the method of its own controls).
         """
         r = self.r
         frame = isinstance(par, FrameControls)
         inner = par.frame if frame else par
         if not isinstance(inner, (Fourier, PiecewiseConstant)):
             fail(where, f"must be Fourier, piecewise-constant or frame controls, got {type(par).__name__}")
-        # a record's pieces keep the method the route planned them with (a plan lowered by
-        # the energy stage afterwards has the method of its own controls)
-        if r.method != METHOD_OF_KIND[inner.kind] and not where.startswith("stitched"):
+        if r.method != METHOD_OF_KIND[inner.kind] and not record:
             fail("method", f"is {r.method!r}, but the controls are {inner.kind!r} "
                             f"(method {METHOD_OF_KIND[inner.kind]!r})")
         if frame:
