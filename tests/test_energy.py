@@ -298,3 +298,32 @@ def test_a_run_at_the_goal_stays_at_it():
         assert after[-1]["energy"] < after[0]["energy"]
         checked += len(after)
     assert checked > 5
+
+
+def test_auto_replaces_a_wasteful_plan_by_a_smooth_one_and_keeps_a_good_one():
+    """``objective="auto"`` on the ball's circle goal (the plan as found needs many times the
+    circle's energy): a Fourier motion (no jumps a mechanism could not follow) that DOP853
+    confirms, needing less than the plan and at most 1 % more than the circle; on an
+    attitude extremal the plan as found is already within reach of the least and is kept
+    unchanged."""
+    rho, T = 0.5, 1.0
+    c = np.zeros((2, 3))
+    c[0, 1], c[1, 2] = -rho * 2 * np.pi, rho * 2 * np.pi
+    R0 = so3.from_rpy(0.2, 0.4, -0.3)
+    _, R, q, _ = verify.resimulate_state((R0, [0.0, 0.0]), Fourier(T, c), T, "rolling_ball")
+    start, goal = (R0, [0.0, 0.0]), (R[-1], q[-1])
+    plain = planner.plan(start, goal, mechanism="rolling_ball", objective=None)
+    res = planner.plan(start, goal, mechanism="rolling_ball", objective="auto")
+    assert res.success, res.reason
+    assert res.method == "parametric" and res.breakpoints is None and res.options["objective"] == "auto"
+    E = confirmed_energy(res, "rolling_ball")
+    assert E < energy.REPLACE_BELOW * quadrature_energy(plain)
+    assert E <= 1.01 * (2 * np.pi * rho) ** 2 / T
+
+    a, b, cz = 0.6, 0.4, 0.5
+    R0 = so3.from_rpy(0.3, -0.5, 1.2)
+    Rd = R0 @ so3.exp(np.array([a, b, cz])) @ so3.exp(np.array([0.0, 0.0, -cz]))
+    plain = planner.plan(R0, Rd, mechanism="attitude", objective=None)
+    kept = planner.plan(R0, Rd, mechanism="attitude", objective="auto")
+    assert kept.options["objective"] == "auto"
+    assert np.array_equal(kept.params, plain.params)

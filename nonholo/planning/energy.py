@@ -38,8 +38,11 @@ gives the same plan on any machine under any load.
 The result's controls are those grid controls (method ``"nonparametric"``) of the
 physical inputs; if no start ends at a certified control at least as cheap as the plan's,
 the plan is returned as it was, its reason saying why. :func:`improve` runs the stage
-for ``objective="energy"`` and, quickly, for the default ``objective="auto"``, which keeps
-the plan unless it needs far more energy than a motion the quick search finds.
+for ``objective="energy"`` and, quickly, for ``objective="auto"``, which keeps the plan
+unless it needs far more energy than a motion the quick search finds; that motion is then
+made smooth (a Fourier fit brought onto the goal and lowered in its coefficients,
+:func:`smoothed`): grid controls jump at every interval, which a physical mechanism cannot
+follow.
 """
 from __future__ import annotations
 
@@ -112,6 +115,10 @@ QUICK_EFFORT = 0.3
 #: must need less than to replace it (a plan kept needs at most 1/0.6 ≈ 1.7 times what it
 #: found).
 REPLACE_BELOW = 0.6
+#: ``objective="auto"``: harmonics of the smooth motion that replaces a plan (:func:`smoothed`).
+SMOOTH_HARMONICS = 16
+#: ``objective="auto"``: SQP iterations of the smooth motion's energy at most.
+SMOOTH_ITERATIONS = 12
 #: The barrier on the clearance from ``Δ = 0`` acts where ``sgnΔ`` is below this.
 BARRIER_DELTA = 0.1
 #: The barrier's weight ``ε`` relative to the energy (:class:`Objective`).
@@ -882,10 +889,10 @@ def improve(request, result: PlanResult, quick: bool = False, budget: float | No
     :func:`search` finds (``objective="energy"``), or as it was with a reason saying why not;
     ``options`` records the objective.
 
-    ``quick`` (``objective="auto"``, the default of :func:`nonholo.plan`): the search from the
-    first :data:`QUICK_STARTS` starts within :data:`QUICK_EFFORT`, and the plan replaced only
-    by a motion needing less than :data:`REPLACE_BELOW` of its energy; otherwise it is
-    returned unchanged.
+    ``quick`` (``objective="auto"``): the search from the first :data:`QUICK_STARTS` starts
+    within :data:`QUICK_EFFORT`, and the plan replaced only by a smooth motion
+    (:func:`smoothed`) needing less than :data:`REPLACE_BELOW` of its energy; otherwise it is
+    returned unchanged but for ``options``.
 
     Parameters
     ----------
@@ -920,17 +927,72 @@ def improve(request, result: PlanResult, quick: bool = False, budget: float | No
         budget = ENERGY_EFFORT if budget is None else budget
         ceiling = plan_energy
     outcome, why = search(problem, initial, request.options, budget, ceiling)
+    lowered = replace(request, method="nonparametric", grid=grid, steps=steps)
+    if outcome is not None and quick:
+        lowered, problem, outcome = smoothed(request, outcome, ceiling)
     if outcome is None:
         if quick:
-            return result
+            return replace(result, options=options)
         return replace(result, reason=f"{result.reason}; energy not lowered: {why}", options=options)
     outcome = replace(outcome, history=result.history + outcome.history,
                       iterations=result.iterations + outcome.iterations,
                       reason=f"{result.reason}; then the plan's energy {plan_energy:.6g} lowered: {outcome.reason}")
-    lowered = build_result(replace(request, method="nonparametric", grid=grid, steps=steps), outcome, True,
-                           outcome.reason, problem)
+    lowered = build_result(lowered, outcome, True, outcome.reason, problem)
     return replace(lowered, options={**lowered.options, "objective": objective}, route=result.route,
                    stitched=result.hops)
+
+
+def smoothed(request, outcome: Outcome, ceiling: float):
+    """The least-energy grid motion of ``outcome`` made smooth: its Fourier fit of
+    :data:`SMOOTH_HARMONICS` harmonics, brought onto the goal by Newton steps of least
+    energy and lowered by at most :data:`SMOOTH_ITERATIONS` SQP iterations in its
+    coefficients, certified. Grid controls jump at every interval, which a physical
+    mechanism cannot follow; the fit of a smooth extremal needs hardly more energy.
+
+    Parameters
+    ----------
+    request : Problem
+        The run's problem.
+    outcome : Outcome
+        The certified grid motion.
+    ceiling : float
+        The energy the smooth motion must stay below.
+
+    Returns
+    -------
+    request : Problem
+        The problem of the returned motion (method ``"parametric"`` for the smooth one).
+    problem : Evaluator
+        Its evaluator.
+    outcome : Outcome or None
+        The certified smooth motion, or ``None`` if it does not end at the goal below
+        ``ceiling`` or fails its certificate.
+    """
+    options = request.options
+    K = SMOOTH_HARMONICS
+    smooth = replace(request, method="parametric", harmonics=K, steps=max(request.steps, 4 * K))
+    problem = smooth.evaluator(method="parametric", steps=smooth.steps)
+    grid = outcome.evaluation.controls
+    fit = Fourier.fit(grid, request.T, K, request.mechanism.n_inputs)
+    ev = problem.evaluate(fit)
+    if not problem.admissible(ev):
+        return request, problem, None
+    metric = fit.metric()
+    ev = newton_steps(problem, ev, metric, options.tol, RESTORE_STEPS + 2)
+    if ev.error > options.tol:
+        return request, problem, None
+    E = energy(ev, metric)
+    run = Run("smooth fit", ev, E, history=[record(0, ev, 0.0, "energy", 0, energy=E, start="smooth fit")])
+    descend(problem, run, options, SMOOTH_ITERATIONS, math.inf)
+    if run.evaluation.error > options.tol or run.energy >= ceiling:
+        return request, problem, None
+    found = Outcome(evaluation=run.evaluation, success=True,
+                    reason=(f"{outcome.reason}; made smooth: its fit of {K} harmonics, energy {run.energy:.6g}"),
+                    history=outcome.history + run.history, iterations=outcome.iterations + len(run.history) - 1)
+    found = certified(found, problem, options)
+    if not found.success:
+        return request, problem, None
+    return smooth, problem, found
 
 
 def plan_energy_of(result: PlanResult) -> float:
