@@ -44,9 +44,9 @@ def problems() -> dict:
     ex1, ex3 = examples.get(1), examples.get(3)
     return {
         "platform, Example 1": nonholo.plan(ex1.R_start, ex1.R_goal, T=ex1.T, method=ex1.methods[0],
-                                            harmonics=ex1.harmonics),
+                                            harmonics=ex1.harmonics, objective=None),
         "platform, Example 3": nonholo.plan(ex3.R_start, ex3.R_goal, T=ex3.T, method=ex3.methods[0],
-                                            harmonics=ex3.harmonics),
+                                            harmonics=ex3.harmonics, objective=None),
         "platform_raised": nonholo.plan(np.eye(3), so3.exp(np.array([0.3, 0.1, 0.2])), mechanism="platform_raised"),
         "rolling_ball": nonholo.plan((BALL_R0, (0.0, 0.0)), (BALL_RD, (0.0, 0.0)), mechanism="rolling_ball",
                                      strategy="paper", harmonics=4),

@@ -32,7 +32,8 @@ def dense(res, samples=4001):
 
 @pytest.fixture(scope="module")
 def plans():
-    return {(s, m): planner.plan(R0, RD, strategy=s, method=m)
+    """The plans as found (``objective=None``): the paths the re-timing is tried on."""
+    return {(s, m): planner.plan(R0, RD, strategy=s, method=m, objective=None)
             for s, m in (("robust", "parametric"), ("robust", "nonparametric"), ("paper", "parametric"))}
 
 
@@ -75,14 +76,14 @@ def test_a_given_time_scales_the_least_time_map_or_fails_saying_the_time_needed(
     _, R, fastest = dense(slow)
     np.testing.assert_allclose(fastest, V / 2, rtol=1e-6)
     assert verify.terminal_error(R[-1], res.R[-1]) <= 1e-10
-    short = planner.plan(R0, RD, T=1.0, leg_speed=V)
+    short = planner.plan(R0, RD, T=1.0, leg_speed=V, objective=None)
     assert not short.success and f"{need:.6g} s" in short.reason
     # planned in T, a plan breaking the bound is re-timed in T when its path allows
     T = 0.5 * (need + fastest_map.peak_ratio)
-    within = planner.plan(R0, RD, T=T, leg_speed=V)
+    within = planner.plan(R0, RD, T=T, leg_speed=V, objective=None)
     assert within.success and within.T == T and dense(within)[2].max() <= V * (1 + 1e-6)
     # a plan that keeps to the bound as planned is returned as planned
-    easy = planner.plan(R0, RD, T=1.0, leg_speed=10.0)
+    easy = planner.plan(R0, RD, T=1.0, leg_speed=10.0, objective=None)
     assert easy.success and not isinstance(easy.parametrisation, Retimed)
     assert easy.options["leg_speed"] == 10.0 and dense(easy)[2].max() <= 10.0
     with pytest.raises(ValueError, match="too short"):

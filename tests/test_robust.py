@@ -215,7 +215,8 @@ def test_paper_strategy_unchanged():
                 res = planner.plan(so3.from_rpy(*a), so3.from_rpy(*b), method=method)
                 record(res.iterations, [h[...] for h in res.history], res.params)
 
-    (every option at its default; "paper" was the default strategy then). Errors are
+    (every option at its default; "paper" was the default strategy then, and the plan as
+    found the default objective, ``objective=None`` now). Errors are
     compared with ``rtol = 1e-9`` above the round-off floor (``atol = 1e-12``: the last
     Newton step ends at ~1e-14, where the value is round-off).
     """
@@ -226,7 +227,7 @@ def test_paper_strategy_unchanged():
         R0, Rd = example(run["example"])        # the recorded problem is nonholo.paper.examples'
         np.testing.assert_array_equal(so3.from_rpy(*ex["R0_rpy"]), R0)
         np.testing.assert_array_equal(so3.from_rpy(*ex["Rd_rpy"]), Rd)
-        res = planner.plan(R0, Rd, method=run["method"], strategy="paper")
+        res = planner.plan(R0, Rd, method=run["method"], strategy="paper", objective=None)
         assert res.success == run["success"] and res.iterations == run["iterations"]
         assert [h["phase"] for h in res.history] == run["phases"]
         assert [h["rejected"] for h in res.history] == run["rejected"]

@@ -92,10 +92,10 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     p.add_argument("--leg-speed", type=float, default=None, metavar="V",
                    help="keep every leg's speed |dl/dt| <= V (geometry units per second): the plan "
                         "is re-timed, in the least time with --T min")
-    p.add_argument("--objective", choices=("none", "energy", "auto"), default="none",
-                   help="energy: then the least energy ∫|u|² dt a search finds, with the goal and limits "
-                        "kept; auto: the plan, unless a quick search finds a motion of far less "
-                        "energy; none (default): the plan as found")
+    p.add_argument("--objective", choices=("none", "energy", "auto"), default="auto",
+                   help="auto (default): the plan, unless a quick search finds a smooth motion of far "
+                        "less energy; energy: then the least energy ∫|u|² dt a search finds, with the goal "
+                        "and limits kept; none: the plan as found")
     p.add_argument("--out", default=None, help="write the result as JSON to this file")
     p.add_argument("--plot", default=None, help="write a figure of the plan to this file (inputs, orientation, "
                         "coordinates, Δ against t; a vehicle's path on the plane)")

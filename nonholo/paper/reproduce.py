@@ -160,7 +160,7 @@ def solve(example: _examples.Example, method: str, strategy: str) -> Solved:
         The plan and its re-simulated error.
     """
     result = plan(example.R_start, example.R_goal, T=example.T, method=method,
-                  harmonics=example.harmonics, strategy=strategy)
+                  harmonics=example.harmonics, strategy=strategy, objective=None)
     resim = None
     if len(result.R):
         R_T = verify.resimulate(example.R_start, result.controls, example.T,

@@ -54,7 +54,7 @@ def plan(R0, Rd, *, T: float | None = 1.0, method: str = "parametric", harmonics
          max_iter: int = 200, strategy="robust", mechanism="platform",
          delta_min: float = 1e-2, steps: int | None = None, newton_below: float = 1e-3,
          min_step: float = 1e-6, callback: Callable[[dict], object] | None = None,
-         route: str = "auto", leg_length=None, leg_speed=None, objective: str | None = None,
+         route: str = "auto", leg_length=None, leg_speed=None, objective: str | None = "auto",
          constraints=()) -> PlanResult:
     """Plan a control steering ``R0`` to ``Rd`` in time ``T`` (seconds).
 
@@ -144,15 +144,16 @@ def plan(R0, Rd, *, T: float | None = 1.0, method: str = "parametric", harmonics
         it fails saying the time needed if its path cannot keep it within ``T``. ``None``
         (default): no bound.
     objective : {None, "energy", "auto"}
-        ``None`` (default): the plan as found. ``"energy"``: the plan, then the least energy
+        ``"auto"`` (default): the plan as found, unless a quick search (within
+        :data:`~nonholo.planning.energy.QUICK_EFFORT`) finds a motion needing less than
+        :data:`~nonholo.planning.energy.REPLACE_BELOW` of its energy — then that motion made
+        smooth (a Fourier series, method ``"parametric"``). ``None``: the plan as found.
+        ``"energy"``: the plan, then the least energy
         ``∫|u|² dt`` of its physical inputs that a search from several starts finds, with
         the goal, ``delta_min`` and the stroke kept, within a budget of effort (the same call
         gives the same plan on any machine) (:mod:`nonholo.planning.energy`:
         piecewise-constant inputs on :data:`~nonholo.planning.energy.ENERGY_GRID` intervals,
-        method ``"nonparametric"`` in the result). ``"auto"``: the plan as found, unless a
-        quick search of the same kind (within :data:`~nonholo.planning.energy.QUICK_EFFORT`)
-        finds a motion needing less than :data:`~nonholo.planning.energy.REPLACE_BELOW` of
-        its energy — then that motion (``options["objective"]`` says so).
+        method ``"nonparametric"`` in the result). ``options["objective"]`` records it.
     constraints : sequence
         Further constraint objects (:mod:`nonholo.planning.constraints`).
 

@@ -232,7 +232,7 @@ class Problem:
     options: Options
     steps: int
     constraints: tuple = ()
-    objective: str | None = None
+    objective: str | None = "auto"
     route: str = "auto"
     least_time: bool = False
     started: float = dataclasses.field(default_factory=time.perf_counter)
@@ -243,7 +243,7 @@ class Problem:
               grid: int = 100, u0=None, gamma: float | None = None, step: float = 1.0, tol: float = 1e-10,
               max_iter: int = 200, strategy="robust", mechanism="platform", delta_min: float = 1e-2,
               steps: int | None = None, newton_below: float = 1e-3, min_step: float = 1e-6,
-              route: str = "auto", leg_length=None, leg_speed=None, objective: str | None = None,
+              route: str = "auto", leg_length=None, leg_speed=None, objective: str | None = "auto",
               constraints=()) -> "Problem":
         """The problem of :func:`nonholo.plan`'s keywords, checked.
 
