@@ -231,7 +231,8 @@ def _check(result, touch_ups, duration, contact, progress):
 
 def replan_options(result: PlanResult) -> dict:
     """The keywords a touch-up re-plans ``result``'s goal with: its horizon, method and
-    strategy, and the options of :data:`REPLAN_OPTIONS` it was planned with.
+    strategy, and the options of :data:`REPLAN_OPTIONS` it was planned with (its objective,
+    ``None`` where it records none).
 
     Parameters
     ----------
@@ -246,6 +247,7 @@ def replan_options(result: PlanResult) -> dict:
     accepted = inspect.signature(plan).parameters
     opts = {k: v for k, v in result.options.items() if k in REPLAN_OPTIONS and k in accepted}
     opts.update(T=planned_controls(result).T, method=result.method, strategy=result.strategy)
+    opts.setdefault("objective", None)       # recorded only when the plan had one
     if "leg_speed" in opts:
         opts["T"] = result.T
     return opts
