@@ -301,7 +301,7 @@ def test_a_run_at_the_goal_stays_at_it():
 
 
 def test_auto_replaces_a_wasteful_plan_by_a_smooth_one_and_keeps_a_good_one():
-    """``objective="auto"`` on the ball's circle goal (the plan as found needs many times the
+    """The default ``objective="auto"`` on the ball's circle goal (the plan as found needs many times the
     circle's energy): a Fourier motion (no jumps a mechanism could not follow) that DOP853
     confirms, needing less than the plan and at most 1 % more than the circle; on an
     attitude extremal the plan as found is already within reach of the least and is kept
@@ -313,7 +313,7 @@ def test_auto_replaces_a_wasteful_plan_by_a_smooth_one_and_keeps_a_good_one():
     _, R, q, _ = verify.resimulate_state((R0, [0.0, 0.0]), Fourier(T, c), T, "rolling_ball")
     start, goal = (R0, [0.0, 0.0]), (R[-1], q[-1])
     plain = planner.plan(start, goal, mechanism="rolling_ball", objective=None)
-    res = planner.plan(start, goal, mechanism="rolling_ball", objective="auto")
+    res = planner.plan(start, goal, mechanism="rolling_ball")         # the default: "auto"
     assert res.success, res.reason
     assert res.method == "parametric" and res.breakpoints is None and res.options["objective"] == "auto"
     E = confirmed_energy(res, "rolling_ball")

@@ -216,6 +216,25 @@ def test_only_a_successful_plan_is_played(car_plan):
         execute(dataclasses.replace(car_plan, success=False, reason="made up"))
 
 
+def test_touch_ups_re_plan_with_the_plans_objective(unicycle_plan):
+    """A touch-up re-plans as its plan was planned: with the default objective ``"auto"``, and
+    with ``None`` for a plan as found (which records no objective)."""
+    from nonholo.physics.execution import replan_options
+
+    found = nonholo.plan((0.0, 0.0, 0.0), (0.0, 1.0, 0.0), mechanism="unicycle", objective=None)
+    assert "objective" not in found.options and replan_options(found)["objective"] is None
+    assert replan_options(unicycle_plan)["objective"] == "auto"
+
+
+def test_the_defaults_smooth_replacement_is_played_like_any_plan(ball_plan, ball_run):
+    """The ball's quarter turn as found rolls a long detour; the default replaces it by a
+    smooth least-energy motion (a Fourier series), which the model follows without slipping
+    beyond its soft contacts' creep."""
+    assert ball_plan.options["objective"] == "auto" and ball_plan.method == "parametric"
+    assert ball_plan.breakpoints is None and "made smooth" in ball_plan.reason
+    assert ball_run.stages[0]["max_slip"] < 1e-2
+
+
 def test_a_touch_up_that_cannot_be_planned_ends_the_run(unicycle_plan, monkeypatch):
     module = importlib.import_module("nonholo.physics.execution")
 
