@@ -42,7 +42,7 @@ for ``objective="energy"`` and, quickly, for ``objective="auto"``, which keeps t
 unless it needs far more energy than a motion the quick search finds; that motion is then
 made smooth (a Fourier fit brought onto the goal and lowered in its coefficients,
 :func:`smoothed`): grid controls jump at every interval, which a physical mechanism cannot
-follow.
+follow. Where the fit cannot be brought onto the goal, the grid motion is returned itself.
 """
 from __future__ import annotations
 
@@ -890,9 +890,10 @@ def improve(request, result: PlanResult, quick: bool = False, budget: float | No
     ``options`` records the objective.
 
     ``quick`` (``objective="auto"``): the search from the first :data:`QUICK_STARTS` starts
-    within :data:`QUICK_EFFORT`, and the plan replaced only by a smooth motion
-    (:func:`smoothed`) needing less than :data:`REPLACE_BELOW` of its energy; otherwise it is
-    returned unchanged but for ``options``.
+    within :data:`QUICK_EFFORT`, and the plan replaced only by a motion needing less than
+    :data:`REPLACE_BELOW` of its energy, made smooth (:func:`smoothed`) — or the grid motion
+    itself where its smooth fit does not end at the goal below that energy (a motion riding
+    a limit, its reason says so); otherwise it is returned unchanged but for ``options``.
 
     Parameters
     ----------
@@ -929,7 +930,11 @@ def improve(request, result: PlanResult, quick: bool = False, budget: float | No
     outcome, why = search(problem, initial, request.options, budget, ceiling)
     lowered = replace(request, method="nonparametric", grid=grid, steps=steps)
     if outcome is not None and quick:
-        lowered, problem, outcome = smoothed(request, outcome, ceiling)
+        smooth, smooth_problem, smooth_outcome, rough = smoothed(request, outcome, ceiling)
+        if smooth_outcome is not None:
+            lowered, problem, outcome = smooth, smooth_problem, smooth_outcome
+        else:       # the grid motion itself, rather than a plan needing far more energy
+            outcome = replace(outcome, reason=f"{outcome.reason}; not made smooth: {rough}")
     if outcome is None:
         if quick:
             return replace(result, options=options)
@@ -961,12 +966,14 @@ def smoothed(request, outcome: Outcome, ceiling: float):
     Returns
     -------
     request : Problem
-        The problem of the returned motion (method ``"parametric"`` for the smooth one).
+        The smooth motion's problem (method ``"parametric"``).
     problem : Evaluator
         Its evaluator.
     outcome : Outcome or None
         The certified smooth motion, or ``None`` if it does not end at the goal below
         ``ceiling`` or fails its certificate.
+    why : str
+        Why there is none (empty if there is).
     """
     options = request.options
     K = SMOOTH_HARMONICS
@@ -976,23 +983,25 @@ def smoothed(request, outcome: Outcome, ceiling: float):
     fit = Fourier.fit(grid, request.T, K, request.mechanism.n_inputs)
     ev = problem.evaluate(fit)
     if not problem.admissible(ev):
-        return request, problem, None
+        return smooth, problem, None, f"the motion of its fit of {K} harmonics is not admissible"
     metric = fit.metric()
     ev = newton_steps(problem, ev, metric, options.tol, RESTORE_STEPS + 2)
-    if ev.error > options.tol:
-        return request, problem, None
     E = energy(ev, metric)
     run = Run("smooth fit", ev, E, history=[record(0, ev, 0.0, "energy", 0, energy=E, start="smooth fit")])
     descend(problem, run, options, SMOOTH_ITERATIONS, math.inf)
-    if run.evaluation.error > options.tol or run.energy >= ceiling:
-        return request, problem, None
+    polish(problem, run, options)
+    if run.evaluation.error > options.tol:
+        return smooth, problem, None, (f"its fit of {K} harmonics ended {run.evaluation.error:.2g} from the goal "
+                                       f"after {len(run.history) - 1} iterations")
+    if run.energy >= ceiling:
+        return smooth, problem, None, f"its fit of {K} harmonics needs {run.energy:.6g}, not below {ceiling:.6g}"
     found = Outcome(evaluation=run.evaluation, success=True,
                     reason=(f"{outcome.reason}; made smooth: its fit of {K} harmonics, energy {run.energy:.6g}"),
                     history=outcome.history + run.history, iterations=outcome.iterations + len(run.history) - 1)
     found = certified(found, problem, options)
     if not found.success:
-        return request, problem, None
-    return smooth, problem, found
+        return smooth, problem, None, found.reason
+    return smooth, problem, found, ""
 
 
 def plan_energy_of(result: PlanResult) -> float:
