@@ -949,10 +949,11 @@ def improve(request, result: PlanResult, quick: bool = False, budget: float | No
 
 def smoothed(request, outcome: Outcome, ceiling: float):
     """The least-energy grid motion of ``outcome`` made smooth: its Fourier fit of
-    :data:`SMOOTH_HARMONICS` harmonics, brought onto the goal by Newton steps of least
-    energy and lowered by at most :data:`SMOOTH_ITERATIONS` SQP iterations in its
-    coefficients, certified. Grid controls jump at every interval, which a physical
-    mechanism cannot follow; the fit of a smooth extremal needs hardly more energy.
+    :data:`SMOOTH_HARMONICS` harmonics, Newton steps of least energy toward the goal, at
+    most :data:`SMOOTH_ITERATIONS` SQP iterations in its coefficients (they bring it onto
+    the goal where the Newton steps could not, and lower its energy), Newton steps again,
+    certified. Grid controls jump at every interval, which a physical mechanism cannot
+    follow; the fit of a smooth extremal needs hardly more energy.
 
     Parameters
     ----------
