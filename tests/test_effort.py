@@ -42,3 +42,20 @@ def test_a_global_route_is_the_same_on_a_slow_clock(monkeypatch):
     a, b = first.to_dict(), again.to_dict()
     a.pop("seconds"), b.pop("seconds")
     assert json.dumps(a) == json.dumps(b)
+
+
+def test_a_plan_does_not_depend_on_the_effort_counted_before():
+    """The default plan (its least-energy stage ends on a budget of effort) of a car pair
+    whose budget once ended on a tie, after different amounts of effort counted before in
+    the process: the same plan every time (the count and its readings are exact)."""
+    def car():
+        result = planner.plan([0.0, 0.0, 0.0, 0.0], [0.517410922309838, 0.7569603693325078, -0.3976800780779256, 0.0],
+                              mechanism="car")
+        d = result.to_dict()
+        d.pop("seconds")
+        return json.dumps(d)
+
+    first = car()
+    for before in (0.2, 12345.6, 526160.0, 3.0e7 + 0.4):
+        effort.add(before)
+        assert car() == first

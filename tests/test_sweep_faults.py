@@ -28,11 +28,9 @@ N = 24
 
 def car_rows(count=N, seed=3):
     rng = np.random.default_rng(seed)
-    # the plans as found (objective None): these tests are of the sweep's faults, and the
-    # default's least-energy stage gave one row (car-15) apart in this process and in the CLI's
     return [{"start": [0.0, 0.0, 0.0, 0.0],
              "goal": [float(rng.uniform(-1, 1)), float(rng.uniform(-1, 1)), float(rng.uniform(-0.5, 0.5)), 0.0],
-             "mechanism": "car", "label": f"car-{i}", "options": {"objective": None}} for i in range(count)]
+             "mechanism": "car", "label": f"car-{i}"} for i in range(count)]
 
 
 @pytest.fixture(scope="module")

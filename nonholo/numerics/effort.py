@@ -12,19 +12,31 @@ forward step :data:`FORWARD_WEIGHT` (its share of the work), a partial step of
 machine (the benchmarks' 2-core AMD EPYC), so that budgets keep their meaning in seconds
 there (a plan's wall time there is within about 20 % of its effort for nine in ten).
 
+The count is exact, so that where a budget ends does not depend on what the process
+counted before: it is a whole number of :data:`UNITS_PER_STEP`-ths of a variational step,
+read as that number times a power of two (:data:`SECONDS_PER_UNIT`), so a reading, and
+a deadline a dyadic budget after it, carry no rounding (a count in floating point made a
+budget's last comparison a tie broken by the count's rounding: the same plan came out
+differently after other plans).
+
 The count is per process (threads planning at once share it: their budgets then depend
 on each other; a sweep's workers are processes).
 """
 from __future__ import annotations
 
+#: The count's unit: this many per variational step (a forward step is a whole number of them).
+UNITS_PER_STEP = 5
+#: The reading is the count times this power of two (``2⁻²²`` s per unit).
+SECONDS_PER_UNIT = 2.0 ** -22
 #: Variational CF4 steps a second of planning on the reference machine, everything around
-#: the kernels included (fitted to the wall times of 300 random far pairs' plans: the
-#: variational kernel alone runs 2.0e6 steps a second there).
-STEPS_PER_SECOND = 8.0e5
+#: the kernels included (fitted to the wall times of 300 random far pairs' plans, rounded to
+#: ``2²²/5`` so that a reading is exact: the variational kernel alone runs 2.0e6 steps a
+#: second there).
+STEPS_PER_SECOND = 1.0 / (UNITS_PER_STEP * SECONDS_PER_UNIT)
 #: A forward step's effort, in variational steps (forward replays run about 2.5× faster).
 FORWARD_WEIGHT = 0.4
 
-_count = [0.0]
+_count = [0]
 
 
 def add(steps: float) -> None:
@@ -33,9 +45,9 @@ def add(steps: float) -> None:
     Parameters
     ----------
     steps : float
-        The effort, in variational steps.
+        The effort, in variational steps (rounded to the count's unit).
     """
-    _count[0] += steps
+    _count[0] += round(steps * UNITS_PER_STEP)
 
 
 def seconds() -> float:
@@ -44,6 +56,6 @@ def seconds() -> float:
     Returns
     -------
     float
-        The count divided by :data:`STEPS_PER_SECOND`.
+        The count in seconds (``count · 2⁻²²``: exact below ``2³¹`` s).
     """
-    return _count[0] / STEPS_PER_SECOND
+    return _count[0] * SECONDS_PER_UNIT
