@@ -119,7 +119,12 @@ REPLACE_BELOW = 0.6
 SMOOTH_HARMONICS = 16
 #: ``objective="auto"``: SQP iterations of the smooth motion's energy at most.
 SMOOTH_ITERATIONS = 12
-#: The barrier on the clearance from ``Δ = 0`` acts where ``sgnΔ`` is below this.
+#: ``objective="auto"``: the barrier's weight in them, relative to the energy (the grid
+#: motion may ride a limit, with a corner there a smooth motion cannot follow: it is kept
+#: off the limit, for a few per cent of energy).
+SMOOTH_BARRIER_WEIGHT = 1.0
+#: The barrier on the clearance from ``Δ = 0`` acts where ``sgnΔ`` is below this (or below
+#: twice ``delta_min``, where that is more: :func:`barrier_reach`).
 BARRIER_DELTA = 0.1
 #: The barrier's weight ``ε`` relative to the energy (:class:`Objective`).
 BARRIER_WEIGHT = 1e-3
@@ -153,9 +158,28 @@ def energy(ev: Evaluation, metric: np.ndarray) -> float:
     return float(np.dot(metric, ev.params ** 2))
 
 
-def barrier_terms(problem: Evaluator, ev: Evaluation) -> tuple[float, np.ndarray, np.ndarray, np.ndarray]:
+def barrier_reach(delta_min: float) -> float:
+    """Where the barrier on the clearance from ``Δ = 0`` acts: ``sgnΔ`` below
+    :data:`BARRIER_DELTA`, or below ``2 delta_min`` where that is more (it must lie above
+    ``delta_min``).
+
+    Parameters
+    ----------
+    delta_min : float
+        The least ``sgnΔ`` allowed.
+
+    Returns
+    -------
+    float
+        ``d₀``.
+    """
+    return max(BARRIER_DELTA, 2.0 * delta_min)
+
+
+def barrier_terms(problem: Evaluator, ev: Evaluation,
+                  rows: bool = True) -> tuple[float, np.ndarray, np.ndarray, np.ndarray | None]:
     """The barrier ``Φ = Σ_{n ≥ 1} h ψ(r_n)`` of ``ev``'s nodes on the clearance from
-    ``Δ = 0`` (``r = (sgnΔ − delta_min)/(d₀ − delta_min)``, ``d₀`` = :data:`BARRIER_DELTA`)
+    ``Δ = 0`` (``r = (sgnΔ − delta_min)/(d₀ − delta_min)``, ``d₀`` = :func:`barrier_reach`)
     and on the legs' clearances from their stroke (``r = c/c₀``, ``c₀`` =
     :data:`~nonholo.model.limits.BARRIER_CLEARANCE`), ``ψ(r) = r − 1 − log r`` below 1 and 0
     above (zero with its slope at ``r = 1``).
@@ -166,6 +190,8 @@ def barrier_terms(problem: Evaluator, ev: Evaluation) -> tuple[float, np.ndarray
         The problem.
     ev : Evaluation
         The evaluation.
+    rows : bool, default True
+        Compute the terms' gradient rows (the value alone needs none).
 
     Returns
     -------
@@ -175,31 +201,33 @@ def barrier_terms(problem: Evaluator, ev: Evaluation) -> tuple[float, np.ndarray
         The nodes of the terms within reach.
     r : numpy.ndarray
         Their ``r``.
-    rows : numpy.ndarray
-        Their ``dr/ds`` at the node, rows of ``d``.
+    rows : numpy.ndarray or None
+        Their ``dr/ds`` at the node, rows of ``d`` (``None`` unless asked for).
     """
     mech = problem.mechanism
-    nodes, rs, rows = [], [], []
+    nodes, rs, grads = [], [], []
     if problem.singular.exists:
         d = problem.sign * mech.delta_samples(ev.R, ev.q)
-        span = BARRIER_DELTA - problem.delta_min
+        span = barrier_reach(problem.delta_min) - problem.delta_min
         r = (d - problem.delta_min) / span
         near = np.nonzero(r < 1.0)[0]
         near = near[near > 0]
         if near.size:
-            grad = spatial_gradient_delta(mech, ev.R[near], q=ev.q[near])
-            nodes.append(near), rs.append(r[near]), rows.append((problem.sign / span) * grad)
+            nodes.append(near), rs.append(r[near])
+            if rows:
+                grads.append((problem.sign / span) * spatial_gradient_delta(mech, ev.R[near], q=ev.q[near]))
     if problem.leg_limits is not None:
         terms = problem.leg_limits.clearance_terms(mech, ev.R, BARRIER_CLEARANCE)
         if terms is not None:
             at, c, g = terms
             keep = at > 0
-            nodes.append(at[keep]), rs.append(c[keep] / BARRIER_CLEARANCE), rows.append(g[keep] / BARRIER_CLEARANCE)
+            nodes.append(at[keep]), rs.append(c[keep] / BARRIER_CLEARANCE), grads.append(g[keep] / BARRIER_CLEARANCE)
     if not nodes:
         empty = np.zeros(0)
-        return 0.0, empty.astype(int), empty, np.zeros((0, mech.n_rates))
-    nodes, r, rows = np.concatenate(nodes), np.maximum(np.concatenate(rs), 1e-300), np.concatenate(rows)
-    return float(problem.h * np.sum(r - 1.0 - np.log(r))), nodes, r, rows
+        return 0.0, empty.astype(int), empty, np.zeros((0, mech.n_rates)) if rows else None
+    nodes, r = np.concatenate(nodes), np.maximum(np.concatenate(rs), 1e-300)
+    return (float(problem.h * np.sum(r - 1.0 - np.log(r))), nodes, r,
+            np.concatenate(grads) if rows else None)
 
 
 class Objective:
@@ -222,6 +250,7 @@ class Objective:
         self.problem, self.metric = problem, metric
         self.constrained = problem.singular.exists or problem.leg_limits is not None
         self.tau = 0.0
+        self.last = None            # (evaluation, tau, derivatives): an iteration asks twice
 
     def near(self, ev: Evaluation) -> bool:
         """Whether the barrier may act on the next evaluations.
@@ -242,7 +271,7 @@ class Objective:
             return False
         problem = self.problem
         near_delta = (problem.singular.exists and ev.min_delta is not None
-                      and ev.min_delta < 2.0 * BARRIER_DELTA)
+                      and ev.min_delta < 2.0 * barrier_reach(problem.delta_min))
         near_legs = ev.min_clearance is not None and ev.min_clearance < 2.0 * BARRIER_CLEARANCE
         return near_delta or near_legs
 
@@ -262,7 +291,7 @@ class Objective:
         E = energy(ev, self.metric)
         if not self.constrained or self.tau == 0.0:
             return E
-        return E + self.tau * barrier_terms(self.problem, ev)[0]
+        return E + self.tau * barrier_terms(self.problem, ev, rows=False)[0]
 
     def derivatives(self, ev: Evaluation) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
         """The objective's derivatives at an evaluation.
@@ -281,19 +310,25 @@ class Objective:
         hess_barrier : numpy.ndarray or None
             ``τ∇²Φ`` (Gauss–Newton), ``None`` where no term is within reach.
         """
+        if self.last is not None and self.last[0] is ev and self.last[1] == self.tau:
+            return self.last[2]
         gE = 2.0 * self.metric * ev.params
         zero = np.zeros_like(gE)
         if not self.constrained or ev.Z is None:
-            return gE, zero, None
-        _, nodes, r, rows = barrier_terms(self.problem, ev)
-        if not nodes.size:
-            return gE, zero, None
-        at, where = np.unique(nodes, return_inverse=True)
-        s = node_sensitivities(self.problem, ev, at)
-        G = np.einsum("kd,kdp->kp", rows, s[where])           # ∂r_n/∂λ
-        h = self.problem.h * self.tau
-        r = np.maximum(r, MIN_BARRIER_R)
-        return gE, h * (1.0 - 1.0 / r) @ G, (G.T * (h / r ** 2)) @ G
+            found = gE, zero, None
+        else:
+            _, nodes, r, rows = barrier_terms(self.problem, ev)
+            if not nodes.size:
+                found = gE, zero, None
+            else:
+                at, where = np.unique(nodes, return_inverse=True)
+                s = node_sensitivities(self.problem, ev, at)
+                G = np.einsum("kd,kdp->kp", rows, s[where])           # ∂r_n/∂λ
+                h = self.problem.h * self.tau
+                r = np.maximum(r, MIN_BARRIER_R)
+                found = gE, h * (1.0 - 1.0 / r) @ G, (G.T * (h / r ** 2)) @ G
+        self.last = ev, self.tau, found
+        return found
 
 
 @dataclass(eq=False)
@@ -891,9 +926,10 @@ def improve(request, result: PlanResult, quick: bool = False, budget: float | No
 
     ``quick`` (``objective="auto"``): the search from the first :data:`QUICK_STARTS` starts
     within :data:`QUICK_EFFORT`, and the plan replaced only by a motion needing less than
-    :data:`REPLACE_BELOW` of its energy, made smooth (:func:`smoothed`); otherwise (also where
-    the smooth fit does not end at the goal below that energy: grid controls, which jump at
-    every interval, are no motion to execute) it is returned unchanged but for ``options``.
+    :data:`REPLACE_BELOW` of its energy, made smooth (:func:`smoothed`); otherwise it is
+    returned unchanged but for ``options`` (and, where the smooth fit does not end at the
+    goal below that energy, its reason saying so: grid controls, which jump at every
+    interval, are no motion to execute).
 
     Parameters
     ----------
@@ -930,7 +966,11 @@ def improve(request, result: PlanResult, quick: bool = False, budget: float | No
     outcome, why = search(problem, initial, request.options, budget, ceiling)
     lowered = replace(request, method="nonparametric", grid=grid, steps=steps)
     if outcome is not None and quick:
-        lowered, problem, outcome, _ = smoothed(request, outcome, ceiling)
+        found = energy(outcome.evaluation, outcome.evaluation.parametrisation.metric())
+        lowered, problem, outcome, why = smoothed(request, outcome, ceiling)
+        if outcome is None:
+            return replace(result, options=options,
+                           reason=f"{result.reason}; kept: a motion of energy {found:.6g} was found, but {why}")
     if outcome is None:
         if quick:
             return replace(result, options=options)
@@ -947,8 +987,9 @@ def smoothed(request, outcome: Outcome, ceiling: float):
     """The least-energy grid motion of ``outcome`` made smooth: its Fourier fit of
     :data:`SMOOTH_HARMONICS` harmonics, Newton steps of least energy toward the goal, at
     most :data:`SMOOTH_ITERATIONS` SQP iterations in its coefficients (they bring it onto
-    the goal where the Newton steps could not, and lower its energy), Newton steps again,
-    certified. Grid controls jump at every interval, which a physical mechanism cannot
+    the goal where the Newton steps could not, and lower its energy; their barrier weighs
+    :data:`SMOOTH_BARRIER_WEIGHT`, so a fit of a motion that rides a limit comes off it),
+    Newton steps again, certified. Grid controls jump at every interval, which a physical mechanism cannot
     follow; the fit of a smooth extremal needs hardly more energy.
 
     Parameters
@@ -984,7 +1025,8 @@ def smoothed(request, outcome: Outcome, ceiling: float):
     metric = fit.metric()
     ev = newton_steps(problem, ev, metric, options.tol, RESTORE_STEPS + 2)
     E = energy(ev, metric)
-    run = Run("smooth fit", ev, E, history=[record(0, ev, 0.0, "energy", 0, energy=E, start="smooth fit")])
+    run = Run("smooth fit", ev, E, history=[record(0, ev, 0.0, "energy", 0, energy=E, start="smooth fit")],
+              tau=SMOOTH_BARRIER_WEIGHT * max(E, 1e-12) / request.T)
     descend(problem, run, options, SMOOTH_ITERATIONS, math.inf)
     polish(problem, run, options)
     if run.evaluation.error > options.tol:
