@@ -329,24 +329,18 @@ def test_auto_replaces_a_wasteful_plan_by_a_smooth_one_and_keeps_a_good_one():
     assert np.array_equal(kept.params, plain.params)
 
 
-def test_auto_brings_the_smooth_fit_of_a_motion_riding_a_limit_off_it():
+def test_auto_keeps_the_plan_where_the_smooth_fit_cannot_reach_the_goal():
     """A car pair whose least-energy motion rides the steering limit (cos φ down to
-    delta_min, with a corner in the steering rate there): its Fourier fit cannot follow the
-    corner from inside, and without a barrier that weighs it ended 0.03 from the goal and the
-    plan as found (4.1 times the least energy) was kept. The default now returns a smooth
-    motion that DOP853 confirms, clear of the limit, within 3× the least energy."""
+    delta_min, with a corner in the steering rate there): the Fourier fit of the grid motion
+    does not end at the goal, and grid controls, which jump at every interval, are no motion
+    to execute, so the default keeps the plan as found, its reason saying why."""
     start = [2.096230047574747, 0.46216472194268254, 1.8030320833764233, 0.7810465258321972]
     goal = [2.1538261655074664, -0.1470932460849312, -1.158767445847923, 0.7641695064409237]
     found = planner.plan(start, goal, mechanism="car", delta_min=0.01, objective=None)
-    least = planner.plan(start, goal, mechanism="car", delta_min=0.01, objective="energy")
     res = planner.plan(start, goal, mechanism="car", delta_min=0.01)
     assert res.success, res.reason
-    assert res.method == "parametric" and res.breakpoints is None and res.options["objective"] == "auto"
-    E = confirmed_energy(res, "car")
-    assert E < energy.REPLACE_BELOW * quadrature_energy(found)
-    assert E <= 3.0 * confirmed_energy(least, "car")
-    _, _, _, delta = verify.resimulate_state(res.start, res.controls, res.T, "car", res.breakpoints)
-    assert np.min(delta) >= 0.01                                   # Δ = cos φ, the start's sign
+    assert res.options["objective"] == "auto" and np.array_equal(res.params, found.params)
+    assert "kept: a motion of energy" in res.reason and "from the goal" in res.reason
 
 
 @pytest.mark.parametrize(("gid", "delta_min"), [("near-s4-03", 0.15), ("far-s2-00", 0.3)])

@@ -119,10 +119,6 @@ REPLACE_BELOW = 0.6
 SMOOTH_HARMONICS = 16
 #: ``objective="auto"``: SQP iterations of the smooth motion's energy at most.
 SMOOTH_ITERATIONS = 12
-#: ``objective="auto"``: the barrier's weight in them, relative to the energy (the grid
-#: motion may ride a limit, with a corner there a smooth motion cannot follow: it is kept
-#: off the limit, for a few per cent of energy).
-SMOOTH_BARRIER_WEIGHT = 1.0
 #: The barrier on the clearance from ``Δ = 0`` acts where ``sgnΔ`` is below this (or below
 #: twice ``delta_min``, where that is more: :func:`barrier_reach`).
 BARRIER_DELTA = 0.1
@@ -987,9 +983,8 @@ def smoothed(request, outcome: Outcome, ceiling: float):
     """The least-energy grid motion of ``outcome`` made smooth: its Fourier fit of
     :data:`SMOOTH_HARMONICS` harmonics, Newton steps of least energy toward the goal, at
     most :data:`SMOOTH_ITERATIONS` SQP iterations in its coefficients (they bring it onto
-    the goal where the Newton steps could not, and lower its energy; their barrier weighs
-    :data:`SMOOTH_BARRIER_WEIGHT`, so a fit of a motion that rides a limit comes off it),
-    Newton steps again, certified. Grid controls jump at every interval, which a physical mechanism cannot
+    the goal where the Newton steps could not, and lower its energy), Newton steps again,
+    certified. Grid controls jump at every interval, which a physical mechanism cannot
     follow; the fit of a smooth extremal needs hardly more energy.
 
     Parameters
@@ -1025,8 +1020,7 @@ def smoothed(request, outcome: Outcome, ceiling: float):
     metric = fit.metric()
     ev = newton_steps(problem, ev, metric, options.tol, RESTORE_STEPS + 2)
     E = energy(ev, metric)
-    run = Run("smooth fit", ev, E, history=[record(0, ev, 0.0, "energy", 0, energy=E, start="smooth fit")],
-              tau=SMOOTH_BARRIER_WEIGHT * max(E, 1e-12) / request.T)
+    run = Run("smooth fit", ev, E, history=[record(0, ev, 0.0, "energy", 0, energy=E, start="smooth fit")])
     descend(problem, run, options, SMOOTH_ITERATIONS, math.inf)
     polish(problem, run, options)
     if run.evaluation.error > options.tol:
