@@ -329,18 +329,45 @@ def test_auto_replaces_a_wasteful_plan_by_a_smooth_one_and_keeps_a_good_one():
     assert np.array_equal(kept.params, plain.params)
 
 
-def test_auto_keeps_the_plan_where_the_smooth_fit_cannot_reach_the_goal():
-    """A car pair whose least-energy motion rides the steering limit (cos φ down to
-    delta_min, with a corner in the steering rate there): the Fourier fit of the grid motion
-    does not end at the goal, and grid controls, which jump at every interval, are no motion
-    to execute, so the default keeps the plan as found, its reason saying why."""
-    start = [2.096230047574747, 0.46216472194268254, 1.8030320833764233, 0.7810465258321972]
-    goal = [2.1538261655074664, -0.1470932460849312, -1.158767445847923, 0.7641695064409237]
+#: A car pair whose least-energy motion rides the steering limit (cos φ down to delta_min,
+#: with a corner in the steering rate there): the Fourier fit of that grid motion does not
+#: end at the goal.
+LIMIT_PAIR = ([2.096230047574747, 0.46216472194268254, 1.8030320833764233, 0.7810465258321972],
+              [2.1538261655074664, -0.1470932460849312, -1.158767445847923, 0.7641695064409237])
+
+
+def test_auto_makes_the_plan_smooth_where_the_least_energy_fit_cannot_reach_the_goal():
+    """On that pair the default descends from the Fourier fit of the plan instead: a smooth
+    motion DOP853 confirms (the goal, and most of the plan's clearance from Δ = 0), below
+    REFIT_BELOW of the plan's energy and within 3× of the least energy found by
+    ``objective="energy"``."""
+    start, goal = LIMIT_PAIR
+    plain = planner.plan(start, goal, mechanism="car", delta_min=0.01, objective=None)
+    least = planner.plan(start, goal, mechanism="car", delta_min=0.01, objective="energy")
+    res = planner.plan(start, goal, mechanism="car", delta_min=0.01)
+    assert res.success, res.reason
+    assert res.method == "parametric" and res.breakpoints is None and res.options["objective"] == "auto"
+    assert "made smooth: the plan's fit" in res.reason
+    _, R, q, delta = verify.resimulate_state(res.start, res.controls, res.T, "car", res.breakpoints)
+    assert np.min(np.sign(delta[0]) * delta) >= 0.01 + 0.89 * (plain.min_delta - 0.01)
+    E = confirmed_energy(res, "car")
+    assert E < energy.REFIT_BELOW * quadrature_energy(plain)
+    assert E <= 3.0 * confirmed_energy(least, "car")
+
+
+def test_auto_keeps_the_plan_where_no_smooth_fit_reaches_the_goal_below_it(monkeypatch):
+    """Where neither fit ends at the goal below its ceiling (the plan's fit given no
+    iterations stays at the plan's energy, above REFIT_BELOW of it), the default keeps the
+    plan as found, its reason saying why: grid controls, which jump at every interval, are
+    no motion to execute."""
+    start, goal = LIMIT_PAIR
+    monkeypatch.setattr(energy, "SMOOTH_PLAN_ITERATIONS", 0)
     found = planner.plan(start, goal, mechanism="car", delta_min=0.01, objective=None)
     res = planner.plan(start, goal, mechanism="car", delta_min=0.01)
     assert res.success, res.reason
     assert res.options["objective"] == "auto" and np.array_equal(res.params, found.params)
     assert "kept: a motion of energy" in res.reason and "from the goal" in res.reason
+    assert "the plan's fit of 16 harmonics needs" in res.reason
 
 
 @pytest.mark.parametrize(("gid", "delta_min"), [("near-s4-03", 0.15), ("far-s2-00", 0.3)])

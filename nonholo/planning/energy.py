@@ -42,7 +42,9 @@ for ``objective="energy"`` and, quickly, for ``objective="auto"``, which keeps t
 unless it needs far more energy than a motion the quick search finds; that motion is then
 made smooth (a Fourier fit brought onto the goal and lowered in its coefficients,
 :func:`smoothed`): grid controls jump at every interval, which a physical mechanism cannot
-follow. Where the fit cannot be brought onto the goal, the plan is kept.
+follow. Where the fit cannot be brought onto the goal, the plan's own fit is lowered
+instead; where neither does, the plan is kept. The quick search and the fits keep most of
+the plan's clearance from ``Δ = 0`` (:func:`smooth_clearance`).
 """
 from __future__ import annotations
 
@@ -115,10 +117,18 @@ QUICK_EFFORT = 0.3
 #: must need less than to replace it (a plan kept needs at most 1/0.6 ≈ 1.7 times what it
 #: found).
 REPLACE_BELOW = 0.6
+#: ``objective="auto"``: the fraction of the plan's clearance from ``Δ = 0`` above
+#: ``delta_min`` the motion that replaces it keeps (:func:`smooth_clearance`).
+KEEP_CLEARANCE = 0.9
 #: ``objective="auto"``: harmonics of the smooth motion that replaces a plan (:func:`smoothed`).
 SMOOTH_HARMONICS = 16
 #: ``objective="auto"``: SQP iterations of the smooth motion's energy at most.
 SMOOTH_ITERATIONS = 12
+#: ``objective="auto"``: ... and of the smooth motion from the plan's fit, where the least
+#: energy's fit does not reach the goal ...
+SMOOTH_PLAN_ITERATIONS = 40
+#: ... which replaces the plan where it needs less than this fraction of its energy.
+REFIT_BELOW = 0.9
 #: The barrier on the clearance from ``Δ = 0`` acts where ``sgnΔ`` is below this (or below
 #: twice ``delta_min``, where that is more: :func:`barrier_reach`).
 BARRIER_DELTA = 0.1
@@ -949,7 +959,8 @@ def improve(request, result: PlanResult, quick: bool = False, budget: float | No
         return result if quick else replace(result, options=options)
     grid = ENERGY_GRID
     steps = -(-request.steps // grid) * grid
-    problem = request.evaluator(method="nonparametric", steps=steps)
+    problem = request.evaluator(method="nonparametric", steps=steps,
+                                delta_min=smooth_clearance(result) if quick else None)
     plan_energy = plan_energy_of(result)
     initial = starts(problem, result.parametrisation)
     if quick:
@@ -963,7 +974,7 @@ def improve(request, result: PlanResult, quick: bool = False, budget: float | No
     lowered = replace(request, method="nonparametric", grid=grid, steps=steps)
     if outcome is not None and quick:
         found = energy(outcome.evaluation, outcome.evaluation.parametrisation.metric())
-        lowered, problem, outcome, why = smoothed(request, outcome, ceiling)
+        lowered, problem, outcome, why = smoothed(request, outcome, ceiling, result)
         if outcome is None:
             return replace(result, options=options,
                            reason=f"{result.reason}; kept: a motion of energy {found:.6g} was found, but {why}")
@@ -979,13 +990,41 @@ def improve(request, result: PlanResult, quick: bool = False, budget: float | No
                    stitched=result.hops)
 
 
-def smoothed(request, outcome: Outcome, ceiling: float):
+def smooth_clearance(result: PlanResult | None) -> float | None:
+    """The clearance from ``Δ = 0`` the motions that may replace ``result`` keep
+    (``objective="auto"``): :data:`KEEP_CLEARANCE` of the plan's own above ``delta_min``. A
+    motion closer to ``Δ = 0`` may need less energy, but it is more sensitive to whatever
+    a mechanism does not follow exactly (``|ω| ~ 1/|Δ|``), and the default returns motions
+    to execute.
+
+    Parameters
+    ----------
+    result : PlanResult or None
+        The certified plan.
+
+    Returns
+    -------
+    float or None
+        The clearance (``None`` without a plan or for a mechanism without a singular set).
+    """
+    if result is None or result.min_delta is None:
+        return None
+    delta_min = result.options["delta_min"]
+    return delta_min + KEEP_CLEARANCE * max(result.min_delta - delta_min, 0.0)
+
+
+def smoothed(request, outcome: Outcome, ceiling: float, plan: PlanResult | None = None):
     """The least-energy grid motion of ``outcome`` made smooth: its Fourier fit of
     :data:`SMOOTH_HARMONICS` harmonics, Newton steps of least energy toward the goal, at
     most :data:`SMOOTH_ITERATIONS` SQP iterations in its coefficients (they bring it onto
     the goal where the Newton steps could not, and lower its energy), Newton steps again,
-    certified. Grid controls jump at every interval, which a physical mechanism cannot
-    follow; the fit of a smooth extremal needs hardly more energy.
+    certified (:func:`smooth_run`). Grid controls jump at every interval, which a physical
+    mechanism cannot follow; the fit of a smooth extremal needs hardly more energy. Where
+    the fit of a motion that rides a limit cannot be brought onto the goal (or not below
+    ``ceiling``), the same iteration runs from the fit of the certified ``plan``, which
+    reaches it, for up to :data:`SMOOTH_PLAN_ITERATIONS` iterations: it descends to a smooth
+    critical point near the plan, which replaces the plan where it needs less than
+    :data:`REFIT_BELOW` of its energy.
 
     Parameters
     ----------
@@ -994,7 +1033,11 @@ def smoothed(request, outcome: Outcome, ceiling: float):
     outcome : Outcome
         The certified grid motion.
     ceiling : float
-        The energy the smooth motion must stay below.
+        The energy the smooth fit of ``outcome`` must stay below (that from the plan: the
+        plan's).
+    plan : PlanResult, optional
+        The certified plan: the smooth motion keeps its clearance from ``Δ = 0``
+        (:func:`smooth_clearance`) and is integrated on at least its steps.
 
     Returns
     -------
@@ -1008,33 +1051,85 @@ def smoothed(request, outcome: Outcome, ceiling: float):
     why : str
         Why there is none (empty if there is).
     """
-    options = request.options
     K = SMOOTH_HARMONICS
-    smooth = replace(request, method="parametric", harmonics=K, steps=max(request.steps, 4 * K))
-    problem = smooth.evaluator(method="parametric", steps=smooth.steps)
-    grid = outcome.evaluation.controls
-    fit = Fourier.fit(grid, request.T, K, request.mechanism.n_inputs)
+    steps = max(request.steps, 4 * K, 0 if plan is None else plan.steps)
+    smooth = replace(request, method="parametric", harmonics=K, steps=steps)
+    problem = smooth.evaluator(method="parametric", steps=steps, delta_min=smooth_clearance(plan))
+    found, why = smooth_run(problem, "the motion's fit", outcome.evaluation.controls, SMOOTH_ITERATIONS, ceiling,
+                            request.options)
+    if found is None and plan is not None:
+        found, why_plan = smooth_run(problem, "the plan's fit", plan.parametrisation, SMOOTH_PLAN_ITERATIONS,
+                                     REFIT_BELOW * plan_energy_of(plan), request.options)
+        why = "" if found is not None else f"{why}; {why_plan}"
+    if found is None:
+        return smooth, problem, None, why
+    problem = found.problem
+    found = replace(found, reason=f"{outcome.reason}; made smooth: {found.reason}",
+                    history=outcome.history + found.history, iterations=outcome.iterations + found.iterations)
+    return replace(smooth, steps=problem.steps), problem, found, ""
+
+
+def smooth_run(problem: Evaluator, label: str, controls: Controls, iterations: int, ceiling: float,
+               options: Options) -> tuple[Outcome | None, str]:
+    """The Fourier fit of ``controls`` in ``problem``'s harmonics, Newton steps of least
+    energy toward the goal, at most ``iterations`` SQP iterations, Newton steps again,
+    certified — on twice the integrator steps where the certificate finds the planner's
+    grid too coarse for the motion.
+
+    Parameters
+    ----------
+    problem : Evaluator
+        The smooth problem (method ``"parametric"``).
+    label : str
+        What is fitted (for the reasons).
+    controls : Controls
+        The physical controls fitted.
+    iterations : int
+        SQP iterations at most.
+    ceiling : float
+        The energy the motion must stay below.
+    options : Options
+        The run's settings.
+
+    Returns
+    -------
+    outcome : Outcome or None
+        The certified smooth motion (its ``problem`` the evaluator it was certified on),
+        or ``None``.
+    why : str
+        Why there is none (empty if there is).
+    """
+    K = SMOOTH_HARMONICS
+    fit = Fourier.fit(controls, problem.T, K, problem.mechanism.n_inputs)
     ev = problem.evaluate(fit)
     if not problem.admissible(ev):
-        return smooth, problem, None, f"the motion of its fit of {K} harmonics is not admissible"
+        return None, f"the motion of {label} of {K} harmonics is not admissible"
     metric = fit.metric()
     ev = newton_steps(problem, ev, metric, options.tol, RESTORE_STEPS + 2)
     E = energy(ev, metric)
-    run = Run("smooth fit", ev, E, history=[record(0, ev, 0.0, "energy", 0, energy=E, start="smooth fit")])
-    descend(problem, run, options, SMOOTH_ITERATIONS, math.inf)
+    run = Run(label, ev, E, history=[record(0, ev, 0.0, "energy", 0, energy=E, start=label)])
+    descend(problem, run, options, iterations, math.inf)
     polish(problem, run, options)
     if run.evaluation.error > options.tol:
-        return smooth, problem, None, (f"its fit of {K} harmonics ended {run.evaluation.error:.2g} from the goal "
-                                       f"after {len(run.history) - 1} iterations")
+        return None, (f"{label} of {K} harmonics ended {run.evaluation.error:.2g} from the goal "
+                      f"after {len(run.history) - 1} iterations")
     if run.energy >= ceiling:
-        return smooth, problem, None, f"its fit of {K} harmonics needs {run.energy:.6g}, not below {ceiling:.6g}"
+        return None, f"{label} of {K} harmonics needs {run.energy:.6g}, not below {ceiling:.6g}"
     found = Outcome(evaluation=run.evaluation, success=True,
-                    reason=(f"{outcome.reason}; made smooth: its fit of {K} harmonics, energy {run.energy:.6g}"),
-                    history=outcome.history + run.history, iterations=outcome.iterations + len(run.history) - 1)
-    found = certified(found, problem, options)
-    if not found.success:
-        return smooth, problem, None, found.reason
-    return smooth, problem, found, ""
+                    reason=f"{label} of {K} harmonics, energy {run.energy:.6g}",
+                    history=run.history, iterations=len(run.history) - 1, problem=problem)
+    certificate = certified(found, problem, options)
+    if not certificate.success:
+        # the motion may be faster than the planner's grid resolves: its controls on twice
+        # the steps, brought back onto the goal there
+        finer = problem.refined(2 * problem.steps)
+        ev = newton_steps(finer, finer.evaluate(run.evaluation.controls), metric, options.tol, RESTORE_STEPS)
+        if finer.admissible(ev) and ev.error <= options.tol and energy(ev, metric) < ceiling:
+            again = certified(replace(found, evaluation=ev, problem=finer), finer, options)
+            if again.success:
+                return again, ""
+        return None, certificate.reason
+    return certificate, ""
 
 
 def plan_energy_of(result: PlanResult) -> float:

@@ -354,7 +354,8 @@ class Problem:
 
     # -- what the planner reads ---------------------------------------------------------
 
-    def evaluator(self, frame: bool = False, method: str | None = None, steps: int | None = None) -> Evaluator:
+    def evaluator(self, frame: bool = False, method: str | None = None, steps: int | None = None,
+                  delta_min: float | None = None) -> Evaluator:
         """The :class:`~nonholo.planning.core.Evaluator` of this problem: its start, goal,
         horizon, clearance and stroke.
 
@@ -366,6 +367,8 @@ class Problem:
             ``"parametric"`` or ``"nonparametric"`` (default: the problem's).
         steps : int, optional
             Integrator steps on ``[0, T]`` (default: the problem's).
+        delta_min : float, optional
+            A clearance from ``Δ = 0`` at least the problem's (default: the problem's).
 
         Returns
         -------
@@ -373,7 +376,9 @@ class Problem:
             The evaluator.
         """
         return Evaluator(self.R0, self.Rd, self.T, self.mechanism, method or self.method,
-                         self.steps if steps is None else steps, self.options.delta_min, frame=frame,
+                         self.steps if steps is None else steps,
+                         self.options.delta_min if delta_min is None else max(delta_min, self.options.delta_min),
+                         frame=frame,
                          leg_limits=self.leg_limits, q0=self.q0, qd=self.qd)
 
     @property
