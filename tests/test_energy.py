@@ -277,6 +277,18 @@ def test_controls_energy_is_the_metric_form_of_fourier_and_grid_controls():
     assert energy.controls_energy(grid, grid.breakpoints, 2.0) == pytest.approx(closed, rel=1e-12)
 
 
+def test_runs_heading_near_the_best_are_continued(monkeypatch):
+    """A car goal where the run that ends lowest heads 12 % above the best finished one after
+    its probe: continued (CONTINUE_WITHIN), it ends below it — lower than the search that
+    stops at the best finished run, both confirmed by DOP853."""
+    start, goal = np.zeros(4), np.array([-0.8942286643945572, 0.7466523674519534, 3.0799270103686043, 0.18196927672716656])
+    found = planner.plan(start, goal, mechanism="car", delta_min=0.01, objective="energy")
+    monkeypatch.setattr(energy, "CONTINUE_WITHIN", 1.0)
+    stopped = planner.plan(start, goal, mechanism="car", delta_min=0.01, objective="energy")
+    assert found.success and stopped.success
+    assert confirmed_energy(found, "car") < 0.99 * confirmed_energy(stopped, "car")
+
+
 def test_a_run_at_the_goal_stays_at_it():
     """The car from its plan: once a run of the least-energy stage reaches the goal, every later
     iterate of it ends within ``tol`` of the goal (a step is brought back onto it), and the

@@ -29,8 +29,8 @@ from several starts (:func:`starts`): the certified plan's inputs, then the drif
 the goal plus loops of a few sizes and frequency ratios in either sense (the motions
 that reach the bracket directions at the least cost), then seeded random Fourier inputs.
 Each start is iterated :data:`PROBE_ITERATIONS` times, then the run heading for the least
-energy is continued, round by round, while it may beat the best finished one
-(:func:`search`); the least-energy run at the goal that is certified
+energy is continued, round by round, while it heads for not much more than the best
+finished one (:data:`CONTINUE_WITHIN`; :func:`search`); the least-energy run at the goal that is certified
 (:mod:`nonholo.planning.certification`) is the result. Everything is budgeted in effort
 (:mod:`nonholo.numerics.effort`, :data:`ENERGY_EFFORT`), not in wall time, so the same call
 gives the same plan on any machine under any load.
@@ -79,6 +79,10 @@ ENERGY_GRID = 100
 MAX_ITERATIONS = 80
 #: SQP iterations of every start before any is continued, and of each round after.
 PROBE_ITERATIONS = 12
+#: Runs are continued while the one heading for the least energy heads below this many
+#: times the least energy of a run finished at the goal (a run's heading after 12
+#: iterations is a rough guess: one heading 12 % above the best may end 2 % below it).
+CONTINUE_WITHIN = 1.15
 #: Runs at the goal polished and certified at most, the cheapest first.
 FINALISTS = 3
 #: A probe is near the goal when its terminal error is below this (in the error's units).
@@ -854,7 +858,7 @@ def search(problem: Evaluator, initial, options: Options, budget: float,
 
     Every start is iterated :data:`PROBE_ITERATIONS` times; then, in rounds of as many, the
     unfinished run heading for the least energy (:func:`estimate`), while it heads below
-    every finished run at the goal and the budget lasts. The runs at the goal (after
+    :data:`CONTINUE_WITHIN` times every finished run at the goal and the budget lasts. The runs at the goal (after
     :func:`polish`), cheapest first, are certified until one is.
 
     Parameters
@@ -894,7 +898,7 @@ def search(problem: Evaluator, initial, options: Options, budget: float,
         heading = [estimate(r) for r in open_runs]
         k = int(np.argmin(heading))
         finished = [r.energy for r in runs if r.evaluation.error <= options.tol and r not in open_runs]
-        if finished and heading[k] >= min(finished):
+        if finished and heading[k] >= CONTINUE_WITHIN * min(finished):
             break
         descend(problem, open_runs[k], options, PROBE_ITERATIONS, deadline)
     near = sorted((r for r in runs if r.evaluation.error <= NEAR_GOAL), key=lambda r: r.energy)
