@@ -30,8 +30,8 @@ the goal plus loops of a few sizes and frequency ratios in either sense (the mot
 that reach the bracket directions at the least cost), then seeded random Fourier inputs.
 Each start is iterated :data:`PROBE_ITERATIONS` times, then the run heading for the least
 energy is continued, round by round, while it heads for not much more than the best
-finished one (:data:`CONTINUE_WITHIN`; :func:`search`); the least-energy run at the goal that is certified
-(:mod:`nonholo.planning.certification`) is the result. Everything is budgeted in effort
+finished one (:data:`CONTINUE_WITHIN`; :func:`search`); the least-energy run at the goal
+that is certified (:mod:`nonholo.planning.certification`) is the result. Everything is budgeted in effort
 (:mod:`nonholo.numerics.effort`, :data:`ENERGY_EFFORT`), not in wall time, so the same call
 gives the same plan on any machine under any load.
 
@@ -80,8 +80,8 @@ MAX_ITERATIONS = 80
 #: SQP iterations of every start before any is continued, and of each round after.
 PROBE_ITERATIONS = 12
 #: Runs are continued while the one heading for the least energy heads below this many
-#: times the least energy of a run finished at the goal (a run's heading after 12
-#: iterations is a rough guess: one heading 12 % above the best may end 2 % below it).
+#: times the least energy of a run finished at the goal (a run's heading after its probe
+#: is a rough guess: one heading somewhat above the best may end below it).
 CONTINUE_WITHIN = 1.15
 #: Runs at the goal polished and certified at most, the cheapest first.
 FINALISTS = 3
@@ -858,8 +858,8 @@ def search(problem: Evaluator, initial, options: Options, budget: float,
 
     Every start is iterated :data:`PROBE_ITERATIONS` times; then, in rounds of as many, the
     unfinished run heading for the least energy (:func:`estimate`), while it heads below
-    :data:`CONTINUE_WITHIN` times every finished run at the goal and the budget lasts. The runs at the goal (after
-    :func:`polish`), cheapest first, are certified until one is.
+    :data:`CONTINUE_WITHIN` times every finished run at the goal and the budget lasts. The
+    runs at the goal (after :func:`polish`), cheapest first, are certified until one is.
 
     Parameters
     ----------
@@ -1107,7 +1107,7 @@ def smooth_run(problem: Evaluator, label: str, controls: Controls, iterations: i
     fit = Fourier.fit(controls, problem.T, K, problem.mechanism.n_inputs)
     ev = problem.evaluate(fit)
     if not problem.admissible(ev):
-        return None, f"the motion of {label} of {K} harmonics is not admissible"
+        return None, f"{label} of {K} harmonics is not admissible"
     metric = fit.metric()
     ev = newton_steps(problem, ev, metric, options.tol, RESTORE_STEPS + 2)
     E = energy(ev, metric)
