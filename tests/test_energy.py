@@ -289,6 +289,30 @@ def test_runs_heading_near_the_best_are_continued(monkeypatch):
     assert confirmed_energy(found, "car") < 0.99 * confirmed_energy(stopped, "car")
 
 
+def test_the_search_stops_once_runs_agree_on_the_least_energy(monkeypatch):
+    """A near platform goal, where every start that reaches the goal ends at the same
+    critical point: the search stops once three runs agree (CONFIRMATIONS), after less
+    than half the starts, with the energy of the search that takes every start — both
+    confirmed by DOP853."""
+    R0, Rd, T = goal("near-s1-04")
+    started = []
+    begin = energy.begin
+
+    def counted(problem, label, controls, options):
+        started.append(label)
+        return begin(problem, label, controls, options)
+
+    monkeypatch.setattr(energy, "begin", counted)
+    stopped = planner.plan(R0, Rd, T=T, objective="energy")
+    few = len(started)
+    started.clear()
+    monkeypatch.setattr(energy, "CONFIRMATIONS", 10 ** 6)
+    every = planner.plan(R0, Rd, T=T, objective="energy")
+    assert stopped.success and every.success
+    assert few < 0.5 * len(started)
+    assert confirmed_energy(stopped, "platform") == pytest.approx(confirmed_energy(every, "platform"), rel=1e-6)
+
+
 def test_a_run_at_the_goal_stays_at_it():
     """The car from its plan: once a run of the least-energy stage reaches the goal, every later
     iterate of it ends within ``tol`` of the goal (a step is brought back onto it), and the

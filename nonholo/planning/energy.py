@@ -30,8 +30,10 @@ the goal plus loops of a few sizes and frequency ratios in either sense (the mot
 that reach the bracket directions at the least cost), then seeded random Fourier inputs.
 Each start is iterated :data:`PROBE_ITERATIONS` times, then the run heading for the least
 energy is continued, round by round, while it heads for not much more than the best
-finished one (:data:`CONTINUE_WITHIN`; :func:`search`); the least-energy run at the goal
-that is certified (:mod:`nonholo.planning.certification`) is the result. Everything is budgeted in effort
+finished one (:data:`CONTINUE_WITHIN`); no further start is taken once
+:data:`CONFIRMATIONS` finished runs agree on the least energy (:func:`confirmed`;
+:func:`search`). The least-energy run at the goal that is certified
+(:mod:`nonholo.planning.certification`) is the result. Everything is budgeted in effort
 (:mod:`nonholo.numerics.effort`, :data:`ENERGY_EFFORT`), not in wall time, so the same call
 gives the same plan on any machine under any load.
 
@@ -54,6 +56,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 from scipy.linalg import cho_factor, cho_solve
+from scipy.linalg.blas import dger
 
 from ..controls.parametrisations import Controls, Fourier, PiecewiseConstant
 from ..io.result import PlanResult
@@ -83,6 +86,11 @@ PROBE_ITERATIONS = 12
 #: times the least energy of a run finished at the goal (a run's heading after its probe
 #: is a rough guess: one heading somewhat above the best may end below it).
 CONTINUE_WITHIN = 1.15
+#: The search starts no further run once this many runs finished at the goal agree on the
+#: least energy of any (:func:`confirmed`) ...
+CONFIRMATIONS = 3
+#: ... within this relative difference.
+AGREE_RTOL = 1e-5
 #: Runs at the goal polished and certified at most, the cheapest first.
 FINALISTS = 3
 #: A probe is near the goal when its terminal error is below this (in the error's units).
@@ -367,6 +375,8 @@ class Run:
         The merit's weight on ``|l_T|``.
     B : numpy.ndarray or None
         The quasi-Newton Hessian of the Lagrangian (a vector: diagonal).
+    H : numpy.ndarray or None
+        Its inverse, once ``B`` is a matrix.
     tau : float or None
         The barrier's weight, once set.
     kkt : float, default inf
@@ -383,12 +393,54 @@ class Run:
     history: list = field(default_factory=list)
     mu: float = 0.0
     B: np.ndarray | None = None
+    H: np.ndarray | None = None
     tau: float | None = None
     kkt: float = float("inf")
     alpha: float = 1.0
 
 
-def qp_step(B: np.ndarray, g: np.ndarray, J: np.ndarray, l: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def rank_one(A: np.ndarray, alpha: float, x: np.ndarray, y: np.ndarray) -> None:
+    """``A += α x yᵀ`` in place (BLAS ``dger``; ``A`` square and C-ordered).
+
+    Parameters
+    ----------
+    A : numpy.ndarray
+        The matrix, updated.
+    alpha : float
+        ``α``.
+    x, y : numpy.ndarray
+        The vectors.
+    """
+    dger(alpha, y, x, a=A.T, overwrite_a=True)
+
+
+def small_solve(A: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """``A⁻¹b`` for the small square systems of the endpoint's dimension (least squares
+    where ``A`` is singular).
+
+    Parameters
+    ----------
+    A : numpy.ndarray
+        The matrix.
+    b : numpy.ndarray
+        The right-hand side.
+
+    Returns
+    -------
+    numpy.ndarray
+        The solution.
+    """
+    try:
+        x = np.linalg.solve(A, b)
+        if np.all(np.isfinite(x)):
+            return x
+    except np.linalg.LinAlgError:
+        pass
+    return np.linalg.lstsq(A, b, rcond=None)[0]
+
+
+def qp_step(B: np.ndarray, g: np.ndarray, J: np.ndarray, l: np.ndarray,
+            H: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     """The step of the quadratic model ``min gᵀd + ½dᵀBd`` subject to ``l + Jd = 0``.
 
     Parameters
@@ -401,6 +453,8 @@ def qp_step(B: np.ndarray, g: np.ndarray, J: np.ndarray, l: np.ndarray) -> tuple
         The Jacobian of the endpoint.
     l : numpy.ndarray
         The terminal error ``l_T``.
+    H : numpy.ndarray, optional
+        ``B⁻¹``, where it is known (a matrix ``B`` is otherwise factorised).
 
     Returns
     -------
@@ -411,10 +465,12 @@ def qp_step(B: np.ndarray, g: np.ndarray, J: np.ndarray, l: np.ndarray) -> tuple
     """
     if B.ndim == 1:
         Hg, HJ = g / B, J.T / B[:, None]
+    elif H is not None:
+        Hg, HJ = H @ g, H @ J.T
     else:
         factor = cho_factor(B)
         Hg, HJ = cho_solve(factor, g), cho_solve(factor, J.T)
-    nu = np.linalg.lstsq(J @ HJ, J @ Hg - l, rcond=None)[0]
+    nu = small_solve(J @ HJ, J @ Hg - l)
     return HJ @ nu - Hg, nu
 
 
@@ -566,14 +622,14 @@ def descend(problem: Evaluator, run: Run, options: Options, iterations: int, dea
         g = gE + gB
         model = run.B if HB is None else (np.diag(run.B) if run.B.ndim == 1 else run.B) + HB
         try:
-            d, nu = qp_step(model, g, ev.J, ev.l)
+            d, nu = qp_step(model, g, ev.J, ev.l, run.H if HB is None else None)
         except np.linalg.LinAlgError:       # the updates lost definiteness to rounding
-            run.B = gn_hessian
+            run.B, run.H = gn_hessian, None
             d, nu = qp_step(gn_hessian, g, ev.J, ev.l)
         if run.B.ndim == 2:
             gn = qp_step(gn_hessian if HB is None else np.diag(gn_hessian) + HB, g, ev.J, ev.l)
-            if np.dot(metric * d, d) > STEP_GROWTH ** 2 * np.dot(metric * gn[0], gn[0]):
-                run.B = gn_hessian
+            if not np.dot(metric * d, d) <= STEP_GROWTH ** 2 * np.dot(metric * gn[0], gn[0]):
+                run.B, run.H = gn_hessian, None
                 d, nu = gn
         run.mu = max(run.mu, MERIT_FACTOR * float(np.linalg.norm(nu)))
         E0 = energy(ev, metric)
@@ -592,7 +648,7 @@ def descend(problem: Evaluator, run: Run, options: Options, iterations: int, dea
         gE1, gB1, _ = objective.derivatives(accepted)
         g1 = gE1 + gB1
         if rejected > RESET_HALVINGS:
-            run.B = gn_hessian
+            run.B, run.H = gn_hessian, None
         else:
             # damped BFGS update of the Hessian of the energy's Lagrangian E − νᵀs_T (Powell);
             # the barrier's is taken as it is
@@ -606,12 +662,24 @@ def descend(problem: Evaluator, run: Run, options: Options, iterations: int, dea
                     theta = 0.8 * sBs / (sBs - sy)
                     y = theta * y + (1.0 - theta) * Bs
                     sy = float(step @ y)
-                run.B = B + np.outer(y, y) / sy - np.outer(Bs, Bs) / sBs
+                # and of its inverse H, B⁺⁻¹ = H + ((sᵀy + yᵀHy)/(sᵀy)²) ssᵀ − (Hy sᵀ + s yᵀH)/sᵀy,
+                # in place (the run's own matrices once B is one)
+                if run.B.ndim == 1:
+                    H = np.diag(1.0 / run.B)
+                else:
+                    H = run.H if run.H is not None else np.linalg.inv(B)
+                Hy = H @ y
+                rank_one(B, 1.0 / sy, y, y)
+                rank_one(B, -1.0 / sBs, Bs, Bs)
+                rank_one(H, (sy + float(y @ Hy)) / sy ** 2, step, step)
+                rank_one(H, -1.0 / sy, Hy, step)
+                rank_one(H, -1.0 / sy, step, Hy)
+                run.B, run.H = B, H
         E1 = energy(accepted, metric)
         ev = accepted
         # first-order conditions: the gradient in the row space of J (in the metric M⁻¹)
         JW = ev.J / metric
-        lam = np.linalg.lstsq(JW @ ev.J.T, JW @ g1, rcond=None)[0]
+        lam = small_solve(JW @ ev.J.T, JW @ g1)
         resid = g1 - ev.J.T @ lam
         run.kkt = float(np.sqrt(np.dot(resid / metric, resid) / max(np.dot(g1 / metric, g1), 1e-300)))
         run.history.append(record(it, ev, alpha, "energy", rejected, energy=E1, start=run.label))
@@ -677,7 +745,7 @@ def correction(ev: Evaluation, metric: np.ndarray) -> np.ndarray:
         ``c``.
     """
     JW = ev.J / metric
-    return -JW.T @ np.linalg.lstsq(JW @ ev.J.T, ev.l, rcond=None)[0]
+    return -JW.T @ small_solve(JW @ ev.J.T, ev.l)
 
 
 def estimate(run: Run) -> float:
@@ -850,15 +918,86 @@ def starts(problem: Evaluator, plan: Controls | None):
     yield from loop_starts(problem)
 
 
+def finished_energies(runs: list[Run], options: Options) -> list[float]:
+    """The energies of the runs finished at the goal (converged, or no further step), least first.
+
+    Parameters
+    ----------
+    runs : list of Run
+        The runs.
+    options : Options
+        The run's settings (``tol``).
+
+    Returns
+    -------
+    list of float
+        Their energies.
+    """
+    return sorted(r.energy for r in runs if (r.converged or r.stuck) and r.evaluation.error <= options.tol)
+
+
+def confirmed(runs: list[Run], options: Options) -> bool:
+    """Whether :data:`CONFIRMATIONS` runs finished at the goal agree (within
+    :data:`AGREE_RTOL`) on the least energy of any: starts from different motions that end
+    at the same critical point, the least found, make a lower one unlikely.
+
+    Parameters
+    ----------
+    runs : list of Run
+        The runs.
+    options : Options
+        The run's settings (``tol``).
+
+    Returns
+    -------
+    bool
+        Whether the search may stop starting runs.
+    """
+    found = finished_energies(runs, options)
+    return bool(found) and sum(e <= found[0] * (1.0 + AGREE_RTOL) for e in found) >= CONFIRMATIONS
+
+
+def continue_near_best(problem: Evaluator, runs: list[Run], options: Options, deadline: float,
+                       unfinished: bool = False) -> None:
+    """Continue, in rounds of :data:`PROBE_ITERATIONS`, the open run heading for the least
+    energy (:func:`estimate`) while it heads below :data:`CONTINUE_WITHIN` times every run
+    finished at the goal (with ``unfinished``, also while none is) and the budget lasts.
+
+    Parameters
+    ----------
+    problem : Evaluator
+        The problem (grid controls).
+    runs : list of Run
+        The runs, updated.
+    options : Options
+        The run's settings.
+    deadline : float
+        An :func:`nonholo.numerics.effort.seconds` reading.
+    unfinished : bool, default False
+        Continue even while no run has finished at the goal.
+    """
+    while effort.seconds() <= deadline:
+        open_runs = [r for r in runs if not (r.converged or r.stuck) and len(r.history) <= MAX_ITERATIONS]
+        if not open_runs:
+            return
+        heading = [estimate(r) for r in open_runs]
+        k = int(np.argmin(heading))
+        finished = [r.energy for r in runs if r.evaluation.error <= options.tol and r not in open_runs]
+        if (not finished and not unfinished) or (finished and heading[k] >= CONTINUE_WITHIN * min(finished)):
+            return
+        descend(problem, open_runs[k], options, PROBE_ITERATIONS, deadline)
+
+
 def search(problem: Evaluator, initial, options: Options, budget: float,
            ceiling: float = math.inf) -> tuple[Outcome | None, str]:
     """The least-energy certified control of ``problem`` from the labelled physical
     controls ``initial`` (see the module) within ``budget`` seconds of effort, if its
     energy is below ``ceiling``: ``(outcome, "")``, or ``(None, why)``.
 
-    Every start is iterated :data:`PROBE_ITERATIONS` times; then, in rounds of as many, the
-    unfinished run heading for the least energy (:func:`estimate`), while it heads below
-    :data:`CONTINUE_WITHIN` times every finished run at the goal and the budget lasts. The
+    The starts are taken in turn: each is iterated :data:`PROBE_ITERATIONS` times, then
+    the runs heading near the best finished one are continued (:func:`continue_near_best`),
+    until the runs agree on the least energy (:func:`confirmed`) or the starts run out;
+    then the open runs are continued so once more, whether or not one has finished. The
     runs at the goal (after :func:`polish`), cheapest first, are certified until one is.
 
     Parameters
@@ -891,16 +1030,10 @@ def search(problem: Evaluator, initial, options: Options, budget: float,
             skipped += 1
             continue
         runs.append(descend(problem, run, options, PROBE_ITERATIONS, deadline))
-    while effort.seconds() <= deadline:
-        open_runs = [r for r in runs if not (r.converged or r.stuck) and len(r.history) <= MAX_ITERATIONS]
-        if not open_runs:
+        continue_near_best(problem, runs, options, deadline)
+        if confirmed(runs, options):
             break
-        heading = [estimate(r) for r in open_runs]
-        k = int(np.argmin(heading))
-        finished = [r.energy for r in runs if r.evaluation.error <= options.tol and r not in open_runs]
-        if finished and heading[k] >= CONTINUE_WITHIN * min(finished):
-            break
-        descend(problem, open_runs[k], options, PROBE_ITERATIONS, deadline)
+    continue_near_best(problem, runs, options, deadline, unfinished=True)
     near = sorted((r for r in runs if r.evaluation.error <= NEAR_GOAL), key=lambda r: r.energy)
     why = ""
     tried = f"{len(runs)} starts" + (f", {skipped} not admissible" if skipped else "")
@@ -918,7 +1051,7 @@ def search(problem: Evaluator, initial, options: Options, budget: float,
                           reason=(f"least energy {run.energy:.6g} on {ENERGY_GRID} intervals, from the "
                                   f"start '{run.label}' (energy {first:.6g}; {how}; {tried})"),
                           history=run.history, iterations=len(run.history) - 1)
-        outcome = certified(outcome, problem, options)
+        outcome = certified_or_finer(outcome, problem, options, ceiling)
         if outcome.success:
             return outcome, ""
         why = outcome.reason
@@ -986,6 +1119,10 @@ def improve(request, result: PlanResult, quick: bool = False, budget: float | No
         if quick:
             return replace(result, options=options)
         return replace(result, reason=f"{result.reason}; energy not lowered: {why}", options=options)
+    if outcome.problem is not None and not quick:
+        # certified on a finer grid than the search's
+        problem = outcome.problem
+        lowered = replace(lowered, steps=problem.steps)
     outcome = replace(outcome, history=result.history + outcome.history,
                       iterations=result.iterations + outcome.iterations,
                       reason=f"{result.reason}; then the plan's energy {plan_energy:.6g} lowered: {outcome.reason}")
@@ -1122,18 +1259,44 @@ def smooth_run(problem: Evaluator, label: str, controls: Controls, iterations: i
     found = Outcome(evaluation=run.evaluation, success=True,
                     reason=f"{label} of {K} harmonics, energy {run.energy:.6g}",
                     history=run.history, iterations=len(run.history) - 1, problem=problem)
+    certificate = certified_or_finer(found, problem, options, ceiling)
+    return (certificate, "") if certificate.success else (None, certificate.reason)
+
+
+def certified_or_finer(found: Outcome, problem: Evaluator, options: Options, ceiling: float) -> Outcome:
+    """``found`` certified (:func:`~nonholo.planning.certification.certified`) — or, where
+    its certificate fails, its controls on twice the integrator steps, brought back onto
+    the goal there by Newton steps of least energy and certified there (its ``problem``
+    then the finer evaluator): the motion may be faster than the planner's grid resolves,
+    or so sensitive that the replay's corrections cannot close the gap between the grids.
+
+    Parameters
+    ----------
+    found : Outcome
+        A success at the goal on ``problem``'s grid.
+    problem : Evaluator
+        Its problem.
+    options : Options
+        The run's settings.
+    ceiling : float
+        The energy the motion on the finer grid must stay below.
+
+    Returns
+    -------
+    Outcome
+        The certified motion, or the first certificate's failure.
+    """
     certificate = certified(found, problem, options)
-    if not certificate.success:
-        # the motion may be faster than the planner's grid resolves: its controls on twice
-        # the steps, brought back onto the goal there
-        finer = problem.refined(2 * problem.steps)
-        ev = newton_steps(finer, finer.evaluate(run.evaluation.controls), metric, options.tol, RESTORE_STEPS)
-        if finer.admissible(ev) and ev.error <= options.tol and energy(ev, metric) < ceiling:
-            again = certified(replace(found, evaluation=ev, problem=finer), finer, options)
-            if again.success:
-                return again, ""
-        return None, certificate.reason
-    return certificate, ""
+    if certificate.success:
+        return certificate
+    metric = found.evaluation.parametrisation.metric()
+    finer = problem.refined(2 * problem.steps)
+    ev = newton_steps(finer, finer.evaluate(found.evaluation.controls), metric, options.tol, RESTORE_STEPS)
+    if finer.admissible(ev) and ev.error <= options.tol and energy(ev, metric) < ceiling:
+        again = certified(replace(found, evaluation=ev, problem=finer), finer, options)
+        if again.success:
+            return again
+    return certificate
 
 
 def plan_energy_of(result: PlanResult) -> float:
