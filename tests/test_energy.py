@@ -6,6 +6,7 @@ import importlib.util
 import os
 import subprocess
 import sys
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -311,6 +312,27 @@ def test_the_search_stops_once_runs_agree_on_the_least_energy(monkeypatch):
     assert stopped.success and every.success
     assert few < 0.5 * len(started)
     assert confirmed_energy(stopped, "platform") == pytest.approx(confirmed_energy(every, "platform"), rel=1e-6)
+
+
+def test_a_finalist_not_certified_on_the_planners_grid_is_certified_on_twice_its_steps(monkeypatch):
+    """Where a finalist's certificate fails on the search's grid (here refused there), its
+    controls are brought onto the goal on twice the integrator steps and certified there:
+    the plan records the finer steps, needs the same energy, and DOP853 confirms it."""
+    R0, Rd, T = goal("far-s2-03")
+    first = planner.plan(R0, Rd, T=T, objective="energy")
+    real = energy.certified
+
+    def refused_on_the_search_grid(outcome, problem, options):
+        prob = outcome.problem if outcome.problem is not None else problem
+        if prob.steps == first.steps:
+            return replace(outcome, success=False, reason="refused on the search's grid")
+        return real(outcome, problem, options)
+
+    monkeypatch.setattr(energy, "certified", refused_on_the_search_grid)
+    finer = planner.plan(R0, Rd, T=T, objective="energy")
+    assert first.success and finer.success, finer.reason
+    assert finer.steps == 2 * first.steps and finer.replay_steps is not None
+    assert confirmed_energy(finer, "platform") == pytest.approx(confirmed_energy(first, "platform"), rel=1e-6)
 
 
 def test_a_run_at_the_goal_stays_at_it():
