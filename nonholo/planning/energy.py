@@ -663,11 +663,8 @@ def descend(problem: Evaluator, run: Run, options: Options, iterations: int, dea
                     y = theta * y + (1.0 - theta) * Bs
                     sy = float(step @ y)
                 # and of its inverse H, B⁺⁻¹ = H + ((sᵀy + yᵀHy)/(sᵀy)²) ssᵀ − (Hy sᵀ + s yᵀH)/sᵀy,
-                # in place (the run's own matrices once B is one)
-                if run.B.ndim == 1:
-                    H = np.diag(1.0 / run.B)
-                else:
-                    H = run.H if run.H is not None else np.linalg.inv(B)
+                # in place (the run's own matrices once B is one: B and H become matrices together)
+                H = np.diag(1.0 / run.B) if run.B.ndim == 1 else run.H
                 Hy = H @ y
                 rank_one(B, 1.0 / sy, y, y)
                 rank_one(B, -1.0 / sBs, Bs, Bs)
@@ -918,28 +915,11 @@ def starts(problem: Evaluator, plan: Controls | None):
     yield from loop_starts(problem)
 
 
-def finished_energies(runs: list[Run], options: Options) -> list[float]:
-    """The energies of the runs finished at the goal (converged, or no further step), least first.
-
-    Parameters
-    ----------
-    runs : list of Run
-        The runs.
-    options : Options
-        The run's settings (``tol``).
-
-    Returns
-    -------
-    list of float
-        Their energies.
-    """
-    return sorted(r.energy for r in runs if (r.converged or r.stuck) and r.evaluation.error <= options.tol)
-
-
 def confirmed(runs: list[Run], options: Options) -> bool:
-    """Whether :data:`CONFIRMATIONS` runs finished at the goal agree (within
-    :data:`AGREE_RTOL`) on the least energy of any: starts from different motions that end
-    at the same critical point, the least found, make a lower one unlikely.
+    """Whether :data:`CONFIRMATIONS` runs finished at the goal (converged, or no further
+    step) agree (within :data:`AGREE_RTOL`) on the least energy of any: starts from
+    different motions that end at the same critical point, the least found, make a lower
+    one unlikely.
 
     Parameters
     ----------
@@ -953,7 +933,7 @@ def confirmed(runs: list[Run], options: Options) -> bool:
     bool
         Whether the search may stop starting runs.
     """
-    found = finished_energies(runs, options)
+    found = sorted(r.energy for r in runs if (r.converged or r.stuck) and r.evaluation.error <= options.tol)
     return bool(found) and sum(e <= found[0] * (1.0 + AGREE_RTOL) for e in found) >= CONFIRMATIONS
 
 
