@@ -28,11 +28,13 @@ Such an iteration finds *a* critical point near its start; the least one is look
 from several starts (:func:`starts`): the certified plan's inputs, then the drift toward
 the goal plus loops of a few sizes and frequency ratios in either sense (the motions
 that reach the bracket directions at the least cost), then seeded random Fourier inputs.
-Each start is iterated :data:`PROBE_ITERATIONS` times, then the run heading for the least
+Each start is iterated :data:`PROBE_ITERATIONS` times, or fewer where it heads for far more
+energy than a run finished at the goal (:func:`probe`), then the run heading for the least
 energy is continued, round by round, while it heads for not much more than the best
-finished one (:data:`CONTINUE_WITHIN`); no further start is taken once
-:data:`CONFIRMATIONS` finished runs agree on the least energy (:func:`confirmed`;
-:func:`search`). The least-energy run at the goal that is certified
+finished one (:data:`CONTINUE_WITHIN`; while none has finished, one round after each
+start) and has not joined a run finished above it (:data:`JOIN_DISTANCE`); no further
+start is taken once :data:`CONFIRMATIONS` finished runs agree on the least energy
+(:func:`confirmed`; :func:`search`). The least-energy run at the goal that is certified
 (:mod:`nonholo.planning.certification`) is the result. Everything is budgeted in effort
 (:mod:`nonholo.numerics.effort`, :data:`ENERGY_EFFORT`), not in wall time, so the same call
 gives the same plan on any machine under any load.
@@ -82,13 +84,22 @@ ENERGY_GRID = 100
 MAX_ITERATIONS = 80
 #: SQP iterations of every start before any is continued, and of each round after.
 PROBE_ITERATIONS = 12
+#: ... in stages of this many (:func:`probe`), ...
+PROBE_STAGE = 4
+#: ... the probe ending once the run heads for more than this many times the least energy
+#: of a run finished at the goal.
+GIVE_UP_ABOVE = 2.0
+#: A run whose controls come this close (relative, :func:`distance`) to those of a run
+#: finished at the goal above the least energy is given up: it is heading for the same
+#: critical point.
+JOIN_DISTANCE = 0.05
 #: Runs are continued while the one heading for the least energy heads below this many
 #: times the least energy of a run finished at the goal (a run's heading after its probe
 #: is a rough guess: one heading somewhat above the best may end below it).
 CONTINUE_WITHIN = 1.15
 #: The search starts no further run once this many runs finished at the goal agree on the
 #: least energy of any (:func:`confirmed`) ...
-CONFIRMATIONS = 3
+CONFIRMATIONS = 2
 #: ... within this relative difference.
 AGREE_RTOL = 1e-5
 #: Runs at the goal polished and certified at most, the cheapest first.
@@ -112,6 +123,10 @@ KKT_RTOL = 1e-8
 #: A quasi-Newton step longer than this many Gauss–Newton steps (metric M) resets the
 #: Hessian to ``2M`` ...
 STEP_GROWTH = 4.0
+#: ... or this many, once the run is at the goal: there the Gauss–Newton step is the
+#: slowly contracting fixed-point step, which the quasi-Newton step outgrows as it learns
+#: the curvature, and the restoring search guards every step.
+STEP_GROWTH_AT_GOAL = 8.0
 #: ... and so does one the line search halved more than this many times.
 RESET_HALVINGS = 3
 #: The merit's weight on ``|l_T|``: this many times the multiplier ``|ν|`` (at least).
@@ -397,6 +412,7 @@ class Run:
     tau: float | None = None
     kkt: float = float("inf")
     alpha: float = 1.0
+    joined: str = ""
 
 
 def rank_one(A: np.ndarray, alpha: float, x: np.ndarray, y: np.ndarray) -> None:
@@ -628,7 +644,8 @@ def descend(problem: Evaluator, run: Run, options: Options, iterations: int, dea
             d, nu = qp_step(gn_hessian, g, ev.J, ev.l)
         if run.B.ndim == 2:
             gn = qp_step(gn_hessian if HB is None else np.diag(gn_hessian) + HB, g, ev.J, ev.l)
-            if not np.dot(metric * d, d) <= STEP_GROWTH ** 2 * np.dot(metric * gn[0], gn[0]):
+            growth = STEP_GROWTH if ev.error > options.tol else STEP_GROWTH_AT_GOAL
+            if not np.dot(metric * d, d) <= growth ** 2 * np.dot(metric * gn[0], gn[0]):
                 run.B, run.H = gn_hessian, None
                 d, nu = gn
         run.mu = max(run.mu, MERIT_FACTOR * float(np.linalg.norm(nu)))
@@ -937,11 +954,65 @@ def confirmed(runs: list[Run], options: Options) -> bool:
     return bool(found) and sum(e <= found[0] * (1.0 + AGREE_RTOL) for e in found) >= CONFIRMATIONS
 
 
+def distance(run: Run, other: Run) -> float:
+    """The distance of two runs' controls relative to the second's, ``|λ − λ'|_M / |λ'|_M``.
+
+    Parameters
+    ----------
+    run, other : Run
+        The runs (on the same grid).
+
+    Returns
+    -------
+    float
+        The distance.
+    """
+    metric = other.evaluation.parametrisation.metric()
+    gap = float(np.dot(metric, (run.evaluation.params - other.evaluation.params) ** 2))
+    return math.sqrt(gap / max(other.energy, 1e-300))
+
+
+def probe(problem: Evaluator, run: Run, runs: list[Run], options: Options, deadline: float) -> Run:
+    """A new run's first :data:`PROBE_ITERATIONS` iterations, in stages of
+    :data:`PROBE_STAGE`, ended once it heads (:func:`estimate`) above
+    :data:`GIVE_UP_ABOVE` times the least energy of a run finished at the goal.
+
+    Parameters
+    ----------
+    problem : Evaluator
+        The problem (grid controls).
+    run : Run
+        The new run, updated.
+    runs : list of Run
+        The runs before it.
+    options : Options
+        The run's settings.
+    deadline : float
+        An :func:`nonholo.numerics.effort.seconds` reading.
+
+    Returns
+    -------
+    Run
+        ``run``.
+    """
+    best = min((r.energy for r in runs if r.evaluation.error <= options.tol and (r.converged or r.stuck)),
+               default=math.inf)
+    done = 0
+    while done < PROBE_ITERATIONS and not (run.converged or run.stuck) and effort.seconds() <= deadline:
+        descend(problem, run, options, min(PROBE_STAGE, PROBE_ITERATIONS - done), deadline)
+        done += PROBE_STAGE
+        if estimate(run) > GIVE_UP_ABOVE * best:
+            break
+    return run
+
+
 def continue_near_best(problem: Evaluator, runs: list[Run], options: Options, deadline: float,
-                       unfinished: bool = False) -> None:
+                       unfinished: float = 0) -> None:
     """Continue, in rounds of :data:`PROBE_ITERATIONS`, the open run heading for the least
     energy (:func:`estimate`) while it heads below :data:`CONTINUE_WITHIN` times every run
-    finished at the goal (with ``unfinished``, also while none is) and the budget lasts.
+    finished at the goal (while none is, for ``unfinished`` rounds) and the budget lasts.
+    A run that comes within :data:`JOIN_DISTANCE` of one finished above the least energy
+    (:func:`distance`) is not continued: it is heading for the same critical point.
 
     Parameters
     ----------
@@ -953,18 +1024,29 @@ def continue_near_best(problem: Evaluator, runs: list[Run], options: Options, de
         The run's settings.
     deadline : float
         An :func:`nonholo.numerics.effort.seconds` reading.
-    unfinished : bool, default False
-        Continue even while no run has finished at the goal.
+    unfinished : float, default 0
+        Rounds to continue while no run has finished at the goal (``math.inf``: until one
+        has, or none is open).
     """
     while effort.seconds() <= deadline:
-        open_runs = [r for r in runs if not (r.converged or r.stuck) and len(r.history) <= MAX_ITERATIONS]
+        open_runs = [r for r in runs if not (r.converged or r.stuck or r.joined)
+                     and len(r.history) <= MAX_ITERATIONS]
         if not open_runs:
             return
         heading = [estimate(r) for r in open_runs]
         k = int(np.argmin(heading))
-        finished = [r.energy for r in runs if r.evaluation.error <= options.tol and r not in open_runs]
-        if (not finished and not unfinished) or (finished and heading[k] >= CONTINUE_WITHIN * min(finished)):
+        finished = [r for r in runs if r.evaluation.error <= options.tol and r not in open_runs]
+        if finished:
+            least = min(r.energy for r in finished)
+            join = next((r for r in finished if r.energy > least * (1.0 + AGREE_RTOL)
+                         and distance(open_runs[k], r) <= JOIN_DISTANCE), None)
+            if join is not None:
+                open_runs[k].joined = join.label
+                continue
+        if (not finished and unfinished <= 0) or (finished and heading[k] >= CONTINUE_WITHIN * least):
             return
+        if not finished:
+            unfinished -= 1
         descend(problem, open_runs[k], options, PROBE_ITERATIONS, deadline)
 
 
@@ -974,10 +1056,11 @@ def search(problem: Evaluator, initial, options: Options, budget: float,
     controls ``initial`` (see the module) within ``budget`` seconds of effort, if its
     energy is below ``ceiling``: ``(outcome, "")``, or ``(None, why)``.
 
-    The starts are taken in turn: each is iterated :data:`PROBE_ITERATIONS` times, then
-    the runs heading near the best finished one are continued (:func:`continue_near_best`),
-    until the runs agree on the least energy (:func:`confirmed`) or the starts run out;
-    then the open runs are continued so once more, whether or not one has finished. The
+    The starts are taken in turn: each is probed (:func:`probe`), then the runs heading
+    near the best finished one are continued (:func:`continue_near_best`; while none has
+    finished, the one heading lowest for a round), until the runs agree on the least
+    energy (:func:`confirmed`) or the starts run out; then the open runs are continued so
+    once more, whether or not one has finished. The
     runs at the goal (after :func:`polish`), cheapest first, are certified until one is.
 
     Parameters
@@ -1009,11 +1092,11 @@ def search(problem: Evaluator, initial, options: Options, budget: float,
         if run is None:
             skipped += 1
             continue
-        runs.append(descend(problem, run, options, PROBE_ITERATIONS, deadline))
-        continue_near_best(problem, runs, options, deadline)
+        runs.append(probe(problem, run, runs, options, deadline))
+        continue_near_best(problem, runs, options, deadline, unfinished=1)
         if confirmed(runs, options):
             break
-    continue_near_best(problem, runs, options, deadline, unfinished=True)
+    continue_near_best(problem, runs, options, deadline, unfinished=math.inf)
     near = sorted((r for r in runs if r.evaluation.error <= NEAR_GOAL), key=lambda r: r.energy)
     why = ""
     tried = f"{len(runs)} starts" + (f", {skipped} not admissible" if skipped else "")
