@@ -133,8 +133,10 @@ RESET_HALVINGS = 3
 MERIT_FACTOR = 2.0
 #: Step halvings of the line search at most.
 MAX_HALVINGS = 12
-#: Newton steps that bring a trial step of a run at the goal back onto it, at most.
-RESTORE_STEPS = 3
+#: Newton steps that bring a trial step of a run at the goal back onto it, at most (a long
+#: quasi-Newton step may end 0.1 from the goal; quadratic convergence needs four or five
+#: steps from there, and a trial refused for want of them costs a halving and a new trial).
+RESTORE_STEPS = 6
 #: ``objective="auto"``: the starts of the quick search (the plan's, then the loops of the
 #: first size).
 QUICK_STARTS = 5
