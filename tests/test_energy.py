@@ -354,6 +354,41 @@ def test_a_long_step_at_the_goal_is_brought_back_rather_than_halved(monkeypatch)
     assert confirmed_energy(restored, "car") == pytest.approx(confirmed_energy(halved, "car"), rel=1e-6)
 
 
+def test_the_search_on_half_the_steps_certifies_on_the_plans_own(monkeypatch):
+    """A near platform goal: the search on half the plan's integrator steps
+    (SEARCH_COARSENING) returns a plan on the full steps with the energy of the search on
+    the full steps (both confirmed by DOP853), for less effort."""
+    R0, Rd, T = goal("near-s6-07")
+    coarse, coarse_effort = effort_of(lambda: planner.plan(R0, Rd, T=T, objective="energy"))
+    monkeypatch.setattr(energy, "SEARCH_COARSENING", 1)
+    full, full_effort = effort_of(lambda: planner.plan(R0, Rd, T=T, objective="energy"))
+    assert coarse.success and full.success
+    assert coarse.steps == full.steps
+    assert coarse_effort < 0.85 * full_effort
+    assert confirmed_energy(coarse, "platform") == pytest.approx(confirmed_energy(full, "platform"), rel=1e-6)
+
+
+def test_where_the_search_on_fewer_steps_certifies_nothing_it_searches_on_the_plans_own(monkeypatch):
+    """Where the search on half the steps returns nothing certified (here refused: a motion
+    riding a limit may stop short of the goal on the coarser steps), the search runs again
+    on the plan's own steps and lowers the plan's energy as the search does (DOP853)."""
+    R0, Rd, T = goal("near-s1-04")
+    usual = planner.plan(R0, Rd, T=T, objective="energy")
+    searched = []
+    search = energy.search
+
+    def refused_on_fewer_steps(problem, *args, **kwargs):
+        searched.append(problem.steps)
+        found = search(problem, *args, **kwargs)
+        return (None, "refused on fewer steps") if len(searched) == 1 else found
+
+    monkeypatch.setattr(energy, "search", refused_on_fewer_steps)
+    again = planner.plan(R0, Rd, T=T, objective="energy")
+    assert usual.success and again.success
+    assert searched == [usual.steps // 2, usual.steps]
+    assert confirmed_energy(again, "platform") == pytest.approx(confirmed_energy(usual, "platform"), rel=1e-6)
+
+
 def test_runs_heading_elsewhere_are_given_up_without_changing_the_plan(monkeypatch):
     """A far car goal with two critical points many starts reach: probes heading for far
     more than the best finished run end early (GIVE_UP_ABOVE) and runs that join the higher

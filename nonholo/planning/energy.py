@@ -34,8 +34,11 @@ energy is continued, round by round, while it heads for not much more than the b
 finished one (:data:`CONTINUE_WITHIN`; while none has finished, one round after each
 start) and has not joined a run finished above it (:data:`JOIN_DISTANCE`); no further
 start is taken once :data:`CONFIRMATIONS` finished runs agree on the least energy
-(:func:`confirmed`; :func:`search`). The least-energy run at the goal that is certified
-(:mod:`nonholo.planning.certification`) is the result. Everything is budgeted in effort
+(:func:`confirmed`; :func:`search`). The search integrates with a fraction of the plan's
+steps (:data:`SEARCH_COARSENING`); the least-energy run at the goal, brought onto it on the
+plan's own steps, that is certified (:mod:`nonholo.planning.certification`) is the result
+(where none is, the search is run again on the plan's own steps: a motion riding a limit
+may reach the goal only there). Everything is budgeted in effort
 (:mod:`nonholo.numerics.effort`, :data:`ENERGY_EFFORT`), not in wall time, so the same call
 gives the same plan on any machine under any load.
 
@@ -80,6 +83,9 @@ from .core import (
 #: Intervals of the piecewise-constant controls the energy is lowered over (the plan's
 #: integrator steps are rounded up to a multiple of it).
 ENERGY_GRID = 100
+#: The full search integrates with this many times fewer steps than the plan (at least one
+#: per interval); its finalists are brought onto the goal and certified on the plan's steps.
+SEARCH_COARSENING = 2
 #: SQP iterations of one start at most.
 MAX_ITERATIONS = 80
 #: SQP iterations of every start before any is continued, and of each round after.
@@ -1053,7 +1059,7 @@ def continue_near_best(problem: Evaluator, runs: list[Run], options: Options, de
 
 
 def search(problem: Evaluator, initial, options: Options, budget: float,
-           ceiling: float = math.inf) -> tuple[Outcome | None, str]:
+           ceiling: float = math.inf, final: Evaluator | None = None) -> tuple[Outcome | None, str]:
     """The least-energy certified control of ``problem`` from the labelled physical
     controls ``initial`` (see the module) within ``budget`` seconds of effort, if its
     energy is below ``ceiling``: ``(outcome, "")``, or ``(None, why)``.
@@ -1077,6 +1083,9 @@ def search(problem: Evaluator, initial, options: Options, budget: float,
         Seconds of effort.
     ceiling : float, default inf
         The energy to beat.
+    final : Evaluator, optional
+        The problem on the steps to certify on, if not ``problem``'s: each finalist is
+        brought onto the goal there by Newton steps first.
 
     Returns
     -------
@@ -1107,6 +1116,14 @@ def search(problem: Evaluator, initial, options: Options, budget: float,
             why = why or f"the least energy found, {run.energy:.6g}, is not below {ceiling:.6g}"
             break
         polish(problem, run, options)
+        on = problem
+        if final is not None and run.evaluation.error <= options.tol:
+            metric = run.evaluation.parametrisation.metric()
+            ev = newton_steps(final, final.evaluate(run.evaluation.controls), metric, options.tol, RESTORE_STEPS)
+            if not final.admissible(ev):
+                why = why or f"the iteration from '{run.label}' is not admissible on {final.steps} steps"
+                continue
+            run.evaluation, run.energy, on = ev, energy(ev, metric), final
         if run.evaluation.error > options.tol:
             why = why or f"the iteration from '{run.label}' ended {run.evaluation.error:.2g} from the goal"
             continue
@@ -1115,8 +1132,9 @@ def search(problem: Evaluator, initial, options: Options, budget: float,
         outcome = Outcome(evaluation=run.evaluation, success=True,
                           reason=(f"least energy {run.energy:.6g} on {ENERGY_GRID} intervals, from the "
                                   f"start '{run.label}' (energy {first:.6g}; {how}; {tried})"),
-                          history=run.history, iterations=len(run.history) - 1)
-        outcome = certified_or_finer(outcome, problem, options, ceiling)
+                          history=run.history, iterations=len(run.history) - 1,
+                          problem=on if on is not problem else None)
+        outcome = certified_or_finer(outcome, on, options, ceiling)
         if outcome.success:
             return outcome, ""
         why = outcome.reason
@@ -1172,7 +1190,17 @@ def improve(request, result: PlanResult, quick: bool = False, budget: float | No
     else:
         budget = ENERGY_EFFORT if budget is None else budget
         ceiling = plan_energy
-    outcome, why = search(problem, initial, request.options, budget, ceiling)
+    final = None
+    if not quick and SEARCH_COARSENING > 1:
+        coarse = max(grid, -(-steps // (SEARCH_COARSENING * grid)) * grid)
+        if coarse < steps:
+            final, problem = problem, problem.refined(coarse)
+    outcome, why = search(problem, initial, request.options, budget, ceiling, final)
+    if outcome is None and final is not None:
+        # nothing certified from the search on fewer steps (a motion riding a limit may
+        # reach the goal only on the plan's own): the search on those
+        problem = final
+        outcome, why = search(problem, starts(problem, result.parametrisation), request.options, budget, ceiling)
     lowered = replace(request, method="nonparametric", grid=grid, steps=steps)
     if outcome is not None and quick:
         found = energy(outcome.evaluation, outcome.evaluation.parametrisation.metric())
