@@ -323,17 +323,20 @@ def effort_of(call):
     return result, effort.seconds() - before
 
 
+def car_energy_plan(goal):
+    """The least-energy car plan from the origin to ``goal`` and the effort it counted."""
+    return effort_of(lambda: planner.plan(np.zeros(4), goal, mechanism="car", delta_min=0.01, objective="energy"))
+
+
 def test_quasi_newton_steps_at_the_goal_may_outgrow_the_fixed_point_step(monkeypatch):
     """A near car goal whose runs converge slowly at the goal: resetting the quasi-Newton
     Hessian whenever its step outgrows four Gauss–Newton steps (as away from the goal)
     throws the learnt curvature away; with STEP_GROWTH_AT_GOAL the search counts less than
     two thirds of the effort for the same energy, both confirmed by DOP853."""
-    start, goal = np.zeros(4), np.array([-0.7, -0.36, -0.7, 0.44])
-    grown, grown_effort = effort_of(lambda: planner.plan(start, goal, mechanism="car", delta_min=0.01,
-                                                         objective="energy"))
+    goal = np.array([-0.7, -0.36, -0.7, 0.44])
+    grown, grown_effort = car_energy_plan(goal)
     monkeypatch.setattr(energy, "STEP_GROWTH_AT_GOAL", energy.STEP_GROWTH)
-    reset, reset_effort = effort_of(lambda: planner.plan(start, goal, mechanism="car", delta_min=0.01,
-                                                         objective="energy"))
+    reset, reset_effort = car_energy_plan(goal)
     assert grown.success and reset.success
     assert grown_effort < 2.0 / 3.0 * reset_effort
     assert confirmed_energy(grown, "car") <= confirmed_energy(reset, "car") * (1 + 1e-6)
@@ -343,12 +346,10 @@ def test_a_long_step_at_the_goal_is_brought_back_rather_than_halved(monkeypatch)
     """The same near car goal: its long quasi-Newton steps end up to 0.1 from the goal;
     with RESTORE_STEPS Newton steps they are brought back, with three most are halved
     and tried again. The search counts less effort for the same energy (DOP853)."""
-    start, goal = np.zeros(4), np.array([-0.7, -0.36, -0.7, 0.44])
-    restored, restored_effort = effort_of(lambda: planner.plan(start, goal, mechanism="car", delta_min=0.01,
-                                                               objective="energy"))
+    goal = np.array([-0.7, -0.36, -0.7, 0.44])
+    restored, restored_effort = car_energy_plan(goal)
     monkeypatch.setattr(energy, "RESTORE_STEPS", 3)
-    halved, halved_effort = effort_of(lambda: planner.plan(start, goal, mechanism="car", delta_min=0.01,
-                                                           objective="energy"))
+    halved, halved_effort = car_energy_plan(goal)
     assert restored.success and halved.success
     assert restored_effort < 0.85 * halved_effort
     assert confirmed_energy(restored, "car") == pytest.approx(confirmed_energy(halved, "car"), rel=1e-6)
@@ -394,14 +395,11 @@ def test_runs_heading_elsewhere_are_given_up_without_changing_the_plan(monkeypat
     more than the best finished run end early (GIVE_UP_ABOVE) and runs that join the higher
     one are not continued (JOIN_DISTANCE); the search counts less effort than with neither
     and returns the same energy, confirmed by DOP853."""
-    start, goal = np.zeros(4), np.array([-0.8942286643945572, 0.7466523674519534, 3.0799270103686043,
-                                         0.18196927672716656])
-    quick, quick_effort = effort_of(lambda: planner.plan(start, goal, mechanism="car", delta_min=0.01,
-                                                         objective="energy"))
+    goal = np.array([-0.8942286643945572, 0.7466523674519534, 3.0799270103686043, 0.18196927672716656])
+    quick, quick_effort = car_energy_plan(goal)
     monkeypatch.setattr(energy, "GIVE_UP_ABOVE", math.inf)
     monkeypatch.setattr(energy, "JOIN_DISTANCE", 0.0)
-    full, full_effort = effort_of(lambda: planner.plan(start, goal, mechanism="car", delta_min=0.01,
-                                                       objective="energy"))
+    full, full_effort = car_energy_plan(goal)
     assert quick.success and full.success
     assert quick_effort < 0.9 * full_effort
     assert confirmed_energy(quick, "car") == pytest.approx(confirmed_energy(full, "car"), rel=1e-6)
