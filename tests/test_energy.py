@@ -390,6 +390,22 @@ def test_where_the_search_on_fewer_steps_certifies_nothing_it_searches_on_the_pl
     assert confirmed_energy(again, "platform") == pytest.approx(confirmed_energy(usual, "platform"), rel=1e-6)
 
 
+def test_newton_steps_leave_a_motion_that_ran_into_the_singular_set_as_it_is():
+    """Controls brought onto finer steps may run into Δ = 0 there (the evaluation is then
+    incomplete, without l_T): Newton steps return it unchanged, not admissible, instead of
+    failing on its missing error."""
+    from nonholo.planning.problem import Problem
+
+    problem = Problem.build([0.0, 0.0, 0.0, 0.0], [1.0, 0.5, 0.2, 0.0], mechanism="car").evaluator(
+        method="nonparametric", steps=100)
+    steer = PiecewiseConstant(1.0, np.tile([1.0, 3.0], (100, 1)))     # φ = 3t crosses π/2
+    ev = problem.evaluate(steer)
+    assert not ev.complete and ev.error is None
+    metric = steer.metric()
+    assert energy.newton_steps(problem, ev, metric, 1e-10, energy.RESTORE_STEPS) is ev
+    assert not problem.admissible(ev)
+
+
 def test_runs_heading_elsewhere_are_given_up_without_changing_the_plan(monkeypatch):
     """A far car goal with two critical points many starts reach: probes heading for far
     more than the best finished run end early (GIVE_UP_ABOVE) and runs that join the higher

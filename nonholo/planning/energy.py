@@ -406,6 +406,9 @@ class Run:
         The first-order residual of the last iterate.
     alpha : float, default 1.0
         The first step of the next line search.
+    joined : str, default ""
+        The label of the run finished above the least energy it came close to, once it did
+        (:func:`continue_near_best`): it is not continued.
     """
 
     label: str
@@ -850,7 +853,7 @@ def newton_steps(problem: Evaluator, ev: Evaluation, metric: np.ndarray, tol: fl
         The last evaluation taken.
     """
     for _ in range(steps):
-        if ev.error <= tol:
+        if not ev.complete or ev.error <= tol:      # a motion that ran into Δ = 0 has no l_T
             break
         trial = problem.evaluate(ev.params + correction(ev, metric), full=full)
         if not (problem.admissible(trial) and trial.error < ev.error):
