@@ -115,7 +115,8 @@ NEAR_GOAL = 1e-3
 #: A start whose projection on the grid ends closer to the goal than this, or a run's
 #: iterate, is brought onto it by Newton steps.
 POLISH_BELOW = 0.05
-#: Seconds of effort (:mod:`nonholo.numerics.effort`) the stage may take.
+#: Seconds of effort (:mod:`nonholo.numerics.effort`) a search may take (the stage takes a
+#: second search, on the plan's own steps, where the first certifies nothing).
 ENERGY_EFFORT = 1.0
 #: Seconds of effort an iteration's linear algebra counts, besides its simulations (about
 #: its time on the reference machine).
