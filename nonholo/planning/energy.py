@@ -865,6 +865,27 @@ def newton_steps(problem: Evaluator, ev: Evaluation, metric: np.ndarray, tol: fl
     return ev
 
 
+def onto(problem: Evaluator, ev: Evaluation, tol: float) -> Evaluation:
+    """``ev``'s controls on ``problem``'s integrator steps, brought onto the goal there by
+    Newton steps of least energy (at most :data:`RESTORE_STEPS`).
+
+    Parameters
+    ----------
+    problem : Evaluator
+        The problem on the other steps.
+    ev : Evaluation
+        An evaluation of grid controls.
+    tol : float
+        The goal's tolerance.
+
+    Returns
+    -------
+    Evaluation
+        The last evaluation taken.
+    """
+    return newton_steps(problem, problem.evaluate(ev.controls), ev.parametrisation.metric(), tol, RESTORE_STEPS)
+
+
 def loop_starts(problem: Evaluator):
     """Labelled physical initial controls of the search: the drift ``ū = G(x₀)^# δ/T``
     toward the goal (``δ`` the offset of the goal from the start, a least-squares fit of
@@ -1122,12 +1143,11 @@ def search(problem: Evaluator, initial, options: Options, budget: float,
         polish(problem, run, options)
         on = problem
         if final is not None and run.evaluation.error <= options.tol:
-            metric = run.evaluation.parametrisation.metric()
-            ev = newton_steps(final, final.evaluate(run.evaluation.controls), metric, options.tol, RESTORE_STEPS)
+            ev = onto(final, run.evaluation, options.tol)
             if not final.admissible(ev):
                 why = why or f"the iteration from '{run.label}' is not admissible on {final.steps} steps"
                 continue
-            run.evaluation, run.energy, on = ev, energy(ev, metric), final
+            run.evaluation, run.energy, on = ev, energy(ev, ev.parametrisation.metric()), final
         if run.evaluation.error > options.tol:
             why = why or f"the iteration from '{run.label}' ended {run.evaluation.error:.2g} from the goal"
             continue
@@ -1386,10 +1406,9 @@ def certified_or_finer(found: Outcome, problem: Evaluator, options: Options, cei
     certificate = certified(found, problem, options)
     if certificate.success:
         return certificate
-    metric = found.evaluation.parametrisation.metric()
     finer = problem.refined(2 * problem.steps)
-    ev = newton_steps(finer, finer.evaluate(found.evaluation.controls), metric, options.tol, RESTORE_STEPS)
-    if finer.admissible(ev) and ev.error <= options.tol and energy(ev, metric) < ceiling:
+    ev = onto(finer, found.evaluation, options.tol)
+    if finer.admissible(ev) and ev.error <= options.tol and energy(ev, ev.parametrisation.metric()) < ceiling:
         again = certified(replace(found, evaluation=ev, problem=finer), finer, options)
         if again.success:
             return again
