@@ -965,6 +965,24 @@ def starts(problem: Evaluator, plan: Controls | None):
     yield from loop_starts(problem)
 
 
+def finished_at_goal(run: Run, options: Options) -> bool:
+    """Whether a run has finished (converged, or can make no further step) at the goal.
+
+    Parameters
+    ----------
+    run : Run
+        The run.
+    options : Options
+        The run's settings (``tol``).
+
+    Returns
+    -------
+    bool
+        Whether it has.
+    """
+    return (run.converged or run.stuck) and run.evaluation.error <= options.tol
+
+
 def confirmed(runs: list[Run], options: Options) -> bool:
     """Whether :data:`CONFIRMATIONS` runs finished at the goal (converged, or no further
     step) agree (within :data:`AGREE_RTOL`) on the least energy of any: starts from
@@ -983,7 +1001,7 @@ def confirmed(runs: list[Run], options: Options) -> bool:
     bool
         Whether the search may stop starting runs.
     """
-    found = sorted(r.energy for r in runs if (r.converged or r.stuck) and r.evaluation.error <= options.tol)
+    found = sorted(r.energy for r in runs if finished_at_goal(r, options))
     return bool(found) and sum(e <= found[0] * (1.0 + AGREE_RTOL) for e in found) >= CONFIRMATIONS
 
 
@@ -1028,8 +1046,7 @@ def probe(problem: Evaluator, run: Run, runs: list[Run], options: Options, deadl
     Run
         ``run``.
     """
-    best = min((r.energy for r in runs if r.evaluation.error <= options.tol and (r.converged or r.stuck)),
-               default=math.inf)
+    best = min((r.energy for r in runs if finished_at_goal(r, options)), default=math.inf)
     done = 0
     while done < PROBE_ITERATIONS and not (run.converged or run.stuck) and effort.seconds() <= deadline:
         descend(problem, run, options, min(PROBE_STAGE, PROBE_ITERATIONS - done), deadline)
