@@ -323,9 +323,19 @@ def effort_of(call):
     return result, effort.seconds() - before
 
 
-def car_energy_plan(goal):
-    """The least-energy car plan from the origin to ``goal`` and the effort it counted."""
-    return effort_of(lambda: planner.plan(np.zeros(4), goal, mechanism="car", delta_min=0.01, objective="energy"))
+def car_plans_with_and_without(monkeypatch, goal, **switched_off):
+    """The least-energy car plan from the origin to ``goal`` and the effort it counted, then
+    the same with the module's settings ``switched_off`` (names to values); both succeed."""
+    def plan():
+        return effort_of(lambda: planner.plan(np.zeros(4), goal, mechanism="car", delta_min=0.01,
+                                              objective="energy"))
+
+    on, on_effort = plan()
+    for name, value in switched_off.items():
+        monkeypatch.setattr(energy, name, value)
+    off, off_effort = plan()
+    assert on.success and off.success
+    return on, on_effort, off, off_effort
 
 
 def test_quasi_newton_steps_at_the_goal_may_outgrow_the_fixed_point_step(monkeypatch):
@@ -334,10 +344,8 @@ def test_quasi_newton_steps_at_the_goal_may_outgrow_the_fixed_point_step(monkeyp
     throws the learnt curvature away; with STEP_GROWTH_AT_GOAL the search counts less than
     two thirds of the effort for the same energy, both confirmed by DOP853."""
     goal = np.array([-0.7, -0.36, -0.7, 0.44])
-    grown, grown_effort = car_energy_plan(goal)
-    monkeypatch.setattr(energy, "STEP_GROWTH_AT_GOAL", energy.STEP_GROWTH)
-    reset, reset_effort = car_energy_plan(goal)
-    assert grown.success and reset.success
+    grown, grown_effort, reset, reset_effort = car_plans_with_and_without(
+        monkeypatch, goal, STEP_GROWTH_AT_GOAL=energy.STEP_GROWTH)
     assert grown_effort < 2.0 / 3.0 * reset_effort
     assert confirmed_energy(grown, "car") <= confirmed_energy(reset, "car") * (1 + 1e-6)
 
@@ -347,10 +355,7 @@ def test_a_long_step_at_the_goal_is_brought_back_rather_than_halved(monkeypatch)
     with RESTORE_STEPS Newton steps they are brought back, with three most are halved
     and tried again. The search counts less effort for the same energy (DOP853)."""
     goal = np.array([-0.7, -0.36, -0.7, 0.44])
-    restored, restored_effort = car_energy_plan(goal)
-    monkeypatch.setattr(energy, "RESTORE_STEPS", 3)
-    halved, halved_effort = car_energy_plan(goal)
-    assert restored.success and halved.success
+    restored, restored_effort, halved, halved_effort = car_plans_with_and_without(monkeypatch, goal, RESTORE_STEPS=3)
     assert restored_effort < 0.85 * halved_effort
     assert confirmed_energy(restored, "car") == pytest.approx(confirmed_energy(halved, "car"), rel=1e-6)
 
@@ -412,11 +417,8 @@ def test_runs_heading_elsewhere_are_given_up_without_changing_the_plan(monkeypat
     one are not continued (JOIN_DISTANCE); the search counts less effort than with neither
     and returns the same energy, confirmed by DOP853."""
     goal = np.array([-0.8942286643945572, 0.7466523674519534, 3.0799270103686043, 0.18196927672716656])
-    quick, quick_effort = car_energy_plan(goal)
-    monkeypatch.setattr(energy, "GIVE_UP_ABOVE", math.inf)
-    monkeypatch.setattr(energy, "JOIN_DISTANCE", 0.0)
-    full, full_effort = car_energy_plan(goal)
-    assert quick.success and full.success
+    quick, quick_effort, full, full_effort = car_plans_with_and_without(monkeypatch, goal, GIVE_UP_ABOVE=math.inf,
+                                                                        JOIN_DISTANCE=0.0)
     assert quick_effort < 0.9 * full_effort
     assert confirmed_energy(quick, "car") == pytest.approx(confirmed_energy(full, "car"), rel=1e-6)
 
