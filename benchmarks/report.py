@@ -2,7 +2,7 @@
 
 Every results file starts with the same header, written here and nowhere else: the date
 (UTC, ISO 8601), the code measured (git commit, short hash, with ``+ uncommitted changes``
-when the work tree differs from it — the results directory itself does not count), the
+when the code differs from it — the output folders do not count), the
 machine (CPU model, cores, platform; Python, NumPy, SciPy and numba versions, and any
 other package a script names) and the exact command.
 
@@ -15,12 +15,12 @@ import datetime as _dt
 import os
 import platform
 import shlex
-import subprocess
 import sys
 from pathlib import Path
 
+from nonholo.io import provenance
+
 RESULTS_DIR = Path(__file__).resolve().parent / "results"
-_ROOT = Path(__file__).resolve().parent.parent
 
 
 def utc_now() -> str:
@@ -29,19 +29,9 @@ def utc_now() -> str:
 
 
 def git_revision() -> str | None:
-    """``"<short hash>"`` of HEAD, plus ``" + uncommitted changes"`` if the work tree
-    (outside ``benchmarks/results/``) differs from it; ``None`` outside a git checkout."""
-    try:
-        rev = subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True, text=True,
-                             cwd=_ROOT, timeout=10)
-        if rev.returncode != 0:
-            return None
-        dirty = subprocess.run(["git", "status", "--porcelain", "--", ".",
-                                ":(exclude)benchmarks/results"],
-                               capture_output=True, text=True, cwd=_ROOT, timeout=10)
-    except (OSError, subprocess.SubprocessError):
-        return None
-    return rev.stdout.strip() + (" + uncommitted changes" if dirty.stdout.strip() else "")
+    """``"<short hash>"`` of HEAD, plus ``" + uncommitted changes"`` if the code differs from
+    it (:func:`nonholo.io.provenance.git_revision`); ``None`` outside a git checkout."""
+    return provenance.git_revision(short=True)
 
 
 def cpu_model() -> str | None:

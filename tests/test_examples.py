@@ -47,7 +47,9 @@ def test_unknown_example():
 
 def test_reproduce_writes_summary_and_figures(tmp_path, capsys):
     assert main(["reproduce", "--out", str(tmp_path), "--no-audit"]) == 0
-    rows = json.loads((tmp_path / "summary.json").read_text())
+    summary = json.loads((tmp_path / "summary.json").read_text())
+    assert summary["made_by"]["numpy"] == np.__version__ and "commit" in summary["made_by"]
+    rows = summary["examples"]
     keys = {"example", "method", "strategy", "success", "iterations", "terminal_error",
             "min_delta"}
     assert all(keys <= set(r) and "seconds" not in r for r in rows)   # times are printed, not kept
@@ -82,3 +84,14 @@ def test_reproduce_writes_summary_and_figures(tmp_path, capsys):
     assert limited.success and limited.options["leg_length"] == [1.2, 2.0]
     head = (tmp_path / "plans" / "leg_limits.csv").read_text().splitlines()
     assert head[0] == "t,l1,l2,dl1_dt,dl2_dt,u1,u2,qx,qy,qz,qw,delta" and len(head) == 1 + 101
+    # a second run changes nothing; --check lists a number moved beyond rounding, and by how much
+    capsys.readouterr()
+    assert main(["reproduce", "--out", str(tmp_path), "--no-audit", "--no-figures", "--check"]) == 0
+    text = (tmp_path / "summary.json").read_text()
+    moved = text.replace(f'"min_delta": {rows[0]["min_delta"]!r}', f'"min_delta": {rows[0]["min_delta"] + 1e-3!r}')
+    assert moved != text
+    (tmp_path / "summary.json").write_text(moved)
+    assert main(["reproduce", "--out", str(tmp_path), "--no-audit", "--no-figures", "--check"]) == 1
+    out = capsys.readouterr().out
+    assert "differs: " in out and "summary.json: numbers differ by" in out
+    assert (tmp_path / "summary.json").read_text() == moved          # --check writes nothing

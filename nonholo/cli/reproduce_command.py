@@ -17,6 +17,9 @@ def add_parser(subparsers) -> None:
     p.add_argument("--out", default="paper_figures", help="output directory (default: paper_figures)")
     p.add_argument("--no-audit", action="store_true", help="skip printing the audit")
     p.add_argument("--no-figures", action="store_true", help="skip the figures")
+    p.add_argument("--check", action="store_true",
+                   help="write nothing: list the outputs that differ from the files there beyond the "
+                        "tolerances (numbers 1e-9 of their magnitude), and by how much; exit 1 if any")
     p.set_defaults(func=run)
 
 
@@ -35,4 +38,4 @@ def run(args) -> int:
     """
     os.environ.setdefault("MPLBACKEND", "Agg")
     from ..paper.reproduce import run as _run
-    return _run(args.out, audit=not args.no_audit, draw=not args.no_figures)
+    return _run(args.out, audit=not args.no_audit, draw=not args.no_figures, check=args.check)

@@ -23,6 +23,9 @@ motion's nodes are recomputed by the same kernel). Floats are written with
 ``repr`` precision, so a save/load round trip reproduces every number exactly. Quantities
 that do not exist (``min_delta`` for a mechanism without a singular set, the terminal
 error of a run stopped before any simulation) are ``null``/``None``, never NaN.
+``made_by`` records what made the file: the nonholo version and commit, and the versions
+of Python, NumPy, SciPy, SymPy and the C compiler (:mod:`nonholo.io.provenance`); files
+without it (written before it was recorded) load as well.
 
 Saving (:mod:`nonholo.io.safe_write`) is atomic (a complete new file replaces the old
 one, or the old one stays), never replaces what is not a regular file (a directory is
@@ -83,9 +86,11 @@ _REQUIRED = ("format", "success", "reason", "terminal_error", "min_delta", "iter
 _CERTIFIED = ("sensitivity", "error_bound", "replay_steps")
 #: fields only some files have: the certificate's, absent from ``nonholo.plan/1`` files
 #: (``null`` there); ``route`` (``nonholo.plan/3``); a smoothed route's stitched controls;
-#: the coordinates of a mechanism whose state has them
+#: the coordinates of a mechanism whose state has them; what made the file (``made_by``)
 _OPTIONAL = ("sensitivity", "error_bound", "replay_steps", "route", "stitched",
-             "q0", "qd", "q", "errors")
+             "q0", "qd", "q", "errors", "made_by")
+#: the longest text of a ``made_by`` entry
+_MADE_BY_TEXT = 200
 #: the fields of each kind of ``controls``
 _CONTROL_FIELDS = {"fourier": ("kind", "T", "harmonics", "coeffs"),
                    "piecewise_constant": ("kind", "T", "grid", "values"),
@@ -327,9 +332,21 @@ def decode(d, mechanism=None) -> tuple[dict, bool]:
         options=dict(options), sensitivity=number_field(d, "sensitivity", null=True),
         error_bound=number_field(d, "error_bound", null=True),
         replay_steps=None if d["replay_steps"] is None else integer_field(d, "replay_steps", minimum=2),
-        route=string_field(d, "route"), stitched=stitched,
+        route=string_field(d, "route"), stitched=stitched, made_by=_made_by(d.get("made_by")),
         **({} if not mech.space.k else _coordinates(d, mech)))
     return fields, d["format"] == FORMAT_1
+
+
+def _made_by(value) -> dict | None:
+    """The record of what made the plan (:mod:`nonholo.io.provenance`): names to short
+    texts or nulls; a record, not a result, so only its type is checked."""
+    if value is None:
+        return None
+    if not isinstance(value, dict) or len(value) > 32 or not all(
+            isinstance(k, str) and len(k) <= 64 and (v is None or (isinstance(v, str) and len(v) <= _MADE_BY_TEXT))
+            for k, v in value.items()):
+        fail("made_by", f"must be an object of short texts or nulls, got {short(value)}")
+    return dict(value)
 
 
 def _mechanism(name: str, mechanism):

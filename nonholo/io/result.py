@@ -19,7 +19,7 @@ from ..model.mechanism import Mechanism
 from ..motion.frame_controls import FrameControls
 from ..motion.time_change import planned
 from . import csv_export as export
-from . import plan_file, safe_write
+from . import plan_file, provenance, safe_write
 
 
 @dataclass(eq=False)
@@ -103,6 +103,10 @@ class PlanResult:
         saving and checks use, so that a plan of a mechanism outside the catalog works as
         one of the catalog's (by default the catalog's of that name; ``ValueError`` if it
         has none).
+    made_by : dict, optional
+        What made the plan (:func:`nonholo.io.provenance.made_by`): read from its file,
+        ``None`` for a plan made in this process (its file records this process's). Not
+        compared by ``==``.
     """
 
     success: bool
@@ -135,6 +139,7 @@ class PlanResult:
     qd: np.ndarray | None = None
     errors: dict | None = None
     kinematics: Mechanism | None = field(default=None, repr=False)
+    made_by: dict | None = field(default=None, repr=False)
 
     def __post_init__(self):
         if self.kinematics is None:
@@ -252,6 +257,7 @@ class PlanResult:
             "R": arr(self.R),
             "u": arr(self.u),
             "delta": arr(self.delta),
+            "made_by": dict(self.made_by) if self.made_by is not None else provenance.made_by(),
         }
 
     @classmethod
@@ -438,7 +444,7 @@ class PlanResult:
         if not isinstance(other, PlanResult):
             return NotImplemented
         for f in fields(self):
-            if f.name == "kinematics":          # the mechanism itself: compared by name
+            if f.name in ("kinematics", "made_by"):   # the mechanism: by name; a record of the code
                 continue
             a, b = getattr(self, f.name), getattr(other, f.name)
             if isinstance(a, np.ndarray) or isinstance(b, np.ndarray):

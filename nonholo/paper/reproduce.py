@@ -19,17 +19,27 @@
   ``physics`` extra; without it a note says they were skipped);
 - ``plans/example<k>_<method>.json``: every planned result (reload with
   :meth:`nonholo.io.result.PlanResult.load`);
-- ``summary.json``: one object per (example, method) with ``example``, ``method``,
-  ``strategy``, ``success``, ``iterations``, ``terminal_error`` (after independent
-  re-simulation with DOP853), ``planner_error`` (the planner's own ``|l_T|``),
-  ``min_delta``, ``reason``; and ``summary.md``, the same as a table.
+- ``summary.json``: ``{"made_by": ..., "examples": [...]}``, one object per (example,
+  method) with ``example``, ``method``, ``strategy``, ``success``, ``iterations``,
+  ``terminal_error`` (after independent re-simulation with DOP853), ``planner_error``
+  (the planner's own ``|l_T|``), ``min_delta``, ``reason``; and ``summary.md``, the same
+  as a table;
+- ``figure_data/<stem>.data``: the data each figure and the animation were drawn from
+  (:mod:`nonholo.paper.outputs`).
 
-A second run writes the same bytes (on the same machine and kernels): no file records when
+An output is rewritten only where its content differs beyond the tolerances of
+:mod:`nonholo.paper.outputs` from the file already there (numbers within 1e-9 of their
+magnitude, or of 1 where smaller; figures redrawn only when the data they plot moved), so
+a run on another CPU leaves a fresh clone as it was. ``summary.json`` and every plan file
+record what made them (``"made_by"``: :mod:`nonholo.io.provenance`). No file records when
 or how fast it was made — PDFs carry no creation date (:func:`nonholo.viz.style.save_figure`),
-plan files no wall time (``seconds`` is ``null``). The times go to the terminal: one line
-per plan on stderr and the summary table with a time column on stdout.
+plan files no wall time (``seconds`` is ``null``): two runs on one machine write the same
+bytes. The times go to the terminal: one line per plan on stderr and the summary table
+with a time column on stdout. ``check=True`` (``nonholo reproduce --check``) writes
+nothing and lists each output that differs, and by how much.
 
-The run fails (exit status 1) when the generated code is stale or Example 1 or 2 fails.
+The run fails (exit status 1) when the generated code is stale or Example 1 or 2 fails, or,
+with ``check``, when an output differs beyond the tolerances.
 """
 from __future__ import annotations
 
@@ -42,7 +52,7 @@ from pathlib import Path
 import numpy as np
 
 from ..certify import resimulate as verify
-from ..io import safe_write
+from ..io import csv_export, provenance
 from ..model import catalog
 from ..planning.api import STRATEGIES, plan
 from ..planning.retime import retime
@@ -50,6 +60,7 @@ from ..spaces import so3
 from .. import viz
 from ..viz import state_figures
 from . import examples as _examples
+from .outputs import Outputs
 
 DEFAULT_OUTDIR = Path("paper_figures")
 #: Re-simulated terminal error required of Examples 1 and 2 (rad).
@@ -124,22 +135,24 @@ def _log(msg: str) -> None:
     print(msg, file=sys.stderr, flush=True)
 
 
-def keep(result, path: Path) -> Path:
-    """Save a plan without its wall time (see the module).
+def keep(result, name, outputs: Outputs) -> Path:
+    """Save a plan without its wall time (see the module), where it differs.
 
     Parameters
     ----------
     result : PlanResult
         The plan.
-    path : pathlib.Path
-        The plan file.
+    name : str or pathlib.Path
+        The plan file, relative to the output folder.
+    outputs : Outputs
+        The output folder's writer.
 
     Returns
     -------
     pathlib.Path
-        The file written.
+        The plan file.
     """
-    return replace(result, seconds=None).save(path)
+    return outputs.plan(replace(result, seconds=None), name)
 
 
 def solve(example: _examples.Example, method: str, strategy: str) -> Solved:
@@ -284,8 +297,8 @@ def plan_far_goal():
     return plan(so3.from_rpy(*FAR_GOAL[0]), so3.from_rpy(*FAR_GOAL[1]))
 
 
-def write_figures(solved: list[Solved], outdir: Path, progress=_log) -> list[Path]:
-    """Write all figures of the mechanism, the singular set and the examples.
+def write_figures(solved: list[Solved], outputs: Outputs, progress=_log) -> None:
+    """Write all figures of the mechanism, the singular set and the examples, where they differ.
 
     Also the plans of the far goal, the stroke-limits goal and the least-time plan (see
     the module).
@@ -294,21 +307,15 @@ def write_figures(solved: list[Solved], outdir: Path, progress=_log) -> list[Pat
     ----------
     solved : list of Solved
         The examples' plans.
-    outdir : pathlib.Path
-        The output folder.
+    outputs : Outputs
+        The output folder's writer (:mod:`nonholo.paper.outputs`).
     progress : callable, optional
         Called with a line of progress (default: printed on stderr).
-
-    Returns
-    -------
-    list of pathlib.Path
-        The figure files written.
     """
-    written: list[Path] = []
-
     def save(fig, stem):
-        written.extend(viz.save_figure(fig, stem, outdir))
-        progress(f"      wrote {stem}.png/.pdf")
+        before = len(outputs.written)
+        outputs.figure(fig, stem)
+        progress(f"      {'wrote' if len(outputs.written) > before else 'kept'} {stem}.png/.pdf")
 
     exs = _examples.examples()
     for fig, stem in mechanism_cards():
@@ -338,66 +345,59 @@ def write_figures(solved: list[Solved], outdir: Path, progress=_log) -> list[Pat
         save(viz.global_route_figure(far), "global_route")
     else:
         progress(f"      note: the far goal took the {far.route} route ({far.reason[:120]}); no global_route figure")
-    (outdir / "plans").mkdir(parents=True, exist_ok=True)
-    keep(far, outdir / "plans" / "far_goal.json")
+    keep(far, "plans/far_goal.json", outputs)
     free, limited = plan_limits_goal()
     if free.success and limited.success:
         save(viz.leg_limits_figure(free, limited), "leg_limits")
-        keep(limited, outdir / "plans" / "leg_limits.json")
-        limited.to_csv(outdir / "plans" / "leg_limits.csv", rate=100)
-        progress("      wrote plans/leg_limits.json and plans/leg_limits.csv")
+        keep(limited, "plans/leg_limits.json", outputs)
+        outputs.text("plans/leg_limits.csv", csv_export.csv_text(limited, 100))
+        progress("      plans/leg_limits.json and plans/leg_limits.csv")
     else:
         progress(f"      note: the stroke-limits goal was not solved ({limited.reason[:120]}); no leg_limits figure")
     if free.success:
         cheap, fast = plan_quality(free)
         save(viz.motion_quality_figure(free, cheap, fast), "motion_quality")
-        keep(fast, outdir / "plans" / "least_time.json")
-        fast.to_csv(outdir / "plans" / "least_time.csv", rate=100)
-        progress("      wrote plans/least_time.json and plans/least_time.csv")
+        keep(fast, "plans/least_time.json", outputs)
+        outputs.text("plans/least_time.csv", csv_export.csv_text(fast, 100))
+        progress("      plans/least_time.json and plans/least_time.csv")
     ex3 = [s for s in solved if s.example.number == 3 and len(s.result.R)]
     if ex3:
-        gif = outdir / "example3_animation.gif"
-        viz.animate_platform(ex3[0].result, gif)
-        written.append(gif)
-        progress(f"      wrote {gif.name}")
-    written.extend(physics_figures(ex3[0].result if ex3 else None, outdir, progress))
-    return written
+        motion = ex3[0].result
+        outputs.drawing("example3_animation.gif", lambda path: viz.animate_platform(motion, path),
+                        ["animate_platform", motion.mechanism, motion.method],
+                        np.concatenate([motion.t, np.ravel(motion.R)]))
+        progress("      example3_animation.gif")
+    physics_figures(ex3[0].result if ex3 else None, outputs, progress)
 
 
 #: Touch-ups of the executions :func:`physics_figures` draws.
 PHYSICS_TOUCH_UPS = 3
 
 
-def physics_figures(example3, outdir: Path, progress=_log) -> list[Path]:
+def physics_figures(example3, outputs: Outputs, progress=_log) -> None:
     """Example 3, the ball's reorientation and the car's parking played on physics models.
 
     Parameters
     ----------
     example3 : PlanResult or None
         Example 3's plan (``None``: not drawn).
-    outdir : pathlib.Path
-        The output folder.
+    outputs : Outputs
+        The output folder's writer (none written without MuJoCo).
     progress : callable, optional
         Called with a line of progress.
-
-    Returns
-    -------
-    list of pathlib.Path
-        The figure files written (none without MuJoCo).
     """
     try:
         import mujoco  # noqa: F401  (the physics extra)
     except ImportError:
         progress("      note: MuJoCo is not installed (python -m pip install -e '.[physics]'): "
                  "no physics figures")
-        return []
+        return
     from ..physics import execute
 
     runs = [("physics_example3", "Example 3 on the platform's physics model", example3)]
     for name in ("rolling_ball", "car"):
         start, goal = STATE_PROBLEMS[name]
         runs.append((f"physics_{name}", None, plan(start, goal, mechanism=name, **STATE_OPTIONS[name])))
-    written = []
     for stem, title, result in runs:
         if result is None or not result.success:
             progress(f"      note: no plan to play for {stem}")
@@ -406,9 +406,9 @@ def physics_figures(example3, outdir: Path, progress=_log) -> list[Path]:
         errors = ", ".join(f"{s['error'][k]:.1e}" for s in record.stages for k in ("rotation", "coordinates")
                            if k in s["error"])
         progress(f"      played {stem[8:]}: errors after each stage {errors}")
-        written.extend(viz.save_figure(viz.execution_figure(record, title=title), stem, outdir))
-        progress(f"      wrote {stem}.png/.pdf")
-    return written
+        before = len(outputs.written)
+        outputs.figure(viz.execution_figure(record, title=title), stem)
+        progress(f"      {'wrote' if len(outputs.written) > before else 'kept'} {stem}.png/.pdf")
 
 
 def summary_table(rows: list[dict], seconds: list[float] | None = None) -> str:
@@ -440,7 +440,7 @@ def summary_table(rows: list[dict], seconds: list[float] | None = None) -> str:
     return "\n".join(lines)
 
 
-def run(outdir: Path = DEFAULT_OUTDIR, audit: bool = True, draw: bool = True) -> int:
+def run(outdir: Path = DEFAULT_OUTDIR, audit: bool = True, draw: bool = True, check: bool = False) -> int:
     """The whole job (see the module).
 
     Parameters
@@ -451,11 +451,14 @@ def run(outdir: Path = DEFAULT_OUTDIR, audit: bool = True, draw: bool = True) ->
         Whether to audit the appendix against the derivation.
     draw : bool, default True
         Whether to draw the figures.
+    check : bool, default False
+        Write nothing; list the outputs that differ from the files there, and by how much.
 
     Returns
     -------
     int
-        The exit status: 1 when the generated code is stale or Example 1 or 2 fails, else 0.
+        The exit status: 1 when the generated code is stale or Example 1 or 2 fails, or with
+        ``check`` when an output differs beyond the tolerances; else 0.
     """
     from derivations import audit as _audit
     from derivations import codegen
@@ -465,7 +468,9 @@ def run(outdir: Path = DEFAULT_OUTDIR, audit: bool = True, draw: bool = True) ->
 
     t0 = time.perf_counter()
     outdir = Path(outdir)
-    outdir.mkdir(parents=True, exist_ok=True)
+    if not check:
+        outdir.mkdir(parents=True, exist_ok=True)
+    outputs = Outputs(outdir, check=check)
     _log("checking that the generated modules match a fresh derivation ...")
     stale = codegen.check(files=inliner.every_generated_file())
     if stale:
@@ -477,24 +482,32 @@ def run(outdir: Path = DEFAULT_OUTDIR, audit: bool = True, draw: bool = True) ->
         print(_audit.format_table(appendix_audit.run()), flush=True)
     _log("solving the examples ...")
     solved = solve_all()
-    plans = outdir / "plans"
-    plans.mkdir(exist_ok=True)
     for s in solved:
-        keep(s.result, plans / f"example{s.example.number}_{s.result.method}.json")
+        keep(s.result, f"plans/example{s.example.number}_{s.result.method}.json", outputs)
     rows = [s.summary() for s in solved]
-    safe_write.write_text(outdir / "summary.json", json.dumps(rows, indent=2) + "\n")
-    safe_write.write_text(outdir / "summary.md", summary_table(rows) + "\n")
+    outputs.json("summary.json", json.dumps({"made_by": provenance.made_by(), "examples": rows},
+                                            indent=2) + "\n")
+    outputs.text("summary.md", summary_table(rows) + "\n")
     print(summary_table(rows, [s.result.seconds for s in solved]), flush=True)
     if draw:
         _log("drawing the figures ...")
-        write_figures(solved, outdir)
+        write_figures(solved, outputs)
     failed = [s for s in solved if s.example.must_succeed and not s.ok]
     for s in solved:
         if not s.example.must_succeed and not s.ok:
             _log(f"note: {s.example.title} not solved by strategy {s.result.strategy!r}: "
                  f"{s.result.reason}")
-    _log(f"done in {time.perf_counter() - t0:.1f} s; outputs in {outdir}/")
+    _log(f"done in {time.perf_counter() - t0:.1f} s; {len(outputs.written)} files written, "
+         f"{len(outputs.kept)} kept as they were (their content agrees); outputs in {outdir}/")
+    for d in outputs.differences:
+        if check:
+            print(f"differs: {d}", flush=True)
+        else:
+            _log(f"rewrote {d}")
+    if check:
+        _log(f"check: {len(outputs.differences)} output(s) differ beyond the tolerances"
+             if outputs.differences else "check: every output agrees with the files there")
     if failed:
         _log("FAILED: " + ", ".join(f"{s.example.title} ({s.result.method})" for s in failed))
         return 1
-    return 0
+    return 1 if check and outputs.differences else 0

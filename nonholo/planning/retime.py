@@ -141,7 +141,7 @@ def retime(result: PlanResult, leg_speed: float | None = None, T: float | None =
     options = result.options if v is None else {**result.options, "leg_speed": v}
     return dataclasses.replace(
         result, parametrisation=timed, T=timed.T, t=t, u=timed(t).reshape(n, mech.n_inputs),
-        reason=f"{result.reason}; re-timed {' '.join(how)}", options=options,
+        reason=f"{result.reason}; re-timed {' '.join(how)}", options=options, made_by=None,
         seconds=None if result.seconds is None else result.seconds + (time.perf_counter() - started))
 
 
