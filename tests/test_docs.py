@@ -1,6 +1,7 @@
 """The documentation site: the gallery's staleness check, the ``Raises`` check, the build
-itself (``sphinx-build -W``) with every internal link of the built site resolved, and the
-landing page opened in a headless Chromium (when there is one)."""
+itself (``sphinx-build -W``, with the packages of the extras other than ``docs`` not
+importable) with every internal link of the built site resolved, and the landing page opened
+in a headless Chromium (when there is one)."""
 from __future__ import annotations
 
 import functools
@@ -153,16 +154,78 @@ class Links(html.parser.HTMLParser):
                 self.links.append(attrs[key])
 
 
+#: The top-level packages of the extras other than ``docs`` (``physics``: MuJoCo; ``cluster``:
+#: Dask; ``bench``; ``notebooks``): ``pip install -e ".[docs]"`` alone builds the site, so the
+#: build (conf.py, docs/ext/, autosummary's imports of every public module) imports none of
+#: them — a public module that needs one imports it where it is used.
+NOT_IN_THE_DOCS_EXTRA = ("mujoco", "dask", "distributed", "casadi", "ompl", "control", "jupyterlab")
+
+#: A ``sitecustomize`` that makes those packages not importable, as in an environment with the
+#: ``docs`` extra alone, and writes each attempt, with its stack, to a log.
+BLOCKER = """\
+import sys
+import traceback
+
+BLOCKED = {blocked!r}
+LOG = {log!r}
+
+
+class NotInstalled:
+    \"\"\"Import of a package of another extra: ModuleNotFoundError, the attempt logged.\"\"\"
+
+    def find_spec(self, name, path=None, target=None):
+        if name.partition(".")[0] not in BLOCKED:
+            return None
+        with open(LOG, "a", encoding="utf-8") as log:
+            log.write(f"import {{name}}\\n" + "".join(traceback.format_stack()) + "\\n")
+        raise ModuleNotFoundError(f"No module named {{name!r}} (tests/test_docs.py: not in the docs extra)",
+                                  name=name)
+
+
+sys.meta_path.insert(0, NotInstalled())
+"""
+
+
+def without_other_extras(folder: Path) -> tuple[dict, Path]:
+    """The environment of a process in which :data:`NOT_IN_THE_DOCS_EXTRA` cannot be imported
+    (a ``sitecustomize`` in ``folder``, first on ``PYTHONPATH``), and the log of its attempts."""
+    log = folder / "blocked_imports.log"
+    (folder / "sitecustomize.py").write_text(BLOCKER.format(blocked=NOT_IN_THE_DOCS_EXTRA, log=str(log)),
+                                             encoding="utf-8")
+    path = os.pathsep.join(p for p in (str(folder), str(ROOT), os.environ.get("PYTHONPATH", "")) if p)
+    return dict(os.environ, PYTHONPATH=path), log
+
+
+def test_the_blocker_makes_the_other_extras_not_importable_and_logs_the_attempt(tmp_path):
+    env, log = without_other_extras(tmp_path)
+    code = ("import importlib\n"
+            "for name in ('mujoco', 'dask.array', 'json'):\n"
+            "    try:\n"
+            "        importlib.import_module(name)\n"
+            "        print(name, 'imported')\n"
+            "    except ModuleNotFoundError as e:\n"
+            "        print(name, 'missing', e.name)\n")
+    run = subprocess.run([sys.executable, "-c", code], check=False, env=env, capture_output=True, text=True)
+    assert run.returncode == 0, run.stderr
+    assert run.stdout.splitlines() == ["mujoco missing mujoco", "dask.array missing dask", "json imported"]
+    logged = log.read_text(encoding="utf-8")
+    assert "import mujoco\n" in logged and "import dask\n" in logged and "import json" not in logged
+
+
 @pytest.fixture(scope="module")
 def site(tmp_path_factory) -> Path:
-    """The site built once for the tests of this module (the build is the slow part): its
+    """The site built once for the tests of this module (the build is the slow part), with
+    the packages of the other extras not importable (:data:`NOT_IN_THE_DOCS_EXTRA`): its
     ``html`` folder."""
     pytest.importorskip("sphinx")
     pytest.importorskip("myst_nb")
     out = tmp_path_factory.mktemp("site") / "html"
-    env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")]))
+    env, blocked = without_other_extras(tmp_path_factory.mktemp("docs_extra_only"))
     run = subprocess.run([sys.executable, "-m", "sphinx", "-W", "--keep-going", "-q", "-j", "auto", "-b", "html",
                           str(ROOT / "docs"), str(out)], check=False, cwd=ROOT, env=env, capture_output=True, text=True)
+    # nothing of another extra was imported while building, not even in a try/except
+    assert not blocked.exists(), ("the docs build imports packages the docs extra does not install:\n"
+                                  + blocked.read_text(encoding="utf-8")[-6000:])
     assert run.returncode == 0, run.stderr[-6000:]
     return out
 

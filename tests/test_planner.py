@@ -11,6 +11,7 @@ import json
 import numpy as np
 import pytest
 from conftest import (
+    assert_inputs_match,
     check_solution,
     example,
     example_rpy_args,
@@ -228,7 +229,12 @@ def test_save_load_round_trip(tmp_path, kw):
     back = PlanResult.load(path)
     assert back == res
     t = np.linspace(0.0, 1.0, 1001)
-    np.testing.assert_array_equal(back.controls(t), res.controls(t))
+    if res.parametrisation.kind == "frame":
+        # the loaded frame controls re-integrate their nodes (forward kernel), the planner's
+        # hold those of its variational kernel: two computations of the same inputs
+        assert_inputs_match(back.controls(t), res.controls(t))
+    else:   # rebuilt from the stored numbers by the same computation: bit for bit
+        np.testing.assert_array_equal(back.controls(t), res.controls(t))
     if res.breakpoints is not None:
         np.testing.assert_array_equal(back.breakpoints, res.breakpoints)
     assert json.loads(path.read_text())["format"] == FORMAT

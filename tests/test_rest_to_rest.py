@@ -5,6 +5,7 @@ import json
 
 import numpy as np
 import pytest
+from conftest import assert_inputs_match
 
 import nonholo
 from nonholo.certify import resimulate as verify
@@ -95,7 +96,9 @@ def test_rest_to_rest_files_round_trip_and_stay_honest(platform_plan, car_plan, 
         path = rr.save(tmp_path / f"p{i}.json")
         back = PlanResult.load(path)
         assert back == rr
-        np.testing.assert_array_equal(back.controls(back.t), rr.u)
+        # the loaded controls (frame nodes re-integrated) against the samples the re-timing
+        # stored (the planner's nodes): two computations of the same inputs
+        assert_inputs_match(back.controls(back.t), rr.u)
     d = json.loads((tmp_path / "p0.json").read_text())
     for edit, field in ((lambda d: d["controls"].update(T=-1.0), "controls.T"),
                         (lambda d: d["controls"].update(T=2 * d["T"]), "T"),

@@ -8,7 +8,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from conftest import example, forbid_simulation, verified
+from conftest import assert_inputs_match, example, forbid_simulation, verified
 
 from nonholo.certify import resimulate as verify
 from nonholo.controls import parametrisations as C
@@ -109,8 +109,10 @@ def test_save_load_keeps_the_physical_controls(tmp_path, method):
     back = PlanResult.load(res.save(tmp_path / "plan.json"))
     assert back == res and back.strategy == "robust"
     t = np.linspace(0.0, 1.0, 777)
-    np.testing.assert_array_equal(back.controls(t), res.controls(t))
-    np.testing.assert_array_equal(back.u, res.u)
+    # frame controls: the loaded ones re-integrate their nodes (forward kernel), the planner's
+    # hold those of its variational kernel: two computations of the same inputs
+    assert_inputs_match(back.controls(t), res.controls(t))
+    np.testing.assert_array_equal(back.u, res.u)        # the stored samples, read back
     d = json.loads((tmp_path / "plan.json").read_text())
     assert d["controls"]["kind"] == "frame" and d["controls"]["frame"]["kind"] in ("fourier", "piecewise_constant")
     # u is physical: L(R) u = N(R) w along the planned motion (ω in the admissible plane)

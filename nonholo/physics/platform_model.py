@@ -37,7 +37,6 @@ from __future__ import annotations
 
 from types import SimpleNamespace
 
-import mujoco
 import numpy as np
 
 from ..io.csv_export import states_at
@@ -259,6 +258,8 @@ class PlatformModel:
         ValueError
             If ``R`` is not a rotation or ``q`` is not empty.
         """
+        import mujoco
+
         if np.size(q):
             raise ValueError(f"q must be empty for a platform on SO(3), got shape {np.shape(q)}")
         R = so3.check_rotation(R, "R")
@@ -306,6 +307,8 @@ class PlatformModel:
         tuple of numpy.ndarray
             ``R`` (3, 3), the platform's orientation, and ``q``, shape ``(0,)``.
         """
+        import mujoco
+
         a = model.jnt_qposadr[model.joint("platform").id]
         quat = np.array(data.qpos[a:a + 4])
         R = np.empty(9)
@@ -403,6 +406,8 @@ class PlatformModel:
         float
             The speed (length units per second); 0 without contact.
         """
+        import mujoco
+
         sphere, disk = model.body("platform").id, model.body("disk").id
         jp = np.empty((3, model.nv))
         out = 0.0
@@ -430,6 +435,8 @@ class PlatformModel:
         float
             The force (model units); 0 without contact.
         """
+        import mujoco
+
         f = np.empty(6)
         out = 0.0
         for i in self._pairs(model, data):
