@@ -1,5 +1,6 @@
 """``nonholo execute`` and the execution figure: a saved car plan played on its MuJoCo model
-with a touch-up, the record and the model file written and read back, bad input refused."""
+with a touch-up, the record and the model file written and read back, a touch-up not played
+reported, bad input refused."""
 import json
 
 import numpy as np
@@ -10,6 +11,7 @@ import mujoco
 
 import nonholo
 from nonholo.cli.entry import main
+from nonholo.cli.execute_command import describe
 from nonholo.physics import Execution
 from nonholo.viz.execution_figures import execution_figure, tracking_distance
 
@@ -31,12 +33,23 @@ def test_execute_plays_touches_up_and_writes_its_files(car_plan, tmp_path, capsy
     record = Execution.load(report)
     errors = [s["error"]["coordinates"] for s in record.stages]
     assert errors[0] < 2e-2 and errors[1] < 0.1 * errors[0]
-    assert json.loads(report.read_text())["stages"][0]["planned"] is True
+    assert [s["outcome"] for s in json.loads(report.read_text())["stages"]] == ["played", "played"]
     assert figure.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert mujoco.MjModel.from_xml_path(str(model)).nbody > 1
     # the figure needs the run's traces: a record read back has none
     with pytest.raises(ValueError, match="traces"):
         execution_figure(record)
+
+
+@pytest.mark.parametrize("outcome, words", [("predicted worse", "not played, predicted worse (why)"),
+                                            ("within tolerance", "not played, within tolerance (why)"),
+                                            ("not planned", "not planned (why)")])
+def test_a_touch_up_not_played_is_one_line_saying_why(outcome, words):
+    record = {"error": {"coordinates": 1e-3}, "outcome": outcome, "reason": "why", "max_slip": 0.0,
+              "real_time_factor": 0.0}
+    assert describe(record, "touch-up 2", {"coordinates": "wheelbase"}) == f"touch-up 2: {words}"
+    played = dict(record, outcome="played")
+    assert describe(played, "touch-up 2", {"coordinates": "wheelbase"}).startswith("touch-up 2: error coordinates 1.00e-03")
 
 
 @pytest.mark.parametrize("argv, words", [

@@ -16,7 +16,10 @@ import pytest
 
 import nonholo
 from nonholo.physics import Contact, Execution, execute, model_for, write_mjcf
+from nonholo.physics.execution import MARGIN, motion_size, predicted_error
+from nonholo.planning.retime import retime
 from nonholo.spaces import so3
+from nonholo.viz.execution_figures import execution_figure
 
 mujoco = pytest.importorskip("mujoco")
 
@@ -37,6 +40,12 @@ def ball_plan():
 @pytest.fixture(scope="module")
 def ball_run(ball_plan):
     return execute(ball_plan, touch_ups=1, contact=COARSE)
+
+
+@pytest.fixture(scope="module")
+def fast_ball(ball_plan):
+    """The ball played ten times faster than its default, with a touch-up offered."""
+    return execute(ball_plan, touch_ups=1, duration=1.0, contact=COARSE)
 
 
 @pytest.fixture(scope="module")
@@ -61,6 +70,17 @@ def unicycle_plan():
 def rotation_gap(Ra, Rb) -> np.ndarray:
     """``|log(R_a R_bᵀ)|`` of two stacks of rotations."""
     return np.array([np.linalg.norm(so3.log(a @ b.T)) for a, b in zip(Ra, Rb)])
+
+
+def norms(run) -> list[float]:
+    """``|e|`` after each stage of ``run``."""
+    space = nonholo.mechanism_named(run.mechanism).space
+    return [space.norm(s["error"]) for s in run.stages]
+
+
+def assert_never_worse(run):
+    e = norms(run)
+    assert all(b <= a for a, b in zip(e, e[1:])), e
 
 
 # -- the ball --------------------------------------------------------------------------------
@@ -101,10 +121,17 @@ def test_radius_compensation_measures_the_rolling_radius_of_the_soft_contacts():
     assert rotation_gap([R], [BALL_R0])[0] < 1e-6 and np.linalg.norm(q) < 1e-6
 
 
-def test_played_too_fast_the_ball_slips(ball_plan, ball_run):
-    fast = execute(ball_plan, duration=1.0, contact=COARSE)
-    assert fast.stages[0]["error"]["rotation"] > 0.1
-    assert fast.stages[0]["max_slip"] > 100 * ball_run.stages[0]["max_slip"]
+def test_played_too_fast_the_ball_slips_and_is_not_touched_up(fast_ball, ball_run):
+    """Far off the goal, the re-plan is nearly as large a motion as the plan, played as fast:
+    its predicted error is not below the present one, and it is not played."""
+    first, second = fast_ball.stages
+    assert first["error"]["rotation"] > 0.1
+    assert first["max_slip"] > 100 * ball_run.stages[0]["max_slip"]
+    assert second["outcome"] == "predicted worse" and "predicted" in second["reason"]
+    assert second["predicted"] >= norms(fast_ball)[0] and second["size"] > 0.1 * first["size"]
+    assert second["error"] == first["error"] and second["sim_time"] == 0.0 and fast_ball.traces[1] is None
+    assert_never_worse(fast_ball)
+    assert "touch-up 1 not played" in execution_figure(fast_ball).get_suptitle()
 
 
 # -- the car and the unicycle ----------------------------------------------------------------
@@ -115,6 +142,7 @@ def test_the_car_parks(car_run):
     first, second = (s["error"]["coordinates"] for s in car_run.stages)
     assert first < 5e-2
     assert second < 1e-2 and second < first / 10
+    assert car_run.stages[1]["outcome"] == "played" and second <= car_run.stages[1]["predicted"]
 
 
 def test_two_runs_are_identical(unicycle_plan):
@@ -142,6 +170,63 @@ def test_the_record_saves_and_loads(car_run, tmp_path):
     assert back == car_run and back.contact == COARSE.resolved("car") and back.traces is None
     with pytest.raises(ValueError, match="stages"):
         Execution.from_dict({**d, "stages": []})
+
+
+def test_a_record_with_a_touch_up_not_played_saves_and_loads(fast_ball, tmp_path):
+    back = Execution.load(fast_ball.save(tmp_path / "fast.json"))
+    assert back == fast_ball
+    assert [s["outcome"] for s in back.stages] == ["played", "predicted worse"]
+    assert back.stages[1]["reason"] == fast_ball.stages[1]["reason"] and back.stages[1]["drift"] is None
+    d = fast_ball.to_dict()
+    with pytest.raises(ValueError, match=r"stages\[1\]\.outcome"):
+        Execution.from_dict({**d, "stages": [d["stages"][0], {**d["stages"][1], "outcome": "skipped"}]})
+    with pytest.raises(ValueError, match=r"stages\[1\]\.reason"):
+        Execution.from_dict({**d, "stages": [d["stages"][0], {**d["stages"][1], "reason": None}]})
+
+
+def test_a_record_saved_before_outcomes_loads(fast_ball):
+    """Older records had ``planned`` (``False`` for a touch-up that could not be planned)."""
+    keys = ("error", "max_slip", "max_contact_force", "sim_time", "real_time_factor", "duration")
+    d = fast_ball.to_dict()
+    old = [{**{k: s[k] for k in keys}, "planned": True} for s in d["stages"]]
+    old[1].update(planned=False, reason="no plan")
+    back = Execution.from_dict({**d, "stages": old})
+    assert [s["outcome"] for s in back.stages] == ["played", "not planned"]
+    assert "planned" not in back.stages[0] and back.stages[1]["reason"] == "no plan"
+    assert "not played" in repr(back)
+
+
+# -- touch-ups: played only when predicted to help ----------------------------------------------
+
+def test_execution_stops_within_the_plans_tolerance():
+    loose = nonholo.plan((0.0, 0.0, 0.0), (0.0, 1.0, 0.0), mechanism="unicycle", tol=1e-2)
+    run = execute(loose, touch_ups=3, contact=COARSE, duration=5.0)
+    assert [s["outcome"] for s in run.stages] == ["played", "within tolerance"]
+    assert norms(run)[0] <= 1e-2 and "tolerance" in run.stages[1]["reason"]
+    assert run.stages[1]["size"] is None and run.stages[1]["predicted"] is None and run.traces[1] is None
+    assert_never_worse(run)
+
+
+def test_the_prediction_scales_the_stages_played():
+    """Each played stage bounds a motion ``r`` times its size by ``|e| max(r, r²)``; the least
+    bound, times the margin, plus the drift over the time and the plan's own error."""
+    stages = [{"outcome": "played", "size": 2.0, "drift": 0.0},
+              {"outcome": "played", "size": 0.5, "drift": 1e-9},
+              {"outcome": "predicted worse", "size": 0.01, "drift": None}]
+    e = [1e-4, 1e-7, 1e-7]
+    assert predicted_error(e, stages, 0.1, 0.0, 0.0) == pytest.approx(MARGIN * 1e-7 * 0.2)
+    assert predicted_error(e, stages, 1.0, 0.0, 0.0) == pytest.approx(MARGIN * 1e-7 * 4.0)
+    assert predicted_error(e, stages, 8.0, 0.0, 0.0) == pytest.approx(MARGIN * 1e-7 * 16.0 ** 2)
+    assert predicted_error(e[:1], stages[:1], 8.0, 0.0, 0.0) == pytest.approx(MARGIN * 1e-4 * 4.0 ** 2)
+    assert predicted_error(e, stages, 0.1, 1e-12, 10.0) == pytest.approx(MARGIN * 2e-8 + 1e-8 + 1e-12)
+    assert predicted_error(e[:1], [{"outcome": "not planned", "size": None}], 1.0, 0.0, 0.0) == np.inf
+    assert predicted_error(e[:1], stages[:1], 0.0, 1e-12, 0.0) == pytest.approx(1e-12)
+
+
+def test_the_size_of_a_motion_does_not_depend_on_its_timing(unicycle_plan):
+    size = motion_size(unicycle_plan)
+    assert size >= 1.0             # ∫|v| dt alone covers the distance to the goal
+    assert motion_size(retime(unicycle_plan, T=10.0, rest_to_rest=True)) == pytest.approx(size, rel=1e-2)
 
 
 # -- settings, models, refusals -----------------------------------------------------------------
@@ -244,6 +329,6 @@ def test_a_touch_up_that_cannot_be_planned_ends_the_run(unicycle_plan, monkeypat
 
     monkeypatch.setattr(module, "plan", refuse)
     ex = execute(unicycle_plan, touch_ups=3, contact=COARSE, duration=5.0)
-    assert [s["planned"] for s in ex.stages] == [True, False]
+    assert [s["outcome"] for s in ex.stages] == ["played", "not planned"]
     assert ex.stages[1]["error"] == ex.stages[0]["error"] and "no plan" in ex.stages[1]["reason"]
     assert ex.traces[1] is None

@@ -7,16 +7,20 @@ Example::
 
 The plan is played from rest to rest on a MuJoCo model generated from its mechanism's data
 (:mod:`nonholo.physics`; needs the ``physics`` extra), left to settle and measured; each
-touch-up re-plans from the measured state to the goal and plays again. One line is printed
-per stage: the error from the goal by part, the largest slip and the real-time factor.
-``--json`` writes the record (``{"stages": [{"error": {"rotation": …, "coordinates": …},
-"max_slip": …, …}, …]}``, the open-loop stage first), ``--plot`` its figure
+touch-up re-plans from the measured state to the goal and plays again — only if predicted
+to end nearer the goal, and none once within the plan's tolerance
+(:func:`nonholo.physics.execution.execute`). One line is printed per stage: the error from
+the goal by part, the largest slip and the real-time factor, or why a touch-up was not
+played (touching up ends there). ``--json`` writes the record (``{"stages": [{"error":
+{"rotation": …, "coordinates": …}, "outcome": "played", "max_slip": …, …}, …]}``, the
+open-loop stage first), ``--plot`` its figure
 (:func:`nonholo.viz.execution_figures.execution_figure`), ``--mjcf`` the model file, which
 loads in plain ``mujoco.MjModel.from_xml_path``. Files are written as ``nonholo plan``
 writes them (:mod:`nonholo.io.safe_write`).
 
-Exit status: 0 when every stage was played, 1 if a touch-up could not be planned, 2 on bad
-input (or without MuJoCo), 3 if ``--json``, ``--plot`` or ``--mjcf`` could not be written.
+Exit status: 0 when every touch-up was played or left out by design (within tolerance, or
+predicted to end no nearer), 1 if a touch-up could not be planned, 2 on bad input (or
+without MuJoCo), 3 if ``--json``, ``--plot`` or ``--mjcf`` could not be written.
 """
 from __future__ import annotations
 
@@ -49,7 +53,7 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
                               description=plain(__doc__), formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("plan", help="a plan file written by `nonholo plan --out`")
     p.add_argument("--touch-ups", type=int, default=0, metavar="N",
-                   help="re-plan from the measured state and play again N times (default 0)")
+                   help="re-plan from the measured state and play again, at most N times (default 0)")
     p.add_argument("--duration", type=float, default=None, metavar="S",
                    help="seconds each stage's motion takes (default: 10 times the plan's T)")
     p.add_argument("--actuators", choices=("prescribed", "servo"), default=None,
@@ -63,7 +67,7 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
 
 
 def describe(record: dict, name: str, units: dict) -> str:
-    """One stage's line: its error by part, slip and real-time factor.
+    """One stage's line: its error by part, slip and real-time factor, or why it was not played.
 
     Parameters
     ----------
@@ -79,8 +83,11 @@ def describe(record: dict, name: str, units: dict) -> str:
     str
         The line.
     """
-    if not record.get("planned", True):
+    outcome = record.get("outcome", "played")
+    if outcome == "not planned":
         return f"{name}: not planned ({record.get('reason')})"
+    if outcome != "played":
+        return f"{name}: not played, {outcome} ({record.get('reason')})"
     error = ", ".join(f"{part} {value:.2e} {units[part]}".rstrip() for part, value in record["error"].items())
     return (f"{name}: error {error}; max slip {record['max_slip']:.2e}/s; "
             f"real-time factor {record['real_time_factor']:.2f}")
@@ -140,7 +147,7 @@ def run(args) -> int:
     except ValueError as exc:
         _error(str(exc))
         return EXIT_BAD_INPUT
-    if not all(s.get("planned", True) for s in run_.stages):
+    if any(s["outcome"] == "not planned" for s in run_.stages):
         status = EXIT_TOUCH_UP_FAILED
     if args.json:
         try:

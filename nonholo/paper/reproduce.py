@@ -403,9 +403,11 @@ def physics_figures(example3, outputs: Outputs, progress=_log) -> None:
             progress(f"      note: no plan to play for {stem}")
             continue
         record = execute(result, touch_ups=PHYSICS_TOUCH_UPS)
-        errors = ", ".join(f"{s['error'][k]:.1e}" for s in record.stages for k in ("rotation", "coordinates")
-                           if k in s["error"])
-        progress(f"      played {stem[8:]}: errors after each stage {errors}")
+        errors = ", ".join(" / ".join(f"{v:.1e}" for v in s["error"].values()) for s in record.stages
+                           if s.get("outcome", "played") == "played")
+        ended = record.stages[-1]
+        why = "" if ended.get("outcome", "played") == "played" else f"; then not played: {ended['outcome']}"
+        progress(f"      played {stem[8:]}: error after each stage played {errors}{why}")
         before = len(outputs.written)
         outputs.figure(viz.execution_figure(record, title=title), stem)
         progress(f"      {'wrote' if len(outputs.written) > before else 'kept'} {stem}.png/.pdf")

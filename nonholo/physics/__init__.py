@@ -2,8 +2,9 @@
 ``pip install nonholo[physics]``).
 
 - :func:`execute` plays a plan from rest to rest on its mechanism's model, lets it settle,
-  measures where it ended, and re-plans from there to the goal for each touch-up
-  (:mod:`nonholo.physics.execution`), recording each stage in an :class:`Execution`;
+  measures where it ended, and re-plans from there to the goal for each touch-up, played
+  only when predicted to end nearer the goal (:mod:`nonholo.physics.execution`),
+  recording each stage in an :class:`Execution`;
 - :class:`Contact` holds every contact and actuation setting
   (:mod:`nonholo.physics.contact`);
 - :func:`model_for` gives a mechanism's model, :func:`write_mjcf` writes its MJCF file

@@ -2,16 +2,39 @@
 :class:`Execution`.
 
 The plan is played from rest to rest: re-timed so that its inputs vanish at both ends, in
-``duration`` seconds (:func:`nonholo.planning.retime.retime` with ``rest_to_rest``), on the model of its mechanism (:func:`nonholo.physics.models.model_for`).
-The model starts at rest at the plan's start, settled; after the motion it is left to
-settle again and its state is measured. That is the open-loop stage. Each touch-up then
-re-plans from the measured state to the plan's goal — with the plan's own options — and
-plays the new plan the same way, from where the mechanism is: the mechanism is at rest
-when it is re-planned, so the new plan starts where it really is.
+``duration`` seconds (:func:`nonholo.planning.retime.retime` with ``rest_to_rest``), on the
+model of its mechanism (:func:`nonholo.physics.models.model_for`). The model starts at rest
+at the plan's start, settled; after the motion it is left to settle again and its state is
+measured. That is the open-loop stage.
+
+Each touch-up re-plans from the measured state to the plan's goal — with the plan's own
+options — and plays the new plan the same way, from where the mechanism is, at rest. A
+touch-up is played only when it is predicted to end nearer the goal than the mechanism is:
+a large correction loop costs more tracking error than it removes. The prediction is a
+model fitted to the stages played so far, never a trial run:
+
+- the tracking error a played stage leaves grows with the size of its motion,
+  :func:`motion_size` ``s = ∫|u| dt`` of its planned inputs, as ``a·s + b·s²`` with ``a, b ≥ 0``
+  (a part linear in the motion, e.g. a rolling radius slightly off, and a quadratic one,
+  e.g. lag): so a stage of size ``s_j`` that
+  ended at ``|e_j|`` bounds a motion of size ``s`` by ``|e_j| · max(r, r²)``, ``r = s/s_j``.
+  The least bound over the stages played, times :data:`MARGIN` (a stage's error is a sample
+  of the model, not a bound), is the tracking term;
+- the mechanism drifts at rest (e.g. friction creeping under the legs' weight) at the
+  largest rate measured over the end of any played stage's settling (:data:`DRIFT_WINDOW`),
+  for the whole time of the touch-up's motion and settling;
+- the re-plan's own kinematic error (its terminal error and error bound) adds.
+
+``|e|`` is the norm of the stacked error (:meth:`~nonholo.spaces.groups.Product.norm`),
+the quantity a plan's ``tol`` bounds. Touching up stops at the first touch-up not played:
+once ``|e| ≤ tol`` of the plan (``result.options["tol"]``), when the re-plan is predicted to
+end no nearer, or when it cannot be planned; that touch-up is recorded, with its reason and
+the error unchanged. Hence the recorded errors do not grow from stage to stage as long as
+the prediction holds.
 
 Everything recorded is a function of the inputs alone — MuJoCo runs single-threaded and
-deterministically, and no wall-clock time enters the simulation — except each stage's
-real-time factor (simulated over wall time).
+deterministically, and no wall-clock time enters the simulation or a decision — except each
+stage's real-time factor (simulated over wall time).
 """
 # ruff: noqa: TRY004 (bad input is refused by a ValueError naming the argument, as across the package)
 from __future__ import annotations
@@ -39,6 +62,14 @@ SAMPLE = 0.01
 #: Keywords of :func:`nonholo.plan` a touch-up takes over from the plan's ``options``.
 REPLAN_OPTIONS = ("gamma", "step", "tol", "max_iter", "newton_below", "min_step", "delta_min",
                   "harmonics", "grid", "steps", "route", "leg_length", "leg_speed", "objective")
+#: Safety factor on the tracking term of a touch-up's predicted error (module docstring).
+MARGIN = 2.0
+#: The last fraction of a stage's settling over which its drift at rest is measured.
+DRIFT_WINDOW = 0.5
+#: The tolerance of a plan whose options record none (that of :func:`nonholo.plan`).
+DEFAULT_TOL = inspect.signature(plan).parameters["tol"].default
+#: What became of a stage: played, or why not (a touch-up only).
+OUTCOMES = ("played", "within tolerance", "predicted worse", "not planned")
 #: The format tag of a saved execution.
 FORMAT = "nonholo.execution/1"
 
@@ -46,27 +77,33 @@ FORMAT = "nonholo.execution/1"
 # -- the record ------------------------------------------------------------------------------
 
 class Execution:
-    """The record of :func:`execute`: one entry per stage, the open-loop stage first.
+    """The record of :func:`execute`: one entry per stage, the open-loop stage first, then
+    the touch-ups played and at most one touch-up not played, the last.
 
     Parameters
     ----------
     mechanism : str
         The mechanism's name.
     stages : list of dict
-        Per stage: ``error`` (the state's error from the goal by part, as
+        Per stage: ``error``, the state's error from the goal by part after it (as
         ``mechanism.space.error`` gives it: ``rotation`` in rad, ``coordinates`` in the
-        mechanism's units), ``max_slip`` (largest tangential speed at a rolling contact,
-        units per second) and ``max_contact_force`` (N), both over the samples taken every
-        :data:`SAMPLE` s, ``sim_time`` (s), ``real_time_factor``
-        (simulated over wall time), ``duration`` (s of motion, settling aside) and
-        ``planned`` (``False`` for a touch-up that could not be planned, with its ``reason``:
-        nothing was played, and no further touch-up is tried).
+        mechanism's units; unchanged by a stage not played); ``outcome``, one of
+        :data:`OUTCOMES`; ``size``, :func:`motion_size` of its plan (``None`` if none was
+        planned); ``predicted``, a touch-up's predicted ``|e|`` (``None`` for the open loop
+        and without a plan); ``drift``, the rate (per second) at which the state moved at rest
+        over the end of its settling; ``max_slip`` (largest tangential speed at a rolling
+        contact, units per second) and ``max_contact_force`` (N), both over the samples taken
+        every :data:`SAMPLE` s; ``sim_time`` (s); ``real_time_factor`` (simulated over wall
+        time); ``duration`` (s of motion, settling aside). A stage not played has a
+        ``reason``, and zero slip, force and times. Records saved before ``outcome`` had
+        ``planned`` instead; :meth:`from_dict` reads them.
     contact : Contact
         The settings played with (resolved: no field ``None``).
     traces : list of dict, optional
         Per stage, samples of the motion every :data:`SAMPLE` s: ``t`` (from the stage's
         start), the planned states ``R_planned``, ``q_planned`` (held at the end after
-        ``duration``), the simulated ``R``, ``q`` and ``slip``. Not saved.
+        ``duration``), the simulated ``R``, ``q`` and ``slip``; ``None`` for a stage not
+        played. Not saved.
     """
 
     def __init__(self, mechanism: str, stages: list, contact: Contact, traces: list | None = None):
@@ -136,7 +173,7 @@ class Execution:
             for key in ("max_slip", "max_contact_force", "sim_time", "real_time_factor"):
                 if not is_number(s[key]):
                     raise ValueError(f"stages[{i}].{key} must be a number, got {s[key]!r}")
-            stages.append(dict(s, error=dict(s["error"])))
+            stages.append(_stage_from_dict(s, i))
         return cls(d["mechanism"], stages, Contact.from_dict(d["contact"]))
 
     def save(self, path):
@@ -206,9 +243,27 @@ class Execution:
         parts = []
         for i, s in enumerate(self.stages):
             err = ", ".join(f"{k} {v:.2e}" for k, v in s["error"].items())
-            parts.append(f"  {'open loop' if i == 0 else f'touch-up {i}'}: {err}, max slip "
-                         f"{s['max_slip']:.2e}")
+            outcome = s.get("outcome", "played")
+            what = f"max slip {s['max_slip']:.2e}" if outcome == "played" else f"not played ({outcome})"
+            parts.append(f"  {'open loop' if i == 0 else f'touch-up {i}'}: {err}, {what}")
         return f"Execution({self.mechanism}, {len(self.stages)} stages\n" + "\n".join(parts) + ")"
+
+
+def _stage_from_dict(s: dict, i: int) -> dict:
+    """A saved stage checked, with its ``outcome`` (from ``planned`` in older records)."""
+    stage = dict(s, error=dict(s["error"]))
+    if "outcome" not in stage:
+        stage["outcome"] = "played" if stage.pop("planned", True) is not False else "not planned"
+    if stage["outcome"] not in OUTCOMES:
+        raise ValueError(f"stages[{i}].outcome must be one of {OUTCOMES}, got {stage['outcome']!r}")
+    if i == 0 and stage["outcome"] != "played":
+        raise ValueError(f"stages[0].outcome must be 'played' (the open loop), got {stage['outcome']!r}")
+    if stage["outcome"] != "played" and not isinstance(stage.get("reason"), str):
+        raise ValueError(f"stages[{i}].reason: a stage not played needs its reason, got {stage.get('reason')!r}")
+    for key in ("size", "predicted", "drift"):
+        if stage.get(key) is not None and not is_number(stage[key]):
+            raise ValueError(f"stages[{i}].{key} must be a number or null, got {stage[key]!r}")
+    return stage
 
 
 # -- playing ----------------------------------------------------------------------------------
@@ -299,6 +354,59 @@ def _stage(sim, played, R, q):
     return numbers, trace, R_end, q_end
 
 
+def motion_size(result: PlanResult) -> float:
+    """The size of a plan's motion: ``∫|u| dt`` of its inputs (the same for any re-timing).
+
+    Parameters
+    ----------
+    result : PlanResult
+        A plan.
+
+    Returns
+    -------
+    float
+        The integral, by the trapezoidal rule over the plan's samples (input units × s).
+    """
+    t = np.asarray(result.t, dtype=float)
+    if len(t) < 2:
+        return 0.0
+    speed = np.linalg.norm(np.asarray(result.u, dtype=float).reshape(len(t), -1), axis=1)
+    return float(np.sum(0.5 * (speed[1:] + speed[:-1]) * np.diff(t)))
+
+
+def predicted_error(norms, stages, size: float, kinematic: float, seconds: float) -> float:
+    """The ``|e|`` a motion of ``size`` is predicted to end at, from the stages played.
+
+    ``MARGIN · tracking + drift · seconds + kinematic`` (module docstring): ``tracking`` the
+    least of the bounds ``|e_j| · max(r, r²)``, ``r = size / s_j``, over the played stages
+    ``j`` of size ``s_j > 0``; ``drift`` the largest drift at rest measured.
+
+    Parameters
+    ----------
+    norms : sequence of float
+        ``|e|`` after each stage of ``stages``.
+    stages : sequence of dict
+        Stages of an :class:`Execution` so far.
+    size : float
+        :func:`motion_size` of the motion.
+    kinematic : float
+        Its plan's own error bound at the goal.
+    seconds : float
+        Time it takes, settling included.
+
+    Returns
+    -------
+    float
+        The prediction; ``inf`` for a motion of non-zero size without a played motion to
+        scale it from.
+    """
+    played = [(n, s) for n, s in zip(norms, stages) if s["outcome"] == "played"]
+    bounds = [n * max(size / s["size"], (size / s["size"]) ** 2) for n, s in played if s.get("size")]
+    drift = max((s.get("drift") or 0.0 for _, s in played), default=0.0)
+    tracking = 0.0 if size == 0 else (MARGIN * min(bounds) if bounds else math.inf)
+    return tracking + drift * seconds + kinematic
+
+
 def execute(result, touch_ups=0, duration=None, contact=None, progress=None) -> Execution:
     """Play a plan on the MuJoCo model of its mechanism, open loop, then touch up.
 
@@ -307,8 +415,8 @@ def execute(result, touch_ups=0, duration=None, contact=None, progress=None) -> 
     result : PlanResult
         A successful plan.
     touch_ups : int
-        Re-plans from the measured state to the plan's goal after the open-loop stage,
-        each played like it.
+        Re-plans from the measured state to the plan's goal after the open-loop stage at
+        most, each played like it if predicted to end nearer the goal (module docstring).
     duration : float, optional
         Seconds each stage's motion takes, settling aside (default: ``SLOWDOWN``
         times the plan's ``T``).
@@ -316,13 +424,13 @@ def execute(result, touch_ups=0, duration=None, contact=None, progress=None) -> 
         The contact and actuation settings (default: ``Contact()``; fields left ``None``
         take the mechanism's calibrated values, :meth:`Contact.resolved`).
     progress : callable, optional
-        Called with each stage's record (a dict with ``stage``, its index) once played.
+        Called with each stage's record (a dict with ``stage``, its index) once done.
 
     Returns
     -------
     Execution
-        Per stage: the error by part, slip, contact force, simulated time, real-time factor;
-        the motions' samples in ``Execution.traces``.
+        Per stage: the error by part, what became of it, slip, contact force, simulated
+        time, real-time factor; the motions' samples in ``Execution.traces``.
 
     Raises
     ------
@@ -343,34 +451,82 @@ def execute(result, touch_ups=0, duration=None, contact=None, progress=None) -> 
     R, q = model.state(m, d)
     Rd, qd = result.Rd, _coordinates(result.qd)
     options = replan_options(result)
-    stages, traces = [], []
-    current = result
+    tol = float(result.options.get("tol", DEFAULT_TOL))
+    settle = float(model.contact.settle)
+    stages, traces, norms = [], [], []
+    current, predicted = result, None
     for i in range(touch_ups + 1):
-        reason = None
-        if i > 0:
-            try:
-                current = plan(mech.space.public(R, q), result.goal, mechanism=mech, **options)
-                reason = None if current.success else current.reason
-            except ValueError as exc:          # e.g. a measured state the planner refuses
-                reason = str(exc)
-        if reason is not None:
-            record = {"error": _error(mech, R, q, Rd, qd), "max_slip": 0.0, "max_contact_force": 0.0,
-                      "sim_time": 0.0, "real_time_factor": 0.0, "duration": 0.0, "planned": False,
-                      "reason": reason}
-            stages.append(record)
-            traces.append(None)
-            if progress is not None:
-                progress(dict(record, stage=i))
-            break
-        played = retime(current, T=duration if duration is not None else SLOWDOWN * planned_controls(current).T,
-                        rest_to_rest=True)
+        if i == 0:
+            played = _played(current, duration)
+        else:
+            record = _touch_up(mech, R, q, result, options, tol, (stages, norms), duration, settle)
+            if isinstance(record, dict):           # not played: recorded, and touching up ends
+                record["error"] = dict(stages[-1]["error"])
+                stages.append(record)
+                traces.append(None)
+                norms.append(norms[-1])
+                if progress is not None:
+                    progress(dict(record, stage=i))
+                break
+            current, played, predicted = record
         numbers, trace, R, q = _stage(sim, played, R, q)
-        record = {"error": _error(mech, R, q, Rd, qd), **numbers, "planned": True}
+        error = _error(mech, R, q, Rd, qd)
+        record = {"error": error, "outcome": "played", **numbers, "size": motion_size(current),
+                  "drift": _drift(mech, trace, float(played.T), settle), "predicted": predicted}
         stages.append(record)
         traces.append(trace)
+        norms.append(mech.space.norm(error))
         if progress is not None:
             progress(dict(record, stage=i))
     return Execution(mech.name, stages, model.contact, traces)
+
+
+def _played(current, duration):
+    """``current`` re-timed from rest to rest as it is played."""
+    return retime(current, T=duration if duration is not None else SLOWDOWN * planned_controls(current).T,
+                  rest_to_rest=True)
+
+
+def _touch_up(mech, R, q, result, options, tol, so_far, duration, settle):
+    """The touch-up from the measured ``(R, q)``, after the stages ``so_far`` (records and
+    their ``|e|``): ``(plan, played, predicted |e|)`` to play, or the record of a touch-up not
+    played (without its error)."""
+    stages, norms = so_far
+    now = norms[-1]
+
+    def skip(outcome, reason, size=None, predicted=None):
+        return {"outcome": outcome, "reason": reason, "max_slip": 0.0, "max_contact_force": 0.0,
+                "sim_time": 0.0, "real_time_factor": 0.0, "duration": 0.0, "size": size, "drift": None,
+                "predicted": predicted}
+
+    if now <= tol:
+        return skip("within tolerance", f"|e| = {now:.3g} is within the plan's tolerance {tol:g}")
+    try:
+        current = plan(mech.space.public(R, q), result.goal, mechanism=mech, **options)
+        reason = None if current.success else current.reason
+    except ValueError as exc:              # e.g. a measured state the planner refuses
+        reason = str(exc)
+    if reason is not None:
+        return skip("not planned", reason)
+    played = _played(current, duration)
+    size = motion_size(current)
+    kinematic = (current.terminal_error or 0.0) + (current.error_bound or 0.0)
+    predicted = predicted_error(norms, stages, size, kinematic, float(played.T) + settle)
+    if not predicted < now:
+        return skip("predicted worse", f"predicted |e| {predicted:.3g} after a motion of size {size:.3g}, "
+                    f"not below the present {now:.3g}", size, predicted)
+    return current, played, predicted
+
+
+def _drift(mech, trace, T: float, settle: float) -> float:
+    """How fast the state moved over the last :data:`DRIFT_WINDOW` of the stage's settling
+    (``|e|`` between its first and last samples there, per second)."""
+    t = trace["t"]
+    k = min(int(np.searchsorted(t, T + (1 - DRIFT_WINDOW) * settle - 1e-9)), len(t) - 2)
+    if t[-1] <= t[k]:
+        return 0.0
+    e = mech.space.error(trace["R"][k], trace["q"][k], trace["R"][-1], trace["q"][-1])[1]
+    return mech.space.norm(e) / float(t[-1] - t[k])
 
 
 def _coordinates(q) -> np.ndarray:

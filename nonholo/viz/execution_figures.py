@@ -3,7 +3,8 @@
 :func:`execution_figure` takes an :class:`~nonholo.physics.execution.Execution` with its
 traces (the samples kept by a run; a record loaded from a file has none) and draws four
 panels: the error from the goal after each stage on a log scale (its parts: rotation,
-coordinates), the simulated state's distance from the played plan along each stage's
+coordinates; a touch-up not played, hollow, at the error it left unchanged), the simulated
+state's distance from the played plan along each played stage's
 motion, the motion itself (the first two coordinates in the plane where the state has them,
 else the roll–pitch–yaw angles against time), planned and simulated, and the slip at the
 rolling contacts along each stage.
@@ -92,12 +93,17 @@ def execution_figure(execution, title: str | None = None) -> NotebookFigure:
     ax = fig.add_subplot(grid[0, 0])
     parts = list(stages[0]["error"])
     x = np.arange(len(stages))
+    played = np.array([s.get("outcome", "played") == "played" for s in stages])
     units = {part: mech.space.part_unit(part) for part in parts}
     names_of = {part: (f"{part} {unit}" if unit.startswith("(") else label(part, unit)) for part, unit in units.items()}
     for j, part in enumerate(parts):
         values = np.maximum([s["error"][part] for s in stages], FLOOR)
-        ax.semilogy(x, values, "o-", color=RESULT_COLORS[j], label=names_of[part])
-    ax.set_xticks(x, names, rotation=20 if len(stages) > 3 else 0)
+        ax.semilogy(x, values, "-", color=RESULT_COLORS[j], label=names_of[part])
+        ax.semilogy(x[played], values[played], "o", color=RESULT_COLORS[j])
+        ax.semilogy(x[~played], values[~played], "o", mfc="none", color=RESULT_COLORS[j],
+                    label="not played" if j == len(parts) - 1 and not played.all() else None)
+    ticks = [f"{name}\n({s['outcome']})" if not p else name for name, s, p in zip(names, stages, played)]
+    ax.set_xticks(x, ticks, rotation=20 if len(stages) > 3 else 0)
     ax.set_ylabel("error from the goal")
     ax.set_title("after each stage (at rest)")
     ax.legend(fontsize=8)
@@ -151,7 +157,9 @@ def execution_figure(execution, title: str | None = None) -> NotebookFigure:
     ax.set_title("slip")
     ax.legend(fontsize=8)
 
-    fig.suptitle(title or f"{mech.name} on its physics model: open loop and {len(stages) - 1} touch-up"
-                 + ("" if len(stages) == 2 else "s"))
+    touched = int(played.sum()) - 1
+    fig.suptitle(title or f"{mech.name} on its physics model: open loop"
+                 + (f" and {touched} touch-up" + ("" if touched == 1 else "s") if touched else "")
+                 + ("" if played.all() else f"; touch-up {touched + 1} not played"))
     fig.tight_layout()
     return fig
