@@ -12,7 +12,9 @@ unless its content differs beyond the tolerances of :mod:`nonholo.io.numeric_dif
   what;
 - a figure is redrawn (PNG and PDF) only when the data it plots moved
   (:func:`nonholo.viz.figure_data.figure_data`, stored beside it in
-  ``figure_data/<stem>.data``);
+  ``figure_data/<stem>.data``); a figure of numbers known only to a coarser tolerance is
+  given it (``rtol``: the physics executions' touch-ups, see
+  :data:`nonholo.paper.reproduce.TOUCH_UP_RTOL`);
 - any other file (the GIF) is remade when the numbers it is drawn from moved (stored the
   same way).
 
@@ -84,15 +86,15 @@ def _without_provenance(value):
     return {k: v for k, v in value.items() if k != PROVENANCE_KEY} if isinstance(value, dict) else value
 
 
-def _where(old, new) -> str:
-    """``" (in <the artist>)"``: the first artist of a drawing whose record moved most."""
+def _where(old, new, rtol: float) -> str:
+    """``" (most in <the artist>)"``: the first artist of a drawing whose record moved most."""
     before, after = figure_data.parts(*old), figure_data.parts(*new)
     if not before or len(before) != len(after):
         return ""
     moved = [max(numeric_diff.text_distance(wa, wb), numeric_diff.array_distance(a, b))
              for (wa, a), (wb, b) in zip(before, after)]
     k = int(np.argmax(moved))
-    return f" (most in {after[k][0][:80]!r})" if moved[k] > numeric_diff.RTOL else ""
+    return f" (most in {after[k][0][:80]!r})" if moved[k] > rtol else ""
 
 
 class Outputs:
@@ -120,9 +122,10 @@ class Outputs:
         self.kept: list[Path] = []
 
     # -- deciding --------------------------------------------------------------------------
-    def _differs(self, path: Path, distance: float, old_exists: bool, where: str = "") -> bool:
+    def _differs(self, path: Path, distance: float, old_exists: bool, where: str = "",
+                 rtol: float = numeric_diff.RTOL) -> bool:
         """Record the outcome for ``path``; whether it must be (re)written."""
-        if distance <= numeric_diff.RTOL:
+        if distance <= rtol:
             self.kept.append(path)
             return False
         if not old_exists:
@@ -130,7 +133,7 @@ class Outputs:
         elif math.isinf(distance):
             why = "differs in more than numbers"
         else:
-            why = f"numbers differ by {distance:.1e} of their scale (tolerance {numeric_diff.RTOL:.0e})"
+            why = f"numbers differ by {distance:.1e} of their scale (tolerance {rtol:.0e})"
         self.differences.append(Difference(path, distance, why + where))
         return not self.check
 
@@ -210,7 +213,8 @@ class Outputs:
         """
         return self.json(name, result.to_json())
 
-    def _drawn(self, paths: list[Path], stem: str, words: list[str], numbers, make) -> list[Path]:
+    def _drawn(self, paths: list[Path], stem: str, words: list[str], numbers, make,
+               rtol: float = numeric_diff.RTOL) -> list[Path]:
         record = self.outdir / DATA_DIR / f"{stem}.data"
         stored = _read_bytes(record)
         old = None
@@ -225,15 +229,15 @@ class Outputs:
         else:       # texts by their words and numbers (a rounded label), then the data
             distance = max(numeric_diff.text_distance("\n".join(old[0]), "\n".join(words)),
                            numeric_diff.array_distance(old[1], numbers))
-        where = "" if old is None or distance <= numeric_diff.RTOL else _where(old, (words, numbers))
-        if self._differs(paths[0], distance, present and old is not None, where):
+        where = "" if old is None or distance <= rtol else _where(old, (words, numbers), rtol)
+        if self._differs(paths[0], distance, present and old is not None, where, rtol):
             make()
             record.parent.mkdir(parents=True, exist_ok=True)
             safe_write.write_bytes(record, figure_data.to_bytes(words, numbers), "path")
             self.written.extend([*paths, record])
         return paths
 
-    def figure(self, fig, stem: str) -> list[Path]:
+    def figure(self, fig, stem: str, rtol: float = numeric_diff.RTOL) -> list[Path]:
         """A figure as ``<stem>.png`` and ``<stem>.pdf``, redrawn where its data moved.
 
         Parameters
@@ -242,6 +246,9 @@ class Outputs:
             The figure.
         stem : str
             The files' name without suffix.
+        rtol : float
+            The tolerance of its data, for a figure of numbers known only to a coarser one
+            (the default: :data:`nonholo.io.numeric_diff.RTOL`).
 
         Returns
         -------
@@ -251,7 +258,7 @@ class Outputs:
         words, numbers = figure_data.figure_data(fig)
         paths = [self.outdir / f"{stem}.png", self.outdir / f"{stem}.pdf"]
         return self._drawn(paths, stem, words, numbers,
-                           lambda: style.save_figure(fig, stem, self.outdir, dpi=self.dpi))
+                           lambda: style.save_figure(fig, stem, self.outdir, dpi=self.dpi), rtol)
 
     def drawing(self, name, make, words: list[str], numbers) -> Path:
         """A file drawn by ``make(path)`` from ``numbers``, remade where they moved.
