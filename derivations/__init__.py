@@ -16,4 +16,6 @@ mechanism's geometry:
 - :mod:`derivations.audit`        printed vs derived, equation by equation
 - :mod:`derivations.codegen`      numeric modules written into ``nonholo/generated``
 - :mod:`derivations.generator`    what keys a generated module: the generator's version, a definition's text
+- :mod:`derivations.admission`    a user's text and numbers as data: names, constants, expressions as text
+- :mod:`derivations.budget`       the size budget of the symbolic work, checked before deriving
 """

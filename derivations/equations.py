@@ -10,21 +10,107 @@
   singularity function.
 
 Both give a :class:`~derivations.mechanisms.Mechanism` for the code generator. Expressions
-are SymPy's; ``parameters`` maps further symbols to numbers, substituted first (a float as
-the rational of its printed digits). Every symbol must be declared — a coordinate, an input,
-a parameter, or an entry of the rotation — else ``ValueError`` naming it, and every
-argument is checked for the class of state it describes (the message says which argument
-to use instead).
+are SymPy's, or text in Python's syntax read by :func:`derivations.admission.parse` (never
+evaluated: only numbers, the declared symbols, arithmetic and a fixed set of functions);
+``parameters`` maps further symbols to numbers — finite and real, never text —
+substituted first (a float as the rational of its printed digits). Every symbol must be
+declared — a coordinate, an input, a parameter, or an entry of the rotation — else
+``ValueError`` naming it, and every argument is checked for the class of state it
+describes (the message says which argument to use instead). :func:`admitted` checks and
+converts the arguments before anything is hashed or derived: the name, the text, the
+constants, and the size budget of the symbolic work (:mod:`derivations.budget`), whose
+costliest steps (``simplify``, ``factor``, ``expand``) are bounded here too.
 """
 from __future__ import annotations
 
 from collections.abc import Mapping
 
 import sympy as sp
+from sympy.matrices.utilities import dotprodsimp
 
-from .generator import check_name
+from . import admission, budget
+from .admission import check_name
 from .mechanisms import Mechanism, exact_number, is_free_name
 from .rotations import r
+
+#: The forms of a definition :func:`admitted` checks: their symbol and expression arguments.
+FORMS = {
+    "field_mechanism": {"symbols": ("inputs", "coordinates", "angles"), "expressions": ("rates", "omega", "delta")},
+    "constraint_mechanism": {"symbols": ("coordinates", "velocities", "inputs", "angles"),
+                             "expressions": ("constraints",)},
+}
+
+
+def admitted(form: str, name, arguments: Mapping) -> dict:
+    """The arguments of ``form`` (``"field_mechanism"`` or ``"constraint_mechanism"``)
+    checked and converted, before anything is hashed or derived from them.
+
+    The name is an identifier (:func:`derivations.admission.check_name`); symbols are
+    SymPy symbols, no more than :mod:`derivations.budget` allows; parameters are finite
+    real numbers (:func:`derivations.admission.constant`, text refused); expressions are
+    SymPy's, numbers, or text read by :func:`derivations.admission.parse` in the declared
+    symbols, each within the budget and with real, finite constants; the rotation a 3×3
+    matrix of symbols; the description and the units lines of text.
+
+    Parameters
+    ----------
+    form : str
+        The function the arguments are for.
+    name : str
+        The mechanism's name.
+    arguments : mapping
+        Its keyword arguments.
+
+    Returns
+    -------
+    dict
+        The arguments, the expressions as SymPy's (text parsed), the parameters' values
+        as SymPy numbers.
+
+    Raises
+    ------
+    ValueError
+        Naming the argument.
+    """
+    if form not in FORMS:
+        raise ValueError(f"form must be one of {', '.join(FORMS)}, got {form!r}")
+    check_name(name)
+    out = dict(arguments)
+    declared = []
+    for key in FORMS[form]["symbols"]:
+        if key in out:
+            out[key] = _symbols(out[key], key)
+            declared += out[key]
+    budget.check_count(len(out.get("coordinates", ())), budget.COORDINATES, "coordinates", "coordinates")
+    budget.check_count(len(out.get("inputs", ())), budget.INPUTS, "inputs", "inputs")
+    if out.get("parameters") is not None:
+        out["parameters"] = _parameters(out["parameters"])
+        declared += list(out["parameters"])
+    if out.get("rotation") is not None:
+        out["rotation"] = _rotation(out["rotation"])
+    if out.get("omega") is not None:
+        declared += list(r if out.get("rotation") is None else out["rotation"])
+    if out.get("description") is not None:
+        out["description"] = admission.check_text(out["description"], "description")
+    if out.get("units") is not None:
+        out["units"] = _unit_texts(out["units"])
+    symbols = admission.symbol_table(declared)
+    tally = budget.Tally(f"mechanism {name!r}")
+    field_nodes = 0
+    for key in FORMS[form]["expressions"]:
+        value = out.get(key)
+        if value is None:
+            continue
+        before = tally.nodes
+        if key == "delta":
+            out[key] = admission.expression(value, key, symbols, tally)
+        else:
+            out[key] = _expressions(value, key, symbols, tally)
+        if key in ("rates", "omega"):
+            field_nodes += tally.nodes - before
+    rows = len(out.get("coordinates", ())) + (3 if out.get("omega") is not None else 0)
+    budget.check_work(field_nodes, rows, "rates" if out.get("omega") is None else "rates and omega")
+    return out
 
 
 def field_mechanism(name: str, *, inputs, coordinates=(), rates=(), omega=None, rotation=None,
@@ -46,40 +132,42 @@ def field_mechanism(name: str, *, inputs, coordinates=(), rates=(), omega=None, 
       default: the product of the distinct factors of the field's denominators (``tan``,
       ``sec`` … as ``sin``/``cos``), none if it has none.
     """
-    name = check_name(name)
-    u = _symbols(inputs, "inputs", at_least=1)
-    x = _symbols(coordinates, "coordinates")
-    values = _parameters(parameters)
+    given = admitted("field_mechanism", name, dict(
+        inputs=inputs, coordinates=coordinates, rates=rates, omega=omega, rotation=rotation, angles=angles,
+        parameters=parameters, delta=delta, units=units, description=description))
+    u = _symbols(given["inputs"], "inputs", at_least=1)
+    x = given["coordinates"]
+    values = given["parameters"] or {}
     _distinct({"coordinates": x, "inputs": u, "parameters": tuple(values)})
     if not x and omega is None:
         raise ValueError("give coordinates= with rates= (a state x in R^k), omega= (an orientation R "
                          "on SO(3)) or both (SO(3) x R^k)")
-    rates = _expressions(rates, "rates")
+    rates = given["rates"]
     if len(rates) != len(x):
         raise ValueError(f"rates: {len(rates)} expression(s) for {len(x)} coordinate(s); give one "
                          "rate per coordinate")
-    R = None if omega is None else _rotation(rotation)
+    R = None if omega is None else (given["rotation"] if given["rotation"] is not None else r)
     declared = set(x) | set(u) | set(values) | (set(R) if R is not None else set())
     parts = {"rates": rates}
     if omega is not None:
-        parts["omega"] = _expressions(omega, "omega")
+        parts["omega"] = given["omega"]
         if len(parts["omega"]) != 3:
             raise ValueError(f"omega: the angular velocity has 3 components, got {len(parts['omega'])}")
     if delta is not None:
-        parts["delta"] = _expressions([delta], "delta")
+        parts["delta"] = [given["delta"]]
     for key, exprs in parts.items():
         _declared(exprs, key, declared, R)
     to_r = {**values, **({} if R is None else dict(zip(R, r)))}
-    parts = {key: [e.xreplace(to_r) for e in exprs] for key, exprs in parts.items()}
+    parts = {key: _substituted(exprs, to_r, key, name) for key, exprs in parts.items()}
     X = _linear(parts["rates"], u, [f"the rate of {c}" for c in x]) if x else None
     L = _linear(parts["omega"], u, [f"omega[{i}]" for i in range(3)]) if omega is not None else None
     field = X if L is None else (L if X is None else sp.Matrix.vstack(L, X))
     is_angle = _angles(angles, x)
     return Mechanism(
-        name=name, description=description or f"{name} (from its equations)",
+        name=name, description=given["description"] or f"{name} (from its equations)",
         L=L, X=X, coordinates=x, inputs=tuple(str(s) for s in u),
         delta=parts["delta"][0] if "delta" in parts else singular_factor(field),
-        angles=is_angle, units=_units(units, x, is_angle),
+        angles=is_angle, units=_units(given["units"], x, is_angle),
         derivation={"rates": tuple(parts["rates"]), "omega": parts.get("omega"), "parameters": values})
 
 
@@ -96,40 +184,70 @@ def constraint_mechanism(name: str, *, coordinates, velocities, constraints, inp
     (none if constant) — the rates blow up where it vanishes. ``angles``, ``units``,
     ``parameters`` as for :func:`field_mechanism`.
     """
-    x = _symbols(coordinates, "coordinates", at_least=1)
-    xdot = _symbols(velocities, "velocities")
+    given = admitted("constraint_mechanism", name, dict(
+        coordinates=coordinates, velocities=velocities, constraints=constraints, inputs=inputs, angles=angles,
+        parameters=parameters, units=units, description=description))
+    x = _symbols(given["coordinates"], "coordinates", at_least=1)
+    xdot = given["velocities"]
     if len(xdot) != len(x):
         raise ValueError(f"velocities: {len(xdot)} symbol(s) for {len(x)} coordinate(s); give the "
                          "symbol of each coordinate's rate")
-    u = _symbols(inputs, "inputs", at_least=1)
-    values = _parameters(parameters)
+    u = _symbols(given["inputs"], "inputs", at_least=1)
+    values = given["parameters"] or {}
     extra = tuple(s for s in u if s not in xdot)
     _distinct({"coordinates": x, "velocities": xdot, "parameters": tuple(values), "inputs": extra})
-    equations = _expressions(constraints, "constraints")
+    equations = given["constraints"]
     _declared(equations, "constraints", set(x) | set(xdot) | set(u) | set(values), None)
-    equations = [e.xreplace(values) for e in equations]
+    equations = _substituted(equations, values, "constraints", name)
     unknowns = [v for v in xdot if v not in u]
+    budget.check_count(len(unknowns), budget.UNKNOWNS, "constraints", "rates to solve for (velocities that are "
+                       "not inputs)")
     if len(equations) != len(unknowns):
         raise ValueError(f"constraints: {len(equations)} equation(s) for the {len(unknowns)} rate(s) that "
                          f"are not inputs ({', '.join(map(str, unknowns)) or 'none'}); give as many "
                          "equations as those rates")
     moving = list(unknowns) + list(u)
     for i, e in enumerate(equations):
-        rest = sp.expand(e - sp.Matrix([e]).jacobian(moving).dot(sp.Matrix(moving)))
+        # linear: no second derivative in the rates and inputs, nothing left where they are 0
+        rest = budget.expanded(e.xreplace({a: 0 for a in moving}))
+        if rest != 0:
+            rest = budget.simplified(rest)
         if any(e.diff(a).has(*moving) for a in moving) or rest != 0:
-            raise ValueError(f"constraints[{i}] = {e} is not linear in the rates and inputs "
+            raise ValueError(f"constraints[{i}] = {_shown(e)} is not linear in the rates and inputs "
                              "(A(x) ẋ = B(x) u, no term without a rate or an input)")
     A = sp.Matrix(equations).jacobian(unknowns)
     B = -sp.Matrix(equations).jacobian(list(u))
-    det = sp.factor_terms(_tidy(A.det()))
+    # a small system by fraction-free elimination with SymPy's simplification of the
+    # products; a larger one division-free (Berkowitz) and solved without it, measured
+    # against the budget at once (derivations.budget)
+    small = len(unknowns) <= 3 and all(budget.is_small(a, budget.SIMPLIFY_NODES) for a in A)
+    det = A.det() if small else A.det(method="berkowitz")
+    if not small:
+        budget.measure(det, "constraints: the determinant of their matrix in the rates that are not inputs")
+    limit = budget.ALGEBRA_NODES if small else budget.SIMPLIFY_NODES
+    det = _tidy(det, limit)
+    det = sp.factor_terms(det) if budget.is_small(det) else det
     if det == 0:
         raise ValueError("constraints: their matrix in the rates that are not inputs is singular "
                          "everywhere; they do not fix those rates")
-    solved = dict(zip(unknowns, (A.LUsolve(B * sp.Matrix(u))).applyfunc(_tidy)))
+    if small:
+        solution = A.LUsolve(B * sp.Matrix(u))
+    else:
+        with dotprodsimp(False):
+            solution = A.LUsolve(B * sp.Matrix(u))
+        for v, e in zip(unknowns, solution):
+            budget.measure(e, f"constraints: the rate of {v} they solve to")
+    solved = dict(zip(unknowns, solution.applyfunc(lambda e: _tidy(e, limit))))
     rates = [solved.get(v, v) for v in xdot]
     delta = None if not det.free_symbols else det.as_coeff_Mul()[1]
-    return field_mechanism(name, inputs=u, coordinates=x, rates=rates, angles=angles, units=units,
-                           delta=delta, description=description or f"{name} (from its constraints)")
+    try:
+        return field_mechanism(name, inputs=u, coordinates=x, rates=rates, angles=given["angles"],
+                               units=given["units"], delta=delta,
+                               description=given["description"] or f"{name} (from its constraints)")
+    except ValueError as exc:
+        if "budget" not in str(exc):
+            raise
+        raise ValueError(f"constraints: the rates they solve to are beyond the budget ({exc})") from None
 
 
 def singular_factor(field: sp.Matrix) -> sp.Expr | None:
@@ -139,14 +257,38 @@ def singular_factor(field: sp.Matrix) -> sp.Expr | None:
     trig = {sp.tan: lambda a: sp.sin(a) / sp.cos(a), sp.cot: lambda a: sp.cos(a) / sp.sin(a),
             sp.sec: lambda a: 1 / sp.cos(a), sp.csc: lambda a: 1 / sp.sin(a)}
     factors = []
+    allowance = budget.Allowance()
     for e in field:
         for f, g in trig.items():
             e = e.replace(f, g)
-        _, den = sp.fraction(sp.together(e))
-        for base, _ in sp.factor_list(den)[1]:
-            if base.free_symbols and all(sp.simplify(base / b).free_symbols for b in factors):
+        if budget.is_small(e):
+            _, den = sp.fraction(sp.together(e))
+            bases = [base for base, _ in sp.factor_list(den)[1]]
+        else:                   # beyond the algebra's budget: the denominators as they are
+            bases = _denominators(e)
+        for base in bases:
+            if base.free_symbols and all(_not_a_multiple(base, b, allowance) for b in factors):
                 factors.append(base)
+                budget.check_count(len(factors), budget.FACTORS, "delta", "distinct factors in the field's "
+                                   "denominators; give the singularity function as delta=")
     return sp.Mul(*factors) if factors else None
+
+
+def _denominators(e: sp.Expr) -> list:
+    """The bases of the negative powers in ``e`` (an iterative walk)."""
+    out, stack = [], [e]
+    while stack:
+        node = stack.pop()
+        if isinstance(node, sp.Pow) and node.exp.is_Number and node.exp < 0 and node.base not in out:
+            out.append(node.base)
+        stack.extend(node.args)
+    return out
+
+
+def _not_a_multiple(base: sp.Expr, other: sp.Expr, allowance: budget.Allowance) -> bool:
+    """Whether ``base`` is not a constant multiple of ``other`` (``simplify`` of the ratio,
+    within the derivation's ``allowance``)."""
+    return bool(budget.simplified(base / other, allowance).free_symbols)
 
 
 # -- checks ------------------------------------------------------------------------------------
@@ -179,6 +321,8 @@ def _distinct(groups: dict) -> None:
 
 
 def _parameters(parameters) -> dict:
+    """Symbol → value, each a finite real number (:func:`derivations.admission.constant`;
+    text refused, not evaluated), floats as the rationals of their printed digits."""
     if parameters is None:
         return {}
     if not isinstance(parameters, Mapping):
@@ -187,25 +331,44 @@ def _parameters(parameters) -> dict:
     for k, v in parameters.items():
         if not isinstance(k, sp.Symbol):
             raise ValueError(f"parameters: the keys must be SymPy symbols, got {k!r}")
-        try:
-            value = sp.sympify(v)
-        except (sp.SympifyError, TypeError):
-            raise ValueError(f"parameters: {k} = {v!r} is not a number") from None
-        if value.free_symbols or not value.is_number:
-            raise ValueError(f"parameters: {k} = {v!r} is not a number")
-        out[k] = exact_number(value)
+        out[k] = exact_number(admission.constant(v, f"parameters: {k}"))
     return out
 
 
-def _expressions(values, key: str) -> list:
-    values = list(values) if isinstance(values, (list, tuple, sp.MatrixBase)) else [values]
+def _expressions(values, key: str, symbols: Mapping, tally: budget.Tally) -> list:
+    """The expressions of ``key`` (a sequence, a matrix or one), each admitted
+    (:func:`derivations.admission.expression`: text parsed in ``symbols``)."""
+    if isinstance(values, sp.MatrixBase):
+        values = list(values)
+    elif isinstance(values, (list, tuple)):
+        budget.check_count(len(values), budget.COORDINATES + 3, key, "expressions")
+        values = list(values)
+    else:
+        values = [values]
+    return [admission.expression(v, f"{key}[{i}]", symbols, tally) for i, v in enumerate(values)]
+
+
+def _substituted(exprs, values: Mapping, key: str, name) -> list:
+    """``exprs`` with ``values`` substituted, checked again: within the budget and with
+    real, finite constants (a product of parameters may leave float range)."""
+    tally = budget.Tally(f"mechanism {name!r}")
     out = []
-    for i, v in enumerate(values):
-        try:
-            out.append(sp.sympify(v))
-        except (sp.SympifyError, TypeError):
-            raise ValueError(f"{key}[{i}]: {v!r} is not a SymPy expression") from None
+    for i, e in enumerate(exprs):
+        e = e.xreplace(values)
+        label = f"{key}[{i}] (with the parameters' values)"
+        tally.add(e, label)
+        admission.check_constants(e, label)
+        out.append(e)
     return out
+
+
+def _unit_texts(units):
+    """``units`` (a sequence or a mapping) with each unit a line of text."""
+    if isinstance(units, Mapping):
+        return {k: admission.check_text(v, f"units[{k}]") for k, v in units.items()}
+    if isinstance(units, (str, bytes)) or not isinstance(units, (list, tuple)):
+        raise ValueError(f"units must be a sequence or a mapping of strings, got {type(units).__name__}")
+    return tuple(admission.check_text(v, f"units[{i}]") for i, v in enumerate(units))
 
 
 def _declared(exprs, key: str, declared: set, R) -> None:
@@ -224,23 +387,33 @@ def _declared(exprs, key: str, declared: set, R) -> None:
 def _rotation(rotation) -> sp.Matrix:
     if rotation is None:
         return r
-    R = sp.Matrix(rotation)
-    if R.shape != (3, 3) or not all(isinstance(s, sp.Symbol) for s in R) or len(set(R)) != 9:
+    rows = rotation.tolist() if isinstance(rotation, sp.MatrixBase) else rotation
+    entries = [s for row in rows for s in row] if isinstance(rows, (list, tuple)) and all(
+        isinstance(row, (list, tuple)) for row in rows) else None
+    # the entries are checked before a Matrix is built of them (it would sympify text)
+    if (entries is None or len(rows) != 3 or any(len(row) != 3 for row in rows)
+            or not all(isinstance(s, sp.Symbol) for s in entries) or len(set(entries)) != 9):
         raise ValueError("rotation must be a 3×3 matrix of nine distinct symbols (the entries of R)")
-    return R
+    return sp.Matrix(rows)
 
 
 def _linear(exprs, u, labels) -> sp.Matrix:
     """The matrix ``G`` with ``exprs = G u``; ``ValueError`` naming an expression that is not
     linear in ``u`` or has a term without an input (a drift)."""
     G = sp.Matrix(exprs).jacobian(list(u))
+    allowance = budget.Allowance()
     for i, label in enumerate(labels):
         if G.row(i).has(*u):
-            raise ValueError(f"{label} = {exprs[i]} is not linear in the inputs {', '.join(map(str, u))}")
-        drift = sp.simplify(exprs[i] - (G.row(i) * sp.Matrix(u))[0])
+            raise ValueError(f"{label} = {_shown(exprs[i])} is not linear in the inputs {', '.join(map(str, u))}")
+        # linear in u (G free of u): the expression is G u plus its value at u = 0, the drift
+        drift = exprs[i].xreplace({a: 0 for a in u})
         if drift != 0:
-            raise ValueError(f"{label} = {exprs[i]} has the term {drift} without an input: the field "
-                             "must be driftless (rates = G(x) u)")
+            drift = budget.expanded(drift)
+        if drift != 0:
+            drift = budget.simplified(drift, allowance)
+        if drift != 0:
+            raise ValueError(f"{label} = {_shown(exprs[i])} has the term {_shown(drift)} without an input: the "
+                             "field must be driftless (rates = G(x) u)")
     return G
 
 
@@ -267,6 +440,19 @@ def _units(units, x, is_angle) -> tuple[str, ...]:
     return units
 
 
-def _tidy(e: sp.Expr) -> sp.Expr:
-    """A solved rate or determinant in a tidy form (trigonometric identities applied)."""
-    return sp.simplify(sp.trigsimp(sp.expand_trig(e)))
+def _tidy(e: sp.Expr, limit: int) -> sp.Expr:
+    """A solved rate or determinant in a tidy form (trigonometric identities applied), where
+    it has at most ``limit`` nodes, expanded too (:mod:`derivations.budget`); otherwise as
+    it is."""
+    if not budget.is_small(e, limit):
+        return e
+    expanded = budget.expanded(e, trig=True)
+    if not budget.is_small(expanded, limit):
+        return e
+    return sp.simplify(sp.trigsimp(expanded))
+
+
+def _shown(e) -> str:
+    """``e`` as text for a message, shortened."""
+    text = str(e)
+    return text if len(text) <= 200 else text[:150] + " … " + text[-40:]

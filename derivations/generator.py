@@ -11,8 +11,11 @@ from pathlib import Path
 
 import sympy as sp
 
+from .admission import check_name
+
 #: The modules whose code decides the text of a generated module (with SymPy's version).
-GENERATOR_MODULES = ("codegen", "equations", "mechanisms", "rotations", "state_space", "variational")
+GENERATOR_MODULES = ("admission", "budget", "codegen", "equations", "mechanisms", "rotations", "state_space",
+                     "variational")
 
 
 def generator_version() -> str:
@@ -24,17 +27,13 @@ def generator_version() -> str:
     return h.hexdigest()
 
 
-def check_name(name) -> str:
-    """A mechanism's name: a Python identifier (it names the generated module and its file)."""
-    if not isinstance(name, str) or not name.isidentifier():
-        raise ValueError(f"name must be a Python identifier (it names the generated module), got {name!r}")
-    return name
-
-
 def definition_text(form: str, name, arguments: Mapping) -> str:
     """A canonical text of a definition: the form, the name and each argument as SymPy
     ``srepr`` (mappings by their keys' names); ``ValueError`` for a name that is not an
-    identifier or an argument that is not SymPy data (naming it)."""
+    identifier or an argument that is not SymPy data (naming it). Text is kept as its
+    ``repr``, never converted (SymPy's ``sympify`` would evaluate it); the arguments are
+    expected within the budget (:mod:`derivations.budget`; ``srepr`` recurses), as
+    :func:`derivations.equations.admitted` leaves them."""
     def text(value, key):
         if isinstance(value, Mapping):
             items = sorted(((str(k), text(k, key), text(v, key)) for k, v in value.items()))
@@ -44,7 +43,7 @@ def definition_text(form: str, name, arguments: Mapping) -> str:
         if value is None or isinstance(value, (str, bool)):
             return repr(value)
         try:
-            return sp.srepr(sp.sympify(value))
+            return sp.srepr(value if isinstance(value, sp.Basic) else sp.sympify(value, strict=True))
         except (sp.SympifyError, TypeError, ValueError):
             raise ValueError(f"{key}: {value!r} is not a SymPy expression or symbol") from None
 

@@ -26,6 +26,7 @@ from dataclasses import dataclass, field
 
 import sympy as sp
 
+from . import admission, budget
 from .rotations import e1, e2, e3, hat, r
 
 
@@ -73,9 +74,11 @@ class Mechanism:
     derivation: dict = field(default_factory=dict, compare=False, repr=False)
 
     def __post_init__(self):
-        """Refuse a definition the generated code could not run: which class of state it
-        is (an orientation needs ``L`` of 3 rows, coordinates need ``X``), shapes that do
-        not fit, and symbols that are neither ``R``'s entries nor coordinates (each named)."""
+        """Refuse a definition the generated code could not run: its user text and sizes
+        (:func:`check_definition`), which class of state it is (an orientation needs ``L``
+        of 3 rows, coordinates need ``X``), shapes that do not fit, and symbols that are
+        neither ``R``'s entries nor coordinates (each named)."""
+        check_definition(self)
         where = f"mechanism {self.name!r}"
         if self.L is None and self.X is None:
             raise ValueError(f"{where}: give L (an orientation R: 3 rows in r11 … r33), X (the rates "
@@ -160,6 +163,88 @@ class Mechanism:
         return f"SO(3)xR^{k}" if self.orientation else f"R^{k}"
 
 
+#: The fields of a :class:`Mechanism` that hold matrices.
+MATRIX_FIELDS = ("L", "X", "frame", "frame_inputs")
+
+
+def check_definition(mechanism) -> None:
+    """Refuse a symbolic mechanism whose user text could become code or whose size is past
+    the budget of the symbolic work, before anything is derived or hashed from it.
+
+    The name is a Python identifier (:func:`derivations.admission.check_name`); the
+    description, the inputs' names and the units are lines of printable text
+    (:func:`~derivations.admission.check_text`); ``L``, ``X``, ``frame`` and
+    ``frame_inputs`` are SymPy matrices and ``delta`` an expression, each entry — and each
+    of the derivation's ``auxiliary_forms``, ``auxiliaries`` and ``geometry`` — within
+    :mod:`derivations.budget` (the field and the frame, which are differentiated, within its
+    ``WORK`` too) and with real, finite constants
+    (:func:`~derivations.admission.check_constants`).
+
+    Parameters
+    ----------
+    mechanism : Mechanism
+        The symbolic mechanism (or an object with its fields).
+
+    Raises
+    ------
+    ValueError
+        Naming the field (and the entry).
+    """
+    admission.check_name(getattr(mechanism, "name", None))
+    where = f"mechanism {mechanism.name!r}"
+    admission.check_text(getattr(mechanism, "description", None), f"{where}: description")
+    for key in ("inputs", "units"):
+        values = getattr(mechanism, key, ())
+        if not isinstance(values, (tuple, list)):
+            raise ValueError(f"{where}: {key} must be a tuple of strings, got {type(values).__name__}")
+        for i, value in enumerate(values):
+            admission.check_text(value, f"{where}: {key}[{i}]")
+    tally = budget.Tally(where)
+    differentiated = 0
+    for key in MATRIX_FIELDS:
+        value = getattr(mechanism, key, None)
+        if value is None:
+            continue
+        if not isinstance(value, sp.MatrixBase):
+            raise ValueError(f"{where}: {key} must be a SymPy matrix, got {type(value).__name__}")
+        before = tally.nodes
+        _check_entries(value, f"{where}: {key}", tally)
+        if key != "frame_inputs":
+            differentiated += tally.nodes - before
+    rows = (3 if getattr(mechanism, "L", None) is not None else 0) + len(getattr(mechanism, "coordinates", ()))
+    budget.check_work(differentiated, rows, f"{where}: the field")
+    delta = getattr(mechanism, "delta", None)
+    if delta is not None:
+        admission.expression(delta, f"{where}: delta", tally=tally)
+    derivation = getattr(mechanism, "derivation", None) or {}
+    if not isinstance(derivation, dict):
+        raise ValueError(f"{where}: derivation must be a dict, got {type(derivation).__name__}")
+    for name, form in dict(derivation.get("auxiliary_forms", {})).items():
+        if isinstance(form, sp.MatrixBase):
+            _check_entries(form, f"{where}: auxiliary form {name}", tally)
+        else:
+            admission.expression(form, f"{where}: auxiliary form {name}", tally=tally)
+    geometry = derivation.get("geometry")
+    if geometry is not None:                # the legs' code is generated from it
+        for key in ("base1", "tip1", "base2", "tip2", "contact", "axle"):
+            check_vector(getattr(geometry, key, None), f"{where}: geometry {key}")
+    for i, pair in enumerate(derivation.get("auxiliaries", ())):
+        symbol, value = pair
+        if not isinstance(symbol, sp.Symbol) or not is_free_name(symbol.name):
+            raise ValueError(f"{where}: auxiliaries[{i}] must define a symbol named by an identifier, "
+                             f"got {symbol!r}")
+        admission.expression(value, f"{where}: auxiliaries[{i}] ({symbol})", tally=tally)
+
+
+def _check_entries(matrix: sp.MatrixBase, key: str, tally: budget.Tally) -> None:
+    """Every entry of ``matrix`` within the budget, with real, finite constants."""
+    budget.check_count(len(matrix), (budget.COORDINATES + 3) * budget.INPUTS, key, "entries")
+    rows, cols = matrix.shape
+    for i in range(rows):
+        for j in range(cols):
+            admission.expression(matrix[i, j], f"{key}[{i}, {j}]", tally=tally)
+
+
 #: Names the generated code and the variational derivation use themselves: a coordinate
 #: may not take them (:func:`is_free_name`).
 TAKEN_NAMES = re.compile(r"(R|q|v|out|numpy|r[1-3][1-3]|[suv][0-9]+)")
@@ -168,7 +253,7 @@ TAKEN_NAMES = re.compile(r"(R|q|v|out|numpy|r[1-3][1-3]|[suv][0-9]+)")
 def is_free_name(name: str) -> bool:
     """Whether a coordinate may be called ``name`` in a generated module: an identifier, not a
     keyword, not one of :data:`TAKEN_NAMES`."""
-    return name.isidentifier() and not keyword.iskeyword(name) and not TAKEN_NAMES.fullmatch(name)
+    return isinstance(name, str) and name.isidentifier() and not keyword.iskeyword(name) and not TAKEN_NAMES.fullmatch(name)
 
 
 # --------------------------------------------------------------------------------------
@@ -200,6 +285,38 @@ class PlatformGeometry:
     tip2: tuple
     contact: tuple
     axle: tuple
+
+    def __post_init__(self):
+        """Refuse a vector that is not three numbers or SymPy expressions (text is refused,
+        never parsed: SymPy would evaluate it), or a constant that is not real and finite
+        (:func:`check_vector`)."""
+        for key in ("base1", "tip1", "base2", "tip2", "contact", "axle"):
+            check_vector(getattr(self, key), f"geometry: {key}")
+
+
+def check_vector(values, key: str) -> None:
+    """Refuse anything but three numbers or SymPy expressions, each within the budget and
+    with real, finite constants (:func:`derivations.admission.expression`; text refused).
+
+    Parameters
+    ----------
+    values : sequence
+        The vector.
+    key : str
+        What it is, for the message.
+
+    Raises
+    ------
+    ValueError
+        Naming ``key``.
+    """
+    if isinstance(values, (str, bytes)) or not hasattr(values, "__len__") or len(values) != 3:
+        raise ValueError(f"{key} must be a vector of 3 numbers or SymPy expressions, got {values!r:.80}")
+    for i, value in enumerate(values):
+        if isinstance(value, (str, bytes)):
+            raise ValueError(f"{key}[{i}] = {value!r:.80} is text; give a number or a SymPy expression "
+                             "(text is never evaluated)")
+        admission.expression(value, f"{key}[{i}]")
 
 
 #: The paper's platform (reconstruction, ``../shared/design/MODEL.md``): leg 1 from
@@ -418,6 +535,8 @@ def body_rate_mechanism(name: str, b_1, b_2, description: str) -> Mechanism:
     ``dR/dt = R [u_1 b_1 + u_2 b_2]``, i.e. spatial ``ω = R (u_1 b_1 + u_2 b_2)``, so
     ``L(R) = R [b_1 b_2]``: polynomial, no singular set.
     """
+    check_vector(b_1, "b_1")
+    check_vector(b_2, "b_2")
     B = sp.Matrix.hstack(sp.Matrix(b_1), sp.Matrix(b_2))
     Bo = sp.Matrix.hstack(*sp.GramSchmidt([B.col(0), B.col(1)], True))
     # N = R Bo, and Nᵀ L = Boᵀ RᵀR B = Boᵀ B on SO(3): W is constant

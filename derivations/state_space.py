@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import sympy as sp
 
-from . import variational
+from . import budget, variational
 from .mechanisms import Mechanism
 from .rotations import hat, r
 from .variational import inputs
@@ -45,15 +45,18 @@ def Q_matrix(mechanism: Mechanism, G: sp.Matrix | None = None,
     for e in Gu:
         d = sum(sp.diff(e, r[i, j]) * dR[i, j] for i in range(3) for j in range(3))
         d += sum(sp.diff(e, x) * s[k0 + c] for c, x in enumerate(mechanism.coordinates))
-        rows.append(sp.expand(d))
-    return sp.Matrix(rows).jacobian(s).applyfunc(simplified)
+        # expanded where that is cheap (derivations.budget); linear in s either way
+        rows.append(budget.expanded(d))
+    allowance = budget.Allowance()
+    return sp.Matrix(rows).jacobian(s).applyfunc(lambda e: simplified(e, allowance))
 
 
-def simplified(e: sp.Expr) -> sp.Expr:
-    """``sp.simplify(e)`` where ``e`` is a sum; a single term of the expanded derivative is
-    kept as it is, since ``simplify`` costs a second on its first call (it imports
-    ``sympy.physics``) and a mechanism of one's own is derived on every first run."""
-    return sp.simplify(e) if isinstance(e, sp.Add) else e
+def simplified(e: sp.Expr, allowance: budget.Allowance | None = None) -> sp.Expr:
+    """``sp.simplify(e)`` where ``e`` is a sum small enough for it, within the derivation's
+    ``allowance`` (:func:`derivations.budget.simplified`); a single term of the expanded
+    derivative is kept as it is, since ``simplify`` costs a second on its first call (it
+    imports ``sympy.physics``) and a mechanism of one's own is derived on every first run."""
+    return budget.simplified(e, allowance) if isinstance(e, sp.Add) else e
 
 
 def A_matrix(mechanism: Mechanism, u: sp.Matrix | None = None) -> sp.Matrix:

@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import sympy as sp
 
+from . import admission
 from .mechanisms import Mechanism, input_map
 from .rotations import e3
 
@@ -33,6 +34,7 @@ def rolling_ball(radius=1, name: str = "rolling_ball") -> Mechanism:
     ``ṗ + ω × (−ρ e₃) = 0`` (its vertical component is ``0 = 0``), and the ball does
     not spin about the vertical, ``ω · e₃ = 0``. Solved: ``ω = (e₃ × ṗ)/ρ``.
     """
+    admission.constant(radius, "radius")            # a number (never text: nsimplify would evaluate it)
     rho = sp.Integer(radius) if isinstance(radius, int) else sp.nsimplify(radius)
     p1, p2 = sp.symbols("p1 p2", real=True)
     v = sp.Matrix(sp.symbols("v1:3", real=True))
@@ -67,6 +69,7 @@ def kinematic_car(wheelbase=1, name: str = "car") -> Mechanism:
     (``w₁ = v / cos φ``... in physical terms ``v = w₁ cos φ``): finite everywhere and, with
     ``ℓ = 1``, orthonormal.
     """
+    admission.constant(wheelbase, "wheelbase")      # a number (never text: nsimplify would evaluate it)
     ell = sp.Integer(wheelbase) if isinstance(wheelbase, int) else sp.nsimplify(wheelbase)
     x, y, th, ph = sp.symbols("x y theta phi", real=True)
     v, u2 = sp.symbols("v u2", real=True)

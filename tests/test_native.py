@@ -10,6 +10,7 @@ cache, the fallback to numba, the arguments' checks.
 import os
 import subprocess
 import sys
+import sysconfig
 
 import kernel_runs
 import numpy as np
@@ -139,7 +140,9 @@ def test_a_stale_module_is_not_used(tmp_path, monkeypatch):
     lib = native.load("toy", "abc", lambda: src)
     assert lib is not None and lib.SOURCE_DIGEST == "abc"
     assert lib.toy(2.0, np.array([1.0, 2.0, 3.0])) == 12.0
-    assert len(list(tmp_path.glob("toy_*"))) == 1
+    suffix = sysconfig.get_config_var("EXT_SUFFIX") or ".so"
+    assert len(list(tmp_path.glob(f"toy_*{suffix}"))) == 1
+    assert native.record_path(next(tmp_path.glob(f"toy_*{suffix}"))).exists()   # its hash, recorded
     monkeypatch.setattr(native, "_WARNED", set())          # said once per process
     with pytest.warns(RuntimeWarning, match="native kernels unavailable"):
         stale = native.load("toy", "def", lambda: src)   # a module built from other sources

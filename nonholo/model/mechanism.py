@@ -33,8 +33,8 @@ from __future__ import annotations
 
 import hashlib
 import inspect
+import keyword
 import os
-import tempfile
 import types
 from dataclasses import dataclass, field
 from functools import cached_property
@@ -540,11 +540,19 @@ class Mechanism:  # signature: __new__'s (*args, **kwargs), the fields below; nu
         ------
         TypeError
             If ``mechanism`` is not a symbolic mechanism.
+        ValueError
+            Naming the field, for a name that is not an identifier, text that is not a line
+            of printable text, an expression past the size budget or a constant that is
+            not a finite real number (:func:`derivations.mechanisms.check_definition`),
+            checked before anything is hashed or generated.
         """
         if type(mechanism).__name__ != "Mechanism" or not hasattr(mechanism, "field"):
             raise TypeError(f"mechanism must be a symbolic derivations.mechanisms.Mechanism, not "
                             f"{type(mechanism).__name__}; from equations, use Mechanism.from_equations "
                             "(a velocity field) or Mechanism.from_constraints (Pfaffian constraints)")
+        from derivations import mechanisms  # SymPy: imported only when asked for
+
+        mechanisms.check_definition(mechanism)
         return cls.from_module(load_source(generated_source(mechanism, cache), mechanism.name))
 
     @classmethod
@@ -601,8 +609,17 @@ class Mechanism:  # signature: __new__'s (*args, **kwargs), the fields below; nu
         Raises
         ------
         ValueError
-            Naming it, for an undeclared symbol, a rate that is not linear in the inputs or
-            an argument of the wrong class of state.
+            Naming it, for an undeclared symbol, a rate that is not linear in the inputs,
+            an argument of the wrong class of state, a name that is not an identifier, text
+            where a number is due, a constant that is not a finite real number, or an
+            expression past the size budget of the symbolic work
+            (:func:`derivations.equations.admitted`, checked before anything is derived).
+
+        Notes
+        -----
+        An expression may also be given as text (``"v*cos(theta0)"``): it is read by
+        :func:`derivations.admission.parse` in the declared symbols — numbers,
+        arithmetic and a fixed set of functions only, never evaluated as Python.
         """
         arguments = dict(inputs=inputs, coordinates=coordinates, rates=rates, omega=omega, rotation=rotation,
                          angles=angles, parameters=parameters, delta=delta, units=units, description=description)
@@ -732,10 +749,14 @@ def equations_source(form: str, name, arguments: dict, cache: bool = True) -> st
     str
         The module's source.
     """
-    from derivations import generator
+    from derivations import equations, generator
+
+    # checked and converted before anything is hashed or derived: the name, text parsed,
+    # the constants, the size budget (derivations.budget)
+    arguments = equations.admitted(form, name, arguments)
 
     def build() -> str:
-        from derivations import codegen, equations
+        from derivations import codegen
 
         return codegen.mechanism_module(getattr(equations, form)(name, **arguments))
 
@@ -747,16 +768,24 @@ def equations_source(form: str, name, arguments: dict, cache: bool = True) -> st
 
 
 def cached_source(name: str, digest: str, build: Callable[[], str]) -> str:
-    """A generated source, read from the cache or built and written to it.
+    """A generated source, read from the cache — verified before it is used — or built and
+    written to it.
+
+    An entry is used only if :func:`nonholo.numerics.native.read_entry` verifies it: a
+    regular file of the user's whose bytes hash to the record nonholo wrote beside it with
+    this ``digest``. An entry edited, damaged (truncated, empty, not text), without a
+    record, or not a regular file (a FIFO, a directory, a symbolic link) is passed over
+    with a warning naming it and rebuilt, so that what runs is what the definition
+    generates.
 
     Parameters
     ----------
     name : str
-        The mechanism's name.
+        The mechanism's name (a Python identifier: it names the file).
     digest : str
         The definition's digest; the file is ``<name>_<digest[:24]>.py`` in
-        :func:`generated_cache_dir` (written atomically; a cache that cannot be written is
-        reported once and skipped).
+        :func:`generated_cache_dir` (written atomically with its record; a cache that
+        cannot be written is reported once and skipped).
     build : callable
         ``build()``: the source, when it is not cached.
 
@@ -764,18 +793,26 @@ def cached_source(name: str, digest: str, build: Callable[[], str]) -> str:
     -------
     str
         The module's source.
+
+    Raises
+    ------
+    ValueError
+        If ``name`` is not an identifier or is a keyword.
     """
+    if not isinstance(name, str) or not name.isidentifier() or keyword.iskeyword(name):
+        raise ValueError(f"name must be a Python identifier that is not a keyword (it names the generated "
+                         f"module's file), got {name!r}")
     path = generated_cache_dir() / f"{name}_{digest[:24]}.py"
-    try:
-        return path.read_text()
-    except OSError:
-        pass
+    data = native.read_entry(path, digest)
+    if data is not None:
+        try:
+            return data.decode("utf-8")
+        except UnicodeDecodeError:          # recorded as written: only a foreign record gets here
+            native.warn_once(f"cache entry {path}", f"nonholo: ignored the cache entry {path}: it is not "
+                                                    "text; rebuilding it")
     source = build()
     try:
-        path.parent.mkdir(parents=True, exist_ok=True)
-        with tempfile.NamedTemporaryFile("w", dir=path.parent, delete=False, suffix=".tmp") as f:
-            f.write(source)
-        os.replace(f.name, path)
+        native.write_entry(path, source.encode("utf-8"), digest)
     except OSError as exc:
         native.warn_once("generated cache", f"nonholo: could not cache the generated module of "
                                             f"{name!r} ({exc})")
