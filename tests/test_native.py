@@ -18,7 +18,7 @@ import pytest
 
 from nonholo.generated import MECHANISMS
 from nonholo.integrate import cf4
-from nonholo.numerics import c_translation, kernels, native
+from nonholo.numerics import c_translation, cache_entries, kernels, native
 
 pytestmark = pytest.mark.skipif(native.compiler() is None, reason="no C compiler")
 
@@ -142,8 +142,8 @@ def test_a_stale_module_is_not_used(tmp_path, monkeypatch):
     assert lib.toy(2.0, np.array([1.0, 2.0, 3.0])) == 12.0
     suffix = sysconfig.get_config_var("EXT_SUFFIX") or ".so"
     assert len(list(tmp_path.glob(f"toy_*{suffix}"))) == 1
-    assert native.record_path(next(tmp_path.glob(f"toy_*{suffix}"))).exists()   # its hash, recorded
-    monkeypatch.setattr(native, "_WARNED", set())          # said once per process
+    assert cache_entries.record_path(next(tmp_path.glob(f"toy_*{suffix}"))).exists()   # its hash, recorded
+    monkeypatch.setattr(cache_entries, "_WARNED", set())          # said once per process
     with pytest.warns(RuntimeWarning, match="native kernels unavailable"):
         stale = native.load("toy", "def", lambda: src)   # a module built from other sources
     assert stale is None

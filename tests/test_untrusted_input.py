@@ -1,7 +1,7 @@
 """Nothing runs that nobody wrote: a mechanism of one's own against an attack round.
 
 The caches of generated modules and compiled kernels are verified before anything in them
-runs (:func:`nonholo.numerics.native.read_entry`): an edited, planted or damaged entry, or
+runs (:func:`nonholo.numerics.cache_entries.read_entry`): an edited, planted or damaged entry, or
 something other than a regular file at its path, is passed over and rebuilt. A user's text
 is data: names are identifiers, descriptions and units escaped literals, parameters finite
 real numbers, expressions given as text read by a parser that admits only arithmetic
@@ -35,7 +35,7 @@ from derivations.mechanisms import Mechanism as Symbolic
 from derivations.mechanisms import PlatformGeometry
 from nonholo import Mechanism, plan
 from nonholo.model import mechanism as mechanism_module
-from nonholo.numerics import c_translation, native
+from nonholo.numerics import c_translation, cache_entries, native
 
 x, y, th, th0, th1, v, w, d, ell = sp.symbols("x y theta theta0 theta1 v w d ell", real=True)
 xd, yd, thd = sp.symbols("xdot ydot thetadot", real=True)
@@ -48,7 +48,7 @@ UNICYCLE = dict(coordinates=[x, y, th], inputs=[v, w], rates=[v * sp.cos(th), v 
 def cache(tmp_path, monkeypatch):
     """Caches of the test's own; each warning said anew."""
     monkeypatch.setenv(native.CACHE_ENV, str(tmp_path / "cache"))
-    monkeypatch.setattr(native, "_WARNED", set())
+    monkeypatch.setattr(cache_entries, "_WARNED", set())
     return tmp_path / "cache"
 
 
@@ -117,7 +117,7 @@ def test_a_planted_source_without_a_record_or_with_another_s_is_not_run(cache, m
     name = "unicycle_planted"
     Mechanism.from_equations(name, **UNICYCLE)
     path = entry_of(cache, name)
-    record = native.record_path(path)
+    record = cache_entries.record_path(path)
     good = path.read_text()
     # no record
     record.unlink()
@@ -129,8 +129,8 @@ def test_a_planted_source_without_a_record_or_with_another_s_is_not_run(cache, m
     other = Mechanism.from_equations("unicycle_other", **{**UNICYCLE, "rates": [v * sp.cos(th), v * sp.sin(th), 2 * w]})
     other_path = entry_of(cache, "unicycle_other")
     path.write_text(other_path.read_text().replace("'unicycle_other'", f"'{name}'") + payload(marker))
-    record.write_bytes(native.record_path(other_path).read_bytes())
-    native._WARNED.clear()                                   # the fixture's own set: said anew
+    record.write_bytes(cache_entries.record_path(other_path).read_bytes())
+    cache_entries._WARNED.clear()                                   # the fixture's own set: said anew
     with pytest.warns(RuntimeWarning, match="record of another entry"):
         m = Mechanism.from_equations(name, **UNICYCLE)
     assert m.module.SOURCE == good and other.module.SOURCE != good
@@ -162,9 +162,9 @@ def test_a_damaged_cache_entry_is_repaired_not_fatal(cache, marker, tmp_path, da
         elsewhere.write_text(payload(marker) + good.decode())
         path.unlink()
         path.symlink_to(elsewhere)
-        record = json.loads(native.record_path(path).read_text())
+        record = json.loads(cache_entries.record_path(path).read_text())
         record["sha256"] = hashlib.sha256(elsewhere.read_bytes()).hexdigest()
-        native.record_path(path).write_text(json.dumps(record))
+        cache_entries.record_path(path).write_text(json.dumps(record))
     expected = "could not cache" if damage == "directory" else f"ignored the cache entry {path}"
     with pytest.warns(RuntimeWarning) as caught:
         m = Mechanism.from_equations(name, **UNICYCLE)
@@ -268,10 +268,10 @@ def test_a_planted_compiled_module_is_never_imported(cache, marker, tmp_path, wi
     target = cache / f"{name}_{want[:16]}{sysconfig.get_config_var('EXT_SUFFIX') or '.so'}"
     if with_record:
         native.compile_module(name, toy_source(name, want), target, key=want)
-        genuine_record = native.record_path(target).read_bytes()
+        genuine_record = cache_entries.record_path(target).read_bytes()
     native.compile_module(name, planted_source(name, want, marker), target)
     if with_record:
-        native.record_path(target).write_bytes(genuine_record)
+        cache_entries.record_path(target).write_bytes(genuine_record)
     assert target.exists() and not marker.exists()
     with pytest.warns(RuntimeWarning, match=re.escape(f"ignored the cache entry {target}")):
         lib = native.load(name, want, lambda: toy_source(name, want))

@@ -44,7 +44,7 @@ from typing import Callable
 import numpy as np
 
 from ..integrate import cf4
-from ..numerics import native
+from ..numerics import cache_entries, native
 from ..numerics.checks import real_array
 from ..spaces.groups import Product
 from ..spaces.singular import NoSingularSet, SingularSet
@@ -771,7 +771,7 @@ def cached_source(name: str, digest: str, build: Callable[[], str]) -> str:
     """A generated source, read from the cache — verified before it is used — or built and
     written to it.
 
-    An entry is used only if :func:`nonholo.numerics.native.read_entry` verifies it: a
+    An entry is used only if :func:`nonholo.numerics.cache_entries.read_entry` verifies it: a
     regular file of the user's whose bytes hash to the record nonholo wrote beside it with
     this ``digest``. An entry edited, damaged (truncated, empty, not text), without a
     record, or not a regular file (a FIFO, a directory, a symbolic link) is passed over
@@ -803,16 +803,16 @@ def cached_source(name: str, digest: str, build: Callable[[], str]) -> str:
         raise ValueError(f"name must be a Python identifier that is not a keyword (it names the generated "
                          f"module's file), got {name!r}")
     path = generated_cache_dir() / f"{name}_{digest[:24]}.py"
-    data = native.read_entry(path, digest)
+    data = cache_entries.read_entry(path, digest)
     if data is not None:
         try:
             return data.decode("utf-8")
         except UnicodeDecodeError:          # recorded as written: only a foreign record gets here
-            native.warn_once(f"cache entry {path}", f"nonholo: ignored the cache entry {path}: it is not "
+            cache_entries.warn_once(f"cache entry {path}", f"nonholo: ignored the cache entry {path}: it is not "
                                                     "text; rebuilding it")
     source = build()
     try:
-        native.write_entry(path, source.encode("utf-8"), digest)
+        cache_entries.write_entry(path, source.encode("utf-8"), digest)
     except OSError as exc:
         native.warn_once("generated cache", f"nonholo: could not cache the generated module of "
                                             f"{name!r} ({exc})")
