@@ -36,6 +36,9 @@ from ..viz.style import NotebookFigure
 SETTINGS = {"paper": {"strategy": "paper", "route": "local"},
             "robust": {"strategy": "robust", "route": "local"},
             "default": {}}
+#: The most problems an atlas may hold (``n² × slices × settings``): each is a plan of about
+#: a second, and its rows are built in memory; 31 × 31 × 3 (the default) is 2883.
+MAX_PROBLEMS = 100_000
 #: The quantities :func:`atlas_figure` draws.
 QUANTITIES = ("success", "iterations", "time")
 #: Example 1's start (RPY, rad): the atlases' default orientation (coordinates default to 0).
@@ -215,7 +218,7 @@ def problems(n: int = 31, psi=None, start=None, mechanism: str = "platform",
     Parameters
     ----------
     n : int
-        Cells per axis, ``≥ 2``.
+        Cells per axis, ``≥ 2``, with at most :data:`MAX_PROBLEMS` problems in all.
     psi : sequence of float, optional
         The slices ``ψ = const`` (rad), with an orientation and ``ψ`` off the axes
         (default: the start's ψ).
@@ -286,6 +289,11 @@ def problems(n: int = 31, psi=None, start=None, mechanism: str = "platform",
         psi = tuple(float(p) for p in psi)
         if not psi or not np.all(np.isfinite(psi)):
             raise BadArgument("psi", f"must be finite angles (rad), got {list(psi)}")
+    count = n * n * len(psi) * len(settings)
+    if count > MAX_PROBLEMS:
+        raise BadArgument("n", f"= {n} makes {count:,} problems ({n}² goals × {len(psi)} slice"
+                               f"{'s' * (len(psi) != 1)} × {len(settings)} setting{'s' * (len(settings) != 1)}), "
+                               f"more than MAX_PROBLEMS = {MAX_PROBLEMS:,}: lower it")
     which = [names.index(a) for a in axes]
     centres = [cell_centres(n, b) for b in bounds]
     R0, q0 = space.from_cli(start)

@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import sys
 import time
 from pathlib import Path
@@ -21,9 +22,20 @@ def _derive(args) -> int:
 
     t0 = time.perf_counter()
     outdir = Path(args.dir) if args.dir else codegen.GENERATED_DIR
-    files = inliner.every_generated_file()
+    why = _derive_dir_error(outdir, args.check)
+    if why is None:
+        files = inliner.every_generated_file()
+        try:
+            if args.check:
+                stale = codegen.check(outdir, files)
+            else:
+                written = codegen.write(outdir, files)
+        except OSError as exc:
+            why = f"cannot {'read' if args.check else 'write'} {exc.filename or outdir}: {exc.strerror or exc}"
+    if why is not None:
+        print(f"nonholo derive: error: --dir {outdir}: {why}", file=sys.stderr)
+        return 2
     if args.check:
-        stale = codegen.check(outdir, files)
         for path, diff in stale:
             print(f"stale: {path}", file=sys.stderr)
             if args.verbose:
@@ -34,10 +46,30 @@ def _derive(args) -> int:
             return 1
         print(f"generated modules are up to date ({time.perf_counter() - t0:.1f} s)")
         return 0
-    for path in codegen.write(outdir, files):
+    for path in written:
         print(f"wrote {path}")
     print(f"done in {time.perf_counter() - t0:.1f} s")
     return 0
+
+
+def _derive_dir_error(outdir: Path, check: bool) -> str | None:
+    """Why ``derive`` cannot use ``outdir`` (checked before the derivation): for ``--check``
+    a directory that does not exist or is not one; for writing, one that is a file or
+    below one, or not writable; ``None`` if it may be used."""
+    if outdir.exists() and not outdir.is_dir():
+        return "not a directory"
+    if check:
+        return None if outdir.is_dir() else "no such directory (nothing to check)"
+    existing = outdir
+    while not existing.exists():                 # the nearest existing ancestor is created from
+        if existing.parent == existing:
+            break
+        existing = existing.parent
+    if not existing.is_dir():
+        return f"cannot be created: {existing} is not a directory"
+    if not os.access(existing, os.W_OK | os.X_OK):
+        return f"not writable ({existing})"
+    return None
 
 
 def _audit(args) -> int:
@@ -97,6 +129,19 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+def tolerate_any_encoding() -> None:
+    """Let stdout and stderr write any text under any encoding (``PYTHONIOENCODING=ascii``,
+    a C locale): a character the encoding lacks (``Δ``, ``γ``) is written escaped
+    (``\\u0394``), not an error that would turn a successful command into a failure."""
+    for stream in (sys.stdout, sys.stderr):
+        reconfigure = getattr(stream, "reconfigure", None)
+        if reconfigure is not None and getattr(stream, "errors", None) == "strict":
+            try:
+                reconfigure(errors="backslashreplace")
+            except (ValueError, OSError):       # a closed or detached stream: leave it
+                pass
+
+
 def main(argv: list[str] | None = None) -> int:
     """Run ``nonholo`` with the arguments ``argv``.
 
@@ -110,6 +155,7 @@ def main(argv: list[str] | None = None) -> int:
     int
         The exit status.
     """
+    tolerate_any_encoding()
     args = build_parser().parse_args(argv)
     try:
         return args.func(args)

@@ -74,7 +74,11 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     p.add_argument("--harmonics", type=int, default=2, help="Fourier harmonics K (default 2)")
     p.add_argument("--grid", type=int, default=100, help="intervals of the nonparametric grid (default 100)")
     p.add_argument("--strategy", default="robust",
-                   help=f"planning strategy: {', '.join(planner.STRATEGIES)} (default: robust)")
+                   help=f"planning strategy: {', '.join(planner.STRATEGIES)} (default: robust), or an import "
+                        "path module:Class with --allow-imports")
+    p.add_argument("--allow-imports", action="store_true",
+                   help="let --strategy be an import path (module:Class), which imports that module and runs "
+                        "its code")
     p.add_argument("--mechanism", default="platform",
                    help=f"mechanism ({', '.join(catalog.names())}; see `nonholo mechanisms`)")
     p.add_argument("--gamma", type=float, default=None,
@@ -252,7 +256,7 @@ def run(args) -> int:
             max_iter=args.max_iter, delta_min=args.delta_min, steps=args.steps, route=args.route,
             leg_length=args.leg_length, leg_speed=args.leg_speed,
             objective=None if args.objective == "none" else args.objective,
-            callback=None if args.quiet else _print_record)
+            callback=None if args.quiet else _print_record, allow_imports=args.allow_imports)
     except ValueError as exc:
         _error(str(exc))
         return EXIT_BAD_INPUT

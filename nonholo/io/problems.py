@@ -31,9 +31,8 @@ from __future__ import annotations
 
 import hashlib
 import json
+import math
 from pathlib import Path
-
-import numpy as np
 
 from ..model import catalog
 from ..numerics.checks import is_number
@@ -46,6 +45,9 @@ COLUMNS = ("start", "goal", "mechanism", "options", "label")
 OPTIONS = ("T", "method", "harmonics", "grid", "gamma", "step", "tol", "max_iter", "strategy",
            "delta_min", "steps", "newton_below", "min_step", "route", "leg_length", "leg_speed",
            "objective")
+#: The option :func:`check_row` adds for a strategy named by its import path the caller
+#: allowed (``plan(allow_imports=True)``); a table cannot set it (it is not in :data:`OPTIONS`).
+IMPORTS = "allow_imports"
 
 
 def _fail(row: int, column: str | None, message: str):
@@ -83,7 +85,8 @@ def check_row(d, row: int, allow_imports: bool = False) -> dict:
     dict
         ``{"start", "goal", "mechanism", "options", "label"}`` with the states in the form
         :func:`nonholo.plan` takes (arrays; a pair ``(R, q)`` as a tuple), the mechanism's
-        name and a dict of options.
+        name and a dict of keywords of :func:`nonholo.plan`: the row's options, and
+        ``allow_imports=True`` with an import path allowed.
 
     Raises
     ------
@@ -112,26 +115,42 @@ def check_row(d, row: int, allow_imports: bool = False) -> dict:
     for key, value in options.items():
         if key not in OPTIONS:
             _fail(row, f"options.{key}", f"is not an option of plan() (known: {', '.join(OPTIONS)})")
-        if not _json_value(value):
-            _fail(row, f"options.{key}", f"must be a number, string, boolean, null or list, got {value!r}")
+        why = _json_value(value)
+        if why:
+            _fail(row, f"options.{key}", why)
+    options = dict(options)
     strategy = options.get("strategy")
-    if isinstance(strategy, str) and ":" in strategy and not allow_imports:
-        _fail(row, "options.strategy",
-              f"names a strategy by its import path {strategy!r}, which would import the module "
-              f"{strategy.partition(':')[0]!r} and run its code; a problem table is data: allow it with "
-              "allow_imports=True (nonholo sweep --allow-imports) if you trust the table")
+    if isinstance(strategy, str) and ":" in strategy:
+        if not allow_imports:
+            _fail(row, "options.strategy",
+                  f"names a strategy by its import path {strategy!r}, which would import the module "
+                  f"{strategy.partition(':')[0]!r} and run its code; a problem table is data: allow it with "
+                  "allow_imports=True (nonholo sweep --allow-imports) if you trust the table")
+        options[IMPORTS] = True              # the caller's opt-in, passed on to plan()
     label = d.get("label")
     if label is not None and not isinstance(label, str):
         _fail(row, "label", f"must be text, got {label!r}")
-    return {"start": start, "goal": goal, "mechanism": name, "options": dict(options), "label": label}
+    return {"start": start, "goal": goal, "mechanism": name, "options": options, "label": label}
 
 
-def _json_value(x) -> bool:
-    if x is None or isinstance(x, (bool, str)) or is_number(x):
-        return not (is_number(x) and not np.isfinite(x))
+def _json_value(x) -> str | None:
+    """Why ``x`` is not an option's value JSON can hold (``None``: it is one)."""
+    if x is None or isinstance(x, (bool, str)):
+        return None
+    if is_number(x):
+        try:
+            finite = math.isfinite(x)
+        except OverflowError:                 # an integer beyond the floats' range
+            return f"is an integer too large for a number of plan() ({_digits(x)} digits)"
+        return None if finite else f"must be a finite number, got {x!r}"
     if isinstance(x, (list, tuple)):
-        return all(_json_value(v) for v in x)
-    return False
+        return next((why for why in map(_json_value, x) if why), None)
+    return f"must be a number, string, boolean, null or list, got {x!r}"
+
+
+def _digits(n: int) -> int:
+    """The decimal digits of a (huge) integer, without converting it to text."""
+    return int(abs(n).bit_length() * math.log10(2)) + 1
 
 
 def check(rows, allow_imports: bool = False) -> list[dict]:
@@ -221,7 +240,8 @@ def as_json(problem: dict) -> dict:
     space = catalog.get(problem["mechanism"]).space
     out = {"start": space.to_json(*space.parse(problem["start"], "start")),
            "goal": space.to_json(*space.parse(problem["goal"], "goal")),
-           "mechanism": problem["mechanism"], "options": problem["options"]}
+           "mechanism": problem["mechanism"],
+           "options": {k: v for k, v in problem["options"].items() if k != IMPORTS}}
     if problem.get("label") is not None:
         out["label"] = problem["label"]
     return out

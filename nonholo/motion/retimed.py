@@ -15,6 +15,16 @@ at every instant the fastest leg moves at ``v``, and no re-timing of the path ta
 than ``T̃`` (``TimeMap.minimum_time``). A longer ``T`` is met by ``dτ/dt = 1/(cρ)``,
 ``c = T/T̃ ≥ 1``: the fastest leg then moves at ``v/c`` throughout.
 
+Except where the path nearly stops. Where its inputs pass near zero (a sharp turn of the
+path, a near-cusp), ``ρ`` nearly vanishes and the exact least-time map rushes through:
+``dτ/dt = 1/ρ`` is huge, and the inputs ``u/ρ``, whose size stays that of the bound, turn
+round within microseconds, continuously but faster than any actuator follows. So ``ρ``
+is floored at :data:`FLOOR` times its peak, ``ρ = max(max_i |s_i|, FLOOR · max_τ max_i
+|s_i|) / v``: there the path is played no faster than ``1/FLOOR`` times its fastest
+part's pace, every leg below ``v``, and the inputs turn at a bounded rate. A path whose
+fastest leg never falls below :data:`FLOOR` of its peak is re-timed in the exact least
+time.
+
 How :class:`TimeMap` builds ``τ(t)``:
 
 - the planned control is replayed from ``R0`` on ``nodes`` CF4 steps (a multiple of its
@@ -22,8 +32,8 @@ How :class:`TimeMap` builds ``τ(t)``:
   the control jumps;
 - each ``s_i`` is interpolated by a quintic spline ``S_i`` between consecutive jumps
   (:data:`DEGREE`), and ``ρ = max_i |S_i| / v`` *exactly*: its kinks, where the fastest leg
-  changes, are the roots of ``S_a ∓ S_b``, found as polynomial roots, so between knots and
-  kinks ``ρ`` is one quintic;
+  changes or meets the floor, are the roots of ``S_a ∓ S_b`` and ``S_a ∓ floor``, found as
+  polynomial roots, so between knots and kinks ``ρ`` is one quintic or the floor;
 - ``t(τ) = c ∫ ρ`` is integrated piece by piece by 3-point Gauss–Legendre (exact for
   quintics) and inverted by Newton's method inside a piece (``dt/dτ = cρ > 0``), to
   round-off.
@@ -42,10 +52,10 @@ from scipy.interpolate import PPoly, make_interp_spline
 
 from ..controls import stages
 from ..model import catalog
-from ..numerics.checks import check_count, check_time, check_times, is_number
+from ..numerics.checks import check_count, check_times, is_number
 from ..spaces import so3
 from . import playback
-from .time_change import TimeChange
+from .time_change import MIN_TIME, TimeChange, check_horizon
 
 #: Nodes of the replay that samples the legs' speeds, at least (rounded up to a multiple of
 #: the controls' grid): the spline's error in ``ρ`` is ``O((T/nodes)⁶)``.
@@ -56,6 +66,9 @@ NEWTON_STEPS = 8
 #: A motion whose fastest leg is slower than this fraction of its peak somewhere stands
 #: (almost) still there: ``dτ/dt = 1/ρ`` would be unbounded.
 STANDSTILL = 1e-9
+#: ``ρ`` is at least this fraction of its peak (see the module): the most the re-timing
+#: speeds up the slowest part of a path relative to its fastest is ``1/FLOOR``.
+FLOOR = 0.05
 #: Two inputs differing by more than this (relative to the largest input) at a node: the
 #: control jumps there (the splines of ``s_i`` are broken at it).
 JUMP_RTOL = 1e-12
@@ -156,14 +169,16 @@ class TimeMap:
         peak = float(np.max(np.abs(self._spline.c[-1])))      # |s_i| at the nodes
         if not peak > 0.0:
             raise ValueError("the planned motion never moves a leg: nothing to re-time")
-        kinks = _kinks(self._spline)
+        #: the floor of the fastest leg's speed ``max_i |S_i|`` in ``ρ`` (see the module)
+        self.floor = FLOOR * peak
+        kinks = _kinks(self._spline, self.floor)
         self.edges = np.unique(np.concatenate([x, kinks]))
         self.kinks = np.setdiff1d(kinks, x)
         self.jumps = jumps
         a, b = self.edges[:-1], self.edges[1:]
         mid, half = 0.5 * (a + b), 0.5 * (b - a)
         rho_q = self.ratio(mid[:, None] + half[:, None] * _GAUSS_X[None, :])
-        least = float(np.min(self.ratio(self.edges[:-1])))
+        least = float(np.min(np.abs(self._spline(self.edges[:-1])).max(axis=-1))) / self.leg_speed
         if not least > STANDSTILL * peak / self.leg_speed or not np.min(rho_q) > 0.0:
             raise ValueError("the planned motion stands still somewhere (every leg at rest): "
                              "its re-timing under a speed bound is not defined there")
@@ -173,19 +188,23 @@ class TimeMap:
         if T is None:
             self.scale = 1.0
         else:
-            T = check_time(T)
+            T = check_horizon(T)
             if T < self.minimum_time * (1.0 - 1e-12):
                 raise ValueError(f"T = {T:.6g} s is too short: the path needs at least "
                                  f"{self.minimum_time:.6g} s with every leg at most "
                                  f"{self.leg_speed:g} fast")
             self.scale = max(T / self.minimum_time, 1.0)
         self.T = self.minimum_time * self.scale if T is None else T
+        if not self.T >= MIN_TIME:
+            raise ValueError(f"leg_speed = {self.leg_speed:g} re-times the motion in T = {self.T:.3g} s, less "
+                             f"than {MIN_TIME:g} s: its inputs would not be finite (a mistake of units)")
         self._t_edges = self._cumulative * self.scale
         self._t_edges[-1] = self.T
 
     # -- ρ -----------------------------------------------------------------------------------
     def ratio(self, tau) -> np.ndarray:
-        """``ρ(τ) = max_i |S_i(τ)| / v``: the planned motion's fastest leg speed over the bound.
+        """``ρ(τ) = max(max_i |S_i(τ)|, floor) / v``: the planned motion's fastest leg speed
+        over the bound, floored (see the module).
 
         Parameters
         ----------
@@ -198,7 +217,7 @@ class TimeMap:
             ``ρ(τ)``, of the shape of ``tau``.
         """
         tau = np.asarray(tau, dtype=float)
-        return np.max(np.abs(self._spline(tau)), axis=-1) / self.leg_speed
+        return np.maximum(np.max(np.abs(self._spline(tau)), axis=-1), self.floor) / self.leg_speed
 
     @property
     def peak_ratio(self) -> float:
@@ -300,8 +319,10 @@ def _speed_spline(base, R0, mech, nodes: int) -> tuple[PPoly, np.ndarray]:
     return PPoly(np.concatenate(coeffs, axis=1), np.concatenate(knots)), tau[jump]
 
 
-def _kinks(spline: PPoly) -> np.ndarray:
-    """Where two legs are equally fast, ``|S_a| = |S_b|``: the roots of ``S_a ∓ S_b``."""
+def _kinks(spline: PPoly, floor: float = 0.0) -> np.ndarray:
+    """Where two legs are equally fast, ``|S_a| = |S_b|`` (the roots of ``S_a ∓ S_b``), and
+    where the fastest leg's speed meets ``floor`` (roots of ``S_a ∓ floor`` at which no leg
+    is faster)."""
     k = spline.c.shape[-1]
     roots = []
     for a in range(k):
@@ -310,6 +331,15 @@ def _kinks(spline: PPoly) -> np.ndarray:
                 diff = PPoly(spline.c[..., a] + sign * spline.c[..., b], spline.x)
                 r = diff.roots(discontinuity=False, extrapolate=False)
                 roots.append(r[np.isfinite(r)])
+    if floor > 0.0:
+        for a in range(k):
+            for sign in (-1.0, 1.0):
+                c = spline.c[..., a].copy()
+                c[-1] += sign * floor
+                r = PPoly(c, spline.x).roots(discontinuity=False, extrapolate=False)
+                r = r[np.isfinite(r)]
+                if r.size:
+                    roots.append(r[np.max(np.abs(spline(r)), axis=-1) <= floor * (1.0 + 1e-9)])
     return np.unique(np.concatenate(roots)) if roots else np.empty(0)
 
 
@@ -394,7 +424,7 @@ class Retimed(TimeChange):
     @property
     def breakpoints(self) -> np.ndarray:
         """The re-timed images of the base controls' breakpoints and of the instants where
-        the fastest leg changes (``ũ`` has a kink there)."""
+        the fastest leg changes or meets the floor (``ũ`` has a kink there)."""
         b = getattr(self.base, "breakpoints", None)
         inner = [self.map.kinks, self.map.jumps, [0.0, self.base.T]]
         if b is not None:

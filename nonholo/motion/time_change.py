@@ -27,6 +27,39 @@ from ..numerics.checks import check_time
 BISECTIONS = 60
 #: ``max σ' = σ'(1/2)``: a rest-to-rest motion's peak speed over its mean speed.
 PEAK_RATIO = 15.0 / 8.0
+#: The shortest horizon accepted (s), a nanosecond: inputs scale as ``1/T``, so a shorter
+#: horizon is a mistake of units whose inputs overflow (``T = 1e-310``: ``±inf``) or whose
+#: Jacobians underflow, not a faster motion (the counterpart of
+#: :data:`~nonholo.numerics.checks.MAX_TIME`).
+MIN_TIME = 1e-9
+
+
+def check_horizon(T, name: str = "T") -> float:
+    """A horizon of a motion: a positive finite time (:func:`~nonholo.numerics.checks.check_time`)
+    of at least :data:`MIN_TIME`.
+
+    Parameters
+    ----------
+    T : float
+        The horizon (s).
+    name : str
+        The argument's name, for the message.
+
+    Returns
+    -------
+    float
+        ``T``.
+
+    Raises
+    ------
+    ValueError
+        Naming ``name``, if ``T`` is not such a time.
+    """
+    T = check_time(T, name)
+    if T < MIN_TIME:
+        raise ValueError(f"{name} must be at least {MIN_TIME:g} s, got {T:g} (the inputs scale as 1/{name}: "
+                         "a shorter horizon is a mistake of units whose inputs are not finite)")
+    return T
 
 
 def smoothstep(s) -> tuple[np.ndarray, np.ndarray]:
@@ -145,7 +178,8 @@ class RestToRest(TimeChange):
     Raises
     ------
     ValueError
-        If ``base`` is rest-to-rest already or ``T`` is not a positive finite time.
+        If ``base`` is rest-to-rest already or ``T`` is not a horizon
+        (:func:`check_horizon`).
     """
 
     kind = "rest_to_rest"
@@ -154,7 +188,7 @@ class RestToRest(TimeChange):
         if isinstance(base, RestToRest):
             raise ValueError("base is rest-to-rest already: time its own base instead")
         self.base = base
-        self.T = check_time(T)
+        self.T = check_horizon(T)
 
     def tau(self, t) -> tuple[np.ndarray, np.ndarray]:
         """The base's time at played times.

@@ -55,7 +55,7 @@ def plan(R0, Rd, *, T: float | None = 1.0, method: str = "parametric", harmonics
          delta_min: float = 1e-2, steps: int | None = None, newton_below: float = 1e-3,
          min_step: float = 1e-6, callback: Callable[[dict], object] | None = None,
          route: str = "auto", leg_length=None, leg_speed=None, objective: str | None = "auto",
-         constraints=()) -> PlanResult:
+         constraints=(), allow_imports: bool = False) -> PlanResult:
     """Plan a control steering ``R0`` to ``Rd`` in time ``T`` (seconds).
 
     The keywords build a :class:`~nonholo.planning.problem.Problem` (:meth:`Problem.build
@@ -76,7 +76,8 @@ def plan(R0, Rd, *, T: float | None = 1.0, method: str = "parametric", harmonics
         plan in the physical inputs, and ``leg_length`` and ``leg_speed`` are for SO(3)
         mechanisms only.
     T : float or None
-        The horizon in seconds; ``None`` only with ``leg_speed``: the least time.
+        The horizon in seconds, at least :data:`~nonholo.motion.time_change.MIN_TIME`;
+        ``None`` only with ``leg_speed``: the least time.
     method : {"parametric", "nonparametric"}
         Fourier series with ``harmonics`` = K, or piecewise constant on ``grid`` equal
         intervals — of the physical inputs ``u`` (``"paper"``) or of the frame coordinates
@@ -85,7 +86,8 @@ def plan(R0, Rd, *, T: float | None = 1.0, method: str = "parametric", harmonics
     harmonics : int
         Harmonics K of the parametric form.
     grid : int
-        Intervals of the nonparametric form.
+        Intervals of the nonparametric form (at most
+        :data:`~nonholo.planning.problem.MAX_PLAN_STEPS`).
     u0 : optional
         Initial control in physical units (see :func:`~nonholo.planning.problem.initial_controls`; default: the
         examples'). ``"robust"`` converts it to frame coordinates
@@ -103,8 +105,9 @@ def plan(R0, Rd, *, T: float | None = 1.0, method: str = "parametric", harmonics
     strategy : str or type
         ``"robust"`` (default, :mod:`nonholo.planning.strategy_robust`) or ``"paper"`` (the
         appendix's algorithm, :mod:`nonholo.planning.strategy_paper`), or a
-        :class:`~nonholo.planning.core.Strategy` subclass, itself or by its import path
-        ``"package.module:Class"`` (:func:`~nonholo.planning.problem.strategy_class`).
+        :class:`~nonholo.planning.core.Strategy` subclass, itself or, with
+        ``allow_imports=True``, by its import path ``"package.module:Class"``
+        (:func:`~nonholo.planning.problem.strategy_class`).
     mechanism : str or Mechanism
         A :class:`~nonholo.model.mechanism.Mechanism` or its name
         (:func:`nonholo.model.catalog.names`).
@@ -112,7 +115,8 @@ def plan(R0, Rd, *, T: float | None = 1.0, method: str = "parametric", harmonics
         Every trajectory accepted keeps ``|Δ| ≥ delta_min`` (ignored for mechanisms without
         a singular set).
     steps : int, optional
-        CF4 steps on ``[0, T]`` (default :func:`~nonholo.planning.problem.default_steps`).
+        CF4 steps on ``[0, T]`` (default :func:`~nonholo.planning.problem.default_steps`; at
+        most :data:`~nonholo.planning.problem.MAX_PLAN_STEPS`, the most a certificate replays).
     newton_below : float
         Below this ``|l_T|`` take full Newton steps (``γh = 1``).
     min_step : float
@@ -140,7 +144,8 @@ def plan(R0, Rd, *, T: float | None = 1.0, method: str = "parametric", harmonics
         keeps ``|dl_i/dt| ≤ v``. The path is planned as without it (in
         :data:`~nonholo.planning.problem.PLANNING_TIME` when ``T=None``), then re-timed
         (:mod:`nonholo.planning.retime`): with ``T=None`` in the least time — the fastest
-        leg at ``v`` throughout; with a given ``T`` only if the plan breaks the bound, and
+        leg at ``v`` throughout but where the path nearly stops
+        (:data:`~nonholo.motion.retimed.FLOOR`); with a given ``T`` only if the plan breaks the bound, and
         it fails saying the time needed if its path cannot keep it within ``T``. ``None``
         (default): no bound.
     objective : {None, "energy", "auto"}
@@ -154,8 +159,13 @@ def plan(R0, Rd, *, T: float | None = 1.0, method: str = "parametric", harmonics
         gives the same plan on any machine) (:mod:`nonholo.planning.energy`:
         piecewise-constant inputs on :data:`~nonholo.planning.energy.ENERGY_GRID` intervals,
         method ``"nonparametric"`` in the result). ``options["objective"]`` records it.
-    constraints : sequence
-        Further constraint objects (:mod:`nonholo.planning.constraints`).
+    constraints : sequence or None
+        Further constraint objects (:mod:`nonholo.planning.constraints`,
+        :data:`~nonholo.planning.constraints.KINDS`); ``None`` as ``()``: none.
+    allow_imports : bool
+        Let ``strategy`` be an import path, which imports its module and runs its code. Off
+        by default: a strategy's name read from a file (a plan file's label re-planned, a
+        problem table) is data, and an import path there is refused, naming ``strategy``.
 
     Returns
     -------
@@ -168,11 +178,14 @@ def plan(R0, Rd, *, T: float | None = 1.0, method: str = "parametric", harmonics
     ------
     ValueError
         For bad input, naming the argument: ``R0``/``Rd`` not states of the mechanism,
-        ``Δ(R0) = 0``, ``T ≤ 0``, ``harmonics``/``grid``/``steps`` < 1, an unknown method,
-        strategy or mechanism, bad numerical options, a Fourier basis too large for memory;
+        ``Δ(R0) = 0``, ``T`` below :data:`~nonholo.motion.time_change.MIN_TIME`,
+        ``harmonics``/``grid``/``steps`` < 1 or too large, an unknown method, strategy or
+        mechanism, a strategy's import path without ``allow_imports``, bad numerical
+        options, a Fourier basis too large for memory;
         ``leg_length`` or ``leg_speed`` for a mechanism beyond SO(3).
     TypeError
-        For a ``callback`` that is not callable.
+        For a ``callback`` that is not callable, ``constraints`` that are not constraint
+        objects (naming ``constraints``), an ``allow_imports`` that is not a bool.
 
     See Also
     --------
@@ -186,7 +199,7 @@ def plan(R0, Rd, *, T: float | None = 1.0, method: str = "parametric", harmonics
                             mechanism=mechanism, delta_min=delta_min, steps=steps,
                             newton_below=newton_below, min_step=min_step, route=route,
                             leg_length=leg_length, leg_speed=leg_speed, objective=objective,
-                            constraints=constraints)
+                            constraints=constraints, allow_imports=allow_imports)
     return solve(problem, callback)
 
 

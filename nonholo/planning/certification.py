@@ -9,7 +9,8 @@ the planner's own Jacobian: ``λ ← λ − J^# l_T`` with ``l_T`` the *replay's
 error — a Newton step on the replayed endpoint map, whose derivative differs from the
 planner's ``J`` by the relative discretisation error, so each correction shrinks the
 error by about that factor. At most :data:`MAX_CORRECTIONS`; one that does not halve the
-replay's error ends the corrections.
+replay's error ends the corrections. Corrections that end uncertified are dropped: a
+failed certificate is that of the controls the failed plan holds.
 """
 from __future__ import annotations
 
@@ -61,11 +62,12 @@ def certify(problem: Evaluator, ev: Evaluation, options: Options) -> tuple[Evalu
     Returns
     -------
     evaluation : Evaluation
-        The evaluation the certificate belongs to: ``ev`` unless corrected.
+        The evaluation the certificate belongs to: the corrected one if it passed, else
+        ``ev`` (a failure describes the controls it leaves, never an uncertified correction).
     certificate : Certificate
         Its certificate.
     corrections : int
-        The corrections made.
+        The corrections made (0 for a failure).
     """
     mech = problem.mechanism
 
@@ -84,7 +86,8 @@ def certify(problem: Evaluator, ev: Evaluation, options: Options) -> tuple[Evalu
     grid = getattr(ev.parametrisation, "grid", None)
     halves = N % 2 == 0 and (grid is None or (N // 2) % grid == 0)
     first = N if problem.frame and halves else 2 * N
-    cert = measure(ev, first)
+    given = ev, measure(ev, first)
+    cert = given[1]
     G = cert.sensitivity
     corrections = 0
     while not cert.passed and cert.correctable and corrections < MAX_CORRECTIONS:
@@ -97,6 +100,10 @@ def certify(problem: Evaluator, ev: Evaluation, options: Options) -> tuple[Evalu
             break
         ev, cert = trial, trial_cert
         corrections += 1
+    if not cert.passed:
+        # corrections that did not certify are dropped: the evaluation returned is the one
+        # given, and the certificate (its reason) is of that evaluation's controls
+        return given[0], given[1], 0
     return ev, cert, corrections
 
 

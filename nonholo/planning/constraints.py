@@ -242,6 +242,50 @@ class LegSpeed:
         return None
 
 
+#: The kinds of constraint the planner keeps.
+KINDS = (Clearance, LegStroke, LegSpeed)
+
+
+def check_all(constraints, mechanism) -> tuple:
+    """:func:`nonholo.plan`'s ``constraints``, each checked against ``mechanism``.
+
+    ``None`` means no further constraints (as ``()``); anything else must be a sequence of
+    constraint objects of :data:`KINDS`: the planner keeps no other kind, so another is
+    refused rather than silently ignored.
+
+    Parameters
+    ----------
+    constraints : sequence or None
+        The caller's constraint objects.
+    mechanism : Mechanism
+        The mechanism planned.
+
+    Returns
+    -------
+    tuple
+        The constraints, checked.
+
+    Raises
+    ------
+    TypeError
+        Naming ``constraints``, for something that is not a sequence of constraint objects.
+    ValueError
+        Naming the argument, for a constraint the mechanism cannot take.
+    """
+    if constraints is None:
+        return ()
+    kinds = ", ".join(k.__name__ for k in KINDS)
+    if isinstance(constraints, (str, bytes, dict)) or isinstance(constraints, KINDS) \
+            or not hasattr(constraints, "__iter__"):
+        raise TypeError(f"constraints must be a sequence of constraint objects ({kinds}) or None, "
+                        f"got {type(constraints).__name__}")
+    items = tuple(constraints)
+    for i, c in enumerate(items):
+        if not isinstance(c, KINDS):
+            raise TypeError(f"constraints[{i}] must be a constraint object ({kinds}), got {type(c).__name__}")
+    return tuple(c.check(mechanism) for c in items)
+
+
 def first_refusal(constraints, mechanism, start, goal) -> str | None:
     """The first constraint's reason why ``start`` and ``goal`` cannot be joined.
 

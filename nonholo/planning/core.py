@@ -658,6 +658,12 @@ def backtrack(problem: Evaluator, ev: Evaluation, direction: np.ndarray, scale: 
                                            f"|l_T| = {ev.error:.3g}; last rejected step: {last}")
 
 
+#: ``(window, ratio)``: every run of :func:`descend` stalls when ``|l_T|`` shrank by less
+#: than a factor ``ratio`` over the last ``window`` accepted steps (at that pace it would
+#: take thousands of steps to converge: a tiny ``γ``, a step control stuck at tiny steps).
+PROGRESS = (50, 0.99)
+
+
 @dataclass
 class Descent:
     """How :func:`descend` ended: ``status`` is ``"converged"``, ``"budget"`` (``budget``
@@ -691,7 +697,9 @@ def descend(problem: Evaluator, ev: Evaluation, options: Options,
     ``direction(ev, newton)`` gives the step direction (the step is ``−γh`` or ``−1`` times
     it); ``full(ev)`` whether trial evaluations keep the data of a full evaluation;
     ``stall = (window, ratio)``: stop when ``|l_T|`` (above ``newton_below``) shrank by
-    less than a factor ``ratio`` over the last ``window`` steps. Each accepted step is
+    less than a factor ``ratio`` over the last ``window`` steps; whatever ``stall``, every
+    run stops, in any phase, when it shrank by less than :data:`PROGRESS` allows (no
+    strategy runs ``max_iter`` steps without progress). Each accepted step is
     appended to ``history`` (numbered from ``first + 1``, with ``tags``) and passed to
     ``callback``, whose true return value stops the loop.
 
@@ -734,9 +742,9 @@ def descend(problem: Evaluator, ev: Evaluation, options: Options,
             return Descent(ev, it, "converged", f"converged: |l_T| = {ev.error:.3g} <= tol = {options.tol:g}")
         if it >= budget:
             return Descent(ev, it, "budget", f"|l_T| = {ev.error:.3g}")
-        if stall is not None:
-            w, ratio = stall
-            if w and len(errors) > w and ev.error >= options.newton_below and ev.error > ratio * errors[-1 - w]:
+        for w, ratio, flow_only in ((stall or (0, 1.0)) + (True,), PROGRESS + (False,)):
+            if w and len(errors) > w and (ev.error >= options.newton_below or not flow_only) \
+                    and ev.error > ratio * errors[-1 - w]:
                 return Descent(ev, it, "stalled", f"stalled at |l_T| = {ev.error:.3g} (less than "
                                f"{100 * (1 - ratio):.3g} % in {w} steps)")
         newton = ev.error < options.newton_below

@@ -16,6 +16,7 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
+from ..certify.certificate import MAX_REPLAY_STEPS
 from ..controls import stages
 from ..controls.parametrisations import (
     Controls,
@@ -26,9 +27,10 @@ from ..controls.parametrisations import (
 from ..model import catalog
 from ..model.mechanism import Mechanism
 from ..motion.simulation import DEFAULT_STEPS
+from ..motion.time_change import check_horizon
 from ..numerics import effort
-from ..numerics.checks import MAX_STEPS, check_count, check_time
-from .constraints import Clearance, LegSpeed, LegStroke, one_of
+from ..numerics.checks import check_count, check_time
+from .constraints import Clearance, LegSpeed, LegStroke, check_all, one_of
 from .core import Evaluator, Options, Strategy
 from .strategy_paper import PaperStrategy
 from .strategy_robust import RobustStrategy
@@ -43,6 +45,11 @@ MAX_BASIS = 2 * 10**7
 #: the energy ∫|u|² dt, or the plan unless a quick search finds a motion of far less energy
 #: (:func:`nonholo.planning.energy.improve`).
 OBJECTIVES = (None, "energy", "auto")
+#: The most ``grid`` intervals and integrator ``steps`` a plan may take: half the finest
+#: certified replay (:data:`~nonholo.certify.certificate.MAX_REPLAY_STEPS`), which is on at
+#: least twice the planner's steps. A plan on more could never be certified: it would spend
+#: its whole ``max_iter``, each step ~``steps`` long, for a certain failure.
+MAX_PLAN_STEPS = MAX_REPLAY_STEPS // 2
 #: The strategies :func:`nonholo.plan` knows by name.
 STRATEGIES: dict[str, type[Strategy]] = {"paper": PaperStrategy, "robust": RobustStrategy}
 #: The planning horizon (s) of a plan asked for in the least time (``T=None``): the path is
@@ -69,15 +76,69 @@ def one_of_choices(value, choices) -> bool:
     return (value is None or isinstance(value, str)) and value in choices
 
 
+def is_import_path(strategy) -> bool:
+    """Whether ``strategy`` names a strategy by its import path ``"package.module:Class"``
+    (resolving it imports the module and runs its top-level code).
+
+    Parameters
+    ----------
+    strategy : object
+        What the caller passed as ``strategy``.
+
+    Returns
+    -------
+    bool
+        ``True`` for a string with a colon that is not a name of :data:`STRATEGIES`.
+    """
+    return isinstance(strategy, str) and strategy not in STRATEGIES and ":" in strategy
+
+
+def check_strategy(strategy, allow_imports: bool) -> type[Strategy]:
+    """:func:`strategy_class` of what a caller of :func:`nonholo.plan` passed: an import
+    path only with the caller's ``allow_imports=True``. A strategy's name read from a file
+    (a plan file's label, a problem table's option) is data: it never imports code unless
+    the caller opts in.
+
+    Parameters
+    ----------
+    strategy : str or type
+        As for :func:`strategy_class`.
+    allow_imports : bool
+        Whether an import path may be imported.
+
+    Returns
+    -------
+    type
+        The :class:`~nonholo.planning.core.Strategy` subclass.
+
+    Raises
+    ------
+    ValueError
+        Naming ``strategy``, for an import path without ``allow_imports`` (nothing is
+        imported), or as :func:`strategy_class`.
+    TypeError
+        If ``allow_imports`` is not ``True`` or ``False``.
+    """
+    if not isinstance(allow_imports, bool):
+        raise TypeError(f"allow_imports must be True or False, got {allow_imports!r}")
+    if is_import_path(strategy) and not allow_imports:
+        raise ValueError(f"strategy {strategy!r} is an import path, which would import the module "
+                         f"{strategy.partition(':')[0]!r} and run its code; known strategies: "
+                         f"{', '.join(STRATEGIES)}, or pass a Strategy subclass, or opt in with "
+                         "allow_imports=True (nonholo plan --allow-imports) if you trust the name")
+    return strategy_class(strategy)
+
+
 def strategy_class(strategy) -> type[Strategy]:
-    """The strategy a name or a class stands for.
+    """The strategy a name or a class stands for. This resolver imports an import path
+    when given one; :func:`nonholo.plan` asks its caller's opt-in first
+    (:func:`check_strategy`).
 
     Parameters
     ----------
     strategy : str or type
         A :class:`~nonholo.planning.core.Strategy` subclass, a name of :data:`STRATEGIES`,
-        or an import path ``"package.module:Class"`` (so that a problem table, JSON, can
-        name any strategy).
+        or an import path ``"package.module:Class"``.
 
     Returns
     -------
@@ -244,7 +305,7 @@ class Problem:
               max_iter: int = 200, strategy="robust", mechanism="platform", delta_min: float = 1e-2,
               steps: int | None = None, newton_below: float = 1e-3, min_step: float = 1e-6,
               route: str = "auto", leg_length=None, leg_speed=None, objective: str | None = "auto",
-              constraints=()) -> "Problem":
+              constraints=(), allow_imports: bool = False) -> "Problem":
         """The problem of :func:`nonholo.plan`'s keywords, checked.
 
         Parameters
@@ -253,11 +314,11 @@ class Problem:
             As for :func:`nonholo.plan`.
         mechanism, delta_min, steps, newton_below, min_step, route, leg_length
             As for :func:`nonholo.plan`.
-        leg_speed, objective
+        leg_speed, objective, allow_imports
             As for :func:`nonholo.plan`.
-        constraints : sequence
+        constraints : sequence or None
             Further constraint objects (:mod:`nonholo.planning.constraints`), besides those
-            of ``delta_min``, ``leg_length`` and ``leg_speed``.
+            of ``delta_min``, ``leg_length`` and ``leg_speed``; ``None``: none.
 
         Returns
         -------
@@ -268,6 +329,9 @@ class Problem:
         ------
         ValueError
             For bad input, naming the argument.
+        TypeError
+            For ``constraints`` that are not constraint objects, or an ``allow_imports``
+            that is not a bool.
         """
         started, started_effort = time.perf_counter(), effort.seconds()
         mech = catalog.get(mechanism)
@@ -281,11 +345,11 @@ class Problem:
         stroke = LegStroke.of(leg_length, mech)
         if not one_of_choices(method, METHODS):
             raise ValueError(f"unknown method {method!r}; known: {', '.join(METHODS)}")
-        solver = strategy_class(strategy)
+        solver = check_strategy(strategy, allow_imports)
         least_time = T is None
-        T = check_time(PLANNING_TIME if least_time else T)
+        T = check_horizon(PLANNING_TIME if least_time else T)
         harmonics = check_count(harmonics, "harmonics")
-        grid = check_count(grid, "grid", maximum=MAX_STEPS // 2)     # at most the steps (below)
+        grid = check_count(grid, "grid", maximum=MAX_PLAN_STEPS)     # at most the steps (below)
         R0, q0 = mech.parse_state(R0, "R0")
         Rd, qd = mech.parse_state(Rd, "Rd")
         options = Options(gamma=solver.default_gamma if gamma is None else gamma, step=step, tol=tol,
@@ -293,9 +357,9 @@ class Problem:
                           delta_min=delta_min)
         if mech.singular.value(R0, q0) == 0.0:
             raise ValueError(mech.singular.refusal)
-        # the planner checks its discretisation on twice the steps: half the integrator's limit
+        # the certificate replays on twice the steps: at most half its finest replay
         steps = check_count(default_steps(method, grid) if steps is None else steps, "steps",
-                            maximum=MAX_STEPS // 2)
+                            maximum=MAX_PLAN_STEPS)
         if method == "parametric" and 2 * harmonics > steps:
             raise ValueError(f"harmonics = {harmonics} is more than the integrator's steps = {steps} "
                              "can resolve (at most steps/2; raise steps or lower harmonics)")
@@ -308,7 +372,7 @@ class Problem:
         stages.check_steps(controls, steps)
         # the keywords' constraints are checked as they are built; the caller's ones here
         listed = (Clearance(options.delta_min), stroke, speed)
-        checked = tuple(c for c in listed if c is not None) + tuple(c.check(mech) for c in constraints)
+        checked = tuple(c for c in listed if c is not None) + check_all(constraints, mech)
         for kind in (Clearance, LegStroke, LegSpeed):
             one_of(checked, kind)
         return cls(mechanism=mech, R0=R0, q0=q0, Rd=Rd, qd=qd, T=T, method=method, harmonics=harmonics,

@@ -4,7 +4,8 @@ from rest to rest.
 :func:`retime` wraps a plan's controls in a time change (:mod:`nonholo.motion.time_change`):
 :class:`~nonholo.motion.retimed.Retimed` keeps every leg at most ``leg_speed`` fast — at that
 speed throughout for the least time (``T=None``), at ``leg_speed · T̃/T`` for a longer
-``T``; ``rest_to_rest=True`` plays the motion by the smoothstep time change
+``T``, slower only where the path nearly stops (:data:`~nonholo.motion.retimed.FLOOR`: the
+inputs turn there at a bounded rate); ``rest_to_rest=True`` plays the motion by the smoothstep time change
 (:class:`~nonholo.motion.time_change.RestToRest`), which starts and ends at zero speed, for any
 mechanism. The path is the plan's, so its certificate carries over unchanged: the re-timed
 motion ends where the plan's does, with the same error bound, least ``|Δ|``, sensitivity
@@ -22,8 +23,7 @@ import numpy as np
 from ..io.result import PlanResult
 from ..motion.frame_controls import from_dict as controls_from_dict
 from ..motion.retimed import RETIME_NODES, Retimed, TimeMap, check_leg_speed
-from ..motion.time_change import PEAK_RATIO, RestToRest, planned, played_time
-from ..numerics.checks import check_time
+from ..motion.time_change import PEAK_RATIO, RestToRest, check_horizon, planned, played_time
 
 
 def planned_controls(result: PlanResult):
@@ -95,8 +95,9 @@ def retime(result: PlanResult, leg_speed: float | None = None, T: float | None =
     ValueError
         For a failed plan, a mechanism without legs under a ``leg_speed``, no
         ``leg_speed`` without ``rest_to_rest``, a bad ``leg_speed``, ``T`` or
-        ``rest_to_rest``, or a ``T`` shorter than the path needs under ``leg_speed`` (the
-        message says how long it needs).
+        ``rest_to_rest``, a ``T`` shorter than the path needs under ``leg_speed`` (the
+        message says how long it needs), or a ``T`` whose inputs are not finite (below
+        :data:`~nonholo.motion.time_change.MIN_TIME`, naming ``T``).
     """
     started = time.perf_counter()
     if not isinstance(result, PlanResult):
@@ -110,7 +111,7 @@ def retime(result: PlanResult, leg_speed: float | None = None, T: float | None =
     if v is None and not rest_to_rest:
         raise ValueError("leg_speed must be a positive finite speed, got None (or pass rest_to_rest=True)")
     if T is not None:
-        T = check_time(T)
+        T = check_horizon(T)
     if not result.success:
         raise ValueError(f"only a successful plan can be re-timed; this one failed: {result.reason}")
     base = planned_controls(result)
@@ -138,9 +139,12 @@ def retime(result: PlanResult, leg_speed: float | None = None, T: float | None =
     tau[-1] = base.T
     t = played_time(timed, tau)
     t[0], t[-1] = 0.0, timed.T
+    u = timed(t).reshape(n, mech.n_inputs)
+    if not np.all(np.isfinite(u)):
+        raise ValueError(f"T = {timed.T:g} s is too short for this plan: its re-timed inputs are not finite")
     options = result.options if v is None else {**result.options, "leg_speed": v}
     return dataclasses.replace(
-        result, parametrisation=timed, T=timed.T, t=t, u=timed(t).reshape(n, mech.n_inputs),
+        result, parametrisation=timed, T=timed.T, t=t, u=u,
         reason=f"{result.reason}; re-timed {' '.join(how)}", options=options, made_by=None,
         seconds=None if result.seconds is None else result.seconds + (time.perf_counter() - started))
 
