@@ -10,7 +10,8 @@ F. a failed certification describes the controls the result holds; G. every stra
    when it makes no progress; H. least-time inputs turn at a bounded rate where the path
    nearly stops; I. the largest accepted sizes can be certified; J. a huge integer in a
    problem table names the row and column; K. ``constraints`` that are not constraint
-   objects are refused naming ``constraints``.
+   objects are refused naming ``constraints``; L. a field that is not finite at the start
+   or the goal gives a failed result that says so.
 """
 from __future__ import annotations
 
@@ -193,3 +194,18 @@ def test_constraints_that_are_not_constraint_objects_are_refused_naming_constrai
             planner.plan(R0, RD, constraints=bad)
     default = Problem.build(R0, RD)
     assert Problem.build(R0, RD, constraints=None).constraints == default.constraints
+
+
+def test_a_field_not_finite_at_the_start_or_the_goal_is_a_failed_result_that_says_so(tmp_path, monkeypatch):
+    """L. ``ẋ = v log x``: G is -inf at x = 0 (before: LAPACK's complaints and a LinAlgError)."""
+    import sympy as sp
+
+    monkeypatch.setenv("NONHOLO_CACHE_DIR", str(tmp_path))
+    x, y, v, w = sp.symbols("x y v w")
+    mech = nonholo.Mechanism.from_equations("log_rate", inputs=[v, w], coordinates=[x, y],
+                                            rates=[v * sp.log(x), w])
+    for start, goal, where in (([0.0, 0.0], [2.0, 1.0], "start"), ([2.0, 0.0], [0.0, 1.0], "goal")):
+        res = planner.plan(start, goal, mechanism=mech, objective=None)
+        assert not res.success
+        assert f"the field G of 'log_rate' is not finite at the {where}" in res.reason, res.reason
+    assert planner.plan([2.0, 0.0], [1.5, 1.0], mechanism=mech, objective=None).success   # elsewhere it plans

@@ -25,6 +25,8 @@ from __future__ import annotations
 
 from typing import Callable
 
+import numpy as np
+
 from ..io.result import PlanResult
 from ..numerics.blas import one_thread
 from . import energy
@@ -227,6 +229,37 @@ def solve(problem: Problem, callback: Callable[[dict], object] | None = None) ->
         return limit_speed(result, problem.leg_speed, None if problem.least_time else problem.T)
 
 
+def field_refusal(problem) -> str | None:
+    """Why no motion can start or end where the problem asks: the field ``G`` not finite
+    (or not computable) at the start or the goal, off the singular set (which has its own
+    refusals).
+
+    Parameters
+    ----------
+    problem : Problem
+        The planning problem.
+
+    Returns
+    -------
+    str or None
+        The reason, ``None`` where ``G`` is finite at both ends.
+    """
+    mech = problem.mechanism
+    for where, R, q in (("start", problem.R0, problem.q0), ("goal", problem.Rd, problem.qd)):
+        q = np.zeros(mech.n_coordinates) if q is None else np.asarray(q, dtype=float)
+        with np.errstate(all="ignore"):
+            try:
+                if mech.singular.value(R, q if len(q) else None) == 0.0:
+                    continue
+                field = np.asarray(mech.G(np.asarray(R, dtype=float), q), dtype=float)
+            except (ArithmeticError, ValueError, TypeError) as exc:
+                return f"the field G of {mech.name!r} cannot be evaluated at the {where} ({exc}): unreachable"
+        if not np.isfinite(field).all():
+            at = f"coordinates {np.round(q, 6).tolist()}" if len(q) else "its orientation"
+            return f"the field G of {mech.name!r} is not finite at the {where} ({at}): no motion can start or end there"
+    return None
+
+
 def solve_path(problem: Problem, callback: Callable[[dict], object] | None = None) -> PlanResult:
     """The path of ``problem`` in its time ``T``: refused at once where a constraint rules
     the goal out, else the strategy's local plan, then (route ``"auto"`` after a failure, or
@@ -246,7 +279,7 @@ def solve_path(problem: Problem, callback: Callable[[dict], object] | None = Non
     """
     mech, options, cls = problem.mechanism, problem.options, problem.strategy_class
     # goals that cannot be reached: decided before anything is simulated (or compiled)
-    refusal = first_refusal(problem.constraints, mech, problem.start, problem.goal)
+    refusal = first_refusal(problem.constraints, mech, problem.start, problem.goal) or field_refusal(problem)
     if refusal is not None:
         return build_result(problem, None, False, refusal)
 
