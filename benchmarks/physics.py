@@ -19,7 +19,8 @@ after the open-loop play and after each touch-up (with the touch-up's prediction
 was not played), the last error by part, the largest slip speed at a rolling contact over
 all plays, and the open-loop play's real-time factor; and whether ``|e|`` never grows from
 stage to stage in every row. The first case is run twice and its records compared
-(*repeat*). Exit status 1 if a row's errors grow or the repeat differs.
+(*repeat*). Exit status 1 if a row's errors grow, a stage went unstable
+(:func:`nonholo.physics.execution.execute`) or the repeat differs.
 
 Writes ``benchmarks/results/physics.md``.
 """
@@ -89,6 +90,8 @@ def stage_text(stage: dict, norm: float) -> str:
         return f"{norm:.1e}" + ("" if stage["predicted"] is None else f" (pred. {stage['predicted']:.1e})")
     if outcome == "predicted worse":
         return f"not played: pred. {stage['predicted']:.1e}"
+    if outcome == "unstable":
+        return "UNSTABLE"
     return "not played: within tol." if outcome == "within tolerance" else "not planned"
 
 
@@ -139,7 +142,7 @@ def main(argv=None) -> int:
         f"preload {base.preload:g} N, settling {base.settle:g} s; the platforms' own: time step "
         f"{own.timestep:g} s, solref {own.solref}, solimp {own.solimp}, preload {own.preload:g} N; "
         "but for the setting named.")
-    rows, runs, growing = [], {}, []
+    rows, runs, growing, unstable = [], {}, [], []
     for mech, setting, duration, contact in CASES:
         started = time.perf_counter()
         ex = execute(plans[mech], touch_ups=args.touch_ups, duration=duration, contact=contact)
@@ -148,6 +151,8 @@ def main(argv=None) -> int:
         norms = [plans[mech].kinematics.space.norm(s["error"]) for s in ex.stages]
         if any(b > a for a, b in zip(norms, norms[1:])):
             growing.append(f"{mech}, {setting}")
+        if any(s["outcome"] == "unstable" for s in ex.stages):
+            unstable.append(f"{mech}, {setting}")
         cells = [stage_text(s, n) for s, n in zip(ex.stages, norms)]
         cells += ["–"] * (args.touch_ups + 1 - len(cells))
         rows.append([mech, setting, *cells, error_text(ex.stages[-1]["error"]),
@@ -155,7 +160,8 @@ def main(argv=None) -> int:
     rep.table(["mechanism", "setting", "open loop", *[f"touch-up {k}" for k in range(1, args.touch_ups + 1)],
                "last, by part", "max slip", "RTF"], rows)
     rep.paragraph("|e| non-increasing from stage to stage: "
-                  + (f"NOT in {'; '.join(growing)}." if growing else "in every row."))
+                  + (f"NOT in {'; '.join(growing)}." if growing else "in every row.")
+                  + (f" The simulation went UNSTABLE in {'; '.join(unstable)}." if unstable else ""))
     rep.paragraph(f"Rolling radii measured after settling (unit nominal radius for the ball, "
                   f"{CarModel.WHEEL:g} for the wheels): {radii()}. Played in 1 s the ball's peak speed is "
                   "ten times that of 10 s and its accelerations a hundred times: the friction the "
@@ -168,7 +174,7 @@ def main(argv=None) -> int:
     rep.paragraph(f"Repeat: {mech}, {setting}, run again: records "
                   f"{'bit-identical' if same else 'DIFFERENT'} (real-time factors aside).")
     rep.write()
-    return 0 if same and not growing else 1
+    return 0 if same and not growing and not unstable else 1
 
 
 if __name__ == "__main__":

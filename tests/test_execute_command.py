@@ -54,7 +54,7 @@ def test_a_touch_up_not_played_is_one_line_saying_why(outcome, words):
 
 @pytest.mark.parametrize("argv, words", [
     (["nothere.json"], "cannot read the plan"),
-    (["{plan}", "--touch-ups", "-1"], "touch_ups"),
+    (["{plan}", "--touch-ups", "-1"], "--touch-ups"),
     (["{plan}", "--duration", "0"], "duration"),
     (["{plan}", "--plot", "x.nosuchformat"], "unknown figure format"),
 ])

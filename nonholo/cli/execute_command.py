@@ -11,7 +11,10 @@ touch-up re-plans from the measured state to the goal and plays again — only i
 to end nearer the goal, and none once within the plan's tolerance
 (:func:`nonholo.physics.execution.execute`). One line is printed per stage: the error from
 the goal by part, the largest slip and the real-time factor, or why a touch-up was not
-played (touching up ends there). ``--json`` writes the record (``{"stages": [{"error":
+played (touching up ends there), or that MuJoCo went unstable in the stage (the execution
+ends there). ``--touch-ups`` (at most :data:`~nonholo.physics.execution.MAX_TOUCH_UPS`) and
+``--duration`` (at most :data:`~nonholo.physics.execution.MAX_DURATION` s) are checked
+before the plan is read. ``--json`` writes the record (``{"stages": [{"error":
 {"rotation": …, "coordinates": …}, "outcome": "played", "max_slip": …, …}, …]}``, the
 open-loop stage first), ``--plot`` its figure
 (:func:`nonholo.viz.execution_figures.execution_figure`), ``--mjcf`` the model file, which
@@ -19,8 +22,9 @@ loads in plain ``mujoco.MjModel.from_xml_path``. Files are written as ``nonholo 
 writes them (:mod:`nonholo.io.safe_write`).
 
 Exit status: 0 when every touch-up was played or left out by design (within tolerance, or
-predicted to end no nearer), 1 if a touch-up could not be planned, 2 on bad input (or
-without MuJoCo), 3 if ``--json``, ``--plot`` or ``--mjcf`` could not be written.
+predicted to end no nearer), 1 if a touch-up could not be planned or MuJoCo went unstable in
+a stage, 2 on bad input (or without MuJoCo), 3 if ``--json``, ``--plot`` or ``--mjcf`` could
+not be written.
 """
 from __future__ import annotations
 
@@ -32,7 +36,7 @@ from ..io.result import PlanResult
 from . import plan_command
 from .help_text import plain
 
-#: exit status of ``nonholo execute`` (see the module docstring)
+#: exit status of ``nonholo execute`` (see the module docstring; 1 also when MuJoCo went unstable)
 EXIT_PLAYED, EXIT_TOUCH_UP_FAILED, EXIT_BAD_INPUT, EXIT_WRITE_FAILED = 0, 1, 2, 3
 
 
@@ -84,6 +88,8 @@ def describe(record: dict, name: str, units: dict) -> str:
         The line.
     """
     outcome = record.get("outcome", "played")
+    if outcome == "unstable":
+        return f"{name}: unstable ({record.get('reason')})"
     if outcome == "not planned":
         return f"{name}: not planned ({record.get('reason')})"
     if outcome != "played":
@@ -111,9 +117,16 @@ def run(args) -> int:
     except ImportError:
         _error("MuJoCo is not installed: python -m pip install 'nonholo[physics]'")
         return EXIT_BAD_INPUT
-    from ..physics import Contact, execute, write_mjcf
+    from ..physics import Contact, execute, model_for, write_mjcf
+    from ..physics.execution import check_duration, check_steps, check_touch_ups
     from ..viz.execution_figures import execution_figure, stage_names
 
+    try:                                   # bounded before anything is read or allocated
+        touch_ups = check_touch_ups(args.touch_ups, "--touch-ups")
+        duration = check_duration(args.duration, "--duration")
+    except ValueError as exc:
+        _error(str(exc))
+        return EXIT_BAD_INPUT
     why = plan_command.plot_format_error(args.plot) if args.plot else None
     if why:
         _error(why)
@@ -128,8 +141,9 @@ def run(args) -> int:
             _error(f"cannot read the plan {args.plan}: {exc.strerror or exc}")
             return EXIT_BAD_INPUT
         contact = Contact(actuators=args.actuators)
+        check_steps(result, duration, model_for(result.kinematics, contact).contact, "--duration")
         units = {part: result.kinematics.space.part_unit(part) for part in ("rotation", "coordinates")}
-        counter = iter(stage_names(args.touch_ups + 1 if args.touch_ups >= 0 else 1))
+        counter = iter(stage_names(touch_ups + 1))
 
         def progress(record):
             if not args.quiet:
@@ -142,12 +156,11 @@ def run(args) -> int:
             except OSError as exc:
                 _cannot_write(args.mjcf, exc)
                 status = EXIT_WRITE_FAILED
-        run_ = execute(result, touch_ups=args.touch_ups, duration=args.duration, contact=contact,
-                       progress=progress)
+        run_ = execute(result, touch_ups=touch_ups, duration=duration, contact=contact, progress=progress)
     except ValueError as exc:
         _error(str(exc))
         return EXIT_BAD_INPUT
-    if any(s["outcome"] == "not planned" for s in run_.stages):
+    if any(s["outcome"] in ("not planned", "unstable") for s in run_.stages):
         status = EXIT_TOUCH_UP_FAILED
     if args.json:
         try:
@@ -157,9 +170,15 @@ def run(args) -> int:
             status = EXIT_WRITE_FAILED
         else:
             print(f"wrote {args.json}", file=sys.stderr)
-    if args.plot:
+    unstable = [i for i, s in enumerate(run_.stages) if s["outcome"] == "unstable"]
+    if args.plot and run_.traces[0] is None:     # unstable before anything was played: nothing to draw
+        _error(f"did not write {args.plot}: the simulation went unstable before the open loop played")
+    elif args.plot:
+        # the figure's own title reads a stage not played as a touch-up left out: say what happened
+        title = (f"{run_.mechanism} on its physics model: the simulation went unstable in the "
+                 f"{stage_names(len(run_.stages))[unstable[0]]}" if unstable else None)
         try:
-            plan_command.write_figure(execution_figure(run_), args.plot, "--plot")
+            plan_command.write_figure(execution_figure(run_, title=title), args.plot, "--plot")
         except (OSError, ValueError) as exc:
             _cannot_write(args.plot, exc)
             status = EXIT_WRITE_FAILED

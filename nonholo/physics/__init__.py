@@ -5,11 +5,14 @@
   measures where it ended, and re-plans from there to the goal for each touch-up, played
   only when predicted to end nearer the goal (:mod:`nonholo.physics.execution`),
   recording each stage in an :class:`Execution`;
-- :class:`Contact` holds every contact and actuation setting
+- :class:`Contact` holds every contact and actuation setting, each in a bounded range
   (:mod:`nonholo.physics.contact`);
-- :func:`model_for` gives a mechanism's model, :func:`write_mjcf` writes its MJCF file
-  (:mod:`nonholo.physics.models`; the rolling mechanisms' models:
-  :mod:`nonholo.physics.vehicle_models`).
+- :func:`model_for` gives a mechanism's model, chosen by its kinematics, not its name;
+  :func:`write_mjcf` writes its MJCF file (:mod:`nonholo.physics.models`; the rolling
+  mechanisms' models: :mod:`nonholo.physics.vehicle_models`).
+
+Bad settings, durations and counts are refused before anything is played; a stage in which
+MuJoCo goes unstable is recorded as such and ends the execution.
 
 MuJoCo is imported only when a model is simulated.
 """

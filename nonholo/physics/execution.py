@@ -32,6 +32,19 @@ end no nearer, or when it cannot be planned; that touch-up is recorded, with its
 the error unchanged. Hence the recorded errors do not grow from stage to stage as long as
 the prediction holds.
 
+Nothing is played on trust. The mechanism's model is chosen by its kinematics
+(:func:`nonholo.physics.models.matching_model`); the settings lie in the ranges of
+:mod:`nonholo.physics.contact`; ``duration`` is at most :data:`MAX_DURATION`, ``touch_ups`` at
+most :data:`MAX_TOUCH_UPS`, and a stage's motion spans at least :data:`MIN_MOTION_STEPS` and its
+motion and settling at most :data:`~nonholo.physics.contact.MAX_STAGE_STEPS` MuJoCo steps —
+all checked before anything is allocated or played. While playing, MuJoCo's warnings of bad positions, velocities,
+accelerations or controls, and non-finite positions or velocities, are checked at every
+sample: MuJoCo resets an unstable simulation and carries on, so a stage in which it did is
+recorded with the outcome ``"unstable"`` and its reason, its error left at the one before it
+(the state after a reset says nothing), and execution stops there. So is a stage with no
+contact force at any sample: the mechanism left the contacts it rolls on (contacts too stiff
+for the time step, say), and what was played is no longer the model.
+
 Everything recorded is a function of the inputs alone — MuJoCo runs single-threaded and
 deterministically, and no wall-clock time enters the simulation or a decision — except each
 stage's real-time factor (simulated over wall time).
@@ -52,7 +65,7 @@ from ..io.result import PlanResult
 from ..numerics.checks import check_time, is_number
 from ..planning.api import plan
 from ..planning.retime import planned_controls, retime
-from .contact import Contact
+from .contact import MAX_STAGE_STEPS, Contact, shown
 from .models import model_for
 
 #: ``duration=None`` plays a plan in this many times its planned ``T``.
@@ -68,17 +81,32 @@ MARGIN = 2.0
 DRIFT_WINDOW = 0.5
 #: The tolerance of a plan whose options record none (that of :func:`nonholo.plan`).
 DEFAULT_TOL = inspect.signature(plan).parameters["tol"].default
-#: What became of a stage: played, or why not (a touch-up only).
-OUTCOMES = ("played", "within tolerance", "predicted worse", "not planned")
+#: What became of a stage: played; why a touch-up was not; or ``"unstable"``: MuJoCo reported
+#: the simulation unstable while playing it, or the mechanism left its contacts (execution
+#: stops there).
+OUTCOMES = ("played", "within tolerance", "predicted worse", "not planned", "unstable")
 #: The format tag of a saved execution.
 FORMAT = "nonholo.execution/1"
+#: Largest ``duration`` (s) of a stage's motion (explicit or by default :data:`SLOWDOWN` × ``T``).
+MAX_DURATION = 1000.0
+#: Largest number of touch-ups.
+MAX_TOUCH_UPS = 100
+#: Least number of MuJoCo steps a stage's motion spans (fewer would play it in a jump).
+MIN_MOTION_STEPS = 10
+#: The keys of a stage's record (``planned``: records saved before ``outcome``).
+STAGE_KEYS = ("error", "outcome", "reason", "size", "predicted", "drift", "max_slip", "max_contact_force",
+              "sim_time", "real_time_factor", "duration", "planned")
+#: Largest file :meth:`Execution.load` reads (bytes); a record is a few kilobytes.
+MAX_RECORD_BYTES = 4 * 1024 * 1024
+#: Deepest nesting of objects and lists in a saved record (it has 4).
+MAX_RECORD_DEPTH = 6
 
 
 # -- the record ------------------------------------------------------------------------------
 
 class Execution:
     """The record of :func:`execute`: one entry per stage, the open-loop stage first, then
-    the touch-ups played and at most one touch-up not played, the last.
+    the touch-ups played and at most one stage not played or ``"unstable"``, the last.
 
     Parameters
     ----------
@@ -89,14 +117,18 @@ class Execution:
         ``mechanism.space.error`` gives it: ``rotation`` in rad, ``coordinates`` in the
         mechanism's units; unchanged by a stage not played); ``outcome``, one of
         :data:`OUTCOMES`; ``size``, :func:`motion_size` of its plan (``None`` if none was
-        planned); ``predicted``, a touch-up's predicted ``|e|`` (``None`` for the open loop
-        and without a plan); ``drift``, the rate (per second) at which the state moved at rest
-        over the end of its settling; ``max_slip`` (largest tangential speed at a rolling
+        planned); ``predicted``, a touch-up's predicted ``|e|`` (``None`` for the open loop,
+        without a plan, and for a prediction that is not finite, which its reason gives);
+        ``drift``, the rate (per second) at which the state moved at rest over the end of its
+        settling; ``max_slip`` (largest tangential speed at a rolling
         contact, units per second) and ``max_contact_force`` (N), both over the samples taken
         every :data:`SAMPLE` s; ``sim_time`` (s); ``real_time_factor`` (simulated over wall
         time); ``duration`` (s of motion, settling aside). A stage not played has a
-        ``reason``, and zero slip, force and times. Records saved before ``outcome`` had
-        ``planned`` instead; :meth:`from_dict` reads them.
+        ``reason``, and zero slip, force and times. A stage MuJoCo went unstable in (or with
+        no contact force) has the outcome ``"unstable"``, a ``reason``, the error before it,
+        and slip, force and times up to where that was seen; it is the last; its trace holds
+        the samples before it. Records saved before
+        ``outcome`` had ``planned`` instead; :meth:`from_dict` reads them.
     contact : Contact
         The settings played with (resolved: no field ``None``).
     traces : list of dict, optional
@@ -131,7 +163,7 @@ class Execution:
 
     @classmethod
     def from_dict(cls, d: dict) -> Execution:
-        """Inverse of :meth:`to_dict`.
+        """Inverse of :meth:`to_dict`: refuses what :meth:`save` would not write.
 
         Parameters
         ----------
@@ -141,40 +173,42 @@ class Execution:
         Returns
         -------
         Execution
-            The record, without traces.
+            The record, without traces; its numbers as floats.
 
         Raises
         ------
         ValueError
-            Naming the field that is missing or wrong.
+            Naming the field that is missing, unknown or wrong: a number that is not a finite
+            float (or an integer beyond the floats), an unknown outcome, a stage after one
+            not played.
         """
         if not isinstance(d, dict):
             raise ValueError(f"an execution record must be a JSON object, got {type(d).__name__}")
         if d.get("format", FORMAT) != FORMAT:
-            raise ValueError(f"format: expected {FORMAT!r}, got {d.get('format')!r}")
+            raise ValueError(f"format: expected {FORMAT!r}, got {shown(d.get('format'))}")
+        unknown = sorted(str(k) for k in d if k not in ("format", "mechanism", "stages", "contact"))
+        if unknown:
+            raise ValueError(f"unknown fields {unknown}: a record has format, mechanism, stages and contact")
         for key in ("mechanism", "stages", "contact"):
             if key not in d:
                 raise ValueError(f"{key}: missing")
-        if not isinstance(d["mechanism"], str):
-            raise ValueError(f"mechanism must be a name, got {d['mechanism']!r}")
+        if not isinstance(d["mechanism"], str) or not 0 < len(d["mechanism"]) <= 200:
+            raise ValueError(f"mechanism must be a name, got {shown(d['mechanism'])}")
         if not isinstance(d["stages"], list) or not d["stages"]:
             raise ValueError("stages must be a non-empty list")
-        stages = []
-        for i, s in enumerate(d["stages"]):
-            if not isinstance(s, dict):
-                raise ValueError(f"stages[{i}] must be an object")
-            for key in ("error", "max_slip", "max_contact_force", "sim_time", "real_time_factor"):
-                if key not in s:
-                    raise ValueError(f"stages[{i}].{key}: missing")
-            if not isinstance(s["error"], dict) or not s["error"] or not all(
-                    k in ("rotation", "coordinates") and is_number(v) for k, v in s["error"].items()):
-                raise ValueError(f"stages[{i}].error must map 'rotation'/'coordinates' to numbers, "
-                                 f"got {s['error']!r}")
-            for key in ("max_slip", "max_contact_force", "sim_time", "real_time_factor"):
-                if not is_number(s[key]):
-                    raise ValueError(f"stages[{i}].{key} must be a number, got {s[key]!r}")
-            stages.append(_stage_from_dict(s, i))
-        return cls(d["mechanism"], stages, Contact.from_dict(d["contact"]))
+        if len(d["stages"]) > MAX_TOUCH_UPS + 1:
+            raise ValueError(f"stages: {len(d['stages'])} stages, more than the {MAX_TOUCH_UPS + 1} an "
+                             "execution has at most")
+        stages = [_stage_from_dict(s, i) for i, s in enumerate(d["stages"])]
+        for i, stage in enumerate(stages[:-1]):
+            if stage["outcome"] != "played":
+                raise ValueError(f"stages[{i}].outcome: a stage {stage['outcome']!r} ends an execution, "
+                                 f"yet {len(stages) - i - 1} stage(s) follow it")
+        try:
+            contact = Contact.from_dict(d["contact"])
+        except ValueError as exc:
+            raise ValueError(f"contact: {exc}") from None
+        return cls(d["mechanism"], stages, contact)
 
     def save(self, path):
         """Write the record as JSON (atomically, :mod:`nonholo.io.safe_write`).
@@ -203,7 +237,10 @@ class Execution:
 
     @classmethod
     def load(cls, path) -> Execution:
-        """Read a record written by :meth:`save`.
+        """Read a record written by :meth:`save`, refusing anything it would not write: a file
+        larger than :data:`MAX_RECORD_BYTES`, nested deeper than :data:`MAX_RECORD_DEPTH`,
+        ``NaN`` or ``Infinity``, a number beyond the floats (``1e400``, ``10**400``), an
+        unknown field (:meth:`from_dict`).
 
         Parameters
         ----------
@@ -218,14 +255,27 @@ class Execution:
         Raises
         ------
         ValueError
-            For a file that is not such a record, saying why.
+            For a file that is not such a record: naming the file and the field, saying why.
+        OSError
+            If the file cannot be read.
         """
+        with open(path, "rb") as f:
+            raw = f.read(MAX_RECORD_BYTES + 1)
+        if len(raw) > MAX_RECORD_BYTES:
+            raise ValueError(f"{path}: larger than {MAX_RECORD_BYTES} bytes: not an execution record")
         try:
-            with open(path, encoding="utf-8-sig") as f:
-                d = json.load(f)
+            text = raw.decode("utf-8-sig")
+        except UnicodeDecodeError as exc:
+            raise ValueError(f"{path}: not UTF-8 text: {exc.reason} at byte {exc.start}") from None
+        try:
+            d = json.loads(text, parse_constant=_Unrepresentable, parse_float=_json_float, parse_int=_json_int)
         except json.JSONDecodeError as exc:
             raise ValueError(f"{path}: not JSON: {exc}") from None
+        except RecursionError:
+            raise ValueError(f"{path}: nested deeper than {MAX_RECORD_DEPTH} levels: not an execution "
+                             "record") from None
         try:
+            _check_depth(d)
             return cls.from_dict(d)
         except ValueError as exc:
             raise ValueError(f"{path}: {exc}") from None
@@ -244,44 +294,241 @@ class Execution:
         for i, s in enumerate(self.stages):
             err = ", ".join(f"{k} {v:.2e}" for k, v in s["error"].items())
             outcome = s.get("outcome", "played")
-            what = f"max slip {s['max_slip']:.2e}" if outcome == "played" else f"not played ({outcome})"
+            what = (f"max slip {s['max_slip']:.2e}" if outcome == "played"
+                    else "MuJoCo unstable" if outcome == "unstable" else f"not played ({outcome})")
             parts.append(f"  {'open loop' if i == 0 else f'touch-up {i}'}: {err}, {what}")
         return f"Execution({self.mechanism}, {len(self.stages)} stages\n" + "\n".join(parts) + ")"
 
 
+class _Unrepresentable:
+    """A JSON number no float holds (``NaN``, ``Infinity``, ``1e400``, ``10**400``), kept as
+    text for the message that refuses it: it is not a number to any check."""
+
+    def __init__(self, text: str):
+        self.text = text if len(text) <= 40 else f"{text[:20]}...({len(text)} digits)"
+
+    def __repr__(self) -> str:
+        return self.text
+
+
+def _json_float(text: str):
+    x = float(text)
+    return x if math.isfinite(x) else _Unrepresentable(text)
+
+
+def _json_int(text: str):
+    if len(text.lstrip("-")) > 309:           # beyond any float, and maybe past int()'s digits limit
+        return _Unrepresentable(text)
+    x = int(text)
+    try:
+        float(x)
+    except OverflowError:
+        return _Unrepresentable(text)
+    return x
+
+
+def _check_depth(value) -> None:
+    """Refuse nesting deeper than :data:`MAX_RECORD_DEPTH` (iteratively: no recursion)."""
+    todo = [(value, 0, "")]
+    while todo:
+        v, depth, where = todo.pop()
+        if isinstance(v, (dict, list)):
+            if depth >= MAX_RECORD_DEPTH:
+                raise ValueError(f"{where or 'the record'}: nested deeper than {MAX_RECORD_DEPTH} levels: "
+                                 "not an execution record")
+            if isinstance(v, dict):
+                todo.extend((x, depth + 1, f"{where}.{str(k)[:40]}" if where else str(k)[:40])
+                            for k, x in v.items())
+            else:
+                todo.extend((x, depth + 1, f"{where}[{i}]") for i, x in enumerate(v))
+
+
+def _finite(value, where: str, minimum: float = -math.inf) -> float:
+    """A record's number as a finite float ``≥ minimum``, or a ValueError naming ``where``."""
+    if not is_number(value):
+        raise ValueError(f"{where} must be a finite number, got {shown(value)}")
+    try:
+        x = float(value)
+    except OverflowError:
+        raise ValueError(f"{where} must be a finite number, got {shown(value)}") from None
+    if not math.isfinite(x) or x < minimum:
+        raise ValueError(f"{where} must be a finite number{'' if minimum == -math.inf else f' >= {minimum:g}'}, "
+                         f"got {shown(value)}")
+    return x
+
+
 def _stage_from_dict(s: dict, i: int) -> dict:
-    """A saved stage checked, with its ``outcome`` (from ``planned`` in older records)."""
-    stage = dict(s, error=dict(s["error"]))
+    """A saved stage checked, its numbers as floats, with its ``outcome`` (from ``planned`` in
+    older records)."""
+    at = f"stages[{i}]"
+    if not isinstance(s, dict):
+        raise ValueError(f"{at} must be an object")
+    unknown = sorted(str(k) for k in s if k not in STAGE_KEYS)
+    if unknown:
+        raise ValueError(f"{at}: unknown fields {unknown}; a stage has {', '.join(STAGE_KEYS)}")
+    for key in ("error", "max_slip", "max_contact_force", "sim_time", "real_time_factor"):
+        if key not in s:
+            raise ValueError(f"{at}.{key}: missing")
+    error = s["error"]
+    if not isinstance(error, dict) or not error or not all(k in ("rotation", "coordinates") for k in error):
+        raise ValueError(f"{at}.error must map 'rotation'/'coordinates' to numbers, got {shown(error)}")
+    stage = dict(s, error={k: _finite(v, f"{at}.error.{k}", 0.0) for k, v in error.items()})
+    for key in ("max_slip", "max_contact_force", "sim_time", "real_time_factor", "duration"):
+        if key in stage:
+            stage[key] = _finite(stage[key], f"{at}.{key}", 0.0)
+    for key in ("size", "predicted", "drift"):
+        if stage.get(key) is not None:
+            stage[key] = _finite(stage[key], f"{at}.{key}", 0.0)
+    if "planned" in stage and not isinstance(stage["planned"], bool):
+        raise ValueError(f"{at}.planned must be true or false, got {shown(stage['planned'])}")
     if "outcome" not in stage:
         stage["outcome"] = "played" if stage.pop("planned", True) is not False else "not planned"
-    if stage["outcome"] not in OUTCOMES:
-        raise ValueError(f"stages[{i}].outcome must be one of {OUTCOMES}, got {stage['outcome']!r}")
-    if i == 0 and stage["outcome"] != "played":
-        raise ValueError(f"stages[0].outcome must be 'played' (the open loop), got {stage['outcome']!r}")
+    if not isinstance(stage["outcome"], str) or stage["outcome"] not in OUTCOMES:
+        raise ValueError(f"{at}.outcome must be one of {OUTCOMES}, got {shown(stage['outcome'])}")
+    if i == 0 and stage["outcome"] not in ("played", "unstable"):
+        raise ValueError(f"stages[0].outcome must be 'played' or 'unstable' (the open loop), "
+                         f"got {stage['outcome']!r}")
     if stage["outcome"] != "played" and not isinstance(stage.get("reason"), str):
-        raise ValueError(f"stages[{i}].reason: a stage not played needs its reason, got {stage.get('reason')!r}")
-    for key in ("size", "predicted", "drift"):
-        if stage.get(key) is not None and not is_number(stage[key]):
-            raise ValueError(f"stages[{i}].{key} must be a number or null, got {stage[key]!r}")
+        raise ValueError(f"{at}.reason: a stage not played needs its reason, got {shown(stage.get('reason'))}")
+    if stage.get("reason") is not None and not isinstance(stage["reason"], str):
+        raise ValueError(f"{at}.reason must be text, got {shown(stage['reason'])}")
     return stage
 
 
 # -- playing ----------------------------------------------------------------------------------
+
+def check_touch_ups(touch_ups, name: str = "touch_ups") -> int:
+    """A number of touch-ups: a whole number in ``[0, MAX_TOUCH_UPS]``.
+
+    Parameters
+    ----------
+    touch_ups : int
+        The number.
+    name : str
+        The argument's name, for the message (``"--touch-ups"`` on the command line).
+
+    Returns
+    -------
+    int
+        ``touch_ups``.
+
+    Raises
+    ------
+    ValueError
+        Naming ``name``.
+    """
+    if isinstance(touch_ups, (bool, np.bool_)) or not isinstance(touch_ups, (int, np.integer)) \
+            or not 0 <= touch_ups <= MAX_TOUCH_UPS:
+        raise ValueError(f"{name} must be a whole number in [0, {MAX_TOUCH_UPS}] (MAX_TOUCH_UPS), "
+                         f"got {shown(touch_ups)}")
+    return int(touch_ups)
+
+
+def check_duration(duration, name: str = "duration") -> float | None:
+    """A stage's duration: ``None`` (the default) or a positive time of at most :data:`MAX_DURATION`.
+
+    Parameters
+    ----------
+    duration : float or None
+        Seconds.
+    name : str
+        The argument's name, for the message (``"--duration"`` on the command line).
+
+    Returns
+    -------
+    float or None
+        ``duration``.
+
+    Raises
+    ------
+    ValueError
+        Naming ``name``.
+    """
+    if duration is None:
+        return None
+    duration = check_time(duration, name)
+    if duration > MAX_DURATION:
+        raise ValueError(f"{name} must be at most {MAX_DURATION:g} s (MAX_DURATION), got {duration:g}")
+    return duration
+
+
+def stage_steps(T: float, contact: Contact) -> tuple[int, int]:
+    """The MuJoCo steps of a stage whose motion takes ``T`` seconds: of its motion, and of
+    its motion and settling.
+
+    Parameters
+    ----------
+    T : float
+        The motion's duration (s).
+    contact : Contact
+        Resolved settings (their ``timestep`` and ``settle``).
+
+    Returns
+    -------
+    tuple of int
+        ``(motion, total)``.
+    """
+    h = float(contact.timestep)
+    n_move = max(math.ceil(T / h - 1e-9), 1)
+    return n_move, n_move + round(float(contact.settle) / h)
+
+
+def _steps_refused(T: float, contact: Contact, what: str) -> str | None:
+    """Why a stage of ``T`` seconds is not played (its steps outside the bounds), or ``None``."""
+    if not T <= MAX_DURATION:
+        return f"{what} {T:g} s is longer than MAX_DURATION = {MAX_DURATION:g} s"
+    n_move, n_total = stage_steps(T, contact)
+    h = float(contact.timestep)
+    if n_move < MIN_MOTION_STEPS:
+        return (f"{what} {T:g} s spans {n_move} MuJoCo step(s) of timestep {h:g} s, fewer than "
+                f"MIN_MOTION_STEPS = {MIN_MOTION_STEPS}: a longer duration or a finer timestep")
+    if n_total > MAX_STAGE_STEPS:
+        return (f"{what} {T:g} s and settling {float(contact.settle):g} s at timestep {h:g} s take "
+                f"{n_total:.3g} MuJoCo steps, more than MAX_STAGE_STEPS = {MAX_STAGE_STEPS:.3g}: a shorter "
+                "duration or a coarser timestep")
+    return None
+
+
+def check_steps(result: PlanResult, duration: float | None, contact: Contact, name: str = "duration") -> None:
+    """Refuse a plan's open-loop stage of too few or too many MuJoCo steps
+    (:data:`MIN_MOTION_STEPS`, :data:`~nonholo.physics.contact.MAX_STAGE_STEPS`), before
+    anything is allocated.
+
+    Parameters
+    ----------
+    result : PlanResult
+        The plan.
+    duration : float or None
+        The stage's duration (s; ``None``: :data:`SLOWDOWN` × its planned ``T``), checked by
+        :func:`check_duration`.
+    contact : Contact
+        The resolved settings of its model (their ``timestep`` and ``settle``).
+    name : str
+        The duration's name, for the message (``"--duration"`` on the command line).
+
+    Raises
+    ------
+    ValueError
+        Naming ``name`` and the time step.
+    """
+    what = name if duration is not None else f"{name} (by default {SLOWDOWN:g} × the plan's T)"
+    why = _steps_refused(_stage_duration(result, duration), contact, what)
+    if why is not None:
+        raise ValueError(why)
+
 
 def _check(result, touch_ups, duration, contact, progress):
     if not isinstance(result, PlanResult):
         raise ValueError(f"result must be a PlanResult, got {type(result).__name__}")
     if not result.success:
         raise ValueError(f"result: only a successful plan can be played; this one failed: {result.reason}")
-    if isinstance(touch_ups, (bool, np.bool_)) or not isinstance(touch_ups, (int, np.integer)) or touch_ups < 0:
-        raise ValueError(f"touch_ups must be a whole number >= 0, got {touch_ups!r}")
-    if duration is not None:
-        duration = check_time(duration, "duration")
+    touch_ups = check_touch_ups(touch_ups)
+    duration = check_duration(duration)
     if contact is not None and not isinstance(contact, Contact):
         raise ValueError(f"contact must be a Contact or None, got {type(contact).__name__}")
     if progress is not None and not callable(progress):
         raise ValueError(f"progress must be callable or None, got {type(progress).__name__}")
-    return int(touch_ups), duration
+    return touch_ups, duration
 
 
 def replan_options(result: PlanResult) -> dict:
@@ -308,17 +555,50 @@ def replan_options(result: PlanResult) -> dict:
     return opts
 
 
+#: MuJoCo's warnings that mean the simulation went wrong (it resets itself on the first three).
+WARNINGS = {"mjWARN_BADQACC": "bad accelerations", "mjWARN_BADQVEL": "bad velocities",
+            "mjWARN_BADQPOS": "bad positions", "mjWARN_BADCTRL": "bad controls"}
+
+
+def instability(m, d) -> str | None:
+    """What MuJoCo reported wrong with a simulation so far, or ``None``: its warnings of
+    :data:`WARNINGS` (counted since the data were last reset) and non-finite positions or
+    velocities.
+
+    Parameters
+    ----------
+    m, d : mujoco.MjModel, mujoco.MjData
+        The simulation.
+
+    Returns
+    -------
+    str or None
+        The warnings and their counts, or ``None`` if there are none.
+    """
+    import mujoco
+
+    found = []
+    for name, what in WARNINGS.items():
+        count = int(d.warning[int(getattr(mujoco.mjtWarning, name))].number)
+        if count:
+            found.append(f"{what} ({count} warning{'s' if count > 1 else ''})")
+    if not (np.all(np.isfinite(d.qpos)) and np.all(np.isfinite(d.qvel))):
+        found.append("non-finite positions or velocities")
+    return "; ".join(found) or None
+
+
 def _stage(sim, played, R, q):
     """Play ``played`` from the measured ``(R, q)`` and settle; the stage's numbers and
-    trace, and the measured state after it."""
+    trace, the measured state after it, and what went wrong (``None`` if nothing): MuJoCo's
+    instability (:func:`instability`; the play stops at the first sample after it), or no
+    contact force at any sample (the mechanism left its contacts)."""
     import mujoco
 
     model, m, d = sim
     model.follow(played, R, q)
     h = float(m.opt.timestep)
     T = float(played.T)
-    n_move = math.ceil(T / h - 1e-9)
-    n_total = n_move + round(model.contact.settle / h)
+    n_move, n_total = stage_steps(T, model.contact)
     every = max(1, round(SAMPLE / h))
     times, Rs, qs, slips = [0.0], [], [], []
     R0, q0 = model.state(m, d)
@@ -327,12 +607,18 @@ def _stage(sim, played, R, q):
     slips.append(float(model.slip(m, d)))
     worst_slip, worst_force = 0.0, 0.0
     wall = 0.0
+    wrong, steps = None, n_total
     for k in range(n_total):
         started = time.perf_counter()
         model.drive(m, d, k * h)
         mujoco.mj_step(m, d)
         wall += time.perf_counter() - started
         if (k + 1) % every == 0 or k + 1 == n_total:
+            wrong = instability(m, d)
+            if wrong is not None:              # MuJoCo reset it: what it holds now says nothing
+                wrong = f"MuJoCo went unstable: {wrong} by t = {(k + 1) * h:.6g} s of the stage"
+                steps = k + 1
+                break
             # slip and forces at the samples: measuring them costs more than a step
             slip = float(model.slip(m, d))
             worst_slip = max(worst_slip, slip)
@@ -342,16 +628,23 @@ def _stage(sim, played, R, q):
             Rs.append(Rk)
             qs.append(qk)
             slips.append(slip)
-    mujoco.mj_forward(m, d)
+    if wrong is None:
+        mujoco.mj_forward(m, d)
+        wrong = instability(m, d)
+        if wrong is not None:
+            wrong = f"MuJoCo went unstable: {wrong} by the end of the stage"
+        elif not worst_force > 0:
+            wrong = ("no contact force at any sample of the stage: the mechanism left the contacts it "
+                     "rolls on")
     R_end, q_end = model.state(m, d)
     t = np.array(times)
     Rp, qp = states_at(played, np.minimum(t, float(played.t[-1])))
     trace = {"t": t, "R_planned": Rp, "q_planned": qp, "R": np.array(Rs), "q": np.array(qs),
              "slip": np.array(slips)}
-    sim_time = n_total * h
+    sim_time = steps * h
     numbers = {"max_slip": worst_slip, "max_contact_force": worst_force, "sim_time": sim_time,
-               "real_time_factor": sim_time / wall if wall > 0 else float("inf"), "duration": T}
-    return numbers, trace, R_end, q_end
+               "real_time_factor": sim_time / wall if wall > 0 else 0.0, "duration": T}
+    return numbers, trace, R_end, q_end, wrong
 
 
 def motion_size(result: PlanResult) -> float:
@@ -410,16 +703,23 @@ def predicted_error(norms, stages, size: float, kinematic: float, seconds: float
 def execute(result, touch_ups=0, duration=None, contact=None, progress=None) -> Execution:
     """Play a plan on the MuJoCo model of its mechanism, open loop, then touch up.
 
+    Everything is checked before anything is played (module docstring): the model matches
+    the mechanism's kinematics, the settings lie in their ranges, and the open loop's steps
+    within :data:`MIN_MOTION_STEPS` and :data:`~nonholo.physics.contact.MAX_STAGE_STEPS`. A
+    stage MuJoCo goes unstable in (or without contact force) is recorded as ``"unstable"``
+    and ends the execution.
+
     Parameters
     ----------
     result : PlanResult
         A successful plan.
     touch_ups : int
         Re-plans from the measured state to the plan's goal after the open-loop stage at
-        most, each played like it if predicted to end nearer the goal (module docstring).
+        most, each played like it if predicted to end nearer the goal (module docstring);
+        at most :data:`MAX_TOUCH_UPS`.
     duration : float, optional
         Seconds each stage's motion takes, settling aside (default: ``SLOWDOWN``
-        times the plan's ``T``).
+        times the plan's ``T``); at most :data:`MAX_DURATION`.
     contact : Contact, optional
         The contact and actuation settings (default: ``Contact()``; fields left ``None``
         take the mechanism's calibrated values, :meth:`Contact.resolved`).
@@ -436,20 +736,27 @@ def execute(result, touch_ups=0, duration=None, contact=None, progress=None) -> 
     ------
     ValueError
         Naming the argument: ``result`` not a successful :class:`PlanResult`, ``touch_ups``
-        not a whole number ``≥ 0``, ``duration`` not a positive time, ``contact`` not a
-        :class:`Contact`, a mechanism without a physics model.
+        not a whole number in ``[0, MAX_TOUCH_UPS]``, ``duration`` not a positive time of at
+        most ``MAX_DURATION`` or a stage of too few or too many MuJoCo steps (naming
+        ``duration`` and the ``timestep``), ``contact`` not a :class:`Contact`, a mechanism
+        without a physics model or whose kinematics no model matches (naming it).
     """
     import mujoco
 
     touch_ups, duration = _check(result, touch_ups, duration, contact, progress)
     mech = result.kinematics
     model = model_for(mech, contact)
+    check_steps(result, duration, model.contact)
     m = mujoco.MjModel.from_xml_string(model.mjcf())
     d = mujoco.MjData(m)
     sim = (model, m, d)
     model.reset(m, d, result.R0, _coordinates(result.q0))
-    R, q = model.state(m, d)
     Rd, qd = result.Rd, _coordinates(result.qd)
+    wrong = instability(m, d)
+    if wrong is None:
+        R, q = model.state(m, d)
+    else:                                      # while settling at the start: the plan's start it was
+        R, q = result.R0, _coordinates(result.q0)
     options = replan_options(result)
     tol = float(result.options.get("tol", DEFAULT_TOL))
     settle = float(model.contact.settle)
@@ -459,7 +766,7 @@ def execute(result, touch_ups=0, duration=None, contact=None, progress=None) -> 
         if i == 0:
             played = _played(current, duration)
         else:
-            record = _touch_up(mech, R, q, result, options, tol, (stages, norms), duration, settle)
+            record = _touch_up(mech, R, q, result, options, tol, (stages, norms), duration, model.contact)
             if isinstance(record, dict):           # not played: recorded, and touching up ends
                 record["error"] = dict(stages[-1]["error"])
                 stages.append(record)
@@ -469,7 +776,23 @@ def execute(result, touch_ups=0, duration=None, contact=None, progress=None) -> 
                     progress(dict(record, stage=i))
                 break
             current, played, predicted = record
-        numbers, trace, R, q = _stage(sim, played, R, q)
+        before = _error(mech, R, q, Rd, qd)
+        if wrong is not None:                      # before the open loop, while settling
+            numbers, trace = _nothing_played(float(played.T)), None
+            wrong = f"MuJoCo went unstable: {wrong} while the model settled at the start"
+        else:
+            numbers, trace, R, q, wrong = _stage(sim, played, R, q)
+        if wrong is not None:
+            record = {"error": before, "outcome": "unstable", **numbers, "size": motion_size(current),
+                      "drift": None, "predicted": predicted,
+                      "reason": f"{wrong}; the state after it says nothing of the plan: the error is "
+                                "the one before the stage, and the execution stops here"}
+            stages.append(record)
+            traces.append(trace)
+            norms.append(mech.space.norm(before))
+            if progress is not None:
+                progress(dict(record, stage=i))
+            break
         error = _error(mech, R, q, Rd, qd)
         record = {"error": error, "outcome": "played", **numbers, "size": motion_size(current),
                   "drift": _drift(mech, trace, float(played.T), settle), "predicted": predicted}
@@ -481,23 +804,34 @@ def execute(result, touch_ups=0, duration=None, contact=None, progress=None) -> 
     return Execution(mech.name, stages, model.contact, traces)
 
 
+def _nothing_played(T: float) -> dict:
+    """The numbers of a stage not played (its motion would have taken ``T``)."""
+    return {"max_slip": 0.0, "max_contact_force": 0.0, "sim_time": 0.0, "real_time_factor": 0.0, "duration": T}
+
+
 def _played(current, duration):
     """``current`` re-timed from rest to rest as it is played."""
-    return retime(current, T=duration if duration is not None else SLOWDOWN * planned_controls(current).T,
-                  rest_to_rest=True)
+    return retime(current, T=_stage_duration(current, duration), rest_to_rest=True)
 
 
-def _touch_up(mech, R, q, result, options, tol, so_far, duration, settle):
+def _stage_duration(current, duration) -> float:
+    """How long ``current``'s motion takes as it is played."""
+    return duration if duration is not None else SLOWDOWN * planned_controls(current).T
+
+
+def _touch_up(mech, R, q, result, options, tol, so_far, duration, contact):
     """The touch-up from the measured ``(R, q)``, after the stages ``so_far`` (records and
     their ``|e|``): ``(plan, played, predicted |e|)`` to play, or the record of a touch-up not
     played (without its error)."""
     stages, norms = so_far
     now = norms[-1]
+    settle = float(contact.settle)
 
     def skip(outcome, reason, size=None, predicted=None):
-        return {"outcome": outcome, "reason": reason, "max_slip": 0.0, "max_contact_force": 0.0,
-                "sim_time": 0.0, "real_time_factor": 0.0, "duration": 0.0, "size": size, "drift": None,
-                "predicted": predicted}
+        # a prediction that is not finite (no played motion to scale from) is in the reason only
+        kept = predicted if predicted is None or math.isfinite(predicted) else None
+        return {"outcome": outcome, "reason": reason, **_nothing_played(0.0), "size": size, "drift": None,
+                "predicted": kept}
 
     if now <= tol:
         return skip("within tolerance", f"|e| = {now:.3g} is within the plan's tolerance {tol:g}")
@@ -508,6 +842,9 @@ def _touch_up(mech, R, q, result, options, tol, so_far, duration, settle):
         reason = str(exc)
     if reason is not None:
         return skip("not planned", reason)
+    why = _steps_refused(_stage_duration(current, duration), contact, "its duration")
+    if why is not None:
+        return skip("not planned", f"the re-plan cannot be played: {why}")
     played = _played(current, duration)
     size = motion_size(current)
     kinematic = (current.terminal_error or 0.0) + (current.error_bound or 0.0)

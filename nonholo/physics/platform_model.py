@@ -42,6 +42,7 @@ import numpy as np
 from ..io.csv_export import states_at
 from ..model import catalog
 from ..spaces import so3
+from .contact import MAX_STAGE_STEPS
 
 #: The calibrated contact and drive settings used when no ``contact`` is given.
 DEFAULTS = {
@@ -336,7 +337,8 @@ class PlatformModel:
         Raises
         ------
         ValueError
-            If ``played`` is a plan of another mechanism or did not reach its end, ``R`` is
+            If ``played`` is a plan of another mechanism or did not reach its end, or takes
+            more than :data:`~nonholo.physics.contact.MAX_STAGE_STEPS` time steps, ``R`` is
             not a rotation or ``q`` is not empty.
         """
         if np.size(q):
@@ -347,7 +349,11 @@ class PlatformModel:
             raise ValueError(f"played is a plan of mechanism {name!r}, this model is of {self.mechanism.name!r}")
         T = float(played.T)
         dt = float(self.settings["timestep"])
-        n = int(np.ceil(T / dt - 1e-9))
+        steps = T / dt
+        if not steps <= MAX_STAGE_STEPS:       # checked before anything is allocated
+            raise ValueError(f"played: a motion of {T:g} s takes {steps:.3g} time steps of {dt:g} s, more "
+                             f"than MAX_STAGE_STEPS = {MAX_STAGE_STEPS:.3g}")
+        n = int(np.ceil(steps - 1e-9))
         t = np.arange(n + 1) * dt
         Rs, _ = states_at(played, np.minimum(t, T))
         lengths = self.geometry.leg_lengths(Rs)

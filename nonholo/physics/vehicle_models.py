@@ -160,6 +160,34 @@ class Targets:
                 (1 - f) * self.velocities[i] + f * self.velocities[i + 1])
 
 
+def steps_of(T: float, h: float, name: str) -> int:
+    """The time steps ``h`` a motion of ``T`` seconds takes (at least one), at most
+    :data:`~nonholo.physics.contact.MAX_STAGE_STEPS`.
+
+    Parameters
+    ----------
+    T, h : float
+        The motion's duration and the time step (s).
+    name : str
+        The motion's name, for the message.
+
+    Returns
+    -------
+    int
+        The number of steps.
+
+    Raises
+    ------
+    ValueError
+        Naming ``name``, for a motion of more steps (checked before anything is allocated).
+    """
+    steps = T / h
+    if not steps <= contacts.MAX_STAGE_STEPS:
+        raise ValueError(f"{name}: a motion of {T:g} s takes {steps:.3g} time steps of {h:g} s, more than "
+                         f"MAX_STAGE_STEPS = {contacts.MAX_STAGE_STEPS:.3g}")
+    return max(int(np.ceil(steps - 1e-9)), 1)
+
+
 def _documented(cls):
     """``cls`` with the docstrings of its base classes' methods on its overrides that have none."""
     for name, member in vars(cls).items():
@@ -394,10 +422,16 @@ class RollingModel(abc.ABC):
             The motion to play, from rest to rest.
         R, q : numpy.ndarray
             The state it starts from.
+
+        Raises
+        ------
+        ValueError
+            Naming ``played``, if its motion takes more than
+            :data:`~nonholo.physics.contact.MAX_STAGE_STEPS` time steps.
         """
         h = self.contact.timestep
         T = float(played.T)
-        n = max(int(np.ceil(T / h - 1e-9)), 1)
+        n = steps_of(T, h, "played")
         t = np.minimum(np.arange(n + 1) * h, T)
         disp, vel = self.displacements(played, t, np.asarray(R, dtype=float), np.asarray(q, dtype=float))
         pos = self._hold[None] + disp - disp[0]
