@@ -296,3 +296,14 @@ def test_deep_nesting_is_refused_without_a_recursion_error(unicycle_run, tmp_pat
     shallow = {**d, "stages": [{**d["stages"][0], "error": {"coordinates": [[[[[[1.0]]]]]]}}]}
     with pytest.raises(ValueError, match="nested deeper"):
         Execution.load(written(tmp_path, shallow))
+
+
+def test_the_figure_s_title_says_how_the_run_ended():
+    from nonholo.viz.execution_figures import default_title
+
+    played, skip, unstable = ({"outcome": "played"}, {"outcome": "within tolerance"}, {"outcome": "unstable"})
+    assert default_title("car", [played]) == "car on its physics model: open loop"
+    assert default_title("car", [played, played, skip]) == (
+        "car on its physics model: open loop and 1 touch-up; touch-up 2 not played (within tolerance)")
+    assert default_title("car", [unstable]) == "car on its physics model: open loop unstable"
+    assert default_title("car", [played, unstable]).endswith("the simulation went unstable in touch-up 1")

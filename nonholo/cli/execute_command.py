@@ -170,15 +170,11 @@ def run(args) -> int:
             status = EXIT_WRITE_FAILED
         else:
             print(f"wrote {args.json}", file=sys.stderr)
-    unstable = [i for i, s in enumerate(run_.stages) if s["outcome"] == "unstable"]
     if args.plot and run_.traces[0] is None:     # unstable before anything was played: nothing to draw
         _error(f"did not write {args.plot}: the simulation went unstable before the open loop played")
     elif args.plot:
-        # the figure's own title reads a stage not played as a touch-up left out: say what happened
-        title = (f"{run_.mechanism} on its physics model: the simulation went unstable in the "
-                 f"{stage_names(len(run_.stages))[unstable[0]]}" if unstable else None)
         try:
-            plan_command.write_figure(execution_figure(run_, title=title), args.plot, "--plot")
+            plan_command.write_figure(execution_figure(run_), args.plot, "--plot")
         except (OSError, ValueError) as exc:
             _cannot_write(args.plot, exc)
             status = EXIT_WRITE_FAILED

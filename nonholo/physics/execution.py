@@ -136,13 +136,19 @@ class Execution:
         start), the planned states ``R_planned``, ``q_planned`` (held at the end after
         ``duration``), the simulated ``R``, ``q`` and ``slip``; ``None`` for a stage not
         played. Not saved.
+    kinematics : Mechanism, optional
+        The mechanism played (figures use it; a record read back names a catalog one).
     """
 
-    def __init__(self, mechanism: str, stages: list, contact: Contact, traces: list | None = None):
+    def __init__(self, mechanism: str, stages: list, contact: Contact, traces: list | None = None,
+                 kinematics=None):
         self.mechanism = mechanism
         self.stages = stages
         self.contact = contact
         self.traces = traces
+        #: the :class:`~nonholo.model.mechanism.Mechanism` played (``None`` for a record read
+        #: back: its name then names a catalog mechanism); not saved
+        self.kinematics = kinematics
 
     @property
     def errors(self) -> list[dict]:
@@ -801,7 +807,7 @@ def execute(result, touch_ups=0, duration=None, contact=None, progress=None) -> 
         norms.append(mech.space.norm(error))
         if progress is not None:
             progress(dict(record, stage=i))
-    return Execution(mech.name, stages, model.contact, traces)
+    return Execution(mech.name, stages, model.contact, traces, kinematics=mech)
 
 
 def _nothing_played(T: float) -> dict:

@@ -60,6 +60,36 @@ def tracking_distance(mechanism, trace: dict) -> dict:
 
 
 @styled
+def default_title(name: str, stages: list) -> str:
+    """What a run did, in a line: the stages played, and how the last one not played ended.
+
+    Parameters
+    ----------
+    name : str
+        The mechanism's name.
+    stages : list of dict
+        The run's stages (:class:`~nonholo.physics.execution.Execution`).
+
+    Returns
+    -------
+    str
+        E.g. ``"car on its physics model: open loop and 2 touch-ups; touch-up 3 not played
+        (within tolerance)"``.
+    """
+    outcomes = [s.get("outcome", "played") for s in stages]
+    touched = sum(o == "played" for o in outcomes[1:])
+    head = f"{name} on its physics model: open loop"
+    if outcomes[0] != "played":
+        return f"{head} {outcomes[0]}"
+    head += f" and {touched} touch-up" + ("" if touched == 1 else "s") if touched else ""
+    last = outcomes[-1]
+    if last == "played":
+        return head
+    if last == "unstable":
+        return f"{head}; the simulation went unstable in touch-up {len(outcomes) - 1}"
+    return f"{head}; touch-up {len(outcomes) - 1} not played ({last})"
+
+
 def execution_figure(execution, title: str | None = None) -> NotebookFigure:
     """Errors per stage, tracking, the motion and the slip of a played plan (module docstring).
 
@@ -84,7 +114,7 @@ def execution_figure(execution, title: str | None = None) -> NotebookFigure:
     if not traces or traces[0] is None:
         raise ValueError("execution has no traces to draw (a record loaded from a file keeps only "
                          "its numbers): draw the figure from the run itself")
-    mech = catalog.get(execution.mechanism)
+    mech = getattr(execution, "kinematics", None) or catalog.get(execution.mechanism)
     stages = execution.stages
     names = stage_names(len(stages))
     fig = NotebookFigure(figsize=(10.5, 7.2))
@@ -157,9 +187,6 @@ def execution_figure(execution, title: str | None = None) -> NotebookFigure:
     ax.set_title("slip")
     ax.legend(fontsize=8)
 
-    touched = int(played.sum()) - 1
-    fig.suptitle(title or f"{mech.name} on its physics model: open loop"
-                 + (f" and {touched} touch-up" + ("" if touched == 1 else "s") if touched else "")
-                 + ("" if played.all() else f"; touch-up {touched + 1} not played"))
+    fig.suptitle(title or default_title(mech.name, stages))
     fig.tight_layout()
     return fig
