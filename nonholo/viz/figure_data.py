@@ -2,14 +2,15 @@
 
 :func:`figure_data` walks a Matplotlib figure's artists in their order and records, for
 each, what it shows in *data* coordinates — a line's points, a collection's offsets, paths
-and colour values, a patch's outline, an image's array and extent, a text's string and
-position — and how it is styled (colours, widths, sizes, the axes' scales, their cells of
-the grid and the limits set by hand). Ticks, tick labels, spines, autoscaled limits and
-the places the layout gives (axes, axis labels) are left out: they follow from the data and
-the layout. Two figures whose data agree to rounding draw the same picture to the eye; the
-pixels of their PNG files may still differ (anti-aliasing), which is why ``nonholo
-reproduce`` compares this record (:mod:`nonholo.io.numeric_diff`) rather than the files to
-decide whether to redraw.
+and colour values, a patch's outline, an image's array and extent, a text's string and its
+place in data coordinates — and how it is styled (colours, widths, sizes, the axes' scales,
+their cells of the grid and the limits set by hand). Ticks, tick labels, spines,
+autoscaled limits and the places the layout gives (axes, titles, legends, axis labels) are
+left out: they follow from the data and the layout (on a log scale, a value at rounding
+level can move a decade of ticks, and with it every title). Two figures whose data agree
+to rounding draw the same picture to the eye; the pixels of their PNG files may still
+differ (anti-aliasing), which is why ``nonholo reproduce`` compares this record
+(:mod:`nonholo.io.numeric_diff`) rather than the files to decide whether to redraw.
 
 The record is ``(words, numbers)``: ``words`` a list of strings (the artists' kinds, their
 texts, the shapes of their arrays), ``numbers`` one float array. :func:`to_bytes` and
@@ -37,7 +38,7 @@ from matplotlib.figure import Figure
 __all__ = ["figure_data", "parts", "to_bytes", "from_bytes", "FORMAT"]
 
 #: The tag of a stored record.
-FORMAT = "nonholo.figure_data/1"
+FORMAT = "nonholo.figure_data/2"
 _MAGIC = b"NHFD1\n"
 
 
@@ -144,7 +145,10 @@ def _image(rec: _Record, image: mpl_image.AxesImage) -> None:
 def _text(rec: _Record, text: mpl_text.Text, placed_by_layout: bool) -> None:
     if not text.get_text():
         return
-    where = (np.nan, np.nan) if placed_by_layout else text.get_position()
+    # a place in data coordinates is data; any other (titles, legends, axis labels) the
+    # layout may move when the figure is drawn
+    in_data = text.axes is not None and text.get_transform() == text.axes.transData
+    where = text.get_position() if in_data and not placed_by_layout else (np.nan, np.nan)
     rec.add("text", np.asarray(where, dtype=float), _rgba(text.get_color()),
             [text.get_fontsize(), text.get_rotation()], text=text.get_text())
 
