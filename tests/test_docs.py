@@ -9,6 +9,7 @@ import html.parser
 import http.server
 import importlib.util
 import os
+import re
 import shutil
 import struct
 import subprocess
@@ -421,3 +422,32 @@ def test_the_landing_page_in_a_headless_browser_shows_the_figure_and_the_navigat
     assert pixels.ndim == 3 and pixels.shape[0] > 0 and pixels.shape[1] > 0
     flat = pixels.reshape(-1, pixels.shape[2])
     assert (flat != flat[0]).any(), "the screenshot of the landing page is blank (one colour)"
+
+
+def table_rows_of_the_wrong_width(text: str) -> list[tuple[int, int, int]]:
+    """``(line, cells, expected)`` of every Markdown table row whose number of cells is not
+    its header's: cells split at ``|`` not escaped as ``\\|`` (a ``|`` inside a code span
+    splits a row as well, in GitHub's and MyST's tables alike)."""
+    bad, width = [], None
+    for number, line in enumerate(text.splitlines(), 1):
+        stripped = line.strip()
+        if not (stripped.startswith("|") and stripped.endswith("|") and len(stripped) > 1):
+            width = None
+            continue
+        cells = len(re.split(r"(?<!\\)\|", stripped)) - 2
+        if width is None:
+            width = cells
+        elif cells != width:
+            bad.append((number, cells, width))
+    return bad
+
+
+def test_the_table_check_sees_a_pipe_that_splits_a_cell():
+    table = "| a | b |\n|---|---|\n| `x|y` | 1 |\n| `x\\|y` | 2 |\n"
+    assert table_rows_of_the_wrong_width(table) == [(3, 3, 2)]
+
+
+@pytest.mark.parametrize("page", sorted(p.relative_to(ROOT).as_posix() for p in [ROOT / "README.md", *ROOT.glob("docs/**/*.md")]
+                                        if "_build" not in p.parts))
+def test_every_table_row_has_its_header_s_cells(page):
+    assert table_rows_of_the_wrong_width((ROOT / page).read_text(encoding="utf-8")) == [], page
