@@ -5,10 +5,12 @@
 """
 from __future__ import annotations
 
+import dataclasses
 import importlib
 from functools import cache
 
 from ..generated import MECHANISMS as GENERATED
+from . import drawing
 from .mechanism import Mechanism
 
 #: Mechanisms added at run time (:func:`add`), by name.
@@ -26,9 +28,14 @@ def names() -> tuple[str, ...]:
     return tuple(GENERATED) + tuple(n for n in _ADDED if n not in GENERATED)
 
 
+#: Bounds of the catalog's mechanisms, as :attr:`Mechanism.bounds` holds them, by name.
+CATALOG_BOUNDS: dict[str, dict] = {}
+
+
 @cache
 def _generated(name: str) -> Mechanism:
-    return Mechanism.from_module(importlib.import_module(f"nonholo.generated.{name}"))
+    mechanism = Mechanism.from_module(importlib.import_module(f"nonholo.generated.{name}"))
+    return dataclasses.replace(mechanism, drawing=drawing.catalog_drawing(name), bounds=CATALOG_BOUNDS.get(name))
 
 
 def get(mechanism="platform") -> Mechanism:

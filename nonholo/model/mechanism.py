@@ -248,6 +248,12 @@ class Mechanism:  # signature: __new__'s (*args, **kwargs), the fields below; nu
         Names, units and angle flags of the coordinates ``q`` (a state beyond SO(3)).
     G : callable or None
         The stacked field ``G(R, q)`` (rows ``(ω, q̇)``; ``G(R, q) = L(R)`` on SO(3)).
+    definition : dict or None
+        The definition as data (mechanism files, plan files).
+    drawing : Drawing or None
+        How it is drawn (:mod:`nonholo.model.drawing`).
+    bounds : dict or None
+        Bounds on the inputs and coordinates, as data.
     """
 
     name: str
@@ -266,6 +272,14 @@ class Mechanism:  # signature: __new__'s (*args, **kwargs), the fields below; nu
     angles: tuple[bool, ...] = ()
     #: the stacked field ``G(R, q)`` (rows ``(ω, q̇)``; ``G(R, q) = L(R)`` on SO(3))
     G: Callable | None = None
+    #: the definition as data (the text form of :meth:`from_equations`), which mechanism
+    #: files and plan files carry; ``None`` for a mechanism generated into the package
+    definition: dict | None = field(default=None, repr=False)
+    #: how the mechanism is drawn (:class:`nonholo.model.drawing.Drawing`); ``None`` without
+    drawing: object | None = field(default=None, repr=False)
+    #: bounds as data, ``{"inputs": {name: (low, high)}, "coordinates": {name: (low, high)}}``
+    #: (``±inf`` where free); ``None`` without
+    bounds: dict | None = field(default=None, repr=False)
 
     def __new__(cls, *args, **kwargs):
         """Arguments that do not fit the fields raise a ``TypeError`` saying how a mechanism
