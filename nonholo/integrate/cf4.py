@@ -984,7 +984,7 @@ def specialise(template, namespace: dict, bindings: dict, tag: str, cache: bool)
     f.__qualname__ = f"{template.__name__}__{tag}"        # its own cache entry
     f.__module__ = namespace["__name__"]
     f.__doc__ = template.__doc__
-    return jit(f, cache=cache)
+    return jit(f, cache=cache, lazy=False)
 
 
 def system_tag(module, frame: bool) -> str:
@@ -1155,17 +1155,17 @@ def _compile(module, frame: bool, templates, tag: str, cache: bool, fast_derivat
     """Compile ``templates`` for a system of ``module`` (see :func:`compile_system`)."""
     G, QG = (module.N_into, module.QN_into) if frame else (module.G_into, module.QG_into)
     bindings = {
-        "field_into": jit(G, cache=False),
+        "field_into": jit(G, cache=False, lazy=False),
         # QG feeds only the variational system (the Jacobian): fast-math lets LLVM turn
         # its ``x**(-2.0)`` into a multiplication (the result changes at round-off level)
-        "field_derivative_into": jit(QG, cache=False, fastmath=fast_derivative),
-        "delta": jit(module.delta if module.HAS_SINGULAR_SET else no_singularity, cache=False),
+        "field_derivative_into": jit(QG, cache=False, lazy=False, fastmath=fast_derivative),
+        "delta": jit(module.delta if module.HAS_SINGULAR_SET else no_singularity, cache=False, lazy=False),
         "ROTATION": bool(module.ORIENTATION),
         "D": (3 if module.ORIENTATION else 0) + len(module.COORDINATES),
         "OFFSET": 3 if module.ORIENTATION else 0,
     }
     if frame:
-        bindings["W_into"] = jit(module.W_into, cache=False)
+        bindings["W_into"] = jit(module.W_into, cache=False, lazy=False)
     for template in templates:
         if template.__name__ == "frame_inputs" and not frame:
             continue

@@ -2521,6 +2521,6 @@ PyMODINIT_FUNC PyInit_attitude(void)
     import_array();
     PyObject *m = PyModule_Create(&moduledef);
     if (m == NULL) return NULL;
-    if (PyModule_AddStringConstant(m, "SOURCE_DIGEST", "a3b3de1b38a6d610b039016b8289de1b1e566a4a5741c73981ec5c047d38a3ad") < 0) { Py_DECREF(m); return NULL; }
+    if (PyModule_AddStringConstant(m, "SOURCE_DIGEST", "3279d867eb5eacd35287e1e05e9797d9b83165130da4d0beba6d974b79751ca4") < 0) { Py_DECREF(m); return NULL; }
     return m;
 }

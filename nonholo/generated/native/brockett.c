@@ -1161,6 +1161,6 @@ PyMODINIT_FUNC PyInit_brockett(void)
     import_array();
     PyObject *m = PyModule_Create(&moduledef);
     if (m == NULL) return NULL;
-    if (PyModule_AddStringConstant(m, "SOURCE_DIGEST", "599ff80bf451561c298fce076d86f18136e49074b746f8a0d6e4467c580ae05b") < 0) { Py_DECREF(m); return NULL; }
+    if (PyModule_AddStringConstant(m, "SOURCE_DIGEST", "e0a19fdae09b56bd1477fe8eba95a05252642ae8668c6edf9c09859bb5467ebe") < 0) { Py_DECREF(m); return NULL; }
     return m;
 }

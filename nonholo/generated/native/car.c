@@ -2440,6 +2440,6 @@ PyMODINIT_FUNC PyInit_car(void)
     import_array();
     PyObject *m = PyModule_Create(&moduledef);
     if (m == NULL) return NULL;
-    if (PyModule_AddStringConstant(m, "SOURCE_DIGEST", "8728589292312c81f28f639f0869403c88fa9985de95824973bd4494d9d7abec") < 0) { Py_DECREF(m); return NULL; }
+    if (PyModule_AddStringConstant(m, "SOURCE_DIGEST", "460e3d80b2c5f84048b8aea6ae752cb4b14bcc5cbeda741bc10597967fe06a31") < 0) { Py_DECREF(m); return NULL; }
     return m;
 }

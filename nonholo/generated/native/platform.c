@@ -2565,6 +2565,6 @@ PyMODINIT_FUNC PyInit_platform(void)
     import_array();
     PyObject *m = PyModule_Create(&moduledef);
     if (m == NULL) return NULL;
-    if (PyModule_AddStringConstant(m, "SOURCE_DIGEST", "449859de8f06b1e5705848c7b48860aa19e143918d7107a63783bb2b8f83792d") < 0) { Py_DECREF(m); return NULL; }
+    if (PyModule_AddStringConstant(m, "SOURCE_DIGEST", "27907e4be065b2e04f717587307e359000d6de45223934fd20207d4c523dd017") < 0) { Py_DECREF(m); return NULL; }
     return m;
 }

@@ -2583,6 +2583,6 @@ PyMODINIT_FUNC PyInit_platform_raised(void)
     import_array();
     PyObject *m = PyModule_Create(&moduledef);
     if (m == NULL) return NULL;
-    if (PyModule_AddStringConstant(m, "SOURCE_DIGEST", "35e55940f9301fa9f4dab9fb61be9f8bb2db42db998af1ab28c3f8a6366e2c56") < 0) { Py_DECREF(m); return NULL; }
+    if (PyModule_AddStringConstant(m, "SOURCE_DIGEST", "71d406ce7587718fbfdec1a60527d5d1533f6d83de361590ee7d35032b59d33d") < 0) { Py_DECREF(m); return NULL; }
     return m;
 }

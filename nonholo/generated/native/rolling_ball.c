@@ -1201,6 +1201,6 @@ PyMODINIT_FUNC PyInit_rolling_ball(void)
     import_array();
     PyObject *m = PyModule_Create(&moduledef);
     if (m == NULL) return NULL;
-    if (PyModule_AddStringConstant(m, "SOURCE_DIGEST", "79fc6dd8ff21434ebf5da06482e22d227f1396b2f733573ca98d0411fbbba22e") < 0) { Py_DECREF(m); return NULL; }
+    if (PyModule_AddStringConstant(m, "SOURCE_DIGEST", "cfe8c486ffade28279e32faa4c58bed7d4e978842aa70c620a712fbefd07984d") < 0) { Py_DECREF(m); return NULL; }
     return m;
 }

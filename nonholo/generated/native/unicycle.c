@@ -1159,6 +1159,6 @@ PyMODINIT_FUNC PyInit_unicycle(void)
     import_array();
     PyObject *m = PyModule_Create(&moduledef);
     if (m == NULL) return NULL;
-    if (PyModule_AddStringConstant(m, "SOURCE_DIGEST", "210c40f45d7377dcbbe036d5ae499e60a823e1d2abd5806d7a30b4b5a2133bb5") < 0) { Py_DECREF(m); return NULL; }
+    if (PyModule_AddStringConstant(m, "SOURCE_DIGEST", "f5b68e87a482282ef71c86bddb902d8c3544bc1882b8d5138d1a527a4aa0b18f") < 0) { Py_DECREF(m); return NULL; }
     return m;
 }
