@@ -24,7 +24,6 @@ Conventions
 from __future__ import annotations
 
 import numpy as np
-from scipy.spatial.transform import Rotation
 
 from ..numerics import kernels
 from ..numerics.checks import real_array
@@ -209,6 +208,8 @@ class SO3:
         numpy.ndarray
             The rotations, shape ``(n, 3, 3)``.
         """
+        from scipy.spatial.transform import Rotation  # loaded when first needed
+
         return Rotation.random(n, random_state=rng).as_matrix().reshape(n, 3, 3)
 
     def to_json(self, R) -> list:

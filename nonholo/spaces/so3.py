@@ -13,7 +13,6 @@ Conventions:
 from __future__ import annotations
 
 import numpy as np
-from scipy.spatial.transform import Rotation
 
 from ..numerics.checks import real_array
 
@@ -95,6 +94,8 @@ def log(R) -> np.ndarray:
     numpy.ndarray
         The 3-vector ``l``.
     """
+    from scipy.spatial.transform import Rotation  # loaded when first needed
+
     return Rotation.from_matrix(np.asarray(R, dtype=float)).as_rotvec()
 
 
@@ -170,6 +171,8 @@ def from_rpy(phi: float, theta: float, psi: float) -> np.ndarray:
     numpy.ndarray
         The 3×3 rotation.
     """
+    from scipy.spatial.transform import Rotation  # loaded when first needed
+
     return Rotation.from_euler("ZYX", [phi, theta, psi]).as_matrix()
 
 
@@ -186,6 +189,8 @@ def as_rpy(R) -> np.ndarray:
     numpy.ndarray
         ``(φ, ϑ, ψ)`` with ``from_rpy(φ, ϑ, ψ) = R``; ``ϑ ∈ [-π/2, π/2]``.
     """
+    from scipy.spatial.transform import Rotation  # loaded when first needed
+
     return Rotation.from_matrix(np.asarray(R, dtype=float)).as_euler("ZYX")
 
 
@@ -238,6 +243,8 @@ def turns(Ra: np.ndarray, Rb: np.ndarray) -> np.ndarray:
     numpy.ndarray
         Rotation vectors, shape ``(E, 3)``.
     """
+    from scipy.spatial.transform import Rotation  # loaded when first needed
+
     a = Rotation.from_matrix(Ra)
     return (Rotation.from_matrix(Rb) * a.inv()).as_rotvec()
 
@@ -259,6 +266,8 @@ def geodesic_points(Ra: np.ndarray, v: np.ndarray, s: np.ndarray) -> np.ndarray:
     numpy.ndarray
         Shape ``(E, S, 3, 3)``.
     """
+    from scipy.spatial.transform import Rotation  # loaded when first needed
+
     E, S = len(v), len(s)
     turn = Rotation.from_rotvec((v[:, None, :] * s[None, :, None]).reshape(-1, 3)).as_matrix()
     return np.matmul(turn.reshape(E, S, 3, 3), np.asarray(Ra, dtype=float)[:, None])
