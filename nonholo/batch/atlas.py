@@ -29,7 +29,8 @@ from matplotlib.colors import BoundaryNorm, ListedColormap, LogNorm
 from matplotlib.figure import Figure
 from scipy.spatial.transform import Rotation
 
-from ..model import catalog
+from ..model import catalog, mechanism_file
+from ..model.names import ANGLES, MILLISECOND, RAD, label
 from ..viz.style import NotebookFigure
 
 #: The planner settings an atlas compares: name → options of :func:`nonholo.plan`.
@@ -49,7 +50,7 @@ ALIASES = {"phi": "φ", "theta": "ϑ", "psi": "ψ"}
 RPY_RANGES = {"φ": (-np.pi, np.pi), "ϑ": (-np.pi / 2, np.pi / 2), "ψ": (-np.pi, np.pi)}
 #: Success map colours: solved, failed, unreachable.
 _SUCCESS_COLORS = ("#2ca02c", "#d62728", "#d9d9d9")
-_AXIS_TEXT = {"φ": "goal φ (about z) [rad]", "ϑ": "goal ϑ (about y) [rad]", "ψ": "goal ψ (about x) [rad]"}
+_AXIS_TEXT = {angle.symbol: label(f"goal {angle.text}", RAD) for angle in ANGLES}
 _PI_TICKS = {(-np.pi, np.pi): ([-np.pi, -np.pi / 2, 0, np.pi / 2, np.pi], ["−π", "−π/2", "0", "π/2", "π"]),
              (-np.pi / 2, np.pi / 2): ([-np.pi / 2, 0, np.pi / 2], ["−π/2", "0", "π/2"])}
 
@@ -210,7 +211,7 @@ def states(space, numbers) -> tuple[np.ndarray, np.ndarray]:
     return np.broadcast_to(np.eye(3), (numbers.shape[0], 3, 3)), numbers
 
 
-def problems(n: int = 31, psi=None, start=None, mechanism: str = "platform",
+def problems(n: int = 31, psi=None, start=None, mechanism="platform",
              settings=tuple(SETTINGS), options: dict | None = None, *, axes=None, extent=None) -> list[dict]:
     """The problems of an atlas: from ``start`` to every cell centre of an ``n × n`` grid
     over the goal's numbers ``axes``, for every setting.
@@ -225,8 +226,9 @@ def problems(n: int = 31, psi=None, start=None, mechanism: str = "platform",
     start : sequence of float, optional
         The start's command-line numbers (RPY angles in rad, then the coordinates; default
         :func:`default_start`); the goal's numbers off the axes are the start's.
-    mechanism : str
-        The mechanism's name.
+    mechanism : str or Mechanism
+        The mechanism: a name, a mechanism file (``.toml``) or a
+        :class:`~nonholo.model.mechanism.Mechanism` (:func:`nonholo.model.catalog.resolve`).
     settings : sequence of str
         Keys of :data:`SETTINGS`.
     options : dict, optional
@@ -252,9 +254,17 @@ def problems(n: int = 31, psi=None, start=None, mechanism: str = "platform",
     unknown = [s for s in settings if s not in SETTINGS]
     if unknown:
         raise BadArgument("settings", f"has an unknown setting {unknown[0]!r}; known: {', '.join(SETTINGS)}")
-    if mechanism not in catalog.names():
-        raise BadArgument("mechanism", f"must be one of {', '.join(catalog.names())}, got {mechanism!r}")
-    space = catalog.get(mechanism).space
+    if isinstance(mechanism, str) and not mechanism.lower().endswith(".toml") and mechanism not in catalog.names():
+        raise BadArgument("mechanism", f"must be one of {', '.join(catalog.names())} or a mechanism file (.toml), "
+                                       f"got {mechanism!r}")
+    try:
+        mech = catalog.resolve(mechanism)
+    except ValueError as exc:
+        raise BadArgument("mechanism", f"refused: {exc}") from None
+    # the rows name a catalog mechanism, or hold another's definition (data the workers rebuild it from)
+    in_rows = mech.name if mech.definition is None else mechanism_file.json_data(mech.definition)
+    mechanism = mech.name
+    space = mech.space
     names = space.cli_names
     if start is None:
         start = default_start(space)
@@ -311,7 +321,7 @@ def problems(n: int = 31, psi=None, start=None, mechanism: str = "platform",
                              "extent": [float(v) for b in bounds for v in b], "goal": goal.tolist(),
                              "start": start.tolist(), **({} if p is None else {"psi": p})}
                     rows.append({"start": first, "goal": space.public(*space.from_cli(goal)),
-                                 "mechanism": mechanism, "options": {**(options or {}), **SETTINGS[s]},
+                                 "mechanism": in_rows, "options": {**(options or {}), **SETTINGS[s]},
                                  "label": json.dumps(label, separators=(",", ":"))})
     return rows
 
@@ -347,7 +357,7 @@ class Atlas:
         first = keep[0][1]
         self.n, self.start = first["n"], tuple(first["start"])
         self.mechanism = keep[0][0]["mechanism"]
-        mech = catalog.get(self.mechanism)
+        self.kinematics = mech = _row_mechanism(keep[0][0])
         self.space = space = mech.space
         # labels without axes: an RPY slice atlas
         self.axes = tuple(first.get("axes", ("φ", "ϑ")))
@@ -447,8 +457,22 @@ class Atlas:
         numbers[..., names.index(self.axes[0])] = x
         numbers[..., names.index(self.axes[1])] = y
         R, q = states(self.space, numbers.reshape(-1, len(names)))
-        D = catalog.get(self.mechanism).singular.values(R, q)
+        D = self.kinematics.singular.values(R, q)
         return np.asarray(D, dtype=float).reshape(x.shape)
+
+
+def _row_mechanism(row: dict):
+    """The mechanism of a results row: the catalog's of its name, else the one its
+    ``problem`` holds the definition of."""
+    name = row["mechanism"]
+    if name not in catalog.names():
+        try:
+            value = json.loads(row.get("problem") or "{}").get("mechanism")
+        except (ValueError, AttributeError):
+            value = None
+        if isinstance(value, dict):
+            return catalog.resolve(value)
+    return catalog.get(name)
 
 
 def _axis_text(space, name: str) -> str:
@@ -456,7 +480,7 @@ def _axis_text(space, name: str) -> str:
         return _AXIS_TEXT[name]
     c = space.coordinates
     unit = c.units[c.names.index(name)]
-    return f"goal {name}" + (f" [{unit}]" if unit else "")
+    return label(f"goal {name}", unit)
 
 
 def atlas_figure(table, quantity: str = "success") -> Figure:
@@ -484,7 +508,7 @@ def atlas_figure(table, quantity: str = "success") -> Figure:
         raise ValueError(f"unknown quantity {quantity!r}; known: {', '.join(QUANTITIES)}")
     atlas = Atlas(table)
     space = atlas.space
-    singular = catalog.get(atlas.mechanism).singular
+    singular = atlas.kinematics.singular
     rows, cols = len(atlas.slices), len(atlas.settings)
     fig = NotebookFigure(figsize=(4.6 * cols + 1.2, 3.4 * rows + 0.8), layout="constrained")
     axes = np.array(fig.subplots(rows, cols, squeeze=False, sharex=True, sharey=True))
@@ -537,7 +561,7 @@ def atlas_figure(table, quantity: str = "success") -> Figure:
         cb.ax.set_yticklabels(["solved", "failed", "unreachable\n(across Δ = 0)"])
     elif mesh is not None:
         fig.colorbar(mesh, ax=axes, shrink=0.8,
-                     label="accepted iterations" if quantity == "iterations" else "wall time [ms]")
+                     label="accepted iterations" if quantity == "iterations" else label("wall time", MILLISECOND))
     what = {"success": "which goals each planner solves", "iterations": "accepted iterations",
             "time": "wall time per plan"}[quantity]
     fig.suptitle(f"{atlas.mechanism}: {what}, from {atlas.describe_start()} (yellow "

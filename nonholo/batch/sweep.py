@@ -8,7 +8,10 @@ are planned in batches — in this process (``workers=1``), on local worker proc
 (``workers=N``, default: one per core), or on a Dask distributed cluster (``client=`` a
 ``distributed.Client``, or ``scheduler=`` its address) — and every finished batch is written
 at once, so nothing computed is lost. A table may mix mechanisms and kinds of state (SO(3),
-``Rᵏ``, ``SO(3) × Rᵏ``): each row is planned with its own mechanism.
+``Rᵏ``, ``SO(3) × Rᵏ``): each row is planned with its own mechanism. A row's mechanism file
+(``"mechanism": "trailer.toml"``, relative to the table's directory) is read once, here;
+the workers are sent its definition as data (:func:`nonholo.io.problems.as_json`) and
+rebuild it from the cache of generated modules and kernels, never a pickled module.
 
 Results: a Parquet file (pyarrow), one row per problem, sorted by ``index`` (the problem's
 row, from 0), with :data:`SCHEMA`'s columns: the problem's ``label`` and ``mechanism``,
@@ -122,7 +125,7 @@ def solve(index: int, row: dict) -> dict:
            "problem": problem_json(row)}
     started = time.perf_counter()
     try:
-        res = plan(problem["start"], problem["goal"], mechanism=problem["mechanism"], **problem["options"])
+        res = plan(problem["start"], problem["goal"], mechanism=problem["kinematics"], **problem["options"])
     except Exception as exc:                              # recorded, not fatal to the sweep
         return {**out, "strategy": None, "method": None, "route": None, "T": None, "success": False,
                 "terminal_error": None, "min_delta": None, "iterations": 0,
@@ -231,7 +234,7 @@ def check_options(problems: list[dict]) -> None:
 
     for i, p in enumerate(problems):
         try:
-            Problem.build(p["start"], p["goal"], mechanism=p["mechanism"], **p["options"])
+            Problem.build(p["start"], p["goal"], mechanism=p.get("kinematics", p["mechanism"]), **p["options"])
         except (ValueError, TypeError, OverflowError) as exc:
             raise ValueError(f"problem row {i}, column {_column_of(str(exc), p['options'])!r}: {exc}") from None
 

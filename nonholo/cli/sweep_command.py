@@ -14,7 +14,9 @@ row per problem to a Parquet file as results arrive (:mod:`nonholo.batch.sweep`)
 the same arguments it finishes what an interrupted (even killed) run left, and a second sweep
 on the same output while one runs is refused (exit 2). Every row's options are checked as
 ``plan`` checks them before anything runs; a strategy named by import path
-(``"module:Class"``) needs ``--allow-imports``. ``atlas --problems`` writes
+(``"module:Class"``) needs ``--allow-imports``. A row's ``"mechanism"`` may be a mechanism file
+(``"trailer.toml"``, relative to the table's directory), and ``atlas --mechanism`` one too
+(relative to the working directory). ``atlas --problems`` writes
 an atlas's problems (:func:`nonholo.batch.atlas.problems`): goals on a grid over two of the
 numbers of a state (``--axes``: the RPY angles phi theta psi with an orientation, then the
 coordinates; default phi theta, or the first two coordinates), the others the start's
@@ -64,7 +66,9 @@ def add_parsers(subparsers) -> None:
     p.add_argument("--out", default="paper_figures", help="directory of the figures (default paper_figures)")
     p.add_argument("--problems", default=None, metavar="FILE",
                    help="instead of drawing: write an atlas's problems to FILE (JSON Lines)")
-    p.add_argument("--mechanism", default="platform", help="the mechanism (default platform)")
+    p.add_argument("--mechanism", default="platform",
+                   help="the mechanism: a name (default platform) or a mechanism file (.toml), whose "
+                        "definition the rows then hold")
     p.add_argument("--grid", type=int, default=31, help="goals per side of each slice (default 31)")
     p.add_argument("--axes", nargs=2, default=None, metavar=("A", "B"),
                    help="the goal's two numbers on the grid: phi theta psi (with an orientation) or "

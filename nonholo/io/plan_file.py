@@ -15,8 +15,9 @@ planned in frame coordinates (strategy ``"robust"``), ``{"kind": "frame", "T",
 "waypoints"}``, unless the route was re-planned as one smooth control: then ``controls``
 is that control and ``"stitched"`` the route's stitched control (absent otherwise); a
 time-changed plan wraps one of those as ``{"kind": "retimed", "T", "leg_speed", "nodes",
-"mechanism", "R0", "base"}`` (a leg-speed bound) and/or ``{"kind": "rest_to_rest", "T",
-"base"}`` (played from rest to rest); see :mod:`nonholo.controls.parametrisations`,
+"mechanism", "R0", "base"}`` (a leg-speed bound) or ``{"kind": "retimed_inputs", "T",
+"bounds", "nodes", "base"}`` (input bounds, one ``[low, high]`` per input, ``null`` where
+free) and/or ``{"kind": "rest_to_rest", "T", "base"}`` (played from rest to rest); see :mod:`nonholo.controls.parametrisations`,
 :mod:`nonholo.motion.frame_controls`, :mod:`nonholo.controls.stitched` and
 :mod:`nonholo.motion.time_change`) from which ``controls(t)`` is rebuilt (identically: the frame
 motion's nodes are recomputed by the same kernel). Floats are written with
@@ -25,7 +26,13 @@ that do not exist (``min_delta`` for a mechanism without a singular set, the ter
 error of a run stopped before any simulation) are ``null``/``None``, never NaN.
 ``made_by`` records what made the file: the nonholo version and commit, and the versions
 of Python, NumPy, SciPy, SymPy and the C compiler (:mod:`nonholo.io.provenance`); files
-without it (written before it was recorded) load as well.
+without it (written before it was recorded) load as well. A plan of a mechanism with a
+definition as data (:meth:`~nonholo.model.mechanism.Mechanism.from_equations`,
+:meth:`~nonholo.model.mechanism.Mechanism.from_file`) carries it, ``mechanism_definition``
+(:func:`nonholo.model.mechanism_file.json_data`), and its SHA-256, ``mechanism_digest``
+(:func:`nonholo.model.mechanism_file.digest`): such a file loads without ``mechanism=``; a
+digest that does not match is refused, and the definition is checked as a mechanism file
+is before the mechanism is built. A catalog mechanism's plans hold its name only.
 
 Saving (:mod:`nonholo.io.safe_write`) is atomic (a complete new file replaces the old
 one, or the old one stays), never replaces what is not a regular file (a directory is
@@ -72,9 +79,10 @@ from ..certify.plan_fields import (
 )
 from ..controls.parametrisations import Controls
 from ..controls.stitched import Stitched
-from ..model import catalog
+from ..model import catalog, mechanism_file
+from ..model.bounds import InputBounds
 from ..motion.frame_controls import FrameControls, from_dict
-from ..motion.retimed import Retimed
+from ..motion.retimed import InputRetimed, Retimed
 from ..motion.time_change import RestToRest
 from ..numerics.checks import is_number
 
@@ -86,9 +94,10 @@ _REQUIRED = ("format", "success", "reason", "terminal_error", "min_delta", "iter
 _CERTIFIED = ("sensitivity", "error_bound", "replay_steps")
 #: fields only some files have: the certificate's, absent from ``nonholo.plan/1`` files
 #: (``null`` there); ``route`` (``nonholo.plan/3``); a smoothed route's stitched controls;
-#: the coordinates of a mechanism whose state has them; what made the file (``made_by``)
+#: the coordinates of a mechanism whose state has them; what made the file (``made_by``);
+#: the definition of a mechanism that has one, and its SHA-256
 _OPTIONAL = ("sensitivity", "error_bound", "replay_steps", "route", "stitched",
-             "q0", "qd", "q", "errors", "made_by")
+             "q0", "qd", "q", "errors", "made_by", "mechanism_definition", "mechanism_digest")
 #: the longest text of a ``made_by`` entry
 _MADE_BY_TEXT = 200
 #: the fields of each kind of ``controls``
@@ -97,6 +106,7 @@ _CONTROL_FIELDS = {"fourier": ("kind", "T", "harmonics", "coeffs"),
                    "frame": ("kind", "T", "mechanism", "steps", "R0", "frame"),
                    "stitched": ("kind", "T", "pieces", "waypoints"),
                    "retimed": ("kind", "T", "leg_speed", "nodes", "mechanism", "R0", "base"),
+                   "retimed_inputs": ("kind", "T", "bounds", "nodes", "base"),
                    "rest_to_rest": ("kind", "T", "base")}
 
 
@@ -230,6 +240,16 @@ def _controls(d, mech, where: str = "controls", timed: bool = True,
             fail(f"{where}.mechanism", f"is {d['mechanism']!r}, but the plan's 'mechanism' is {mech.name!r}")
         rotation_field(_array(d["R0"], f"{where}.R0", (3, 3)), f"{where}.R0")
         _controls(d["base"], mech, f"{where}.base", timed=False, rest=False)
+    elif isinstance(d, dict) and d.get("kind") == InputRetimed.kind and timed:
+        _fields(d, _CONTROL_FIELDS["retimed_inputs"], where)
+        if number_field(d, "T", where=f"{where}.") <= 0:
+            fail(f"{where}.T", f"must be positive, got {d['T']}")
+        integer_field(d, "nodes", 2, where=f"{where}.")
+        try:
+            InputBounds.from_record(d["bounds"], mech, "bounds")
+        except ValueError as exc:
+            fail(f"{where}.bounds", f"is not a plan's input bounds: {exc}")
+        _controls(d["base"], mech, f"{where}.base", timed=False, rest=False)
     elif isinstance(d, dict) and d.get("kind") == Stitched.kind:
         _fields(d, _CONTROL_FIELDS["stitched"] + (("coordinates",) if mech.space.k else ()), where)
         if number_field(d, "T", where=f"{where}.") <= 0:
@@ -302,12 +322,12 @@ def decode(d, mechanism=None) -> tuple[dict, bool]:
     if not isinstance(d["success"], bool):
         raise ValueError(f"invalid plan: 'success' must be true or false, got {short(d['success'])}")
     name = string_field(d, "mechanism")
-    mech = _mechanism(name, mechanism)
+    mech = _mechanism(name, mechanism, d)
     par = _controls(d["controls"], mech)
     stitched = None
     if d["stitched"] is not None:
         if not isinstance(d["stitched"], dict) or d["stitched"].get("kind") != Stitched.kind:
-            fail("stitched", f"must be stitched controls ({{\"kind\": \"stitched\", ...}}) or null")
+            fail("stitched", "must be stitched controls ({\"kind\": \"stitched\", ...}) or null")
         stitched = _controls(d["stitched"], mech, "stitched")
     m = par.n_inputs
     options = d["options"]
@@ -349,10 +369,79 @@ def _made_by(value) -> dict | None:
     return dict(value)
 
 
-def _mechanism(name: str, mechanism):
-    """The mechanism of a plan whose file names ``name``: ``mechanism`` if given (it must be
-    of that name), else the catalog's; ``ValueError`` saying to pass ``mechanism=`` for a
-    name the catalog does not know."""
+def definition_fields(mechanism) -> dict:
+    """The fields a plan file holds for a mechanism with a definition as data
+    (:attr:`~nonholo.model.mechanism.Mechanism.definition`): ``mechanism_definition`` (its
+    JSON form) and ``mechanism_digest`` (its SHA-256); none for one without (a catalog
+    mechanism: its plans name it only).
+
+    Parameters
+    ----------
+    mechanism : Mechanism
+        The plan's mechanism.
+
+    Returns
+    -------
+    dict
+        The fields, or an empty dict.
+    """
+    definition = getattr(mechanism, "definition", None)
+    if definition is None:
+        return {}
+    return {"mechanism_definition": mechanism_file.json_data(definition),
+            "mechanism_digest": mechanism_file.digest(definition)}
+
+
+def _defined(name: str, mechanism, d: dict):
+    """The mechanism of a file carrying ``mechanism_definition``: its digest checked, then
+    the definition checked as a mechanism file is and built (or ``mechanism``, if given,
+    of the same definition)."""
+    for key in ("mechanism_definition", "mechanism_digest"):
+        if key not in d:
+            other = ({"mechanism_definition", "mechanism_digest"} - {key}).pop()
+            fail(key, f"is missing, but {other!r} is set (a plan carries both or neither)")
+    definition, digest = d["mechanism_definition"], d["mechanism_digest"]
+    if not isinstance(digest, str):
+        fail("mechanism_digest", f"must be text (a SHA-256), got {json_type(digest)}")
+    if not isinstance(definition, dict):
+        fail("mechanism_definition", f"must be an object (a mechanism's definition), got {json_type(definition)}")
+    try:
+        actual = mechanism_file.digest(definition)
+    except ValueError as exc:
+        fail("mechanism_definition", str(exc))
+    if actual != digest:
+        fail("mechanism_digest", f"does not match 'mechanism_definition' (whose SHA-256 is {actual}): the "
+                                 "definition or its digest was changed")
+    if mechanism is not None:
+        try:
+            mech = catalog.resolve(mechanism)
+        except ValueError as exc:
+            raise ValueError(f"mechanism: {exc}") from None
+        if mech.definition is None or mechanism_file.digest(mech.definition) != digest:
+            fail("mechanism_definition", f"differs from the definition of the mechanism given ({mech.name!r})")
+    else:
+        try:
+            mech = _from_definition(definition)
+        except ValueError as exc:
+            raise ValueError(f"invalid plan: {exc}") from None
+    if mech.name != name:
+        fail("mechanism", f"is {name!r}, but 'mechanism_definition' defines {mech.name!r}")
+    return mech
+
+
+def _from_definition(definition: dict):
+    """The mechanism of a plan's definition (user data: checked as a mechanism file is),
+    built once per process (:func:`nonholo.model.catalog.resolve`)."""
+    return catalog.resolve(definition, where=lambda field: f"'mechanism_definition.{field}'")
+
+
+def _mechanism(name: str, mechanism, d: dict | None = None):
+    """The mechanism of a plan whose file names ``name``: the one its definition gives
+    (:func:`_defined`), else ``mechanism`` if given (it must be of that name), else the
+    catalog's; ``ValueError`` saying to pass ``mechanism=`` for a name the catalog does not
+    know."""
+    if d is not None and ("mechanism_definition" in d or "mechanism_digest" in d):
+        return _defined(name, mechanism, d)
     if mechanism is not None:
         try:
             mech = catalog.get(mechanism)

@@ -12,8 +12,10 @@ One problem per line, a JSON object::
 the JSON form of the row's mechanism's space (:meth:`nonholo.spaces.groups.Product.to_json`):
 a 3×3 rotation matrix (nested lists) on SO(3), the ``k`` coordinates on ``Rᵏ``, the pair
 ``[R, q]`` on ``SO(3) × Rᵏ``. ``mechanism`` (a name, :func:`nonholo.model.catalog.names`;
-default ``"platform"``) and ``options`` (keyword arguments of :func:`nonholo.plan`
-that JSON can hold, :data:`OPTIONS`) are optional; so is ``label``, free text carried
+a mechanism file, a path ending in ``.toml`` relative to the table's own directory; or a
+mechanism's definition as an object, as a file holds it; default ``"platform"``) and
+``options`` (keyword arguments of :func:`nonholo.plan` that JSON can hold, :data:`OPTIONS`)
+are optional; so is ``label``, free text carried
 into the results (e.g. a goal's name). A table may mix mechanisms: each row's states are
 checked against its own. In Python the same rows are dicts (``start`` and ``goal`` may
 be arrays, and a pair a tuple ``(R, q)``).
@@ -34,7 +36,8 @@ import json
 import math
 from pathlib import Path
 
-from ..model import catalog
+from ..model import catalog, mechanism_file
+from ..model.mechanism import Mechanism
 from ..numerics.checks import is_number
 from . import safe_write
 
@@ -68,7 +71,51 @@ def _state(space, value, row: int, column: str, mechanism: str):
     return space.public(R, q)
 
 
-def check_row(d, row: int, allow_imports: bool = False) -> dict:
+def row_mechanism(value, row: int, base=None) -> Mechanism:
+    """The mechanism of a row's ``mechanism`` column (see the module).
+
+    Parameters
+    ----------
+    value : str, dict or Mechanism
+        A name, a mechanism file's path (``.toml``), a definition, or (in Python) a
+        :class:`~nonholo.model.mechanism.Mechanism` of the catalog or with a definition.
+    row : int
+        The row's number, for messages.
+    base : str or os.PathLike, optional
+        The directory a relative file path is relative to (the table's).
+
+    Returns
+    -------
+    Mechanism
+        The mechanism (one object per file or definition: :func:`nonholo.model.catalog.resolve`).
+
+    Raises
+    ------
+    ValueError
+        Naming the row and the column (and, for a file, the file, its line and field).
+    """
+    if isinstance(value, Mechanism):
+        if value.definition is None and not _in_catalog(value):
+            _fail(row, "mechanism", f"mechanism {value.name!r} is not the catalog's and has no definition as "
+                                    "data to rebuild it from in a worker: give its file (.toml)")
+        return value
+    if isinstance(value, str) and not value.lower().endswith(".toml") and value not in catalog.names():
+        _fail(row, "mechanism", f"unknown mechanism {value!r} (known: {', '.join(catalog.names())}; or a "
+                                "mechanism file, .toml)")
+    if not isinstance(value, (str, dict)):
+        _fail(row, "mechanism", f"must be a mechanism's name, a mechanism file (.toml) or a definition, got "
+                                f"{value!r}")
+    try:
+        return catalog.resolve(value, base, where="mechanism")
+    except ValueError as exc:
+        _fail(row, "mechanism", str(exc))
+
+
+def _in_catalog(mechanism: Mechanism) -> bool:
+    return mechanism.name in catalog.names() and catalog.get(mechanism.name) is mechanism
+
+
+def check_row(d, row: int, allow_imports: bool = False, base=None) -> dict:
     """One problem, checked.
 
     Parameters
@@ -79,13 +126,17 @@ def check_row(d, row: int, allow_imports: bool = False) -> dict:
         Its number (from 0), for messages.
     allow_imports : bool
         Accept a strategy named by its import path (see the module); refused otherwise.
+    base : str or os.PathLike, optional
+        The directory a mechanism file's relative path is relative to (the table's;
+        default: the working directory).
 
     Returns
     -------
     dict
-        ``{"start", "goal", "mechanism", "options", "label"}`` with the states in the form
-        :func:`nonholo.plan` takes (arrays; a pair ``(R, q)`` as a tuple), the mechanism's
-        name and a dict of keywords of :func:`nonholo.plan`: the row's options, and
+        ``{"start", "goal", "mechanism", "kinematics", "options", "label"}`` with the
+        states in the form :func:`nonholo.plan` takes (arrays; a pair ``(R, q)`` as a
+        tuple), the mechanism's name, the :class:`~nonholo.model.mechanism.Mechanism`
+        itself and a dict of keywords of :func:`nonholo.plan`: the row's options, and
         ``allow_imports=True`` with an import path allowed.
 
     Raises
@@ -101,12 +152,9 @@ def check_row(d, row: int, allow_imports: bool = False) -> dict:
     for key in ("start", "goal"):
         if key not in d:
             _fail(row, key, "is missing")
-    name = d.get("mechanism", "platform")
-    if not isinstance(name, str):
-        _fail(row, "mechanism", f"must be a mechanism's name, got {name!r}")
-    if name not in catalog.names():
-        _fail(row, "mechanism", f"unknown mechanism {name!r} (known: {', '.join(catalog.names())})")
-    space = catalog.get(name).space
+    mechanism = row_mechanism(d.get("mechanism", "platform"), row, base)
+    name = mechanism.name
+    space = mechanism.space
     start = _state(space, d["start"], row, "start", name)
     goal = _state(space, d["goal"], row, "goal", name)
     options = d.get("options", {})
@@ -130,7 +178,8 @@ def check_row(d, row: int, allow_imports: bool = False) -> dict:
     label = d.get("label")
     if label is not None and not isinstance(label, str):
         _fail(row, "label", f"must be text, got {label!r}")
-    return {"start": start, "goal": goal, "mechanism": name, "options": options, "label": label}
+    return {"start": start, "goal": goal, "mechanism": name, "kinematics": mechanism, "options": options,
+            "label": label}
 
 
 def _json_value(x) -> str | None:
@@ -153,7 +202,7 @@ def _digits(n: int) -> int:
     return int(abs(n).bit_length() * math.log10(2)) + 1
 
 
-def check(rows, allow_imports: bool = False) -> list[dict]:
+def check(rows, allow_imports: bool = False, base=None) -> list[dict]:
     """Every row checked (:func:`check_row`).
 
     Parameters
@@ -161,6 +210,8 @@ def check(rows, allow_imports: bool = False) -> list[dict]:
     rows : iterable of dict
         The problems.
     allow_imports : bool
+        See :func:`check_row`.
+    base : str or os.PathLike, optional
         See :func:`check_row`.
 
     Returns
@@ -185,7 +236,7 @@ def check(rows, allow_imports: bool = False) -> list[dict]:
                         f"got {type(rows).__name__}") from None
     if not rows:
         raise ValueError("the problem table is empty")
-    return [check_row(d, i, allow_imports) for i, d in enumerate(rows)]
+    return [check_row(d, i, allow_imports, base) for i, d in enumerate(rows)]
 
 
 def read(path, allow_imports: bool = False) -> list[dict]:
@@ -202,7 +253,8 @@ def read(path, allow_imports: bool = False) -> list[dict]:
     Returns
     -------
     list of dict
-        The checked problems (:func:`check`).
+        The checked problems (:func:`check`; a mechanism file's path relative to the
+        file's directory).
 
     Raises
     ------
@@ -221,7 +273,7 @@ def read(path, allow_imports: bool = False) -> list[dict]:
                 _fail(i, None, f"is not JSON: {exc.msg} at character {exc.pos}")
     if not rows:
         raise ValueError(f"{path}: no problems (an empty file)")
-    return check(rows, allow_imports)
+    return check(rows, allow_imports, Path(path).parent)
 
 
 def as_json(problem: dict) -> dict:
@@ -235,12 +287,15 @@ def as_json(problem: dict) -> dict:
     Returns
     -------
     dict
-        The row, the states in the JSON form of the mechanism's space.
+        The row, the states in the JSON form of the mechanism's space; the mechanism by
+        its definition if it has one (data a worker rebuilds it from), else by its name.
     """
-    space = catalog.get(problem["mechanism"]).space
+    mechanism = problem.get("kinematics") or catalog.resolve(problem["mechanism"])
+    space = mechanism.space
     out = {"start": space.to_json(*space.parse(problem["start"], "start")),
            "goal": space.to_json(*space.parse(problem["goal"], "goal")),
-           "mechanism": problem["mechanism"],
+           "mechanism": (mechanism.name if mechanism.definition is None
+                         else mechanism_file.json_data(mechanism.definition)),
            "options": {k: v for k, v in problem["options"].items() if k != IMPORTS}}
     if problem.get("label") is not None:
         out["label"] = problem["label"]

@@ -237,6 +237,7 @@ class PlanResult:
             "iterations": int(self.iterations),
             "history": _plain(self.history),
             "mechanism": self.mechanism,
+            **plan_file.definition_fields(self.kinematics),
             "method": self.method,
             "strategy": self.strategy,
             "T": self.T,
@@ -415,9 +416,13 @@ class PlanResult:
             The plan file.
         mechanism : Mechanism, optional
             The :class:`~nonholo.model.mechanism.Mechanism` the plan was made with, for one
-            that is not in the catalog (built in the script, e.g. by
-            :meth:`~nonholo.model.mechanism.Mechanism.from_equations`); it must have the
-            name the file gives.
+            that is not in the catalog and whose definition the file does not carry (built
+            by :meth:`~nonholo.model.mechanism.Mechanism.from_constraints` or
+            :meth:`~nonholo.model.mechanism.Mechanism.from_symbolic`); it must have the
+            name the file gives (and its definition, if the file carries one). A plan of a
+            mechanism with a definition (:meth:`~nonholo.model.mechanism.Mechanism.from_equations`,
+            :meth:`~nonholo.model.mechanism.Mechanism.from_file`) carries it
+            (``mechanism_definition``, ``mechanism_digest``) and loads without it.
 
         Returns
         -------
@@ -458,10 +463,7 @@ class PlanResult:
         def num(x, fmt):
             return "n/a" if x is None else format(x, fmt)
 
-        try:                             # errors in the state's units (rad on SO(3))
-            amount = catalog.get(self.mechanism).space.amount
-        except ValueError:               # a mechanism not in the catalog: numbers alone
-            amount = num
+        amount = self.kinematics.space.amount     # errors in the state's units (rad on SO(3))
         status = "success" if self.success else "FAILED"
         wall = "wall time not recorded" if self.seconds is None else f"{self.seconds * 1e3:.1f} ms"
         lines = [

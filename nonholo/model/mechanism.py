@@ -31,6 +31,7 @@ take ``R`` alone (the paper's ``Δ(R)``, ``N(R)``, ``QN(R, w)``, ``W(R)``).
 """
 from __future__ import annotations
 
+import dataclasses
 import hashlib
 import inspect
 import keyword
@@ -48,6 +49,7 @@ from ..numerics import cache_entries, native
 from ..numerics.checks import real_array
 from ..spaces.groups import Product
 from ..spaces.singular import NoSingularSet, SingularSet
+from . import mechanism_file
 
 
 @dataclass(frozen=True)
@@ -637,7 +639,102 @@ class Mechanism:  # signature: __new__'s (*args, **kwargs), the fields below; nu
         """
         arguments = dict(inputs=inputs, coordinates=coordinates, rates=rates, omega=omega, rotation=rotation,
                          angles=angles, parameters=parameters, delta=delta, units=units, description=description)
-        return cls.from_module(load_source(equations_source("field_mechanism", name, arguments, cache), name))
+        mechanism = cls.from_module(load_source(equations_source("field_mechanism", name, arguments, cache), name))
+        # the definition as data (text), for mechanism files and plan files
+        return dataclasses.replace(mechanism, definition=mechanism_file.recorded(name, arguments))
+
+    @classmethod
+    def from_definition(cls, definition, *, where=None, cache: bool = True) -> "Mechanism":
+        """The mechanism of a definition as data — a mechanism file's content
+        (:mod:`nonholo.model.mechanism_file`), a plan file's ``mechanism_definition``, a
+        :attr:`definition` — checked as a mechanism file is, then built by
+        :meth:`from_equations` (and its cache).
+
+        Parameters
+        ----------
+        definition : mapping
+            The definition.
+        where : callable or str, optional
+            ``where(field)``, the place of a field for messages, or a label (``"definition"``
+            by default: ``definition.rates.x``).
+        cache : bool
+            As for :meth:`from_equations`.
+
+        Returns
+        -------
+        Mechanism
+            The mechanism, with its :attr:`definition`, :attr:`drawing` and :attr:`bounds`.
+
+        Raises
+        ------
+        ValueError
+            Naming the field (``where(field)``) refused.
+        """
+        if where is None or isinstance(where, str):
+            where = mechanism_file.labelled(where or "definition")
+        definition = mechanism_file.check(definition, where)
+        try:
+            mechanism = cls.from_equations(**mechanism_file.arguments(definition), cache=cache)
+        except ValueError as exc:
+            raise ValueError(mechanism_file.located(str(exc), definition, where)) from None
+        return dataclasses.replace(mechanism, definition=definition,
+                                   drawing=mechanism_file.drawing_of(definition, where),
+                                   bounds=mechanism_file.bounds_of(definition))
+
+    @classmethod
+    def from_file(cls, path, cache: bool = True) -> "Mechanism":
+        """The mechanism of a mechanism file (TOML, :mod:`nonholo.model.mechanism_file`):
+        its equations as text, read as data — nothing in it is run.
+
+        Parameters
+        ----------
+        path : str or os.PathLike
+            The file (at most :data:`nonholo.model.mechanism_file.MAX_BYTES`).
+        cache : bool
+            As for :meth:`from_equations`: a later run neither derives nor generates.
+
+        Returns
+        -------
+        Mechanism
+            The mechanism, with its :attr:`definition`, :attr:`drawing` and :attr:`bounds`.
+
+        Raises
+        ------
+        ValueError
+            Naming the file, the line and the field (``trailer.toml, line 12, rates.theta:
+            ...``); naming the file for a path that is not a regular file or is too large.
+        """
+        definition, where = mechanism_file.read_file(path)
+        return cls.from_definition(definition, where=where, cache=cache)
+
+    def to_file(self, path) -> Path:
+        """Write the mechanism's :attr:`definition` as a mechanism file (TOML), which
+        :meth:`from_file` reads back to the same definition; atomically.
+
+        Parameters
+        ----------
+        path : str or os.PathLike
+            The file.
+
+        Returns
+        -------
+        pathlib.Path
+            ``path``.
+
+        Raises
+        ------
+        ValueError
+            For a mechanism without a definition as data (one generated into the package,
+            built by :meth:`from_symbolic`, :meth:`from_constraints` or :meth:`from_module`),
+            or a ``path`` that is not a regular file.
+        OSError
+            If writing fails.
+        """
+        if self.definition is None:
+            raise ValueError(f"mechanism {self.name!r} has no definition as data: only a mechanism built by "
+                             "Mechanism.from_equations (with equations a mechanism file can hold) or read by "
+                             "Mechanism.from_file can be written to a mechanism file")
+        return mechanism_file.write(self.definition, path)
 
     @classmethod
     def from_constraints(cls, name: str, *, coordinates, velocities, constraints, inputs, angles=(),
