@@ -8,7 +8,11 @@ The numeric kinematics come from generated modules (``nonholo.generated``, writt
 - ``nonholo.simulate(R0, controls, T, ...)`` → :class:`~nonholo.motion.simulation.Trajectory`
   (:mod:`nonholo.motion.simulation`);
 - ``nonholo.retime(result, leg_speed, T=None)``: a plan re-timed so that no leg moves
-  faster than ``leg_speed`` (:mod:`nonholo.planning.retime`);
+  faster than ``leg_speed``, or no input leaves its bounds (``input_bounds=``)
+  (:mod:`nonholo.planning.retime`);
+- ``nonholo.constraints``: the constraint objects ``plan(..., constraints=[...])`` takes —
+  ``InputBounds``, ``StateBounds``, ``Clearance``, ``LegStroke``, ``LegSpeed`` — and
+  ``of_mechanism(m)``, a mechanism's own bounds (:mod:`nonholo.constraints`);
 - :class:`~nonholo.model.mechanism.Mechanism`: a mechanism's numeric kinematics
   (``Mechanism.from_equations`` builds one from its velocity field, ``from_constraints``
   from Pfaffian constraints, ``from_symbolic`` from a derivation); ``nonholo.mechanism_named``
@@ -24,6 +28,7 @@ from .planning.api import plan  # noqa: E402
 from .planning.retime import retime  # noqa: E402
 
 from .planning.problem import Problem  # noqa: E402
+from . import constraints  # noqa: E402
 
 __all__ = ["plan", "simulate", "retime", "PlanResult", "Mechanism", "mechanism_named", "Problem"]
 

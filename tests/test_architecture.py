@@ -151,6 +151,8 @@ def test_layer_of_every_module():
     assert layer("nonholo.numerics.jit") == "numerics"
     assert layer("nonholo.planning.core") == "planning"
     assert layer("nonholo") == "nonholo"
+    assert layer("nonholo.constraints") == "nonholo"          # a top module: the public face
+    assert layer("nonholo.model") == "model"
     assert LAYERS.index("numerics") < LAYERS.index("planning") < LAYERS.index("cli")
 
 
@@ -166,8 +168,9 @@ MAX_TOP_MODULES = 12
 
 
 def layer(module: str) -> str:
+    """The subpackage of ``module``; ``nonholo`` for the package and its top modules."""
     parts = module.split(".")
-    return parts[1] if len(parts) > 1 else "nonholo"
+    return parts[1] if len(parts) > 2 or (len(parts) == 2 and is_package(module)) else "nonholo"
 
 
 def test_every_module_is_parsed():

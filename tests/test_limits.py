@@ -125,7 +125,7 @@ def test_cli_leg_length_and_its_figure(tmp_path, capsys):
     res = PlanResult.load(out)
     assert res.options["leg_length"] == [1.2, 2.0] and png.stat().st_size > 0
     assert main(args + ["--leg-length", "2.0", "1.2"]) == 2
-    assert "leg_length" in capsys.readouterr().err
+    assert "--leg-length" in capsys.readouterr().err
 
 
 def test_a_plan_file_cannot_claim_limits_its_motion_breaks():

@@ -30,7 +30,7 @@ def nothing_left(out):
     ({"T": -1}, "options.T", "T must be a positive finite time"),
     ({"harmonics": 0}, "options.harmonics", "harmonics must be an integer >= 1, got 0"),
     ({"method": "xyz"}, "options.method", "unknown method 'xyz'"),
-    ({"T": None}, "options.T", "needs a leg_speed"),
+    ({"T": None, "leg_speed": 0.5}, "options.leg_speed", "mechanism 'car' has no legs"),
     ({"tol": 0}, "options.tol", "tol must be a positive number"),
     ({"steps": 3, "harmonics": 2}, "options.harmonics", "more than the integrator's steps = 3"),
     ({"route": "sideways"}, "options.route", "unknown route"),

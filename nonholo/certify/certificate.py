@@ -35,6 +35,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..controls import stages
+from ..model.bounds import input_names
+from ..model.limits import Limits
 from ..motion.playback import replay
 from ..spaces.groups import NO_COORDINATES
 
@@ -311,7 +313,8 @@ def no_basis(steps: int) -> tuple:
 
 def measure(R0, Rd, T: float, mechanism, par, steps: int, tol: float, delta_min: float,
             sign: float = 1.0, G: float | None = None, R_half=None,
-            max_steps: int | None = None, leg_limits=None, q0=None, qd=None) -> Certificate:
+            max_steps: int | None = None, leg_limits=None, q0=None, qd=None, limits=None,
+            input_bounds=None) -> Certificate:
     """The certificate of physical controls (see the module): replays on ``steps/2``·2ᵏ and
     ``steps``·2ᵏ CF4 steps, ``k`` the least with an error estimate below ``ERROR_FRACTION ·
     tol``, or ``k = 0`` when the sensitivity already rules the plan out (infinite,
@@ -347,6 +350,13 @@ def measure(R0, Rd, T: float, mechanism, par, steps: int, tol: float, delta_min:
         must keep.
     q0, qd : array_like, optional
         The start's and the goal's coordinates.
+    limits : Limits, optional
+        Further clearances every node of the replay must keep, each to within its slack
+        (:class:`~nonholo.model.limits.Limits`: the legs' stroke, the coordinates' bounds).
+    input_bounds : InputBounds, optional
+        Bounds (:class:`~nonholo.model.bounds.InputBounds`, checked) the replayed inputs
+        must keep at every stage point, to :data:`~nonholo.model.bounds.BOUND_RTOL`
+        relative: for controls played as they are, not for a path still to be re-timed.
 
     Returns
     -------
@@ -354,6 +364,7 @@ def measure(R0, Rd, T: float, mechanism, par, steps: int, tol: float, delta_min:
         The certificate, ``passed`` or with the ``reason`` why not.
     """
     singular = mechanism.singular
+    limits = Limits.of(leg_limits, limits)
     q0 = np.ascontiguousarray(NO_COORDINATES if q0 is None else q0, dtype=float)
     qd = NO_COORDINATES if qd is None else qd
     cap = MAX_REPLAY_STEPS if max_steps is None else max_steps
@@ -415,9 +426,13 @@ def measure(R0, Rd, T: float, mechanism, par, steps: int, tol: float, delta_min:
                   f"(the most certified: {cap}); more than {ERROR_FRACTION:g}·tol")
     elif not singular.clear(dmin, delta_min):
         reason = (f"the physical replay comes within {dmin:.4g} of Δ = 0 (delta_min = {delta_min:g})")
-    elif leg_limits is not None and leg_limits.least_clearance(mechanism, R) < 0.0:
-        reason = (f"the physical replay leaves the legs' stroke: "
-                  f"{leg_limits.describe(mechanism, R, np.arange(M + 1) * (T / M))}")
+    elif limits is not None and limits.broken(mechanism, R, q) is not None:
+        reason = (f"the physical replay leaves {limits.broken(mechanism, R, q).kept_text}: "
+                  f"{limits.describe(mechanism, R, np.arange(M + 1) * (T / M), q)}")
+    elif input_bounds is not None and input_bounds.excess(U.reshape(-1, U.shape[-1])) is not None:
+        steps_t = (np.arange(M)[:, None] + np.array([0.0, 0.5, 1.0])[None, :]).ravel() * (T / M)
+        reason = (f"the physical replay's inputs leave their bounds: "
+                  f"{input_bounds.excess(U.reshape(-1, U.shape[-1]), steps_t, input_names(mechanism))}")
     elif err + bound > tol:
         reason = (f"the physical replay ({M} steps) ends {space.amount(err, '.3g')} from the goal "
                   f"(+ error bound {bound:.2g} > tol = {tol:g})")

@@ -9,7 +9,7 @@ samples, ``terminal_error`` (within the plan's own ``tol``), ``min_delta``, ``er
 (at least the replay's Richardson estimate) — and ``success``, judged from the replay
 itself: the certified replay ends within ``tol − error_bound`` of ``Rd``, with a
 sensitivity the certificate accepts, clear of ``Δ = 0``, within the legs' stroke and
-speed (a ``nonholo.plan/1`` success, which records no certificate, is certified anew). The
+speed, the coordinates' and the inputs' bounds (a ``nonholo.plan/1`` success, which records no certificate, is certified anew). The
 result is taken by its attributes (no import of :mod:`nonholo.io`); a failed check raises
 ``ValueError`` naming the field."""
 from __future__ import annotations
@@ -20,10 +20,11 @@ from ..controls import stages
 from ..controls.parametrisations import Fourier, PiecewiseConstant
 from ..controls.stitched import Stitched
 from ..model import catalog
-from ..model.limits import LegLimits
+from ..model.bounds import InputBounds, StateBounds, input_names
+from ..model.limits import LegLimits, Limits
 from ..motion import playback
 from ..motion.frame_controls import FrameControls
-from ..motion.retimed import Retimed
+from ..motion.retimed import InputRetimed, Retimed
 from ..motion.time_change import RestToRest, is_time_change, planned, played_time
 from ..numerics import kernels
 from ..spaces.groups import NO_COORDINATES
@@ -183,6 +184,9 @@ class PlanChecks:
         if isinstance(par, Retimed):
             self.retimed(par, mech)
             par = par.base
+        elif isinstance(par, InputRetimed):
+            self.input_retimed(par)
+            par = par.base
         if r.route not in ROUTES:
             fail("route", f"must be one of {', '.join(map(repr, ROUTES))}, got {short(r.route)}")
         stitched = isinstance(par, Stitched)
@@ -243,6 +247,22 @@ class PlanChecks:
         if r.options.get("leg_speed") != par.leg_speed:
             fail("options", f"record leg_speed = {short(r.options.get('leg_speed'))}, the controls "
                              f"are re-timed for {par.leg_speed!r}")
+
+    def input_retimed(self, par: InputRetimed) -> None:
+        """Controls re-timed under input bounds: of a certified success's path, under the
+        ``input_bounds`` the options record.
+
+        Parameters
+        ----------
+        par : InputRetimed
+            The controls.
+        """
+        r = self.r
+        if r.replay_steps is None:
+            fail("controls", "are re-timed, which only the path of a certified plan can be")
+        if r.options.get("input_bounds") != par.bounds.record():
+            fail("options", f"record input_bounds = {short(r.options.get('input_bounds'))}, the controls "
+                             f"are re-timed for {par.bounds.record()!r}")
 
     def piece(self, par, mech, where: str, steps: int | None, R0, record: bool = False) -> None:
         """One piece of physical controls against the plan's ``method``, ``strategy``,
@@ -445,7 +465,7 @@ class PlanChecks:
                                      f"estimate ({mech.space.amount(est, '.3g')} with {M} steps)")
             #: the certified replay itself: its nodes, Richardson estimate and distance from
             #: the goal (as the certificate measures it), for the success check
-            self.replayed, self.replay_T = R_M, T
+            self.replayed, self.replayed_q, self.replay_T = R_M, Q_M, T
             self.estimate = est
             _, parts = mech.space.error(R_M[-1], Q_M[-1], r.Rd, r.qd if mech.space.k else NO_COORDINATES)
             self.end_error = float(mech.space.norm(parts))
@@ -508,7 +528,8 @@ class PlanChecks:
         steps) ends within ``tol - error_bound`` of ``Rd`` (``tol``: the plan's own option),
         its ``error_bound`` covers the Richardson estimate and the sensitivity's share, the
         sensitivity is one the certificate accepts for ``tol``, the replay keeps
-        ``delta_min`` and the stroke, and the samples keep ``leg_speed``. A file of format
+        ``delta_min``, the stroke and the ``state_bounds`` (to their slack), and the samples
+        keep ``leg_speed`` and the ``input_bounds`` (:meth:`inputs_kept`). A file of format
         ``nonholo.plan/1`` (no certificate recorded) is certified here as the planner
         certifies a plan (:func:`nonholo.certify.certificate.measure`): the same standard.
 
@@ -526,8 +547,10 @@ class PlanChecks:
         dmin = float(r.options["delta_min"])
         stroke = r.options.get("leg_length")
         limits = None if stroke is None else LegLimits.from_argument(stroke, mech)
+        state = r.options.get("state_bounds")
+        box = None if state is None else StateBounds.from_record(state, mech, "options.state_bounds")
         if self.legacy:
-            self.legacy_certificate(mech, tol, dmin, limits)
+            self.legacy_certificate(mech, tol, dmin, Limits.of(limits, box))
         elif r.replay_steps is None:
             fail("success", "is true, but the plan has no certificate (replay_steps, error_bound)")
         else:
@@ -555,13 +578,46 @@ class PlanChecks:
             if limits is not None and limits.least_clearance(mech, self.replayed) < 0.0:
                 fail("success", f"is true, but the replayed motion leaves the legs' stroke: "
                                  f"{limits.describe(mech, self.replayed, np.linspace(0.0, self.replay_T, len(self.replayed)))}")
+            if box is not None and box.least_clearance(mech, self.replayed, self.replayed_q) < -box.slack:
+                times = np.linspace(0.0, self.replay_T, len(self.replayed))
+                fail("success", f"is true, but the replayed motion leaves the coordinates' bounds: "
+                                 f"{box.describe(mech, self.replayed, times, self.replayed_q)}")
         if limits is not None and limits.least_clearance(mech, r.R) < -VALUE_RTOL * limits.hi:
             fail("success", f"is true, but {limits.describe(mech, r.R, r.t)}")
+        if box is not None and box.least_clearance(mech, r.R, r.q) < -box.slack:
+            fail("success", f"is true, but {box.describe(mech, r.R, r.t, r.q)}")
+        recorded = r.options.get("input_bounds")
+        if recorded is not None:
+            self.inputs_kept(mech, InputBounds.from_record(recorded, mech, "options.input_bounds"))
         speed = r.options.get("leg_speed")
         if speed is not None:
             fastest = float(np.max(np.abs(mech.leg_speeds(r.R, r.u))))
             if fastest > speed * (1.0 + SPEED_RTOL):
                 fail("success", f"is true, but a leg moves at {fastest:.6g} > leg_speed = {speed:g}")
+
+    def inputs_kept(self, mech, bounds) -> None:
+        """A success's inputs within the bounds its options record, to
+        :data:`~nonholo.model.bounds.BOUND_RTOL`: the samples ``u``, and the controls at the
+        ends and middles of the certified replay's steps.
+
+        Parameters
+        ----------
+        mech : Mechanism
+            The plan's mechanism.
+        bounds : InputBounds
+            The bounds, checked.
+        """
+        r = self.r
+        names = input_names(mech)
+        out = bounds.excess(r.u, r.t, names)
+        if out is None:
+            M = r.replay_steps or 2 * r.steps
+            t = (np.arange(M)[:, None] + np.array([0.0, 0.5, 1.0])[None, :]).ravel() * (r.T / M)
+            t[-1] = r.T
+            u = np.asarray(r.parametrisation(t), dtype=float).reshape(t.size, mech.n_inputs)
+            out = bounds.excess(u, t, names)
+        if out is not None:
+            fail("success", f"is true, but {out}")
 
     def legacy_certificate(self, mech, tol: float, dmin: float, limits) -> None:
         """A success read from a file of format ``nonholo.plan/1``: its physical controls
@@ -576,8 +632,8 @@ class PlanChecks:
             The plan's ``tol``.
         dmin : float
             Its ``delta_min``.
-        limits : LegLimits or None
-            Its stroke limits.
+        limits : Limits or None
+            Its stroke limits and coordinates' bounds.
         """
         r = self.r
         par = r.parametrisation

@@ -8,7 +8,9 @@ Orientations are given as RPY angles ``φ ϑ ψ`` in radians, ``RPY(φ, ϑ, ψ) 
 R(Z, φ) R(Y, ϑ) R(X, ψ)``. A mechanism whose state goes beyond SO(3) takes its coordinates
 (``nonholo plan --mechanism car --from 0 0 0 0 --to 0 1 0 0``: ``x y θ φ``), after the RPY
 angles if it has an orientation too (``rolling_ball``: ``φ ϑ ψ p1 p2``); ``nonholo
-mechanisms`` lists each one's state. The strategy is ``robust``
+mechanisms`` lists each one's state; ``--mechanism FILE.toml`` plans a mechanism of one's own
+from its file (:mod:`nonholo.model.mechanism_file`; a bad file exits with status 2 naming
+the file, the line and the field). The strategy is ``robust``
 (:mod:`nonholo.planning.strategy_robust`) unless ``--strategy paper`` asks for the
 appendix's algorithm as published (:mod:`nonholo.planning.strategy_paper`). One line is
 printed per accepted iteration (iteration, error ``|l_T|``, the step ``γh``, least ``|Δ|``
@@ -23,6 +25,13 @@ rest is discarded and the files are still written.
 
 ``--csv`` writes a successful plan's motion for an actuator controller
 (:mod:`nonholo.io.csv_export`), sampled at ``--csv-rate`` Hz.
+
+``--T min`` asks for the least time along the planned path: under ``--leg-speed`` for a
+platform, under the vehicle's own bounds for a mechanism that has them (``car``: ``|v| ≤ 1``,
+``|φ̇| ≤ 1``, ``|φ| ≤ 0.6``; ``unicycle``: ``|v|, |ω| ≤ 0.5``; ``nonholo plan --mechanism car
+--from 0 0 0 0 --to 0 1 0 0 --T min``); the summary prints the time found. Errors name the
+flags (``--T``, ``--leg-speed``, ``--from`` …), not the Python arguments behind them
+(:mod:`nonholo.cli.flag_text`).
 
 Exit status: 0 on success, 1 if the planner failed, 2 on bad input, 3 if ``--out``,
 ``--plot`` or ``--csv`` could not be written (whatever the planner's outcome; one line on stderr names
@@ -40,6 +49,7 @@ from ..io import csv_export as export
 from ..io import safe_write
 from ..model import catalog
 from ..planning import api as planner
+from .flag_text import in_flags
 from .help_text import plain
 
 #: exit status of ``nonholo plan`` (see the module docstring)
@@ -68,7 +78,8 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     p.add_argument("--to", dest="goal", nargs="+", type=float, required=True, metavar="X",
                    help="the goal, as --from")
     p.add_argument("--T", type=_horizon, default=1.0,
-                   help="time horizon in s (default 1), or 'min' for the least time under --leg-speed")
+                   help="time horizon in s (default 1), or 'min' for the least time under --leg-speed or, "
+                        "for a vehicle with bounds (car, unicycle), under its bounds")
     p.add_argument("--method", choices=planner.METHODS, default="parametric",
                    help="Fourier controls (parametric) or piecewise constant (nonparametric)")
     p.add_argument("--harmonics", type=int, default=2, help="Fourier harmonics K (default 2)")
@@ -80,7 +91,8 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
                    help="let --strategy be an import path (module:Class), which imports that module and runs "
                         "its code")
     p.add_argument("--mechanism", default="platform",
-                   help=f"mechanism ({', '.join(catalog.names())}; see `nonholo mechanisms`)")
+                   help=f"mechanism: a name ({', '.join(catalog.names())}; see `nonholo mechanisms`) or a "
+                        "mechanism file (.toml)")
     p.add_argument("--gamma", type=float, default=None,
                    help="decay rate γ of the θ-flow (default: the strategy's, 1 robust, 0.5 paper)")
     p.add_argument("--tol", type=float, default=1e-10, help="stop when |l_T| <= tol (rad)")
@@ -129,7 +141,7 @@ def _fmt(x, spec: str) -> str:
 
 def _error_text(res, spec: str) -> str:
     """The terminal error in words with its units: ``|l_T|`` in rad, or by part beyond SO(3)."""
-    space = catalog.get(res.mechanism).space
+    space = res.kinematics.space
     if res.errors is None:
         return f"|l_T| = {space.amount(res.terminal_error, spec)}"
     return ", ".join(f"{part} {space.amount(value, spec, part)}" for part, value in res.errors.items())
@@ -200,8 +212,8 @@ def state_of(mechanism, values, flag: str):
 
     Parameters
     ----------
-    mechanism : str
-        The mechanism's name in the catalog.
+    mechanism : str or Mechanism
+        The mechanism, or its name in the catalog.
     values : sequence of float
         The numbers given to ``flag``.
     flag : str
@@ -248,19 +260,20 @@ def run(args) -> int:
         _error(why)
         return EXIT_BAD_INPUT
     try:
-        R0 = state_of(args.mechanism, args.start, "--from")
-        Rd = state_of(args.mechanism, args.goal, "--to")
+        mechanism = catalog.resolve(args.mechanism)
+        R0 = state_of(mechanism, args.start, "--from")
+        Rd = state_of(mechanism, args.goal, "--to")
         res = planner.plan(
             R0, Rd, T=args.T, method=args.method, harmonics=args.harmonics, grid=args.grid,
-            strategy=args.strategy, mechanism=args.mechanism, gamma=args.gamma, tol=args.tol,
+            strategy=args.strategy, mechanism=mechanism, gamma=args.gamma, tol=args.tol,
             max_iter=args.max_iter, delta_min=args.delta_min, steps=args.steps, route=args.route,
             leg_length=args.leg_length, leg_speed=args.leg_speed,
             objective=None if args.objective == "none" else args.objective,
             callback=None if args.quiet else _print_record, allow_imports=args.allow_imports)
     except ValueError as exc:
-        _error(str(exc))
+        _error(in_flags(str(exc)))
         return EXIT_BAD_INPUT
-    _say(f"{'success' if res.success else 'FAILED'}: {res.reason}")
+    _say(f"{'success' if res.success else 'FAILED'}: {in_flags(res.reason)}")
     _say(f"terminal error {_error_text(res, '.3e')}, min |Δ| = "
          f"{_fmt(res.min_delta, '.4f')}, {res.iterations} iterations, {res.seconds * 1e3:.1f} ms "
          f"({res.mechanism}, {res.method}/{res.strategy}, {res.route} route, T = {res.T:g} s, "

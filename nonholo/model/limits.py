@@ -1,4 +1,5 @@
-"""Stroke limits of a platform's legs: ``lo ≤ l_i(R) ≤ hi`` for every leg ``i``.
+"""Stroke limits of a platform's legs, ``lo ≤ l_i(R) ≤ hi`` for every leg ``i``, and the
+clearances a motion keeps at every node (:class:`Limits`: the stroke, bounds on coordinates).
 
 A motion is kept inside the limits the way it is kept clear of ``Δ = 0``: a trajectory
 is admissible only if every node's *clearances* ``c = l_i − lo`` and ``c = hi − l_i``
@@ -6,6 +7,13 @@ are non-negative (:meth:`LegLimits.least_clearance`), the certified replay check
 on its finer grid, and the strategy ``"robust"`` adds a null-space barrier on the
 clearances below :data:`BARRIER_CLEARANCE` (:meth:`LegLimits.clearance_terms`). Lengths
 are in the units of the mechanism's geometry (:meth:`nonholo.model.mechanism.Mechanism.leg_lengths`).
+
+Any box of clearances ``c(x) ≥ 0`` with gradients plugs into the same machinery: it gives
+``clearances``, ``least_clearance``, ``describe``, ``clearance_terms`` (all taking the
+nodes' orientations ``R`` and coordinates ``q``) and a ``slack``, how far a replayed node may
+pass it. :class:`Limits` holds those a problem keeps — :class:`LegLimits` and
+:class:`~nonholo.model.bounds.StateBounds` — and is what the planner, the barrier and the
+certificate read.
 """
 from __future__ import annotations
 
@@ -83,7 +91,12 @@ class LegLimits:
         return (self.lo, self.hi)
 
     # -- clearances --------------------------------------------------------------------------
-    def clearances(self, mechanism, R) -> np.ndarray:
+    #: how far a replayed node may pass the stroke and still keep it (none)
+    slack = 0.0
+    #: what a motion that passes these limits leaves, for messages
+    kept_text = "the legs' stroke"
+
+    def clearances(self, mechanism, R, q=None) -> np.ndarray:
         """``(l_i − lo, hi − l_i)`` for every leg.
 
         Parameters
@@ -92,6 +105,8 @@ class LegLimits:
             The platform (:meth:`~nonholo.model.mechanism.Mechanism.leg_lengths`).
         R : array_like
             A stack of orientations ``(n, 3, 3)`` (or one).
+        q : array_like, optional
+            Unused (a platform has no coordinates).
 
         Returns
         -------
@@ -105,7 +120,7 @@ class LegLimits:
         out[:, 1::2] = self.hi - lengths
         return out
 
-    def least_clearance(self, mechanism, R) -> float:
+    def least_clearance(self, mechanism, R, q=None) -> float:
         """The least clearance over a stack of orientations.
 
         Parameters
@@ -114,6 +129,8 @@ class LegLimits:
             The platform.
         R : array_like
             Orientations ``(n, 3, 3)``.
+        q : array_like, optional
+            Unused.
 
         Returns
         -------
@@ -155,7 +172,7 @@ class LegLimits:
         return (f"{what} is outside the legs' stroke: leg {leg} is {length:.4g} long, "
                 f"{-c:.3g} {side} leg_length's {end} end {limit:g}")
 
-    def describe(self, mechanism, R, times=None) -> str:
+    def describe(self, mechanism, R, times=None, q=None) -> str:
         """Where a stack of orientations leaves the limits the most (for a failure's reason).
 
         Parameters
@@ -166,6 +183,8 @@ class LegLimits:
             Orientations ``(n, 3, 3)``.
         times : array_like, optional
             Their times (s), to say when.
+        q : array_like, optional
+            Unused.
 
         Returns
         -------
@@ -177,7 +196,7 @@ class LegLimits:
         return (f"leg {leg} passes its {('lower', 'upper')[bound]} stroke limit by {-c:.3g}{when} "
                 f"(leg_length = ({self.lo:g}, {self.hi:g}))")
 
-    def clearance_terms(self, mechanism, R, threshold: float = BARRIER_CLEARANCE):
+    def clearance_terms(self, mechanism, R, threshold: float = BARRIER_CLEARANCE, q=None):
         """The active terms of a log barrier ``Σ −log(c/c₀)`` on the clearances of nodes.
 
         Parameters
@@ -188,6 +207,8 @@ class LegLimits:
             The nodes' orientations ``(n, 3, 3)``.
         threshold : float
             Only clearances below it are active.
+        q : array_like, optional
+            Unused.
 
         Returns
         -------
@@ -203,3 +224,148 @@ class LegLimits:
         rows = G[np.arange(nodes.size), cols // 2]
         rows[cols % 2 == 1] *= -1.0                                        # hi − l_i decreases with l_i
         return nodes, c[nodes, cols], rows
+
+
+class Limits:
+    """The clearances a motion keeps at every node: several boxes of clearances (a
+    platform's :class:`LegLimits`, :class:`~nonholo.model.bounds.StateBounds`) as one.
+
+    The planner's trajectories are admissible where :meth:`least_clearance` ``≥ 0`` (every
+    node inside every box); a replay keeps them where :meth:`kept` (each box within its
+    ``slack``).
+
+    Parameters
+    ----------
+    parts : sequence
+        The boxes (``None`` entries are left out, the parts of a :class:`Limits` taken).
+    """
+
+    def __init__(self, parts):
+        flat = []
+        for p in parts:
+            if isinstance(p, Limits):
+                flat.extend(p.parts)
+            elif p is not None:
+                flat.append(p)
+        self.parts = tuple(flat)
+
+    @classmethod
+    def of(cls, *parts) -> "Limits | None":
+        """The limits of some boxes, or ``None`` without any.
+
+        Parameters
+        ----------
+        *parts
+            Boxes of clearances, or ``None``.
+
+        Returns
+        -------
+        Limits or None
+            ``None`` when every part is ``None``.
+        """
+        limits = cls(parts)
+        return limits if limits.parts else None
+
+    def least_clearance(self, mechanism, R, q=None) -> float:
+        """The least clearance of any box over the nodes.
+
+        Parameters
+        ----------
+        mechanism : Mechanism
+            The mechanism.
+        R, q : array_like
+            The nodes' orientations and coordinates.
+
+        Returns
+        -------
+        float
+            Negative where a node is outside a box.
+        """
+        return min(p.least_clearance(mechanism, R, q) for p in self.parts)
+
+    def kept(self, mechanism, R, q=None) -> bool:
+        """Whether every node keeps every box to within its ``slack``.
+
+        Parameters
+        ----------
+        mechanism : Mechanism
+            The mechanism.
+        R, q : array_like
+            The nodes' orientations and coordinates.
+
+        Returns
+        -------
+        bool
+            ``True`` where no box is passed by more than its slack.
+        """
+        return all(p.least_clearance(mechanism, R, q) >= -p.slack for p in self.parts)
+
+    def broken(self, mechanism, R, q=None):
+        """The first box some node passes beyond its ``slack``.
+
+        Parameters
+        ----------
+        mechanism : Mechanism
+            The mechanism.
+        R, q : array_like
+            The nodes' orientations and coordinates.
+
+        Returns
+        -------
+        object or None
+            The box, ``None`` if every one is kept.
+        """
+        for p in self.parts:
+            if p.least_clearance(mechanism, R, q) < -p.slack:
+                return p
+        return None
+
+    def describe(self, mechanism, R, times=None, q=None) -> str:
+        """Where the nodes pass a box the most (the first box passed beyond its slack,
+        else the one with the least clearance).
+
+        Parameters
+        ----------
+        mechanism : Mechanism
+            The mechanism.
+        R : array_like
+            The nodes' orientations.
+        times : array_like, optional
+            Their times (s).
+        q : array_like, optional
+            The nodes' coordinates.
+
+        Returns
+        -------
+        str
+            What passes which limit and by how much.
+        """
+        least = [(p.least_clearance(mechanism, R, q), p) for p in self.parts]
+        broken = [p for c, p in least if c < -p.slack]
+        part = broken[0] if broken else min(least, key=lambda cp: cp[0])[1]
+        return part.describe(mechanism, R, times, q)
+
+    def clearance_terms(self, mechanism, R, threshold: float = BARRIER_CLEARANCE, q=None):
+        """The active barrier terms of every box (:meth:`LegLimits.clearance_terms`).
+
+        Parameters
+        ----------
+        mechanism : Mechanism
+            The mechanism.
+        R : array_like
+            The nodes' orientations.
+        threshold : float
+            Only clearances below it are active.
+        q : array_like, optional
+            The nodes' coordinates.
+
+        Returns
+        -------
+        tuple of numpy.ndarray or None
+            ``(nodes, c, ∇c)`` of every active clearance, or ``None``.
+        """
+        terms = [t for t in (p.clearance_terms(mechanism, R, threshold, q=q) for p in self.parts)
+                 if t is not None]
+        if not terms:
+            return None
+        return tuple(np.concatenate(parts) for parts in zip(*terms))

@@ -303,7 +303,7 @@ def _aligned_indices(steps: int, nodes: int):
 def from_dict(d: dict, mechanism=None):
     """Inverse of ``to_dict`` for a parametrisation (:func:`nonholo.controls.parametrisations.from_dict`), a
     :class:`FrameControls`, a :class:`~nonholo.controls.stitched.Stitched` of them, or any of those
-    :class:`~nonholo.motion.retimed.Retimed` or
+    :class:`~nonholo.motion.retimed.Retimed`, :class:`~nonholo.motion.retimed.InputRetimed` or
     :class:`~nonholo.motion.time_change.RestToRest`.
 
     Parameters
@@ -335,6 +335,8 @@ def from_dict(d: dict, mechanism=None):
     named = d.get("mechanism") if mechanism is None else mechanism
     if d.get("kind") == retimed.Retimed.kind:
         return retimed.from_dict(d, rebuilt, named)
+    if d.get("kind") == retimed.InputRetimed.kind:
+        return retimed.input_from_dict(d, rebuilt)
     if d.get("kind") == time_change.RestToRest.kind:
         return time_change.from_dict(d, rebuilt)
     if d.get("kind") == stitched.Stitched.kind:

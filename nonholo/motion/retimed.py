@@ -1,4 +1,5 @@
-"""Controls re-timed so that no leg moves faster than a bound: the fastest re-timing of a path.
+"""Controls re-timed so that no leg moves faster than a bound, or no input leaves its bounds:
+the fastest re-timing of a path.
 
 The mechanisms are driftless (``dR/dt = [L(R) u] R``): for a planned control ``u(τ)`` on
 ``[0, T]`` and an increasing map ``τ(t)`` from ``[0, T̃]`` onto ``[0, T]``, the control
@@ -42,6 +43,17 @@ So the ``dτ/dt = 1/(cρ(τ(t)))`` that scales ``u`` is the derivative of the ve
 ``u`` is read: the re-timed control moves along the planned path to round-off, whatever
 the spline's own error, which only moves the fastest leg's speed off ``v`` between nodes
 (by the spline's interpolation error, ``O(h⁶)`` in the node spacing ``h``).
+
+**Bounds on the inputs** (:class:`InputTimeMap`, :class:`InputRetimed`). The inputs scale
+the same way, ``ũ_i(t) = u_i(τ) dτ/dt``, so a box ``low_i ≤ ũ_i ≤ high_i`` with
+``low_i < 0 < high_i`` (:class:`~nonholo.model.bounds.InputBounds`) is met by the same
+construction with the level ``ρ(τ) = max_i max(u_i(τ)/high_i, u_i(τ)/low_i)`` (the share of
+its bound the most loaded input uses; ``u_i/±inf = 0`` where free): at every instant one
+input is at its bound, the least time along the planned path. No replay is needed (the
+splines go through the inputs themselves), the kinks are the roots of the differences of
+the channels ``S_i/high_i``, ``S_j/low_j`` and of each channel and the floor, and
+:data:`FLOOR` acts as above. A bound that does not hold zero inside is no box a time change
+can meet (it neither turns an input's sign nor lifts it off zero).
 """
 from __future__ import annotations
 
@@ -52,6 +64,7 @@ from scipy.interpolate import PPoly, make_interp_spline
 
 from ..controls import stages
 from ..model import catalog
+from ..model.bounds import InputBounds
 from ..numerics.checks import check_count, check_times, is_number
 from ..spaces import so3
 from . import playback
@@ -162,25 +175,48 @@ class TimeMap:
         self.leg_speed = check_leg_speed(leg_speed, mech)
         if self.leg_speed is None:
             raise ValueError("leg_speed must be a positive finite speed, got None")
+        self._unit = self.leg_speed
         self.nodes = node_count(base, check_count(nodes, "nodes", minimum=2))
         self.T_base = base.T
         self._spline, jumps = _speed_spline(base, R0, mech, self.nodes)
+        self._build(jumps, T)
+
+    #: what the bound keeps, for messages
+    bound_text = "every leg at most {v:g} fast"
+    #: what does not move when nothing is bounded moves, for messages
+    moving = "leg"
+
+    def _level(self, values) -> np.ndarray:
+        """``max_i |s_i|``: the fastest leg's speed at spline values ``(..., k)``."""
+        return np.max(np.abs(values), axis=-1)
+
+    def _kinks(self, floor: float) -> np.ndarray:
+        return _kinks(self._spline, floor)
+
+    def _describe_bound(self) -> str:
+        return self.bound_text.format(v=self._unit)
+
+    def _bound_name(self) -> str:
+        return f"leg_speed = {self._unit:g}"
+
+    def _build(self, jumps, T) -> None:
+        """The map from the spline of the bounded quantities and its jumps (see the module)."""
         x = self._spline.x
-        peak = float(np.max(np.abs(self._spline.c[-1])))      # |s_i| at the nodes
+        peak = float(np.max(self._level(self._spline.c[-1])))     # the level at the nodes
         if not peak > 0.0:
-            raise ValueError("the planned motion never moves a leg: nothing to re-time")
-        #: the floor of the fastest leg's speed ``max_i |S_i|`` in ``ρ`` (see the module)
+            raise ValueError(f"the planned motion never moves a {self.moving}: nothing to re-time")
+        #: the floor of the level ``max_i |S_i|`` in ``ρ`` (see the module)
         self.floor = FLOOR * peak
-        kinks = _kinks(self._spline, self.floor)
+        kinks = self._kinks(self.floor)
         self.edges = np.unique(np.concatenate([x, kinks]))
         self.kinks = np.setdiff1d(kinks, x)
         self.jumps = jumps
         a, b = self.edges[:-1], self.edges[1:]
         mid, half = 0.5 * (a + b), 0.5 * (b - a)
         rho_q = self.ratio(mid[:, None] + half[:, None] * _GAUSS_X[None, :])
-        least = float(np.min(np.abs(self._spline(self.edges[:-1])).max(axis=-1))) / self.leg_speed
-        if not least > STANDSTILL * peak / self.leg_speed or not np.min(rho_q) > 0.0:
-            raise ValueError("the planned motion stands still somewhere (every leg at rest): "
+        least = float(np.min(self._level(self._spline(self.edges[:-1])))) / self._unit
+        if not least > STANDSTILL * peak / self._unit or not np.min(rho_q) > 0.0:
+            raise ValueError(f"the planned motion stands still somewhere (every {self.moving} at rest): "
                              "its re-timing under a speed bound is not defined there")
         pieces = half * (rho_q @ _GAUSS_W)
         self._cumulative = np.concatenate([[0.0], np.cumsum(pieces)])
@@ -191,12 +227,11 @@ class TimeMap:
             T = check_horizon(T)
             if T < self.minimum_time * (1.0 - 1e-12):
                 raise ValueError(f"T = {T:.6g} s is too short: the path needs at least "
-                                 f"{self.minimum_time:.6g} s with every leg at most "
-                                 f"{self.leg_speed:g} fast")
+                                 f"{self.minimum_time:.6g} s with {self._describe_bound()}")
             self.scale = max(T / self.minimum_time, 1.0)
         self.T = self.minimum_time * self.scale if T is None else T
         if not self.T >= MIN_TIME:
-            raise ValueError(f"leg_speed = {self.leg_speed:g} re-times the motion in T = {self.T:.3g} s, less "
+            raise ValueError(f"{self._bound_name()} re-times the motion in T = {self.T:.3g} s, less "
                              f"than {MIN_TIME:g} s: its inputs would not be finite (a mistake of units)")
         self._t_edges = self._cumulative * self.scale
         self._t_edges[-1] = self.T
@@ -217,7 +252,7 @@ class TimeMap:
             ``ρ(τ)``, of the shape of ``tau``.
         """
         tau = np.asarray(tau, dtype=float)
-        return np.maximum(np.max(np.abs(self._spline(tau)), axis=-1), self.floor) / self.leg_speed
+        return np.maximum(self._level(self._spline(tau)), self.floor) / self._unit
 
     @property
     def peak_ratio(self) -> float:
@@ -286,6 +321,66 @@ class TimeMap:
         return half * (self.ratio(pts) @ _GAUSS_W)
 
 
+class InputTimeMap(TimeMap):
+    """``t(τ)`` and its inverse for controls played with every input within its bounds (see
+    the module): :class:`TimeMap` with the level ``max_i max(S_i/high_i, S_i/low_i)`` of the
+    inputs' splines ``S_i``.
+
+    Parameters
+    ----------
+    base : Controls or FrameControls
+        The planned physical controls, on ``[0, T_base]``.
+    bounds : InputBounds
+        The bounds, checked (:meth:`~nonholo.model.bounds.InputBounds.check`: one per input,
+        ``low < 0 < high``).
+    T : float, optional
+        The re-timed duration; ``None`` for the least (``minimum_time``).
+    nodes : int
+        Nodes the inputs are splined through, at least.
+
+    Raises
+    ------
+    ValueError
+        If ``bounds`` are not such bounds (or free everywhere), no bounded input ever moves
+        or all stand still somewhere, or ``T`` is below the time needed (saying it).
+    """
+
+    bound_text = "every input within its bounds ({bounds})"
+    moving = "bounded input"
+
+    def __init__(self, base, bounds: InputBounds, T: float | None = None, nodes: int = RETIME_NODES):
+        if not isinstance(bounds, InputBounds):
+            raise ValueError(f"bounds must be InputBounds, got {type(bounds).__name__}")
+        lows, highs = bounds.lows, bounds.highs
+        if len(lows) != base.n_inputs or len(highs) != base.n_inputs:
+            raise ValueError(f"bounds have {len(lows)} entries, the controls {base.n_inputs} inputs")
+        if not (np.all(lows < 0.0) and np.all(highs > 0.0)):
+            raise ValueError(f"bounds must hold 0 inside (low < 0 < high) for a time change to meet them, "
+                             f"got {bounds.text()}")
+        if bounds.free:
+            raise ValueError("bounds are free everywhere: nothing to re-time under")
+        self.bounds = bounds
+        self.leg_speed = None
+        self._unit = 1.0
+        self.nodes = node_count(base, check_count(nodes, "nodes", minimum=2))
+        self.T_base = base.T
+        self._spline, jumps = _input_spline(base, self.nodes)
+        self._build(jumps, T)
+
+    def _level(self, values) -> np.ndarray:
+        """``max_i max(S_i/high_i, S_i/low_i)`` at spline values ``(..., m)``."""
+        return self.bounds.usage(values)
+
+    def _kinks(self, floor: float) -> np.ndarray:
+        return _channel_kinks(self._spline, self.bounds, floor)
+
+    def _describe_bound(self) -> str:
+        return self.bound_text.format(bounds=self.bounds.text())
+
+    def _bound_name(self) -> str:
+        return f"InputBounds {self.bounds.text()}"
+
+
 def _speed_spline(base, R0, mech, nodes: int) -> tuple[PPoly, np.ndarray]:
     """The legs' speeds ``s_i(τ)`` of ``base`` played from ``R0``: splines of degree
     :data:`DEGREE` through their values at ``nodes`` CF4 nodes, broken where the control
@@ -296,10 +391,23 @@ def _speed_spline(base, R0, mech, nodes: int) -> tuple[PPoly, np.ndarray]:
     Rs, done, _, _ = playback.replay(np.asarray(R0, dtype=float), base, T, mech, nodes, sign, U)
     if done < nodes:
         raise ValueError("the planned motion runs into a non-finite angular velocity: not re-timed")
-    tau = np.arange(nodes + 1) * (T / nodes)
-    tau[-1] = T
     right = mech.leg_speeds(Rs[:-1], U[:, 0])          # s_i at the start of each step
     left = mech.leg_speeds(Rs[1:], U[:, 2])            # … and at its end
+    return _broken_spline(U, right, left, T, nodes)
+
+
+def _input_spline(base, nodes: int) -> tuple[PPoly, np.ndarray]:
+    """The inputs ``u_i(τ)`` of ``base``: splines of degree :data:`DEGREE` through their
+    values at ``nodes`` steps, broken where the control jumps, and the jumps' times."""
+    U = np.ascontiguousarray(stages.stage_table(base, nodes))
+    return _broken_spline(U, U[:, 0], U[:, 2], base.T, nodes)
+
+
+def _broken_spline(U, right, left, T: float, nodes: int) -> tuple[PPoly, np.ndarray]:
+    """Splines through values at the nodes (``right``: at the start of each step, ``left``:
+    at its end), broken where the stage table ``U`` jumps, and the jumps' times."""
+    tau = np.arange(nodes + 1) * (T / nodes)
+    tau[-1] = T
     scale = max(float(np.max(np.abs(U))), 1e-300)
     jump = np.flatnonzero(np.max(np.abs(U[1:, 0] - U[:-1, 2]), axis=1) > JUMP_RTOL * scale) + 1
     bounds = np.concatenate([[0], jump, [nodes]])
@@ -343,53 +451,36 @@ def _kinks(spline: PPoly, floor: float = 0.0) -> np.ndarray:
     return np.unique(np.concatenate(roots)) if roots else np.empty(0)
 
 
-class Retimed(TimeChange):
-    """Physical controls re-timed so that every leg moves at most ``leg_speed`` fast:
-    ``ũ(t) = u(τ(t)) dτ/dt`` on ``[0, T]`` (:class:`TimeMap`).
+def _channel_kinks(spline: PPoly, bounds: InputBounds, floor: float = 0.0) -> np.ndarray:
+    """Where two inputs use equal shares of their bounds (roots of ``S_i/b_i − S_j/b_j``
+    for every finite side ``b_i`` of input ``i`` and ``b_j`` of another input ``j``), and
+    where a share meets ``floor`` (roots of ``S_i/b_i − floor`` at which no share is larger)."""
+    channels = [(i, b) for i, (lo, hi) in enumerate(zip(bounds.lows, bounds.highs))
+                for b in (hi, lo) if math.isfinite(b)]
+    roots = []
+    for a, (i, bi) in enumerate(channels):
+        for j, bj in channels[a + 1:]:
+            if i == j:
+                continue        # one input's two shares meet at 0, below the floor
+            r = PPoly(spline.c[..., i] / bi - spline.c[..., j] / bj, spline.x).roots(
+                discontinuity=False, extrapolate=False)
+            roots.append(r[np.isfinite(r)])
+    if floor > 0.0:
+        for i, b in channels:
+            c = spline.c[..., i] / b
+            c[-1] -= floor
+            r = PPoly(c, spline.x).roots(discontinuity=False, extrapolate=False)
+            r = r[np.isfinite(r)]
+            if r.size:
+                roots.append(r[bounds.usage(spline(r)) <= floor * (1.0 + 1e-9)])
+    return np.unique(np.concatenate(roots)) if roots else np.empty(0)
 
-    Evaluates like a control (``u = self(t)``, vectorised); :meth:`tau` maps its times to
-    the planned ones, :meth:`time` back.
 
-    Parameters
-    ----------
-    base : Controls or FrameControls
-        The planned physical controls, on ``[0, T_base]`` (not re-timed already).
-    R0 : array_like
-        The start, a rotation matrix.
-    mechanism : str or Mechanism
-        The platform.
-    leg_speed : float
-        ``v``, the legs' top speed (geometry units per second).
-    T : float, optional
-        The re-timed duration; ``None`` for the least time.
-    nodes : int
-        CF4 nodes of the replay that samples the legs' speeds, at least.
+class MappedTimeChange(TimeChange):
+    """A time change by a :class:`TimeMap` (the attribute ``map``) of base controls: what
+    :class:`Retimed` and :class:`InputRetimed` share."""
 
-    Raises
-    ------
-    ValueError
-        If ``base`` is re-timed already, ``R0`` is not a rotation, or :class:`TimeMap`
-        refuses the rest.
-    """
-
-    kind = "retimed"
-
-    def __init__(self, base, R0, mechanism, leg_speed: float, T: float | None = None,
-                 nodes: int = RETIME_NODES):
-        if isinstance(base, Retimed):
-            raise ValueError("base is re-timed already: re-time its own base instead")
-        self.mechanism = catalog.get(mechanism)
-        R = np.array(so3.check_rotation(R0, "R0"), dtype=float)
-        R.setflags(write=False)
-        self.R0 = R
-        self.base = base
-        self.map = TimeMap(base, R, self.mechanism, leg_speed, T, nodes)
-        self.T = self.map.T
-
-    @property
-    def leg_speed(self) -> float:
-        """``v``, the legs' top speed."""
-        return self.map.leg_speed
+    map: TimeMap
 
     def tau(self, t) -> tuple[np.ndarray, np.ndarray]:
         """The planned time at re-timed times (:meth:`TimeMap.tau`).
@@ -424,7 +515,8 @@ class Retimed(TimeChange):
     @property
     def breakpoints(self) -> np.ndarray:
         """The re-timed images of the base controls' breakpoints and of the instants where
-        the fastest leg changes or meets the floor (``ũ`` has a kink there)."""
+        the fastest leg (the most loaded input) changes or meets the floor (``ũ`` has a kink
+        there)."""
         b = getattr(self.base, "breakpoints", None)
         inner = [self.map.kinks, self.map.jumps, [0.0, self.base.T]]
         if b is not None:
@@ -432,6 +524,55 @@ class Retimed(TimeChange):
         out = self.time(np.unique(np.concatenate(inner)))
         out[0], out[-1] = 0.0, self.T
         return np.unique(out)
+
+
+class Retimed(MappedTimeChange):
+    """Physical controls re-timed so that every leg moves at most ``leg_speed`` fast:
+    ``ũ(t) = u(τ(t)) dτ/dt`` on ``[0, T]`` (:class:`TimeMap`).
+
+    Evaluates like a control (``u = self(t)``, vectorised); :meth:`~MappedTimeChange.tau` maps
+    its times to the planned ones, :meth:`~MappedTimeChange.time` back.
+
+    Parameters
+    ----------
+    base : Controls or FrameControls
+        The planned physical controls, on ``[0, T_base]`` (not re-timed already).
+    R0 : array_like
+        The start, a rotation matrix.
+    mechanism : str or Mechanism
+        The platform.
+    leg_speed : float
+        ``v``, the legs' top speed (geometry units per second).
+    T : float, optional
+        The re-timed duration; ``None`` for the least time.
+    nodes : int
+        CF4 nodes of the replay that samples the legs' speeds, at least.
+
+    Raises
+    ------
+    ValueError
+        If ``base`` is re-timed already, ``R0`` is not a rotation, or :class:`TimeMap`
+        refuses the rest.
+    """
+
+    kind = "retimed"
+
+    def __init__(self, base, R0, mechanism, leg_speed: float, T: float | None = None,
+                 nodes: int = RETIME_NODES):
+        if isinstance(base, MappedTimeChange):
+            raise ValueError("base is re-timed already: re-time its own base instead")
+        self.mechanism = catalog.get(mechanism)
+        R = np.array(so3.check_rotation(R0, "R0"), dtype=float)
+        R.setflags(write=False)
+        self.R0 = R
+        self.base = base
+        self.map = TimeMap(base, R, self.mechanism, leg_speed, T, nodes)
+        self.T = self.map.T
+
+    @property
+    def leg_speed(self) -> float:
+        """``v``, the legs' top speed."""
+        return self.map.leg_speed
 
     def to_dict(self) -> dict:
         """A JSON-able description for :func:`from_dict`.
@@ -468,3 +609,73 @@ def from_dict(d: dict, base_from_dict, mechanism=None) -> Retimed:
     """
     return Retimed(base_from_dict(d["base"]), d["R0"], d["mechanism"] if mechanism is None else mechanism,
                    d["leg_speed"], T=d["T"], nodes=d["nodes"])
+
+
+class InputRetimed(MappedTimeChange):
+    """Physical controls re-timed so that every input keeps its bounds:
+    ``ũ(t) = u(τ(t)) dτ/dt`` on ``[0, T]`` (:class:`InputTimeMap`), the least time along the
+    path for ``T=None``.
+
+    Evaluates like a control (``u = self(t)``, vectorised); :meth:`~MappedTimeChange.tau` maps
+    its times to the planned ones, :meth:`~MappedTimeChange.time` back.
+
+    Parameters
+    ----------
+    base : Controls or FrameControls
+        The planned physical controls, on ``[0, T_base]`` (not re-timed already).
+    bounds : InputBounds
+        The inputs' bounds, checked (one per input, ``low < 0 < high``).
+    T : float, optional
+        The re-timed duration; ``None`` for the least time.
+    nodes : int
+        Nodes the inputs are splined through, at least.
+
+    Raises
+    ------
+    ValueError
+        If ``base`` is re-timed already, or :class:`InputTimeMap` refuses the rest.
+    """
+
+    kind = "retimed_inputs"
+
+    def __init__(self, base, bounds: InputBounds, T: float | None = None, nodes: int = RETIME_NODES):
+        if isinstance(base, MappedTimeChange):
+            raise ValueError("base is re-timed already: re-time its own base instead")
+        self.base = base
+        self.map = InputTimeMap(base, bounds, T, nodes)
+        self.bounds = self.map.bounds
+        self.T = self.map.T
+
+    def to_dict(self) -> dict:
+        """A JSON-able description for :func:`input_from_dict`.
+
+        Returns
+        -------
+        dict
+            ``{"kind": "retimed_inputs", "T", "bounds", "nodes", "base"}``; ``bounds``: one
+            pair ``[low, high]`` per input, ``null`` where free.
+        """
+        return {"kind": self.kind, "T": self.T, "bounds": self.bounds.record(), "nodes": self.map.nodes,
+                "base": self.base.to_dict()}
+
+    def __repr__(self) -> str:
+        return f"InputRetimed({self.base!r} on [0, {self.T:.6g}], inputs within {self.bounds.text()})"
+
+
+def input_from_dict(d: dict, base_from_dict) -> InputRetimed:
+    """Inverse of :meth:`InputRetimed.to_dict`; the time map is rebuilt by the same computation.
+
+    Parameters
+    ----------
+    d : dict
+        The description.
+    base_from_dict : callable
+        Reads the base controls.
+
+    Returns
+    -------
+    InputRetimed
+        The controls.
+    """
+    bounds = InputBounds.from_record(d["bounds"], name="bounds")
+    return InputRetimed(base_from_dict(d["base"]), bounds, T=d["T"], nodes=d["nodes"])

@@ -32,7 +32,7 @@ from ..numerics.blas import one_thread
 from . import energy
 from . import route as global_route
 from .certification import certified
-from .constraints import first_refusal
+from .constraint_objects import first_refusal
 from .core import build_result
 from .problem import (
     METHODS,
@@ -45,7 +45,7 @@ from .problem import (
     initial_controls,
     strategy_class,
 )
-from .retime import limit_speed
+from .retime import limit_inputs, limit_speed
 
 __all__ = ["plan", "solve", "Problem", "STRATEGIES", "METHODS", "ROUTES", "OBJECTIVES", "PLANNING_TIME",
            "strategy_class", "initial_controls", "default_steps"]
@@ -79,7 +79,10 @@ def plan(R0, Rd, *, T: float | None = 1.0, method: str = "parametric", harmonics
         mechanisms only.
     T : float or None
         The horizon in seconds, at least :data:`~nonholo.motion.time_change.MIN_TIME`;
-        ``None`` only with ``leg_speed``: the least time.
+        ``None``: the least time along the planned path under ``leg_speed`` or under
+        :class:`~nonholo.model.bounds.InputBounds` (given in ``constraints``, else the
+        mechanism's own: the catalog's car and unicycle have them, and their
+        :class:`~nonholo.model.bounds.StateBounds` join).
     method : {"parametric", "nonparametric"}
         Fourier series with ``harmonics`` = K, or piecewise constant on ``grid`` equal
         intervals — of the physical inputs ``u`` (``"paper"``) or of the frame coordinates
@@ -162,8 +165,15 @@ def plan(R0, Rd, *, T: float | None = 1.0, method: str = "parametric", harmonics
         piecewise-constant inputs on :data:`~nonholo.planning.energy.ENERGY_GRID` intervals,
         method ``"nonparametric"`` in the result). ``options["objective"]`` records it.
     constraints : sequence or None
-        Further constraint objects (:mod:`nonholo.planning.constraints`,
-        :data:`~nonholo.planning.constraints.KINDS`); ``None`` as ``()``: none.
+        Further constraint objects (``nonholo.constraints``:
+        :data:`~nonholo.planning.constraint_objects.KINDS`); ``None`` as ``()``: none.
+        :class:`~nonholo.model.bounds.StateBounds` are kept at every node like the legs'
+        stroke; :class:`~nonholo.model.bounds.InputBounds` by re-timing the planned path
+        (:func:`~nonholo.planning.retime.limit_inputs`): with ``T=None`` in the least time
+        along it, with a given ``T`` as planned if its inputs keep them, re-timed in ``T``
+        if its path needs no longer, else a failure saying the time it needs. A mechanism's
+        own bounds (:func:`~nonholo.model.bounds.of_mechanism`) apply with ``T=None`` only,
+        each kind unless given here (``InputBounds()``, free, drops them).
     allow_imports : bool
         Let ``strategy`` be an import path, which imports its module and runs its code. Off
         by default: a strategy's name read from a file (a plan file's label re-planned, a
@@ -184,7 +194,9 @@ def plan(R0, Rd, *, T: float | None = 1.0, method: str = "parametric", harmonics
         ``harmonics``/``grid``/``steps`` < 1 or too large, an unknown method, strategy or
         mechanism, a strategy's import path without ``allow_imports``, bad numerical
         options, a Fourier basis too large for memory;
-        ``leg_length`` or ``leg_speed`` for a mechanism beyond SO(3).
+        ``leg_length`` or ``leg_speed`` for a mechanism beyond SO(3); ``T=None`` with nothing
+        to bound the time; ``R0``/``Rd`` outside the state bounds (naming the coordinate);
+        bounds that do not fit the mechanism (naming ``low``/``high``).
     TypeError
         For a ``callback`` that is not callable, ``constraints`` that are not constraint
         objects (naming ``constraints``), an ``allow_imports`` that is not a bool.
@@ -207,8 +219,9 @@ def plan(R0, Rd, *, T: float | None = 1.0, method: str = "parametric", harmonics
 
 def solve(problem: Problem, callback: Callable[[dict], object] | None = None) -> PlanResult:
     """The plan of ``problem``: its path (:func:`solve_path`), re-timed under its legs'
-    speed if it has one (:func:`nonholo.planning.retime.limit_speed`), with BLAS on one
-    thread (:func:`nonholo.numerics.blas.one_thread`).
+    speed or its inputs' bounds if it has them (:func:`nonholo.planning.retime.limit_speed`,
+    :func:`~nonholo.planning.retime.limit_inputs`), with BLAS on one thread
+    (:func:`nonholo.numerics.blas.one_thread`).
 
     Parameters
     ----------
@@ -226,7 +239,8 @@ def solve(problem: Problem, callback: Callable[[dict], object] | None = None) ->
     """
     with one_thread():
         result = solve_path(problem, callback)
-        return limit_speed(result, problem.leg_speed, None if problem.least_time else problem.T)
+        T = None if problem.least_time else problem.T
+        return limit_inputs(limit_speed(result, problem.leg_speed, T), problem.input_bounds, T)
 
 
 def field_refusal(problem) -> str | None:
@@ -313,7 +327,7 @@ def solve_path(problem: Problem, callback: Callable[[dict], object] | None = Non
     steered = global_route.steer(mech, problem.R0, problem.Rd, problem.T, hop, tol=options.tol,
                                  delta_min=options.delta_min, sign=evaluator.sign, started=route_started,
                                  budget=budget, leg_limits=problem.leg_limits, rescue=smooth, leg=leg,
-                                 q0=problem.q0, qd=problem.qd)
+                                 q0=problem.q0, qd=problem.qd, limits=problem.limits)
     if steered.controls is None and steered.smoothed is None:
         return build_result(problem, outcome, False,
                             f"{local_reason}; the global route failed too: {steered.reason}", evaluator)

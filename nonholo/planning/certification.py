@@ -78,7 +78,7 @@ def certify(problem: Evaluator, ev: Evaluation, options: Options) -> tuple[Evalu
             half = (ev.R[-1], ev.q[-1])
         return replay_certificate.measure(problem.R0, problem.Rd, problem.T, mech, physical(problem, ev),
                                           steps, options.tol, options.delta_min, problem.sign, G, half,
-                                          leg_limits=problem.leg_limits, q0=problem.q0, qd=problem.qd)
+                                          limits=problem.limits, q0=problem.q0, qd=problem.qd)
 
     # the first replays: on N and 2N steps (N: the planner's) when the planner's trajectory
     # is the replay on N, else on N/2 and N where the controls allow it

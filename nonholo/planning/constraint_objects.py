@@ -1,12 +1,18 @@
 """What a plan keeps along its motion, as objects in a list (as python-control's
 ``trajectory_constraints`` and opty's ``bounds``): the clearance from the singular set,
-the legs' stroke and the legs' speed.
+the legs' stroke and the legs' speed, bounds on the inputs and on the coordinates.
 
 Each constraint is checked against its mechanism when a :class:`~nonholo.planning.problem.Problem`
 is built (``ValueError`` naming the argument), and says whether a start and a goal can be
 joined at all (their ``refusal``, before anything is simulated). Along the motion the planner
 and the certificate keep them (:mod:`nonholo.planning.core`, :mod:`nonholo.certify.certificate`);
-the legs' speed is kept by re-timing the planned path (:mod:`nonholo.planning.retime`).
+the legs' speed and the inputs' bounds are kept by re-timing the planned path
+(:mod:`nonholo.planning.retime`), the coordinates' bounds like the legs' stroke
+(:mod:`nonholo.model.limits`).
+
+Its objects are public in :mod:`nonholo.constraints`: :class:`InputBounds` and
+:class:`StateBounds` (:mod:`nonholo.model.bounds`), :class:`Clearance`, :class:`LegStroke`,
+:class:`LegSpeed`, and :func:`of_mechanism`, a mechanism's own bounds as objects.
 """
 from __future__ import annotations
 
@@ -15,9 +21,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..model.bounds import InputBounds, StateBounds, as_data, of_mechanism
 from ..model.limits import LegLimits
 from ..motion.retimed import check_leg_speed
 from ..numerics.checks import is_number
+
+__all__ = ["InputBounds", "StateBounds", "Clearance", "LegStroke", "LegSpeed", "KINDS", "of_mechanism",
+           "as_data"]
 
 
 @dataclass(frozen=True)
@@ -243,7 +253,7 @@ class LegSpeed:
 
 
 #: The kinds of constraint the planner keeps.
-KINDS = (Clearance, LegStroke, LegSpeed)
+KINDS = (Clearance, LegStroke, LegSpeed, InputBounds, StateBounds)
 
 
 def check_all(constraints, mechanism) -> tuple:

@@ -42,7 +42,7 @@ from ..certify.certificate import Certificate
 from ..controls import stages
 from ..controls.parametrisations import Controls
 from ..io.result import PlanResult, coordinate_fields
-from ..model.limits import LegLimits
+from ..model.limits import Limits
 from ..model.mechanism import Mechanism
 from ..motion.frame_controls import FrameControls
 from ..numerics import kernels
@@ -110,8 +110,8 @@ class Evaluation:
     stops early where ``sgnΔ < delta_stop`` or ``ω`` is not finite). ``min_delta``: least
     ``sgn(Δ(R0))·Δ`` over the integrator's evaluation points (= least ``|Δ|`` unless the
     motion crossed ``Δ = 0``; ``None`` without a singular set). ``min_clearance``: least
-    clearance of the nodes from the legs' stroke limits (:mod:`nonholo.model.limits`; ``None``
-    without limits). ``l``, ``error``, ``J``
+    clearance of the nodes from the problem's limits (the legs' stroke, the coordinates'
+    bounds: :class:`~nonholo.model.limits.Limits`; ``None`` without limits). ``l``, ``error``, ``J``
     only when complete; ``Z`` (``Z(t_n) = Φ(t_n, 0)^{-1}`` at every node, ``(N+1, 3, 3)``)
     and ``Wd`` (the kernel's stage weights, ``(3N, 3m)``, see
     :func:`nonholo.integrate.cf4.forward_variational`) only when the evaluation was asked for
@@ -185,9 +185,9 @@ class Evaluator:
     :meth:`evaluate` simulates a control with the variational system and returns the
     error ``l_T`` and the Jacobian ``J = ∂s_T/∂λ``. ``frame=True`` integrates the system
     in the desingularised frame coordinates ``w`` (``dR/dt = [N(R) w] R``; ``Δ`` is still
-    monitored): ``λ`` then parametrises ``w``. ``leg_limits``: the legs' stroke limits
-    (:class:`~nonholo.model.limits.LegLimits`) an admissible trajectory keeps at every node, or
-    ``None``. ``q0``, ``qd``: the coordinates of start and goal of a mechanism whose state
+    monitored): ``λ`` then parametrises ``w``. ``limits``: the clearances an admissible
+    trajectory keeps at every node (:class:`~nonholo.model.limits.Limits`: the legs' stroke,
+    the coordinates' bounds; or a :class:`~nonholo.model.limits.LegLimits` alone), or ``None``. ``q0``, ``qd``: the coordinates of start and goal of a mechanism whose state
     goes beyond SO(3) (:mod:`nonholo.spaces.groups`; ``R0 = Rd = I`` without orientation); then
     ``l_T`` is the stacked error ``(l, δq)`` and ``J`` has ``d`` rows.
 
@@ -207,17 +207,17 @@ class Evaluator:
         The clearance kept.
     frame : bool, default False
         Whether to integrate in the frame coordinates ``w``.
-    leg_limits : LegLimits or None, optional
-        The legs' stroke limits, if any.
+    limits : Limits or None, optional
+        The clearances kept at every node, if any.
     q0, qd : numpy.ndarray, optional
         Start and goal coordinates beyond SO(3).
     """
 
     def __init__(self, R0, Rd, T: float, mechanism: Mechanism, method: str, steps: int,
-                 delta_min: float, frame: bool = False, leg_limits: LegLimits | None = None,
+                 delta_min: float, frame: bool = False, limits: Limits | None = None,
                  q0=None, qd=None):
         self.mechanism = mechanism
-        self.leg_limits = leg_limits
+        self.limits = limits
         self.frame = frame
         self.kernels = mechanism.kernels(frame)
         self.R0 = np.ascontiguousarray(R0, dtype=float)
@@ -298,7 +298,7 @@ class Evaluator:
             The problem on that grid.
         """
         return Evaluator(self.R0, self.Rd, self.T, self.mechanism, self.method, steps, self.delta_min,
-                       self.frame, self.leg_limits, self.q0, self.qd)
+                       self.frame, self.limits, self.q0, self.qd)
 
     def use(self, controls: Controls) -> None:
         """Interpret parameter vectors passed to :meth:`evaluate` in a parametrisation.
@@ -353,8 +353,8 @@ class Evaluator:
         ev = Evaluation(x, self.parametrisation, complete, int(n), None if complete else float(t_stop),
                         self.singular.reported(dmin), self._Rs[:n + 1].copy(), given,
                         self._Qs[:n + 1].copy())
-        if self.leg_limits is not None:
-            ev.min_clearance = self.leg_limits.least_clearance(self.mechanism, ev.R)
+        if self.limits is not None:
+            ev.min_clearance = self.limits.least_clearance(self.mechanism, ev.R, ev.q)
         if complete:
             ev.l, ev.errors = self.error_of(self._Rs[n], self._Qs[n])
             ev.error = self.mechanism.space.norm(ev.errors)
@@ -376,10 +376,10 @@ class Evaluator:
         -------
         bool
             Complete, ``|Δ| ≥ delta_min`` along the whole trajectory and every node inside
-            the legs' stroke limits (if any).
+            the problem's limits (if any).
         """
         return (ev.complete and self.singular.clear(ev.min_delta, self.delta_min)
-                and (self.leg_limits is None or ev.min_clearance >= 0.0))
+                and (self.limits is None or ev.min_clearance >= 0.0))
 
     def why_not(self, ev: Evaluation) -> str:
         """Why an evaluation is not admissible.
@@ -402,8 +402,8 @@ class Evaluator:
             return f"|Δ| fell to {ev.min_delta:.6g} < delta_min = {self.delta_min:g}{where}"
         if not ev.complete:
             return f"the angular velocity became non-finite at t ≈ {ev.t_stop:.4g} s"
-        if self.leg_limits is not None and ev.min_clearance < 0.0:
-            return self.leg_limits.describe(self.mechanism, ev.R, np.arange(len(ev.R)) * self.h)
+        if self.limits is not None and ev.min_clearance < 0.0:
+            return self.limits.describe(self.mechanism, ev.R, np.arange(len(ev.R)) * self.h, ev.q)
         return "admissible"
 
 

@@ -222,7 +222,8 @@ def barrier_terms(problem: Evaluator, ev: Evaluation,
                   rows: bool = True) -> tuple[float, np.ndarray, np.ndarray, np.ndarray | None]:
     """The barrier ``Φ = Σ_{n ≥ 1} h ψ(r_n)`` of ``ev``'s nodes on the clearance from
     ``Δ = 0`` (``r = (sgnΔ − delta_min)/(d₀ − delta_min)``, ``d₀`` = :func:`barrier_reach`)
-    and on the legs' clearances from their stroke (``r = c/c₀``, ``c₀`` =
+    and on the clearances of the problem's limits — the legs' stroke, the coordinates'
+    bounds (``r = c/c₀``, ``c₀`` =
     :data:`~nonholo.model.limits.BARRIER_CLEARANCE`), ``ψ(r) = r − 1 − log r`` below 1 and 0
     above (zero with its slope at ``r = 1``).
 
@@ -258,8 +259,8 @@ def barrier_terms(problem: Evaluator, ev: Evaluation,
             nodes.append(near), rs.append(r[near])
             if rows:
                 grads.append((problem.sign / span) * spatial_gradient_delta(mech, ev.R[near], q=ev.q[near]))
-    if problem.leg_limits is not None:
-        terms = problem.leg_limits.clearance_terms(mech, ev.R, BARRIER_CLEARANCE)
+    if problem.limits is not None:
+        terms = problem.limits.clearance_terms(mech, ev.R, BARRIER_CLEARANCE, q=ev.q)
         if terms is not None:
             at, c, g = terms
             keep = at > 0
@@ -290,7 +291,7 @@ class Objective:
 
     def __init__(self, problem: Evaluator, metric: np.ndarray):
         self.problem, self.metric = problem, metric
-        self.constrained = problem.singular.exists or problem.leg_limits is not None
+        self.constrained = problem.singular.exists or problem.limits is not None
         self.tau = 0.0
         self.last = None            # (evaluation, tau, derivatives): an iteration asks twice
 

@@ -5,7 +5,7 @@ constraints, objective and the solver's settings, checked once when it is built.
 and hands it to :func:`nonholo.planning.api.solve`; the strategies, the global route and
 the least-energy stage read what they need from it, and the route plans its hops as
 problems of their own (:meth:`Problem.part`). Constraints are objects in a list
-(:mod:`nonholo.planning.constraints`).
+(:mod:`nonholo.planning.constraint_objects`).
 """
 from __future__ import annotations
 
@@ -30,7 +30,9 @@ from ..motion.simulation import DEFAULT_STEPS
 from ..motion.time_change import check_horizon
 from ..numerics import effort
 from ..numerics.checks import check_count, check_time
-from .constraints import Clearance, LegSpeed, LegStroke, check_all, one_of
+from ..model.bounds import InputBounds, StateBounds, of_mechanism
+from ..model.limits import Limits
+from .constraint_objects import KINDS, Clearance, LegSpeed, LegStroke, check_all, one_of
 from .core import Evaluator, Options, Strategy
 from .strategy_paper import PaperStrategy
 from .strategy_robust import RobustStrategy
@@ -218,6 +220,27 @@ def initial_controls(method: str, T: float, n_inputs: int, harmonics: int, grid:
     return kind.fit(func, T, size, n_inputs)
 
 
+def least_time_bounds(given: tuple, mechanism) -> tuple:
+    """The mechanism's own bounds a plan in the least time keeps besides ``given``: each kind
+    (:class:`~nonholo.model.bounds.InputBounds`, :class:`~nonholo.model.bounds.StateBounds`)
+    the caller did not give.
+
+    Parameters
+    ----------
+    given : tuple
+        The caller's constraints, checked.
+    mechanism : Mechanism
+        The mechanism planned.
+
+    Returns
+    -------
+    tuple
+        The bounds of :func:`~nonholo.model.bounds.of_mechanism` not given already.
+    """
+    kinds = {type(c) for c in given}
+    return tuple(b for b in of_mechanism(mechanism) if type(b) not in kinds)
+
+
 def default_steps(method: str, grid: int) -> int:
     """The default CF4 steps of a plan.
 
@@ -265,7 +288,7 @@ class Problem:
     steps : int
         CF4 steps on ``[0, T]``.
     constraints : tuple
-        What the motion keeps (:mod:`nonholo.planning.constraints`).
+        What the motion keeps (:mod:`nonholo.planning.constraint_objects`).
     objective : {None, "energy", "auto"}
         What is lowered once the plan is found.
     route : {"auto", "local", "global"}
@@ -317,8 +340,11 @@ class Problem:
         leg_speed, objective, allow_imports
             As for :func:`nonholo.plan`.
         constraints : sequence or None
-            Further constraint objects (:mod:`nonholo.planning.constraints`), besides those
-            of ``delta_min``, ``leg_length`` and ``leg_speed``; ``None``: none.
+            Further constraint objects (:mod:`nonholo.planning.constraint_objects`), besides those
+            of ``delta_min``, ``leg_length`` and ``leg_speed``; ``None``: none. With
+            ``T=None`` the mechanism's own bounds (:func:`~nonholo.model.bounds.of_mechanism`)
+            join them, each kind (:class:`~nonholo.model.bounds.InputBounds`,
+            :class:`~nonholo.model.bounds.StateBounds`) unless given here.
 
         Returns
         -------
@@ -328,7 +354,8 @@ class Problem:
         Raises
         ------
         ValueError
-            For bad input, naming the argument.
+            For bad input, naming the argument; ``R0``/``Rd`` outside the
+            :class:`~nonholo.model.bounds.StateBounds`, naming the coordinate.
         TypeError
             For ``constraints`` that are not constraint objects, or an ``allow_imports``
             that is not a bool.
@@ -336,8 +363,16 @@ class Problem:
         started, started_effort = time.perf_counter(), effort.seconds()
         mech = catalog.get(mechanism)
         speed = LegSpeed.of(leg_speed, mech)
+        given = check_all(constraints, mech)
         if T is None and speed is None:
-            raise ValueError("T=None asks for the least time, which needs a leg_speed to bound")
+            given = given + least_time_bounds(given, mech)
+            if not any(isinstance(c, InputBounds) and not c.free for c in given):
+                raise ValueError(f"T=None asks for the least time, which needs a leg_speed (a platform's) or "
+                                 f"InputBounds in constraints to re-time the path under; mechanism "
+                                 f"{mech.name!r} has no input bounds of its own")
+        if speed is not None and any(isinstance(c, InputBounds) and not c.free for c in given):
+            raise ValueError("leg_speed and InputBounds cannot be kept together yet (each re-times the path "
+                             "on its own): give one of them")
         if not one_of_choices(objective, OBJECTIVES):
             raise ValueError(f"unknown objective {objective!r}; known: None, 'energy', 'auto'")
         if not one_of_choices(route, ROUTES):
@@ -352,6 +387,12 @@ class Problem:
         grid = check_count(grid, "grid", maximum=MAX_PLAN_STEPS)     # at most the steps (below)
         R0, q0 = mech.parse_state(R0, "R0")
         Rd, qd = mech.parse_state(Rd, "Rd")
+        for c in given:
+            if isinstance(c, StateBounds):
+                for name, state, what in (("R0", (R0, q0), "the start"), ("Rd", (Rd, qd), "the goal")):
+                    outside = c.violation(mech, state, what)
+                    if outside is not None:
+                        raise ValueError(f"{name}: {outside}")
         options = Options(gamma=solver.default_gamma if gamma is None else gamma, step=step, tol=tol,
                           max_iter=max_iter, newton_below=newton_below, min_step=min_step,
                           delta_min=delta_min)
@@ -370,10 +411,11 @@ class Problem:
                              f"more than {MAX_BASIS:.0e}; lower harmonics or steps")
         controls = initial_controls(method, T, mech.n_inputs, harmonics, grid, u0)
         stages.check_steps(controls, steps)
-        # the keywords' constraints are checked as they are built; the caller's ones here
+        # the keywords' constraints are checked as they are built, the caller's above: at most
+        # one of each kind
         listed = (Clearance(options.delta_min), stroke, speed)
-        checked = tuple(c for c in listed if c is not None) + check_all(constraints, mech)
-        for kind in (Clearance, LegStroke, LegSpeed):
+        checked = tuple(c for c in listed if c is not None) + given
+        for kind in KINDS:
             one_of(checked, kind)
         return cls(mechanism=mech, R0=R0, q0=q0, Rd=Rd, qd=qd, T=T, method=method, harmonics=harmonics,
                    grid=grid, controls=controls, u0_given=u0 is not None, gamma_given=gamma is not None,
@@ -408,7 +450,7 @@ class Problem:
         options = dataclasses.replace(self.options, delta_min=delta_min,
                                       gamma=self.options.gamma if self.gamma_given else solver.default_gamma)
         controls = initial_controls(self.method, T, mech.n_inputs, self.harmonics, self.grid)
-        kept = tuple(c for c in self.constraints if not isinstance(c, (Clearance, LegSpeed)))
+        kept = tuple(c for c in self.constraints if not isinstance(c, (Clearance, LegSpeed, InputBounds)))
         return dataclasses.replace(
             self, R0=np.asarray(start[0], dtype=float), q0=np.asarray(start[1], dtype=float),
             Rd=np.asarray(goal[0], dtype=float), qd=np.asarray(goal[1], dtype=float), T=check_time(T),
@@ -443,7 +485,7 @@ class Problem:
                          self.steps if steps is None else steps,
                          self.options.delta_min if delta_min is None else max(delta_min, self.options.delta_min),
                          frame=frame,
-                         leg_limits=self.leg_limits, q0=self.q0, qd=self.qd)
+                         limits=self.limits, q0=self.q0, qd=self.qd)
 
     @property
     def strategy(self) -> str:
@@ -477,6 +519,26 @@ class Problem:
         speed = one_of(self.constraints, LegSpeed)
         return None if speed is None else speed.v
 
+    @property
+    def input_bounds(self) -> InputBounds | None:
+        """The inputs' bounds (:class:`~nonholo.model.bounds.InputBounds`), or ``None``
+        (also for bounds free everywhere)."""
+        bounds = one_of(self.constraints, InputBounds)
+        return None if bounds is None or bounds.free else bounds
+
+    @property
+    def state_bounds(self) -> StateBounds | None:
+        """The coordinates' bounds (:class:`~nonholo.model.bounds.StateBounds`), or ``None``
+        (also for bounds free everywhere)."""
+        bounds = one_of(self.constraints, StateBounds)
+        return None if bounds is None or bounds.free else bounds
+
+    @property
+    def limits(self) -> Limits | None:
+        """The clearances every node keeps (:class:`~nonholo.model.limits.Limits`: the legs'
+        stroke, the coordinates' bounds), or ``None``."""
+        return Limits.of(self.leg_limits, self.state_bounds)
+
     def recorded_options(self) -> dict:
         """The options a result records.
 
@@ -484,8 +546,12 @@ class Problem:
         -------
         dict
             :class:`~nonholo.planning.core.Options`, ``harmonics``, ``grid`` and, when set,
-            ``leg_length``.
+            ``leg_length``, ``input_bounds`` and ``state_bounds``
+            (:meth:`~nonholo.model.bounds.Box.record`).
         """
         limits = self.leg_limits
         extra = {} if limits is None else {"leg_length": list(limits.as_tuple())}
+        for key, bounds in (("input_bounds", self.input_bounds), ("state_bounds", self.state_bounds)):
+            if bounds is not None:
+                extra[key] = bounds.record()
         return {**asdict(self.options), "harmonics": self.harmonics, "grid": self.grid, **extra}

@@ -1,5 +1,5 @@
-"""``retime()``: a successful plan played as fast as its legs allow, in a given time, or
-from rest to rest.
+"""``retime()``: a successful plan played as fast as its legs or its inputs' bounds allow, in a
+given time, or from rest to rest.
 
 :func:`retime` wraps a plan's controls in a time change (:mod:`nonholo.motion.time_change`):
 :class:`~nonholo.motion.retimed.Retimed` keeps every leg at most ``leg_speed`` fast — at that
@@ -12,6 +12,17 @@ motion ends where the plan's does, with the same error bound, least ``|Δ|``, se
 and legs' lengths. The result's samples are the plan's, at the played instants ``t(τ_k)``
 of its step points. :func:`limit_speed` is what :func:`nonholo.plan` does with a
 ``leg_speed``.
+
+Under :class:`~nonholo.model.bounds.InputBounds` the same is done to the inputs
+(:class:`~nonholo.motion.retimed.InputRetimed`): ``T=None`` plays the path in the least time
+that keeps every input within its bounds — the least time *along the planned path*, not the
+least time of the problem (another path may be faster; finding it is a time-optimal control
+problem this does not solve). :func:`limit_inputs` is what :func:`nonholo.plan` does with
+them: with ``T=None`` the least time along the path; with a given ``T`` the plan as found if
+its inputs keep the bounds, else re-timed in ``T`` if its path can be, else a failure saying
+the time the path needs. Every re-timing under input bounds is checked on a fine grid
+(:data:`CHECK_STEPS`): inputs beyond a bound by more than
+:data:`~nonholo.model.bounds.BOUND_RTOL` (relative) make the plan a failure.
 """
 from __future__ import annotations
 
@@ -22,8 +33,22 @@ import numpy as np
 
 from ..io.result import PlanResult
 from ..motion.frame_controls import from_dict as controls_from_dict
-from ..motion.retimed import RETIME_NODES, Retimed, TimeMap, check_leg_speed
+from ..model.bounds import InputBounds, input_names
+from ..motion.retimed import (
+    RETIME_NODES,
+    InputRetimed,
+    InputTimeMap,
+    Retimed,
+    TimeMap,
+    check_leg_speed,
+    node_count,
+)
 from ..motion.time_change import PEAK_RATIO, RestToRest, check_horizon, planned, played_time
+
+
+#: Steps of the grid on which re-timed inputs are checked against their bounds, at least (three
+#: points each: the ends and the middle).
+CHECK_STEPS = 4 * RETIME_NODES
 
 
 def planned_controls(result: PlanResult):
@@ -63,9 +88,90 @@ def time_map(result: PlanResult, leg_speed: float, nodes: int = RETIME_NODES) ->
     return TimeMap(planned_controls(result), result.R0, mech, check_leg_speed(leg_speed, mech), None, nodes)
 
 
+def check_input_bounds(value, mechanism) -> InputBounds | None:
+    """``input_bounds`` as :func:`retime` takes it.
+
+    Parameters
+    ----------
+    value : InputBounds or None
+        The bounds, or ``None``.
+    mechanism : Mechanism
+        The plan's mechanism.
+
+    Returns
+    -------
+    InputBounds or None
+        The bounds checked against ``mechanism``; ``None`` for none (or bounds free
+        everywhere).
+
+    Raises
+    ------
+    ValueError
+        Naming ``input_bounds``, for anything else.
+    """
+    if value is None:
+        return None
+    if not isinstance(value, InputBounds):
+        raise ValueError(f"input_bounds must be nonholo.constraints.InputBounds or None, got {type(value).__name__}")
+    try:
+        bounds = value.check(mechanism)
+    except ValueError as exc:
+        raise ValueError(f"input_bounds: {exc}") from None
+    return None if bounds.free else bounds
+
+
+def input_time_map(result: PlanResult, bounds: InputBounds, nodes: int = RETIME_NODES) -> InputTimeMap:
+    """The fastest re-timing of ``result``'s path under input bounds.
+
+    Parameters
+    ----------
+    result : PlanResult
+        A plan.
+    bounds : InputBounds
+        The bounds, checked against its mechanism.
+    nodes : int
+        Nodes the inputs are splined through.
+
+    Returns
+    -------
+    InputTimeMap
+        Its ``minimum_time`` and ``peak_ratio``.
+    """
+    return InputTimeMap(planned_controls(result), bounds, None, nodes)
+
+
+def input_excess(controls, bounds: InputBounds, mechanism, steps: int) -> str | None:
+    """Where ``controls`` leave ``bounds`` by more than
+    :data:`~nonholo.model.bounds.BOUND_RTOL`, on a grid of ``steps`` steps (three points
+    each).
+
+    Parameters
+    ----------
+    controls : Controls or TimeChange
+        The physical controls as played.
+    bounds : InputBounds
+        The bounds, checked.
+    mechanism : Mechanism
+        The mechanism (the inputs' names).
+    steps : int
+        Steps of the grid, at least (rounded up to a multiple of the controls' grid).
+
+    Returns
+    -------
+    str or None
+        The input out the most, when and by how much; ``None`` within.
+    """
+    steps = node_count(controls, steps)
+    t = (np.arange(steps)[:, None] + np.array([0.0, 0.5, 1.0])[None, :]).ravel() * (controls.T / steps)
+    t[-1] = controls.T
+    u = np.asarray(controls(t), dtype=float).reshape(t.size, -1)
+    return bounds.excess(u, t, input_names(mechanism))
+
+
 def retime(result: PlanResult, leg_speed: float | None = None, T: float | None = None, *,
-           rest_to_rest: bool = False) -> PlanResult:
-    """``result`` re-timed: every leg at most ``leg_speed`` fast, and/or from rest to rest.
+           rest_to_rest: bool = False, input_bounds: InputBounds | None = None) -> PlanResult:
+    """``result`` re-timed: every leg at most ``leg_speed`` fast or every input within
+    ``input_bounds``, and/or from rest to rest.
 
     Parameters
     ----------
@@ -75,29 +181,38 @@ def retime(result: PlanResult, leg_speed: float | None = None, T: float | None =
         The legs' top speed (the geometry's length units per second). With
         ``rest_to_rest``, ``None`` keeps the bound the plan's options record, if any.
     T : float, optional
-        The time of the re-timed motion (s); ``None``: the least time under ``leg_speed``,
-        or, rest to rest without a bound, the plan's time.
+        The time of the re-timed motion (s); ``None``: the least time under ``leg_speed``
+        or ``input_bounds`` (along the plan's path), or, rest to rest without a bound, the
+        plan's time.
     rest_to_rest : bool
         Play the motion by the smoothstep time change
         (:class:`~nonholo.motion.time_change.RestToRest`): its inputs are zero at ``0`` and
-        ``T``. Under a ``leg_speed`` it wraps the fastest re-timing, stretched by the
-        smoothstep's peak ratio 15/8 so that no leg exceeds the bound.
+        ``T``. Under a bound it wraps the fastest re-timing, stretched by the smoothstep's
+        peak ratio 15/8 so that no leg (or input) exceeds the bound.
+    input_bounds : InputBounds, optional
+        Bounds on the inputs (:class:`~nonholo.model.bounds.InputBounds`, ``low < 0 <
+        high``), instead of a ``leg_speed``. With ``rest_to_rest``, ``None`` keeps the
+        bounds the plan's options record, if any.
 
     Returns
     -------
     PlanResult
-        A new result whose controls are :class:`~nonholo.motion.retimed.Retimed` and/or
+        A new result whose controls are :class:`~nonholo.motion.retimed.Retimed`,
+        :class:`~nonholo.motion.retimed.InputRetimed` and/or
         :class:`~nonholo.motion.time_change.RestToRest` of the planned controls (a re-timed
-        plan is re-timed from its planned controls); ``options`` records ``leg_speed``.
+        plan is re-timed from its planned controls); ``options`` records ``leg_speed`` or
+        ``input_bounds``. Under ``input_bounds`` a re-timing whose inputs leave them on the
+        check's grid (:func:`input_excess`) is returned as a failure saying where.
 
     Raises
     ------
     ValueError
-        For a failed plan, a mechanism without legs under a ``leg_speed``, no
-        ``leg_speed`` without ``rest_to_rest``, a bad ``leg_speed``, ``T`` or
-        ``rest_to_rest``, a ``T`` shorter than the path needs under ``leg_speed`` (the
-        message says how long it needs), or a ``T`` whose inputs are not finite (below
-        :data:`~nonholo.motion.time_change.MIN_TIME`, naming ``T``).
+        For a failed plan, a mechanism without legs under a ``leg_speed``, no bound
+        without ``rest_to_rest``, both a ``leg_speed`` and ``input_bounds``, a bad
+        ``leg_speed``, ``input_bounds``, ``T`` or ``rest_to_rest``, a ``T`` shorter than the
+        path needs under the bound (the message says how long it needs), or a ``T`` whose
+        inputs are not finite (below :data:`~nonholo.motion.time_change.MIN_TIME`, naming
+        ``T``).
     """
     started = time.perf_counter()
     if not isinstance(result, PlanResult):
@@ -105,35 +220,48 @@ def retime(result: PlanResult, leg_speed: float | None = None, T: float | None =
     if not isinstance(rest_to_rest, (bool, np.bool_)):
         raise ValueError(f"rest_to_rest must be True or False, got {rest_to_rest!r}")
     mech = result.kinematics
-    if leg_speed is None and rest_to_rest:
+    if leg_speed is None and input_bounds is None and rest_to_rest:
         leg_speed = result.options.get("leg_speed")
+        recorded = result.options.get("input_bounds")
+        if leg_speed is None and recorded is not None:
+            input_bounds = InputBounds.from_record(recorded, mech, "options.input_bounds")
     v = check_leg_speed(leg_speed, mech)
-    if v is None and not rest_to_rest:
-        raise ValueError("leg_speed must be a positive finite speed, got None (or pass rest_to_rest=True)")
+    bounds = check_input_bounds(input_bounds, mech)
+    if v is not None and bounds is not None:
+        raise ValueError("leg_speed and input_bounds cannot be kept together yet (each re-times the path "
+                         "on its own): give one of them")
+    if v is None and bounds is None and not rest_to_rest:
+        raise ValueError("leg_speed must be a positive finite speed, got None (or pass input_bounds, or "
+                         "rest_to_rest=True)")
     if T is not None:
         T = check_horizon(T)
     if not result.success:
         raise ValueError(f"only a successful plan can be re-timed; this one failed: {result.reason}")
     base = planned_controls(result)
     timed, how = base, []
-    if v is not None:
+    if v is not None or bounds is not None:
         # the re-timed controls exactly as a plan file rebuilds them (its base read back from
         # its description, the time map recomputed from that): the time map is computed from a
         # replay of the base, whose rounding a kink of the fastest leg can amplify, so samples
         # computed from any other copy need not be ``controls(t)`` of the loaded plan
-        timed = controls_from_dict(Retimed(base, result.R0, mech, v, T=None if rest_to_rest else T).to_dict(),
-                                   mech)
+        T_map = None if rest_to_rest else T
+        changed = (Retimed(base, result.R0, mech, v, T=T_map) if v is not None
+                   else InputRetimed(base, bounds, T=T_map))
+        timed = controls_from_dict(changed.to_dict(), mech)
         needs = timed.map.minimum_time * (PEAK_RATIO if rest_to_rest else 1.0)
+        kept = (f"every leg at most {v:g} fast" if v is not None
+                else f"every input within its bounds ({bounds.text(input_names(mech))})")
         if rest_to_rest and T is not None and T < needs:
             raise ValueError(f"T = {T:g} s is shorter than the {needs:.6g} s this path needs from rest to rest "
-                             f"with every leg at most {v:g} fast")
-        how.append(f"with every leg at most {v:g} fast (the path needs {needs:.6g} s"
+                             f"with {kept}")
+        how.append(f"with {kept} (the path needs {needs:.6g} s"
                    + (" from rest to rest)" if rest_to_rest else ")"))
     if rest_to_rest:
-        duration = T if T is not None else timed.T * (PEAK_RATIO if v is not None else 1.0)
+        duration = T if T is not None else timed.T * (PEAK_RATIO if v is not None or bounds is not None else 1.0)
         timed = controls_from_dict(RestToRest(timed, duration).to_dict(), mech)
         how.insert(0, "from rest to rest")
-    how.insert(0, "in the least time" if T is None and v is not None else f"in T = {timed.T:g} s")
+    how.insert(0, "in the least time" if T is None and (v is not None or bounds is not None)
+               else f"in T = {timed.T:g} s")
     n = len(result.t)
     tau = np.arange(n) * (base.T / result.steps)
     tau[-1] = base.T
@@ -142,10 +270,19 @@ def retime(result: PlanResult, leg_speed: float | None = None, T: float | None =
     u = timed(t).reshape(n, mech.n_inputs)
     if not np.all(np.isfinite(u)):
         raise ValueError(f"T = {timed.T:g} s is too short for this plan: its re-timed inputs are not finite")
-    options = result.options if v is None else {**result.options, "leg_speed": v}
+    options = result.options
+    if v is not None:
+        options = {**options, "leg_speed": v}
+    if bounds is not None:
+        options = {**options, "input_bounds": bounds.record()}
+    success, reason = result.success, f"{result.reason}; re-timed {' '.join(how)}"
+    if bounds is not None:
+        out = input_excess(timed, bounds, mech, max(CHECK_STEPS, result.replay_steps or 0))
+        if out is not None:
+            success, reason = False, f"{reason}, but {out}"
     return dataclasses.replace(
-        result, parametrisation=timed, T=timed.T, t=t, u=u,
-        reason=f"{result.reason}; re-timed {' '.join(how)}", options=options, made_by=None,
+        result, success=success, parametrisation=timed, T=timed.T, t=t, u=u,
+        reason=reason, options=options, made_by=None,
         seconds=None if result.seconds is None else result.seconds + (time.perf_counter() - started))
 
 
@@ -184,3 +321,44 @@ def limit_speed(result: PlanResult, leg_speed: float | None, T: float | None) ->
               "plan with T=None for the least time")
     return dataclasses.replace(result, success=False, reason=reason,
                                options={**result.options, "leg_speed": leg_speed})
+
+
+def limit_inputs(result: PlanResult, bounds: InputBounds | None, T: float | None) -> PlanResult:
+    """What :func:`nonholo.plan` returns under input bounds (see the module).
+
+    Parameters
+    ----------
+    result : PlanResult
+        The planned path.
+    bounds : InputBounds or None
+        The bounds, checked; ``None``: ``result`` itself is returned.
+    T : float or None
+        ``None``: a success re-timed in the least time along its path. A given ``T``: a
+        success whose inputs keep the bounds (on the check's grid) is returned as planned;
+        one that does not is re-timed in ``T`` if its path needs no more, else fails saying
+        the time it needs.
+
+    Returns
+    -------
+    PlanResult
+        The plan under the bounds; ``options`` records ``input_bounds`` either way.
+    """
+    if bounds is None:
+        return result
+    options = {**result.options, "input_bounds": bounds.record()}
+    if not result.success:
+        return dataclasses.replace(result, options=options)
+    if T is None:
+        return retime(result, input_bounds=bounds)
+    mech = result.kinematics
+    steps = max(CHECK_STEPS, result.replay_steps or 0)
+    out = input_excess(result.parametrisation, bounds, mech, steps)
+    if out is None:
+        return dataclasses.replace(result, options=options)
+    fastest = input_time_map(result, bounds)
+    if fastest.minimum_time <= T:
+        return retime(result, T=T, input_bounds=bounds)
+    reason = (f"the planned path needs T >= {fastest.minimum_time:.6g} s to keep every input within its "
+              f"bounds ({bounds.text(input_names(mech))}; in T = {T:g} s {out.split(' (')[0]}); "
+              "plan with T=None for the least time")
+    return dataclasses.replace(result, success=False, reason=reason, options=options)

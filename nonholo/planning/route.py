@@ -610,7 +610,7 @@ def hop_delta_min(mechanism: Mechanism, a, b, delta_min: float) -> float:
 def steer(mechanism: Mechanism, R0, Rd, T: float, local: Callable, *, tol: float, delta_min: float,
           sign: float, budget: float | None = None, started: float | None = None,
           leg_limits=None, rescue: Callable | None = None, q0=None, qd=None,
-          leg: Callable | None = None) -> Steered:
+          leg: Callable | None = None, limits=None) -> Steered:
     """The route ``R0 → Rd`` steered hop by hop (see the module).
 
     Along the path of the first cost of :data:`nonholo.planning.roadmap.CONDITIONING_POWERS`,
@@ -654,6 +654,9 @@ def steer(mechanism: Mechanism, R0, Rd, T: float, local: Callable, *, tol: float
         ``leg(start, goal, T, delta_min, quick)``: plans a leg of the last stage (see the
         module) with the run's strategy, without the hops' cap, ``quick``: with
         :func:`quick_strategy`; without it (or beyond SO(3)) there is no last stage.
+    limits : Limits, optional
+        Further clearances the stitched replay keeps (:class:`~nonholo.model.limits.Limits`,
+        the coordinates' bounds; ``local`` keeps them in each hop).
 
     Returns
     -------
@@ -675,7 +678,7 @@ def steer(mechanism: Mechanism, R0, Rd, T: float, local: Callable, *, tol: float
             continue        # steering is deterministic: the same path fails the same way
         tried.append(path)
         steered = _steer_path(mechanism, path, goal, T, local, tol=tol, delta_min=delta_min, sign=sign,
-                              deadline=started + budget, leg_limits=leg_limits)
+                              deadline=started + budget, leg_limits=leg_limits, limits=limits)
         if steered.controls is None and steered.draft is not None and rescue is not None:
             steered.smoothed = rescue(steered.draft, steered.certify_seconds)
         if steered.controls is not None or steered.smoothed is not None or effort.seconds() > started + budget:
@@ -694,7 +697,7 @@ def _same_path(a: list, b: list) -> bool:
 
 
 def _steer_path(mechanism: Mechanism, path: list, goal, T: float, local: Callable, *, tol: float,
-                delta_min: float, sign: float, deadline: float, leg_limits=None) -> Steered:
+                delta_min: float, sign: float, deadline: float, leg_limits=None, limits=None) -> Steered:
     """:func:`steer` along one path of states ``(R, q)`` (``path[0]`` the start)."""
     start = path[0]
     R0, q0 = start
@@ -722,11 +725,11 @@ def _steer_path(mechanism: Mechanism, path: list, goal, T: float, local: Callabl
             return Steered(None, None, hops, f"hop {len(hops) + 1} ({length:.3g}{provider.unit}) failed: {why}", waypoints)
         targets.insert(0, provider.midpoint(here, targets[0]))
     return _certify_hops(mechanism, start, goal, T, hops, local, tol=tol, delta_min=delta_min, sign=sign,
-                         leg_limits=leg_limits, waypoints=waypoints)
+                         leg_limits=leg_limits, waypoints=waypoints, limits=limits)
 
 
 def _certify_hops(mechanism: Mechanism, start, goal, T: float, hops: list, local: Callable, *, tol: float,
-                  delta_min: float, sign: float, leg_limits, waypoints) -> Steered:
+                  delta_min: float, sign: float, leg_limits, waypoints, limits=None) -> Steered:
     """The hops' controls stitched and certified as a whole from ``start`` to ``goal``; where
     the replay misses the goal by a correctable error, the last hop is planned again by
     ``local`` from where the stitched replay enters it (at most :data:`MAX_REPAIRS` times)."""
@@ -739,7 +742,7 @@ def _certify_hops(mechanism: Mechanism, start, goal, T: float, hops: list, local
         clock = effort.seconds()
         cert = certify.measure(R0, Rd, T, mechanism, stitched, M, tol, delta_min, sign,
                                max_steps=min(certify.MAX_REPLAY_STEPS, STITCHED_REFINEMENT * M),
-                               leg_limits=leg_limits, q0=q0, qd=qd)
+                               leg_limits=leg_limits, q0=q0, qd=qd, limits=limits)
         clock = effort.seconds() - clock
         if cert.passed or not cert.correctable or repair == MAX_REPAIRS:
             break

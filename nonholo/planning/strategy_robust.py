@@ -140,8 +140,8 @@ def barrier_gradient(problem: Evaluator, ev: Evaluation, d0: float) -> np.ndarra
     """Gradient in ``λ`` of the barrier ``φ = Σ_{n=1..N} h ψ(d_n)``, ``d_n = sgn(Δ(R0)) Δ(R(t_n))``.
 
     ``ψ(d) = −log(d/d₀)`` for ``d < d₀`` and 0 above, plus the same barrier on the legs'
-    clearances from their stroke limits where the problem has them
-    (:meth:`nonholo.model.limits.LegLimits.clearance_terms`, below
+    clearances from their stroke limits and the coordinates' from their bounds where the
+    problem has them (:meth:`nonholo.model.limits.Limits.clearance_terms`, below
     :data:`nonholo.model.limits.BARRIER_CLEARANCE`).
 
     ``ev`` must hold ``Z`` and the stage weights ``Wd`` (``full`` evaluation). The
@@ -179,8 +179,8 @@ def barrier_gradient(problem: Evaluator, ev: Evaluation, d0: float) -> np.ndarra
             grad = spatial_gradient_delta(problem.mechanism, ev.R[active], q=ev.q[active])
             a[active] = (h * problem.sign * (-1.0 / d[active]))[:, None] * grad
             any_active = True
-    if problem.leg_limits is not None:
-        terms = problem.leg_limits.clearance_terms(problem.mechanism, ev.R)
+    if problem.limits is not None:
+        terms = problem.limits.clearance_terms(problem.mechanism, ev.R, q=ev.q)
         if terms is not None:
             nodes, c, rows = terms
             keep = nodes > 0
@@ -361,8 +361,8 @@ class RobustStrategy(Strategy):
     def near_limits(self, problem: Evaluator, ev: Evaluation, factor: float = 1.0) -> bool:
         """Whether a trajectory comes within ``factor`` times a barrier's reach of a limit.
 
-        The limits: ``Δ = 0`` (:attr:`barrier_d0`) and the legs' stroke limits
-        (:data:`nonholo.model.limits.BARRIER_CLEARANCE`).
+        The limits: ``Δ = 0`` (:attr:`barrier_d0`), the legs' stroke limits and the
+        coordinates' bounds (:data:`nonholo.model.limits.BARRIER_CLEARANCE`).
 
         Parameters
         ----------

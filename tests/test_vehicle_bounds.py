@@ -1,0 +1,304 @@
+"""Vehicles' bounds (``nonholo.constraints``): ``InputBounds`` kept by re-timing the planned
+path, ``StateBounds`` at every node like a leg stroke, the catalog's defaults, the least time
+along the path (``T=None``, ``nonholo plan --T min``), plan files and the certificate.
+
+Plans are checked against an independent integrator: SciPy's DOP853 on the mechanism's own
+rates ``mech.rates`` (``G(x) u``), between the controls' breakpoints, not the planner's CF4."""
+import json
+import math
+import re
+
+import numpy as np
+import pytest
+from scipy.integrate import solve_ivp
+
+import nonholo
+from nonholo import PlanResult
+from nonholo.certify import certificate as certify
+from nonholo.cli.entry import main
+from nonholo.constraints import InputBounds, StateBounds, as_data, of_mechanism
+from nonholo.model import catalog
+from nonholo.model.bounds import BOUND_RTOL
+from nonholo.model.limits import Limits
+from nonholo.motion.retimed import FLOOR
+from nonholo.motion.time_change import planned
+
+CAR, UNICYCLE = catalog.get("car"), catalog.get("unicycle")
+CAR_INPUTS = InputBounds((-1.0, -1.0), (1.0, 1.0))
+CAR_STATE = StateBounds((-math.inf,) * 3 + (-0.6,), (math.inf,) * 3 + (0.6,))
+PARK = ([0.0, 0.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0])          # one wheelbase sideways
+#: Dynobench's obstacle-free unicycle park (MODEL.md: time-optimal ≈ 2.90 s)
+UNICYCLE_PARK = ([0.7, 0.8, 0.0], [1.9, 0.3, 0.0])
+
+
+def dop853(result, mech, samples: int = 4001):
+    """The plan's controls played by DOP853 on ``mech.rates``: sample times, states."""
+    bp = result.breakpoints
+    bp = np.unique(np.concatenate([[0.0, result.T], [] if bp is None else np.asarray(bp, dtype=float)]))
+    R, x = np.eye(3), np.asarray(result.q0, dtype=float)
+    ts, xs = [], []
+    for a, b in zip(bp[:-1], bp[1:]):
+        if not b > a:
+            continue
+        sol = solve_ivp(lambda t, y: mech.rates(R, y, np.asarray(result.controls(t), dtype=float).reshape(-1)),
+                        (a, b), x, method="DOP853", rtol=1e-12, atol=1e-13, dense_output=True)
+        t = np.linspace(a, b, max(3, int(samples * (b - a) / result.T)))
+        ts.append(t), xs.append(sol.sol(t).T)
+        x = sol.y[:, -1]
+    return np.concatenate(ts), np.concatenate(xs)
+
+
+def usage(bounds, u):
+    """``max_i max(u_i/high_i, u_i/low_i)``, computed here (not by the package)."""
+    u = np.asarray(u, dtype=float)
+    lo, hi = np.asarray(bounds.low), np.asarray(bounds.high)
+    return np.max(np.maximum(u / hi, u / lo), axis=-1)
+
+
+@pytest.fixture(scope="module")
+def car_least():
+    return nonholo.plan(*PARK, mechanism="car", T=None)
+
+
+@pytest.fixture(scope="module")
+def unicycle_least():
+    return nonholo.plan(*UNICYCLE_PARK, mechanism="unicycle", T=None)
+
+
+# -- the objects ---------------------------------------------------------------------------
+
+@pytest.mark.parametrize("build, match", [
+    (lambda: InputBounds(float("nan"), 1.0), "InputBounds: low"),
+    (lambda: InputBounds(-1.0, (1.0, float("nan"))), r"InputBounds: high\[1\]"),
+    (lambda: InputBounds(1.0, 0.5), "low = 1 must be below high = 0.5"),
+    (lambda: StateBounds((0.0, 2.0), (1.0, 1.0)), r"StateBounds: low\[1\] = 2 must be below high\[1\] = 1"),
+    (lambda: StateBounds((0.0, 1.0), (1.0, 2.0, 3.0)), "low has 2 entries, high 3"),
+    (lambda: StateBounds("x", 1.0), "StateBounds: low must be"),
+    (lambda: InputBounds((-1, -1, -1), (1, 1, 1)).check(CAR), r"low has 3 entries, mechanism 'car' has 2 inputs \(v, u2\)"),
+    (lambda: StateBounds(-1.0, (1.0, 1.0)).check(CAR), r"high has 2 entries, mechanism 'car' has 4 coordinates"),
+    (lambda: StateBounds(-1.0, 1.0).check(catalog.get("platform")), "has no coordinates"),
+    (lambda: InputBounds((0.25, -1.0), (0.5, 1.0)).check(CAR), "0.25 ≤ v ≤ 0.5 .* does not hold 0 inside"),
+    (lambda: InputBounds((-1.0, 0.0), (1.0, 1.0)).check(CAR), "0 ≤ u2 ≤ 1 .* does not hold 0 inside"),
+])
+def test_bad_bounds_name_the_argument(build, match):
+    with pytest.raises(ValueError, match=match):
+        build()
+
+
+def test_a_start_or_goal_outside_the_state_bounds_is_refused_naming_it_and_the_coordinate():
+    for start, goal, name in (([0, 0, 0, 0.7], PARK[1], "R0"), (PARK[0], [0, 1, 0, -0.65], "Rd")):
+        with pytest.raises(ValueError, match=f"^{name}: the {'start' if name == 'R0' else 'goal'} is outside "
+                                             r"the coordinates' bounds: phi = -?0\.\d+ passes"):
+            nonholo.plan(start, goal, mechanism="car", T=None)
+        with pytest.raises(ValueError, match=f"^{name}: .* phi"):
+            nonholo.plan(start, goal, mechanism="car", constraints=[CAR_STATE])
+
+
+def test_bad_combinations_name_the_arguments():
+    with pytest.raises(ValueError, match="T=None asks for the least time, which needs a leg_speed"):
+        nonholo.plan(np.eye(3), np.eye(3), mechanism="rolling_ball", T=None)
+    R0, Rd = nonholo.spaces.so3.from_rpy(0.5, 1.2, -0.5), nonholo.spaces.so3.from_rpy(1.0, 0.9, -0.5)
+    with pytest.raises(ValueError, match="leg_speed and InputBounds"):
+        nonholo.plan(R0, Rd, T=None, leg_speed=1.0, constraints=[InputBounds(-1.0, 1.0)])
+    with pytest.raises(TypeError, match=r"constraints\[1\]"):
+        nonholo.plan(*PARK, mechanism="car", constraints=[CAR_INPUTS, (-1, 1)])
+    with pytest.raises(ValueError, match="at most one"):
+        nonholo.plan(*PARK, mechanism="car", constraints=[CAR_INPUTS, CAR_INPUTS])
+
+
+def test_the_catalog_vehicles_carry_their_bounds_as_data_and_as_objects():
+    assert of_mechanism("car") == [CAR_INPUTS, CAR_STATE]
+    assert of_mechanism(UNICYCLE) == [InputBounds((-0.5, -0.5), (0.5, 0.5))]
+    assert of_mechanism("rolling_ball") == [] and of_mechanism("platform") == []
+    assert CAR.bounds == {"inputs": {"v": (-1.0, 1.0), "u2": (-1.0, 1.0)}, "coordinates": {"phi": (-0.6, 0.6)}}
+    # data -> objects -> data, and a mechanism given the data (as a mechanism file's [bounds]) the same objects
+    assert as_data(of_mechanism(CAR), CAR) == CAR.bounds
+    import dataclasses
+    own = dataclasses.replace(catalog.get("brockett"), bounds={"inputs": {"u1": (-2.0, 3.0)},
+                                                                "coordinates": {"z": (-math.inf, 5.0)}})
+    assert of_mechanism(own) == [InputBounds((-2.0, -math.inf), (3.0, math.inf)),
+                                 StateBounds(-math.inf, (math.inf, math.inf, 5.0)).check(own)]
+    # a plan file's record round-trips, null where free
+    record = CAR_STATE.check(CAR).record()
+    assert record[:3] == [[None, None]] * 3 and StateBounds.from_record(record, CAR) == CAR_STATE.check(CAR)
+
+
+# -- least time ----------------------------------------------------------------------------
+
+@pytest.mark.parametrize("name", ["car", "unicycle"])
+def test_least_time_plans_keep_the_bounds_and_reach_the_goal_under_dop853(name, car_least, unicycle_least):
+    res, goal = (car_least, PARK[1]) if name == "car" else (unicycle_least, UNICYCLE_PARK[1])
+    mech = catalog.get(name)
+    bounds = of_mechanism(name)[0]
+    assert res.success, res.reason
+    assert res.options["input_bounds"] == bounds.record()
+    # the inputs within the bounds at every sample and on a fine grid, to 1e-9 relative
+    t = np.linspace(0.0, res.T, 200001)
+    u = np.asarray(res.controls(t), dtype=float)
+    assert usage(bounds, u).max() <= 1.0 + BOUND_RTOL
+    assert usage(bounds, res.u).max() <= 1.0 + BOUND_RTOL
+    # one input at its bound nearly throughout (the least time along the path)
+    assert usage(bounds, u).max() >= 1.0 - 1e-9
+    assert np.mean(usage(bounds, u) >= 1.0 - 1e-6) > 0.5
+    # DOP853 on the mechanism's rates ends at the goal
+    _, x = dop853(res, mech)
+    assert np.max(np.abs(x[-1] - np.asarray(goal))) <= 1e-8
+    if name == "car":
+        assert np.max(np.abs(x[:, 3])) <= 0.6 * (1.0 + BOUND_RTOL)
+
+
+@pytest.mark.parametrize("name", ["car", "unicycle"])
+def test_the_least_time_is_the_integral_of_the_most_loaded_inputs_share(name, car_least, unicycle_least):
+    """``T̃ = ∫ max(max_i |u_i(τ)|/b_i, FLOOR·peak) dτ`` of the planned controls, by an
+    independent quadrature (Simpson on a fine grid), is the re-timed plan's ``T``."""
+    res = car_least if name == "car" else unicycle_least
+    bounds = of_mechanism(name)[0]
+    base = planned(res.parametrisation)
+    tau = np.linspace(0.0, base.T, 200001)
+    share = usage(bounds, np.asarray(base(tau), dtype=float))
+    rho = np.maximum(share, FLOOR * share.max())
+    h = tau[1] - tau[0]
+    simpson = h / 3.0 * (rho[0] + rho[-1] + 4.0 * rho[1:-1:2].sum() + 2.0 * rho[2:-1:2].sum())
+    assert res.T == pytest.approx(simpson, rel=1e-6)
+    assert res.T > base.T          # the planned path broke the bounds in its planning time
+
+
+@pytest.mark.parametrize("T, kind", [(8.0, "InputRetimed"), (15.0, "Fourier")])
+def test_a_plan_in_a_given_time_keeps_the_bounds_re_timed_in_it_or_as_planned(T, kind):
+    """With the car's bounds asked for and ``T`` given: a plan whose path needs no more than
+    ``T`` is played in ``T`` — re-timed where its inputs broke the bounds (T = 8 s), as
+    planned where they did not (T = 15 s)."""
+    res = nonholo.plan(*PARK, mechanism="car", T=T, constraints=of_mechanism("car"))
+    assert res.success, res.reason
+    assert res.T == T and type(res.parametrisation).__name__ == kind
+    t = np.linspace(0.0, res.T, 100001)
+    assert usage(CAR_INPUTS, res.controls(t)).max() <= 1.0 + BOUND_RTOL
+    _, x = dop853(res, CAR)
+    assert np.max(np.abs(x[-1] - np.asarray(PARK[1]))) <= 1e-8
+    assert np.max(np.abs(x[:, 3])) <= 0.6 * (1.0 + BOUND_RTOL)
+
+
+def test_a_plan_in_too_short_a_time_fails_saying_the_time_it_needs():
+    short = nonholo.plan(*PARK, mechanism="car", T=2.0, constraints=of_mechanism("car"))
+    assert not short.success
+    assert re.search(r"needs T >= \d", short.reason) and "T=None" in short.reason
+    assert "input v reaches" in short.reason
+    assert short.options["input_bounds"] == CAR_INPUTS.record()
+
+
+def test_retime_plays_a_stored_plan_under_input_bounds():
+    res = nonholo.plan(*UNICYCLE_PARK, mechanism="unicycle")          # T = 1, no bounds
+    assert usage(of_mechanism("unicycle")[0], res.u).max() > 1.0
+    fast = nonholo.retime(res, input_bounds=InputBounds(-0.5, 0.5))
+    assert fast.success and fast.T > res.T and "least time" in fast.reason
+    slow = nonholo.retime(res, T=2 * fast.T, input_bounds=InputBounds(-0.5, 0.5))
+    assert usage(of_mechanism("unicycle")[0], slow.u).max() == pytest.approx(0.5, rel=1e-6)
+    with pytest.raises(ValueError, match="too short"):
+        nonholo.retime(res, T=0.5 * fast.T, input_bounds=InputBounds(-0.5, 0.5))
+    with pytest.raises(ValueError, match="input_bounds"):
+        nonholo.retime(res, input_bounds=(-0.5, 0.5))
+
+
+# -- state bounds ----------------------------------------------------------------------------
+
+def test_state_bounds_are_kept_along_the_motion():
+    """The car's default parking plan swings the steering beyond 0.6 rad; under
+    ``StateBounds`` the certified motion keeps it inside (under DOP853 too)."""
+    free = nonholo.plan(*PARK, mechanism="car")
+    _, x = dop853(free, CAR)
+    assert np.max(np.abs(x[:, 3])) > 0.6
+    kept = nonholo.plan(*PARK, mechanism="car", constraints=[CAR_STATE])
+    assert kept.success, kept.reason
+    assert kept.options["state_bounds"] == CAR_STATE.check(CAR).record()
+    _, x = dop853(kept, CAR)
+    assert np.max(np.abs(x[:, 3])) <= 0.6 * (1.0 + BOUND_RTOL)
+    assert np.max(np.abs(x[-1] - np.asarray(PARK[1]))) <= 1e-8
+
+
+# -- plan files and the certificate --------------------------------------------------------
+
+def test_a_least_time_plan_saves_and_loads_and_tampered_bounds_are_refused(car_least, tmp_path):
+    path = car_least.save(tmp_path / "car.json")
+    back = PlanResult.load(path)
+    assert back == car_least and back.T == car_least.T
+    d = json.loads(path.read_text())
+    assert d["controls"]["kind"] == "retimed_inputs" and d["controls"]["bounds"] == CAR_INPUTS.record()
+    # bounds recorded tighter than the controls keep
+    tampered = dict(d, options={**d["options"], "input_bounds": [[-0.9, 0.9], [-1.0, 1.0]]})
+    (tmp_path / "a.json").write_text(json.dumps(tampered))
+    with pytest.raises(ValueError, match="'options' record input_bounds"):
+        PlanResult.load(tmp_path / "a.json")
+    tampered = dict(d, options={**d["options"], "state_bounds": [[None, None]] * 3 + [[-0.4, 0.4]]})
+    (tmp_path / "s.json").write_text(json.dumps(tampered))
+    with pytest.raises(ValueError, match="'success' is true, but the replayed motion leaves the coordinates' bounds: phi"):
+        PlanResult.load(tmp_path / "s.json")
+    tampered = dict(d, options={**d["options"], "state_bounds": [[None, None]] * 3 + [[0.4, -0.4]]})
+    (tmp_path / "b.json").write_text(json.dumps(tampered))
+    with pytest.raises(ValueError, match="'options' has a bad state_bounds"):
+        PlanResult.load(tmp_path / "b.json")
+
+
+def test_the_certificate_refuses_controls_beyond_the_bounds():
+    res = nonholo.plan(*PARK, mechanism="car", T=15.0, constraints=of_mechanism("car"))
+    assert res.success and not type(res.parametrisation).__name__.endswith("Retimed")
+    kw = dict(tol=1e-10, delta_min=1e-2, sign=1.0, q0=res.q0, qd=res.qd)
+    args = (res.R0, res.Rd, res.T, CAR, res.parametrisation, res.replay_steps)
+    assert certify.measure(*args, **kw, input_bounds=CAR_INPUTS.check(CAR),
+                           limits=Limits.of(CAR_STATE.check(CAR))).passed
+    peak = float(np.max(np.abs(res.u[:, 0])))
+    tight = InputBounds((-0.9 * peak, -1.0), (0.9 * peak, 1.0)).check(CAR)
+    bad = certify.measure(*args, **kw, input_bounds=tight)
+    assert not bad.passed and "inputs leave their bounds: input v reaches" in bad.reason
+    phi = float(np.max(np.abs(res.q[:, 3])))
+    box = StateBounds((-math.inf,) * 3 + (-0.9 * phi,), (math.inf,) * 3 + (0.9 * phi,)).check(CAR)
+    bad = certify.measure(*args, **kw, limits=Limits.of(box))
+    assert not bad.passed and "coordinates' bounds" in bad.reason and "phi" in bad.reason
+    # and a file whose successful controls break the bounds it records is refused on load
+    d = res.to_dict()
+    d["options"]["input_bounds"] = tight.record()
+    with pytest.raises(ValueError, match="'success' is true, but input v reaches"):
+        PlanResult.from_dict(json.loads(json.dumps(d)))
+
+
+# -- the command line ------------------------------------------------------------------------
+
+def test_cli_plans_the_car_in_the_least_time_and_prints_it(capsys, car_least):
+    status = main(["plan", "--mechanism", "car", "--from", "0", "0", "0", "0", "--to", "0", "1", "0", "0",
+                   "--T", "min", "--quiet"])
+    out = capsys.readouterr().out
+    assert status == 0, out
+    T = float(re.search(r"T = ([0-9.]+) s", out).group(1))
+    assert T == pytest.approx(car_least.T, rel=1e-5)
+    assert "least time" in out
+
+
+PYTHON = re.compile(r"T=None|\b(leg_speed|leg_length|delta_min|max_iter|allow_imports|csv_rate|R0|Rd)\b|"
+                    r"\w=None|InputBounds|StateBounds|constraints|nonholo\.Mechanism|Strategy subclass")
+
+
+@pytest.mark.parametrize("argv", [
+    ["--T", "min"],
+    ["--T", "0"],
+    ["--T", "1e-12"],
+    ["--leg-speed", "-1"],
+    ["--leg-length", "2", "1"],
+    ["--delta-min", "-1"],
+    ["--max-iter", "-1"],
+    ["--steps", "3"],
+    ["--strategy", "a.b:C"],
+    ["--mechanism", "car", "--from", "0", "0", "0", "0", "--to", "0", "1", "0", "0", "--leg-speed", "1"],
+    ["--mechanism", "car", "--from", "0", "0", "0", "0", "--to", "0", "1", "0", "0", "--leg-length", "1", "2"],
+    ["--mechanism", "car", "--from", "0", "0", "0", "0.7", "--to", "0", "1", "0", "0", "--T", "min"],
+    ["--mechanism", "car", "--from", "0", "0", "0", "0", "--to", "0", "1", "0", "0.7", "--T", "min"],
+    ["--mechanism", "car", "--from", "0", "0", "0", "0", "--to", "0", "1", "0", "0", "--T", "min", "--leg-speed", "1"],
+    ["--mechanism", "rolling_ball", "--from", "0", "0", "0", "0", "0", "--to", "0", "0", "0", "1", "0", "--T", "min"],
+    ["--from", "0", "0", "0", "--to", "1", "0.9", "-0.5"],
+])
+def test_cli_errors_name_flags_not_python_arguments(capsys, argv):
+    if "--from" not in argv:
+        argv = ["--from", "0.5", "1.2", "-0.5", "--to", "1.0", "0.9", "-0.5"] + argv
+    status = main(["plan", "--quiet"] + argv)
+    err = capsys.readouterr().err
+    assert status == 2, err
+    assert err.startswith("nonholo plan: error: ") and "--" in err
+    assert not PYTHON.search(err), err
