@@ -13,6 +13,8 @@ only the first run compiles. Two situations must not break the package:
 """
 from __future__ import annotations
 
+import functools
+import types
 import warnings
 
 #: Options of every compiled function of the package: no GIL held, IEEE arithmetic with
@@ -83,9 +85,7 @@ class LazyDispatcher:
     """
 
     def __init__(self, func, cache: bool, options: dict):
-        self.__wrapped__ = func
-        self.__name__ = getattr(func, "__name__", "function")
-        self.__doc__ = getattr(func, "__doc__", None)
+        functools.update_wrapper(self, func)        # name, module, docstring, __wrapped__
         self._args = (cache, options)
         self._dispatcher = None
 
@@ -105,6 +105,10 @@ class LazyDispatcher:
 
     def __call__(self, *args, **kwargs):
         return self.dispatcher()(*args, **kwargs)
+
+    def __get__(self, obj, objtype=None):
+        # a routine, as numba's dispatcher is (a method descriptor): documented as a function
+        return self if obj is None else types.MethodType(self, obj)
 
     def __getattr__(self, name):
         if name.startswith("__") or name in ("_args", "_dispatcher"):
