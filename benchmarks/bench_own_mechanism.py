@@ -81,17 +81,33 @@ print(json.dumps({"derive": t1 - t0, "generate": t2 - t1, "first plan": t3 - t2,
                   "lines": source.count("\n")}))
 """
 
-#: Geometries of floats (``PlatformGeometry`` fields), a start and a goal of each (RPY).
+def on_sphere(*v) -> tuple:
+    """The point of the unit sphere in the direction ``v`` (the sphere's radius is the unit of
+    length: a platform's joints and contact point lie on it)."""
+    return tuple(float(x) for x in np.asarray(v, dtype=float) / np.linalg.norm(v))
+
+
+def tangent(axle, contact) -> tuple:
+    """``axle`` without its component along ``contact``: tangent to the sphere there."""
+    axle, n = np.asarray(axle, dtype=float), np.asarray(on_sphere(*contact))
+    return tuple(float(x) for x in axle - (axle @ n) * n)
+
+
+#: Geometries of floats (``PlatformGeometry`` fields), a start and a goal of each (RPY). The
+#: CAD-like placement's measurements (three decimals) are put on the sphere: its platform
+#: joints and contact point moved along their directions, its axle made tangent.
 GEOMETRIES = {
     "legs and disk placed at will (notebook 07)": (
-        dict(base1=(0.3, 1.5, 0.4), tip1=(0.1, 1.0, 0.0), base2=(1.5, -0.2, 0.5), tip2=(1.0, 0.0, 0.1),
-             contact=(0.0, 0.6, 0.8), axle=(1.0, 0.0, 0.0)), (0, 0, 0), (0.6, 0.4, -0.3)),
+        dict(base1=(0.3, 1.5, 0.4), tip1=on_sphere(0.1, 1.0, 0.0), base2=(1.5, -0.2, 0.5),
+             tip2=on_sphere(1.0, 0.0, 0.1), contact=(0.0, 0.6, 0.8), axle=(1.0, 0.0, 0.0)),
+        (0, 0, 0), (0.6, 0.4, -0.3)),
     "bases raised, disk off the pole (README)": (
         dict(base1=(0.0, 1.6, 0.5), tip1=(0.0, 1.0, 0.0), base2=(1.6, 0.0, 0.5), tip2=(1.0, 0.0, 0.0),
              contact=(0.6, 0.0, 0.8), axle=(0.0, 1.0, 0.0)), (0.5, 1.2, -0.5), (1.0, 0.9, -0.5)),
-    "a CAD-like placement (three decimals)": (
-        dict(base1=(0.112, 1.487, 0.613), tip1=(0.021, 0.804, 0.113), base2=(1.734, 0.288, -0.171),
-             tip2=(0.792, -0.214, 0.036), contact=(-0.437, 0.218, 0.873), axle=(0.894, 0.0, 0.447)),
+    "a CAD-like placement (three decimals, put on the sphere)": (
+        dict(base1=(0.112, 1.487, 0.613), tip1=on_sphere(0.021, 0.804, 0.113), base2=(1.734, 0.288, -0.171),
+             tip2=on_sphere(0.792, -0.214, 0.036), contact=on_sphere(-0.437, 0.218, 0.873),
+             axle=tangent((0.894, 0.0, 0.447), (-0.437, 0.218, 0.873))),
         (0, 0, 0), (-0.3, 0.2, 0.1)),
 }
 

@@ -25,14 +25,12 @@ from sympy.printing.numpy import NumPyPrinter
 
 from . import definitions, singularity
 from .mechanisms import (
+    DIMENSIONS,
     Mechanism,
-    a,
-    b,
     check_definition,
     input_map,
     leg_length_squared,
     leg_rate_row,
-    rho,
 )
 from .rotations import r
 from .state_space import Q_matrix
@@ -115,9 +113,26 @@ def check_printed(exprs) -> None:
             stack.extend(node.args)
 
 
+#: The largest integer printed as an integer: beyond it, a float (the integers of an
+#: exact geometry of floats, ``2285000000000000011562886131888724026``, would be Python
+#: integers that NumPy, numba and C cannot take).
+EXACT_INTEGERS = 2 ** 53
+
+
 class _Printer(NumPyPrinter):
     """NumPy printer (``numpy.sin`` works on floats, arrays and under numba) that
-    prints ``x**(1/3)`` as the real cube root ``numpy.cbrt(x)``."""
+    prints ``x**(1/3)`` as the real cube root ``numpy.cbrt(x)``, and a rational number whose
+    numerator or denominator exceeds :data:`EXACT_INTEGERS` as the nearest float."""
+
+    def _print_Integer(self, expr):
+        if abs(expr.p) > EXACT_INTEGERS:
+            return repr(float(expr))
+        return super()._print_Integer(expr)
+
+    def _print_Rational(self, expr):
+        if max(abs(expr.p), expr.q) > EXACT_INTEGERS:
+            return repr(float(expr))
+        return super()._print_Rational(expr)
 
     def _print_Pow(self, expr, rational=False):
         if expr.exp == sp.Rational(1, 3):
@@ -192,8 +207,9 @@ def codegen_normal_form() -> str:
 
 #: Dimensions used to place the platform's joints in drawings (sphere radius ρ = 1,
 #: platform joints on the sphere, base joints at distance a from O). The kinematics do
-#: not depend on them: the control scaling 1/(4 |A_i| |B_i|) cancels a and b.
-DRAWING_DIMENSIONS = {a: sp.Rational(8, 5), b: 1, rho: 1}
+#: not depend on them: the control scaling 1/(4 |A_i| |B_i|) cancels a and b. The same
+#: numbers a geometry is checked at (:data:`derivations.mechanisms.DIMENSIONS`).
+DRAWING_DIMENSIONS = DIMENSIONS
 
 
 def geometry_data(geometry) -> str:

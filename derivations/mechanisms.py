@@ -21,6 +21,7 @@ them gives ``L(R)`` and ``det C(R)`` gives ``Δ(R)``.
 from __future__ import annotations
 
 import keyword
+import math
 import re
 from dataclasses import dataclass, field
 
@@ -178,7 +179,8 @@ def check_definition(mechanism) -> None:
     of the derivation's ``auxiliary_forms``, ``auxiliaries`` and ``geometry`` — within
     :mod:`derivations.budget` (the field and the frame, which are differentiated, within its
     ``WORK`` too) and with real, finite constants
-    (:func:`~derivations.admission.check_constants`).
+    (:func:`~derivations.admission.check_constants`); a platform's geometry must be one that
+    can be built (:func:`check_geometry`).
 
     Parameters
     ----------
@@ -226,8 +228,9 @@ def check_definition(mechanism) -> None:
             admission.expression(form, f"{where}: auxiliary form {name}", tally=tally)
     geometry = derivation.get("geometry")
     if geometry is not None:                # the legs' code is generated from it
-        for key in ("base1", "tip1", "base2", "tip2", "contact", "axle"):
+        for key in GEOMETRY_FIELDS:
             check_vector(getattr(geometry, key, None), f"{where}: geometry {key}")
+        check_geometry(geometry, f"{where}: geometry")
     for i, pair in enumerate(derivation.get("auxiliaries", ())):
         symbol, value = pair
         if not isinstance(symbol, sp.Symbol) or not is_free_name(symbol.name):
@@ -262,21 +265,71 @@ def is_free_name(name: str) -> bool:
 
 a, b, rho = sp.symbols("a b rho", positive=True)
 
+#: The numbers of the symbols of a symbolic platform geometry: the sphere's radius ``ρ = 1``
+#: is the unit of length, the platform joints lie on the sphere (``b = ρ``) and the base
+#: joints at ``a = 8/5`` from its centre. A symbolic geometry is checked at them
+#: (:func:`check_geometry`), and the generated code draws and measures the legs with them
+#: (``derivations.codegen.DRAWING_DIMENSIONS``); the kinematics ``L`` and ``Δ`` do not depend
+#: on them.
+DIMENSIONS = {a: sp.Rational(8, 5), b: sp.Integer(1), rho: sp.Integer(1)}
+
+#: The relative tolerance of :func:`check_geometry`: a contact point or a platform joint
+#: within it of the unit sphere is on it, an axle whose cosine with the contact point is
+#: within it of 0 is tangent.
+GEOMETRY_TOL = 1e-9
+
+#: The fields of a :class:`PlatformGeometry`, in order.
+GEOMETRY_FIELDS = ("base1", "tip1", "base2", "tip2", "contact", "axle")
+
 
 @dataclass(frozen=True)
 class PlatformGeometry:
     """Geometry of a two-leg orienting platform with one rolling disk.
 
-    All vectors are 3-tuples (numbers or SymPy expressions). The sphere's centre O is
-    the origin; the platform's orientation is R.
+    The platform is a sphere of radius 1 — its radius is the unit of length — turning about
+    its centre O, the origin; its orientation is ``R``. Every vector is a 3-tuple of
+    numbers or SymPy expressions (text is refused, never parsed: SymPy would evaluate it);
+    the symbols ``a``, ``b``, ``rho`` of this module stand for the numbers of
+    :data:`DIMENSIONS` where a geometry is checked or drawn.
 
-    Attributes:
-        base1, base2: base joints ``A_i`` of the legs, in the world frame.
-        tip1, tip2: platform joints of the legs, in the platform frame (world position
-            ``R tip_i``).
-        contact: the disk's contact point on the sphere, world frame.
-        axle: direction of the disk's axle, world frame (tangent to the sphere at the
-            contact point).
+    The geometry is checked on construction (:func:`check_geometry`): the contact point
+    and the platform joints on the unit sphere, the axle tangent to it at the contact
+    point, each within :data:`GEOMETRY_TOL`. An impossible geometry is refused before
+    anything is derived from it.
+
+    Parameters
+    ----------
+    base1, base2 : tuple
+        The legs' base joints ``A_i``, in the world frame (fixed).
+    tip1, tip2 : tuple
+        The legs' platform joints ``B_i``, in the platform's frame (world position
+        ``R B_i``), on the sphere: ``|B_i| = 1``.
+    contact : tuple
+        The disk's contact point on the sphere, in the world frame: ``|contact| = 1``.
+    axle : tuple
+        The direction of the disk's axle, in the world frame, tangent to the sphere at the
+        contact point (``axle · contact = 0``); its length does not matter.
+
+    Raises
+    ------
+    ValueError
+        Naming the field: a vector that is not three numbers or SymPy expressions, a
+        constant that is not real and finite, or a geometry :func:`check_geometry` refuses
+        (with the defect measured).
+
+    See Also
+    --------
+    platform_mechanism : The platform's kinematics derived from its geometry.
+
+    Examples
+    --------
+    The README's platform, its disk off the pole and its leg bases raised:
+
+    >>> from derivations.mechanisms import PlatformGeometry
+    >>> geometry = PlatformGeometry(
+    ...     base1=(0.0, 1.6, 0.5), tip1=(0.0, 1.0, 0.0),
+    ...     base2=(1.6, 0.0, 0.5), tip2=(1.0, 0.0, 0.0),
+    ...     contact=(0.6, 0.0, 0.8), axle=(0.0, 1.0, 0.0))
     """
 
     base1: tuple
@@ -287,11 +340,117 @@ class PlatformGeometry:
     axle: tuple
 
     def __post_init__(self):
-        """Refuse a vector that is not three numbers or SymPy expressions (text is refused,
-        never parsed: SymPy would evaluate it), or a constant that is not real and finite
-        (:func:`check_vector`)."""
-        for key in ("base1", "tip1", "base2", "tip2", "contact", "axle"):
+        """Refuse a vector that is not three numbers or SymPy expressions, a constant that
+        is not real and finite (:func:`check_vector`), and an impossible geometry
+        (:func:`check_geometry`)."""
+        for key in GEOMETRY_FIELDS:
             check_vector(getattr(self, key), f"geometry: {key}")
+        check_geometry(self)
+
+
+def numeric_vector(values, key: str) -> tuple[float, float, float]:
+    """A checked vector (:func:`check_vector`) in floats, its symbols ``a``, ``b``, ``rho``
+    at :data:`DIMENSIONS`.
+
+    Parameters
+    ----------
+    values : sequence
+        Three numbers or SymPy expressions.
+    key : str
+        What it is, for the message.
+
+    Returns
+    -------
+    tuple of float
+        The vector's value.
+
+    Raises
+    ------
+    ValueError
+        Naming ``key``, for an entry with other symbols (it cannot be measured) or whose
+        value is not a finite real number.
+    """
+    out = []
+    for i, value in enumerate(values):
+        expr = sp.sympify(value).xreplace(DIMENSIONS)
+        if expr.free_symbols:
+            names = ", ".join(sorted(map(str, expr.free_symbols)))
+            raise ValueError(f"{key}[{i}] = {value} has the symbol{'s' if len(expr.free_symbols) > 1 else ''} "
+                             f"{names}: a platform's geometry is given by numbers, or in the symbols a, b, "
+                             "rho of derivations.mechanisms (taken as a = 8/5, b = rho = 1)")
+        number = admission.numeric_value(expr)
+        if number.imag or not math.isfinite(number.real):
+            raise ValueError(f"{key}[{i}] = {value} is not a finite real number")
+        out.append(number.real)
+    return tuple(out)
+
+
+def measured(value: float, expected: float) -> str:
+    """``value`` with the digits that tell it from ``expected`` (4 at least).
+
+    Parameters
+    ----------
+    value, expected : float
+        The measured and the expected number.
+
+    Returns
+    -------
+    str
+        ``"0.92"``, ``"1.005"``, ``"1.000000002"``.
+    """
+    for digits in range(4, 18):
+        text = f"{value:.{digits}g}"
+        if float(text) != expected:
+            return text
+    return repr(value)
+
+
+def check_geometry(geometry, where: str = "geometry") -> None:
+    """Refuse a platform geometry that cannot be built: the sphere's radius is 1, so the
+    disk's contact point and the legs' platform joints must lie on the unit sphere, and the
+    disk's axle must be tangent to it at the contact point; each within the relative
+    tolerance :data:`GEOMETRY_TOL`. A symbolic geometry is measured at :data:`DIMENSIONS`.
+
+    Parameters
+    ----------
+    geometry : PlatformGeometry
+        The geometry (or an object with its six fields).
+    where : str
+        What it is, for the message.
+
+    Raises
+    ------
+    ValueError
+        Naming the field and its defect as measured, e.g. ``"geometry: contact: |contact|
+        = 0.92, expected 1 (...)"``, ``"geometry: axle: axle·contact/(|axle| |contact|) =
+        0.31, expected 0 (tangent ...)"``, ``"geometry: tip1: |tip1| = 1.005, expected the
+        sphere's radius 1 (...)"``.
+    """
+    v = {key: numeric_vector(getattr(geometry, key, None), f"{where}: {key}") for key in GEOMETRY_FIELDS}
+    symbolic = {key for key in GEOMETRY_FIELDS
+                if any(sp.sympify(x).free_symbols for x in getattr(geometry, key))}
+
+    def at(*keys):          # where a symbolic vector was measured
+        return "; measured at a = 8/5, b = rho = 1" if symbolic.intersection(keys) else ""
+
+    scale = "lengths are in units of the sphere's radius: divide every vector by it"
+    contact = math.hypot(*v["contact"])
+    if abs(contact - 1.0) > GEOMETRY_TOL:
+        raise ValueError(f"{where}: contact: |contact| = {measured(contact, 1.0)}, expected 1 (the disk "
+                         f"touches the sphere, of radius 1; {scale}{at('contact')})")
+    axle = math.hypot(*v["axle"])
+    if not axle > 0.0:
+        raise ValueError(f"{where}: axle: |axle| = 0, expected a direction (tangent to the sphere at the "
+                         "contact point)")
+    cosine = sum(x * y for x, y in zip(v["axle"], v["contact"])) / (axle * contact)
+    if abs(cosine) > GEOMETRY_TOL:
+        raise ValueError(f"{where}: axle: axle·contact/(|axle| |contact|) = {measured(cosine, 0.0)}, expected 0 "
+                         f"(the axle is tangent to the sphere at the contact point{at('axle', 'contact')})")
+    for key in ("tip1", "tip2"):
+        length = math.hypot(*v[key])
+        if abs(length - 1.0) > GEOMETRY_TOL:
+            raise ValueError(f"{where}: {key}: |{key}| = {measured(length, 1.0)}, expected the sphere's radius 1 "
+                             f"(the platform joints are on the sphere; {scale}{at(key)})")
 
 
 def check_vector(values, key: str) -> None:
@@ -409,13 +568,37 @@ def platform_mechanism(name: str, geometry: PlatformGeometry, description: str) 
     ``C^{-1} = adj(C) / det C`` and ``det C = κ Δ``. Every admissible ``ω`` lies in the
     plane the disk allows, spanned by the constant frame ``N``, and ``u = C₁₂(R) ω`` (the leg
     rows of ``C``) gives the physical inputs of ``ω = N w`` exactly: ``W = C₁₂ N``,
-    polynomial (``(Nᵀ L)^{-1}``, :func:`input_map`, without inverting anything).
+    polynomial (``(Nᵀ L)^{-1}``, :func:`~derivations.mechanisms.input_map`, without
+    inverting anything).
 
     A geometry of numbers only (floats taken as the rationals they print as) is derived by
-    :func:`exact_platform`, which keeps ``L`` and ``Q`` in terms of the entries of ``C``
-    (no simplification of rational functions); a symbolic one (``a``, ``b``, ``ρ``) as
-    the appendix prints it.
+    :func:`~derivations.mechanisms.exact_platform`, which keeps ``L`` and ``Q`` in terms of
+    the entries of ``C`` (no simplification of rational functions); a symbolic one (``a``,
+    ``b``, ``ρ``) as the appendix prints it.
+
+    Parameters
+    ----------
+    name : str
+        The mechanism's name, a Python identifier (it names the generated module).
+    geometry : PlatformGeometry
+        Where the legs and the disk are (checked when it was made).
+    description : str
+        One line for listings.
+
+    Returns
+    -------
+    derivations.mechanisms.Mechanism
+        The symbolic mechanism; ``nonholo.Mechanism.from_symbolic`` generates and compiles
+        its numeric code.
+
+    Raises
+    ------
+    ValueError
+        If the mechanism's name, description or size is refused
+        (:func:`~derivations.mechanisms.check_definition`), or the geometry is not one that
+        can be built (:func:`check_geometry`, checked again: before anything is derived).
     """
+    check_geometry(geometry)
     exact = exact_geometry(geometry)
     if exact is not None:
         return exact_platform(name, exact, description)

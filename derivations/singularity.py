@@ -20,7 +20,7 @@ import sympy as sp
 from .mechanisms import paper_platform
 from .rotations import rpy, substitute_rotation
 
-#: RPY angles φ (about Z), ϑ (about Y), ψ (about X).
+#: RPY angles φ (yaw, about z), ϑ (pitch, about y), ψ (roll, about x).
 angles = sp.symbols("phi theta psi", real=True)
 phi, theta, psi = angles
 #: Normal-form coordinates.

@@ -113,6 +113,57 @@ def test_mechanism_figure_other_geometry(tmp_path):
     assert "Δ = +1.000" in fig.axes[0].get_title()
 
 
+def test_mechanism_figure_draws_and_titles_one_mechanism():
+    """The figure is of the mechanism given: its geometry drawn, its Δ and name in the titles;
+    a geometry alone has no Δ (no mechanism gives it one); only both given pair a drawing with
+    another mechanism's Δ. A mechanism without legs is refused, a wrong type too."""
+    from derivations.mechanisms import paper_platform
+
+    R = so3.from_rpy(0.3, 0.2, 0.1)
+    raised, paper = catalog.get("platform_raised"), catalog.get("platform")
+
+    def base_joints(fig):
+        """The squares drawn: the base joints, in the world frame."""
+        out = []
+        for coll in fig.axes[0].collections:
+            if getattr(coll, "_offsets3d", None) is not None and len(coll._offsets3d[0]) == 1:
+                out.append(np.array([c[0] for c in coll._offsets3d]))
+        return out
+
+    def drawn_from(fig, geometry):
+        return any(np.allclose(p, geometry.base1) for p in base_joints(fig))
+
+    for given in ("platform_raised", raised):
+        fig = viz.mechanism_figure(R, mechanism=given)
+        title = fig.axes[0].get_title()
+        assert title.startswith("platform_raised\n") and f"Δ = {float(raised.delta(R)):+.3f}" in title
+        assert fig.get_suptitle() == f"platform_raised: {raised.description}"
+        assert drawn_from(fig, raised.geometry) and not drawn_from(fig, paper.geometry)
+    # a mechanism given as geometry= is that mechanism, not the paper's Δ on its drawing
+    fig = viz.mechanism_figure(R, geometry="platform_raised")
+    assert f"Δ = {float(raised.delta(R)):+.3f}" in fig.axes[0].get_title()
+    assert f"{float(paper.delta(R)):+.3f}" not in fig.axes[0].get_title()
+    # a geometry alone: drawn, no Δ
+    fig = viz.mechanism_figure(R, geometry=raised.geometry)
+    assert "Δ" not in fig.axes[0].get_title() and drawn_from(fig, raised.geometry)
+    # both: the caller pairs them
+    fig = viz.mechanism_figure(R, geometry=raised.geometry, mechanism="platform")
+    assert f"Δ = {float(paper.delta(R)):+.3f}" in fig.axes[0].get_title() and drawn_from(fig, raised.geometry)
+    # the default: the paper's platform
+    fig = viz.mechanism_figure(R)
+    assert f"Δ = {float(paper.delta(R)):+.3f}" in fig.axes[0].get_title() and drawn_from(fig, paper.geometry)
+    with pytest.raises(ValueError, match="mechanism 'attitude' has no legs/disk geometry to draw"):
+        viz.mechanism_figure(R, mechanism="attitude")
+    with pytest.raises(ValueError, match="mechanism 'car' has no legs/disk geometry to draw"):
+        viz.mechanism_figure(R, mechanism=catalog.get("car"))
+    with pytest.raises(ValueError, match="unknown mechanism 'no_such'"):
+        viz.mechanism_figure(R, mechanism="no_such")
+    with pytest.raises(TypeError, match="mechanism must be a mechanism's name or a nonholo.Mechanism, got int"):
+        viz.mechanism_figure(R, mechanism=3)
+    with pytest.raises(TypeError, match=r"from_symbolic"):
+        viz.mechanism_figure(R, mechanism=paper_platform())
+
+
 def test_default_geometry_is_the_papers():
     from derivations.mechanisms import PAPER_GEOMETRY
 
@@ -354,7 +405,7 @@ def test_a_platform_plans_figure_has_no_plane(tmp_path):
     assert not plane_axes(fig)
     labels = [ax.get_ylabel() for ax in fig.axes]
     assert labels[:2] == ["input u [1/s]", "RPY angles [rad]"]
-    assert "leg length [geometry units]" in labels and "|l_T| = " in fig.get_suptitle()
+    assert "leg length [radius]" in labels and "|l_T| = " in fig.get_suptitle()
     assert fig.get_suptitle().endswith(" rad")
 
 

@@ -67,10 +67,18 @@ def test_unknown_mechanism():
         plan(np.eye(3), np.eye(3), mechanism="no_such_thing")
 
 
+def on_sphere(*v) -> tuple:
+    """The point of the unit sphere in the direction ``v`` (the sphere's radius is the unit of
+    length: a platform's joints and contact point lie on it)."""
+    n = sum(x * x for x in v) ** 0.5
+    return tuple(x / n for x in v)
+
+
 #: A platform whose singular set separates example 1's start from its goal (Δ of opposite
 #: signs there): a start and control fixed for the paper's platform are not for it.
-ACROSS = PlatformGeometry(base1=(0.1, 1.4, 0.6), tip1=(0.0, 0.8, 0.1), base2=(2.8, 0.9, -0.7),
-                          tip2=(0.6, -0.2, 0.0), contact=(-2.3, -0.2, -1.2), axle=(-0.6, 0.2, 1.1))
+ACROSS = PlatformGeometry(base1=(0.1, 1.4, 0.6), tip1=on_sphere(0.0, 0.8, 0.1), base2=(2.8, 0.9, -0.7),
+                          tip2=on_sphere(0.6, -0.2, 0.0), contact=on_sphere(-2.3, -0.2, -1.2),
+                          axle=(-0.6, 0.3, 1.1))
 
 
 @pytest.fixture

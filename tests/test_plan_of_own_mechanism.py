@@ -24,8 +24,15 @@ from nonholo.spaces import so3
 
 matplotlib.use("Agg")
 
-GEOMETRY = PlatformGeometry(base1=(0.3, 1.5, 0.4), tip1=(0.1, 1.0, 0.0), base2=(1.5, -0.2, 0.5),
-                            tip2=(1.0, 0.0, 0.1), contact=(0.0, 0.6, 0.8), axle=(1.0, 0.0, 0.0))
+def on_sphere(*v) -> tuple:
+    """The point of the unit sphere in the direction ``v`` (the sphere's radius is the unit of
+    length: a platform's joints and contact point lie on it)."""
+    n = sum(x * x for x in v) ** 0.5
+    return tuple(x / n for x in v)
+
+
+GEOMETRY = PlatformGeometry(base1=(0.3, 1.5, 0.4), tip1=on_sphere(0.1, 1.0, 0.0), base2=(1.5, -0.2, 0.5),
+                            tip2=on_sphere(1.0, 0.0, 0.1), contact=(0.0, 0.6, 0.8), axle=(1.0, 0.0, 0.0))
 
 
 @pytest.fixture(scope="module")

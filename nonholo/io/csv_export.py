@@ -1,22 +1,26 @@
 """A planned motion as a table an actuator controller can play back (CSV).
 
-Columns, one row per sample time ``t_k = k / rate`` (and ``T``):
+Columns, one row per sample time ``t_k = k / rate`` (and ``T``), named and with the units of
+the table of names and units (:data:`nonholo.model.names.CSV_COLUMNS`; :func:`column_units`
+gives a plan's columns with their units):
 
-- ``t`` (s);
-- ``l1 … lk``, ``dl1_dt … dlk_dt``: the leg lengths and leg speeds, in the units of the
-  mechanism's geometry (per second), for a mechanism with legs
+- ``t`` [s];
+- ``l1 … lk`` [radius], ``dl1_dt … dlk_dt`` [radius/s]: the leg lengths and leg speeds, in
+  the length unit of the geometry (the sphere's radius, 1), for a mechanism with legs
   (:meth:`nonholo.model.mechanism.Mechanism.leg_lengths`, ``dl_i/dt = G_i(R) L(R) u``);
 - ``u1 … um``: the planned inputs ``u(t)`` (``controls(t)``: the scaled leg rates of a
-  platform, 1/s);
-- ``qx, qy, qz, qw``: the orientation ``R(t)`` as a unit quaternion, scalar last (as
+  platform [1/s]; a vehicle's in its units, :func:`nonholo.model.names.input_units`);
+- ``qx, qy, qz, qw`` [-]: the orientation ``R(t)`` as a unit quaternion, scalar last (as
   :class:`scipy.spatial.transform.Rotation`), its sign kept continuous from row to row
   (``q`` and ``−q`` are the same orientation; a player interpolating quaternions must not
   see a jump);
-- ``delta``: ``Δ(R(t))``, for a mechanism with a singular set.
+- ``delta`` [-]: ``Δ(R(t))``, for a mechanism with a singular set.
 
 A mechanism whose state goes beyond SO(3) (:mod:`nonholo.spaces.groups`) has its coordinates as
-columns named as the mechanism names them (the car's ``x, y, theta, phi``), after the
-inputs; the quaternion only if it has an orientation; ``delta`` is ``Δ(R(t), q(t))``.
+columns named as the mechanism names them (the car's ``x, y, theta, phi``), in its units
+(``wheelbase``, ``rad``), after the inputs; the quaternion only if it has an orientation;
+``delta`` is ``Δ(R(t), q(t))``. The header holds the names alone (a controller reads the
+columns by name); their units are those above.
 
 ``R(t)`` between the plan's samples is one CF4 step of the physical system from the sample
 below (the integrator's own local approximation, ``O(h⁵)`` from the replayed motion), so
@@ -31,6 +35,7 @@ import math
 import numpy as np
 from scipy.spatial.transform import Rotation
 
+from ..model import names
 from ..motion.time_change import planned, planned_time
 from ..motion.simulation import DELTA_STOP
 from ..numerics.checks import is_number
@@ -220,6 +225,49 @@ def trajectory_table(result, rate: float = DEFAULT_RATE) -> dict[str, np.ndarray
     if mech.singular.exists:
         cols["delta"] = mech.delta_samples(R, q if mech.space.k else None)
     return cols
+
+
+def column_names(mechanism) -> list[str]:
+    """The columns of a plan's table (:func:`trajectory_table`), in order.
+
+    Parameters
+    ----------
+    mechanism : Mechanism
+        The plan's mechanism.
+
+    Returns
+    -------
+    list of str
+        ``["t", "l1", "l2", "dl1_dt", "dl2_dt", "u1", "u2", "qx", "qy", "qz", "qw",
+        "delta"]`` for the platform.
+    """
+    out = ["t"]
+    if mechanism.has_legs:
+        legs = range(1, len(mechanism.geometry.bases) + 1)
+        out += [f"l{i}" for i in legs] + [f"dl{i}_dt" for i in legs]
+    out += [f"u{i + 1}" for i in range(mechanism.n_inputs)] + list(mechanism.coordinates)
+    if mechanism.space.has_orientation:
+        out += ["qx", "qy", "qz", "qw"]
+    if mechanism.singular.exists:
+        out.append("delta")
+    return out
+
+
+def column_units(mechanism) -> dict[str, str]:
+    """The columns of a plan's table with their units (:func:`nonholo.model.names.csv_units`).
+
+    Parameters
+    ----------
+    mechanism : Mechanism
+        The plan's mechanism.
+
+    Returns
+    -------
+    dict of str to str
+        ``{"t": "s", "l1": "radius", …, "u1": "1/s", …, "delta": "-"}``, in the columns' order.
+    """
+    header = column_names(mechanism)
+    return dict(zip(header, names.csv_units(mechanism, header)))
 
 
 def csv_text(result, rate: float = DEFAULT_RATE) -> str:

@@ -14,6 +14,7 @@ from functools import cache
 import numpy as np
 from scipy.optimize import least_squares
 
+from ..model.names import ANGLES
 from ..spaces import so3
 
 
@@ -162,9 +163,10 @@ def examples() -> tuple[Example, ...]:
     tuple of Example
         The examples, in order.
     """
-    ex1 = Example(1, "Example 1", "yaw +0.5 rad and pitch -0.3 rad",
+    yaw, pitch, roll = (angle.text for angle in ANGLES)
+    ex1 = Example(1, "Example 1", f"{yaw} +0.5 rad and {pitch} -0.3 rad",
                   (0.5, 1.2, -0.5), so3.from_rpy(1.0, 0.9, -0.5), (1.0, 0.9, -0.5))
-    ex2 = Example(2, "Example 2", "roll turned by -1 rad",
+    ex2 = Example(2, "Example 2", f"{roll} turned by -1 rad",
                   (1.5, 1.4, 0.5), so3.from_rpy(1.5, 1.4, -0.5), (1.5, 1.4, -0.5))
     start3 = (0.5, 1.2, -0.5)
     goal3, goal4 = parallel_parking_goals(so3.from_rpy(*start3))[:2]

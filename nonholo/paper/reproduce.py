@@ -76,7 +76,8 @@ LIMITS_GOAL = ((0.5, 1.2, -0.5), (-0.4527, 1.4094, -1.3638))
 #: the legs' stroke of the limits example (:data:`LIMITS_GOAL`)
 LEG_LENGTH = (1.2, 2.0)
 #: The legs' speed bound the same goal's default plan is re-timed under (figure
-#: ``motion_quality``, ``plans/least_time.json`` and ``.csv``), geometry units per second.
+#: ``motion_quality``, ``plans/least_time.json`` and ``.csv``), in radius per second (the
+#: length unit of the geometry, :mod:`nonholo.model.names`).
 LEG_SPEED = 0.5
 
 

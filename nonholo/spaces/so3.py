@@ -164,7 +164,8 @@ def from_rpy(phi: float, theta: float, psi: float) -> np.ndarray:
     Parameters
     ----------
     phi, theta, psi : float
-        The roll-pitch-yaw angles φ, ϑ, ψ (radians).
+        The RPY angles (radians): φ the yaw (about z), ϑ the pitch (about y), ψ the roll
+        (about x), as :mod:`nonholo.model.names` names them.
 
     Returns
     -------

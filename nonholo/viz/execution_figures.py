@@ -6,14 +6,16 @@ panels: the error from the goal after each stage on a log scale (its parts: rota
 coordinates; a touch-up not played, hollow, at the error it left unchanged), the simulated
 state's distance from the played plan along each played stage's
 motion, the motion itself (the first two coordinates in the plane where the state has them,
-else the roll–pitch–yaw angles against time), planned and simulated, and the slip at the
-rolling contacts along each stage.
+else the RPY angles against time), planned and simulated, and the slip at the rolling
+contacts along each stage, a speed in the mechanism's length unit per second. Names and
+units come from :mod:`nonholo.model.names`.
 """
 from __future__ import annotations
 
 import numpy as np
 
 from ..model import catalog
+from ..model.names import RAD, SECOND, angle_label, length_unit, per_second
 from ..spaces import so3
 from .quantities import coordinate_units, label
 from .style import RESULT_COLORS, TRIPLE_COLORS, NotebookFigure, styled
@@ -125,7 +127,8 @@ def execution_figure(execution, title: str | None = None) -> NotebookFigure:
     x = np.arange(len(stages))
     played = np.array([s.get("outcome", "played") == "played" for s in stages])
     units = {part: mech.space.part_unit(part) for part in parts}
-    names_of = {part: (f"{part} {unit}" if unit.startswith("(") else label(part, unit)) for part, unit in units.items()}
+    names_of = {part: label(part, unit) for part, unit in units.items()}
+    shared = units[parts[0]] if len(set(units.values())) == 1 else ""   # one unit: on the axis too
     for j, part in enumerate(parts):
         values = np.maximum([s["error"][part] for s in stages], FLOOR)
         ax.semilogy(x, values, "-", color=RESULT_COLORS[j], label=names_of[part])
@@ -134,7 +137,7 @@ def execution_figure(execution, title: str | None = None) -> NotebookFigure:
                     label="not played" if j == len(parts) - 1 and not played.all() else None)
     ticks = [f"{name}\n({s['outcome']})" if not p else name for name, s, p in zip(names, stages, played)]
     ax.set_xticks(x, ticks, rotation=20 if len(stages) > 3 else 0)
-    ax.set_ylabel("error from the goal")
+    ax.set_ylabel(label("error from the goal", shared))
     ax.set_title("after each stage (at rest)")
     ax.legend(fontsize=8)
 
@@ -150,8 +153,8 @@ def execution_figure(execution, title: str | None = None) -> NotebookFigure:
         if i:
             ax.axvline(offset, color="0.5", lw=0.8, ls=":")
         offset += trace["t"][-1]
-    ax.set_xlabel(label("time, stages one after another", "s"))
-    ax.set_ylabel("simulated − played plan")
+    ax.set_xlabel(label("time, stages one after another", SECOND))
+    ax.set_ylabel(label("simulated − played plan", shared))
     ax.set_title("tracking along the motion")
     ax.legend(fontsize=8)
 
@@ -166,11 +169,11 @@ def execution_figure(execution, title: str | None = None) -> NotebookFigure:
         ax.set_ylabel(label(mech.coordinates[1], cu[1]))
     else:
         planned, simulated = so3.as_rpy(first["R_planned"]), so3.as_rpy(first["R"])
-        for j, (colour, name) in enumerate(zip(TRIPLE_COLORS, ("φ (roll)", "ϑ (pitch)", "ψ (yaw)"))):
+        for j, (colour, name) in enumerate(zip(TRIPLE_COLORS, (angle_label(k, unit=False) for k in range(3)))):
             ax.plot(first["t"], planned[:, j], "--", color=colour, lw=1.0)
             ax.plot(first["t"], simulated[:, j], color=colour, lw=1.2, label=name)
-        ax.set_xlabel(label("time t", "s"))
-        ax.set_ylabel(label("angle", "rad"))
+        ax.set_xlabel(label("time t", SECOND))
+        ax.set_ylabel(label("RPY angle", RAD))
     ax.set_title("open loop: plan (dashed) and simulated")
     ax.legend(fontsize=8)
 
@@ -182,8 +185,9 @@ def execution_figure(execution, title: str | None = None) -> NotebookFigure:
         ax.semilogy(offset + trace["t"], np.maximum(trace["slip"], FLOOR), color=RESULT_COLORS[i % len(RESULT_COLORS)],
                     lw=1.0, label=names[i])
         offset += trace["t"][-1]
-    ax.set_xlabel(label("time, stages one after another", "s"))
-    ax.set_ylabel("slip speed at the contacts")
+    ax.set_xlabel(label("time, stages one after another", SECOND))
+    length = length_unit(mech)
+    ax.set_ylabel(label("slip speed at the contacts", per_second(length) if length else ""))
     ax.set_title("slip")
     ax.legend(fontsize=8)
 

@@ -6,6 +6,7 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from ..model import catalog
+from ..model.names import NONE, label
 from .plan_figures import plot_body_axes, plot_controls
 from .platform_drawing import draw_platform, rpy_text
 from .singular_set import draw_slice
@@ -50,7 +51,7 @@ def mechanism_card_figure(mechanism: str, R=None, result=None, psi_slice: float 
     if mech.singular.exists:
         cs = draw_slice(ax2, psi_slice, n=181, mechanism=mechanism)
         cb = fig.colorbar(cs, ax=ax2, shrink=0.9, ticks=np.linspace(-1, 1, 5))
-        cb.set_label("Δ / max|Δ| [-]")
+        cb.set_label(label("Δ / max|Δ|", NONE))
     elif result is not None:
         plot_controls(ax2, result)
         ax2.set_title("planned inputs")

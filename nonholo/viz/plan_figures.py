@@ -11,7 +11,9 @@ function that can fill any axes. And figures of one plan's refinements:
 The controls of the platform are the scaled leg-extension rates
 ``u_i = d(l_i²)/dt / (4ab)`` (``a = |A_i|``, ``b = |B_i|``, the distances of the base and
 platform joints from the sphere's centre); with lengths measured in units of the sphere's
-radius they are plotted in ``1/s``.
+radius they are plotted in ``1/s``. Names and units come from :mod:`nonholo.model.names`
+(the angles ``φ (yaw, about z)``, ``ϑ (pitch, about y)``, ``ψ (roll, about x)``; lengths in
+``radius``, the sphere's radius).
 """
 from __future__ import annotations
 
@@ -24,6 +26,7 @@ from matplotlib.lines import Line2D
 from scipy.spatial.transform import Rotation
 
 from ..model import catalog
+from ..model.names import NONE, PER_SECOND, RAD, RADIUS, SECOND, angle_label, label, per_second
 from ..spaces import so3
 from .platform_drawing import (
     delta_along,
@@ -189,8 +192,8 @@ def plot_convergence(ax, results, tol: float | None = None, labels=None) -> None
                 color="0.4")
     if tol is not None:
         ax.axhline(tol, color="k", lw=0.9, ls="--", label=f"tolerance {tol:g}")
-    ax.set_xlabel("iteration [-]")
-    ax.set_ylabel("terminal error ‖l_T‖ [rad]")
+    ax.set_xlabel(label("iteration", NONE))
+    ax.set_ylabel(label("terminal error ‖l_T‖", RAD))
     ax.set_title("convergence")
     ax.legend(loc="lower left", framealpha=0.9)
 
@@ -260,10 +263,10 @@ def plot_controls(ax, results, components=(0, 1), labels=None) -> None:
             ax.plot(t, u[:, j], color=PAIR_COLORS[j], ls=_ls(i), drawstyle=style,
                     label=f"$u_{j + 1}$" if i == 0 else None)
     ax.axhline(0.0, color="k", lw=0.6)
-    ax.set_xlabel("time t [s]")
+    ax.set_xlabel(label("time t", SECOND))
     legs = geometry_for(results, None) is not None
-    ax.set_ylabel(("scaled leg rate u [1/s]" if legs else "input u [1/s]")
-                  if len(components) > 1 else f"$u_{components[0] + 1}$ [1/s]")
+    ax.set_ylabel(label(("scaled leg rate u" if legs else "input u")
+                        if len(components) > 1 else f"$u_{components[0] + 1}$", PER_SECOND))
     ax.set_title("controls")
     _legend(ax, results, labels)
 
@@ -300,8 +303,8 @@ def controls_figure(results, title: str | None = None) -> Figure:
             t, u, style = _control_series(res)
             ax.plot(t, u[:, j], color=_color(i), ls=_ls(i), drawstyle=style, label=lab)
         ax.axhline(0.0, color="k", lw=0.6)
-        ax.set_xlabel("time t [s]")
-        ax.set_ylabel(f"$u_{j + 1}$ [1/s]")
+        ax.set_xlabel(label("time t", SECOND))
+        ax.set_ylabel(label(f"$u_{j + 1}$", PER_SECOND))
         ax.set_title(f"leg {j + 1}: $u_{j + 1}$ = d($l_{j + 1}^2$)/dt / (4ab)" if legs
                      else f"input $u_{j + 1}$")
     axes[0].legend(loc="best", framealpha=0.9)
@@ -345,7 +348,7 @@ def plot_rpy(ax, results, labels=None) -> None:
     """
     results = _as_list(results)
     labels = labels or _labels(results)
-    names = ("φ (about z)", "ϑ (about y)", "ψ (about x)")
+    names = tuple(angle_label(k, unit=False) for k in range(3))
     _no_trajectory(ax, results)
     for i, res in enumerate(results):
         if not has_trajectory(res):
@@ -366,8 +369,8 @@ def plot_rpy(ax, results, labels=None) -> None:
         g = g + 2 * np.pi * np.round((end - g) / (2 * np.pi))
         ax.plot([results[0].t[-1]] * 3, g, "x", color="k", ms=8, mew=1.5, ls="none",
                 label="goal $R_d$")
-    ax.set_xlabel("time t [s]")
-    ax.set_ylabel("RPY angle [rad]")
+    ax.set_xlabel(label("time t", SECOND))
+    ax.set_ylabel(label("RPY angle", RAD))
     ax.set_title("orientation R(t) = RPY(φ, ϑ, ψ)")
     _legend(ax, results, labels)
 
@@ -434,8 +437,8 @@ def plot_leg_lengths(ax, results, geometry=None, labels=None) -> None:
         for y in (lo, hi):
             ax.axhline(y / g.radius, color="0.25", lw=1.0, ls="--",
                        label="stroke limits (leg_length)" if k == 0 and y == lo else None)
-    ax.set_xlabel("time t [s]")
-    ax.set_ylabel("leg length [ρ]")
+    ax.set_xlabel(label("time t", SECOND))
+    ax.set_ylabel(label("leg length", RADIUS))
     ax.set_title("leg lengths $l_i = |R\\,B_i - A_i|$")
     _legend(ax, results, labels)
 
@@ -490,8 +493,8 @@ def plot_delta(ax, results, threshold: float | None = 1e-2, labels=None) -> None
     """
     results = _as_list(results)
     labels = labels or _labels(results)
-    ax.set_xlabel("time t [s]")
-    ax.set_ylabel("Δ(R(t)) [-]")
+    ax.set_xlabel(label("time t", SECOND))
+    ax.set_ylabel(label("Δ(R(t))", NONE))
     ax.set_title("distance from the singular set (▼: min |Δ|)")
     if not _singular(results):
         ax.text(0.5, 0.5, f"no singular set ({results[0].mechanism})", transform=ax.transAxes,
@@ -581,10 +584,10 @@ def plot_body_axes(ax, results, labels=None) -> None:
     ax.set_xticks([-1, 0, 1])
     ax.set_yticks([-1, 0, 1])
     ax.set_zticks([-1, 0, 1])
-    ax.set_xlabel("x [-]")
-    ax.set_ylabel("y [-]")
+    ax.set_xlabel(label("x", NONE))
+    ax.set_ylabel(label("y", NONE))
     ax.zaxis.set_rotate_label(False)
-    ax.set_zlabel("z [-]", rotation=90)
+    ax.set_zlabel(label("z", NONE), rotation=90)
     ax.set_title("body axes R(t) $e_k$ (○ start, □ end)")
     ax.legend(loc="upper left", fontsize=8, framealpha=0.9)
     ax.view_init(elev=22, azim=35)
@@ -631,8 +634,8 @@ def plot_min_delta(ax, results, threshold: float | None = 1e-2, labels=None) -> 
     """
     results = _as_list(results)
     labels = labels or _labels(results)
-    ax.set_xlabel("iteration [-]")
-    ax.set_ylabel("min over t of |Δ(R(t))| [-]")
+    ax.set_xlabel(label("iteration", NONE))
+    ax.set_ylabel(label("min over t of |Δ(R(t))|", NONE))
     ax.set_title("closest approach to Δ = 0 per iteration")
     if not _singular(results):
         ax.text(0.5, 0.5, f"no singular set ({results[0].mechanism})", transform=ax.transAxes,
@@ -695,9 +698,9 @@ def global_route_figure(result, title: str | None = None) -> Figure:
     ax.set_xticks(*PI_TICKS)
     ax.set_yticks(*HALF_PI_TICKS)
     ax.set_zticks(*PI_TICKS)
-    ax.set_xlabel("ψ [rad]")
-    ax.set_ylabel("ϑ [rad]")
-    ax.set_zlabel("φ [rad]")
+    ax.set_xlabel(angle_label(2))
+    ax.set_ylabel(angle_label(1))
+    ax.set_zlabel(angle_label(0))
     ax.set_box_aspect((2, 1, 2), zoom=0.88)
     ax.view_init(elev=25.0, azim=-60.0)
     ax.set_title(f"the motion and Δ = 0 (grey) in RPY angles: {par.n_pieces} hops")
@@ -760,8 +763,8 @@ def leg_limits_figure(free, limited, title: str | None = None) -> Figure:
         if b > a:
             ax.axhspan(a, b, color="0.85", zorder=0)
     ax.set_ylim(bottom, top)
-    ax.set_xlabel("time t [s]")
-    ax.set_ylabel("leg length (geometry units)")
+    ax.set_xlabel(label("time t", SECOND))
+    ax.set_ylabel(label("leg length", RADIUS))
     ax.legend(fontsize=8, loc="best")
     ax.set_title(title or f"{mech.name}: the legs' stroke kept by plan(..., leg_length=({lo:g}, {hi:g}))")
     return fig
@@ -800,8 +803,8 @@ def motion_quality_figure(plain, cheap, fast, title: str | None = None) -> Figur
         for j in range(u.shape[1]):
             left.plot(t, u[:, j], color=PAIR_COLORS[j], ls=ls, lw=1.4,
                       label=f"$u_{j + 1}$, {what} (∫|u|² dt = {e:.4f})" if j == 0 else f"$u_{j + 1}$")
-    left.set_xlabel("time t [s]")
-    left.set_ylabel("input u [1/s]")
+    left.set_xlabel(label("time t", SECOND))
+    left.set_ylabel(label("input u", PER_SECOND))
     left.legend(fontsize=8, loc="best")
     left.set_title("plan(..., objective=\"energy\")")
     v = fast.options["leg_speed"]
@@ -813,8 +816,8 @@ def motion_quality_figure(plain, cheap, fast, title: str | None = None) -> Figur
     for y in (v, -v):
         right.axhline(y, color="0.35", lw=1.2, ls=":")
     right.axhline(0.0, color="k", lw=0.5)
-    right.set_xlabel("time t [s]")
-    right.set_ylabel("leg speed (geometry units / s)")
+    right.set_xlabel(label("time t", SECOND))
+    right.set_ylabel(label("leg speed", per_second(RADIUS)))
     right.legend(fontsize=8, loc="best")
     right.set_title(f"nonholo.retime(..., leg_speed={v:g}): the least time")
     fig.suptitle(title or f"{mech.name}: one path, its least energy and its least time", fontsize=11)

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..model.names import ANGLES, NONE, RADIUS, RAD, SECOND, angle_label, per_second
 from ..spaces import so3
 from .platform_drawing import result_mechanism
 from .quantities import coordinate_units, input_units, label, plane_position, unit_groups
@@ -109,11 +110,11 @@ def _rpy(ax, result) -> None:
     if len(result.R):
         rpy = np.array([so3.as_rpy(R) for R in result.R])
         goal = so3.as_rpy(result.Rd)
-        for k, name in enumerate(("φ (Z)", "ϑ (Y)", "ψ (X)")):
+        for k, name in enumerate(angle_label(i, unit=False) for i in range(len(ANGLES))):
             line, = ax.plot(result.t, rpy[:, k], label=name)
             ax.axhline(goal[k], color=line.get_color(), ls=":", lw=0.8)
         ax.legend(fontsize="small", title="dotted: goal", title_fontsize="small")
-    ax.set_ylabel(label("RPY angles", "rad"))
+    ax.set_ylabel(label("RPY angles", RAD))
 
 
 def _coordinates(ax, result, mech, unit: str, indices) -> None:
@@ -131,7 +132,7 @@ def _delta(ax, result) -> None:
     sgn = np.sign(result.delta[0]) if len(result.delta) else 1.0
     ax.axhline(sgn * dmin, color="r", ls="--", label=f"threshold {sgn * dmin:+g}")
     ax.axhline(0.0, color="k", lw=0.5)
-    ax.set_ylabel("Δ [-]")
+    ax.set_ylabel(label("Δ", NONE))
     ax.legend(fontsize="small")
 
 
@@ -141,7 +142,7 @@ def _legs(lengths_ax, speeds_ax, result, mech) -> None:
         lengths_ax.plot(result.t, lengths[:, i], label=f"l{i + 1}")
     for k, y in enumerate(result.options.get("leg_length") or ()):
         lengths_ax.axhline(y, color="r", ls="--", label="stroke limits" if k == 0 else None)
-    lengths_ax.set_ylabel(label("leg length", "geometry units"))
+    lengths_ax.set_ylabel(label("leg length", RADIUS))
     lengths_ax.legend(fontsize="small")
     speeds = mech.leg_speeds(result.R, result.u)
     for i in range(speeds.shape[1]):
@@ -151,7 +152,7 @@ def _legs(lengths_ax, speeds_ax, result, mech) -> None:
         for k, y in enumerate((v, -v)):
             speeds_ax.axhline(y, color="r", ls="--", label="speed limit" if k == 0 else None)
     speeds_ax.axhline(0.0, color="k", lw=0.5)
-    speeds_ax.set_ylabel(label("leg speed", "geometry units/s"))
+    speeds_ax.set_ylabel(label("leg speed", per_second(RADIUS)))
     speeds_ax.legend(fontsize="small")
 
 
@@ -212,7 +213,7 @@ def plan_figure(result) -> NotebookFigure:
             _legs(ax, by_kind["speeds"], result, mech)
     for ax in axes[:-1]:
         ax.tick_params(labelbottom=False)
-    axes[-1].set_xlabel(label("time t", "s"))
+    axes[-1].set_xlabel(label("time t", SECOND))
     fig.suptitle(f"{result.mechanism}, {result.method}/{result.strategy}: "
                  + error_text(result, mech, ".2e"))
     return fig

@@ -1,10 +1,11 @@
 """The platform drawn: its numeric geometry (:func:`as_geometry`, :func:`leg_lengths`),
 ``Δ`` at its orientations (:func:`delta_along`), the 3D schematic
-(:func:`draw_platform`) and :func:`mechanism_figure` -- the platform at one or two
+(:func:`draw_platform`) and :func:`mechanism_figure` -- a platform at one or two
 orientations.
 
-Lengths are in units of the sphere's radius ``ρ``; the default geometry is the paper's
-placement with ``a = 1.6``, ``b = ρ = 1`` (platform joints on the sphere's surface).
+Lengths are in units of the sphere's radius (``radius``, :mod:`nonholo.model.names`: the
+sphere's radius is 1); the default geometry is the paper's placement with ``a = 1.6``,
+``b = ρ = 1`` (platform joints on the sphere's surface, base joints at 1.6).
 """
 from __future__ import annotations
 
@@ -15,6 +16,7 @@ from mpl_toolkits.mplot3d.art3d import Poly3DCollection
 
 from ..model import catalog
 from ..model.mechanism import Geometry, Mechanism
+from ..model.names import RADIUS, label
 from ..spaces import so3
 from .style import NotebookFigure, PAIR_COLORS, TRIPLE_COLORS, styled
 
@@ -213,8 +215,8 @@ def draw_platform(ax, R, geometry=None, *, labels: bool = True, disk_radius: flo
     The sphere (translucent, with body-fixed parallels and meridians, the body equator
     thicker), the body axes ``x_b, y_b, z_b`` (columns of ``R``) as arrows, the legs as
     thick segments from their base joints (squares) to the platform joints (circles) with
-    their lengths, and the disk (radius ``disk_radius · ρ``, in the plane orthogonal to its
-    axle) tangent to the sphere at the contact point, with its axle.
+    their lengths, and the disk (radius ``disk_radius`` times the sphere's, in the plane
+    orthogonal to its axle) tangent to the sphere at the contact point, with its axle.
 
     Parameters
     ----------
@@ -227,7 +229,7 @@ def draw_platform(ax, R, geometry=None, *, labels: bool = True, disk_radius: flo
     labels : bool
         Label the legs, joints and axes.
     disk_radius : float
-        The disk's radius as a fraction of ``ρ``.
+        The disk's radius as a fraction of the sphere's.
     limit : float, optional
         Half-width of the (cubic) box.
     view : dict, optional
@@ -246,10 +248,10 @@ def draw_platform(ax, R, geometry=None, *, labels: bool = True, disk_radius: flo
     ax.set_zticks(ticks)
     ax.set_box_aspect((1, 1, 1), zoom=0.95)
     ax.view_init(**{**MECHANISM_VIEW, **(view or {})})
-    ax.set_xlabel("x [ρ]")
-    ax.set_ylabel("y [ρ]")
+    ax.set_xlabel(label("x", RADIUS))
+    ax.set_ylabel(label("y", RADIUS))
     ax.zaxis.set_rotate_label(False)
-    ax.set_zlabel("z [ρ]", rotation=90)
+    ax.set_zlabel(label("z", RADIUS), rotation=90)
     ax.tick_params(labelsize=8, pad=0)
     projection = ax.get_proj()
 
@@ -357,14 +359,56 @@ def rpy_text(R) -> str:
     return f"RPY = ({phi:.2f}, {th:.2f}, {psi:.2f}) rad"
 
 
+def drawn_mechanism(mechanism) -> Mechanism:
+    """The platform a drawing is of, checked to have a geometry to draw.
+
+    Parameters
+    ----------
+    mechanism : str or Mechanism
+        A catalog name or a numeric mechanism.
+
+    Returns
+    -------
+    Mechanism
+        The mechanism.
+
+    Raises
+    ------
+    TypeError
+        If ``mechanism`` is neither a name nor a :class:`~nonholo.model.mechanism.Mechanism`
+        (a symbolic ``derivations.mechanisms.Mechanism`` is told to go through
+        ``nonholo.Mechanism.from_symbolic``).
+    ValueError
+        If the name is unknown, or the mechanism has no legs/disk geometry (it is not a
+        two-leg platform).
+    """
+    if not isinstance(mechanism, (str, Mechanism)):
+        hint = ""
+        if type(mechanism).__module__.startswith("derivations"):
+            hint = " (a symbolic mechanism: pass nonholo.Mechanism.from_symbolic(m))"
+        raise TypeError(f"mechanism must be a mechanism's name or a nonholo.Mechanism, got "
+                        f"{type(mechanism).__name__}{hint}")
+    mech = catalog.get(mechanism)
+    if mech.geometry is None:
+        raise ValueError(f"mechanism {mech.name!r} has no legs/disk geometry to draw: a platform's "
+                         "drawing needs a two-leg platform (a mechanism with a geometry)")
+    return mech
+
+
 @styled
 def mechanism_figure(R_start, R_goal=None, geometry=None, title: str | None = None,
-                     mechanism: str = "platform", view: dict | None = None) -> Figure:
-    """3D schematic of the platform at ``R_start`` (and at ``R_goal``, side by side).
+                     mechanism=None, view: dict | None = None) -> Figure:
+    """3D schematic of a platform at ``R_start`` (and at ``R_goal``, side by side).
 
     Each panel shows the sphere with body-fixed grid lines, the body axes as arrows,
     both legs with their current lengths, and the rolling disk with its axle; the panel
     titles give the RPY angles and ``Δ(R)``.
+
+    The figure is of one platform: ``mechanism``'s (its geometry drawn, its ``Δ`` and name
+    in the titles); without it, of ``geometry`` (a geometry alone, without a ``Δ``: no
+    mechanism gives it one; a mechanism or its name given as ``geometry`` is taken as
+    ``mechanism``); without either, of the paper's platform. ``geometry`` and
+    ``mechanism`` both given draw that geometry with that mechanism's ``Δ``.
 
     Parameters
     ----------
@@ -373,11 +417,12 @@ def mechanism_figure(R_start, R_goal=None, geometry=None, title: str | None = No
     R_goal : array_like, optional
         The goal.
     geometry : object, optional
-        See :func:`as_geometry` (default: the paper's).
+        A geometry as :func:`as_geometry` takes it.
     title : str, optional
-        The figure's title.
-    mechanism : str
-        The mechanism whose ``Δ`` the titles give.
+        The figure's title (default: the mechanism's name and description).
+    mechanism : str or Mechanism, optional
+        The platform drawn (a catalog name or a :class:`~nonholo.model.mechanism.Mechanism`
+        with a geometry).
     view : dict, optional
         ``elev``/``azim`` in degrees.
 
@@ -385,20 +430,32 @@ def mechanism_figure(R_start, R_goal=None, geometry=None, title: str | None = No
     -------
     NotebookFigure
         The figure.
+
+    Raises
+    ------
+    TypeError
+        If ``mechanism`` is neither a name nor a mechanism.
+    ValueError
+        If ``mechanism`` is unknown or has no geometry to draw, or a pose is not a rotation.
     """
-    g = as_geometry(geometry)
+    if mechanism is None and isinstance(geometry, (str, Mechanism)):
+        mechanism, geometry = geometry, None
+    if mechanism is not None:
+        mech = drawn_mechanism(mechanism)
+    else:
+        mech = catalog.get("platform") if geometry is None else None
+    g = mech.geometry if geometry is None else as_geometry(geometry)
     view = {**MECHANISM_VIEW, **(view or {})}
     poses = [("start", R_start)] if R_goal is None else [("start", R_start), ("goal", R_goal)]
     fig = NotebookFigure(figsize=(5.2 * len(poses), 5.2), layout="constrained")
-    for k, (name, R) in enumerate(poses):
+    name = "platform" if mech is None else mech.name
+    for k, (pose, R) in enumerate(poses):
         ax = fig.add_subplot(1, len(poses), k + 1, projection="3d")
-        R = so3.check_rotation(R, name)
+        R = so3.check_rotation(R, f"R_{pose}")
         draw_platform(ax, R, g, view=view)
-        d = delta_along(R[None], mechanism)
-        dtxt = f",  Δ = {d[0]:+.3f}" if d is not None else ""
-        label = name if len(poses) > 1 else "platform"
-        ax.set_title(f"{label}\n{rpy_text(R)}{dtxt}")
+        dtxt = f",  Δ = {float(mech.delta(R)):+.3f}" if mech is not None and mech.singular.exists else ""
+        ax.set_title(f"{pose if len(poses) > 1 else name}\n{rpy_text(R)}{dtxt}")
     if title is None:
-        title = "Non-holonomic orienting platform"
+        title = f"{mech.name}: {mech.description}" if mech is not None else "a platform of the given geometry"
     fig.suptitle(title)
     return fig

@@ -1,4 +1,6 @@
-"""Names and units of a mechanism's quantities for the figures, read from its data.
+"""Names and units of a mechanism's quantities for the figures, read from its data and the
+table of names and units (:mod:`nonholo.model.names`, where :func:`label`,
+:func:`coordinate_units` and :func:`input_units` are defined):
 
 - the coordinates: the units the derivation gives them (:attr:`Mechanism.units`);
 - the inputs: the unit of the first coordinate an input moves (its row of the field
@@ -13,85 +15,9 @@ labels from its own data.
 """
 from __future__ import annotations
 
-import numpy as np
+from ..model.names import coordinate_units, input_units, label
 
-from ..spaces import so3
-
-#: The generic state the field is evaluated at to see which coordinates an input moves:
-#: an orientation off the axes and coordinates ``0.1, 0.17, 0.24, …`` (no zero, no
-#: angle near ``π/2``).
-_PROBE_RPY = (0.31, -0.23, 0.17)
-
-
-def label(name: str, unit: str) -> str:
-    """An axis label with its unit.
-
-    Parameters
-    ----------
-    name : str
-        The quantity.
-    unit : str
-        Its unit (``""``: none).
-
-    Returns
-    -------
-    str
-        ``"name [unit]"``, or ``name`` alone without a unit.
-    """
-    return f"{name} [{unit}]" if unit else name
-
-
-def coordinate_units(mechanism) -> tuple[str, ...]:
-    """The unit of each coordinate.
-
-    Parameters
-    ----------
-    mechanism : Mechanism
-        The mechanism.
-
-    Returns
-    -------
-    tuple of str
-        One unit per coordinate (``""`` for each when the mechanism gives none).
-    """
-    return tuple(mechanism.units) or ("",) * mechanism.n_coordinates
-
-
-def _probe_state(mechanism):
-    R = so3.from_rpy(*_PROBE_RPY) if mechanism.space.has_orientation else np.eye(3)
-    q = 0.1 + 0.07 * np.arange(mechanism.n_coordinates)
-    return R, q
-
-
-def input_units(mechanism) -> tuple[str, ...]:
-    """The unit of each input of a mechanism (see the module).
-
-    Parameters
-    ----------
-    mechanism : Mechanism
-        The mechanism.
-
-    Returns
-    -------
-    tuple of str
-        ``("wheelbase/s", "rad/s")`` for the car, ``("1/s", "1/s")`` for the platform.
-    """
-    m, k = mechanism.n_inputs, mechanism.n_coordinates
-    if not k or mechanism.G is None:
-        return ("1/s",) * m
-    R, q = _probe_state(mechanism)
-    with np.errstate(all="ignore"):
-        G = np.asarray(mechanism.G(R, q), dtype=float)
-    rows = G[G.shape[0] - k:]                      # the coordinates' rates
-    units = []
-    for j in range(m):
-        moved = np.flatnonzero(np.isfinite(rows[:, j]) & (np.abs(rows[:, j]) > 1e-12))
-        if not len(moved):
-            units.append("1/s")
-            continue
-        unit = coordinate_units(mechanism)[moved[0]]
-        units.append(f"{unit}/s" if unit else "")
-    return tuple(units)
+__all__ = ["coordinate_units", "input_units", "label", "plane_position", "unit_groups"]
 
 
 def plane_position(mechanism) -> tuple[int, int] | None:

@@ -20,6 +20,7 @@ from scipy.spatial.transform import Rotation
 
 from ..generated import platform_singularity
 from ..model import catalog
+from ..model.names import NONE, angle_label, label
 from .style import NEGATIVE_COLOR, POSITIVE_COLOR, NotebookFigure, styled
 
 
@@ -199,8 +200,8 @@ def draw_slice(ax, psi: float, n: int = 241, marks=None, mechanism: str = "platf
     ax.contour(F, T, D, levels=[0.0], colors="k", linewidths=2.4)
     ax.set_xticks(*PI_TICKS)
     ax.set_yticks(*HALF_PI_TICKS)
-    ax.set_xlabel("φ (about z) [rad]")
-    ax.set_ylabel("ϑ (about y) [rad]")
+    ax.set_xlabel(angle_label(0))
+    ax.set_ylabel(angle_label(1))
     ax.set_title(f"slice ψ = {psi:+.2f} rad")
     ax.grid(False)
     # sign labels at the extremes of this slice
@@ -211,8 +212,8 @@ def draw_slice(ax, psi: float, n: int = 241, marks=None, mechanism: str = "platf
     for idx, txt in ((i_max, "Δ > 0"), (i_min, "Δ < 0")):
         ax.text(F[idx], T[idx], txt, ha="center", va="center", fontsize=10, fontweight="bold",
                 bbox=dict(boxstyle="round,pad=0.2", fc="white", ec="none", alpha=0.8))
-    for label, (phi, th, mk) in (marks or {}).items():
-        ax.plot(phi, th, mk, color="k", ms=7, mfc="yellow", mew=1.2, label=label)
+    for name, (phi, th, mk) in (marks or {}).items():
+        ax.plot(phi, th, mk, color="k", ms=7, mfc="yellow", mew=1.2, label=name)
     if marks:
         ax.legend(loc="lower left", framealpha=0.9)
     return cs
@@ -265,10 +266,10 @@ def singular_set_figure(psi_slice: float = -0.5, marks: dict | None = None,
     ax.set_xticks(PI_TICKS[0], PI_TICKS[1][:-1] + [""])  # π would collide with ϑ's −π/2
     ax.set_yticks(*HALF_PI_TICKS)
     ax.set_zticks(*PI_TICKS)
-    ax.set_xlabel("ψ [rad]")
-    ax.set_ylabel("ϑ [rad]")
-    ax.zaxis.set_rotate_label(False)
-    ax.set_zlabel("φ [rad]", rotation=0, labelpad=14)
+    ax.set_xlabel(angle_label(2))
+    ax.set_ylabel(angle_label(1))
+    ax.zaxis.set_rotate_label(True)
+    ax.set_zlabel(angle_label(0))
     ax.set_box_aspect((2, 1, 2), zoom=0.88)
     v = {"elev": 35.0, "azim": -60.0, **(view or {})}
     ax.view_init(**v)
@@ -280,7 +281,7 @@ def singular_set_figure(psi_slice: float = -0.5, marks: dict | None = None,
     ax2 = fig.add_subplot(gs[1])
     cs = draw_slice(ax2, psi_slice, marks=marks)
     cb = fig.colorbar(cs, ax=ax2, shrink=0.9, ticks=np.linspace(-1, 1, 5))
-    cb.set_label("Δ [-]")
+    cb.set_label(label("Δ", NONE))
     fig.suptitle("Singular set of the platform, RPY(φ, ϑ, ψ) = R(Z, φ) R(Y, ϑ) R(X, ψ)")
     return fig
 
@@ -313,12 +314,12 @@ def singular_slices_figure(psi_values=(-2.0, -0.5, 0.5, 2.0), marks: dict | None
             continue
         psi = psi_values[k]
         here = {}
-        for label, (phi, th, ps, mk) in (marks or {}).items():
+        for name, (phi, th, ps, mk) in (marks or {}).items():
             if int(np.argmin([abs(ps - p) for p in psi_values])) == k:
-                here[label] = (phi, th, mk)
+                here[name] = (phi, th, mk)
         cs = draw_slice(ax, psi, n=181, marks=here)
     cb = fig.colorbar(cs, ax=axes, shrink=0.9, ticks=np.linspace(-1, 1, 5))
-    cb.set_label("Δ [-]")
+    cb.set_label(label("Δ", NONE))
     fig.suptitle("Δ(φ, ϑ, ψ) on slices ψ = const (thick: Δ = 0)")
     return fig
 
@@ -432,10 +433,10 @@ def normal_form_figure(extent: float = 1.0, radius: float = 0.6,
     ticks = [-extent, -extent / 2, 0.0, extent / 2, extent]
     ax.set_xticks(ticks)
     ax.set_yticks(ticks)
-    ax.set_xlabel("x [-]")
-    ax.set_ylabel("y [-]")
+    ax.set_xlabel(label("x", NONE))
+    ax.set_ylabel(label("y", NONE))
     ax.zaxis.set_rotate_label(False)
-    ax.set_zlabel("z [-]", rotation=0, labelpad=8)
+    ax.set_zlabel(label("z", NONE), rotation=0, labelpad=8)
     ax.set_box_aspect((1, 1, 0.8), zoom=0.9)
     ax.view_init(**{"elev": 24.0, "azim": -55.0, **(view or {})})
     ax.set_title("surface z³ + x y = 0")
@@ -466,8 +467,8 @@ def normal_form_figure(extent: float = 1.0, radius: float = 0.6,
     ax2.plot([], [], "o", color="k", mfc="white", ms=3.0, mew=0.8,
              label="images of Δ = 0 with |z − level| < 0.01")
     ax2.set(xlim=(-extent, extent), ylim=(-extent, extent), aspect="equal")
-    ax2.set_xlabel("x [-]")
-    ax2.set_ylabel("y [-]")
+    ax2.set_xlabel(label("x", NONE))
+    ax2.set_ylabel(label("y", NONE))
     ax2.set_title("level curves z = const of z³ + x y = 0")
     ax2.legend(loc="center left", bbox_to_anchor=(1.02, 0.5), framealpha=0.9)
     fig.suptitle("Normal form of the singular set at the identity: Δ = z³ + x y "

@@ -11,6 +11,7 @@ import matplotlib
 import numpy as np
 from matplotlib.patches import Polygon
 
+from ..model.names import RAD, SECOND
 from .platform_drawing import result_mechanism
 from .quantities import coordinate_units, input_units, label
 from .style import NotebookFigure, styled
@@ -66,13 +67,13 @@ def _time_panels(fig, grid, result, title: str, angles: list):
     top = fig.add_subplot(grid[0, 1])
     for values, colour, name in angles:
         top.plot(result.t, values, color=colour, label=name)
-    top.set_ylabel(label("angle", "rad"))
+    top.set_ylabel(label("angle", RAD))
     top.set_title(title)
     top.legend(fontsize=8)
     bottom = fig.add_subplot(grid[1, 1], sharex=top)
     for j, (colour, name) in enumerate(zip(("tab:blue", "tab:orange"), _input_labels(result))):
         bottom.plot(result.t, result.u[:, j], color=colour, lw=1, label=name)
-    bottom.set_xlabel(label("time t", "s"))
+    bottom.set_xlabel(label("time t", SECOND))
     bottom.set_ylabel("input")
     bottom.legend(fontsize=8)
     fig.tight_layout()
