@@ -424,6 +424,38 @@ def test_the_landing_page_in_a_headless_browser_shows_the_figure_and_the_navigat
     assert (flat != flat[0]).any(), "the screenshot of the landing page is blank (one colour)"
 
 
+#: The gallery's page of animations and the GIFs it shows (one per catalog mechanism).
+ANIMATIONS_PAGE = "gallery/animations.html"
+ANIMATIONS = sorted(p.name for p in (ROOT / "docs" / "gallery" / "animations").glob("*.gif"))
+
+
+@pytest.mark.skipif(CHROMIUM is None, reason="no Chromium (/usr/bin/chromium, or chromium on the PATH): "
+                                             "the animations page is not opened in a browser")
+def test_the_animations_page_in_a_headless_browser_loads_its_gifs(site, tmp_path):
+    assert ANIMATIONS, "no GIF in docs/gallery/animations (python docs/ext/animations.py writes them)"
+    requests: list = []
+    handler = functools.partial(type("Site", (Served,), {"requests": requests}), directory=str(site))
+    server = Server(("127.0.0.1", 0), handler)
+    thread = threading.Thread(target=server.serve_forever, daemon=True)
+    thread.start()
+    try:
+        page_url = f"http://127.0.0.1:{server.server_address[1]}/{ANIMATIONS_PAGE}"
+        page = Rendered()
+        page.feed(chromium(tmp_path, "dom", "--dump-dom", page_url).stdout)
+        gifs = [urljoin(page_url, src) for src in page.images if src.endswith(".gif")]
+        assert len(gifs) == len(ANIMATIONS), (gifs, ANIMATIONS)
+        for url in gifs:
+            # loaded by the browser itself, and a GIF of more than one frame
+            assert (urlsplit(url).path, 200) in requests, f"the browser did not load {url}"
+            status, data = fetch(url)
+            assert status == 200 and data[:6] in (b"GIF87a", b"GIF89a"), url
+            assert data.count(b"\x21\xf9\x04") > 1, f"{url} has one frame"       # graphic control blocks
+    finally:
+        server.shutdown()
+        server.server_close()
+        thread.join(5)
+
+
 def table_rows_of_the_wrong_width(text: str) -> list[tuple[int, int, int]]:
     """``(line, cells, expected)`` of every Markdown table row whose number of cells is not
     its header's: cells split at ``|`` not escaped as ``\\|`` (a ``|`` inside a code span

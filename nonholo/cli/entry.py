@@ -1,4 +1,4 @@
-"""Command line: ``nonholo derive | audit | mechanisms | plan | execute | reproduce | sweep | atlas``."""
+"""Command line: ``nonholo derive | audit | mechanisms | plan | execute | animate | reproduce | sweep | atlas``."""
 from __future__ import annotations
 
 import argparse
@@ -8,7 +8,8 @@ import sys
 import time
 from pathlib import Path
 
-from ..model import catalog
+from ..model import bounds, catalog
+from . import animate_command as cli_animate
 from . import execute_command as cli_execute
 from . import plan_command as cli_plan
 from . import reproduce_command as cli_reproduce
@@ -92,7 +93,9 @@ def _mechanisms(args) -> int:
         singular = "singular set Δ = 0" if m.singular.exists else "no singular set"
         state = "" if not m.space.k else f"state {m.state_space}: " + " ".join(
             (["φ", "ϑ", "ψ"] if m.space.has_orientation else []) + list(m.coordinates)) + ", "
-        print(f"{name:<16} {m.description} ({state}{m.n_inputs} inputs, {singular})")
+        limits = bounds.describe(m)
+        print(f"{name:<16} {m.description} ({state}{m.n_inputs} inputs, {singular}"
+              + (f"; bounds {limits})" if limits else ")"))
     return 0
 
 
@@ -124,6 +127,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     cli_plan.add_parser(sub)
     cli_execute.add_parser(sub)
+    cli_animate.add_parser(sub)
     cli_reproduce.add_parser(sub)
     cli_sweep.add_parsers(sub)
     return parser

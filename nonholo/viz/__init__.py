@@ -9,7 +9,9 @@
 - :mod:`~nonholo.viz.plan_figures` -- figures of plans (convergence, controls, RPY, legs,
   ``Δ``, body axes, global route, leg limits, motion quality, example overview);
 - :mod:`~nonholo.viz.mechanism_cards` -- one mechanism at a glance;
-- :mod:`~nonholo.viz.platform_animation` -- a GIF of a motion;
+- :mod:`~nonholo.viz.platform_animation` -- a GIF of the platform's motion;
+- :mod:`~nonholo.viz.animation` -- a GIF or an MP4 of a motion of any mechanism
+  (:func:`animate`);
 - :mod:`~nonholo.viz.plan_summary` -- one plan of any mechanism at a glance (what
   ``nonholo plan --plot`` writes), with a vehicle's path on the plane;
 - :mod:`~nonholo.viz.state_figures` -- plans whose state goes beyond SO(3) (the ball, the
@@ -19,6 +21,7 @@
 
 The public functions are re-exported here: ``from nonholo import viz; viz.rpy_figure(res)``.
 """
+from .animation import animate
 from .execution_figures import execution_figure
 from .mechanism_cards import mechanism_card_figure
 from .plan_figures import (
@@ -86,6 +89,6 @@ __all__ = [
     "plot_delta", "plot_body_axes", "plot_min_delta", "convergence_figure", "controls_figure",
     "rpy_figure", "leg_lengths_figure", "delta_figure", "body_axes_figure", "global_route_figure",
     "leg_limits_figure", "motion_quality_figure", "example_overview_figure",
-    "mechanism_card_figure", "animate_platform", "plan_figure", "plot_plane_path",
+    "mechanism_card_figure", "animate_platform", "animate", "plan_figure", "plot_plane_path",
     "ball_figure", "car_figure", "execution_figure",
 ]
