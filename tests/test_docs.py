@@ -4,6 +4,7 @@ importable) with every internal link of the built site resolved, and the landing
 in a headless Chromium (when there is one)."""
 from __future__ import annotations
 
+import fcntl
 import functools
 import html.parser
 import http.server
@@ -220,14 +221,25 @@ def site(tmp_path_factory) -> Path:
     ``html`` folder."""
     pytest.importorskip("sphinx")
     pytest.importorskip("myst_nb")
-    out = tmp_path_factory.mktemp("site") / "html"
-    env, blocked = without_other_extras(tmp_path_factory.mktemp("docs_extra_only"))
-    run = subprocess.run([sys.executable, "-m", "sphinx", "-W", "--keep-going", "-q", "-j", "auto", "-b", "html",
-                          str(ROOT / "docs"), str(out)], check=False, cwd=ROOT, env=env, capture_output=True, text=True)
-    # nothing of another extra was imported while building, not even in a try/except
-    assert not blocked.exists(), ("the docs build imports packages the docs extra does not install:\n"
-                                  + blocked.read_text(encoding="utf-8")[-6000:])
-    assert run.returncode == 0, run.stderr[-6000:]
+    # one build for the whole run: the build writes its API stubs into docs/, so two
+    # workers of pytest-xdist building at once would race; the first builds, under a lock
+    # in the run's shared temporary folder, the others wait for it and read its site
+    shared = tmp_path_factory.getbasetemp().parent
+    out = shared / "docs_site" / "html"
+    with open(shared / "docs_site.lock", "w") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)
+        done = shared / "docs_site" / "built"
+        if not done.exists():
+            shutil.rmtree(out, ignore_errors=True)
+            env, blocked = without_other_extras(tmp_path_factory.mktemp("docs_extra_only"))
+            run = subprocess.run([sys.executable, "-m", "sphinx", "-W", "--keep-going", "-q", "-j", "auto", "-b",
+                                  "html", str(ROOT / "docs"), str(out)], check=False, cwd=ROOT, env=env,
+                                 capture_output=True, text=True)
+            # nothing of another extra was imported while building, not even in a try/except
+            assert not blocked.exists(), ("the docs build imports packages the docs extra does not install:\n"
+                                          + blocked.read_text(encoding="utf-8")[-6000:])
+            assert run.returncode == 0, run.stderr[-6000:]
+            done.write_text("ok\n")
     return out
 
 
