@@ -10,6 +10,9 @@ machine and the command, see :mod:`benchmarks.report`):
   process on a new, empty cache (``NONHOLO_CACHE_DIR``: derivation, generation,
   compilation), then a second run in another fresh process on what the first left there;
   the import, the definition, the first plan and the whole process;
+- the car towing a trailer of ``docs/guide/car_trailer.toml``, read by
+  ``Mechanism.from_file`` and planned ``0 → (1, 0.5, 0, 0, 0)``, and ``nonholo plan
+  --mechanism`` on the file, first and second runs as above;
 - platforms of numbers (``platform_mechanism`` on a geometry of floats, the exact route of
   ``derivations.mechanisms.exact_platform``), each in a fresh process: the derivation and
   the generation of its module, then (``Mechanism.from_symbolic`` on an empty cache) the
@@ -56,6 +59,24 @@ t4 = time.perf_counter()
 print(json.dumps({"import": t1 - t0, "equations": t2 - t1, "define": t3 - t2, "plan": t4 - t3,
                   "success": bool(res.success)}))
 """
+
+#: A mechanism file (argv[1]): read, then the first plan (times printed as JSON).
+FROM_FILE = r"""
+import json, sys, time
+t0 = time.perf_counter()
+import numpy as np
+import nonholo
+t1 = time.perf_counter()
+m = nonholo.Mechanism.from_file(sys.argv[1])
+t2 = time.perf_counter()
+res = nonholo.plan(np.zeros(5), np.array([1.0, 0.5, 0.0, 0.0, 0.0]), mechanism=m)
+t3 = time.perf_counter()
+print(json.dumps({"import": t1 - t0, "define": t2 - t1, "plan": t3 - t2, "success": bool(res.success)}))
+"""
+
+#: The mechanism file of the docs (a car towing a trailer).
+CAR_TRAILER = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "docs", "guide",
+                           "car_trailer.toml")
 
 #: A platform of numbers (argv[1]: a geometry as JSON, or "paper"): derivation and
 #: generation, then compilation and the first plan from argv[2] to argv[3] (RPY).
@@ -156,6 +177,48 @@ def trailer(report: Report, runs: int) -> None:
                   "process [s]", "success"], rows, ["l", "r", "r", "r", "r", "r", "r", "l"])
 
 
+def command(args: list, cache: str) -> float:
+    """Wall time of ``python -m nonholo.cli ARGS`` in a fresh process on the cache ``cache``."""
+    env = dict(os.environ, NONHOLO_CACHE_DIR=cache, NUMBA_CACHE_DIR=os.path.join(cache, "numba"))
+    t = time.perf_counter()
+    out = subprocess.run([sys.executable, "-m", "nonholo.cli", *args], capture_output=True, text=True, env=env,
+                         check=False)
+    wall = time.perf_counter() - t
+    if out.returncode != 0:
+        raise RuntimeError(f"nonholo {' '.join(args)} failed:\n{out.stderr}")
+    return wall
+
+
+def mechanism_file(report: Report, runs: int) -> None:
+    times = {run: [] for run in ("first run", "second run")}
+    cli = {run: [] for run in times}
+    plan = ["plan", "--mechanism", CAR_TRAILER, "--from", *["0"] * 5, "--to", "1", "0.5", "0", "0", "0", "--quiet"]
+    for _ in range(runs):
+        for store in (times, cli):
+            cache = tempfile.mkdtemp(prefix="nonholo_file_")
+            try:
+                for run in store:
+                    store[run].append(fresh(FROM_FILE, [CAR_TRAILER], cache) if store is times
+                                      else command(plan, cache))
+            finally:
+                shutil.rmtree(cache, ignore_errors=True)
+    report.heading("The car with a trailer, in a mechanism file")
+    report.paragraph(
+        "`Mechanism.from_file(\"docs/guide/car_trailer.toml\")` (*definition*: reading and checking "
+        "the file, deriving, generating and compiling its kernels, or reading them from the cache), "
+        "then `nonholo.plan(0, (1, 0.5, 0, 0, 0))`, in a fresh process on a new, empty cache "
+        "directory (*first run*) and in another on what it left (*second run*); *command*: "
+        "`nonholo plan --mechanism docs/guide/car_trailer.toml --from 0 0 0 0 0 --to 1 0.5 0 0 0` "
+        "as a whole process, on a cache of its own. "
+        f"Median (min–max) over {runs} cache directories, seconds.")
+    rows = [[run, cell([t["import"] for t in ts]), cell([t["define"] for t in ts]), cell([t["plan"] for t in ts]),
+             cell([t["define"] + t["plan"] for t in ts]), cell([t["process"] for t in ts]), cell(cli[run]),
+             "yes" if all(t["success"] for t in ts) else "NO"]
+            for run, ts in times.items()]
+    report.table(["run", "import [s]", "definition [s]", "first plan [s]", "first goal [s]", "process [s]",
+                  "command [s]", "success"], rows, ["l", "r", "r", "r", "r", "r", "r", "l"])
+
+
 def platforms(report: Report, runs: int) -> None:
     cases = {name: (json.dumps(g), json.dumps(start), json.dumps(goal)) for name, (g, start, goal) in GEOMETRIES.items()}
     cases["the paper's geometry, symbolic a, b, ρ (the symbolic route)"] = (
@@ -234,6 +297,7 @@ def main(argv=None) -> None:
                     "benchmarks.bench_own_mechanism", argv, extra_packages=("sympy",))
     load = os.getloadavg()[0]
     trailer(report, args.runs)
+    mechanism_file(report, args.runs)
     platforms(report, args.runs)
     agreement(report)
     report.paragraph(f"Load average (1 min) of the machine when the measurements started and ended: "

@@ -33,7 +33,6 @@ import io
 import math
 
 import numpy as np
-from scipy.spatial.transform import Rotation
 
 from ..model import names
 from ..motion.time_change import planned, planned_time
@@ -171,6 +170,8 @@ def continuous_quaternions(R: np.ndarray) -> np.ndarray:
         ``(x, y, z, w)`` per rotation, shape ``(n, 4)``, each with the sign nearer the
         previous one's.
     """
+    from scipy.spatial.transform import Rotation  # loaded when first needed
+
     q = Rotation.from_matrix(R).as_quat()
     for k in range(1, len(q)):
         if np.dot(q[k], q[k - 1]) < 0.0:

@@ -58,9 +58,9 @@ can meet (it neither turns an input's sign nor lifts it off zero).
 from __future__ import annotations
 
 import math
+from typing import TYPE_CHECKING
 
 import numpy as np
-from scipy.interpolate import PPoly, make_interp_spline
 
 from ..controls import stages
 from ..model import catalog
@@ -69,6 +69,9 @@ from ..numerics.checks import check_count, check_times, is_number
 from ..spaces import so3
 from . import playback
 from .time_change import MIN_TIME, TimeChange, check_horizon
+
+if TYPE_CHECKING:                       # SciPy's splines load when first needed
+    from scipy.interpolate import PPoly
 
 #: Nodes of the replay that samples the legs' speeds, at least (rounded up to a multiple of
 #: the controls' grid): the spline's error in ``ρ`` is ``O((T/nodes)⁶)``.
@@ -406,6 +409,8 @@ def _input_spline(base, nodes: int) -> tuple[PPoly, np.ndarray]:
 def _broken_spline(U, right, left, T: float, nodes: int) -> tuple[PPoly, np.ndarray]:
     """Splines through values at the nodes (``right``: at the start of each step, ``left``:
     at its end), broken where the stage table ``U`` jumps, and the jumps' times."""
+    from scipy.interpolate import PPoly, make_interp_spline  # loaded when first needed
+
     tau = np.arange(nodes + 1) * (T / nodes)
     tau[-1] = T
     scale = max(float(np.max(np.abs(U))), 1e-300)
@@ -431,6 +436,8 @@ def _kinks(spline: PPoly, floor: float = 0.0) -> np.ndarray:
     """Where two legs are equally fast, ``|S_a| = |S_b|`` (the roots of ``S_a ∓ S_b``), and
     where the fastest leg's speed meets ``floor`` (roots of ``S_a ∓ floor`` at which no leg
     is faster)."""
+    from scipy.interpolate import PPoly  # loaded when first needed
+
     k = spline.c.shape[-1]
     roots = []
     for a in range(k):
@@ -455,6 +462,8 @@ def _channel_kinks(spline: PPoly, bounds: InputBounds, floor: float = 0.0) -> np
     """Where two inputs use equal shares of their bounds (roots of ``S_i/b_i − S_j/b_j``
     for every finite side ``b_i`` of input ``i`` and ``b_j`` of another input ``j``), and
     where a share meets ``floor`` (roots of ``S_i/b_i − floor`` at which no share is larger)."""
+    from scipy.interpolate import PPoly  # loaded when first needed
+
     channels = [(i, b) for i, (lo, hi) in enumerate(zip(bounds.lows, bounds.highs))
                 for b in (hi, lo) if math.isfinite(b)]
     roots = []

@@ -26,10 +26,6 @@ from __future__ import annotations
 from functools import lru_cache
 
 import numpy as np
-from scipy.sparse import coo_matrix
-from scipy.sparse.csgraph import dijkstra
-from scipy.spatial import cKDTree
-from scipy.spatial.transform import Rotation
 
 from ..model import catalog
 from ..spaces import so3
@@ -127,6 +123,9 @@ class Roadmap:
     """
 
     def __init__(self, mechanism, clearance: float, samples: int = ROADMAP_SAMPLES, seed: int = ROADMAP_SEED):
+        from scipy.spatial import cKDTree  # SciPy's spatial module: loaded when first needed
+        from scipy.spatial.transform import Rotation
+
         mech = catalog.get(mechanism)
         if not mech.singular.exists:
             raise ValueError(f"mechanism {mech.name!r} has no singular set: it needs no roadmap")
@@ -207,6 +206,8 @@ class Roadmap:
         return self._costs[power]
 
     def _graph(self, extra_i, extra_j, extra_cost, size, power, legs=None):
+        from scipy.sparse import coo_matrix  # loaded when first needed
+
         keep = self.inside(legs)
         i = np.concatenate([self.edges[keep, 0], extra_i])
         j = np.concatenate([self.edges[keep, 1], extra_j])
@@ -215,6 +216,8 @@ class Roadmap:
 
     def _links(self, R, sign: float, level: float, node_index: int, power: float, legs=None):
         """Edges from ``R`` to its clear roadmap neighbours of the same sign."""
+        from scipy.spatial.transform import Rotation  # loaded when first needed
+
         q = Rotation.from_matrix(R).as_quat()
         n = len(self.R)
         _, idx = self.tree.query(q, k=min(4 * NEIGHBOURS, 2 * n))
@@ -244,6 +247,8 @@ class Roadmap:
         numpy.ndarray or None
             The path, ``(k, 3, 3)``, ends included; ``None`` if none joins them.
         """
+        from scipy.sparse.csgraph import dijkstra  # loaded when first needed
+
         sign = float(np.sign(self.mechanism.delta(R0)))
         n = len(self.R)
         s_i, s_j, s_l = self._links(R0, sign, level, n, power, legs)
@@ -337,6 +342,8 @@ def default_clearance(mechanism) -> float:
 
 @lru_cache(maxsize=8)
 def _clearance(mech) -> float:
+    from scipy.spatial.transform import Rotation  # loaded when first needed
+
     R = Rotation.random(20000, random_state=np.random.default_rng(ROADMAP_SEED + 1)).as_matrix()
     return float(np.quantile(np.abs(mech.delta_samples(R)), CLEARANCE_QUANTILE))
 
