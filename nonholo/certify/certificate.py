@@ -129,11 +129,6 @@ class Certificate:
         r = self.replay_steps // steps
         return np.concatenate([self.U[::r, 0], self.U[-1:, 2]])
 
-    @property
-    def certified_error(self) -> float:
-        """``terminal_error + error_bound``: how far the exact motion may end from the goal."""
-        return self.terminal_error + self.error_bound
-
 
 def richardson(fine, coarse, mechanism) -> float:
     """The error estimate of the ``M``-step endpoint from the ``M/2``-step one.

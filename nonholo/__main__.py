@@ -1,0 +1,6 @@
+"""``python -m nonholo``: the command line (as the ``nonholo`` script)."""
+import sys
+
+from .cli.entry import main
+
+sys.exit(main())
