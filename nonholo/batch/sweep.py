@@ -832,8 +832,9 @@ def comparable(table: pa.Table) -> list[dict]:
     Returns
     -------
     list of dict
-        The rows without :data:`TIMING` and the plans' own ``seconds`` (the plans parsed):
-        two runs of one sweep give equal lists.
+        The rows without :data:`TIMING` and the plans' own ``seconds`` and ``made_by`` (what
+        made them: a run resumed after the code's commit moved records the new one), the plans
+        parsed: two runs of one sweep give equal lists.
     """
     out = []
     for row in table.to_pylist():
@@ -841,6 +842,7 @@ def comparable(table: pa.Table) -> list[dict]:
         if row["plan"] is not None:
             plan = json.loads(row["plan"])
             plan.pop("seconds", None)
+            plan.pop("made_by", None)
             row["plan"] = plan
         out.append(row)
     return out

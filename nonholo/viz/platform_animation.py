@@ -70,8 +70,8 @@ def animate_platform(result, path, geometry=None, frames: int = 60, fps: int = 2
     path.parent.mkdir(parents=True, exist_ok=True)
     g = geometry_for([result], geometry)
     if g is None:
-        raise ValueError(f"mechanism {result.mechanism!r} has no legs/disk geometry to draw; "
-                         "pass geometry=")
+        raise ValueError(f"mechanism {result.mechanism!r} is not a platform (it has no legs/disk geometry to "
+                         "draw): nonholo.viz.animate(result, path) animates every mechanism")
     mech = getattr(result, "mechanism", "platform")
     times, rots = _resample(result, frames)
     deltas = delta_along(rots, mech)
