@@ -197,10 +197,11 @@ def test_few_modules_directly_in_the_package():
 
 
 def test_no_two_modules_share_a_name():
-    """No two modules of ``nonholo`` and ``derivations`` have the same file name (``__init__``
-    and the generated modules, named after their mechanisms, aside)."""
+    """No two modules of ``nonholo`` and ``derivations`` have the same file name (``__init__``,
+    ``__main__`` — the names Python gives a package and its ``python -m`` entry — and the
+    generated modules, named after their mechanisms, aside)."""
     files = [p for tree in (PACKAGE, "derivations") for p in (ROOT / tree).rglob("*.py")
-             if p.name != "__init__.py" and "generated" not in p.parts]
+             if p.name not in ("__init__.py", "__main__.py") and "generated" not in p.parts]
     seen = {}
     for p in files:
         seen.setdefault(p.stem, []).append(str(p.relative_to(ROOT)))
