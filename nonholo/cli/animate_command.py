@@ -21,7 +21,6 @@ from __future__ import annotations
 
 import argparse
 import sys
-from pathlib import Path
 
 from ..io import safe_write
 from ..io.result import PlanResult
@@ -72,19 +71,12 @@ def _count(text: str, flag: str, maximum: int) -> int:
 
 
 def _mechanism(value):
-    """The mechanism ``--mechanism`` names: a catalog name, or a mechanism file where
-    :meth:`Mechanism.from_file` exists."""
-    if value in catalog.names():
-        return catalog.get(value)
-    from ..model.mechanism import Mechanism
-
-    from_file = getattr(Mechanism, "from_file", None)
-    if from_file is not None and Path(value).is_file():
-        try:
-            return from_file(value)
-        except (OSError, ValueError) as exc:
-            raise ValueError(f"--mechanism: {value}: {exc}") from None
-    raise ValueError(f"--mechanism: unknown mechanism {value!r}; known: {', '.join(catalog.names())}")
+    """The mechanism ``--mechanism`` names: a catalog name or a mechanism file
+    (:func:`nonholo.model.catalog.resolve`); ``ValueError`` naming the flag."""
+    try:
+        return catalog.resolve(value)
+    except (OSError, ValueError) as exc:
+        raise ValueError(f"--mechanism: {exc}") from None
 
 
 def run(args) -> int:
