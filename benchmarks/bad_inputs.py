@@ -32,14 +32,16 @@ MEMORY_LIMIT = 2 * 2**30
 #: The code runs after ``import numpy as np, nonholo`` with ``R0``, ``Rd`` (a platform
 #: start and goal) and ``tmp`` (an empty temporary folder) defined; it sets ``out``.
 CASES = [
-    ("plan(harmonics=10000, steps=20000)", "refused", "harmonics",
-     "out = nonholo.plan(R0, Rd, harmonics=10000, steps=20000)"),
-    ("plan(method='nonparametric', grid=10**6, steps=10**6, mechanism='car')", "refused", "grid",
-     ("out = nonholo.plan([0, 0, 0, 0], [0, 1, 0, 0], method='nonparametric', grid=10**6, steps=10**6, "
-      "mechanism='car')")),
-    ("plan(method='nonparametric', grid=10**6, steps=10**6, mechanism='rolling_ball')", "refused", "grid",
-     ("out = nonholo.plan((np.eye(3), [0, 0]), (np.eye(3), [0, 1]), method='nonparametric', grid=10**6, "
-      "steps=10**6, mechanism='rolling_ball')")),
+    ("plan(settings=Settings(harmonics=10000, steps=20000))", "refused", "harmonics",
+     "out = nonholo.plan(R0, Rd, settings=nonholo.Settings(harmonics=10000, steps=20000))"),
+    ("plan(settings=Settings(method='nonparametric', grid=10**6, steps=10**6), mechanism='car')", "refused",
+     "grid",
+     ("out = nonholo.plan([0, 0, 0, 0], [0, 1, 0, 0], mechanism='car', "
+      "settings=nonholo.Settings(method='nonparametric', grid=10**6, steps=10**6))")),
+    ("plan(settings=Settings(method='nonparametric', grid=10**6, steps=10**6), mechanism='rolling_ball')",
+     "refused", "grid",
+     ("out = nonholo.plan((np.eye(3), [0, 0]), (np.eye(3), [0, 1]), mechanism='rolling_ball', "
+      "settings=nonholo.Settings(method='nonparametric', grid=10**6, steps=10**6))")),
     ("car goal at x = 1e15", "failed result", "",
      "out = nonholo.plan([0, 0, 0, 0], [1e15, 0, 0, 0], mechanism='car')"),
     ("ball goal at p = (1e15, 0)", "failed result", "",
@@ -66,10 +68,11 @@ CASES = [
      "out = nonholo.plan(R0, Rd, callback=5)"),
     ("plan(T='1')", "refused", "T", "out = nonholo.plan(R0, Rd, T='1')"),
     ("plan(T=True)", "refused", "T", "out = nonholo.plan(R0, Rd, T=True)"),
-    ("plan(complex Rd)", "refused", "Rd", "out = nonholo.plan(R0, Rd.astype(complex))"),
-    ("car goal of booleans", "refused", "Rd",
+    ("plan(complex goal)", "refused", "goal", "out = nonholo.plan(R0, Rd.astype(complex))"),
+    ("car goal of booleans", "refused", "goal",
      "out = nonholo.plan([0, 0, 0, 0], [True, False, False, False], mechanism='car')"),
-    ("plan(tol=np.float32(1e-6))", "result", "", "out = nonholo.plan(R0, Rd, tol=np.float32(1e-6))"),
+    ("plan(settings=Settings(tol=np.float32(1e-6)))", "result", "",
+     "out = nonholo.plan(R0, Rd, settings=nonholo.Settings(tol=np.float32(1e-6)))"),
 ]
 
 CHILD = """

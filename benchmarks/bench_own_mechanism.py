@@ -260,8 +260,8 @@ def agreement(report: Report) -> None:
     from derivations import codegen
     from derivations.definitions import RAISED_GEOMETRY
     from derivations.mechanisms import PAPER_GEOMETRY, PlatformGeometry, a, b, platform_mechanism, rho
+    from nonholo.codegen.mechanism_modules import load_source
     from nonholo.model import catalog
-    from nonholo.model.mechanism import load_source
     from scipy.spatial.transform import Rotation
 
     dims = {a: sp.Rational(8, 5), b: 1, rho: 1}

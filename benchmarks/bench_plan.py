@@ -251,8 +251,9 @@ class _backend:
 
 
 def plan_times(report: Report, repeat: int) -> None:
-    from nonholo.certify import resimulate as verify
-    from nonholo.planning import api as planner
+    from nonholo import Settings
+    from nonholo.certify.resimulate import resimulate, terminal_error
+    from nonholo.planning.api import METHODS, plan
     from nonholo.spaces import so3
 
     report.heading('plan() after warm-up (strategy "paper")')
@@ -266,26 +267,26 @@ def plan_times(report: Report, repeat: int) -> None:
     medians = {}
     for k, (a, b) in EXAMPLES.items():
         R0, Rd = so3.from_rpy(*a), so3.from_rpy(*b)
-        for method in planner.METHODS:
+        for method in METHODS:
             ts = {backend: [] for backend in BACKENDS}
             results = {}
             for backend in BACKENDS:                       # warm-up
                 with _backend(backend):
-                    planner.plan(R0, Rd, method=method, strategy="paper")
+                    plan(R0, Rd, settings=Settings(method=method), strategy="paper")
             for _ in range(repeat):                        # the backends interleaved
                 for backend in BACKENDS:
                     with _backend(backend):
                         t = time.perf_counter()
-                        results[backend] = planner.plan(R0, Rd, method=method, strategy="paper")
+                        results[backend] = plan(R0, Rd, settings=Settings(method=method), strategy="paper")
                         ts[backend].append(time.perf_counter() - t)
             for backend in BACKENDS:
                 res = results[backend]
                 medians[k, method, backend] = statistics.median(ts[backend])
                 evals = res.iterations + 1 + sum(h["rejected"] for h in res.history)
-                R_ref = verify.resimulate(R0, res.controls, res.T, res.mechanism, res.breakpoints)
+                R_ref = resimulate(R0, res.controls, res.T, res.mechanism, res.breakpoints)
                 rows.append([k, method, backend, f"{1e3 * statistics.median(ts[backend]):.2f}",
                              f"{1e3 * min(ts[backend]):.2f}", f"{1e3 * max(ts[backend]):.2f}", res.iterations,
-                             evals, f"{res.terminal_error:.2e}", f"{verify.terminal_error(R_ref, Rd):.2e}",
+                             evals, f"{res.terminal_error:.2e}", f"{terminal_error(R_ref, Rd):.2e}",
                              f"{so3.distance(res.R_T, R_ref):.2e}"])
             a_, b_ = results["native"], results["numba"]
             rows[-1].append(f"{float(np.abs(a_.parametrisation.params - b_.parametrisation.params).max()):.1e}")
@@ -293,14 +294,15 @@ def plan_times(report: Report, repeat: int) -> None:
     report.table(["example", "method", "backend", "median [ms]", "min [ms]", "max [ms]", "iterations",
                   "evaluations", "|l_T|", "re-simulated", "discretisation", "|Δλ| native vs numba"], rows,
                  ["r", "l", "l"] + ["r"] * 9)
-    ratio = max(medians[k, m, "native"] / medians[k, m, "numba"] for k in EXAMPLES for m in planner.METHODS)
+    ratio = max(medians[k, m, "native"] / medians[k, m, "numba"] for k in EXAMPLES for m in METHODS)
     report.paragraph(f"Largest ratio of median plan times native / numba: **{ratio:.2f}**.")
 
 
 def discretisation(report: Report) -> None:
-    from nonholo.certify import resimulate as verify
+    from nonholo import Settings
+    from nonholo.certify.resimulate import resimulate
     from nonholo.motion.simulation import simulate
-    from nonholo.planning import api as planner
+    from nonholo.planning.api import METHODS, initial_controls, plan
     from nonholo.spaces import so3
 
     counts = (100, 200, 400, 800)
@@ -312,10 +314,11 @@ def discretisation(report: Report) -> None:
     rows = []
     for k, (a, b) in EXAMPLES.items():
         R0, Rd = so3.from_rpy(*a), so3.from_rpy(*b)
-        for method in planner.METHODS:
-            for label, par in (("initial", planner.initial_controls(method, 1.0, 2, 2, 100)),
-                               ("planned", planner.plan(R0, Rd, method=method, strategy="paper").parametrisation)):
-                R_ref = verify.resimulate(R0, par, 1.0)
+        for method in METHODS:
+            for label, par in (("initial", initial_controls(method, 1.0, 2, 2, 100)),
+                               ("planned", plan(R0, Rd, settings=Settings(method=method),
+                                                strategy="paper").parametrisation)):
+                R_ref = resimulate(R0, par, 1.0)
                 rows.append([k, method, label] + [f"{so3.distance(simulate(R0, par, 1.0, steps=n).R_T, R_ref):.1e}"
                                                   for n in counts])
     report.table(["example", "method", "control"] + [f"N = {n}" for n in counts], rows,
@@ -324,7 +327,7 @@ def discretisation(report: Report) -> None:
 
 def iteration_cost(report: Report, repeat: int) -> None:
     from nonholo.model import catalog
-    from nonholo.planning import api as planner
+    from nonholo.planning.api import METHODS
     from nonholo.spaces import so3
 
     report.heading("One iteration vs one bare forward simulation")
@@ -332,7 +335,7 @@ def iteration_cost(report: Report, repeat: int) -> None:
         "Kernels called directly, µs of CPU time of the measuring thread per call; median and min over "
         f"{repeat} repeats of 20 calls, the three measurements interleaved. *forward*: the CF4 "
         "kernel alone on a precomputed stage table; *iteration*: what the strategy \"paper\" does "
-        "per accepted step — `Evaluator.evaluate` (stage table, CF4 with the variational system and "
+        "per accepted step — `EndpointMap.evaluate` (stage table, CF4 with the variational system and "
         "the Jacobian, log error), the minimum-norm solve, the parameter update, the "
         "admissibility test and the history record; *kernel*: the stage table "
         "(`stages.stage_function`) and the variational kernel alone.")
@@ -342,7 +345,7 @@ def iteration_cost(report: Report, repeat: int) -> None:
     forwards = {}
     for k, (a, b) in EXAMPLES.items():
         R0, Rd = so3.from_rpy(*a), so3.from_rpy(*b)
-        for method, backend in ((m, b) for m in planner.METHODS for b in BACKENDS):
+        for method, backend in ((m, b) for m in METHODS for b in BACKENDS):
             with _backend(backend):
                 _iteration_rows(rows, ratios, forwards, k, R0, Rd, method, backend, mech, repeat)
     report.table(["example", "method", "backend", "N", "statistic", "forward [µs]", "iteration [µs]",
@@ -355,15 +358,16 @@ def iteration_cost(report: Report, repeat: int) -> None:
 
 def _iteration_rows(rows, ratios, forwards, k, R0, Rd, method, backend, mech, repeat) -> None:
     """One row pair of :func:`iteration_cost` (median and min) in the current backend."""
+    from nonholo import Settings, State
     from nonholo.controls import stages
     from nonholo.numerics import kernels
-    from nonholo.planning import api as planner
-    from nonholo.planning.core import Evaluator, record, step_scale
+    from nonholo.planning.api import plan
+    from nonholo.planning.core import EndpointMap, record, step_scale
 
-    res = planner.plan(R0, Rd, method=method, strategy="paper")
+    res = plan(R0, Rd, settings=Settings(method=method), strategy="paper")
     steps = res.steps
     par = res.parametrisation
-    prob = Evaluator(R0, Rd, 1.0, mech, method, steps, 1e-2)
+    prob = EndpointMap(State(R0, np.zeros(0)), State(Rd, np.zeros(0)), 1.0, mech, method, steps, 1e-2)
     prob.use(par)
     params = par.params.copy()
     scale = step_scale(prob, par)
@@ -372,7 +376,7 @@ def _iteration_rows(rows, ratios, forwards, k, R0, Rd, method, backend, mech, re
     Rs, Qs = kern.nodes(steps)
 
     def forward():
-        kern.forward(prob.R0, prob.q0, U, prob.h, prob.sign, 1e-2, Rs, Qs)
+        kern.forward(*prob.start, U, prob.h, prob.sign, 1e-2, Rs, Qs)
 
     def iteration():
         ev = prob.evaluate(params)
@@ -393,7 +397,7 @@ def _iteration_rows(rows, ratios, forwards, k, R0, Rd, method, backend, mech, re
 
     def variational_kernel():
         fill(params, U2)
-        kern.forward_variational(prob.R0, prob.q0, U2, prob.h, prob.sign, 1e-2, *basis, Rs, Qs, Zs,
+        kern.forward_variational(*prob.start, U2, prob.h, prob.sign, 1e-2, *basis, Rs, Qs, Zs,
                                  J, M, Wd, False)
 
     t = _median_interleaved({"forward": forward, "iteration": iteration,

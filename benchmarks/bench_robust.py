@@ -63,10 +63,11 @@ import time
 import numpy as np
 from scipy.spatial.transform import Rotation
 
+from nonholo import Settings
 from nonholo.paper import examples
-from nonholo.planning import api as planner
+from nonholo.planning.api import METHODS, plan
 from nonholo.spaces import so3
-from nonholo.certify import resimulate as verify
+from nonholo.certify.resimulate import resimulate, resimulate_path, terminal_error
 from nonholo.planning.strategy_robust import RobustStrategy
 
 from .report import Report
@@ -232,12 +233,12 @@ def check(res, R0, Rd, T) -> dict:
     if not res.success:
         return out
     try:
-        RT = verify.resimulate(R0, res.controls, T, res.mechanism, res.breakpoints)
-        _, _, d = verify.resimulate_path(R0, res.controls, T, res.mechanism, res.breakpoints)
+        RT = resimulate(R0, res.controls, T, res.mechanism, res.breakpoints)
+        _, _, d = resimulate_path(R0, res.controls, T, res.mechanism, res.breakpoints)
     except RuntimeError:            # DOP853 gave up (an extremely sensitive motion)
         out["resim"] = float("inf")
         return out
-    out["resim"] = verify.terminal_error(RT, Rd)
+    out["resim"] = terminal_error(RT, Rd)
     out["dense_min_delta"] = float(np.min(np.sign(d[0]) * d))
     out["ok"] = out["resim"] <= RESIM_TOL and out["dense_min_delta"] >= DELTA_MIN
     return out
@@ -283,8 +284,8 @@ SET_ALIGN = ["l", "l", "r", "r", "r", "r", "r", "r"]
 def warm_up(strategies) -> None:
     R0, Rd = so3.from_rpy(0.5, 1.2, -0.5), so3.from_rpy(1.0, 0.9, -0.5)
     for s in strategies:
-        for method in planner.METHODS:
-            planner.plan(R0, Rd, strategy=s, method=method)
+        for method in METHODS:
+            plan(R0, Rd, strategy=s, settings=Settings(method=method))
 
 
 def rejection(report: Report, goals: list[dict], repeat: int = 20) -> None:
@@ -293,7 +294,7 @@ def rejection(report: Report, goals: list[dict], repeat: int = 20) -> None:
     for _ in range(repeat):
         for g in across:
             t = time.perf_counter()
-            res = planner.plan(g["R0"], g["Rd"], T=g["T"])
+            res = plan(g["R0"], g["Rd"], T=g["T"])
             ts.append(time.perf_counter() - t)
             assert not res.success and "across the singular surface" in res.reason, res.reason
     report.heading("Goals across Δ = 0")
@@ -317,16 +318,17 @@ def parking(report: Report) -> None:
         v = so3.log(Rd @ R0.T)
         vtext = f"({v[0]:+.3f}, {v[1]:+.3f}, {v[2]:+.3f})"
         for strategy in ("robust", "paper"):
-            for method in planner.METHODS:
+            for method in METHODS:
                 t = time.perf_counter()
-                res = planner.plan(R0, Rd, method=method, strategy=strategy, route="local")
+                res = plan(R0, Rd, settings=Settings(method=method), strategy=strategy, route="local")
                 wall = time.perf_counter() - t
                 c = check(res, R0, Rd, 1.0)
                 resim = "n/a" if c["resim"] is None else f"{c['resim']:.1e}"
                 md = "n/a" if c["dense_min_delta"] is None else f"{c['dense_min_delta']:.3f}"
                 rows.append([name, vtext, strategy, method, "solved" if c["ok"] else "FAILED", resim, md,
                              res.iterations, f"{wall * 1e3:.1f}", "" if c["ok"] else res.reason[:90]])
-        solved = [planner.plan(R0, Rd, strategy="paper", gamma=g, route="local").success for g in gammas]
+        solved = [plan(R0, Rd, strategy="paper", settings=Settings(gamma=g), route="local").success
+                  for g in gammas]
         gamma_rows.append([name] + ["yes" if x else "no" for x in solved])
     report.table(["goal", "v", "strategy", "method", "result", "re-simulated |l_T|", "min Δ",
                   "iterations", "time [ms]", "reason (failures)"], rows,

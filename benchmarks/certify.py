@@ -41,11 +41,12 @@ import numpy as np
 from benchmarks import goalset
 from benchmarks.report import Report
 from nonholo.model import catalog
-from nonholo.planning import api as planner
-from nonholo.certify import resimulate as verify
+from nonholo.planning.api import plan
+from nonholo.planning.problem import arguments_of
+from nonholo.certify.resimulate import resimulate, resimulate_rk4, terminal_error
 
 MECHANISMS = ("platform", "platform_raised", "attitude")
-#: every strategy and method, default options
+#: every strategy and method, default options (flat, as a problem table's: :func:`arguments_of`)
 CONFIGS = {
     "robust / parametric (default)": {},
     "robust / nonparametric": {"method": "nonparametric"},
@@ -90,17 +91,17 @@ def check_successes(results, pairs) -> list[dict]:
         pars = [results[i].parametrisation for i in idx]
         T = [results[i].T for i in idx]
         mech = results[idx[0]].mechanism
-        R_S, _ = verify.resimulate_rk4(R0, pars, T, mech, steps=S)
-        R_2S, dmin = verify.resimulate_rk4(R0, pars, T, mech, steps=2 * S)
+        R_S, _ = resimulate_rk4(R0, pars, T, mech, steps=S)
+        R_2S, dmin = resimulate_rk4(R0, pars, T, mech, steps=2 * S)
         for j, i in enumerate(idx):
             R = R_2S[j]
             checker = float(np.max(np.abs(R - R_S[j])))
             if not checker <= 1e-9:
                 # RK4 on this grid is not accurate enough (e.g. T = 1e4): DOP853 decides
                 r = results[i]
-                R = verify.resimulate(pairs[i]["R0"], r.controls, r.T, r.mechanism, r.breakpoints)
+                R = resimulate(pairs[i]["R0"], r.controls, r.T, r.mechanism, r.breakpoints)
                 checker = None
-            out[i] = {"miss": verify.terminal_error(R, pairs[i]["Rd"]), "checker": checker,
+            out[i] = {"miss": terminal_error(R, pairs[i]["Rd"]), "checker": checker,
                       "min_delta": None if dmin is None else float(dmin[j])}
     return out
 
@@ -113,7 +114,8 @@ def run_chunk(mechanism: str, label: str, options: dict, start: int, stop: int, 
     results, seconds = [], []
     for p in pairs:
         t = time.thread_time()
-        results.append(planner.plan(p["R0"], p["Rd"], mechanism=mechanism, **{"route": "local", **options}))
+        results.append(plan(p["R0"], p["Rd"], mechanism=mechanism,
+                            **arguments_of({"route": "local", **options}, mechanism)))
         seconds.append(time.thread_time() - t)
     checks = check_successes(results, pairs)
     rows = []
@@ -123,8 +125,8 @@ def run_chunk(mechanism: str, label: str, options: dict, start: int, stop: int, 
                "error_bound": r.error_bound, "terminal_error": r.terminal_error, **(c or {})}
         if c is not None and dop853 > 0:
             dop853 -= 1
-            RT = verify.resimulate(p["R0"], r.controls, r.T, mechanism, r.breakpoints)
-            row["dop853"] = verify.terminal_error(RT, p["Rd"])
+            RT = resimulate(p["R0"], r.controls, r.T, mechanism, r.breakpoints)
+            row["dop853"] = terminal_error(RT, p["Rd"])
         rows.append(row)
     return rows
 

@@ -196,14 +196,14 @@ def control_energy(controls, T: float, breakpoints=None, pieces: int = ENERGY_PI
 
 def verify_solution(goal: dict, controls, breakpoints) -> dict:
     """Terminal error (nonholo.certify.resimulate.resimulate), least sgnΔ on the dense path, energy."""
-    from nonholo.certify import resimulate as verify
+    from nonholo.certify.resimulate import resimulate, terminal_error
 
     R0, Rd, T = goal["R0"], goal["Rd"], goal["T"]
     out = {}
     t0 = time.perf_counter()
     try:
-        RT = verify.resimulate(R0, controls, T, breakpoints=breakpoints)
-        out["terminal_error"] = verify.terminal_error(RT, Rd)
+        RT = resimulate(R0, controls, T, breakpoints=breakpoints)
+        out["terminal_error"] = terminal_error(RT, Rd)
         out["resim_message"] = "ok"
     except (RuntimeError, FloatingPointError, ValueError, ZeroDivisionError) as exc:
         RT = None
@@ -232,20 +232,20 @@ class Unavailable(Exception):
 
 class NonholoSolver:
     def __init__(self, name: str, strategy: str):
-        from nonholo.planning import api as planner
-
         self.name = name
         self.strategy = strategy
-        self.planner = planner
         self.config = {"function": "nonholo.planning.api.plan", "strategy": strategy,
                        "delta_min": DELTA_MIN}
         self.warmup_seconds = None
 
     def warm_up(self):
+        from nonholo.constraints import Clearance
+        from nonholo.planning.api import plan
+
         R0, Rd = (so3.from_rpy(*a) for a in WARMUP)
         t0 = time.perf_counter()
         try:
-            self.planner.plan(R0, Rd, T=1.0, strategy=self.strategy, delta_min=DELTA_MIN, route="local")
+            plan(R0, Rd, T=1.0, strategy=self.strategy, constraints=[Clearance(DELTA_MIN)], route="local")
         except ValueError as exc:
             if "strategy" in str(exc):
                 raise Unavailable(str(exc)) from None

@@ -24,7 +24,7 @@ import time
 import numpy as np
 from scipy.integrate import solve_ivp
 
-from nonholo.certify import resimulate as verify
+from nonholo.certify.resimulate import car_rates
 
 WHEELBASE = 1.0
 BASIS_SIZE = 8
@@ -109,7 +109,7 @@ def resimulate(q0, inputs, T: float, *, samples: int = 2001, rtol: float = 1e-13
 
     def f(t, y):
         v, d = inputs(t)
-        _, qdot = verify.car_rates(None, (y[0], y[1], y[2], d), (v, 0.0), WHEELBASE)
+        _, qdot = car_rates(None, (y[0], y[1], y[2], d), (v, 0.0), WHEELBASE)
         return qdot[:3]
 
     grid = np.linspace(0.0, T, samples)

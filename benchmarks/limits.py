@@ -1,4 +1,4 @@
-"""Plans under the legs' stroke limits: ``nonholo.plan(..., leg_length=(lo, hi))`` against
+"""Plans under the legs' stroke limits: ``nonholo.plan(..., constraints=[LegStroke(lo, hi)])`` against
 CasADi/IPOPT with the same limits, on ``benchmarks/goals.json``.
 
 Run::
@@ -9,8 +9,8 @@ The goals: the platform's reachable goals of ``benchmarks/goals.json`` whose sta
 goal both have every leg inside ``[lo, hi]``. Solvers, each timed per call after one
 warm-up call (numba compiled, the NLP built):
 
-- ``nonholo``: :func:`nonholo.plan` with its defaults and ``leg_length=(lo, hi)``,
-  ``delta_min = 0.01``;
+- ``nonholo``: :func:`nonholo.plan` with its defaults and ``constraints=[Clearance(0.01),
+  LegStroke(lo, hi)]``;
 - ``casadi``: :func:`benchmarks.casadi_ms.solve` (minimum ``∫|u|² dt``, the setting of
   :mod:`benchmarks.compare`'s ``casadi``: 40 intervals, 2 substeps, the Δ constraint at
   the substeps) with ``leg_length=(lo, hi)`` at its nodes;
@@ -25,7 +25,7 @@ computed from the platform's numeric geometry (``|R tip_i − base_i|``).
 Then the legs' speeds (:func:`run_retiming`, :func:`run_speed_peers`): goals planned and
 re-timed by :func:`nonholo.planning.retime` in the least time under ``--leg-speed``, each re-timed
 motion re-simulated against the bound and the plan's end; and the same goals in a given
-time by ``plan(..., leg_speed=...)`` and the CasADi baseline with the same bound. And the
+time by ``plan(..., constraints=[LegSpeed(v)])`` and the CasADi baseline with the same bound. And the
 least energy (:func:`run_energy`): ``plan(..., objective="energy")`` against the
 baseline's fine setting on every reachable goal, in the same run.
 
@@ -41,12 +41,13 @@ import time
 
 import numpy as np
 
+from nonholo.constraints import Clearance, LegSpeed, LegStroke
 from nonholo.model import catalog
-from nonholo.planning import api as planner
+from nonholo.planning.api import plan
 from nonholo.spaces import so3
-from nonholo.certify import resimulate as verify
-from nonholo.planning import energy
-from nonholo.planning.energy import controls_energy
+from nonholo.certify.resimulate import resimulate_path, terminal_error
+from nonholo.planning.energy_objective import controls_energy
+from nonholo.planning.energy_search import ENERGY_GRID
 from nonholo.planning.retime import retime
 
 from . import goalset
@@ -90,12 +91,12 @@ def check(goal: dict, controls, breakpoints, T: float, limits) -> dict:
     stroke limits (a failed integration: infinitely far, on ``Δ = 0``)."""
     mech = catalog.get("platform")
     try:
-        _, R, d = verify.resimulate_path(goal["R0"], controls, T, mech, breakpoints)
+        _, R, d = resimulate_path(goal["R0"], controls, T, mech, breakpoints)
     except (RuntimeError, FloatingPointError, ValueError, ZeroDivisionError):
         return {"final_error": math.inf, "least_delta": 0.0, "least_clearance": -math.inf}
     lengths = mech.geometry.leg_lengths(R)
     sign = float(np.sign(mech.delta(goal["R0"])))
-    return {"final_error": verify.terminal_error(R[-1], goal["Rd"]), "least_delta": float(np.min(sign * d)),
+    return {"final_error": terminal_error(R[-1], goal["Rd"]), "least_delta": float(np.min(sign * d)),
             "least_clearance": float(min(lengths.min() - limits[0], limits[1] - lengths.max()))}
 
 
@@ -105,14 +106,14 @@ def _solved(c: dict | None) -> bool:
 
 
 def run_nonholo(goals, limits, label: str, enforce: bool = True) -> list[dict]:
-    """:func:`nonholo.plan` on every goal, with ``leg_length=limits`` if ``enforce``; the
+    """:func:`nonholo.plan` on every goal, with ``LegStroke(*limits)`` if ``enforce``; the
     checks measure the clearance from ``limits`` either way."""
-    kw = {"leg_length": limits} if enforce else {}
-    planner.plan(so3.from_rpy(*WARMUP[0]), so3.from_rpy(*WARMUP[1]), delta_min=DELTA_MIN, **kw)
+    constraints = [Clearance(DELTA_MIN)] + ([LegStroke(*limits)] if enforce else [])
+    plan(so3.from_rpy(*WARMUP[0]), so3.from_rpy(*WARMUP[1]), constraints=constraints)
     timed = []
     for g in goals:
         t = time.perf_counter()
-        res = planner.plan(g["R0"], g["Rd"], T=g["T"], delta_min=DELTA_MIN, **kw)
+        res = plan(g["R0"], g["Rd"], T=g["T"], constraints=constraints)
         timed.append((time.perf_counter() - t, res))
     out = []
     for g, (wall, res) in zip(goals, timed):
@@ -150,7 +151,7 @@ def speed_check(R0, controls, breakpoints, T: float, v: float) -> dict:
     1, and the least — over the samples not on a breakpoint — of the fastest leg's speed
     over ``v`` (1 when the fastest leg is at the bound throughout)."""
     mech = catalog.get("platform")
-    t, R, d = verify.resimulate_path(R0, controls, T, mech, breakpoints, samples=4001)
+    t, R, d = resimulate_path(R0, controls, T, mech, breakpoints, samples=4001)
     fastest = np.abs(mech.leg_speeds(R, controls(t))).max(axis=1) / v
     away = np.ones(len(t), bool) if breakpoints is None else (
         np.min(np.abs(t[:, None] - np.asarray(breakpoints)[None, :]), axis=1) > 1e-9)
@@ -162,7 +163,7 @@ def run_retiming(goals, v: float) -> list[dict]:
     """Every goal planned by :func:`nonholo.plan`, then re-timed in the least time
     (:func:`nonholo.planning.retime`), the re-timing timed alone (after a warm-up call); each
     re-timed plan re-simulated by DOP853 against the plan's own end and the bound."""
-    plans = [planner.plan(g["R0"], g["Rd"], T=g["T"], delta_min=DELTA_MIN) for g in goals]
+    plans = [plan(g["R0"], g["Rd"], T=g["T"], constraints=[Clearance(DELTA_MIN)]) for g in goals]
     retime(plans[0], v)
     out = []
     for g, res in zip(goals, plans):
@@ -175,13 +176,13 @@ def run_retiming(goals, v: float) -> list[dict]:
         c = speed_check(g["R0"], fast.controls, fast.breakpoints, fast.T, v)
         out.append({"id": g["id"], "planned": True, "seconds": wall, "seconds_ms": 1e3 * wall, "T_planned": res.T, "T_least": fast.T,
                     "excess": c["excess"], "least": c["least"],
-                    "end_vs_plan": verify.terminal_error(c["R_T"], res.R[-1]),
-                    "final_error": verify.terminal_error(c["R_T"], g["Rd"])})
+                    "end_vs_plan": terminal_error(c["R_T"], res.R[-1]),
+                    "final_error": terminal_error(c["R_T"], g["Rd"])})
     return out
 
 
 def run_speed_peers(goals, v: float, stretch: float, least: dict, casadi: bool) -> list[dict]:
-    """``plan(R0, Rd, T, leg_speed=v)`` and, if ``casadi``, the baseline with the same bound,
+    """``plan(R0, Rd, T, constraints=[LegSpeed(v)])`` and, if ``casadi``, the baseline with the same bound,
     in ``T = stretch ×`` the goal's least time under ``v`` (``least``: by goal id);
     re-simulated by DOP853: *solved* = final error ≤ SUCCESS_TOL, sgnΔ ≥ delta_min and no
     leg faster than ``v (1 + 1e-6)`` at the samples (the baseline's piecewise-constant
@@ -194,7 +195,7 @@ def run_speed_peers(goals, v: float, stretch: float, least: dict, casadi: bool) 
         kw = {"N": 40, "substeps": 2, "delta_min": DELTA_MIN, "path_at_substeps": True, "leg_speed": v}
         casadi_ms.solve(so3.from_rpy(*WARMUP[0]), so3.from_rpy(*WARMUP[1]), T=2.0, **kw)
         solvers.append(("casadi", lambda g, T: casadi_ms.solve(g["R0"], g["Rd"], T=T, **kw)))
-    planner.plan(so3.from_rpy(*WARMUP[0]), so3.from_rpy(*WARMUP[1]), T=2.0, leg_speed=v)
+    plan(so3.from_rpy(*WARMUP[0]), so3.from_rpy(*WARMUP[1]), T=2.0, constraints=[LegSpeed(v)])
     for g in goals:
         if g["id"] not in least:
             continue
@@ -202,7 +203,7 @@ def run_speed_peers(goals, v: float, stretch: float, least: dict, casadi: bool) 
         for name, call in solvers:
             t = time.perf_counter()
             if call is None:
-                res = planner.plan(g["R0"], g["Rd"], T=T, delta_min=DELTA_MIN, leg_speed=v)
+                res = plan(g["R0"], g["Rd"], T=T, constraints=[Clearance(DELTA_MIN), LegSpeed(v)])
                 claimed, controls, bps, reason = res.success, res.controls, res.breakpoints, res.reason
             else:
                 res = call(g, T)
@@ -212,7 +213,7 @@ def run_speed_peers(goals, v: float, stretch: float, least: dict, casadi: bool) 
             if claimed:
                 try:
                     c = speed_check(g["R0"], controls, bps, T, v)
-                    solved = (verify.terminal_error(c["R_T"], g["Rd"]) <= SUCCESS_TOL and c["excess"] <= 1e-6
+                    solved = (terminal_error(c["R_T"], g["Rd"]) <= SUCCESS_TOL and c["excess"] <= 1e-6
                               and c["least_delta"] >= DELTA_MIN)
                 except (RuntimeError, ValueError, FloatingPointError):
                     c = None
@@ -228,8 +229,8 @@ def run_energy(goals, casadi: bool) -> list[dict]:
     :mod:`benchmarks.compare`) on every goal, timed per call after a warm-up call, each
     claimed success re-simulated by DOP853 (dense path): *solved* = final error ≤
     SUCCESS_TOL and sgnΔ ≥ delta_min; the energy of the returned controls by quadrature."""
-    solvers = [("nonholo energy", lambda g: planner.plan(g["R0"], g["Rd"], T=g["T"], delta_min=DELTA_MIN,
-                                                          objective="energy"))]
+    solvers = [("nonholo energy", lambda g: plan(g["R0"], g["Rd"], T=g["T"], constraints=[Clearance(DELTA_MIN)],
+                                                 objective="energy"))]
     if casadi:
         from . import casadi_ms
 
@@ -264,7 +265,7 @@ def energy_section(rep: Report, records: list[dict], n_goals: int) -> None:
     rep.paragraph(
         f"The {n_goals} reachable goals of `benchmarks/goals.json` (bands near and far), no stroke or speed "
         "limits: `plan(R0, Rd, T, objective=\"energy\")` (the default plan, then its energy lowered on "
-        f"{energy.ENERGY_GRID} piecewise-constant intervals) against the CasADi baseline's fine setting "
+        f"{ENERGY_GRID} piecewise-constant intervals) against the CasADi baseline's fine setting "
         "(`casadi-fine` of `benchmarks/compare.py`: minimum energy, 40 intervals, 8 substeps). Both timed per "
         "call after a warm-up call, in this run; every claimed success re-simulated by DOP853 (dense path): "
         f"*solved* = final error ≤ {SUCCESS_TOL:g} rad and sgnΔ ≥ {DELTA_MIN:g}; energy ∫|u|² dt of the "
@@ -330,7 +331,7 @@ def speed_section(rep: Report, timed: list[dict], peers: list[dict], v: float) -
         rep.heading("Leg speeds: a given time", level=3)
         rep.paragraph(
             f"The same goals in T = {STRETCH:g} × the least time found above, every leg at most v = {v:g}: "
-            "`plan(R0, Rd, T=T, leg_speed=v)` (the path planned in T, re-timed if its legs are too fast) and "
+            "`plan(R0, Rd, T=T, constraints=[LegSpeed(v)])` (the path planned in T, re-timed if its legs are too fast) and "
             "the CasADi baseline (minimum energy, 40 intervals, 2 substeps, the bound at both ends of every "
             "interval). *solved* = re-simulated final error ≤ 1e-8 rad, sgnΔ ≥ 0.01 and no leg faster than "
             "v (1 + 1e-6) at any sample (the baseline is bounded at its nodes only).")
@@ -376,7 +377,8 @@ def main(argv=None) -> int:
         "Each solver timed per call after a warm-up call. Every claimed success re-simulated by DOP853 "
         f"(rtol = atol = 1e-13, dense path): *solved* = final error ≤ {SUCCESS_TOL:g} rad, sgnΔ ≥ "
         f"{DELTA_MIN:g} and both legs inside the limits at every point (lengths from the numeric geometry); "
-        "a *false claim* is a claimed success that is not solved. `nonholo`: `plan(R0, Rd, leg_length=...)` "
+        "a *false claim* is a claimed success that is not solved. `nonholo`: `plan(R0, Rd, "
+        "constraints=[LegStroke(lo, hi)])` "
         "with its defaults; `casadi`: `benchmarks.casadi_ms.solve` (minimum energy, 40 intervals, 2 substeps, "
         "Δ at the substeps) with the stroke constraint at its nodes; `nonholo (no limits)`: `plan` without "
         "limits (its *solved* ignores the limits: see the line below the table).")

@@ -29,6 +29,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.spatial.transform import Rotation
 
+from nonholo.integrate.compiled import compiled_system
 from nonholo.model import catalog
 from nonholo.spaces import so3
 
@@ -131,7 +132,7 @@ class Planner:
         si.setPropagationStepSize(PROPAGATION_STEP)
         si.setMinMaxControlDuration(*CONTROL_STEPS)
         self.sign = 1.0
-        kern = self.mechanism.kernels(frame=False)
+        kern = compiled_system(self.mechanism, frame=False)
         has_delta = self.mechanism.has_singular_set
 
         def valid(state) -> bool:

@@ -43,11 +43,12 @@ import time
 
 import numpy as np
 
-from nonholo.certify import resimulate as verify
+from nonholo.certify.resimulate import resimulate_path, resimulate_state, state_errors, terminal_error
+from nonholo.constraints import Clearance
 from nonholo.controls.parametrisations import Fourier
 from nonholo.model import catalog
-from nonholo.planning import api as planner
-from nonholo.planning.energy import controls_energy
+from nonholo.planning.api import plan
+from nonholo.planning.energy_objective import controls_energy
 from nonholo.spaces import so3
 
 from . import goalset
@@ -105,7 +106,7 @@ def ball_cases(n: int, rng) -> list[dict]:
         c[1, 1], c[1, 2] = -rho * w * np.sin(phase) * sense, rho * w * np.cos(phase) * sense
         R0 = so3.exp(rng.normal(size=3) * 2.0)
         start = (R0, np.zeros(2))
-        _, R, q, _ = verify.resimulate_state(start, Fourier(T, c), T, "rolling_ball")
+        _, R, q, _ = resimulate_state(start, Fourier(T, c), T, "rolling_ball")
         out.append({"mechanism": "rolling_ball", "start": start, "goal": (R[-1], q[-1]), "T": T,
                     "reference": (2 * np.pi * rho) ** 2 / T, "label": f"ρ = {rho:g}", "band": "circle"})
     return out
@@ -137,14 +138,13 @@ def random_cases(n: int, rng) -> list[dict]:
     for name in catalog.names():
         mech = catalog.get(name)
         while sum(c["mechanism"] == name for c in out) < n:
-            (Ra, qa), (Rb, qb) = mech.space.sample(rng, 2)
+            a, b = mech.space.sample(rng, 2)
             if mech.singular.exists:
-                da, db = mech.singular.value(Ra, qa), mech.singular.value(Rb, qb)
+                da, db = mech.singular.value(*a), mech.singular.value(*b)
                 if min(abs(da), abs(db)) < 0.1 or np.sign(da) != np.sign(db):
                     continue
-            start = Ra if not mech.space.k else (qa if not mech.orientation else (Ra, qa))
-            goal = Rb if not mech.space.k else (qb if not mech.orientation else (Rb, qb))
-            out.append({"mechanism": name, "start": start, "goal": goal, "T": 1.0, "reference": None,
+            out.append({"mechanism": name, "start": mech.space.public(a), "goal": mech.space.public(b),
+                        "T": 1.0, "reference": None,
                         "label": "random", "band": "random"})
     return out
 
@@ -163,13 +163,13 @@ def check(case: dict, controls, breakpoints, T: float) -> dict:
     mech = catalog.get(case["mechanism"])
     try:
         if not mech.space.k:
-            _, R, d = verify.resimulate_path(case["start"], controls, T, mech, breakpoints)
-            final = verify.terminal_error(R[-1], case["goal"])
+            _, R, d = resimulate_path(case["start"], controls, T, mech, breakpoints)
+            final = terminal_error(R[-1], case["goal"])
             least = math.inf if d is None or not mech.singular.exists else float(np.min(np.sign(d[0]) * d))
         else:
-            _, R, q, d = verify.resimulate_state(case["start"], controls, T, mech.name, breakpoints)
+            _, R, q, d = resimulate_state(case["start"], controls, T, mech.name, breakpoints)
             Rd, qd = mech.parse_state(case["goal"], "goal")
-            final = max(verify.state_errors(mech.name, R[-1], q[-1], Rd, qd).values())
+            final = max(state_errors(mech.name, R[-1], q[-1], Rd, qd).values())
             least = math.inf if d is None else float(np.min(np.sign(d[0]) * d))
     except (RuntimeError, FloatingPointError, ValueError, ZeroDivisionError):
         return {"final_error": math.inf, "least_delta": 0.0}
@@ -182,8 +182,8 @@ def run_plan(case: dict, kind: str) -> dict:
     found)."""
     t = time.perf_counter()
     extra = {"energy": {"objective": "energy"}, "default": {}, "found": {"objective": None}}[kind]
-    res = planner.plan(case["start"], case["goal"], T=case["T"], mechanism=case["mechanism"],
-                       delta_min=DELTA_MIN, **extra)
+    res = plan(case["start"], case["goal"], T=case["T"], mechanism=case["mechanism"],
+               constraints=[Clearance(DELTA_MIN)], **extra)
     wall = time.perf_counter() - t
     c = check(case, res.controls, res.breakpoints, res.T) if res.success else None
     solved = c is not None and c["final_error"] <= SUCCESS_TOL and c["least_delta"] >= DELTA_MIN
@@ -329,9 +329,10 @@ def report(records: list[dict], argv, args) -> None:
     rep = Report("optimality.md", "Least-energy plans against known optima and CasADi", "benchmarks.optimality",
                  argv, extra_packages=("casadi",))
     rep.paragraph(
-        "Each case planned by `plan(start, goal, T, delta_min=0.01, objective=\"energy\")` (*energy*), by "
-        "`plan(start, goal, T, delta_min=0.01)` (*default*: `objective=\"auto\"`, the plan as found unless a "
-        "quick search finds a smooth motion of far less energy) and with `objective=None` (*found*: the plan as "
+        "Each case planned by `plan(start, goal, T, constraints=[Clearance(0.01)], objective=\"energy\")` "
+        "(*energy*), by `plan(start, goal, T, constraints=[Clearance(0.01)])` (*default*: "
+        "`objective=\"auto\"`, the plan as found unless a quick search finds a smooth motion of far less "
+        "energy) and with `objective=None` (*found*: the plan as "
         "found), timed per call after a warm-up call per mechanism. "
         f"Every claimed success re-simulated by DOP853 (rtol = atol = 1e-13): *solved* = final error ≤ "
         f"{SUCCESS_TOL:g} and sgnΔ ≥ {DELTA_MIN:g} along the dense path. Energy ∫|u|² dt by quadrature of the "

@@ -9,8 +9,8 @@ Cases: the platform's Examples 1 and 3 (:mod:`nonholo.paper.examples`), Example 
 actuators and without the no-slip pass (the friction under the legs' weight creeps), and a
 plan of ``platform_raised`` (``I → exp([0.3, 0.1, 0.2])``), whose model is written from its
 geometry like any other; the rolling ball's in-place reorientation by ``π/2`` about ``x`` (planned with
-``strategy="paper", harmonics=4``) played in 10 s and in 1 s, without radius compensation and
-with servo actuators; the car's parking problem ``(0, 0, 0, 0) → (0, 1, 0, 0)`` with both
+``strategy="paper", settings=Settings(harmonics=4)``) played in 10 s and in 1 s, without radius
+compensation and with servo actuators; the car's parking problem ``(0, 0, 0, 0) → (0, 1, 0, 0)`` with both
 kinds of actuators; the unicycle's ``(0, 0, 0) → (0, 1, 0)``. Each case: :func:`nonholo.physics.execution.execute`
 with the calibrated contact settings but for the one named, at most ``--touch-ups`` re-plans
 from the measured state, each played only if predicted to end nearer the goal, none once
@@ -47,14 +47,15 @@ BALL_RD = so3.exp(np.array([np.pi / 2, 0.0, 0.0])) @ BALL_R0
 def problems() -> dict:
     """The plans played, by name."""
     ex1, ex3 = examples.get(1), examples.get(3)
+    Settings = nonholo.Settings
     return {
-        "platform, Example 1": nonholo.plan(ex1.R_start, ex1.R_goal, T=ex1.T, method=ex1.methods[0],
-                                            harmonics=ex1.harmonics, objective=None),
-        "platform, Example 3": nonholo.plan(ex3.R_start, ex3.R_goal, T=ex3.T, method=ex3.methods[0],
-                                            harmonics=ex3.harmonics, objective=None),
+        "platform, Example 1": nonholo.plan(ex1.R_start, ex1.R_goal, T=ex1.T, objective=None,
+                                            settings=Settings(method=ex1.methods[0], harmonics=ex1.harmonics)),
+        "platform, Example 3": nonholo.plan(ex3.R_start, ex3.R_goal, T=ex3.T, objective=None,
+                                            settings=Settings(method=ex3.methods[0], harmonics=ex3.harmonics)),
         "platform_raised": nonholo.plan(np.eye(3), so3.exp(np.array([0.3, 0.1, 0.2])), mechanism="platform_raised"),
         "rolling_ball": nonholo.plan((BALL_R0, (0.0, 0.0)), (BALL_RD, (0.0, 0.0)), mechanism="rolling_ball",
-                                     strategy="paper", harmonics=4),
+                                     strategy="paper", settings=Settings(harmonics=4)),
         "car": nonholo.plan((0.0, 0.0, 0.0, 0.0), (0.0, 1.0, 0.0, 0.0), mechanism="car"),
         "unicycle": nonholo.plan((0.0, 0.0, 0.0), (0.0, 1.0, 0.0), mechanism="unicycle"),
     }

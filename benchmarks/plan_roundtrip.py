@@ -3,7 +3,7 @@
 :meth:`~nonholo.io.result.PlanResult.load`.
 
 Pairs: :func:`benchmarks.goalset.uniform_pairs` of ``platform`` (Haar-uniform, one component),
-each planned twice with ``leg_speed`` (default 0.5): in the given ``T = 1`` and in the least
+each planned twice with a ``LegSpeed`` (default 0.5): in the given ``T = 1`` and in the least
 time (``T=None``) — successes (local and global routes, re-timed or not) and failures (too
 slow for ``T``, not converged) alike. A plan passes when ``save`` writes it, ``load`` reads
 it back and the loaded plan equals the saved one field by field. Run as::
@@ -22,7 +22,8 @@ import time
 from pathlib import Path
 
 from nonholo.io.result import PlanResult
-from nonholo.planning import api as planner
+from nonholo.constraints import LegSpeed
+from nonholo.planning.api import plan
 
 from . import goalset
 
@@ -53,7 +54,7 @@ def main(argv=None) -> int:
         for i, pair in enumerate(pairs):
             for T in (1.0, None):
                 t0 = time.perf_counter()
-                res = planner.plan(pair["R0"], pair["Rd"], T=T, leg_speed=args.leg_speed)
+                res = plan(pair["R0"], pair["Rd"], T=T, constraints=[LegSpeed(args.leg_speed)])
                 problem = round_trip(res, Path(tmp) / f"plan{i}_{T}.json")
                 rec = {"pair": pair["id"], "T": T, "success": bool(res.success), "route": res.route,
                        "kind": res.parametrisation.kind, "round_trip": problem is None,

@@ -48,7 +48,7 @@ import numpy as np
 
 from nonholo.model import catalog
 from nonholo.planning import roadmap
-from nonholo.certify import resimulate as verify
+from nonholo.certify.resimulate import resimulate_path, terminal_error
 
 from . import goalset
 from .report import Report
@@ -79,11 +79,11 @@ def check(mechanism, R0, Rd, T: float, controls, breakpoints) -> dict:
     reaching ``Δ = 0``, infinitely far from the goal)."""
     mech = catalog.get(mechanism)
     try:
-        _, R, d = verify.resimulate_path(R0, controls, T, mech, breakpoints)
+        _, R, d = resimulate_path(R0, controls, T, mech, breakpoints)
     except (RuntimeError, FloatingPointError, ValueError, ZeroDivisionError):
         return {"final_error": math.inf, "least_delta": 0.0}
     sign = float(np.sign(mech.delta(R0)))
-    return {"final_error": verify.terminal_error(R[-1], Rd), "least_delta": float(np.min(sign * d))}
+    return {"final_error": terminal_error(R[-1], Rd), "least_delta": float(np.min(sign * d))}
 
 
 def _within(checked: dict | None, error: float) -> bool:

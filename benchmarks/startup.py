@@ -6,9 +6,10 @@ algebra, which every use of the package loads (run by hand).
 Writes ``benchmarks/results/startup.md`` (headed by the date, the git commit, the machine and
 the command, see :mod:`benchmarks.report`): each command in a fresh interpreter, the three
 interleaved run after run so that a busy machine slows them alike; the median wall time of
-each and its ratio to the reference's median; and which of the heavy packages
+each and its ratio to the reference's median; which of the heavy packages
 (numba, SymPy, Matplotlib, MuJoCo, SciPy's modules beyond ``linalg``) ``import nonholo``
-loads.
+and ``nonholo --help`` load, and which modules of the commands ``nonholo --help`` loads
+(none: :mod:`nonholo.cli.entry` imports a command's module only to run that command).
 """
 from __future__ import annotations
 
@@ -35,6 +36,30 @@ HEAVY = ("numba", "sympy", "matplotlib", "mujoco", "pyarrow", "scipy.spatial", "
 
 LOADED = ("import json, sys; import nonholo; "
           f"print(json.dumps([m for m in {HEAVY!r} if m in sys.modules]))")
+
+#: The same for ``nonholo --help``, with the modules of ``nonholo.cli`` it loads besides
+#: the parser's own.
+HELP_LOADED = ("import contextlib, io, json, sys\n"
+               "from nonholo.cli.entry import main\n"
+               "with contextlib.redirect_stdout(io.StringIO()):\n"
+               "    try:\n"
+               "        main(['--help'])\n"
+               "    except SystemExit:\n"
+               "        pass\n"
+               f"print(json.dumps([[m for m in {HEAVY!r} if m in sys.modules],\n"
+               "                  sorted(m for m in sys.modules if m.startswith('nonholo.cli.')\n"
+               "                         and m not in ('nonholo.cli.entry', 'nonholo.cli.commands'))]))")
+
+
+def loaded(code: str):
+    """What ``code``, run in a fresh interpreter, prints as JSON."""
+    return json.loads(subprocess.run([sys.executable, "-c", code], check=True, capture_output=True,
+                                     text=True).stdout)
+
+
+def listed(names) -> str:
+    """``names`` separated by commas, or ``none``."""
+    return ", ".join(names) if names else "none"
 
 
 def wall(command: list) -> float:
@@ -64,10 +89,10 @@ def main(argv=None) -> None:
                  [[name, f"{statistics.median(ts):.3f} ({min(ts):.3f}–{max(ts):.3f})",
                    f"{statistics.median(ts) / reference:.2f}"] for name, ts in times.items()],
                  ["l", "r", "r"])
-    loaded = json.loads(subprocess.run([sys.executable, "-c", LOADED], check=True, capture_output=True,
-                                       text=True).stdout)
+    heavy_help, commands_help = loaded(HELP_LOADED)
     report.paragraph(
-        f"Of {', '.join(HEAVY)}, `import nonholo` loads: {', '.join(loaded) if loaded else 'none'}. "
+        f"Of {', '.join(HEAVY)}, `import nonholo` loads: {listed(loaded(LOADED))}; `nonholo --help`: "
+        f"{listed(heavy_help)}, and of the commands' modules: {listed(commands_help)}. "
         "numba is imported at the first call of a compiled function, when the native kernels are not "
         "used; SymPy by a derivation or a mechanism of one's own; Matplotlib by a figure; MuJoCo by a "
         "physics run; SciPy's other modules by the functions that use them.")

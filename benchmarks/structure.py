@@ -11,8 +11,8 @@ by, counted with ``ast`` and plain text over ``nonholo/`` (generated code aside)
   ``.orientation``, ``has_singular_set``);
 - calls that look a mechanism up by name (``catalog.get(``) and the files holding them;
 - modules longer than :data:`MAX_LINES` lines;
-- import aliases kept from old names (``resimulate as verify``, ``api as planner``), in the
-  package, the tests, the benchmarks and the notebooks;
+- import aliases kept from old names (``resimulate`` imported as ``verify``, ``api`` as
+  ``planner``), in the package, the tests, the benchmarks, the notebooks and the docs;
 - the parameters of ``nonholo.plan`` and ``Problem.build`` and the lines of ``plan``'s docstring.
 """
 from __future__ import annotations
@@ -40,9 +40,9 @@ KIND_QUESTIONS = {
     ".orientation": re.compile(r"\.orientation\b"),
     "has_singular_set": re.compile(r"\bhas_singular_set\b"),
 }
-#: Import aliases kept from old names.
-ALIASES = {"resimulate as verify": re.compile(r"\bresimulate as verify\b"),
-           "api as planner": re.compile(r"\bapi as planner\b")}
+#: Import aliases kept from old names: what is imported under which old name.
+ALIASES = {"`resimulate` imported as `verify`": re.compile(r"\bresimulate\s+as\s+verify\b"),
+           "`api` imported as `planner`": re.compile(r"\bapi\s+as\s+planner\b")}
 
 
 def modules() -> list[Path]:
@@ -83,7 +83,8 @@ def main(argv=None) -> None:
                 lookups += 1
                 lookup_files.add(rel)
     for path in [*modules(), *sorted((ROOT / "tests").rglob("*.py")), *sorted((ROOT / "benchmarks").rglob("*.py")),
-                 *sorted((ROOT / "notebooks").glob("*.ipynb"))]:
+                 *sorted((ROOT / "notebooks").glob("*.ipynb")), *sorted((ROOT / "docs").rglob("*.md")),
+                 *sorted((ROOT / "docs" / "gallery").glob("*.ipynb"))]:
         text = path.read_text(encoding="utf-8")
         for name, pattern in ALIASES.items():
             aliases[name] += len(pattern.findall(text)) if path != Path(__file__).resolve() else 0
@@ -96,7 +97,7 @@ def main(argv=None) -> None:
     report.heading("Looking a mechanism up by name, old aliases, long modules")
     report.table(["what", "count"],
                  [["`catalog.get(` calls", lookups], ["files with them", len(lookup_files)]]
-                 + [[f"`{name}` imports (package, tests, benchmarks, notebooks)", n] for name, n in aliases.items()]
+                 + [[f"{name} (package, tests, benchmarks, notebooks, docs)", n] for name, n in aliases.items()]
                  + [[f"modules over {MAX_LINES} lines", len(long_modules)]], ["l", "r"])
     report.table(["module", "lines"], [[f"`{m}`", n] for m, n in sorted(long_modules, key=lambda x: -x[1])],
                  ["l", "r"])

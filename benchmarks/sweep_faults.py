@@ -3,7 +3,7 @@ local workers, killed with SIGKILL three times at random moments and started aga
 run to the end; and a second sweep started on the same output while the first runs.
 
 Passes when the resumed sweep ends with exit status 0 and 300 rows, each problem once and
-equal to an uninterrupted in-process run's (:func:`nonholo.batch.sweep.comparable`: every
+equal to an uninterrupted in-process run's (:func:`nonholo.batch.result_store.comparable`: every
 column but the wall times), no process of a killed sweep remains (checked 5 s after each
 kill, by the output's path in ``/proc/*/cmdline``), and the second start is refused with
 exit status 2 while the first goes on to finish. Run as::
@@ -27,7 +27,7 @@ from pathlib import Path
 
 import numpy as np
 
-from nonholo.batch import sweep
+from nonholo.batch import result_store, sweep
 from nonholo.io import problems
 
 from .report import Report
@@ -54,7 +54,7 @@ def processes_naming(text: str) -> list[int]:
 
 def parts_count(out: Path) -> int:
     """The parts a sweep on ``out`` has written so far."""
-    folder = sweep.parts_dir(out)
+    folder = result_store.parts_dir(out)
     return len(list(folder.glob("part-*.parquet"))) if folder.exists() else 0
 
 
@@ -111,11 +111,11 @@ def main(argv=None) -> int:
             checks.append((f"no process of killed sweep {round_ + 1} remains", not left))
         done = subprocess.run(cmd, capture_output=True, text=True, timeout=3600, check=False)
         checks.append(("the resumed sweep exits 0", done.returncode == 0))
-        table = sweep.load(out) if out.exists() else None
+        table = result_store.load(out) if out.exists() else None
         index = [] if table is None else table.column("index").to_pylist()
         checks.append((f"{args.problems} rows, each problem once", index == list(range(args.problems))))
         checks.append(("rows equal to the uninterrupted run's",
-                       table is not None and sweep.comparable(table) == sweep.comparable(reference)))
+                       table is not None and result_store.comparable(table) == result_store.comparable(reference)))
         checks.append(("no process left after the resumed sweep", not survivors(str(out))))
 
         # a second start on an output a sweep is writing
@@ -123,16 +123,16 @@ def main(argv=None) -> int:
         cmd2 = [*cmd[:6], str(second_out), *cmd[7:]]
         first = subprocess.Popen(cmd2, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
         deadline = time.monotonic() + 120
-        while first.poll() is None and not sweep.lock_path(second_out).exists() and time.monotonic() < deadline:
+        while first.poll() is None and not result_store.lock_path(second_out).exists() and time.monotonic() < deadline:
             time.sleep(0.01)
         second = subprocess.run(cmd2, capture_output=True, text=True, timeout=600, check=False)
         first.wait(timeout=3600)
         message = second.stderr.strip().splitlines()[-1] if second.stderr.strip() else ""
         checks.append(("a second start on the same output exits 2", second.returncode == 2))
         checks.append(("the first sweep finishes (exit 0)", first.returncode == 0))
-        second_table = sweep.load(second_out) if second_out.exists() else None
+        second_table = result_store.load(second_out) if second_out.exists() else None
         checks.append(("its rows equal the uninterrupted run's", second_table is not None
-                       and sweep.comparable(second_table) == sweep.comparable(reference)))
+                       and result_store.comparable(second_table) == result_store.comparable(reference)))
     report.paragraph(
         f"{args.problems} car problems (from rest at the origin to random poses within 1 wheelbase), "
         f"`nonholo sweep --workers 2`; the uninterrupted reference in this process took "

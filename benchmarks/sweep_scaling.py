@@ -14,7 +14,7 @@ sweep of 8 other pairs (numba loaded), the order is: one worker (in this process
 local worker processes, then a Dask scheduler and two single-threaded workers started as
 separate processes on 127.0.0.1 by the ``dask`` command-line tools (:func:`dask_cluster`); then the machine's ceiling (:func:`machine_ceiling`). Every run's rows must
 equal the one-worker run's (all columns but the wall times,
-:func:`nonholo.batch.sweep.comparable`). Writes ``benchmarks/results/sweep.md``.
+:func:`nonholo.batch.result_store.comparable`). Writes ``benchmarks/results/sweep.md``.
 """
 from __future__ import annotations
 
@@ -27,7 +27,8 @@ import tempfile
 import time
 from pathlib import Path
 
-from nonholo.batch.sweep import comparable, sweep
+from nonholo.batch.result_store import comparable
+from nonholo.batch.sweep import sweep
 
 from . import goalset
 from .report import Report

@@ -14,7 +14,8 @@ import sys
 import tempfile
 from pathlib import Path
 
-from nonholo.batch.sweep import plan_of, sweep
+from nonholo.batch.result_store import plan_of
+from nonholo.batch.sweep import sweep
 
 from .report import RESULTS_DIR, git_revision
 
@@ -38,9 +39,11 @@ def problems_of(goals: list[dict], options: dict | None = None, mechanism: str =
 
 def plan_all(name: str, goals: list[dict], options: dict | None = None, mechanism: str = "platform",
              directory: Path | None = None):
-    """``[(seconds, PlanResult)]``: ``plan(R0, Rd, T=T, mechanism=..., **options)`` for every goal,
-    in order, through a sweep named ``name`` (see the module). A plan that raised raises
-    ``RuntimeError`` with its error."""
+    """``[(seconds, PlanResult)]``: ``plan(R0, Rd, T=T, mechanism=..., **arguments_of(options))``
+    for every goal, in order, through a sweep named ``name`` (see the module); ``options`` are
+    flat, as a problem table holds them (``"delta_min"``, ``"harmonics"``, ...:
+    :func:`nonholo.planning.problem.arguments_of` makes them constraints and settings). A plan
+    that raised raises ``RuntimeError`` with its error."""
     safe = "".join(c if c.isalnum() or c in "-_." else "_" for c in name)
     out = (directory or runs_dir()) / f"{safe}.parquet"
     out.parent.mkdir(parents=True, exist_ok=True)

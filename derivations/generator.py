@@ -1,6 +1,6 @@
 """What identifies a generated module, cheaply (nothing but SymPy's core is imported): the
 code generator's version and the canonical text of a definition. A cache of generated
-modules keys on both (:mod:`nonholo.model.mechanism`), so that a cached module is found
+modules keys on both (:mod:`nonholo.codegen.mechanism_modules`), so that a cached module is found
 without importing the generator or deriving anything.
 """
 from __future__ import annotations

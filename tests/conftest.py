@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from nonholo.certify import resimulate as verify
+from nonholo.certify.resimulate import resimulate, resimulate_path, terminal_error
 from nonholo.controls.parametrisations import Fourier, paper_initial
 from nonholo.generated import MECHANISMS as GENERATED_MECHANISMS
 from nonholo.model import catalog
@@ -71,8 +71,8 @@ def check_solution(res, R0, Rd, tol=1e-10, mechanism=None):
     mech = catalog.get(res.mechanism if mechanism is None else mechanism)
     assert res.success, res.reason
     assert res.terminal_error <= tol
-    R_T = verify.resimulate(R0, res.controls, res.T, mech, res.breakpoints)
-    assert verify.terminal_error(R_T, Rd) <= 1e-8
+    R_T = resimulate(R0, res.controls, res.T, mech, res.breakpoints)
+    assert terminal_error(R_T, Rd) <= 1e-8
     # the planner's own endpoint is within the integrator's discretisation error (≤ 1e-9)
     assert so3.distance(res.R_T, R_T) <= 1e-9
     if mech.has_singular_set:
@@ -91,9 +91,9 @@ def verified(res, R0, Rd, T=1.0, mechanism=None):
     ends within 1e-8 rad of ``Rd`` and keeps ``|Δ| ≥ 1e-2`` on the dense path."""
     mech = catalog.get(res.mechanism if mechanism is None else mechanism)
     assert res.success, res.reason
-    RT = verify.resimulate(R0, res.controls, T, mech, res.breakpoints)
-    assert verify.terminal_error(RT, Rd) <= 1e-8
-    _, _, d = verify.resimulate_path(R0, res.controls, T, mech, res.breakpoints, samples=501)
+    RT = resimulate(R0, res.controls, T, mech, res.breakpoints)
+    assert terminal_error(RT, Rd) <= 1e-8
+    _, _, d = resimulate_path(R0, res.controls, T, mech, res.breakpoints, samples=501)
     assert np.min(np.sign(mech.delta(R0)) * d) >= 1e-2
     assert res.min_delta >= 1e-2
     # the replay's stage values against the parametrisation at t: two computations
@@ -194,19 +194,18 @@ def random_rotations(n, rng, min_abs_delta=0.05, delta=platform_delta):
 
 def forbid_simulation(monkeypatch):
     """Make every way into the integrator fail the test: compiling or fetching kernels
-    (:meth:`nonholo.Mechanism.kernels`, :func:`nonholo.integrate.cf4.compile_system`) and building a
-    planning :class:`~nonholo.planning.core.Evaluator`. Raises ``AssertionError`` (not a
+    (:func:`nonholo.integrate.system_kernels.compile_system`, which
+    :func:`nonholo.integrate.compiled.compiled_system` calls) and building a planning
+    :class:`~nonholo.planning.core.EndpointMap`. Raises ``AssertionError`` (not a
     ``ValueError``), so a ``pytest.raises(ValueError)`` around the call does not swallow it."""
-    from nonholo.integrate import cf4
-    from nonholo.model import mechanism
+    from nonholo.integrate import system_kernels
     from nonholo.planning import core
 
     def forbidden(*args, **kwargs):
         raise AssertionError("simulated (or compiled kernels) although nothing should be simulated")
 
-    monkeypatch.setattr(mechanism.Mechanism, "kernels", forbidden)
-    monkeypatch.setattr(cf4, "compile_system", forbidden)
-    monkeypatch.setattr(core.Evaluator, "__init__", forbidden)
+    monkeypatch.setattr(system_kernels, "compile_system", forbidden)
+    monkeypatch.setattr(core.EndpointMap, "__init__", forbidden)
 
 
 def check_into_forms(module, rotations, rng):

@@ -25,7 +25,7 @@ from nonholo.generated import MECHANISMS
 SYSTEMS = [(name, frame) for name in MECHANISMS
            for frame in ((False, True) if getattr(importlib.import_module(f"nonholo.generated.{name}"),
                                                   "HAS_FRAME", False) else (False,))]
-#: the kernels' two Python forms: generated with the step inlined, and as cf4.py writes them
+#: the kernels' two Python forms: generated with the step inlined, and as the integrator's modules write them
 FORMS = ("inlined", "written")
 #: steps of a run; basis functions of the variational runs
 STEPS, BASIS = 120, 5
@@ -114,13 +114,13 @@ def interpreted(tmp_path: Path) -> dict[tuple[str, bool, str], dict[str, np.ndar
 
 
 def main(path: str) -> None:
-    from nonholo.integrate import cf4
+    from nonholo.integrate import system_kernels
 
     arrays = {}
     for name, frame in SYSTEMS:
         inp = inputs(name, frame)
         for form in FORMS:
-            kern = cf4.compile_system(module(name), frame, inlined=form == "inlined", backend="numba")
+            kern = system_kernels.compile_system(module(name), frame, inlined=form == "inlined", backend="numba")
             for field, value in run(kern, inp, frame).items():
                 arrays[f"{name}|{'frame' if frame else 'physical'}|{form}|{field}"] = value
     np.savez(path, **arrays)

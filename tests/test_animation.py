@@ -62,6 +62,7 @@ def test_every_catalog_mechanism_has_a_motion_here():
 
 
 @pytest.mark.parametrize("name", sorted(MOTIONS))
+@pytest.mark.slow
 def test_every_mechanism_is_seen_moving(name, tmp_path):
     result = planned(name)
     assert animation.animation_kind(result) == MOTIONS[name][2]
@@ -85,6 +86,7 @@ def test_a_saved_plan_animates_as_the_plan(tmp_path):
     assert all(np.array_equal(x, y) for x, y in zip(frames_of(a), frames_of(b)))
 
 
+@pytest.mark.slow
 def test_the_state_view_for_any_mechanism_and_a_forced_kind(tmp_path):
     result = planned("car")
     out = viz.animate(result, tmp_path / "car_state.gif", frames=3, dpi=30, kind="state")
@@ -139,6 +141,7 @@ def test_mp4_with_ffmpeg_or_a_clear_error(tmp_path, monkeypatch):
     assert not (tmp_path / "v.mp4").exists()
 
 
+@pytest.mark.slow
 def test_the_progress_bar_is_on_stderr_when_asked(tmp_path, capsys):
     viz.animate(planned("unicycle"), tmp_path / "p.gif", frames=2, dpi=20, progress=True)
     assert "animating p.gif" in capsys.readouterr().err
@@ -322,6 +325,7 @@ def test_the_functions_are_those_of_the_derivations():
     assert set(drawing.FUNCTIONS) <= set(admission.FUNCTIONS)
 
 
+@pytest.mark.slow
 def test_drawings_need_neither_matplotlib_nor_sympy():
     code = ("import sys, nonholo\n"
             "d = nonholo.mechanism_named('car').drawing\n"
@@ -339,6 +343,7 @@ def saved_plan(tmp_path) -> Path:
     return planned("car").save(tmp_path / "car.json")
 
 
+@pytest.mark.slow
 def test_the_command_animates_a_saved_plan(saved_plan, tmp_path, capsys):
     out = tmp_path / "car.gif"
     assert main(["animate", str(saved_plan), "--out", str(out), "--frames", "4", "--dpi", "30"]) == 0

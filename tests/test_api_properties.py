@@ -9,6 +9,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 import nonholo
+from nonholo.constraints import Clearance, LegSpeed, LegStroke
 from nonholo.controls.parametrisations import Fourier
 from nonholo.spaces import so3
 
@@ -25,28 +26,52 @@ ANYTHING = st.one_of(
     st.just(np.eye(3) * 2), st.just(object()), st.dictionaries(st.text(max_size=3), st.integers(), max_size=2),
 )
 
-#: the keywords of ``plan`` drawn (each on its own), with the cheap settings the rest keep
-ARGUMENTS = ["R0", "Rd", "T", "method", "harmonics", "grid", "gamma", "step", "tol", "max_iter", "strategy",
-             "mechanism", "delta_min", "steps", "newton_below", "min_step", "route", "leg_length",
-             "leg_speed", "objective", "u0", "callback"]
+#: the keywords of ``plan`` drawn (each on its own), the fields of its ``Settings`` and the
+#: numbers of its constraints (each built from the value drawn), the rest valid and cheap
+ARGUMENTS = ["start", "goal", "T", "strategy", "mechanism", "route", "objective", "u0", "callback",
+             "constraints", "settings"]
+SETTINGS_FIELDS = ["method", "harmonics", "grid", "gamma", "step", "tol", "max_iter", "steps", "newton_below",
+                   "min_step"]
+CONSTRAINTS = {"delta_min": lambda v: Clearance(v), "leg_length": lambda v: LegStroke(v, 2.0),
+               "leg_speed": lambda v: LegSpeed(v)}
+#: The word a constraint's error names it by: its field, or the class for a pair of ends.
+NAMED_AS = {"leg_length": "LegStroke"}
 CHEAP = {"max_iter": 3}
 
 
 def _names(exc: BaseException, name: str) -> bool:
-    text = str(exc)
-    return name in text or (name == "Rd" and "goal" in text) or (name == "R0" and "start" in text)
+    return name in str(exc)
 
 
 @pytest.mark.parametrize("name", ARGUMENTS)
 @settings(max_examples=8, deadline=None, derandomize=True, database=None,
           suppress_health_check=[HealthCheck.too_slow])
 @given(value=ANYTHING)
+@pytest.mark.slow
 def test_plan_refuses_or_plans_whatever_one_argument_is(name, value):
-    kwargs = {**CHEAP, "R0": R0, "Rd": RD, name: value}
+    kwargs = {"start": R0, "goal": RD, "settings": nonholo.Settings(**CHEAP), name: value}
     try:
-        res = nonholo.plan(kwargs.pop("R0"), kwargs.pop("Rd"), **kwargs)
+        res = nonholo.plan(kwargs.pop("start"), kwargs.pop("goal"), **kwargs)
     except (ValueError, TypeError) as exc:
-        assert _names(exc, name), f"{name}={value!r}: {type(exc).__name__}: {exc}"
+        assert _names(exc, NAMED_AS.get(name, name)), f"{name}={value!r}: {type(exc).__name__}: {exc}"
+    else:
+        assert isinstance(res, nonholo.PlanResult)
+
+
+@pytest.mark.parametrize("name", SETTINGS_FIELDS + list(CONSTRAINTS))
+@settings(max_examples=8, deadline=None, derandomize=True, database=None,
+          suppress_health_check=[HealthCheck.too_slow])
+@given(value=ANYTHING)
+@pytest.mark.slow
+def test_plan_refuses_or_plans_whatever_one_setting_or_constraint_is(name, value):
+    try:
+        if name in CONSTRAINTS:
+            kwargs = {"settings": nonholo.Settings(**CHEAP), "constraints": [CONSTRAINTS[name](value)]}
+        else:
+            kwargs = {"settings": nonholo.Settings(**{**CHEAP, name: value})}
+        res = nonholo.plan(R0, RD, **kwargs)
+    except (ValueError, TypeError) as exc:
+        assert _names(exc, NAMED_AS.get(name, name)), f"{name}={value!r}: {type(exc).__name__}: {exc}"
     else:
         assert isinstance(res, nonholo.PlanResult)
 

@@ -131,6 +131,7 @@ def test_cycle_finder():
     assert cycles({"a": {"b"}, "b": {"c"}, "c": {"a"}, "d": {"a"}}) == [["a", "b", "c"]]
 
 
+@pytest.mark.slow
 def test_the_graph_sees_every_form_of_import():
     """Known imports of the package, one of each form."""
     edges = graph()
@@ -153,15 +154,19 @@ def test_layer_of_every_module():
     assert layer("nonholo") == "nonholo"
     assert layer("nonholo.constraints") == "nonholo"          # a top module: the public face
     assert layer("nonholo.model") == "model"
+    assert layer("nonholo.codegen.emit") == "codegen"
     assert LAYERS.index("numerics") < LAYERS.index("planning") < LAYERS.index("cli")
+    # code generation sits just above what it generates; a mechanism is data the integrator compiles
+    assert LAYERS.index("generated") < LAYERS.index("codegen") < LAYERS.index("numerics")
+    assert LAYERS.index("codegen") < LAYERS.index("model") < LAYERS.index("integrate")
 
 
 # -- the package ----------------------------------------------------------------------------
 
 #: The subpackages from the bottom up: a module may import from its own layer and the layers
 #: below it, never from a layer above (``nonholo`` itself, the public face, is the top).
-LAYERS = ("generated", "numerics", "spaces", "integrate", "controls", "model", "motion", "certify",
-          "io", "planning", "physics", "viz", "batch", "paper", "cli", "nonholo")
+LAYERS = ("generated", "codegen", "numerics", "spaces", "controls", "model", "integrate", "motion",
+          "certify", "io", "planning", "physics", "viz", "batch", "paper", "cli", "nonholo")
 
 #: At most this many modules directly in ``nonholo/`` besides the subpackages.
 MAX_TOP_MODULES = 12
@@ -175,6 +180,7 @@ def layer(module: str) -> str:
 
 def test_every_module_is_parsed():
     assert {"nonholo", "nonholo.model.catalog", "nonholo.model.mechanism", "nonholo.integrate.cf4",
+            "nonholo.integrate.compiled", "nonholo.codegen", "nonholo.codegen.emit", "nonholo.codegen.build",
             "nonholo.planning.core", "nonholo.planning.strategy_robust",
             "nonholo.generated.platform"} <= set(MODULES)
 
@@ -189,6 +195,30 @@ def test_no_import_from_a_lower_layer_to_a_higher_one():
               for m, targets in graph().items() for t in sorted(targets)
               if LAYERS.index(layer(t)) > LAYERS.index(layer(m))]
     assert not upward, "imports from a lower layer to a higher one:\n" + "\n".join(upward)
+
+
+def reached(module: str, edges: dict[str, set[str]]) -> set[str]:
+    """The modules ``module`` imports, directly or through others."""
+    seen, todo = set(), [module]
+    while todo:
+        for t in edges[todo.pop()] - seen:
+            seen.add(t)
+            todo.append(t)
+    return seen
+
+
+def test_a_mechanism_is_data_the_integrator_compiles():
+    """The mechanism imports neither the integrator (at all) nor the compiler of native
+    modules (itself); the integrator compiles a mechanism's kernels; code generation lives
+    in one subpackage and imports nothing above it."""
+    edges = graph()
+    from_mechanism = reached("nonholo.model.mechanism", edges)
+    assert not {m for m in from_mechanism if layer(m) == "integrate"}, sorted(from_mechanism)
+    assert not {m for m in edges["nonholo.model.mechanism"] if m in ("nonholo.codegen.build", "nonholo.codegen.emit")}
+    assert "nonholo.model.mechanism" not in reached("nonholo.integrate.system_kernels", edges)
+    assert "nonholo.codegen.build" in edges["nonholo.integrate.system_kernels"]
+    codegen = [m for m in MODULES if layer(m) == "codegen"]
+    assert {layer(t) for m in codegen for t in edges[m]} <= {"generated", "codegen"}
 
 
 def test_few_modules_directly_in_the_package():
@@ -225,6 +255,7 @@ def test_no_import_cycle():
     assert not found, "import cycles among nonholo modules: " + "; ".join(" <-> ".join(c) for c in found)
 
 
+@pytest.mark.slow
 def test_no_private_name_is_imported_from_another_module():
     offending = [f"{m}:{line}: from {src} import {name}"
                  for m in MODULES for src, name, line in imports(m)

@@ -17,12 +17,14 @@ def audit_json():
     return json.loads(buf.getvalue())
 
 
+@pytest.mark.slow
 def test_json_shape(audit_json):
     assert len(audit_json) == len(audit.CHECKS)
     for item in audit_json:
         assert set(item) == {"equation", "verdict", "note"}
 
 
+@pytest.mark.slow
 def test_expected_verdicts(audit_json):
     verdicts = {item["equation"]: item["verdict"] for item in audit_json}
     assert verdicts.pop("(12)") == audit.TYPO
@@ -30,6 +32,7 @@ def test_expected_verdicts(audit_json):
     assert set(verdicts.values()) == {audit.VERIFIED}
 
 
+@pytest.mark.slow
 def test_eq12_note_names_the_repair(audit_json):
     note = next(i["note"] for i in audit_json if i["equation"] == "(12)")
     assert "row 1 holds as printed" in note
@@ -43,6 +46,7 @@ def test_wrong_transcription_is_caught(monkeypatch):
     assert audit.check_delta_cubic().verdict == audit.WRONG
 
 
+@pytest.mark.slow
 def test_unrepairable_row_is_wrong(monkeypatch):
     rows = list(printed.EQ_12["rows"])
     rows[2] = rows[2].replace("-r32", "+r32")

@@ -42,6 +42,7 @@ def result():
     return cms.solve(R0, RD, T=1.0, delta_min=DELTA_MIN)
 
 
+@pytest.mark.slow
 def test_solves_reference_example(result):
     assert result.success, result.status
     assert result.u.shape == (40, 2)
@@ -58,6 +59,7 @@ def test_solves_reference_example(result):
     assert min(sgn * Delta(R) for R in R_path) >= DELTA_MIN - 1e-9
 
 
+@pytest.mark.slow
 def test_controls_are_piecewise_constant(result):
     t = result.t_grid
     u = result.controls(np.array([0.0, 0.5 * (t[0] + t[1]), t[1], t[-1]]))
@@ -89,6 +91,7 @@ def test_goal_across_singular_surface_is_rejected(monkeypatch):
         cms.solve(R0, Rd_bad)
 
 
+@pytest.mark.slow
 def test_leg_speed_bound_holds_at_the_nodes_and_binds(result):
     """With ``leg_speed`` the baseline's legs keep ``|dl_i/dt| ≤ v`` at both ends of every
     interval (speeds from the generated geometry: ``G_i(R) L(R) u``), and the bound binds

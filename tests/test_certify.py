@@ -1,4 +1,4 @@
-"""Certified success (nonholo/certify/certificate.py, nonholo/planning/certification.py): no plan claims a
+"""Certified success (nonholo/certify/certificate.py, nonholo/planning/correction.py): no plan claims a
 goal that an independent re-simulation of its physical controls does not reach."""
 from __future__ import annotations
 
@@ -11,13 +11,15 @@ from conftest import example
 
 from benchmarks import goalset
 from nonholo.certify import certificate as certify
-from nonholo.certify import resimulate as verify
+from nonholo.certify.resimulate import resimulate, resimulate_rk4, terminal_error
 from nonholo.model import catalog
 from nonholo.motion import frame_controls as replay
 from nonholo.motion import playback
 from nonholo.motion.simulation import variational
-from nonholo.planning import api as planner
+from nonholo.planning.api import plan
+from nonholo.spaces import State
 from nonholo.planning.core import Outcome, Strategy
+from nonholo import Settings
 
 MISS = 1e-8
 DATA = Path(__file__).parent / "data"
@@ -33,11 +35,11 @@ def rk4_check(results, pairs, least=3200):
     out = [None] * len(results)
     for (mechanism, steps), members in groups.items():
         S = max(steps * -(-max(least, results[i].replay_steps or 0) // steps) for i in members)
-        RT, dmin = verify.resimulate_rk4(np.stack([pairs[i]["R0"] for i in members]),
-                                         [results[i].parametrisation for i in members],
-                                         np.array([results[i].T for i in members]), mechanism, steps=S)
+        RT, dmin = resimulate_rk4(np.stack([pairs[i]["R0"] for i in members]),
+                                  [results[i].parametrisation for i in members],
+                                  np.array([results[i].T for i in members]), mechanism, steps=S)
         for j, i in enumerate(members):
-            out[i] = (verify.terminal_error(RT[j], pairs[i]["Rd"]), None if dmin is None else float(dmin[j]))
+            out[i] = (terminal_error(RT[j], pairs[i]["Rd"]), None if dmin is None else float(dmin[j]))
     return out
 
 
@@ -54,14 +56,16 @@ def assert_certified(res, R0, Rd):
 
 
 @pytest.mark.parametrize("mechanism", ["platform", "platform_raised", "attitude"])
-@pytest.mark.parametrize("options", [{}, {"method": "nonparametric"}, {"strategy": "paper"},
-                                     {"strategy": "paper", "method": "nonparametric"}],
+@pytest.mark.parametrize("strategy, method", [("robust", "parametric"), ("robust", "nonparametric"),
+                                              ("paper", "parametric"), ("paper", "nonparametric")],
                          ids=["robust", "robust-nonparametric", "paper", "paper-nonparametric"])
-def test_every_claimed_success_reaches_the_goal(mechanism, options):
+@pytest.mark.slow
+def test_every_claimed_success_reaches_the_goal(mechanism, strategy, method):
     """Uniform random pairs in one component (fixed seed): every claimed success, re-simulated
     by RK4 on the entries of R, ends within 1e-8 rad of the goal and keeps delta_min."""
     pairs = goalset.uniform_pairs(mechanism, 6, seed=7)
-    results = [planner.plan(p["R0"], p["Rd"], mechanism=mechanism, max_iter=60, **options) for p in pairs]
+    settings = Settings(method=method, max_iter=60)
+    results = [plan(p["R0"], p["Rd"], mechanism=mechanism, strategy=strategy, settings=settings) for p in pairs]
     ok = [(r, p) for r, p in zip(results, pairs) if r.success]
     for (err, dmin), (r, _) in zip(rk4_check(*zip(*ok)) if ok else [], ok):
         assert err <= MISS, (r.reason, err)
@@ -73,27 +77,28 @@ def test_every_claimed_success_reaches_the_goal(mechanism, options):
 
 
 @pytest.mark.parametrize("kw", [
-    {"steps": 3, "harmonics": 1},                       # missed by 6e-3 when it claimed success
-    {"steps": 2, "harmonics": 1},                       # claimed success with sensitivity = inf
-    {"steps": 3, "harmonics": 1, "strategy": "paper"},
-    {"strategy": "paper", "harmonics": 100},            # the most harmonics 200 steps resolve
+    {"settings": Settings(steps=3, harmonics=1)},       # missed by 6e-3 when it claimed success
+    {"settings": Settings(steps=2, harmonics=1)},       # claimed success with sensitivity = inf
+    {"settings": Settings(steps=3, harmonics=1), "strategy": "paper"},
+    {"strategy": "paper", "settings": Settings(harmonics=100)},   # the most harmonics 200 steps resolve
 ])
 def test_coarse_or_odd_options_never_claim_a_missed_goal(kw):
     R0, Rd = example(1)
-    res = planner.plan(R0, Rd, **kw)
+    res = plan(R0, Rd, **kw)
     if res.success:
         assert_certified(res, R0, Rd)
         # and within tol, up to DOP853's own accuracy (~5e-11 here)
-        RT = verify.resimulate(R0, res.controls, res.T, res.mechanism, res.breakpoints)
-        assert verify.terminal_error(RT, Rd) <= 3e-10
+        RT = resimulate(R0, res.controls, res.T, res.mechanism, res.breakpoints)
+        assert terminal_error(RT, Rd) <= 3e-10
     else:
         assert res.error_bound is None
 
 
+@pytest.mark.slow
 def test_a_long_horizon_does_not_claim_success_it_cannot_certify():
     """``T = 1e4`` on the attitude mechanism claimed success 2.76 rad from the goal."""
     R0, Rd = example(1)
-    res = planner.plan(R0, Rd, T=1e4, mechanism="attitude", max_iter=60)
+    res = plan(R0, Rd, T=1e4, mechanism="attitude", settings=Settings(max_iter=60))
     if res.success:
         assert_certified(res, R0, Rd)
     else:
@@ -104,7 +109,7 @@ def test_a_coarse_plan_is_corrected_on_its_replay():
     """On 4 steps the planner's endpoint is far from what its controls do; the certificate
     replays them finely and corrects the control with Newton steps on that replay."""
     R0, Rd = example(1)
-    res = planner.plan(R0, Rd, strategy="paper", steps=4, harmonics=1, mechanism="attitude")
+    res = plan(R0, Rd, strategy="paper", settings=Settings(harmonics=1, steps=4), mechanism="attitude")
     assert_certified(res, R0, Rd)
     assert res.replay_steps > 4 and "correction" in res.reason
 
@@ -120,7 +125,7 @@ def test_a_strategy_that_claims_success_falsely_is_not_believed():
             return Outcome(ev, True, "converged (it says)")
 
     R0, Rd = example(1)
-    res = planner.plan(R0, Rd, strategy=Boastful)
+    res = plan(R0, Rd, strategy=Boastful)
     assert not res.success
     assert "not certified" in res.reason and "ends" in res.reason
     res.validate()
@@ -129,9 +134,10 @@ def test_a_strategy_that_claims_success_falsely_is_not_believed():
 def test_an_ill_conditioned_or_singular_replay_is_not_certified():
     R0, Rd = example(1)
     mech = catalog.get("platform")
-    ok = planner.plan(R0, Rd)
+    ok = plan(R0, Rd)
     par = ok.parametrisation
     sign = float(np.sign(mech.delta(R0)))
+    R0, Rd = ok.start, ok.goal
     base = certify.measure(R0, Rd, 1.0, mech, par, ok.replay_steps, 1e-10, 1e-2, sign)
     assert base.passed and base.terminal_error == pytest.approx(ok.terminal_error, abs=1e-15)
     bad = certify.measure(R0, Rd, 1.0, mech, par, ok.replay_steps, 1e-10, 1e-2, sign, G=1e4)
@@ -142,25 +148,27 @@ def test_an_ill_conditioned_or_singular_replay_is_not_certified():
     assert not near.passed and "Δ = 0" in near.reason
 
 
+@pytest.mark.slow
 def test_the_error_bound_covers_the_replays_error():
     """The bound of a certificate against a replay 16 times finer (a fourth-order method's
     error shrinks 16-fold per halving: the finer replay is the truth to ~1/16 of the bound)."""
     for k in (1, 2, 3):
         R0, Rd = example(k)
         for strategy in ("robust", "paper"):
-            res = planner.plan(R0, Rd, strategy=strategy)
+            res = plan(R0, Rd, strategy=strategy)
             if not res.success:
                 continue
             mech = catalog.get(res.mechanism)
-            fine = playback.replay(R0, res.parametrisation, res.T, mech, 16 * res.replay_steps)[0][-1]
-            assert verify.terminal_error(fine, res.R_T) <= res.error_bound
+            fine = playback.replay(res.start, res.parametrisation, res.T, mech, 16 * res.replay_steps)[0][-1]
+            assert terminal_error(fine, res.R_T) <= res.error_bound
 
 
+@pytest.mark.slow
 def test_sensitivity_on_every_other_node_matches_all_nodes():
     """``certify.sensitivity`` takes Φ on every other node; against ``variational`` on all."""
     pairs = goalset.uniform_pairs("platform", 4, seed=3)
     for p in pairs:
-        res = planner.plan(p["R0"], p["Rd"], max_iter=60)
+        res = plan(p["R0"], p["Rd"], settings=Settings(max_iter=60))
         if not res.success:
             continue
         Phi = variational(p["R0"], res.parametrisation, 1.0, steps=res.steps).Phi
@@ -169,17 +177,17 @@ def test_sensitivity_on_every_other_node_matches_all_nodes():
 
 def test_rk4_check_agrees_with_dop853_and_batches():
     R0, Rd = example(2)
-    res = planner.plan(R0, Rd, strategy="paper")
-    single, dmin = verify.resimulate_rk4(R0, res.parametrisation, 1.0, "platform", steps=3200)
-    dop = verify.resimulate(R0, res.controls, 1.0, "platform")
+    res = plan(R0, Rd, strategy="paper")
+    single, dmin = resimulate_rk4(R0, res.parametrisation, 1.0, "platform", steps=3200)
+    dop = resimulate(R0, res.controls, 1.0, "platform")
     assert np.max(np.abs(single - dop)) < 1e-10
     R1, Rd1 = example(1)
-    other = planner.plan(R1, Rd1, strategy="paper", method="nonparametric")
-    batch, dmins = verify.resimulate_rk4(np.stack([R0, R1]), [res.parametrisation, other.parametrisation],
-                                         [1.0, 1.0], "platform", steps=3200)
+    other = plan(R1, Rd1, strategy="paper", settings=Settings(method="nonparametric"))
+    batch, dmins = resimulate_rk4(np.stack([R0, R1]), [res.parametrisation, other.parametrisation],
+                                  [1.0, 1.0], "platform", steps=3200)
     np.testing.assert_allclose(batch[0], single, atol=1e-15)
     assert dmins[0] == pytest.approx(dmin, abs=1e-15)
-    dop = verify.resimulate(R1, other.controls, 1.0, "platform", other.breakpoints)
+    dop = resimulate(R1, other.controls, 1.0, "platform", other.breakpoints)
     assert np.max(np.abs(batch[1] - dop)) < 1e-10
 
 
@@ -196,14 +204,15 @@ def test_sensitivity_is_resolved_where_a_coarse_grid_misses_it():
     plan is not certified for tol = 1e-10."""
     par, Rd = ill_conditioned_plan()
     mech = catalog.get("platform")
-    fine, _ = certify.sensitivity(par.R0, par, par.T, mech, 6400)
-    coarse, _ = certify.sensitivity(par.R0, par, par.T, mech, 100)
+    start = State(par.R0, np.zeros(0))
+    fine, _ = certify.sensitivity(start, par, par.T, mech, 6400)
+    coarse, _ = certify.sensitivity(start, par, par.T, mech, 100)
     assert coarse < fine / 100
-    G, resolved, grids, _ = certify.resolved_sensitivity(par.R0, par, par.T, mech, 200)
+    G, resolved, grids, _ = certify.resolved_sensitivity(start, par, par.T, mech, 200)
     assert resolved and G == pytest.approx(fine, rel=certify.SENSITIVITY_AGREEMENT)
     assert min(grids) == 100 and max(grids) > 200
     sign = float(np.sign(mech.delta(par.R0)))
-    cert = certify.measure(par.R0, Rd, par.T, mech, par, 400, 1e-10, 1e-2, sign)
+    cert = certify.measure(start, State(Rd, np.zeros(0)), par.T, mech, par, 400, 1e-10, 1e-2, sign)
     assert not cert.passed and "ill-conditioned" in cert.reason
     assert cert.sensitivity >= 10 * coarse      # the finer grids', not the coarse one
 
@@ -216,7 +225,8 @@ def test_unresolved_sensitivity_is_not_certified():
     old = certify.MAX_REPLAY_STEPS
     try:
         certify.MAX_REPLAY_STEPS = 400          # the grids 100, 200, 400 never agree
-        cert = certify.measure(par.R0, Rd, par.T, mech, par, 400, 1e-3, 1e-2, sign)
+        cert = certify.measure(State(par.R0, np.zeros(0)), State(Rd, np.zeros(0)), par.T, mech, par, 400, 1e-3,
+                               1e-2, sign)
     finally:
         certify.MAX_REPLAY_STEPS = old
     assert not cert.passed and "not resolved" in cert.reason
@@ -227,25 +237,26 @@ def test_uniform_pair_certified_with_a_resolved_sensitivity():
     the planner returns now carries the sensitivity of a 16 times finer grid, and reaches
     the goal in an adaptive re-simulation."""
     p = goalset.uniform_pairs("platform", 1000)[301]
-    res = planner.plan(p["R0"], p["Rd"], method="nonparametric")
+    res = plan(p["R0"], p["Rd"], settings=Settings(method="nonparametric"))
     if not res.success:
         return
-    fine, _ = certify.sensitivity(p["R0"], res.parametrisation, res.T, catalog.get("platform"),
+    fine, _ = certify.sensitivity(res.start, res.parametrisation, res.T, catalog.get("platform"),
                                   16 * res.replay_steps)
     assert res.sensitivity == pytest.approx(fine, rel=certify.SENSITIVITY_AGREEMENT)
-    RT = verify.resimulate(p["R0"], res.controls, res.T, "platform", res.breakpoints)
-    assert verify.terminal_error(RT, p["Rd"]) <= res.options["tol"]
+    RT = resimulate(p["R0"], res.controls, res.T, "platform", res.breakpoints)
+    assert terminal_error(RT, p["Rd"]) <= res.options["tol"]
 
 
+@pytest.mark.slow
 def test_frame_controls_break_at_their_nodes():
     """``du/dt`` jumps at the nodes of frame controls: DOP853 stopping there (the result's
     ``breakpoints``) agrees with a fine RK4 to 1e-11; across them it does not."""
     p = goalset.uniform_pairs("platform", 1000)[0]
-    res = planner.plan(p["R0"], p["Rd"])
+    res = plan(p["R0"], p["Rd"])
     nodes = np.linspace(0.0, res.T, res.parametrisation.steps + 1)
     assert np.all(np.isin(nodes, res.breakpoints))
-    rk4, _ = verify.resimulate_rk4(p["R0"], res.parametrisation, res.T, "platform", steps=51200)
-    dop = verify.resimulate(p["R0"], res.controls, res.T, "platform", res.breakpoints)
-    assert verify.terminal_error(dop, rk4) <= 1e-11
-    across = verify.resimulate(p["R0"], res.controls, res.T, "platform", breakpoints=[0.0, res.T])
-    assert verify.terminal_error(across, rk4) > 1e-11
+    rk4, _ = resimulate_rk4(p["R0"], res.parametrisation, res.T, "platform", steps=51200)
+    dop = resimulate(p["R0"], res.controls, res.T, "platform", res.breakpoints)
+    assert terminal_error(dop, rk4) <= 1e-11
+    across = resimulate(p["R0"], res.controls, res.T, "platform", breakpoints=[0.0, res.T])
+    assert terminal_error(across, rk4) > 1e-11

@@ -1,5 +1,5 @@
 """The generated CF4 kernels (the step inlined by `nonholo derive`): against the kernels
-of nonholo/integrate/cf4.py as written (the step called), bit for bit, both executed by
+as nonholo/integrate/ writes them (the step called), bit for bit, both executed by
 the interpreter (``kernel_runs``), for every mechanism and both of its systems; against a
 fresh generation; against DOP853 on the generated field; stopping at the singular set.
 (The compiled backends are held to the interpreted source in ``test_native``.)"""
@@ -11,7 +11,7 @@ from conftest import example
 from nonholo.controls import stages
 from nonholo.controls.parametrisations import Fourier
 from nonholo.generated import cf4_kernels
-from nonholo.integrate import cf4, inliner
+from nonholo.integrate import compiled, system_kernels
 from nonholo.model import catalog
 
 #: A start state per mechanism: ``(R0, q0)``.
@@ -30,10 +30,11 @@ def start(name):
 
 
 def test_generated_kernels_are_fresh():
-    assert inliner.cf4_kernels_module() == open(cf4_kernels.__file__).read()
+    assert compiled.kernels_module() == open(cf4_kernels.__file__).read()
 
 
 @pytest.mark.parametrize("name,frame", kernel_runs.SYSTEMS)
+@pytest.mark.slow
 def test_inlined_kernels_equal_the_written_ones(name, frame, interpreted_kernels):
     """Every output of the generated kernels (forward, variational with both bases, with
     and without ``M(T)``, frame inputs) bit for bit that of the kernels as written, both
@@ -50,7 +51,7 @@ def test_a_stopped_run_reports_where():
     delta_stop: the nodes before it are clear of the threshold, the reported least sgnΔ
     is below it and is Δ at one of that step's stages."""
     mech = catalog.get("platform")
-    kern = cf4.compile_system(mech.module)
+    kern = system_kernels.compile_system(mech.module)
     R0 = np.ascontiguousarray(example(1)[0])
     U = stages.stage_table(Fourier(1.0, [[3.0, 0, 0, 0, 0], [-3.0, 0, 0, 0, 0]]), 100)
     Rs, Qs = kern.nodes(100)
@@ -67,7 +68,7 @@ def test_a_car_stops_before_its_singular_set():
     """The car steered towards cos φ = 0 stops there, where φ's own motion (φ̇ = u₂, exact
     under CF4) says it should."""
     mech = catalog.get("car")
-    kern = cf4.compile_system(mech.module)
+    kern = system_kernels.compile_system(mech.module)
     U = np.zeros((100, 3, 2))
     U[:, :, 0] = 1.0
     U[:, :, 1] = 2.0                       # φ(t) = 2t reaches arccos(0.1) at t ≈ 0.735
@@ -122,7 +123,7 @@ def test_kernels_against_dop853_on_the_generated_field(name, frame):
     its generated field and variational matrix: within 1e-10 with 1000 CF4 steps (the
     motion kept at |Δ| ≥ 0.2, where the field's derivatives stay moderate)."""
     mech = catalog.get(name)
-    kern = mech.kernels(frame)
+    kern = compiled.compiled_system(mech, frame)
     rng = np.random.default_rng(11)
     R0, q0 = start(name)
     d, m = mech.n_rates, mech.n_inputs

@@ -107,11 +107,13 @@ def test_attitude_A_vanishes():
     assert V["A"].applyfunc(sp.expand).is_zero_matrix
 
 
+@pytest.mark.slow
 def test_derive_check_passes_on_committed_tree(capsys):
     from nonholo.cli.entry import main
     assert main(["derive", "--check"]) == 0
 
 
+@pytest.mark.slow
 def test_derive_check_fails_on_altered_copy(tmp_path, capsys):
     from nonholo.cli.entry import main
     copy = tmp_path / "generated"

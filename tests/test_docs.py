@@ -243,6 +243,7 @@ def site(tmp_path_factory) -> Path:
     return out
 
 
+@pytest.mark.slow
 def test_the_site_builds_without_warnings_and_its_internal_links_resolve(site):
     out = site
     pages = {p: Links() for p in out.rglob("*.html") if "_static" not in p.relative_to(out).parts}
@@ -385,6 +386,7 @@ def read_png(path: Path) -> np.ndarray:
 
 @pytest.mark.skipif(CHROMIUM is None, reason="no Chromium (/usr/bin/chromium, or chromium on the PATH): "
                                              "the landing page is not opened in a browser")
+@pytest.mark.slow
 def test_the_landing_page_in_a_headless_browser_shows_the_figure_and_the_navigation(site, tmp_path):
     requests: list = []
     handler = functools.partial(type("Site", (Served,), {"requests": requests}), directory=str(site))
@@ -443,6 +445,7 @@ ANIMATIONS = sorted(p.name for p in (ROOT / "docs" / "gallery" / "animations").g
 
 @pytest.mark.skipif(CHROMIUM is None, reason="no Chromium (/usr/bin/chromium, or chromium on the PATH): "
                                              "the animations page is not opened in a browser")
+@pytest.mark.slow
 def test_the_animations_page_in_a_headless_browser_loads_its_gifs(site, tmp_path):
     assert ANIMATIONS, "no GIF in docs/gallery/animations (python docs/ext/animations.py writes them)"
     requests: list = []

@@ -9,14 +9,15 @@ from test_route import far_pair
 
 from nonholo.controls import stages
 from nonholo.controls.parametrisations import Fourier
+from nonholo.integrate.compiled import compiled_system
 from nonholo.model import catalog
 from nonholo.numerics import effort
-from nonholo.planning import api as planner
+from nonholo.planning.api import plan
 
 
 def test_kernels_count_their_steps():
     mech = catalog.get("platform")
-    kern = mech.kernels(False)
+    kern = compiled_system(mech, False)
     u = Fourier(1.0, [[0.1, 0.0, 0.0], [0.2, 0.0, 0.0]])
     U = np.ascontiguousarray(stages.stage_table(u, 400))
     before = effort.seconds()
@@ -25,9 +26,10 @@ def test_kernels_count_their_steps():
                                                       rel=0, abs=1e-12)
 
 
+@pytest.mark.slow
 def test_a_global_route_is_the_same_on_a_slow_clock(monkeypatch):
     p = far_pair()
-    first = planner.plan(p["R0"], p["Rd"])
+    first = plan(p["R0"], p["Rd"])
     assert first.route == "global" and first.success
     real = time.perf_counter
     slow = {"t": real()}
@@ -37,20 +39,21 @@ def test_a_global_route_is_the_same_on_a_slow_clock(monkeypatch):
         return slow["t"]
 
     monkeypatch.setattr(time, "perf_counter", crawling)
-    again = planner.plan(p["R0"], p["Rd"])
+    again = plan(p["R0"], p["Rd"])
     monkeypatch.setattr(time, "perf_counter", real)
     a, b = first.to_dict(), again.to_dict()
     a.pop("seconds"), b.pop("seconds")
     assert json.dumps(a) == json.dumps(b)
 
 
+@pytest.mark.slow
 def test_a_plan_does_not_depend_on_the_effort_counted_before():
     """The default plan (its least-energy stage ends on a budget of effort) of a car pair
     whose budget once ended on a tie, after different amounts of effort counted before in
     the process: the same plan every time (the count and its readings are exact)."""
     def car():
-        result = planner.plan([0.0, 0.0, 0.0, 0.0], [0.517410922309838, 0.7569603693325078, -0.3976800780779256, 0.0],
-                              mechanism="car")
+        result = plan([0.0, 0.0, 0.0, 0.0], [0.517410922309838, 0.7569603693325078, -0.3976800780779256, 0.0],
+                      mechanism="car")
         d = result.to_dict()
         d.pop("seconds")
         return json.dumps(d)

@@ -1,7 +1,7 @@
-"""``plan(..., objective="energy")`` (nonholo/planning/energy.py): the goal kept, the energy
-∫|u|² dt lowered — checked by independent DOP853 re-simulation, against the minimum
-of the CasADi baseline on the same piecewise-constant grid, on every kind of state, and
-for the same plan in two processes whatever the load."""
+"""``plan(..., objective="energy")`` (nonholo/planning/energy.py and its energy_* modules): the
+goal kept, the energy ∫|u|² dt lowered — checked by independent DOP853 re-simulation, against
+the minimum of the CasADi baseline on the same piecewise-constant grid, on every kind of state,
+and for the same plan in two processes whatever the load."""
 import importlib.util
 import math
 import os
@@ -13,16 +13,18 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+import nonholo
 from benchmarks import goalset
-from nonholo.certify import resimulate as verify
+from nonholo.certify.resimulate import resimulate, resimulate_path, resimulate_state, state_errors, terminal_error
 from nonholo.controls.parametrisations import Fourier, PiecewiseConstant
 from nonholo.io.result import PlanResult
 from nonholo.model import catalog
 from nonholo.numerics import effort
 from nonholo.motion.simulation import variational
-from nonholo.planning import api as planner
-from nonholo.planning import energy
+from nonholo.planning import energy, energy_objective, energy_optimiser, energy_search, energy_smoothing
 from nonholo.spaces import so3
+from nonholo import Settings
+from nonholo.constraints import Clearance, LegStroke
 
 PLATFORM = catalog.get("platform")
 GOALS = {g["id"]: g for g in goalset.load_goals()}
@@ -47,20 +49,20 @@ def quadrature_energy(res, samples=20001):
 @pytest.mark.parametrize("gid", ["near-s0-00", "near-s4-03", "far-s2-00", "far-s6-05"])
 def test_energy_is_lowered_and_the_goal_kept(gid, tmp_path):
     R0, Rd, T = goal(gid)
-    plain = planner.plan(R0, Rd, T=T, objective=None)
-    res = planner.plan(R0, Rd, T=T, objective="energy")
+    plain = nonholo.plan(R0, Rd, T=T, objective=None)
+    res = nonholo.plan(R0, Rd, T=T, objective="energy")
     assert res.success, res.reason
     assert isinstance(res.parametrisation, PiecewiseConstant) and res.method == "nonparametric"
-    assert res.parametrisation.grid == energy.ENERGY_GRID and res.options["objective"] == "energy"
-    _, R, d = verify.resimulate_path(R0, res.controls, T, "platform", res.breakpoints)
-    assert verify.terminal_error(R[-1], Rd) <= 1e-8
+    assert res.parametrisation.grid == energy_search.ENERGY_GRID and res.options["objective"] == "energy"
+    _, R, d = resimulate_path(R0, res.controls, T, "platform", res.breakpoints)
+    assert terminal_error(R[-1], Rd) <= 1e-8
     assert np.min(np.sign(d[0]) * d) >= res.options["delta_min"]
     lowered, before = quadrature_energy(res), quadrature_energy(plain)
     assert lowered < before
     # the stage's own energy is the controls' (Σ h v²) and its history ends there
     records = [h for h in res.history if h["phase"] == "energy"]
     assert records[-1]["energy"] == pytest.approx(lowered, rel=1e-9)
-    assert energy.plan_energy_of(plain) == pytest.approx(before, rel=1e-6)
+    assert energy_objective.plan_energy_of(plain) == pytest.approx(before, rel=1e-6)
     res.save(tmp_path / "e.json")
     assert PlanResult.load(tmp_path / "e.json") == res
 
@@ -70,7 +72,7 @@ def test_first_order_conditions_hold_at_the_result():
     space of the endpoint Jacobian: checked with a Jacobian by central differences of
     independent DOP853 endpoints (in a few random directions of the parameters)."""
     R0, Rd, T = goal("far-s2-00")
-    res = planner.plan(R0, Rd, T=T, objective="energy")
+    res = nonholo.plan(R0, Rd, T=T, objective="energy")
     par = res.parametrisation
     lam, metric = par.params, par.metric()
     rng = np.random.default_rng(0)
@@ -78,11 +80,11 @@ def test_first_order_conditions_hold_at_the_result():
     D = rng.standard_normal((lam.size, 8))
     D /= np.linalg.norm(D, axis=0)
     eps = 1e-5
-    end = verify.resimulate(R0, par, T, "platform", par.breakpoints)
+    end = resimulate(R0, par, T, "platform", par.breakpoints)
     JD = []
     for k in range(D.shape[1]):
-        plus = verify.resimulate(R0, par.with_params(lam + eps * D[:, k]), T, "platform", par.breakpoints)
-        minus = verify.resimulate(R0, par.with_params(lam - eps * D[:, k]), T, "platform", par.breakpoints)
+        plus = resimulate(R0, par.with_params(lam + eps * D[:, k]), T, "platform", par.breakpoints)
+        minus = resimulate(R0, par.with_params(lam - eps * D[:, k]), T, "platform", par.breakpoints)
         JD.append((so3.log(plus @ end.T) - so3.log(minus @ end.T)) / (2 * eps))
     JD = np.array(JD).T                                   # (3, 8)
     # the multiplier from the planner's own Jacobian, then the check along the directions:
@@ -99,21 +101,22 @@ def test_first_order_conditions_hold_at_the_result():
 
 def test_energy_keeps_the_legs_stroke():
     R0, Rd, T = goal("near-s2-07")
-    res = planner.plan(R0, Rd, T=T, objective="energy", leg_length=(1.2, 2.0))
+    res = nonholo.plan(R0, Rd, T=T, objective="energy", constraints=[LegStroke(1.2, 2.0)])
     assert res.success, res.reason
-    _, R, _ = verify.resimulate_path(R0, res.controls, T, "platform", res.breakpoints)
+    _, R, _ = resimulate_path(R0, res.controls, T, "platform", res.breakpoints)
     lengths = PLATFORM.leg_lengths(R)
     assert lengths.min() >= 1.2 and lengths.max() <= 2.0
-    assert verify.terminal_error(R[-1], Rd) <= 1e-8
+    assert terminal_error(R[-1], Rd) <= 1e-8
 
 
 def test_bad_objective_names_the_argument():
     R0, Rd, T = goal("near-s0-00")
     with pytest.raises(ValueError, match="objective"):
-        planner.plan(R0, Rd, objective="time")
+        nonholo.plan(R0, Rd, objective="time")
 
 
 @pytest.mark.skipif(importlib.util.find_spec("casadi") is None, reason="CasADi not installed")
+@pytest.mark.slow
 def test_the_least_energy_is_casadis_on_the_same_grid():
     """The same problem transcribed by the CasADi baseline (multiple shooting, IPOPT) on the
     same 100 intervals: the energies agree (the baseline's RK4 substeps differ from the exact
@@ -121,8 +124,8 @@ def test_the_least_energy_is_casadis_on_the_same_grid():
     from benchmarks import casadi_ms
 
     R0, Rd, T = goal("far-s6-05")
-    res = planner.plan(R0, Rd, T=T, objective="energy")
-    peer = casadi_ms.solve(R0, Rd, T=T, N=energy.ENERGY_GRID, substeps=4, delta_min=0.01,
+    res = nonholo.plan(R0, Rd, T=T, objective="energy")
+    peer = casadi_ms.solve(R0, Rd, T=T, N=energy_search.ENERGY_GRID, substeps=4, delta_min=0.01,
                            path_at_substeps=True)
     assert peer.success, peer.status
     ours = float(np.dot(res.parametrisation.metric(), res.params ** 2))
@@ -141,12 +144,12 @@ def test_energy_beyond_so3_is_lowered_and_confirmed_by_dop853(name):
     """Every kind of state: the plan's energy lowered, the goal reached and the clearance
     from Δ = 0 kept, as DOP853 on the hand-written model re-simulates the controls."""
     start, goal = STATE_GOALS[name]
-    plain = planner.plan(start, goal, mechanism=name, objective=None)
-    res = planner.plan(start, goal, mechanism=name, objective="energy")
+    plain = nonholo.plan(start, goal, mechanism=name, objective=None)
+    res = nonholo.plan(start, goal, mechanism=name, objective="energy")
     assert res.success, res.reason
     assert res.method == "nonparametric" and res.options["objective"] == "energy"
-    _, R, q, delta = verify.resimulate_state(res.start, res.controls, res.T, name, res.breakpoints)
-    errors = verify.state_errors(name, R[-1], q[-1], res.Rd, res.qd)
+    _, R, q, delta = resimulate_state(res.start, res.controls, res.T, name, res.breakpoints)
+    errors = state_errors(name, R[-1], q[-1], res.Rd, res.qd)
     assert max(errors.values()) <= 1e-8, errors
     if delta is not None:
         assert np.min(np.sign(delta[0]) * delta) >= res.options["delta_min"]
@@ -167,6 +170,7 @@ print(res.success, hashlib.sha256(np.ascontiguousarray(res.params).tobytes()).he
 """
 
 
+@pytest.mark.slow
 def test_the_same_call_gives_the_same_plan_in_any_process_under_any_load(tmp_path):
     """The stage's budget is effort, not wall time: two fresh processes, one with empty
     kernel caches (numba's and the native kernels', compiled anew) beside a process burning
@@ -200,11 +204,11 @@ def confirmed_energy(res, name):
     SO(3)) or the generated field (SO(3)) confirms that they reach the goal."""
     mech = catalog.get(name)
     if mech.space.k:
-        _, R, q, _ = verify.resimulate_state(res.start, res.controls, res.T, name, res.breakpoints)
-        assert max(verify.state_errors(name, R[-1], q[-1], res.Rd, res.qd).values()) <= 1e-8
+        _, R, q, _ = resimulate_state(res.start, res.controls, res.T, name, res.breakpoints)
+        assert max(state_errors(name, R[-1], q[-1], res.Rd, res.qd).values()) <= 1e-8
     else:
-        _, R, _ = verify.resimulate_path(res.R0, res.controls, res.T, name, res.breakpoints)
-        assert verify.terminal_error(R[-1], res.Rd) <= 1e-8
+        _, R, _ = resimulate_path(res.R0, res.controls, res.T, name, res.breakpoints)
+        assert terminal_error(R[-1], res.Rd) <= 1e-8
     return quadrature_energy(res)
 
 
@@ -215,7 +219,7 @@ def test_attitude_reaches_the_closed_form_extremal_energy():
     a, b, c = 1.1, -0.7, 1.6
     R0 = so3.from_rpy(0.3, -0.5, 1.2)
     Rd = R0 @ so3.exp(np.array([a, b, c])) @ so3.exp(np.array([0.0, 0.0, -c]))
-    res = planner.plan(R0, Rd, mechanism="attitude", objective="energy")
+    res = nonholo.plan(R0, Rd, mechanism="attitude", objective="energy")
     assert res.success, res.reason
     E = confirmed_energy(res, "attitude")
     assert a * a + b * b <= E <= 1.01 * (a * a + b * b)
@@ -225,7 +229,7 @@ def test_attitude_reaches_the_closed_form_extremal_energy():
 def test_brockett_reaches_the_circle(a):
     """Brockett's integrator from (0, 0, 0) to (0, 0, a) in T = 1: the least energy is 2π|a|
     (one circle of area |a|/2, an isoperimetric bound: no motion needs less)."""
-    res = planner.plan([0.0, 0.0, 0.0], [0.0, 0.0, a], mechanism="brockett", objective="energy")
+    res = nonholo.plan([0.0, 0.0, 0.0], [0.0, 0.0, a], mechanism="brockett", objective="energy")
     assert res.success, res.reason
     E = confirmed_energy(res, "brockett")
     assert 2 * np.pi * abs(a) * (1 - 1e-9) <= E <= 1.01 * 2 * np.pi * abs(a)
@@ -239,8 +243,8 @@ def test_rolling_ball_needs_no_more_than_the_circle():
     c = np.zeros((2, 3))
     c[0, 1], c[1, 2] = -rho * 2 * np.pi, rho * 2 * np.pi      # v = 2πρ (−sin ωt, cos ωt)
     R0 = so3.from_rpy(0.2, 0.4, -0.3)
-    _, R, q, _ = verify.resimulate_state((R0, [0.0, 0.0]), Fourier(T, c), T, "rolling_ball")
-    res = planner.plan((R0, [0.0, 0.0]), (R[-1], q[-1]), mechanism="rolling_ball", objective="energy")
+    _, R, q, _ = resimulate_state((R0, [0.0, 0.0]), Fourier(T, c), T, "rolling_ball")
+    res = nonholo.plan((R0, [0.0, 0.0]), (R[-1], q[-1]), mechanism="rolling_ball", objective="energy")
     assert res.success, res.reason
     assert confirmed_energy(res, "rolling_ball") <= 1.005 * (2 * np.pi * rho) ** 2 / T
 
@@ -274,10 +278,10 @@ def test_controls_energy_is_the_metric_form_of_fourier_and_grid_controls():
     rng = np.random.default_rng(3)
     fourier = Fourier(2.0, rng.standard_normal((2, 2 * 12 + 1)))
     closed = float(fourier.metric() @ fourier.params ** 2)
-    assert energy.controls_energy(fourier, None, 2.0) == pytest.approx(closed, rel=1e-12)
+    assert energy_objective.controls_energy(fourier, None, 2.0) == pytest.approx(closed, rel=1e-12)
     grid = PiecewiseConstant(2.0, rng.standard_normal((37, 2)))
     closed = float(grid.metric() @ grid.params ** 2)
-    assert energy.controls_energy(grid, grid.breakpoints, 2.0) == pytest.approx(closed, rel=1e-12)
+    assert energy_objective.controls_energy(grid, grid.breakpoints, 2.0) == pytest.approx(closed, rel=1e-12)
 
 
 def test_runs_heading_near_the_best_are_continued(monkeypatch):
@@ -285,9 +289,9 @@ def test_runs_heading_near_the_best_are_continued(monkeypatch):
     its probe: continued (CONTINUE_WITHIN), it ends below it — lower than the search that
     stops at the best finished run, both confirmed by DOP853."""
     start, goal = np.zeros(4), np.array([-0.8942286643945572, 0.7466523674519534, 3.0799270103686043, 0.18196927672716656])
-    found = planner.plan(start, goal, mechanism="car", delta_min=0.01, objective="energy")
-    monkeypatch.setattr(energy, "CONTINUE_WITHIN", 1.0)
-    stopped = planner.plan(start, goal, mechanism="car", delta_min=0.01, objective="energy")
+    found = nonholo.plan(start, goal, mechanism="car", constraints=[Clearance(0.01)], objective="energy")
+    monkeypatch.setattr(energy_search, "CONTINUE_WITHIN", 1.0)
+    stopped = nonholo.plan(start, goal, mechanism="car", constraints=[Clearance(0.01)], objective="energy")
     assert found.success and stopped.success
     assert confirmed_energy(found, "car") < 0.99 * confirmed_energy(stopped, "car")
 
@@ -299,18 +303,18 @@ def test_the_search_stops_once_runs_agree_on_the_least_energy(monkeypatch):
     confirmed by DOP853."""
     R0, Rd, T = goal("near-s1-04")
     started = []
-    begin = energy.begin
+    begin = energy_search.begin
 
     def counted(problem, label, controls, options):
         started.append(label)
         return begin(problem, label, controls, options)
 
-    monkeypatch.setattr(energy, "begin", counted)
-    stopped = planner.plan(R0, Rd, T=T, objective="energy")
+    monkeypatch.setattr(energy_search, "begin", counted)
+    stopped = nonholo.plan(R0, Rd, T=T, objective="energy")
     few = len(started)
     started.clear()
-    monkeypatch.setattr(energy, "CONFIRMATIONS", 10 ** 6)
-    every = planner.plan(R0, Rd, T=T, objective="energy")
+    monkeypatch.setattr(energy_search, "CONFIRMATIONS", 10 ** 6)
+    every = nonholo.plan(R0, Rd, T=T, objective="energy")
     assert stopped.success and every.success
     assert few < 0.5 * len(started)
     assert confirmed_energy(stopped, "platform") == pytest.approx(confirmed_energy(every, "platform"), rel=1e-6)
@@ -323,16 +327,16 @@ def effort_of(call):
     return result, effort.seconds() - before
 
 
-def car_plans_with_and_without(monkeypatch, goal, **switched_off):
+def car_plans_with_and_without(monkeypatch, goal, module, **switched_off):
     """The least-energy car plan from the origin to ``goal`` and the effort it counted, then
-    the same with the module's settings ``switched_off`` (names to values); both succeed."""
+    the same with the settings ``switched_off`` (names to values) of ``module``; both succeed."""
     def plan():
-        return effort_of(lambda: planner.plan(np.zeros(4), goal, mechanism="car", delta_min=0.01,
+        return effort_of(lambda: nonholo.plan(np.zeros(4), goal, mechanism="car", constraints=[Clearance(0.01)],
                                               objective="energy"))
 
     on, on_effort = plan()
     for name, value in switched_off.items():
-        monkeypatch.setattr(energy, name, value)
+        monkeypatch.setattr(module, name, value)
     off, off_effort = plan()
     assert on.success and off.success
     return on, on_effort, off, off_effort
@@ -345,7 +349,7 @@ def test_quasi_newton_steps_at_the_goal_may_outgrow_the_fixed_point_step(monkeyp
     two thirds of the effort for the same energy, both confirmed by DOP853."""
     goal = np.array([-0.7, -0.36, -0.7, 0.44])
     grown, grown_effort, reset, reset_effort = car_plans_with_and_without(
-        monkeypatch, goal, STEP_GROWTH_AT_GOAL=energy.STEP_GROWTH)
+        monkeypatch, goal, energy_optimiser, STEP_GROWTH_AT_GOAL=energy_optimiser.STEP_GROWTH)
     assert grown_effort < 2.0 / 3.0 * reset_effort
     assert confirmed_energy(grown, "car") <= confirmed_energy(reset, "car") * (1 + 1e-6)
 
@@ -355,7 +359,8 @@ def test_a_long_step_at_the_goal_is_brought_back_rather_than_halved(monkeypatch)
     with RESTORE_STEPS Newton steps they are brought back, with three most are halved
     and tried again. The search counts less effort for the same energy (DOP853)."""
     goal = np.array([-0.7, -0.36, -0.7, 0.44])
-    restored, restored_effort, halved, halved_effort = car_plans_with_and_without(monkeypatch, goal, RESTORE_STEPS=3)
+    restored, restored_effort, halved, halved_effort = car_plans_with_and_without(monkeypatch, goal, energy_optimiser,
+                                                                                  RESTORE_STEPS=3)
     assert restored_effort < 0.85 * halved_effort
     assert confirmed_energy(restored, "car") == pytest.approx(confirmed_energy(halved, "car"), rel=1e-6)
 
@@ -365,9 +370,9 @@ def test_the_search_on_half_the_steps_certifies_on_the_plans_own(monkeypatch):
     (SEARCH_COARSENING) returns a plan on the full steps with the energy of the search on
     the full steps (both confirmed by DOP853), for less effort."""
     R0, Rd, T = goal("near-s6-07")
-    coarse, coarse_effort = effort_of(lambda: planner.plan(R0, Rd, T=T, objective="energy"))
+    coarse, coarse_effort = effort_of(lambda: nonholo.plan(R0, Rd, T=T, objective="energy"))
     monkeypatch.setattr(energy, "SEARCH_COARSENING", 1)
-    full, full_effort = effort_of(lambda: planner.plan(R0, Rd, T=T, objective="energy"))
+    full, full_effort = effort_of(lambda: nonholo.plan(R0, Rd, T=T, objective="energy"))
     assert coarse.success and full.success
     assert coarse.steps == full.steps
     assert coarse_effort < 0.85 * full_effort
@@ -379,7 +384,7 @@ def test_where_the_search_on_fewer_steps_certifies_nothing_it_searches_on_the_pl
     riding a limit may stop short of the goal on the coarser steps), the search runs again
     on the plan's own steps and lowers the plan's energy as the search does (DOP853)."""
     R0, Rd, T = goal("near-s1-04")
-    usual = planner.plan(R0, Rd, T=T, objective="energy")
+    usual = nonholo.plan(R0, Rd, T=T, objective="energy")
     searched = []
     search = energy.search
 
@@ -389,7 +394,7 @@ def test_where_the_search_on_fewer_steps_certifies_nothing_it_searches_on_the_pl
         return (None, "refused on fewer steps") if len(searched) == 1 else found
 
     monkeypatch.setattr(energy, "search", refused_on_fewer_steps)
-    again = planner.plan(R0, Rd, T=T, objective="energy")
+    again = nonholo.plan(R0, Rd, T=T, objective="energy")
     assert usual.success and again.success
     assert searched == [usual.steps // 2, usual.steps]
     assert confirmed_energy(again, "platform") == pytest.approx(confirmed_energy(usual, "platform"), rel=1e-6)
@@ -407,7 +412,7 @@ def test_newton_steps_leave_a_motion_that_ran_into_the_singular_set_as_it_is():
     ev = problem.evaluate(steer)
     assert not ev.complete and ev.error is None
     metric = steer.metric()
-    assert energy.newton_steps(problem, ev, metric, 1e-10, energy.RESTORE_STEPS) is ev
+    assert energy_optimiser.newton_steps(problem, ev, metric, 1e-10, energy_optimiser.RESTORE_STEPS) is ev
     assert not problem.admissible(ev)
 
 
@@ -417,8 +422,8 @@ def test_runs_heading_elsewhere_are_given_up_without_changing_the_plan(monkeypat
     one are not continued (JOIN_DISTANCE); the search counts less effort than with neither
     and returns the same energy, confirmed by DOP853."""
     goal = np.array([-0.8942286643945572, 0.7466523674519534, 3.0799270103686043, 0.18196927672716656])
-    quick, quick_effort, full, full_effort = car_plans_with_and_without(monkeypatch, goal, GIVE_UP_ABOVE=math.inf,
-                                                                        JOIN_DISTANCE=0.0)
+    quick, quick_effort, full, full_effort = car_plans_with_and_without(monkeypatch, goal, energy_search,
+                                                                        GIVE_UP_ABOVE=math.inf, JOIN_DISTANCE=0.0)
     assert quick_effort < 0.9 * full_effort
     assert confirmed_energy(quick, "car") == pytest.approx(confirmed_energy(full, "car"), rel=1e-6)
 
@@ -428,17 +433,17 @@ def test_a_finalist_not_certified_on_the_planners_grid_is_certified_on_twice_its
     controls are brought onto the goal on twice the integrator steps and certified there:
     the plan records the finer steps, needs the same energy, and DOP853 confirms it."""
     R0, Rd, T = goal("far-s2-03")
-    first = planner.plan(R0, Rd, T=T, objective="energy")
-    real = energy.certified
+    first = nonholo.plan(R0, Rd, T=T, objective="energy")
+    real = energy_search.certified
 
     def refused_on_the_search_grid(outcome, problem, options):
-        prob = outcome.problem if outcome.problem is not None else problem
+        prob = outcome.endpoint if outcome.endpoint is not None else problem
         if prob.steps == first.steps:
             return replace(outcome, success=False, reason="refused on the search's grid")
         return real(outcome, problem, options)
 
-    monkeypatch.setattr(energy, "certified", refused_on_the_search_grid)
-    finer = planner.plan(R0, Rd, T=T, objective="energy")
+    monkeypatch.setattr(energy_search, "certified", refused_on_the_search_grid)
+    finer = nonholo.plan(R0, Rd, T=T, objective="energy")
     assert first.success and finer.success, finer.reason
     assert finer.steps == 2 * first.steps and finer.replay_steps is not None
     assert confirmed_energy(finer, "platform") == pytest.approx(confirmed_energy(first, "platform"), rel=1e-6)
@@ -448,7 +453,7 @@ def test_a_run_at_the_goal_stays_at_it():
     """The car from its plan: once a run of the least-energy stage reaches the goal, every later
     iterate of it ends within ``tol`` of the goal (a step is brought back onto it), and the
     energy it ends with is below the one it reached the goal with."""
-    res = planner.plan(np.zeros(4), np.array([0.76, 0.93, -0.49, 0.29]), mechanism="car",
+    res = nonholo.plan(np.zeros(4), np.array([0.76, 0.93, -0.49, 0.29]), mechanism="car",
                        objective="energy")
     assert res.success, res.reason
     runs = {}
@@ -477,10 +482,10 @@ def test_auto_replaces_a_wasteful_plan_by_a_smooth_one_and_keeps_a_good_one():
     c = np.zeros((2, 3))
     c[0, 1], c[1, 2] = -rho * 2 * np.pi, rho * 2 * np.pi
     R0 = so3.from_rpy(0.2, 0.4, -0.3)
-    _, R, q, _ = verify.resimulate_state((R0, [0.0, 0.0]), Fourier(T, c), T, "rolling_ball")
+    _, R, q, _ = resimulate_state((R0, [0.0, 0.0]), Fourier(T, c), T, "rolling_ball")
     start, goal = (R0, [0.0, 0.0]), (R[-1], q[-1])
-    plain = planner.plan(start, goal, mechanism="rolling_ball", objective=None)
-    res = planner.plan(start, goal, mechanism="rolling_ball")         # the default: "auto"
+    plain = nonholo.plan(start, goal, mechanism="rolling_ball", objective=None)
+    res = nonholo.plan(start, goal, mechanism="rolling_ball")         # the default: "auto"
     assert res.success, res.reason
     assert res.method == "parametric" and res.breakpoints is None and res.options["objective"] == "auto"
     E = confirmed_energy(res, "rolling_ball")
@@ -490,8 +495,8 @@ def test_auto_replaces_a_wasteful_plan_by_a_smooth_one_and_keeps_a_good_one():
     a, b, cz = 0.6, 0.4, 0.5
     R0 = so3.from_rpy(0.3, -0.5, 1.2)
     Rd = R0 @ so3.exp(np.array([a, b, cz])) @ so3.exp(np.array([0.0, 0.0, -cz]))
-    plain = planner.plan(R0, Rd, mechanism="attitude", objective=None)
-    kept = planner.plan(R0, Rd, mechanism="attitude", objective="auto")
+    plain = nonholo.plan(R0, Rd, mechanism="attitude", objective=None)
+    kept = nonholo.plan(R0, Rd, mechanism="attitude", objective="auto")
     assert kept.options["objective"] == "auto"
     assert np.array_equal(kept.params, plain.params)
 
@@ -503,22 +508,23 @@ LIMIT_PAIR = ([2.096230047574747, 0.46216472194268254, 1.8030320833764233, 0.781
               [2.1538261655074664, -0.1470932460849312, -1.158767445847923, 0.7641695064409237])
 
 
+@pytest.mark.slow
 def test_auto_makes_the_plan_smooth_where_the_least_energy_fit_cannot_reach_the_goal():
     """On that pair the default descends from the Fourier fit of the plan instead: a smooth
     motion DOP853 confirms (the goal, and most of the plan's clearance from Δ = 0), below
     REFIT_BELOW of the plan's energy and within 3× of the least energy found by
     ``objective="energy"``."""
     start, goal = LIMIT_PAIR
-    plain = planner.plan(start, goal, mechanism="car", delta_min=0.01, objective=None)
-    least = planner.plan(start, goal, mechanism="car", delta_min=0.01, objective="energy")
-    res = planner.plan(start, goal, mechanism="car", delta_min=0.01)
+    plain = nonholo.plan(start, goal, mechanism="car", constraints=[Clearance(0.01)], objective=None)
+    least = nonholo.plan(start, goal, mechanism="car", constraints=[Clearance(0.01)], objective="energy")
+    res = nonholo.plan(start, goal, mechanism="car", constraints=[Clearance(0.01)])
     assert res.success, res.reason
     assert res.method == "parametric" and res.breakpoints is None and res.options["objective"] == "auto"
     assert "made smooth: the plan's fit" in res.reason
-    _, R, q, delta = verify.resimulate_state(res.start, res.controls, res.T, "car", res.breakpoints)
+    _, R, q, delta = resimulate_state(res.start, res.controls, res.T, "car", res.breakpoints)
     assert np.min(np.sign(delta[0]) * delta) >= 0.01 + 0.89 * (plain.min_delta - 0.01)
     E = confirmed_energy(res, "car")
-    assert E < energy.REFIT_BELOW * quadrature_energy(plain)
+    assert E < energy_smoothing.REFIT_BELOW * quadrature_energy(plain)
     assert E <= 3.0 * confirmed_energy(least, "car")
 
 
@@ -528,9 +534,9 @@ def test_auto_keeps_the_plan_where_no_smooth_fit_reaches_the_goal_below_it(monke
     plan as found, its reason saying why: grid controls, which jump at every interval, are
     no motion to execute."""
     start, goal = LIMIT_PAIR
-    monkeypatch.setattr(energy, "SMOOTH_PLAN_ITERATIONS", 0)
-    found = planner.plan(start, goal, mechanism="car", delta_min=0.01, objective=None)
-    res = planner.plan(start, goal, mechanism="car", delta_min=0.01)
+    monkeypatch.setattr(energy_smoothing, "SMOOTH_PLAN_ITERATIONS", 0)
+    found = nonholo.plan(start, goal, mechanism="car", constraints=[Clearance(0.01)], objective=None)
+    res = nonholo.plan(start, goal, mechanism="car", constraints=[Clearance(0.01)])
     assert res.success, res.reason
     assert res.options["objective"] == "auto" and np.array_equal(res.params, found.params)
     assert "kept: a motion of energy" in res.reason and "from the goal" in res.reason
@@ -546,13 +552,14 @@ def test_the_barrier_acts_between_delta_min_and_its_reach(gid, delta_min):
     from nonholo.planning.problem import Problem
 
     R0, Rd, T = goal(gid)
-    request = Problem.build(R0, Rd, T=T, delta_min=delta_min, method="nonparametric", steps=400)
+    request = Problem.build(R0, Rd, T=T, constraints=[Clearance(delta_min)],
+                            settings=Settings(method="nonparametric", steps=400))
     problem = request.evaluator()
-    plan = planner.plan(R0, Rd, T=T, objective=None)
+    plan = nonholo.plan(R0, Rd, T=T, objective=None)
     ev = problem.evaluate(PiecewiseConstant.fit(plan.controls, T, request.grid, 2), full=True)
-    phi, nodes, r, _ = energy.barrier_terms(problem, ev)
+    phi, nodes, r, _ = energy_objective.barrier_terms(problem, ev)
     d = problem.sign * PLATFORM.delta_samples(ev.R, ev.q)
-    reach = max(energy.BARRIER_DELTA, 2 * delta_min)
+    reach = max(energy_objective.BARRIER_DELTA, 2 * delta_min)
     near = [n for n in range(1, len(d)) if d[n] < reach]
     x = (d[near] - delta_min) / (reach - delta_min)
     assert near and sorted(nodes.tolist()) == near and np.all((r > 0) & (r < 1))

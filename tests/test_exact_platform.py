@@ -28,8 +28,8 @@ from derivations.mechanisms import (
     rho,
 )
 from derivations.rotations import hat, r
+from nonholo.codegen.mechanism_modules import load_source
 from nonholo.model import catalog
-from nonholo.model.mechanism import load_source
 from nonholo.spaces import so3
 
 FIELDS = ("base1", "tip1", "base2", "tip2", "contact", "axle")

@@ -45,6 +45,7 @@ def test_unknown_example():
         examples.get(7)
 
 
+@pytest.mark.slow
 def test_reproduce_writes_summary_and_figures(tmp_path, capsys):
     assert main(["reproduce", "--out", str(tmp_path), "--no-audit"]) == 0
     summary = json.loads((tmp_path / "summary.json").read_text())

@@ -23,6 +23,7 @@ def car_plan(tmp_path_factory):
     return res.save(tmp_path_factory.mktemp("plan") / "car.json")
 
 
+@pytest.mark.slow
 def test_execute_plays_touches_up_and_writes_its_files(car_plan, tmp_path, capsys):
     report, figure, model = tmp_path / "r.json", tmp_path / "e.png", tmp_path / "car.xml"
     status = main(["execute", str(car_plan), "--touch-ups", "1",

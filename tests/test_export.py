@@ -8,12 +8,13 @@ import pytest
 from conftest import example
 from scipy.spatial.transform import Rotation
 
-from nonholo.certify import resimulate as verify
+from nonholo.certify.resimulate import resimulate_path
 from nonholo.cli.entry import main
 from nonholo.io import csv_export as export
 from nonholo.model import catalog
-from nonholo.planning import api as planner
+from nonholo.planning.api import plan
 from nonholo.spaces import so3
+from nonholo import Settings
 
 
 def read(path):
@@ -25,7 +26,7 @@ def read(path):
 
 @pytest.fixture(scope="module")
 def plan1():
-    return planner.plan(*example(1))
+    return plan(*example(1))
 
 
 def test_columns_and_rows(plan1, tmp_path):
@@ -44,8 +45,8 @@ def test_columns_and_rows(plan1, tmp_path):
 def test_orientations_agree_with_an_independent_integrator(plan1, tmp_path):
     cols, _ = read(plan1.to_csv(tmp_path / "m.csv", rate=330))      # times off the plan's grid
     R = Rotation.from_quat(np.column_stack([cols[k] for k in ("qx", "qy", "qz", "qw")])).as_matrix()
-    t_ref, R_ref, _ = verify.resimulate_path(plan1.R0, plan1.controls, plan1.T, "platform", plan1.breakpoints,
-                                             samples=331)
+    t_ref, R_ref, _ = resimulate_path(plan1.R0, plan1.controls, plan1.T, "platform", plan1.breakpoints,
+                                      samples=331)
     j = np.array([np.argmin(np.abs(t_ref - t)) for t in cols["t"]])
     assert np.max(np.abs(t_ref[j] - cols["t"])) <= 1e-12
     err = [so3.distance(a, b) for a, b in zip(R, R_ref[j])]
@@ -69,7 +70,7 @@ def test_leg_columns_against_the_geometry_and_time_differences(plan1, tmp_path):
 
 def test_a_mechanism_without_legs_or_singular_set(tmp_path):
     p = np.eye(3), so3.from_rpy(0.3, -0.2, 0.4)
-    res = planner.plan(*p, mechanism="attitude")
+    res = plan(*p, mechanism="attitude")
     cols, header = read(res.to_csv(tmp_path / "a.csv", rate=10))
     assert header == ["t", "u1", "u2", "qx", "qy", "qz", "qw"]
     R = Rotation.from_quat(np.column_stack([cols[k] for k in ("qx", "qy", "qz", "qw")])).as_matrix()
@@ -80,7 +81,7 @@ def test_bad_rate_and_failed_plans_are_refused(plan1, tmp_path):
     for rate in (0, -5, float("nan"), float("inf"), "100"):
         with pytest.raises(ValueError, match="rate"):
             plan1.to_csv(tmp_path / "x.csv", rate=rate)
-    failed = planner.plan(*example(1), max_iter=1, route="local")
+    failed = plan(*example(1), settings=Settings(max_iter=1), route="local")
     assert not failed.success
     with pytest.raises(ValueError, match="failed"):
         failed.to_csv(tmp_path / "x.csv")

@@ -15,7 +15,7 @@ from scipy.integrate import solve_ivp
 from scipy.spatial.transform import Rotation
 
 from nonholo.model import catalog
-from nonholo.model.mechanism import Geometry
+from nonholo.model.geometry import Geometry
 from nonholo.paper import examples
 from nonholo.spaces import so3
 from nonholo import viz
@@ -220,6 +220,7 @@ def test_normal_form_points():
     assert np.max(np.abs(z ** 3 + x * y)) < 1e-10  # the image of Δ = 0 lies on it
 
 
+@pytest.mark.slow
 def test_singular_figures(tmp_path):
     fig = viz.singular_set_figure(marks={"start": (0.5, 1.2, "o")})
     check_figure(fig, 2, tmp_path, "singular")
@@ -227,6 +228,7 @@ def test_singular_figures(tmp_path):
     check_figure(viz.normal_form_figure(), 2, tmp_path, "normal_form")
 
 
+@pytest.mark.slow
 def test_plan_figures(results, tmp_path):
     check_figure(viz.convergence_figure(results, tol=1e-10), 1, tmp_path, "conv")
     check_figure(viz.controls_figure(results), 2, tmp_path, "controls")
@@ -301,6 +303,7 @@ def test_figures_show_themselves_as_images(results):
     assert "image/png" not in plain
 
 
+@pytest.mark.slow
 def test_figures_are_made_without_pyplot():
     """Building every kind of figure leaves pyplot unimported: no global state in scripts."""
     import subprocess

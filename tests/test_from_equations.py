@@ -15,7 +15,7 @@ import derivations.equations
 import derivations.generator
 from derivations.mechanisms import Mechanism as Symbolic
 from nonholo import Mechanism, mechanism_named, plan
-from nonholo.model import mechanism as mechanism_module
+from nonholo.codegen.cache import generated_cache_dir
 from nonholo.spaces import so3
 
 x, y, th, th0, th1, phi, v, w, ell = sp.symbols("x y theta theta0 theta1 phi v w ell", real=True)
@@ -197,7 +197,7 @@ def test_a_second_build_reads_the_cache_and_the_generator_s_version_is_in_its_ke
     Mechanism.from_equations("trailer1", **{**TRAILER, "rates": TRAILER["rates"][:3] + [v * sin(th1 - th0)]})
     assert len(list(cache.glob("trailer1_*.py"))) == 3
     # the digest covers the generator's modules
-    assert mechanism_module.generated_cache_dir() == cache
+    assert generated_cache_dir() == cache
 
 
 def test_the_generator_s_version_follows_its_sources(tmp_path, monkeypatch):

@@ -5,6 +5,8 @@ import subprocess
 import sys
 from pathlib import Path
 
+import pytest
+
 SIMULATE = """
 import numpy as np
 from nonholo import simulate
@@ -29,6 +31,7 @@ def run(code: str, cache_dir: Path):
                           timeout=600)
 
 
+@pytest.mark.slow
 def test_runs_without_a_writable_cache(tmp_path):
     out = run(READ_ONLY, tmp_path / "cache")
     assert out.returncode == 0, out.stderr
@@ -37,6 +40,7 @@ def test_runs_without_a_writable_cache(tmp_path):
     assert reference.returncode == 0 and out.stdout == reference.stdout
 
 
+@pytest.mark.slow
 def test_a_damaged_cache_entry_is_rebuilt(tmp_path):
     cache = tmp_path / "cache"
     first = run(SIMULATE, cache)

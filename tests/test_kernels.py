@@ -1,11 +1,12 @@
 """The small compiled numerics of :mod:`nonholo.numerics.kernels` and the integrator kernels' entry
-points (:meth:`nonholo.Mechanism.kernels`)."""
+points (:func:`nonholo.integrate.compiled.compiled_system`)."""
 import numpy as np
 import pytest
 from conftest import SO3_MECHANISMS, example
 
 from nonholo.controls import stages
 from nonholo.controls.parametrisations import Fourier
+from nonholo.integrate.compiled import compiled_system
 from nonholo.model import catalog
 from nonholo.motion.frame_controls import FrameControls
 from nonholo.numerics import kernels
@@ -99,14 +100,14 @@ def test_inv33_and_exp_times():
 @pytest.mark.parametrize("name", SO3_MECHANISMS)
 def test_kernels_of_a_mechanism(name):
     mech = catalog.get(name)
-    plain = mech.kernels()
+    plain = compiled_system(mech)
     assert (plain.name, plain.frame) == (name, False)
     if mech.has_frame:
-        frame = mech.kernels(frame=True)
+        frame = compiled_system(mech, frame=True)
         assert (frame.name, frame.frame) == (name, True)
     else:
         with pytest.raises(ValueError, match="frame"):
-            mech.kernels(frame=True)
+            compiled_system(mech, frame=True)
 
 
 def test_frame_inputs_kernel_is_W_times_w():
@@ -123,7 +124,7 @@ def test_frame_inputs_kernel_is_W_times_w():
     Wst = np.ascontiguousarray(Ust[idx])
     w_end = np.ascontiguousarray(Ust[idx, 2])
     Rout, out = np.empty((4, 3, 3)), np.empty((4, 2))
-    mech.kernels(frame=True).frame_inputs(nodes, np.empty((len(nodes), 0)), idx, s, Wst, w_end, Rout,
+    compiled_system(mech, frame=True).frame_inputs(nodes, np.empty((len(nodes), 0)), idx, s, Wst, w_end, Rout,
                                           np.empty((4, 0)), out)
     np.testing.assert_array_equal(Rout[:2], nodes[idx[:2]])
     np.testing.assert_allclose(Rout[2:], nodes[idx[2:] + 1], atol=1e-15)

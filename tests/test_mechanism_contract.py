@@ -15,7 +15,7 @@ from scipy.integrate import solve_ivp
 
 from derivations import definitions
 from derivations.rotations import r
-from nonholo import PlanResult, plan, simulate
+from nonholo import PlanResult, plan, simulate, Settings
 from nonholo.controls import Fourier
 from nonholo.model import catalog
 from nonholo.motion.simulation import SingularTrajectoryError
@@ -58,7 +58,7 @@ def clear_motion(mech, rng, scale: float, harmonics: int):
         R0, q0 = regular_state(mech, rng)
         controls = Fourier(1.0, rng.normal(scale=scale, size=(mech.n_inputs, 2 * harmonics + 1)))
         try:
-            traj = simulate(mech.space.public(R0, q0), controls, 1.0, mechanism=mech, steps=400)
+            traj = simulate(mech.space.public((R0, q0)), controls, 1.0, mechanism=mech, steps=400)
         except SingularTrajectoryError:
             continue
         if traj.min_delta is None or traj.min_delta >= 0.05:
@@ -93,7 +93,7 @@ def test_kernels_agree_with_dop853_on_the_generated_field(mech):
     (R0, q0), controls, traj = clear_motion(mech, np.random.default_rng(11), 0.3, 2)
     q_T = traj.q[-1] if traj.q is not None else np.zeros(0)
     R_ref, q_ref = dop853(mech, R0, q0, controls, 1.0)
-    assert mech.space.distance(traj.R_T, q_T, R_ref, q_ref) < 1e-9
+    assert mech.space.distance((traj.R_T, q_T), (R_ref, q_ref)) < 1e-9
 
 
 def test_a_reachable_goal_is_planned_certified_confirmed_and_reloaded(mech, tmp_path):
@@ -103,10 +103,10 @@ def test_a_reachable_goal_is_planned_certified_confirmed_and_reloaded(mech, tmp_
     if mech.singular.exists:
         assert mech.singular.sign(Rd, qd) == mech.singular.sign(R0, q0)
     tol = 1e-9
-    res = plan(mech.space.public(R0, q0), mech.space.public(Rd, qd), mechanism=mech, tol=tol)
+    res = plan(mech.space.public((R0, q0)), mech.space.public((Rd, qd)), mechanism=mech, settings=Settings(tol=tol))
     assert res.success, res.reason
     R_T, q_T = dop853(mech, R0, q0, res.controls, res.T)
-    assert mech.space.distance(R_T, q_T, Rd, qd) < tol
+    assert mech.space.distance((R_T, q_T), (Rd, qd)) < tol
     path = res.save(tmp_path / "plan.json")
     again = PlanResult.load(path)
     assert again == res

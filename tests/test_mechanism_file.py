@@ -1,7 +1,7 @@
-"""A mechanism of one's own in a data file (nonholo/model/mechanism_file.py,
-``Mechanism.from_file``/``to_file``, ``catalog.resolve``): read as data and never run,
-refused naming the file, the line and the field; accepted by ``nonholo plan``, sweep tables,
-the atlas and plan files, which carry its definition."""
+"""A mechanism of one's own in a data file (nonholo/model/mechanism_file.py and the
+definition's modules beside it, ``Mechanism.from_file``/``to_file``, ``catalog.resolve``):
+read as data and never run, refused naming the file, the line and the field; accepted by
+``nonholo plan``, sweep tables, the atlas and plan files, which carry its definition."""
 import builtins
 import json
 import math
@@ -16,11 +16,11 @@ import pytest
 import sympy as sp
 
 import nonholo
-from nonholo.batch import atlas, sweep
+from nonholo.batch import atlas, result_store, sweep
 from nonholo.cli.entry import main
 from nonholo.io import problems
 from nonholo.io.result import PlanResult
-from nonholo.model import catalog, mechanism_file
+from nonholo.model import catalog, definition_forms, field_places, mechanism_file
 from nonholo.model.mechanism import Mechanism
 from nonholo.spaces import so3
 
@@ -137,7 +137,7 @@ def test_resolve_takes_a_mechanism_a_name_a_file_and_a_definition(trailer, tmp_p
     by_file = catalog.resolve("sub/t.toml", base=tmp_path)
     assert by_file.definition == trailer.definition
     assert catalog.resolve(str(copy)) is by_file                       # built once per process
-    assert catalog.resolve(mechanism_file.json_data(trailer.definition)) is by_file
+    assert catalog.resolve(definition_forms.json_data(trailer.definition)) is by_file
     with pytest.raises(ValueError, match="unknown mechanism 'teapot'"):
         catalog.resolve("teapot")
     with pytest.raises(ValueError, match=re.escape(f"{tmp_path / 'nothere.toml'}: no such mechanism file")):
@@ -298,22 +298,22 @@ def test_a_file_that_is_not_utf8_is_refused_naming_the_line(tmp_path):
 def test_fields_are_found_on_their_lines():
     text = ('name = "a"\n[rates]\n  x = "v"\n"y" = "w"\n[bounds.inputs]\nv = [0, 1]\n'
             '[[drawing.bodies]]\nx = "x"\n[[drawing.bodies]]\nx = "y"\n')
-    assert mechanism_file.line_of(text, "name") == 1
-    assert mechanism_file.line_of(text, "rates.x") == 3 and mechanism_file.line_of(text, "rates.y") == 4
-    assert mechanism_file.line_of(text, "rates.z") == 2                  # missing: its table
-    assert mechanism_file.line_of(text, "bounds.inputs.v") == 6
-    assert mechanism_file.line_of(text, "drawing.bodies[1].x") == 10
-    assert mechanism_file.line_of(text, "units.x") == 1                  # nowhere: the file's start
-    assert mechanism_file.field_at(text, 4) == "rates.y" and mechanism_file.field_at(text, 5) == "bounds.inputs"
+    assert field_places.line_of(text, "name") == 1
+    assert field_places.line_of(text, "rates.x") == 3 and field_places.line_of(text, "rates.y") == 4
+    assert field_places.line_of(text, "rates.z") == 2                  # missing: its table
+    assert field_places.line_of(text, "bounds.inputs.v") == 6
+    assert field_places.line_of(text, "drawing.bodies[1].x") == 10
+    assert field_places.line_of(text, "units.x") == 1                  # nowhere: the file's start
+    assert field_places.field_at(text, 4) == "rates.y" and field_places.field_at(text, 5) == "bounds.inputs"
 
 
 # -- planning, plan files ------------------------------------------------------------------------
 
 def test_a_state_of_the_wrong_size_is_refused_naming_the_argument(trailer, capsys):
-    with pytest.raises(ValueError, match=r"^R0 must be a vector of its 5 coordinates .* for mechanism "
+    with pytest.raises(ValueError, match=r"^start must be a vector of its 5 coordinates .* for mechanism "
                                          r"'car_trailer'"):
         nonholo.plan([0.0, 0.0, 0.0], GOAL, mechanism=trailer)
-    with pytest.raises(ValueError, match=r"^Rd must be"):
+    with pytest.raises(ValueError, match=r"^goal must be"):
         nonholo.plan(START, GOAL + [0.0], mechanism=trailer)
     assert main(["plan", "--mechanism", str(EXAMPLE), "--from", "0", "0", "0", "--to", *map(str, GOAL)]) == 2
     assert "--from takes 5 numbers for mechanism 'car_trailer' (x y theta phi theta1), got 3" in \
@@ -342,13 +342,14 @@ def cli_plan(tmp_path_factory):
     return run_, out
 
 
+@pytest.mark.slow
 def test_the_command_line_plans_a_file_mechanism_and_its_plan_loads_alone(cli_plan, trailer):
     run_, out = cli_plan
     assert run_.returncode == 0, run_.stderr
     assert "success" in run_.stdout and "car_trailer" in run_.stdout
     d = json.loads(out.read_text())
     assert d["mechanism"] == "car_trailer"
-    assert d["mechanism_digest"] == mechanism_file.digest(trailer.definition)
+    assert d["mechanism_digest"] == definition_forms.digest(trailer.definition)
     assert d["mechanism_definition"]["bounds"]["inputs"]["w"] == ["-inf", "inf"]   # JSON holds no inf
     res = PlanResult.load(out)                        # no mechanism= needed
     assert res.success and res.kinematics.definition == trailer.definition
@@ -363,6 +364,7 @@ def test_a_bad_file_on_the_command_line_exits_2_naming_it(tmp_path, capsys):
     assert f"{path}, line 12, rates.theta: 'evil(w)' is not a call" in capsys.readouterr().err
 
 
+@pytest.mark.slow
 def test_execute_says_a_file_mechanism_has_no_physics_model(cli_plan, capsys):
     pytest.importorskip("mujoco")
     assert main(["execute", str(cli_plan[1])]) == 2
@@ -388,17 +390,17 @@ def test_a_changed_definition_or_digest_is_refused_naming_the_field(cli_plan, tm
     # a definition that is user data: checked as a file is, with a digest that matches
     evil = json.loads(json.dumps(d))
     evil["mechanism_definition"]["rates"]["x"] = f"__import__('os').system('touch {tmp_path / MARKER}')"
-    evil["mechanism_digest"] = mechanism_file.digest(evil["mechanism_definition"])
+    evil["mechanism_digest"] = definition_forms.digest(evil["mechanism_definition"])
     refused(evil, r"'mechanism_definition.rates.x': .* is not a call of an allowed function")
     assert not (tmp_path / MARKER).exists()
     # a definition consistent with its digest, but other numbers: the replay refuses it
     other = json.loads(json.dumps(d))
     other["mechanism_definition"]["parameters"]["d"] = 0.5
-    other["mechanism_digest"] = mechanism_file.digest(other["mechanism_definition"])
+    other["mechanism_digest"] = definition_forms.digest(other["mechanism_definition"])
     refused(other, r"invalid plan: 'q.*' disagrees with the controls")
     renamed = json.loads(json.dumps(d))
     renamed["mechanism_definition"]["name"] = "other_name"
-    renamed["mechanism_digest"] = mechanism_file.digest(renamed["mechanism_definition"])
+    renamed["mechanism_digest"] = definition_forms.digest(renamed["mechanism_definition"])
     refused(renamed, r"'mechanism' is 'car_trailer', but 'mechanism_definition' defines 'other_name'")
 
 
@@ -423,13 +425,13 @@ def test_a_sweep_table_names_a_file_relative_to_its_own_directory(tmp_path, monk
     assert checked[0]["mechanism"] == "car_trailer" and checked[0]["kinematics"].definition == trailer.definition
     # the workers are sent data: the definition, not a path nor a module
     sent = problems.as_json(checked[0])
-    assert sent["mechanism"] == mechanism_file.json_data(trailer.definition)
+    assert sent["mechanism"] == definition_forms.json_data(trailer.definition)
     assert problems.as_json(checked[1])["mechanism"] == "car"
     out = tmp_path / "results.parquet"
     result = sweep.sweep(str(table), out, workers=2, progress=False).to_pylist()
     assert [r["mechanism"] for r in result] == ["car_trailer", "car"]
     assert all(r["success"] and r["error"] is None for r in result), result
-    plan = sweep.plan_of(result[0])                 # the row's plan loads alone
+    plan = result_store.plan_of(result[0])                 # the row's plan loads alone
     assert plan.kinematics.definition == trailer.definition
     np.testing.assert_allclose(plan.q[-1], GOAL, atol=1e-8)
     # the same table read from elsewhere resolves the same file; a changed file is another table

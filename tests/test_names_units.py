@@ -276,6 +276,7 @@ def drawn(plans, tmp_path_factory):
     return figures, used
 
 
+@pytest.mark.slow
 def test_every_figure_function_is_drawn(drawn):
     """A figure function added to ``nonholo.viz`` must be added to this test."""
     _, used = drawn
@@ -283,6 +284,7 @@ def test_every_figure_function_is_drawn(drawn):
     assert functions <= used, f"not drawn by this test: {sorted(functions - used)}"
 
 
+@pytest.mark.slow
 def test_every_figure_text_uses_the_table(drawn):
     figures, _ = drawn
     found = []
@@ -293,6 +295,7 @@ def test_every_figure_text_uses_the_table(drawn):
     assert not found, "\n".join(found)
 
 
+@pytest.mark.slow
 def test_the_slip_and_the_lengths_have_units(drawn):
     """The issue's offenders, fixed: the slip in the mechanism's length unit per second, the
     lengths in ``radius``, the angles with the table's words."""

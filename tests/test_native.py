@@ -1,7 +1,7 @@
 """The native (C) kernels against the Python they are translated from.
 
 Both backends compile the same Python (numba directly, the native one through
-:mod:`nonholo.numerics.c_translation`); these tests hold the C kernels to that source,
+:mod:`nonholo.codegen.c_translation`); these tests hold the C kernels to that source,
 executed by the interpreter, to 1e-13 on random inputs for every system of the catalog and
 every kernel, and to numba's compilation of it for one mechanism of each kind of state;
 and they check the build's plumbing: the digest that keeps a stale module out, the disk
@@ -17,10 +17,12 @@ import numpy as np
 import pytest
 
 from nonholo.generated import MECHANISMS
-from nonholo.integrate import cf4
-from nonholo.numerics import c_translation, cache_entries, kernels, native
+from nonholo.codegen import build, c_extension, cache, emit
+from nonholo.codegen.c_subset import Function
+from nonholo.integrate import system_kernels
+from nonholo.numerics import kernels
 
-pytestmark = pytest.mark.skipif(native.compiler() is None, reason="no C compiler")
+pytestmark = pytest.mark.skipif(build.compiler() is None, reason="no C compiler")
 
 
 def _module(name):
@@ -53,17 +55,19 @@ def _agree(got: dict, want: dict, tol=1e-13):
 
 
 @pytest.mark.parametrize("name,frame", kernel_runs.SYSTEMS)
+@pytest.mark.slow
 def test_native_kernels_agree_with_their_python_source(name, frame, interpreted_kernels):
     """forward, forward_variational (sparse and dense bases, with and without M(T)) and
     frame_inputs of the C kernels: the same trajectory, Jacobian and Gramian to 1e-13 as
     the Python they are translated from, executed by the interpreter."""
-    nat = cf4.compile_system(_module(name), frame, backend="native")
+    nat = system_kernels.compile_system(_module(name), frame, backend="native")
     assert nat.backend == "native"
     got = kernel_runs.run(nat, kernel_runs.inputs(name, frame), frame)
     _agree(got, interpreted_kernels[name, frame, "inlined"])
 
 
 @pytest.mark.parametrize("name", ["attitude", "car"])
+@pytest.mark.slow
 def test_native_kernels_agree_with_numba(name, interpreted_kernels):
     """The numba fallback's compiled kernels agree with the C ones and the interpreted
     source to 1e-13: one mechanism on SO(3), one on coordinates with a singular set
@@ -71,8 +75,8 @@ def test_native_kernels_agree_with_numba(name, interpreted_kernels):
     compile is checked for each above)."""
     module = _module(name)
     for frame in _systems(module):
-        ref = cf4.compile_system(module, frame, backend="numba")
-        nat = cf4.compile_system(module, frame, backend="native")
+        ref = system_kernels.compile_system(module, frame, backend="numba")
+        nat = system_kernels.compile_system(module, frame, backend="native")
         assert (nat.backend, ref.backend) == ("native", "numba")
         inp = kernel_runs.inputs(name, frame)
         compiled = kernel_runs.run(ref, inp, frame)
@@ -118,7 +122,7 @@ def test_native_arguments_are_checked():
     """A written argument of the wrong dtype or layout is refused (a copy would lose the
     writes); a read-only one is converted; the message names the argument."""
     module = _module("car")
-    kern = cf4.compile_system(module, backend="native")
+    kern = system_kernels.compile_system(module, backend="native")
     N = 4
     U = np.zeros((N, 3, 2))
     Rs, Qs = kern.nodes(N)
@@ -133,19 +137,18 @@ def test_native_arguments_are_checked():
 def test_a_stale_module_is_not_used(tmp_path, monkeypatch):
     """A module whose recorded digest is not the sources' is passed over: the kernels are
     compiled into the cache (named by the digest) and loaded from there."""
-    monkeypatch.setenv(native.CACHE_ENV, str(tmp_path))
-    src = c_translation.extension_source(
-        "nonholo.generated.native.toy", "toy", [c_translation.Function(_toy, "toy", {"x": "f8", "a": "f8[1]"})],
-        "abc")
-    lib = native.load("toy", "abc", lambda: src)
+    monkeypatch.setenv(cache.CACHE_ENV, str(tmp_path))
+    src = c_extension.extension_source(
+        "nonholo.generated.native.toy", "toy", [Function(_toy, "toy", {"x": "f8", "a": "f8[1]"})], "abc")
+    lib = build.load("toy", "abc", lambda: src)
     assert lib is not None and lib.SOURCE_DIGEST == "abc"
     assert lib.toy(2.0, np.array([1.0, 2.0, 3.0])) == 12.0
     suffix = sysconfig.get_config_var("EXT_SUFFIX") or ".so"
     assert len(list(tmp_path.glob(f"toy_*{suffix}"))) == 1
-    assert cache_entries.record_path(next(tmp_path.glob(f"toy_*{suffix}"))).exists()   # its hash, recorded
-    monkeypatch.setattr(cache_entries, "_WARNED", set())          # said once per process
+    assert cache.record_path(next(tmp_path.glob(f"toy_*{suffix}"))).exists()   # its hash, recorded
+    monkeypatch.setattr(cache, "_WARNED", set())          # said once per process
     with pytest.warns(RuntimeWarning, match="native kernels unavailable"):
-        stale = native.load("toy", "def", lambda: src)   # a module built from other sources
+        stale = build.load("toy", "def", lambda: src)   # a module built from other sources
     assert stale is None
 
 
@@ -156,6 +159,7 @@ def _toy(x, a):
     return s
 
 
+@pytest.mark.slow
 def test_no_compiler_falls_back_to_numba(tmp_path):
     """Without a working compiler (and nothing cached) a user's mechanism still gets its
     kernels: from numba, said once in a warning. (The catalog's car would use the module
@@ -164,11 +168,11 @@ def test_no_compiler_falls_back_to_numba(tmp_path):
 import warnings, numpy as np
 warnings.simplefilter("always")
 from nonholo.model.mechanism import Mechanism
-from nonholo.integrate import cf4
+from nonholo.integrate import system_kernels
 from derivations import vehicles
 m = Mechanism.from_symbolic(vehicles.kinematic_car(2, name="car_wheelbase_2"), cache=False)
 with warnings.catch_warnings(record=True) as w:
-    kern = cf4.compile_system(m.module)
+    kern = system_kernels.compile_system(m.module)
 print(kern.backend, sum("native kernels unavailable" in str(x.message) for x in w))
 """
     env = dict(os.environ, CC="/bin/false", NONHOLO_CACHE_DIR=str(tmp_path), PATH="/nonexistent")
@@ -180,9 +184,8 @@ print(kern.backend, sum("native kernels unavailable" in str(x.message) for x in 
 def test_the_catalog_is_built_at_install():
     """``pip install`` built every catalog module from the checked-in C (so that the first
     plan needs no compiler): each loads with the digest of its sources."""
-    from nonholo.integrate import native_kernels
-
     for name in MECHANISMS:
         module = _module(name)
-        want = native_kernels.source_digest(module, cf4.native_parts())
-        assert native.installed(name, want) is not None, name
+        want = emit.source_digest(module, system_kernels.native_parts())
+        assert build.installed(name, want) is not None, name
+    assert build.installed("numerics", kernels.native_digest()) is not None

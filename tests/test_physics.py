@@ -32,7 +32,7 @@ BALL_RD = so3.exp(np.array([np.pi / 2, 0, 0])) @ BALL_R0
 @pytest.fixture(scope="module")
 def ball_plan():
     res = nonholo.plan((BALL_R0, (0.0, 0.0)), (BALL_RD, (0.0, 0.0)), mechanism="rolling_ball",
-                       strategy="paper", harmonics=4)
+                       strategy="paper", settings=nonholo.Settings(harmonics=4))
     assert res.success
     return res
 
@@ -199,7 +199,7 @@ def test_a_record_saved_before_outcomes_loads(fast_ball):
 # -- touch-ups: played only when predicted to help ----------------------------------------------
 
 def test_execution_stops_within_the_plans_tolerance():
-    loose = nonholo.plan((0.0, 0.0, 0.0), (0.0, 1.0, 0.0), mechanism="unicycle", tol=1e-2)
+    loose = nonholo.plan((0.0, 0.0, 0.0), (0.0, 1.0, 0.0), mechanism="unicycle", settings=nonholo.Settings(tol=1e-2))
     run = execute(loose, touch_ups=3, contact=COARSE, duration=5.0)
     assert [s["outcome"] for s in run.stages] == ["played", "within tolerance"]
     assert norms(run)[0] <= 1e-2 and "tolerance" in run.stages[1]["reason"]
@@ -261,7 +261,7 @@ def test_the_models_load_and_hold_their_state(name, tmp_path):
     m = mujoco.MjModel.from_xml_path(str(path))
     d = mujoco.MjData(m)
     model = model_for(name, COARSE)
-    R = BALL_R0 if mech.space.rotation is not None else np.eye(3)
+    R = BALL_R0 if mech.space.has_orientation else np.eye(3)
     q = {"rolling_ball": [0.5, -0.25], "car": [0.5, -0.25, 0.3, 0.2], "unicycle": [0.5, -0.25, 0.3]}[name]
     model.reset(m, d, R, np.array(q))
     R_m, q_m = model.state(m, d)

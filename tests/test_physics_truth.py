@@ -24,8 +24,8 @@ from nonholo.model import catalog
 from nonholo.physics import Contact, Execution, execute, model_for
 from nonholo.physics import contact as contact_module
 from nonholo.physics import execution as execution_module
-from nonholo.physics.execution import (MAX_DURATION, MAX_STAGE_STEPS, MAX_TOUCH_UPS, MIN_MOTION_STEPS,
-                                       instability)
+from nonholo.physics.execution import MAX_DURATION, MAX_STAGE_STEPS, MIN_MOTION_STEPS, instability
+from nonholo.physics.execution_record import MAX_TOUCH_UPS
 from nonholo.physics.models import matching_model
 from nonholo.physics.vehicle_models import CarModel, UnicycleModel
 
@@ -85,6 +85,7 @@ def unstable(monkeypatch, elsewhere):
 
 # -- 1. the model is chosen by the kinematics ---------------------------------------------------
 
+@pytest.mark.slow
 def test_a_car_of_ones_own_called_car_with_another_wheelbase_is_refused():
     car2 = own_car("car", 2)
     res = nonholo.plan((0.0, 0.0, 0.0, 0.0), (0.0, 0.5, 0.0, 0.0), mechanism=car2)

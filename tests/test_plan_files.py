@@ -23,9 +23,10 @@ import numpy as np
 import pytest
 from conftest import example, example_rpy_args
 
+import nonholo
+from nonholo import Settings
 from nonholo.cli import plan_command as cli_plan
 from nonholo.io.result import PlanResult
-from nonholo.planning import api as planner
 from nonholo.spaces import so3
 
 # -- plans of every kind (computed once) -----------------------------------------------------
@@ -35,10 +36,10 @@ ACROSS = so3.from_rpy(-1.0, 0.9, -0.5)        # Δ has the other sign: refused, 
 
 KINDS = {
     "robust": {},                                           # frame controls (Fourier)
-    "robust_grid": {"method": "nonparametric", "grid": 40},  # frame controls (grid)
+    "robust_grid": {"settings": Settings(method="nonparametric", grid=40)},  # frame controls (grid)
     "paper": {"strategy": "paper"},                          # physical Fourier controls
-    "paper_grid": {"strategy": "paper", "method": "nonparametric", "grid": 40},
-    "failed": {"strategy": "paper", "max_iter": 3, "route": "local"},  # complete, not converged
+    "paper_grid": {"strategy": "paper", "settings": Settings(method="nonparametric", grid=40)},
+    "failed": {"strategy": "paper", "settings": Settings(max_iter=3), "route": "local"},  # complete, not converged
     "stopped": {"strategy": "paper", "route": "local",       # trajectory stops before T
                 "u0": lambda t: np.stack([5 * np.sin(9 * t), 3 * np.cos(7 * t)], -1)},
     "refused": {"Rd": ACROSS},                               # no trajectory at all
@@ -51,7 +52,7 @@ _PLANS: dict = {}
 def plan_of(kind: str) -> PlanResult:
     if kind not in _PLANS:
         kw = dict(KINDS[kind])
-        _PLANS[kind] = planner.plan(R0, kw.pop("Rd", Rd), **kw)
+        _PLANS[kind] = nonholo.plan(R0, kw.pop("Rd", Rd), **kw)
     return _PLANS[kind]
 
 
@@ -116,6 +117,7 @@ def cli(argv):
 
 @pytest.mark.parametrize("broken", ["out", "plot", "both"])
 @pytest.mark.parametrize("goal", ["reachable", "across"])
+@pytest.mark.slow
 def test_cli_a_file_it_cannot_write_is_one_error_line_and_exit_status_3(tmp_path, capsys, broken, goal):
     start, to = example_rpy_args(1)
     if goal == "across":
@@ -152,6 +154,7 @@ def test_cli_documents_its_exit_statuses():
 
 
 @pytest.mark.parametrize("reader", ["head -1", "true"])
+@pytest.mark.slow
 def test_cli_output_closed_by_its_reader_is_not_an_error(tmp_path, reader):
     start, goal = example_rpy_args(1)
     out = tmp_path / "plan.json"
@@ -410,6 +413,7 @@ if given is None:
     def test_a_changed_byte_is_rejected_or_changes_no_result():
         pytest.importorskip("hypothesis")
 else:
+    @pytest.mark.slow
     @settings(max_examples=300, deadline=None, suppress_health_check=list(HealthCheck))
     @given(data=st.data())
     def test_a_changed_byte_is_rejected_or_changes_no_result(damaged_file, data):

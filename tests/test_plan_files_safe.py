@@ -25,28 +25,30 @@ import numpy as np
 import pytest
 from conftest import assert_inputs_match, example, example_rpy_args
 
-from nonholo.certify import resimulate as verify
+from nonholo.certify.resimulate import resimulate, terminal_error
 from nonholo.cli import plan_command as cli_plan
 from nonholo.io import safe_write
 from nonholo.io.result import PlanResult
 from nonholo.model import catalog
-from nonholo.planning import api as planner
+from nonholo.planning.api import plan
 from nonholo.planning.core import Options
 from nonholo.spaces import so3
+from nonholo import Settings
+from nonholo.constraints import LegSpeed, LegStroke
 
 R0, RD = example(1)
 
 
 @pytest.fixture(scope="module")
 def paper_plan():
-    res = planner.plan(R0, RD, strategy="paper")
+    res = plan(R0, RD, strategy="paper")
     assert res.success
     return res
 
 
 @pytest.fixture(scope="module")
 def failed_plan():
-    res = planner.plan(R0, RD, strategy="paper", max_iter=3, route="local")
+    res = plan(R0, RD, strategy="paper", settings=Settings(max_iter=3), route="local")
     assert not res.success and res.terminal_error > 1e-3
     return res
 
@@ -245,6 +247,7 @@ def test_cli_writes_devices_in_place_and_refuses_directories_naming_the_option(t
         assert (tmp_path / flag[2:]).is_dir()
 
 
+@pytest.mark.slow
 def test_cli_plot_without_an_extension_keeps_its_name(tmp_path):
     start, goal = example_rpy_args(1)
     path = tmp_path / "figure"
@@ -272,8 +275,8 @@ def replayed_error(d) -> float:
 
     values, _ = plan_file.decode(d)
     par = values["parametrisation"]
-    R_T = verify.resimulate(values["R0"], par, values["T"], values["mechanism"], par.breakpoints)
-    return verify.terminal_error(R_T, values["Rd"])
+    R_T = resimulate(values["start"].R, par, values["T"], values["mechanism"], par.breakpoints)
+    return terminal_error(R_T, values["goal"].R)
 
 
 def test_forgery_a_failed_plan_relabelled_format_1_with_success_true(tmp_path, failed_plan):
@@ -461,19 +464,20 @@ def far_pair():
 
 
 ROUND_TRIP = {
-    "leg limits": lambda: planner.plan(R0, RD, leg_length=(0.3, 2.0)),
-    "leg speed, T given, kept": lambda: planner.plan(R0, RD, T=30.0, leg_speed=0.5),
-    "leg speed, T given, re-timed": lambda: planner.plan(R0, RD, T=1.0, leg_speed=0.5),
-    "leg speed, T given, too short": lambda: planner.plan(R0, RD, T=1.0, leg_speed=0.2),
-    "leg speed, least time": lambda: planner.plan(R0, RD, T=None, leg_speed=0.5),
-    "energy": lambda: planner.plan(R0, RD, objective="energy"),
-    "global route, least time": lambda: planner.plan(*far_pair(), T=None, leg_speed=0.5),
-    "global route, too short for the leg speed": lambda: planner.plan(*far_pair(), T=1.0, leg_speed=0.5),
-    "not converged": lambda: planner.plan(R0, RD, strategy="paper", max_iter=2, route="local"),
+    "leg limits": lambda: plan(R0, RD, constraints=[LegStroke(0.3, 2.0)]),
+    "leg speed, T given, kept": lambda: plan(R0, RD, T=30.0, constraints=[LegSpeed(0.5)]),
+    "leg speed, T given, re-timed": lambda: plan(R0, RD, T=1.0, constraints=[LegSpeed(0.5)]),
+    "leg speed, T given, too short": lambda: plan(R0, RD, T=1.0, constraints=[LegSpeed(0.2)]),
+    "leg speed, least time": lambda: plan(R0, RD, T=None, constraints=[LegSpeed(0.5)]),
+    "energy": lambda: plan(R0, RD, objective="energy"),
+    "global route, least time": lambda: plan(*far_pair(), T=None, constraints=[LegSpeed(0.5)]),
+    "global route, too short for the leg speed": lambda: plan(*far_pair(), T=1.0, constraints=[LegSpeed(0.5)]),
+    "not converged": lambda: plan(R0, RD, strategy="paper", settings=Settings(max_iter=2), route="local"),
 }
 
 
 @pytest.mark.parametrize("name", list(ROUND_TRIP))
+@pytest.mark.slow
 def test_every_kind_of_plan_saves_and_loads_back_equal(tmp_path, name):
     res = ROUND_TRIP[name]()
     expected = {"leg speed, T given, too short": False, "global route, too short for the leg speed": False,
@@ -495,8 +499,8 @@ def test_every_kind_of_plan_saves_and_loads_back_equal(tmp_path, name):
         assert_inputs_match(back.controls(back.t), res.u)
     if res.success:              # an independent check of what the loaded file claims
         mech = catalog.get(res.mechanism)
-        R_T = verify.resimulate(back.R0, back.controls, back.T, mech, back.breakpoints)
-        assert verify.terminal_error(R_T, back.Rd) <= back.options["tol"] + 1e-12
+        R_T = resimulate(back.R0, back.controls, back.T, mech, back.breakpoints)
+        assert terminal_error(R_T, back.Rd) <= back.options["tol"] + 1e-12
 
 
 def as_format_1(res) -> dict:
@@ -512,7 +516,7 @@ def as_format_1(res) -> dict:
     for key in ("sensitivity", "error_bound", "replay_steps"):
         del d[key]
     sign = float(np.sign(mech.delta(res.R0)))
-    R, done, dmin, _ = playback.replay(res.R0, res.parametrisation, res.T, mech, res.steps, sign)
+    R, done, dmin, _ = playback.replay(res.start, res.parametrisation, res.T, mech, res.steps, sign)
     assert done == res.steps
     d["R"] = R.tolist()
     d["delta"] = mech.delta_samples(R, None).tolist()

@@ -26,13 +26,13 @@ from nonholo.io.result import PlanResult
 from nonholo.motion import simulation as S
 from nonholo.motion.frame_controls import FrameControls
 from nonholo.numerics import kernels
-from nonholo.planning import api as planner
+from nonholo.planning.api import METHODS, STRATEGIES, plan
 from nonholo.planning.core import Outcome, Strategy, descend, record
 from nonholo.planning.strategy_paper import PaperStrategy
 from nonholo.spaces import so3
+from nonholo import Settings
+from nonholo.planning.problem import arguments_of
 
-METHODS = planner.METHODS
-STRATEGIES = ("paper", "robust")
 EXAMPLES = (1, 2)       # the examples (nonholo.paper.examples) solved by both strategies and both methods
 
 
@@ -41,9 +41,10 @@ EXAMPLES = (1, 2)       # the examples (nonholo.paper.examples) solved by both s
 @pytest.mark.parametrize("strategy", STRATEGIES)
 @pytest.mark.parametrize("k", EXAMPLES)
 @pytest.mark.parametrize("method", METHODS)
+@pytest.mark.slow
 def test_examples_converge_and_resimulate(k, method, strategy):
     R0, Rd = example(k)
-    res = planner.plan(R0, Rd, method=method, strategy=strategy, objective=None)
+    res = plan(R0, Rd, settings=Settings(method=method), strategy=strategy, objective=None)
     check_solution(res, R0, Rd)
     assert res.strategy == strategy
     assert res.iterations <= 20
@@ -59,16 +60,17 @@ def test_examples_converge_and_resimulate(k, method, strategy):
 
 @pytest.mark.parametrize("strategy", STRATEGIES)
 @pytest.mark.parametrize("method", METHODS)
+@pytest.mark.slow
 def test_reachable_goals_converge(method, strategy):
     for R0, Rd in paper_reachable_goals(6):
-        check_solution(planner.plan(R0, Rd, method=method, strategy=strategy), R0, Rd)
+        check_solution(plan(R0, Rd, settings=Settings(method=method), strategy=strategy), R0, Rd)
 
 
 def test_hard_goal_fails_gracefully():
     """A reachable goal (generated as above) on which the plain θ-flow runs into the barrier."""
     R0, Rd = so3.from_rpy(2.2642, 0.0361, 1.9724), so3.from_rpy(1.6499, 0.1579, 2.7202)
     for method in METHODS:
-        res = planner.plan(R0, Rd, method=method, strategy="paper", route="local")
+        res = plan(R0, Rd, settings=Settings(method=method), strategy="paper", route="local")
         assert not res.success
         assert "min_step" in res.reason and "delta_min" in res.reason
         assert res.min_delta >= 1e-2                      # the last accepted trajectory
@@ -78,13 +80,14 @@ def test_hard_goal_fails_gracefully():
 # -- the θ-flow and the Newton phase ------------------------------------------------------
 
 @pytest.mark.parametrize("method", METHODS)
+@pytest.mark.slow
 def test_error_decays_as_prescribed_by_the_flow(method):
     """(4)–(5): |l_T(θ+h)|/|l_T(θ)| = e^{−γh} + O(h²) along Euler steps of the θ-flow."""
     R0, Rd = example(1)
     dev = {}
     for step in (0.1, 0.05, 0.025):
-        res = planner.plan(R0, Rd, method=method, gamma=1.0, step=step, newton_below=0.0, max_iter=6,
-                           strategy="paper")
+        res = plan(R0, Rd, settings=Settings(method=method, gamma=1.0, step=step, max_iter=6, newton_below=0.0),
+                   strategy="paper")
         assert all(h["rejected"] == 0 and h["step"] == pytest.approx(step) for h in res.history[1:])
         e = np.array([h["error"] for h in res.history])
         dev[step] = np.abs(e[1:] / e[:-1] - np.exp(-step)).max()
@@ -96,7 +99,7 @@ def test_error_decays_as_prescribed_by_the_flow(method):
 @pytest.mark.parametrize("method", METHODS)
 def test_newton_phase_converges_quadratically(k, method):
     R0, Rd = example(k)
-    res = planner.plan(R0, Rd, method=method, strategy="paper", objective=None)
+    res = plan(R0, Rd, settings=Settings(method=method), strategy="paper", objective=None)
     e = [h["error"] for h in res.history]
     phases = [h["phase"] for h in res.history]
     first = phases.index("newton")
@@ -109,7 +112,7 @@ def test_newton_phase_converges_quadratically(k, method):
 def test_flow_only_converges_linearly_without_newton():
     """Control for the test above: with γh = 0.5 and no Newton phase the error halves."""
     R0, Rd = example(1)
-    res = planner.plan(R0, Rd, newton_below=0.0, max_iter=15, tol=1e-30, strategy="paper")
+    res = plan(R0, Rd, settings=Settings(tol=1e-30, max_iter=15, newton_below=0.0), strategy="paper")
     e = np.array([h["error"] for h in res.history])
     assert not res.success and "max_iter" in res.reason
     np.testing.assert_allclose(e[-5:] / e[-6:-1], 0.5, rtol=1e-3)
@@ -122,7 +125,7 @@ def test_flow_only_converges_linearly_without_newton():
 def test_attitude_mechanism_plans_without_delta_checks(method, strategy):
     R0 = np.eye(3)                                   # fine here: no singular set
     Rd = so3.from_rpy(0.4, -0.3, 0.8)
-    res = planner.plan(R0, Rd, method=method, mechanism="attitude", strategy=strategy)
+    res = plan(R0, Rd, settings=Settings(method=method), mechanism="attitude", strategy=strategy)
     check_solution(res, R0, Rd)
     assert all(h["min_delta"] is None for h in res.history)
 
@@ -139,7 +142,7 @@ NON_ORTHO = R_OK + 1e-6
     ((R_OK, np.full((3, 3), np.inf)), {}, "non-finite"),
     ((np.eye(2), RD_OK), {}, "shape"),
     ((R_OK, [[1, 0, 0], [0, 1, 0]]), {}, "shape"),
-    ((R_OK, "identity"), {}, "R"),
+    ((R_OK, "identity"), {}, "goal"),
     ((np.diag([1.0, 1.0, -1.0]), RD_OK), {"mechanism": "attitude"}, "reflection"),
     ((R_OK @ np.diag([1.0, -1.0, 1.0]), RD_OK), {}, "reflection"),
     ((NON_ORTHO, RD_OK), {}, "orthonormal"),
@@ -167,7 +170,7 @@ def test_bad_input_raises_clear_value_error(args, kw, match, monkeypatch):
     """Bad input is refused before anything is simulated or compiled."""
     forbid_simulation(monkeypatch)
     with pytest.raises(ValueError, match=match):
-        planner.plan(*args, **kw)
+        plan(*args, **arguments_of(kw, "platform"))
 
 
 @pytest.mark.parametrize("Rd, match", [
@@ -179,7 +182,7 @@ def test_goal_beyond_the_singular_surface_returns_at_once(Rd, match, monkeypatch
     """Decided before anything is simulated (or compiled): no problem, no kernels."""
     R0 = example(1)[0]
     forbid_simulation(monkeypatch)
-    res = planner.plan(R0, Rd)
+    res = plan(R0, Rd)
     assert not res.success and match in res.reason
     assert res.iterations == 0 and res.terminal_error is None and res.min_delta is None
     assert len(res.t) == 0 and res.R.shape == (0, 3, 3)
@@ -189,7 +192,7 @@ def test_goal_beyond_the_singular_surface_returns_at_once(Rd, match, monkeypatch
 def test_initial_control_into_the_singularity_fails_gracefully():
     R0, Rd = example(1)
     u0 = C.Fourier(1.0, [[1.0, 0, 0, 0, 0], [0.0, 0, 0, 0, 0]])      # runs into Δ = 0
-    res = planner.plan(R0, Rd, u0=u0, strategy="paper", route="local")
+    res = plan(R0, Rd, u0=u0, strategy="paper", route="local")
     assert not res.success and "initial control" in res.reason and "Δ = 0" in res.reason
     assert res.iterations == 0 and res.terminal_error is None
     assert 0 < len(res.t) < res.steps + 1
@@ -201,9 +204,9 @@ def test_initial_control_into_the_singularity_fails_gracefully():
 
 def test_u0_as_function_or_controls():
     R0, Rd = example(2)
-    a = planner.plan(R0, Rd, u0=C.paper_initial(1.0), strategy="paper")
-    b = planner.plan(R0, Rd, u0=C.Fourier.fit(C.paper_initial(1.0), 1.0, 2), strategy="paper")
-    c = planner.plan(R0, Rd, strategy="paper")
+    a = plan(R0, Rd, u0=C.paper_initial(1.0), strategy="paper")
+    b = plan(R0, Rd, u0=C.Fourier.fit(C.paper_initial(1.0), 1.0, 2), strategy="paper")
+    c = plan(R0, Rd, strategy="paper")
     np.testing.assert_allclose(a.params, c.params, atol=1e-12)
     np.testing.assert_array_equal(b.params, c.params)
 
@@ -212,19 +215,20 @@ def test_u0_as_function_or_controls():
 def test_callback_sees_every_iteration_and_can_stop(strategy):
     R0, Rd = example(1)
     seen = []
-    res = planner.plan(R0, Rd, callback=seen.append, strategy=strategy)
+    res = plan(R0, Rd, callback=seen.append, strategy=strategy)
     assert [r["iteration"] for r in seen] == list(range(res.iterations + 1)) and seen == res.history
-    res = planner.plan(R0, Rd, callback=lambda r: r["iteration"] >= 3, strategy=strategy)
+    res = plan(R0, Rd, callback=lambda r: r["iteration"] >= 3, strategy=strategy)
     assert not res.success and res.iterations == 3 and "callback" in res.reason
 
 
-@pytest.mark.parametrize("kw", [{}, {"method": "nonparametric", "grid": 40},
+@pytest.mark.parametrize("kw", [{}, {"settings": Settings(method="nonparametric", grid=40)},
                                 {"mechanism": "attitude"}, {"Rd": so3.from_rpy(-1.0, 0.9, -0.5)},
-                                {"strategy": "paper"}, {"strategy": "paper", "method": "nonparametric"}])
+                                {"strategy": "paper"},
+                                {"strategy": "paper", "settings": Settings(method="nonparametric")}])
 def test_save_load_round_trip(tmp_path, kw):
     R0, Rd = example(1)
     Rd = kw.pop("Rd", Rd)
-    res = planner.plan(R0, Rd, **kw)
+    res = plan(R0, Rd, **kw)
     path = res.save(tmp_path / "plan.json")
     back = PlanResult.load(path)
     assert back == res
@@ -243,9 +247,9 @@ def test_save_load_round_trip(tmp_path, kw):
 
 def test_repr_is_readable():
     R0, Rd = example(1)
-    text = repr(planner.plan(R0, Rd))
+    text = repr(plan(R0, Rd))
     assert text.startswith("PlanResult(success") and "platform" in text and "|l_T|" in text
-    text = repr(planner.plan(R0, so3.from_rpy(-1.0, 0.9, -0.5)))
+    text = repr(plan(R0, so3.from_rpy(-1.0, 0.9, -0.5)))
     assert "FAILED" in text and "across" in text
 
 
@@ -277,15 +281,15 @@ def test_a_new_strategy_plugs_in_without_touching_the_paper_one():
                         budget=self.options.max_iter, history=history, callback=callback)
             return Outcome(d.evaluation, d.status == "converged", d.reason, history, d.steps)
 
-    strategies = dict(planner.STRATEGIES)
+    strategies = dict(STRATEGIES)
     R0, Rd = example(1)
-    res = planner.plan(R0, Rd, strategy=Sobolev)          # the class itself: nothing registers it
+    res = plan(R0, Rd, strategy=Sobolev)          # the class itself: nothing registers it
     check_solution(res, R0, Rd)
     assert res.strategy == "test-sobolev"
-    assert not np.allclose(res.params, planner.plan(R0, Rd, strategy="paper").params, atol=1e-3)
-    assert planner.STRATEGIES == strategies and "test-sobolev" not in planner.STRATEGIES
+    assert not np.allclose(res.params, plan(R0, Rd, strategy="paper").params, atol=1e-3)
+    assert STRATEGIES == strategies and "test-sobolev" not in STRATEGIES
     with pytest.raises(ValueError, match="strategy"):
-        planner.plan(R0, Rd, strategy="test-sobolev")
+        plan(R0, Rd, strategy="test-sobolev")
 
 
 def test_platform_mean_inputs_fix_r11_r22():

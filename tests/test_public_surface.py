@@ -1,6 +1,5 @@
-"""The public surface: ``nonholo.__all__`` and the former flat layout's module names, kept
-for one release as aliases that warn."""
-import importlib
+"""The public surface: ``nonholo.__all__``, and no name of the former flat layout left."""
+import inspect
 
 import pytest
 
@@ -12,13 +11,15 @@ def test_every_public_name_exists():
         assert getattr(nonholo, name) is not None, name
 
 
-@pytest.mark.parametrize("old", sorted(nonholo.MOVED))
-def test_an_old_module_name_warns_and_is_the_moved_module(old):
-    with pytest.warns(DeprecationWarning, match=f"nonholo.{old} is now nonholo.{nonholo.MOVED[old]}"):
-        module = getattr(nonholo, old)
-    assert module is importlib.import_module(f"nonholo.{nonholo.MOVED[old]}")
+@pytest.mark.parametrize("old", ["so3", "verify", "planner", "result", "figures", "sweep", "limits"])
+def test_the_former_flat_layout_is_gone(old):
+    with pytest.raises(AttributeError, match=f"no attribute '{old}'"):
+        getattr(nonholo, old)
 
 
-def test_an_unknown_name_is_an_attribute_error():
-    with pytest.raises(AttributeError, match="no attribute 'nosuch'"):
-        nonholo.nosuch  # noqa: B018
+def test_the_door_takes_at_most_twelve_parameters():
+    """``plan`` takes the problem's parts; the numbers go in one ``Settings``, the
+    constraints in a list of objects."""
+    assert len(inspect.signature(nonholo.plan).parameters) <= 12
+    assert len(inspect.signature(nonholo.Problem.build).parameters) <= 12
+    assert len(inspect.getdoc(nonholo.plan).splitlines()) <= 40

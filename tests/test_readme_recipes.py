@@ -43,6 +43,7 @@ def ran():
     return out
 
 
+@pytest.mark.slow
 def test_the_platform_recipe_plans_what_its_geometry_moves(ran):
     ns = ran[0]
     result, g = ns["result"], ns["geometry"]
@@ -65,6 +66,7 @@ def test_the_platform_recipe_plans_what_its_geometry_moves(ran):
     assert so3.distance(sol.y[:, -1].reshape(3, 3), ns["Rd"]) < 1e-8
 
 
+@pytest.mark.slow
 def test_the_vehicle_recipe_plans_what_its_constraints_allow(ran):
     ns = ran[1]
     result = ns["result"]

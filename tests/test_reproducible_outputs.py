@@ -138,6 +138,7 @@ def test_check_writes_nothing_and_says_how_far(tmp_path):
     assert "missing" in str(why["b.csv"]) and "missing" in str(why["fig.png"])
 
 
+@pytest.mark.slow
 def test_a_damaged_figure_record_is_redrawn(tmp_path):
     Outputs(tmp_path).figure(_figure(), "fig")
     (tmp_path / DATA_DIR / "fig.data").write_bytes(b"garbage")

@@ -1,5 +1,5 @@
-"""Re-timing under a bound on the legs' speeds (``plan(..., leg_speed=v)``, ``nonholo.planning.retime``,
-nonholo/motion/retimed.py): checked against independent DOP853 re-simulations of the re-timed
+"""Re-timing under a bound on the legs' speeds (``plan(..., constraints=[LegSpeed(v)])``, ``nonholo.planning.retime``,
+nonholo/motion/speed_limits.py): checked against independent DOP853 re-simulations of the re-timed
 controls and an independent quadrature of the least time. Where the planned path nearly
 stops (its fastest leg below the floor, ``FLOOR`` of its peak) the fastest leg is slower than
 the bound, in the proportion of the planned speed to the floor; at the bound elsewhere."""
@@ -11,13 +11,15 @@ import pytest
 from conftest import assert_inputs_match
 
 import nonholo
-from nonholo.certify import resimulate as verify
+from nonholo.certify.resimulate import resimulate_path, terminal_error
 from nonholo.io.result import PlanResult
 from nonholo.model import catalog
-from nonholo.motion.retimed import Retimed
-from nonholo.planning import api as planner
+from nonholo.motion.speed_limits import Retimed
+from nonholo.planning.api import plan
 from nonholo.planning.retime import retime, time_map
 from nonholo.spaces import so3
+from nonholo import Settings
+from nonholo.constraints import LegSpeed, LegStroke
 
 PLATFORM = catalog.get("platform")
 R0 = so3.from_rpy(0.3, 0.2, 0.6)
@@ -27,8 +29,8 @@ V = 0.5
 
 def dense(res, samples=4001):
     """``(t, R, fastest leg speed)`` along ``res``'s controls re-simulated by DOP853 (dense)."""
-    t, R, _ = verify.resimulate_path(res.R0, res.controls, res.T, res.mechanism, res.breakpoints,
-                                     samples=samples)
+    t, R, _ = resimulate_path(res.R0, res.controls, res.T, res.mechanism, res.breakpoints,
+                              samples=samples)
     speeds = np.abs(PLATFORM.leg_speeds(R, res.controls(t)))
     return t, R, speeds.max(axis=1)
 
@@ -45,11 +47,12 @@ def share_of_bound(timed, t, R, base):
 @pytest.fixture(scope="module")
 def plans():
     """The plans as found (``objective=None``): the paths the re-timing is tried on."""
-    return {(s, m): planner.plan(R0, RD, strategy=s, method=m, objective=None)
+    return {(s, m): plan(R0, RD, strategy=s, settings=Settings(method=m), objective=None)
             for s, m in (("robust", "parametric"), ("robust", "nonparametric"), ("paper", "parametric"))}
 
 
 @pytest.mark.parametrize("key", [("robust", "parametric"), ("robust", "nonparametric"), ("paper", "parametric")])
+@pytest.mark.slow
 def test_least_time_keeps_the_path_with_the_fastest_leg_at_the_bound(plans, key):
     res = plans[key]
     if not res.success:
@@ -58,7 +61,7 @@ def test_least_time_keeps_the_path_with_the_fastest_leg_at_the_bound(plans, key)
     assert isinstance(fast.parametrisation, Retimed) and fast.success
     t, R, fastest = dense(fast)
     # the same path: the end orientation is the plan's, within 1e-10 rad
-    assert verify.terminal_error(R[-1], res.R[-1]) <= 1e-10
+    assert terminal_error(R[-1], res.R[-1]) <= 1e-10
     # the fastest leg at the bound: at most v, v itself within 1e-6 — or the planned speed's
     # share of the floor where the path nearly stops (a jump of grid controls is an instant
     # where the speed changes: its samples are left out)
@@ -71,8 +74,8 @@ def test_least_time_keeps_the_path_with_the_fastest_leg_at_the_bound(plans, key)
     # the least time against an independent quadrature of max(max_i |dl_i/dτ|, floor) / v
     # along the plan: the trapezoid rule on the DOP853 samples, each interval with its own side
     # of a jump
-    tau, Rp, _ = verify.resimulate_path(res.R0, res.controls, res.T, res.mechanism, res.breakpoints,
-                                        samples=20001)
+    tau, Rp, _ = resimulate_path(res.R0, res.controls, res.T, res.mechanism, res.breakpoints,
+                                 samples=20001)
     a, b = np.flatnonzero(np.diff(tau) > 0), np.flatnonzero(np.diff(tau) > 0) + 1
     eps = 1e-12
     floor = timed.map.floor
@@ -83,6 +86,7 @@ def test_least_time_keeps_the_path_with_the_fastest_leg_at_the_bound(plans, key)
     assert fast.options["leg_speed"] == V and "re-timed in the least time" in fast.reason
 
 
+@pytest.mark.slow
 def test_a_given_time_scales_the_least_time_map_or_fails_saying_the_time_needed(plans):
     res = plans[("robust", "parametric")]
     fastest_map = time_map(res, V)
@@ -93,15 +97,15 @@ def test_a_given_time_scales_the_least_time_map_or_fails_saying_the_time_needed(
     t, R, fastest = dense(slow)
     share = share_of_bound(slow.parametrisation, t, R, slow.parametrisation.base)
     np.testing.assert_allclose(fastest, V / 2 * share, rtol=1e-6)
-    assert verify.terminal_error(R[-1], res.R[-1]) <= 1e-10
-    short = planner.plan(R0, RD, T=1.0, leg_speed=V, objective=None)
+    assert terminal_error(R[-1], res.R[-1]) <= 1e-10
+    short = plan(R0, RD, T=1.0, constraints=[LegSpeed(V)], objective=None)
     assert not short.success and f"{need:.6g} s" in short.reason
     # planned in T, a plan breaking the bound is re-timed in T when its path allows
     T = 0.5 * (need + fastest_map.peak_ratio)
-    within = planner.plan(R0, RD, T=T, leg_speed=V, objective=None)
+    within = plan(R0, RD, T=T, constraints=[LegSpeed(V)], objective=None)
     assert within.success and within.T == T and dense(within)[2].max() <= V * (1 + 1e-6)
     # a plan that keeps to the bound as planned is returned as planned
-    easy = planner.plan(R0, RD, T=1.0, leg_speed=10.0, objective=None)
+    easy = plan(R0, RD, T=1.0, constraints=[LegSpeed(10.0)], objective=None)
     assert easy.success and not isinstance(easy.parametrisation, Retimed)
     assert easy.options["leg_speed"] == 10.0 and dense(easy)[2].max() <= 10.0
     with pytest.raises(ValueError, match="too short"):
@@ -150,11 +154,11 @@ def test_csv_of_a_retimed_plan_plays_the_legs_at_the_bound(plans, tmp_path):
     q = np.column_stack([col["qx"], col["qy"], col["qz"], col["qw"]])
     from scipy.spatial.transform import Rotation
     R_end = Rotation.from_quat(q[-1]).as_matrix()
-    assert verify.terminal_error(R_end, fast.R[-1]) <= 1e-12
+    assert terminal_error(R_end, fast.R[-1]) <= 1e-12
 
 
 def test_legs_stroke_and_speed_together():
-    res = planner.plan(R0, RD, leg_length=(0.7, 2.0), leg_speed=V, T=None)
+    res = plan(R0, RD, constraints=[LegStroke(0.7, 2.0), LegSpeed(V)], T=None)
     assert res.success, res.reason
     _, R, fastest = dense(res)
     lengths = PLATFORM.leg_lengths(R)
@@ -163,14 +167,15 @@ def test_legs_stroke_and_speed_together():
 
 
 @pytest.mark.parametrize("kwargs, match", [
-    (dict(leg_speed=-1.0), "leg_speed"), (dict(leg_speed=0.0), "leg_speed"),
-    (dict(leg_speed=float("nan")), "leg_speed"), (dict(leg_speed="fast"), "leg_speed"),
-    (dict(leg_speed=True), "leg_speed"), (dict(leg_speed=1.0, mechanism="attitude"), "leg_speed"),
-    (dict(T=None), "leg_speed"), (dict(T=-1.0, leg_speed=1.0), "T"),
+    (dict(constraints=[LegSpeed(-1.0)]), "leg_speed"), (dict(constraints=[LegSpeed(0.0)]), "leg_speed"),
+    (dict(constraints=[LegSpeed(float("nan"))]), "leg_speed"), (dict(constraints=[LegSpeed("fast")]), "leg_speed"),
+    (dict(constraints=[LegSpeed(True)]), "leg_speed"),
+    (dict(constraints=[LegSpeed(1.0)], mechanism="attitude"), "leg_speed"),
+    (dict(T=None), "LegSpeed"), (dict(T=-1.0, constraints=[LegSpeed(1.0)]), "T"),
 ])
 def test_bad_speed_bounds_name_the_argument(kwargs, match):
     with pytest.raises(ValueError, match=match):
-        planner.plan(R0, RD, **kwargs)
+        plan(R0, RD, **kwargs)
 
 
 def test_retime_refuses_failed_plans_and_bad_arguments(plans):

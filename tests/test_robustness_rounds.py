@@ -26,15 +26,16 @@ import pytest
 from conftest import example, example_rpy_args
 
 import nonholo
-from nonholo.certify import resimulate as verify
+from nonholo.certify.resimulate import resimulate, terminal_error
 from nonholo.certify.certificate import MAX_REPLAY_STEPS
 from nonholo.cli.entry import main
 from nonholo.io import problems as problem_table
 from nonholo.io.result import PlanResult
 from nonholo.model import catalog
-from nonholo.planning import api as planner
-from nonholo.planning import certification
-from nonholo.planning.problem import MAX_PLAN_STEPS, Problem
+from nonholo.planning.api import STRATEGIES, plan
+from nonholo.planning import correction
+from nonholo.planning.problem import MAX_PLAN_STEPS, Problem, arguments_of
+from nonholo import Settings
 
 R0, RD = example(1)
 QUICK = {"strategy": "paper", "objective": None, "route": "local"}
@@ -43,7 +44,7 @@ QUICK = {"strategy": "paper", "objective": None, "route": "local"}
 @pytest.fixture(scope="module")
 def quick_plan():
     """A certified plan found in milliseconds."""
-    res = planner.plan(R0, RD, **QUICK)
+    res = plan(R0, RD, **QUICK)
     assert res.success, res.reason
     return res
 
@@ -64,15 +65,16 @@ def test_a_plan_file_s_strategy_label_never_imports_code(quick_plan, tmp_path, m
     loaded = PlanResult.load(tmp_path / "p.json")
     assert loaded.strategy == "evil_mod:X"
     with pytest.raises(ValueError, match="^strategy 'evil_mod:X' is an import path"):
-        planner.plan(loaded.R0, loaded.Rd, mechanism=loaded.mechanism, **replan_options(loaded))
+        plan(loaded.start, loaded.goal, mechanism=loaded.mechanism,
+             **arguments_of(replan_options(loaded), loaded.mechanism))
     this_before = "this" in sys.modules
     with pytest.raises(ValueError, match="^strategy 'this:x'"):
-        planner.plan(R0, RD, strategy="this:x")
+        plan(R0, RD, strategy="this:x")
     assert not marker.exists() and "evil_mod" not in sys.modules
     assert "this" in sys.modules if this_before else "this" not in sys.modules
     # the explicit opt-in is what imports (X is no strategy: refused after the import)
     with pytest.raises(ValueError, match="cannot be imported"):
-        planner.plan(R0, RD, strategy="evil_mod:X", allow_imports=True)
+        plan(R0, RD, strategy="evil_mod:X", allow_imports=True)
     sys.modules.pop("evil_mod", None)
     assert marker.read_text() == "ran"
 
@@ -83,7 +85,7 @@ def test_a_horizon_whose_inputs_are_not_finite_is_refused_naming_T(quick_plan):
         with pytest.raises(ValueError, match="^T must be at least"):
             nonholo.retime(quick_plan, T=T, rest_to_rest=True)
         with pytest.raises(ValueError, match="^T must be at least"):
-            planner.plan(R0, RD, T=T, **QUICK)
+            plan(R0, RD, T=T, **QUICK)
     fast = nonholo.retime(quick_plan, T=1e-6, rest_to_rest=True)
     assert fast.success and np.all(np.isfinite(fast.u)) and np.abs(fast.u).max() > 1e5
 
@@ -122,20 +124,20 @@ def test_plan_succeeds_under_an_ascii_output_encoding(tmp_path):
 def test_a_failed_certification_describes_the_controls_the_result_holds(monkeypatch):
     """F: one correction allowed where two are needed: the plan fails, and the distance its
     reason gives is that of an independent replay of the controls it holds."""
-    monkeypatch.setattr(certification, "MAX_CORRECTIONS", 1)
-    res = planner.plan(R0, RD, steps=16, **QUICK)
+    monkeypatch.setattr(correction, "MAX_CORRECTIONS", 1)
+    res = plan(R0, RD, settings=Settings(steps=16), **QUICK)
     assert not res.success and "not certified" in res.reason
     said = float(re.search(r"not certified: the physical replay \(\d+ steps\) ends ([0-9.e+-]+) rad",
                            res.reason).group(1))
-    replayed = verify.terminal_error(verify.resimulate(R0, res.controls, res.T, catalog.get("platform"),
-                                                       res.breakpoints), RD)
+    replayed = terminal_error(resimulate(R0, res.controls, res.T, catalog.get("platform"),
+                                         res.breakpoints), RD)
     assert said == pytest.approx(replayed, rel=1e-2)
 
 
-@pytest.mark.parametrize("strategy", planner.STRATEGIES)
+@pytest.mark.parametrize("strategy", STRATEGIES)
 def test_every_strategy_stops_when_it_makes_no_progress(strategy):
     """G: a tiny γ with a huge ``max_iter``: a failure saying it stalled, within a few windows."""
-    res = planner.plan(R0, RD, strategy=strategy, gamma=1e-7, max_iter=10**6, route="local", objective=None)
+    res = plan(R0, RD, strategy=strategy, settings=Settings(gamma=1e-7, max_iter=10**6), route="local", objective=None)
     assert not res.success and "stalled" in res.reason
     assert res.iterations < 1000
 
@@ -145,7 +147,7 @@ def test_least_time_inputs_turn_at_a_bounded_rate_where_the_path_nearly_stops():
     quotient, away from the breakpoints, is bounded and does not grow as the sampling is
     refined (the exact least-time map swings them faster the finer one looks)."""
     from nonholo.controls.parametrisations import Fourier
-    from nonholo.motion.retimed import Retimed
+    from nonholo.motion.speed_limits import Retimed
 
     def u(t):
         return np.stack([0.3 * np.cos(2 * np.pi * t), 0.2 * np.cos(2 * np.pi * t) + 1e-3], axis=-1)
@@ -170,11 +172,12 @@ def test_the_largest_accepted_sizes_can_be_certified():
     certified, and a plan on them would spend its whole ``max_iter`` for a certain failure."""
     assert 2 * MAX_PLAN_STEPS <= MAX_REPLAY_STEPS
     with pytest.raises(ValueError, match=f"^steps must be at most {MAX_PLAN_STEPS}"):
-        planner.plan([0, 0, 0, 0], [0, 1, 0, 0], mechanism="car", steps=MAX_PLAN_STEPS + 1)
+        plan([0, 0, 0, 0], [0, 1, 0, 0], mechanism="car", settings=Settings(steps=MAX_PLAN_STEPS + 1))
     with pytest.raises(ValueError, match=f"^grid must be at most {MAX_PLAN_STEPS}"):
-        planner.plan([0, 0, 0, 0], [0, 1, 0, 0], mechanism="car", method="nonparametric",
-                     grid=MAX_PLAN_STEPS + 1)
-    assert Problem.build([0, 0, 0, 0], [0, 1, 0, 0], mechanism="car", steps=MAX_PLAN_STEPS).steps == MAX_PLAN_STEPS
+        plan([0, 0, 0, 0], [0, 1, 0, 0], mechanism="car",
+             settings=Settings(method="nonparametric", grid=MAX_PLAN_STEPS + 1))
+    problem = Problem.build([0, 0, 0, 0], [0, 1, 0, 0], mechanism="car", settings=Settings(steps=MAX_PLAN_STEPS))
+    assert problem.steps == MAX_PLAN_STEPS
 
 
 def test_a_huge_integer_in_a_problem_table_names_the_row_and_column(tmp_path):
@@ -191,7 +194,7 @@ def test_constraints_that_are_not_constraint_objects_are_refused_naming_constrai
     naming it; ``None`` means none."""
     for bad, where in (("x", "constraints must be"), (5, "constraints must be"), ([1], r"constraints\[0\] must be")):
         with pytest.raises(TypeError, match=f"^{where}"):
-            planner.plan(R0, RD, constraints=bad)
+            plan(R0, RD, constraints=bad)
     default = Problem.build(R0, RD)
     assert Problem.build(R0, RD, constraints=None).constraints == default.constraints
 
@@ -205,7 +208,7 @@ def test_a_field_not_finite_at_the_start_or_the_goal_is_a_failed_result_that_say
     mech = nonholo.Mechanism.from_equations("log_rate", inputs=[v, w], coordinates=[x, y],
                                             rates=[v * sp.log(x), w])
     for start, goal, where in (([0.0, 0.0], [2.0, 1.0], "start"), ([2.0, 0.0], [0.0, 1.0], "goal")):
-        res = planner.plan(start, goal, mechanism=mech, objective=None)
+        res = plan(start, goal, mechanism=mech, objective=None)
         assert not res.success
         assert f"the field G of 'log_rate' is not finite at the {where}" in res.reason, res.reason
-    assert planner.plan([2.0, 0.0], [1.5, 1.0], mechanism=mech, objective=None).success   # elsewhere it plans
+    assert plan([2.0, 0.0], [1.5, 1.0], mechanism=mech, objective=None).success   # elsewhere it plans

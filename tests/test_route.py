@@ -9,7 +9,7 @@ import pytest
 
 from benchmarks import goalset
 from conftest import assert_inputs_match
-from nonholo.certify import resimulate as verify
+from nonholo.certify.resimulate import resimulate, resimulate_rk4, terminal_error
 from nonholo.controls import stages
 from nonholo.controls.parametrisations import Fourier
 from nonholo.controls.stitched import Stitched
@@ -17,7 +17,7 @@ from nonholo.model import catalog
 from nonholo.motion import frame_controls as replay
 from nonholo.motion import simulation
 from nonholo.motion.frame_controls import FrameControls
-from nonholo.planning import api as planner
+from nonholo.planning.api import plan
 from nonholo.planning import roadmap, route
 from nonholo.spaces import so3
 
@@ -92,12 +92,13 @@ def two_pieces():
     mech = catalog.get("platform")
     p = goalset.uniform_pairs("platform", 3)[2]
     path = roadmap.orientation_path(mech, p["R0"], p["Rd"], max_hop=0.6)
-    a = planner.plan(path[0], path[1], T=0.7)
-    b = planner.plan(a.R_T, path[2], T=0.4)
+    a = plan(path[0], path[1], T=0.7)
+    b = plan(a.R_T, path[2], T=0.4)
     assert a.success and b.success, (a.reason, b.reason)
     return mech, path, a, b
 
 
+@pytest.mark.slow
 def test_stitched_controls_retime_their_pieces():
     """``u`` on slot i is the piece's, sped up by c_i = T_i/τ; a simulation of the
     stitched control passes through each piece's end (driftless: re-timing keeps the path)."""
@@ -112,10 +113,11 @@ def test_stitched_controls_retime_their_pieces():
     np.testing.assert_allclose(U[:400], 0.7 * stages.stage_table(a.parametrisation, 400), rtol=1e-12)
     tr = simulation.simulate(path[0], s, 2.0, mechanism=mech, steps=2 * a.replay_steps)
     assert so3.distance(tr.R[a.replay_steps], a.R_T) < 1e-9
-    RT = verify.resimulate(path[0], s, 2.0, mech, s.breakpoints)
+    RT = resimulate(path[0], s, 2.0, mech, s.breakpoints)
     assert so3.distance(RT, b.R_T) < 1e-9
 
 
+@pytest.mark.slow
 def test_stitched_controls_round_trip_and_refuse_bad_input():
     mech, path, a, b = two_pieces()
     s = Stitched(2.0, [a.parametrisation, b.parametrisation], [path[0], path[1], path[2]])
@@ -145,11 +147,12 @@ def far_pair(mechanism="platform", pid=FAR):
     return {p["id"]: p for p in goalset.uniform_pairs(mechanism, 1000)}[pid]
 
 
+@pytest.mark.slow
 def test_global_route_reaches_a_goal_the_local_planner_misses(tmp_path):
     p = far_pair()
-    local = planner.plan(p["R0"], p["Rd"], route="local")
+    local = plan(p["R0"], p["Rd"], route="local")
     assert not local.success and local.route == "local"
-    res = planner.plan(p["R0"], p["Rd"])                  # the default route: "auto"
+    res = plan(p["R0"], p["Rd"])                  # the default route: "auto"
     assert res.success and res.route == "global", res.reason
     check_global_result(res, p, tmp_path)
     # by default the stitched route is re-planned as one smooth control
@@ -159,10 +162,11 @@ def test_global_route_reaches_a_goal_the_local_planner_misses(tmp_path):
     assert None in {rec["hop"] for rec in res.history}
 
 
+@pytest.mark.slow
 def test_a_route_that_is_not_smoothed_keeps_the_stitched_control(tmp_path, monkeypatch):
     monkeypatch.setattr(route, "SMOOTHING_HARMONICS", ())
     p = far_pair()
-    res = planner.plan(p["R0"], p["Rd"])
+    res = plan(p["R0"], p["Rd"])
     assert res.success and res.route == "global", res.reason
     assert res.stitched is None and res.hops is res.parametrisation
     check_global_result(res, p, tmp_path)
@@ -175,11 +179,11 @@ def check_global_result(res, p, tmp_path):
     assert res.terminal_error + res.error_bound <= res.options["tol"]
     assert set(range(res.hops.n_pieces)) <= {rec["hop"] for rec in res.history}
     # independent re-simulations of controls(t): DOP853 stopping at every breakpoint, and RK4
-    RT = verify.resimulate(p["R0"], res.controls, res.T, "platform", res.breakpoints)
-    assert verify.terminal_error(RT, p["Rd"]) <= 1e-8
-    rk4, dmin = verify.resimulate_rk4(p["R0"], res.parametrisation, res.T, "platform",
-                                      steps=res.steps * -(-6400 // res.steps))
-    assert verify.terminal_error(rk4, p["Rd"]) <= 1e-8 and dmin >= res.options["delta_min"]
+    RT = resimulate(p["R0"], res.controls, res.T, "platform", res.breakpoints)
+    assert terminal_error(RT, p["Rd"]) <= 1e-8
+    rk4, dmin = resimulate_rk4(p["R0"], res.parametrisation, res.T, "platform",
+                               steps=res.steps * -(-6400 // res.steps))
+    assert terminal_error(rk4, p["Rd"]) <= 1e-8 and dmin >= res.options["delta_min"]
     # the route's waypoints start at R0 and end at Rd; the file keeps everything
     W = res.hops.waypoints
     np.testing.assert_array_equal(W[0], p["R0"])
@@ -190,11 +194,12 @@ def check_global_result(res, p, tmp_path):
     assert back == res and back.route == "global" and back.hops == res.hops
 
 
+@pytest.mark.slow
 def test_stitched_planned_coordinates_are_the_hops_own_retimed():
     """``Stitched.planned``: piece ``i``'s planned (frame) control, re-timed into slot ``i``;
     the physical ``u`` follows from it along the motion (``u = W(R) w``)."""
     p = far_pair()
-    res = planner.plan(p["R0"], p["Rd"], route="global")
+    res = plan(p["R0"], p["Rd"], route="global")
     st = res.hops
     t = np.linspace(0.0, st.T, 301)[:-1]
     i = np.floor(t / st.slot).astype(int)
@@ -206,6 +211,7 @@ def test_stitched_planned_coordinates_are_the_hops_own_retimed():
         np.testing.assert_allclose(st(t[sel]), c * piece(c * (t[sel] - j * st.slot)), rtol=0, atol=1e-12)
 
 
+@pytest.mark.slow
 def test_plan_files_keep_the_smoothed_route_honest():
     """``stitched`` only with a one-piece control on a global route, of the plan's T and R0."""
     from dataclasses import replace
@@ -214,7 +220,7 @@ def test_plan_files_keep_the_smoothed_route_honest():
     from nonholo.io.result import PlanResult
 
     p = far_pair()
-    res = planner.plan(p["R0"], p["Rd"])
+    res = plan(p["R0"], p["Rd"])
     assert res.stitched is not None
     d = res.to_dict()
     with pytest.raises(ValueError, match="route"):
@@ -232,28 +238,29 @@ def test_plan_files_keep_the_smoothed_route_honest():
 
 def test_route_global_for_a_mechanism_without_a_singular_set():
     p = goalset.uniform_pairs("attitude", 3)[2]
-    res = planner.plan(p["R0"], p["Rd"], mechanism="attitude", route="global")
+    res = plan(p["R0"], p["Rd"], mechanism="attitude", route="global")
     assert res.success and res.route == "global", res.reason
-    RT = verify.resimulate(p["R0"], res.controls, res.T, "attitude", res.breakpoints)
-    assert verify.terminal_error(RT, p["Rd"]) <= 1e-8
+    RT = resimulate(p["R0"], res.controls, res.T, "attitude", res.breakpoints)
+    assert terminal_error(RT, p["Rd"]) <= 1e-8
 
 
+@pytest.mark.slow
 def test_route_global_on_platform_raised():
     p = far_pair("platform_raised", "uniform-platform_raised-0025")
-    res = planner.plan(p["R0"], p["Rd"], mechanism="platform_raised", route="auto")
+    res = plan(p["R0"], p["Rd"], mechanism="platform_raised", route="auto")
     assert res.success and res.route == "global", res.reason
-    RT = verify.resimulate(p["R0"], res.controls, res.T, "platform_raised", res.breakpoints)
-    assert verify.terminal_error(RT, p["Rd"]) <= 1e-8
+    RT = resimulate(p["R0"], res.controls, res.T, "platform_raised", res.breakpoints)
+    assert terminal_error(RT, p["Rd"]) <= 1e-8
 
 
 def test_route_argument_and_goals_across_the_singular_surface():
     p = far_pair()
     with pytest.raises(ValueError, match="route"):
-        planner.plan(p["R0"], p["Rd"], route="roadmap")
+        plan(p["R0"], p["Rd"], route="roadmap")
     mech = catalog.get("platform")
     across = next(so3.from_rpy(a, b, 0.3) for a in (0.3, 2.0, -1.0) for b in (0.2, -0.4)
                   if np.sign(mech.delta(so3.from_rpy(a, b, 0.3))) != np.sign(mech.delta(p["R0"])))
-    res = planner.plan(p["R0"], across, route="auto")
+    res = plan(p["R0"], across, route="auto")
     assert not res.success and "across the singular surface" in res.reason and res.route == "local"
 
 
@@ -265,7 +272,7 @@ def test_plan_files_keep_the_route_honest(tmp_path):
     from nonholo.io.result import PlanResult
 
     p = goalset.uniform_pairs("platform", 3)[0]
-    res = planner.plan(p["R0"], p["Rd"])
+    res = plan(p["R0"], p["Rd"])
     d = res.to_dict()
     with pytest.raises(ValueError, match="route"):
         PlanResult.from_dict({**d, "route": "global"})
@@ -279,6 +286,7 @@ def test_plan_files_keep_the_route_honest(tmp_path):
     assert PlanResult.load(tmp_path / "x.json") == res
 
 
+@pytest.mark.slow
 def test_cli_takes_the_route(tmp_path, capsys):
     import argparse
 
@@ -305,13 +313,14 @@ def test_cli_takes_the_route(tmp_path, capsys):
 
 
 @pytest.mark.parametrize("mechanism, first, stop", [("platform", 0, 11), ("platform_raised", 8, 10)])
+@pytest.mark.slow
 def test_default_plan_solves_a_slice_of_the_random_band_set(mechanism, first, stop):
     """Far pairs of ``benchmarks.goalset.band_pairs`` (1.8–π rad), some of which the local
     planner misses: the default ``plan()`` solves each, certified, and RK4 confirms it."""
     from test_certify import rk4_check
 
     far = [p for p in goalset.band_pairs(mechanism, 500) if p["band"] == "1.8-pi"][first:stop]
-    results = [planner.plan(p["R0"], p["Rd"], mechanism=mechanism) for p in far]
+    results = [plan(p["R0"], p["Rd"], mechanism=mechanism) for p in far]
     assert all(r.success for r in results), [r.reason for r in results if not r.success]
     assert any(r.route == "global" for r in results)
     for (err, dmin), r in zip(rk4_check(results, far), results):
@@ -319,6 +328,7 @@ def test_default_plan_solves_a_slice_of_the_random_band_set(mechanism, first, st
         assert dmin >= r.options["delta_min"]
 
 
+@pytest.mark.slow
 def test_a_stitched_control_too_ill_conditioned_to_certify_is_rescued_by_smoothing(monkeypatch):
     """A route whose hops all succeed but whose stitched control its certificate refuses as
     too ill-conditioned is re-planned as one smooth control from the refused one, certified
@@ -334,8 +344,8 @@ def test_a_stitched_control_too_ill_conditioned_to_certify_is_rescued_by_smoothi
     measure = route.certify.measure
     refused = []
 
-    def refuse_stitched(R0, Rd, T, mechanism, par, *args, **kwargs):
-        cert = measure(R0, Rd, T, mechanism, par, *args, **kwargs)
+    def refuse_stitched(start, goal, T, mechanism, par, *args, **kwargs):
+        cert = measure(start, goal, T, mechanism, par, *args, **kwargs)
         if not isinstance(par, Stitched):       # the smooth re-plan's own certificate: as it is
             return cert
         refused.append(par)
@@ -345,7 +355,7 @@ def test_a_stitched_control_too_ill_conditioned_to_certify_is_rescued_by_smoothi
 
     monkeypatch.setattr(route.certify, "measure", refuse_stitched)
     p = far_pair()
-    res = planner.plan(p["R0"], p["Rd"], objective=None)
+    res = plan(p["R0"], p["Rd"], objective=None)
     assert refused, "no stitched control was certified: the route was not steered"
     assert res.success and res.route == "global", res.reason
     # the rescue: the refused stitched control kept as the record, the plan one smooth control
@@ -362,19 +372,20 @@ def test_a_stitched_control_too_ill_conditioned_to_certify_is_rescued_by_smoothi
     assert res.terminal_error + res.error_bound <= res.options["tol"]
     assert res.min_delta >= res.options["delta_min"]
     # ... and confirmed by an independent DOP853 re-simulation of controls(t)
-    RT = verify.resimulate(p["R0"], res.controls, res.T, "platform", res.breakpoints)
-    assert verify.terminal_error(RT, p["Rd"]) <= 1e-8
+    RT = resimulate(p["R0"], res.controls, res.T, "platform", res.breakpoints)
+    assert terminal_error(RT, p["Rd"]) <= 1e-8
 
 
+@pytest.mark.slow
 def test_a_goal_whose_routes_are_all_too_ill_conditioned_takes_two_legs(tmp_path):
     """Far pair ``band-platform_raised-1.8-pi-0000``: the stitched controls of the roadmap's
     paths, and their smooth re-plans, are all too ill-conditioned to certify (sensitivity
     above 7e3); the route's last stage reaches the goal by two legs through a roadmap node,
     certified, and DOP853 confirms it."""
     p = {q["id"]: q for q in goalset.band_pairs("platform_raised", 500)}["band-platform_raised-1.8-pi-0000"]
-    local = planner.plan(p["R0"], p["Rd"], mechanism="platform_raised", route="local")
+    local = plan(p["R0"], p["Rd"], mechanism="platform_raised", route="local")
     assert not local.success
-    res = planner.plan(p["R0"], p["Rd"], mechanism="platform_raised")
+    res = plan(p["R0"], p["Rd"], mechanism="platform_raised")
     assert res.success and res.route == "global", res.reason
     assert "two legs through an intermediate orientation" in res.reason
     legs = res.hops
@@ -382,8 +393,8 @@ def test_a_goal_whose_routes_are_all_too_ill_conditioned_takes_two_legs(tmp_path
     assert any(np.array_equal(legs.waypoints[1], R)
                for R in roadmap.via_nodes("platform_raised", p["R0"], p["Rd"], route.VIA_CANDIDATES))
     assert res.terminal_error + res.error_bound <= res.options["tol"]
-    RT = verify.resimulate(p["R0"], res.controls, res.T, "platform_raised", res.breakpoints)
-    assert verify.terminal_error(RT, p["Rd"]) <= 1e-8
+    RT = resimulate(p["R0"], res.controls, res.T, "platform_raised", res.breakpoints)
+    assert terminal_error(RT, p["Rd"]) <= 1e-8
     res.save(tmp_path / "two_legs.json")
     from nonholo import PlanResult
     assert PlanResult.load(tmp_path / "two_legs.json").hops == legs

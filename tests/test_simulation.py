@@ -5,15 +5,17 @@ import numpy as np
 import pytest
 from conftest import example, platform_delta
 
-from nonholo.certify import resimulate as verify
+from nonholo.certify.resimulate import mobility_lyapunov, resimulate
 from nonholo.controls import parametrisations as C
 from nonholo.controls import stages
+from nonholo.integrate.compiled import compiled_system
 from nonholo.model import catalog
 from nonholo.motion import simulation as S
 from nonholo.motion.frame_controls import FrameControls
 from nonholo.numerics import kernels
-from nonholo.planning.core import Evaluator
+from nonholo.planning.core import EndpointMap
 from nonholo.spaces import so3
+from nonholo.spaces import State
 
 
 def initial(T=1.0):
@@ -46,7 +48,7 @@ def test_stays_on_so3_and_matches_dop853_with_default_steps(k, make):
     assert orth <= 1e-12
     assert np.all(np.linalg.det(tr.R) > 0)
     # the default step count: discretisation error ≤ 1e-9 (DOP853, rtol = atol = 1e-13)
-    assert so3.distance(tr.R_T, verify.resimulate(R0, u, 1.0)) <= 1e-9
+    assert so3.distance(tr.R_T, resimulate(R0, u, 1.0)) <= 1e-9
     np.testing.assert_allclose(tr.delta, [platform_delta(R) for R in tr.R], atol=1e-15)
     assert tr.min_delta <= np.abs(tr.delta).min() + 1e-15
 
@@ -138,7 +140,7 @@ def test_mobility_quadrature_matches_lyapunov_equation(make):
     R0, _ = example(1)
     u = make()
     var = S.variational(R0, u, 1.0)
-    M_lyap = verify.mobility_lyapunov(R0, u, 1.0)
+    M_lyap = mobility_lyapunov(R0, u, 1.0)
     assert rel(var.M, M_lyap) <= 1e-8
     assert np.all(np.linalg.eigvalsh(var.M) > 0)          # rank 3: the system is controllable
     # M(T) = Σ_j G_j G_jᵀ / h_j for grid controls when every grid interval is one step
@@ -197,7 +199,7 @@ def test_bad_input_raises_value_error(R0, controls, T, kw):
 def test_dense_basis_gives_the_sparse_jacobian():
     R0, _ = example(1)
     u = bumpy(seed=1)
-    kern = catalog.get("platform").kernels()
+    kern = compiled_system(catalog.get("platform"))
     U = stages.stage_table(u, 400)
     out = []
     for basis in (stages.sparse_basis(u, 400), stages.kernel_basis(u, 400)):
@@ -216,7 +218,8 @@ def test_frame_jacobian_matches_finite_differences(mechanism):
     """In frame coordinates (kernels bound to N, QN) J = ∂s_T/∂λ of the w-parameters."""
     R0, _ = example(2)
     w = bumpy(seed=5)
-    prob = Evaluator(R0, R0, 1.0, catalog.get(mechanism), "parametric", 400, 1e-2, frame=True)
+    start = State(R0, np.zeros(0))
+    prob = EndpointMap(start, start, 1.0, catalog.get(mechanism), "parametric", 400, 1e-2, frame=True)
     ev = prob.evaluate(w)
     eps = 1e-6
     fd = np.empty_like(ev.J)

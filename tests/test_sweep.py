@@ -1,4 +1,5 @@
-"""Sweeps (nonholo/batch/sweep.py, nonholo/io/problems.py, nonholo/batch/atlas.py, ``nonholo sweep``):
+"""Sweeps (nonholo/batch/sweep.py, nonholo/batch/result_store.py, nonholo/io/problems.py,
+nonholo/batch/atlas.py, ``nonholo sweep``):
 parallel runs equal serial ones, nothing is lost when a sweep is killed, bad problem files
 are refused before anything runs, a Dask cluster of separate processes gives the same rows."""
 import json
@@ -13,7 +14,7 @@ import pyarrow.parquet as pq
 import pytest
 
 from benchmarks import goalset
-from nonholo.batch import atlas, sweep
+from nonholo.batch import atlas, result_store, sweep
 from nonholo.io import problems
 from nonholo.io.result import PlanResult
 from nonholo.spaces import so3
@@ -31,15 +32,16 @@ def serial(tmp_path_factory):
     return rows, sweep.sweep(rows, out, workers=1, progress=False)
 
 
+@pytest.mark.slow
 def test_local_workers_give_the_serial_rows(serial, tmp_path):
     rows, table = serial
     assert table.column("index").to_pylist() == list(range(len(rows)))
     par = sweep.sweep(rows, tmp_path / "par.parquet", workers=2, progress=False)
-    assert sweep.comparable(par) == sweep.comparable(table)
-    assert not sweep.parts_dir(tmp_path / "par.parquet").exists()
+    assert result_store.comparable(par) == result_store.comparable(table)
+    assert not result_store.parts_dir(tmp_path / "par.parquet").exists()
     # a row's plan is the plan, checked like a plan file
     first = table.to_pylist()[0]
-    res = sweep.plan_of(first)
+    res = result_store.plan_of(first)
     assert isinstance(res, PlanResult) and res.success == first["success"]
     np.testing.assert_array_equal(res.R0, np.asarray(rows[0]["start"]))
 
@@ -62,10 +64,11 @@ def mixed_rows():
     ]
 
 
+@pytest.mark.slow
 def test_one_table_mixes_mechanisms(tmp_path):
     """Platform, car and ball problems in one table: the file round-trips, 1 and 2 workers
     give the same rows, and every claimed success holds under SciPy's DOP853."""
-    from nonholo.certify import resimulate as verify
+    from nonholo.certify.resimulate import resimulate, resimulate_state
     from nonholo.model import catalog
 
     rows = mixed_rows()
@@ -77,33 +80,31 @@ def test_one_table_mixes_mechanisms(tmp_path):
     assert json.loads(path.read_text().splitlines()[0])["goal"] == so3.from_rpy(0.7, 1.1, -0.4).tolist()
     one = sweep.sweep(path, tmp_path / "one.parquet", workers=1, progress=False)
     two = sweep.sweep(path, tmp_path / "two.parquet", workers=2, progress=False, batch=1)
-    assert sweep.comparable(two) == sweep.comparable(one)
+    assert result_store.comparable(two) == result_store.comparable(one)
     table = one.to_pylist()
     assert [r["mechanism"] for r in table] == [p["mechanism"] for p in read]
     assert all(r["error"] is None for r in table), [r["error"] for r in table]
     assert all(r["success"] for r in table), [(r["label"], r["reason"]) for r in table]
     for row, problem in zip(table, read):
-        res = sweep.plan_of(row)
+        res = result_store.plan_of(row)
         assert res.mechanism == problem["mechanism"] and res.success
         space = catalog.get(res.mechanism).space
-        R0, q0 = space.parse(problem["start"], "start")
-        Rd, qd = space.parse(problem["goal"], "goal")
-        np.testing.assert_array_equal(res.R0, R0)
-        if res.q0 is not None:
-            np.testing.assert_array_equal(res.q0, q0)
-            np.testing.assert_array_equal(res.qd, qd)
+        start, goal = space.parse(problem["start"], "start"), space.parse(problem["goal"], "goal")
+        assert res.start == start and res.goal == goal
+        (R0, q0), (Rd, qd) = start, goal
         # independent: DOP853 on the hand-written model (car, ball) or on L(R) (platform)
         if space.k or not space.has_orientation:
-            _, R, q, delta = verify.resimulate_state(res.start, res.controls, res.T, res.mechanism,
-                                                     res.breakpoints)
+            _, R, q, delta = resimulate_state(res.start, res.controls, res.T, res.mechanism,
+                                              res.breakpoints)
             R_T, q_T = R[-1], q[-1]
             if delta is not None:
                 assert np.min(np.sign(delta[0]) * delta) > 0.0
         else:
-            R_T, q_T = verify.resimulate(R0, res.controls, res.T, res.mechanism, res.breakpoints), q0
-        assert space.distance(R_T, q_T, Rd, qd) < 1e-8, row["label"]
+            R_T, q_T = resimulate(R0, res.controls, res.T, res.mechanism, res.breakpoints), q0
+        assert space.distance((R_T, q_T), (Rd, qd)) < 1e-8, row["label"]
 
 
+@pytest.mark.slow
 def test_a_finished_sweep_is_not_run_again(serial, tmp_path, monkeypatch):
     rows, _ = serial
     out = tmp_path / "r.parquet"
@@ -119,18 +120,18 @@ def test_a_finished_sweep_is_not_run_again(serial, tmp_path, monkeypatch):
 
 
 def test_a_problem_that_raises_is_recorded_and_the_sweep_goes_on(tmp_path, monkeypatch):
-    from nonholo.planning import api as planner
+    import nonholo.planning.api
 
     rows = pair_rows(3)
     rows[1] = {**rows[1], "options": {"tol": 1e-9}}
-    real = planner.plan
+    real = nonholo.planning.api.plan
 
-    def plan(*args, tol=1e-10, **kwargs):           # a failure only planning shows
-        if tol == 1e-9:
+    def plan(*args, settings=None, **kwargs):       # a failure only planning shows
+        if settings is not None and settings.tol == 1e-9:
             raise ArithmeticError("the planner broke")
-        return real(*args, tol=tol, **kwargs)
+        return real(*args, settings=settings, **kwargs)
 
-    monkeypatch.setattr(planner, "plan", plan)
+    monkeypatch.setattr(nonholo.planning.api, "plan", plan)
     table = sweep.sweep(rows, tmp_path / "r.parquet", workers=1, progress=False).to_pylist()
     assert table[1]["error"] == "ArithmeticError: the planner broke" and table[1]["plan"] is None
     assert not table[1]["success"]
@@ -156,6 +157,7 @@ def test_a_problem_that_raises_is_recorded_and_the_sweep_goes_on(tmp_path, monke
     ('{"start": I, "goal": G', r"row 1: is not JSON"),
     ('', r"row 1: is blank"),
 ])
+@pytest.mark.slow
 def test_bad_problem_files_name_the_row_and_column_before_anything_runs(tmp_path, line, match, monkeypatch):
     good = pair_rows(1)[0]
     text = json.dumps(problems.as_json(problems.check_row(good, 0)))
@@ -166,13 +168,14 @@ def test_bad_problem_files_name_the_row_and_column_before_anything_runs(tmp_path
     monkeypatch.setattr(sweep, "solve_batch", lambda batch: pytest.fail("a problem ran"))
     with pytest.raises(ValueError, match=match):
         sweep.sweep(path, tmp_path / "r.parquet", workers=1, progress=False)
-    assert not (tmp_path / "r.parquet").exists() and not sweep.parts_dir(tmp_path / "r.parquet").exists()
+    assert not (tmp_path / "r.parquet").exists() and not result_store.parts_dir(tmp_path / "r.parquet").exists()
     # the command line: exit status 2, the same message
     run = subprocess.run([sys.executable, "-m", "nonholo.cli", "sweep", str(path), "--out",
                           str(tmp_path / "r.parquet")], capture_output=True, text=True)
     assert run.returncode == 2 and "row 1" in run.stderr
 
 
+@pytest.mark.slow
 def test_a_killed_sweep_resumes_without_losing_or_repeating_a_row(tmp_path):
     # problems slow enough (a fine grid) that the sweep is killed half-way
     rows = [{**r, "options": {"steps": 3200, "harmonics": 4}} for r in pair_rows(16)]
@@ -182,7 +185,7 @@ def test_a_killed_sweep_resumes_without_losing_or_repeating_a_row(tmp_path):
     cmd = [sys.executable, "-m", "nonholo.cli", "sweep", str(path), "--out", str(out), "--workers", "1",
            "--batch", "1", "--quiet"]
     proc = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
-    parts = sweep.parts_dir(out)
+    parts = result_store.parts_dir(out)
     deadline = time.monotonic() + 300
     while time.monotonic() < deadline and len(list(parts.glob("part-*.parquet"))) < 3:
         assert proc.poll() is None, proc.stderr.read()
@@ -194,15 +197,15 @@ def test_a_killed_sweep_resumes_without_losing_or_repeating_a_row(tmp_path):
     done = sum(t.num_rows for t in kept)
     assert 0 < done < len(rows)
     subprocess.run(cmd, check=True, capture_output=True)
-    resumed = sweep.load(out)
+    resumed = result_store.load(out)
     assert resumed.column("index").to_pylist() == list(range(len(rows)))
-    assert sweep.comparable(resumed) == sweep.comparable(table)
+    assert result_store.comparable(resumed) == result_store.comparable(table)
     assert not parts.exists()
 
 
 def test_a_resumed_sweep_refuses_other_problems(tmp_path):
     out = tmp_path / "r.parquet"
-    parts = sweep.parts_dir(out)
+    parts = result_store.parts_dir(out)
     parts.mkdir()
     (parts / "sweep.json").write_text(json.dumps({"fingerprint": "0" * 64, "problems": 2}))
     with pytest.raises(ValueError, match="other problems"):
@@ -210,6 +213,7 @@ def test_a_resumed_sweep_refuses_other_problems(tmp_path):
 
 
 @pytest.mark.skipif(shutil.which("dask") is None, reason="the dask command-line tools are not installed")
+@pytest.mark.slow
 def test_a_dask_cluster_of_separate_processes_gives_the_serial_rows(serial, tmp_path):
     """``dask scheduler`` and two ``dask worker`` processes on 127.0.0.1 (started and shut
     down by the benchmark's :func:`benchmarks.sweep_scaling.dask_cluster`)."""
@@ -222,14 +226,15 @@ def test_a_dask_cluster_of_separate_processes_gives_the_serial_rows(serial, tmp_
     with dask_cluster(tmp_path) as address:
         with Client(address, timeout="60s") as client:
             got = sweep.sweep(rows, tmp_path / "dask.parquet", client=client, progress=False)
-        assert sweep.comparable(got) == sweep.comparable(table)[:8]
+        assert result_store.comparable(got) == result_store.comparable(table)[:8]
         # the command line takes the scheduler's address
         path = problems.write(tmp_path / "p.jsonl", rows)
         subprocess.run([sys.executable, "-m", "nonholo.cli", "sweep", str(path), "--out",
                         str(tmp_path / "cli.parquet"), "--scheduler", address, "--quiet"], check=True)
-        assert sweep.comparable(sweep.load(tmp_path / "cli.parquet")) == sweep.comparable(table)[:8]
+        assert result_store.comparable(result_store.load(tmp_path / "cli.parquet")) == result_store.comparable(table)[:8]
 
 
+@pytest.mark.slow
 def test_atlas_maps_from_a_small_sweep(tmp_path):
     rows = atlas.problems(n=4, settings=("paper", "default"))
     assert len(rows) == 2 * 16
@@ -261,12 +266,12 @@ def test_atlas_maps_from_a_small_sweep(tmp_path):
 def test_a_strategy_class_goes_into_a_problem_table_by_its_import_path(tmp_path):
     """``options.strategy = "package.module:Class"``: any Strategy subclass, in JSON."""
     from benchmarks import bench_robust
-    from nonholo.planning import api as planner
+    from nonholo.planning.api import strategy_class
 
-    assert planner.strategy_class("benchmarks.bench_robust:WBarrier") is bench_robust.WBarrier
+    assert strategy_class("benchmarks.bench_robust:WBarrier") is bench_robust.WBarrier
     for bad in ("benchmarks.bench_robust:Nothing", "no.such.module:X", "nonholo.planning.api:plan"):
         with pytest.raises(ValueError, match="strategy"):
-            planner.strategy_class(bad)
+            strategy_class(bad)
     rows = [{**r, "options": {"strategy": "benchmarks.bench_robust:WBarrier", "route": "local"}}
             for r in pair_rows(2)]
     with pytest.raises(ValueError, match=r"row 0, column 'options.strategy': names a strategy by its import path"):
@@ -276,11 +281,12 @@ def test_a_strategy_class_goes_into_a_problem_table_by_its_import_path(tmp_path)
     assert all(r["error"] is None for r in table)
 
 
+@pytest.mark.slow
 def test_car_atlas_over_the_goal_position(tmp_path):
     """A goal grid in the car's (x, y) from a start, the heading and steering the start's:
     the goals are the cell centres, every claimed success holds under DOP853, the maps are
     drawn, and the command line writes the same problems."""
-    from nonholo.certify import resimulate as verify
+    from nonholo.certify.resimulate import resimulate_state
     from nonholo.model import catalog
 
     start = (0.0, 0.0, 0.3, 0.0)
@@ -298,11 +304,11 @@ def test_car_atlas_over_the_goal_position(tmp_path):
     assert a.count("default", "unreachable") == 0        # the steering angle stays 0: Δ = cos φ = 1
     space = catalog.get("car").space
     for row in table.to_pylist():
-        res = sweep.plan_of(row)
+        res = result_store.plan_of(row)
         if row["success"]:
-            _, R, q, _ = verify.resimulate_state(res.start, res.controls, res.T, "car", res.breakpoints)
+            _, R, q, _ = resimulate_state(res.start, res.controls, res.T, "car", res.breakpoints)
             goal = space.parse(json.loads(row["problem"])["goal"], "goal")
-            assert space.distance(R[-1], q[-1], *goal) < 1e-8
+            assert space.distance((R[-1], q[-1]), goal) < 1e-8
     assert a.count("default", "solved") >= 8
     for q in atlas.QUANTITIES:
         fig = atlas.atlas_figure(table, q)

@@ -1,8 +1,8 @@
-"""Sweeps under faults (nonholo/batch/sweep.py, ``nonholo sweep``): killed with SIGKILL at
-random moments and resumed, two started on one output, parts of a crashed run damaged or
-repeated, a kill between writing the results and removing the parts, a flipped byte in the
-results: each ends with every row exactly once, equal to an uninterrupted run's, or with a
-clear refusal; no worker outlives its sweep.
+"""Sweeps under faults (nonholo/batch/sweep.py, nonholo/batch/result_store.py, ``nonholo sweep``):
+killed with SIGKILL at random moments and resumed, two started on one output, parts of a
+crashed run damaged or repeated, a kill between writing the results and removing the parts,
+a flipped byte in the results: each ends with every row exactly once, equal to an
+uninterrupted run's, or with a clear refusal; no worker outlives its sweep.
 
 The problems are the car's (they plan in a fraction of a second each)."""
 import fcntl
@@ -20,8 +20,10 @@ import pytest
 
 from benchmarks.sweep_faults import processes_naming
 from benchmarks.sweep_faults import survivors as gone
-from nonholo.batch import sweep
+from nonholo.batch import result_store, sweep
 from nonholo.io import problems
+
+pytestmark = pytest.mark.slow
 
 N = 24
 
@@ -46,18 +48,18 @@ def command(path, out, *flags):
 
 
 def assert_complete(out, reference_table):
-    table = sweep.load(out)
+    table = result_store.load(out)
     index = table.column("index").to_pylist()
     assert index == list(range(reference_table.num_rows))           # every row once, in order
-    assert sweep.comparable(table) == sweep.comparable(reference_table)
-    assert not sweep.parts_dir(out).exists() and not sweep.lock_path(out).exists()
+    assert result_store.comparable(table) == result_store.comparable(reference_table)
+    assert not result_store.parts_dir(out).exists() and not result_store.lock_path(out).exists()
     assert sorted(p.name for p in out.parent.iterdir() if p.name.startswith(out.name)
                   or p.name.startswith("." + out.name)) == [out.name]   # nothing left beside it
     return table
 
 
 def parts_of(out):
-    return sorted(sweep.parts_dir(out).glob("part-*.parquet"))
+    return sorted(result_store.parts_dir(out).glob("part-*.parquet"))
 
 
 def test_killed_at_random_moments_then_resumed(reference, tmp_path):
@@ -88,7 +90,7 @@ def test_killed_at_random_moments_then_resumed(reference, tmp_path):
         assert gone(str(out)) == [], "a worker outlived its killed sweep"
         assert not out.exists() or proc.returncode == 0
     assert kills >= 2
-    assert sweep.lock_path(out).exists()                 # a killed sweep's lock file, stale
+    assert result_store.lock_path(out).exists()                 # a killed sweep's lock file, stale
     done = subprocess.run(cmd, capture_output=True, text=True, timeout=600)
     assert done.returncode == 0, done.stderr
     assert f"{N} problems" in done.stdout
@@ -124,24 +126,24 @@ def test_a_held_lock_refuses_at_once_and_a_released_one_does_not_block(reference
     rows, table = reference
     out = tmp_path / "r.parquet"
     monkeypatch.setattr(sweep, "solve_batch", lambda batch: pytest.fail("a problem ran"))
-    fd = os.open(sweep.lock_path(out), os.O_RDWR | os.O_CREAT)
+    fd = os.open(result_store.lock_path(out), os.O_RDWR | os.O_CREAT)
     try:
         fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
         started = time.monotonic()
-        with pytest.raises(sweep.SweepBusy, match=f"is writing {out}"):
+        with pytest.raises(result_store.SweepBusy, match=f"is writing {out}"):
             sweep.sweep(rows, out, workers=1, progress=False)
         assert time.monotonic() - started < 5
-        assert not sweep.parts_dir(out).exists()
+        assert not result_store.parts_dir(out).exists()
     finally:
         os.close(fd)                                     # as a process's death releases it
     monkeypatch.undo()
     sweep.sweep(rows[:2], out, workers=1, progress=False)
-    assert sweep.comparable(sweep.load(out)) == sweep.comparable(table)[:2]
+    assert result_store.comparable(result_store.load(out)) == result_store.comparable(table)[:2]
 
 
 def crashed_parts(out, rows):
     """A parts directory as a crashed run leaves it (see the module), empty."""
-    parts = sweep.parts_dir(out)
+    parts = result_store.parts_dir(out)
     parts.mkdir()
     fingerprint = problems.fingerprint(problems.check(rows))
     (parts / "sweep.json").write_text(json.dumps({"fingerprint": fingerprint, "problems": len(rows)}))
@@ -169,7 +171,7 @@ def test_parts_of_a_crashed_run_are_reconciled(reference, tmp_path, monkeypatch)
         if seconds is not None:
             for r in chosen:
                 r["seconds"] = seconds
-        return sweep.write_part(chosen, parts)
+        return result_store.write_part(chosen, parts)
 
     write([0, 1])
     write([0, 1], seconds=123.0)              # the same batch, finished by a killed run and by the next
@@ -178,7 +180,7 @@ def test_parts_of_a_crashed_run_are_reconciled(reference, tmp_path, monkeypatch)
     torn = write([6, 7])
     torn.write_bytes(torn.read_bytes()[:300])                   # torn: planned again
     other = dict(done[8], problem=json.dumps({"start": [1, 2, 3, 4]}))
-    sweep.write_part([other], parts)          # sound bytes, another problem's row: 8 planned again
+    result_store.write_part([other], parts)          # sound bytes, another problem's row: 8 planned again
     write([9])
     old = write([10])
     old.rename(parts / "part-000000010-a1b2c3.parquet")       # an older version's name, unchecked: again
@@ -212,12 +214,12 @@ def test_a_kill_between_writing_the_results_and_removing_the_parts_is_recovered(
     monkeypatch.setattr(sweep, "solve_batch", lambda batch: pytest.fail("a finished sweep ran again"))
     # the parts still there, in full
     parts = crashed_parts(out, rows)
-    sweep.write_part(table.to_pylist()[:5], parts)
+    result_store.write_part(table.to_pylist()[:5], parts)
     assert sweep.sweep(rows, out, workers=1, progress=False).equals(finished)
     assert not parts.exists()
     # half removed (no sweep.json left), and a removal renamed aside but not done
     parts.mkdir()
-    sweep.write_part(table.to_pylist()[5:9], parts)
+    result_store.write_part(table.to_pylist()[5:9], parts)
     trash = tmp_path / f".{parts.name}.89abcdef.trash"
     trash.mkdir()
     (trash / "sweep.json").write_text("{}")
@@ -240,7 +242,7 @@ def test_a_results_file_with_a_flipped_byte_is_not_returned_as_it_is(reference, 
     out = tmp_path / "r.parquet"
     sweep.sweep(rows, out, workers=1, progress=False)
     good = out.read_bytes()
-    want = sweep.comparable(expected)
+    want = result_store.comparable(expected)
     monkeypatch.setattr(sweep, "solve_batch", lambda batch: pytest.fail("a damaged file was planned again"))
     rng = random.Random(5)
     positions = sorted(rng.sample(range(len(good)), 60))
@@ -248,14 +250,14 @@ def test_a_results_file_with_a_flipped_byte_is_not_returned_as_it_is(reference, 
     for position in positions:
         out.write_bytes(good)
         flip(out, position)
-        for read in (lambda: sweep.sweep(rows, out, workers=1, progress=False), lambda: sweep.load(out)):
+        for read in (lambda: sweep.sweep(rows, out, workers=1, progress=False), lambda: result_store.load(out)):
             try:
                 got = read()
             except ValueError as exc:
                 assert str(out) in str(exc), exc
                 refused += 1
             else:
-                assert sweep.comparable(got) == want, position
+                assert result_store.comparable(got) == want, position
     assert refused >= 0.8 * 2 * len(positions), refused
     # the command line: exit 2, naming the file
     out.write_bytes(good)
@@ -265,9 +267,9 @@ def test_a_results_file_with_a_flipped_byte_is_not_returned_as_it_is(reference, 
     assert run.returncode == 2 and f"{out}" in run.stderr and "damaged" in run.stderr
     # the parts of the run that wrote it are still there: written again from them
     parts = crashed_parts(out, rows)
-    sweep.write_part(expected.to_pylist(), parts)
-    assert sweep.comparable(sweep.sweep(rows, out, workers=1, progress=False)) == want
-    assert sweep.comparable(sweep.load(out)) == want and not parts.exists()
+    result_store.write_part(expected.to_pylist(), parts)
+    assert result_store.comparable(sweep.sweep(rows, out, workers=1, progress=False)) == want
+    assert result_store.comparable(result_store.load(out)) == want and not parts.exists()
 
 
 def test_worker_processes_die_with_their_parent(tmp_path):

@@ -9,7 +9,7 @@ import sys
 
 import pytest
 
-from nonholo.batch import sweep
+from nonholo.batch import result_store, sweep
 from nonholo.io import problems
 
 CAR = {"start": [0.0, 0.0, 0.0, 0.0], "goal": [0.4, 0.2, 0.1, 0.0], "mechanism": "car"}
@@ -23,7 +23,7 @@ def table(tmp_path, bad_options):
 
 
 def nothing_left(out):
-    return not out.exists() and not sweep.parts_dir(out).exists() and not sweep.lock_path(out).exists()
+    return not out.exists() and not result_store.parts_dir(out).exists() and not result_store.lock_path(out).exists()
 
 
 @pytest.mark.parametrize("options, column, match", [
@@ -50,9 +50,10 @@ def test_impossible_options_are_refused_naming_row_and_option_before_anything_ru
     assert nothing_left(out)
     # the same with plan() itself: the message is plan()'s own
     from nonholo.planning.api import plan
+    from nonholo.planning.problem import arguments_of
 
     with pytest.raises(ValueError, match=match):
-        plan(CAR["start"], CAR["goal"], mechanism="car", **options)
+        plan(CAR["start"], CAR["goal"], mechanism="car", **arguments_of(options, "car"))
     assert main(["sweep", str(path), "--out", str(out), "--workers", "1", "--quiet"]) == 2
     err = capsys.readouterr().err
     assert want in err and nothing_left(out)

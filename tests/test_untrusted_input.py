@@ -1,7 +1,7 @@
 """Nothing runs that nobody wrote: a mechanism of one's own against an attack round.
 
 The caches of generated modules and compiled kernels are verified before anything in them
-runs (:func:`nonholo.numerics.cache_entries.read_entry`): an edited, planted or damaged entry, or
+runs (:func:`nonholo.codegen.cache.read_entry`): an edited, planted or damaged entry, or
 something other than a regular file at its path, is passed over and rebuilt. A user's text
 is data: names are identifiers, descriptions and units escaped literals, parameters finite
 real numbers, expressions given as text read by a parser that admits only arithmetic
@@ -34,8 +34,9 @@ from derivations import budget, codegen
 from derivations.mechanisms import Mechanism as Symbolic
 from derivations.mechanisms import PlatformGeometry
 from nonholo import Mechanism, plan
-from nonholo.model import mechanism as mechanism_module
-from nonholo.numerics import c_translation, cache_entries, native
+from nonholo.codegen import build, c_extension
+from nonholo.codegen import cache as entries
+from nonholo.codegen.c_subset import Function
 
 x, y, th, th0, th1, v, w, d, ell = sp.symbols("x y theta theta0 theta1 v w d ell", real=True)
 xd, yd, thd = sp.symbols("xdot ydot thetadot", real=True)
@@ -47,8 +48,8 @@ UNICYCLE = dict(coordinates=[x, y, th], inputs=[v, w], rates=[v * sp.cos(th), v 
 @pytest.fixture
 def cache(tmp_path, monkeypatch):
     """Caches of the test's own; each warning said anew."""
-    monkeypatch.setenv(native.CACHE_ENV, str(tmp_path / "cache"))
-    monkeypatch.setattr(cache_entries, "_WARNED", set())
+    monkeypatch.setenv(entries.CACHE_ENV, str(tmp_path / "cache"))
+    monkeypatch.setattr(entries, "_WARNED", set())
     return tmp_path / "cache"
 
 
@@ -117,7 +118,7 @@ def test_a_planted_source_without_a_record_or_with_another_s_is_not_run(cache, m
     name = "unicycle_planted"
     Mechanism.from_equations(name, **UNICYCLE)
     path = entry_of(cache, name)
-    record = cache_entries.record_path(path)
+    record = entries.record_path(path)
     good = path.read_text()
     # no record
     record.unlink()
@@ -129,8 +130,8 @@ def test_a_planted_source_without_a_record_or_with_another_s_is_not_run(cache, m
     other = Mechanism.from_equations("unicycle_other", **{**UNICYCLE, "rates": [v * sp.cos(th), v * sp.sin(th), 2 * w]})
     other_path = entry_of(cache, "unicycle_other")
     path.write_text(other_path.read_text().replace("'unicycle_other'", f"'{name}'") + payload(marker))
-    record.write_bytes(cache_entries.record_path(other_path).read_bytes())
-    cache_entries._WARNED.clear()                                   # the fixture's own set: said anew
+    record.write_bytes(entries.record_path(other_path).read_bytes())
+    entries._WARNED.clear()                                   # the fixture's own set: said anew
     with pytest.warns(RuntimeWarning, match="record of another entry"):
         m = Mechanism.from_equations(name, **UNICYCLE)
     assert m.module.SOURCE == good and other.module.SOURCE != good
@@ -162,9 +163,9 @@ def test_a_damaged_cache_entry_is_repaired_not_fatal(cache, marker, tmp_path, da
         elsewhere.write_text(payload(marker) + good.decode())
         path.unlink()
         path.symlink_to(elsewhere)
-        record = json.loads(cache_entries.record_path(path).read_text())
+        record = json.loads(entries.record_path(path).read_text())
         record["sha256"] = hashlib.sha256(elsewhere.read_bytes()).hexdigest()
-        cache_entries.record_path(path).write_text(json.dumps(record))
+        entries.record_path(path).write_text(json.dumps(record))
     expected = "could not cache" if damage == "directory" else f"ignored the cache entry {path}"
     with pytest.warns(RuntimeWarning) as caught:
         m = Mechanism.from_equations(name, **UNICYCLE)
@@ -189,20 +190,20 @@ def test_a_fifo_at_a_cache_path_never_blocks(tmp_path, marker):
         import os, warnings, sympy as sp
         warnings.simplefilter("always")
         from nonholo import Mechanism
-        from nonholo.integrate import cf4
+        from nonholo.integrate import system_kernels
         x, y, th, v, w = sp.symbols("x y theta v w", real=True)
         args = dict(coordinates=[x, y, th], inputs=[v, w], rates=[v*sp.cos(th), v*sp.sin(th), w])
         if os.environ.get("STAGE") == "plant":
             m = Mechanism.from_equations("unicycle_fifo", **args)
             gen = [p for p in os.listdir({str(cache / "generated")!r}) if p.endswith(".py")]
-            cf4.compile_system(m.module)
+            system_kernels.compile_system(m.module)
             so = [p for p in os.listdir({str(cache)!r}) if p.endswith({sysconfig.get_config_var("EXT_SUFFIX")!r})]
             for p in [os.path.join({str(cache / "generated")!r}, gen[0]), os.path.join({str(cache)!r}, so[0])]:
                 os.unlink(p); os.mkfifo(p)
         else:
             with warnings.catch_warnings(record=True) as caught:
                 m = Mechanism.from_equations("unicycle_fifo", **args)
-                kernels = cf4.compile_system(m.module)
+                kernels = system_kernels.compile_system(m.module)
             print(kernels.backend, sum("not a regular file" in str(c.message) for c in caught))
     """)
     env = dict(os.environ, NONHOLO_CACHE_DIR=str(cache))
@@ -222,7 +223,7 @@ def test_a_fifo_at_a_cache_path_never_blocks(tmp_path, marker):
 
 # -- compiled modules: hashed before they are imported ------------------------------------------
 
-needs_cc = pytest.mark.skipif(native.compiler() is None, reason="no C compiler")
+needs_cc = pytest.mark.skipif(build.compiler() is None, reason="no C compiler")
 
 
 def _toy(x, a):
@@ -233,9 +234,9 @@ def _toy(x, a):
 
 
 def toy_source(name: str, digest: str) -> str:
-    return c_translation.extension_source(
+    return c_extension.extension_source(
         f"nonholo.generated.native.{name}", name,
-        [c_translation.Function(_toy, "toy", {"x": "f8", "a": "f8[1]"})], digest)
+        [Function(_toy, "toy", {"x": "f8", "a": "f8[1]"})], digest)
 
 
 def planted_source(name: str, digest: str, marker) -> str:
@@ -267,14 +268,14 @@ def test_a_planted_compiled_module_is_never_imported(cache, marker, tmp_path, wi
     want = f"{tmp_path.name}-{name}"
     target = cache / f"{name}_{want[:16]}{sysconfig.get_config_var('EXT_SUFFIX') or '.so'}"
     if with_record:
-        native.compile_module(name, toy_source(name, want), target, key=want)
-        genuine_record = cache_entries.record_path(target).read_bytes()
-    native.compile_module(name, planted_source(name, want, marker), target)
+        build.compile_module(name, toy_source(name, want), target, key=want)
+        genuine_record = entries.record_path(target).read_bytes()
+    build.compile_module(name, planted_source(name, want, marker), target)
     if with_record:
-        cache_entries.record_path(target).write_bytes(genuine_record)
+        entries.record_path(target).write_bytes(genuine_record)
     assert target.exists() and not marker.exists()
     with pytest.warns(RuntimeWarning, match=re.escape(f"ignored the cache entry {target}")):
-        lib = native.load(name, want, lambda: toy_source(name, want))
+        lib = build.load(name, want, lambda: toy_source(name, want))
     assert lib is not None and lib.SOURCE_DIGEST == want
     assert lib.toy(2.0, np.array([1.0, 2.0, 3.0])) == 12.0
 
@@ -285,16 +286,16 @@ def test_a_damaged_compiled_module_is_rebuilt(cache, marker, tmp_path, monkeypat
     recompiled, with a warning naming it."""
     name = "toy_damaged"
     want = f"{tmp_path.name}-{name}"
-    monkeypatch.setattr(native, "_LOADED", {})
-    lib = native.load(name, want, lambda: toy_source(name, want))
+    monkeypatch.setattr(build, "_LOADED", {})
+    lib = build.load(name, want, lambda: toy_source(name, want))
     assert lib is not None
-    monkeypatch.setattr(native, "_LOADED", {})               # as a later process
+    monkeypatch.setattr(build, "_LOADED", {})               # as a later process
     monkeypatch.delitem(sys.modules, f"nonholo.generated.native.{name}", raising=False)
     target = next(cache.glob(f"{name}_*{sysconfig.get_config_var('EXT_SUFFIX') or '.so'}"))
     good = target.read_bytes()
     target.write_bytes(good[: len(good) // 3])
     with pytest.warns(RuntimeWarning, match=re.escape(f"ignored the cache entry {target}")):
-        again = native.load(name, want, lambda: toy_source(name, want))
+        again = build.load(name, want, lambda: toy_source(name, want))
     assert again is not None and again.toy(1.0, np.ones(2)) == 2.0
     assert target.stat().st_size > len(good) // 3
 
@@ -340,7 +341,7 @@ def test_a_name_must_be_an_identifier(cache, marker, tmp_path, name):
     with pytest.raises(ValueError, match="name must be a Python identifier"):
         Mechanism.from_equations(name, **UNICYCLE)
     with pytest.raises(ValueError, match="name must be a Python identifier"):
-        mechanism_module.cached_source(name, "0" * 64, lambda: payload(marker))
+        entries.cached_source(name, "0" * 64, lambda: payload(marker))
     assert not [p for p in tmp_path.rglob("*") if p.is_file()]
 
 

@@ -5,9 +5,10 @@ import pytest
 from conftest import example
 from scipy.spatial.transform import Rotation
 
-from nonholo import plan, simulate
+from nonholo import plan, simulate, Settings
 from nonholo.controls.parametrisations import Fourier
 from nonholo.model import platform
+from nonholo.planning.problem import arguments_of
 
 R0, RD = example(1)
 
@@ -29,26 +30,26 @@ def test_bad_options_name_the_argument(name, value):
     if name == "grid":
         kwargs["method"] = "nonparametric"
     with pytest.raises(ValueError, match=name):
-        plan(R0, RD, **kwargs)
+        plan(R0, RD, **arguments_of(kwargs, "platform"))
 
 
 def test_a_large_grid_is_refused_before_allocating():
     with pytest.raises(ValueError, match="grid must be at most"):
-        plan(R0, RD, method="nonparametric", grid=10**7)
+        plan(R0, RD, settings=Settings(method="nonparametric", grid=10**7))
     with pytest.raises(ValueError, match="steps must be at most"):
-        plan(R0, RD, method="nonparametric", grid=10**5, steps=10**6)
+        plan(R0, RD, settings=Settings(method="nonparametric", grid=10**5, steps=10**6))
 
 
 def test_a_basis_too_large_for_memory_is_refused_at_once():
     """harmonics × steps whose Fourier basis would take GiB: refused, naming both, before
     anything is allocated (the limit is the planner's, not the machine's)."""
     with pytest.raises(ValueError, match=r"harmonics = 10000 on steps = 20000.*GiB"):
-        plan(R0, RD, harmonics=10000, steps=20000)
+        plan(R0, RD, settings=Settings(harmonics=10000, steps=20000))
 
 
 @pytest.mark.parametrize("kwargs, match", [
     ({"T": "1"}, "T must be"), ({"T": True}, "T must be"), ({"callback": 5}, "callback must be callable"),
-    ({"Rd": RD + 0j}, "Rd must be real"), ({"R0": R0.astype(bool)}, "R0 must be real"),
+    ({"Rd": RD + 0j}, "goal must be real"), ({"R0": R0.astype(bool)}, "start must be real"),
 ])
 def test_strings_booleans_complex_and_uncallables_are_refused(kwargs, match):
     args = {"R0": R0, "Rd": RD, **kwargs}
@@ -57,7 +58,8 @@ def test_strings_booleans_complex_and_uncallables_are_refused(kwargs, match):
 
 
 def test_numpy_scalars_are_numbers():
-    res = plan(R0, RD, tol=np.float32(1e-6), T=np.float64(1.0), harmonics=np.int64(2), max_iter=np.int32(3))
+    res = plan(R0, RD, T=np.float64(1.0),
+               settings=Settings(harmonics=np.int64(2), tol=np.float32(1e-6), max_iter=np.int32(3)))
     assert res.options["tol"] == pytest.approx(1e-6) and isinstance(res.options["tol"], float)
 
 
@@ -108,4 +110,4 @@ def test_platform_kinematics_never_return_non_finite_numbers():
 
 def test_a_huge_integer_count_is_refused_by_name():
     with pytest.raises(ValueError, match="steps must be at most"):
-        plan(R0, RD, steps=10**400)
+        plan(R0, RD, settings=Settings(steps=10**400))

@@ -16,12 +16,12 @@ import nonholo
 from nonholo import PlanResult
 from nonholo.certify import certificate as certify
 from nonholo.cli.entry import main
-from nonholo.constraints import InputBounds, StateBounds, as_data, of_mechanism
+from nonholo.constraints import InputBounds, LegSpeed, StateBounds, as_data, of_mechanism
 from nonholo.model import catalog
 from nonholo.model.bounds import BOUND_RTOL
 from nonholo.model.limits import Limits
-from nonholo.motion.retimed import FLOOR
-from nonholo.motion.time_change import planned
+from nonholo.motion.speed_limits import FLOOR
+from nonholo.motion.time_scaling import planned
 
 CAR, UNICYCLE = catalog.get("car"), catalog.get("unicycle")
 CAR_INPUTS = InputBounds((-1.0, -1.0), (1.0, 1.0))
@@ -86,8 +86,8 @@ def test_bad_bounds_name_the_argument(build, match):
 
 
 def test_a_start_or_goal_outside_the_state_bounds_is_refused_naming_it_and_the_coordinate():
-    for start, goal, name in (([0, 0, 0, 0.7], PARK[1], "R0"), (PARK[0], [0, 1, 0, -0.65], "Rd")):
-        with pytest.raises(ValueError, match=f"^{name}: the {'start' if name == 'R0' else 'goal'} is outside "
+    for start, goal, name in (([0, 0, 0, 0.7], PARK[1], "start"), (PARK[0], [0, 1, 0, -0.65], "goal")):
+        with pytest.raises(ValueError, match=f"^{name}: the {name} is outside "
                                              r"the coordinates' bounds: phi = -?0\.\d+ passes"):
             nonholo.plan(start, goal, mechanism="car", T=None)
         with pytest.raises(ValueError, match=f"^{name}: .* phi"):
@@ -95,11 +95,11 @@ def test_a_start_or_goal_outside_the_state_bounds_is_refused_naming_it_and_the_c
 
 
 def test_bad_combinations_name_the_arguments():
-    with pytest.raises(ValueError, match="T=None asks for the least time, which needs a leg_speed"):
+    with pytest.raises(ValueError, match="T=None asks for the least time, which needs a LegSpeed"):
         nonholo.plan(np.eye(3), np.eye(3), mechanism="rolling_ball", T=None)
     R0, Rd = nonholo.spaces.so3.from_rpy(0.5, 1.2, -0.5), nonholo.spaces.so3.from_rpy(1.0, 0.9, -0.5)
-    with pytest.raises(ValueError, match="leg_speed and InputBounds"):
-        nonholo.plan(R0, Rd, T=None, leg_speed=1.0, constraints=[InputBounds(-1.0, 1.0)])
+    with pytest.raises(ValueError, match="LegSpeed and InputBounds"):
+        nonholo.plan(R0, Rd, T=None, constraints=[InputBounds(-1.0, 1.0), LegSpeed(1.0)])
     with pytest.raises(TypeError, match=r"constraints\[1\]"):
         nonholo.plan(*PARK, mechanism="car", constraints=[CAR_INPUTS, (-1, 1)])
     with pytest.raises(ValueError, match="at most one"):
@@ -126,6 +126,7 @@ def test_the_catalog_vehicles_carry_their_bounds_as_data_and_as_objects():
 # -- least time ----------------------------------------------------------------------------
 
 @pytest.mark.parametrize("name", ["car", "unicycle"])
+@pytest.mark.slow
 def test_least_time_plans_keep_the_bounds_and_reach_the_goal_under_dop853(name, car_least, unicycle_least):
     res, goal = (car_least, PARK[1]) if name == "car" else (unicycle_least, UNICYCLE_PARK[1])
     mech = catalog.get(name)
@@ -164,6 +165,7 @@ def test_the_least_time_is_the_integral_of_the_most_loaded_inputs_share(name, ca
 
 
 @pytest.mark.parametrize("T, kind", [(8.0, "InputRetimed"), (15.0, "Fourier")])
+@pytest.mark.slow
 def test_a_plan_in_a_given_time_keeps_the_bounds_re_timed_in_it_or_as_planned(T, kind):
     """With the car's bounds asked for and ``T`` given: a plan whose path needs no more than
     ``T`` is played in ``T`` — re-timed where its inputs broke the bounds (T = 8 s), as
@@ -178,6 +180,7 @@ def test_a_plan_in_a_given_time_keeps_the_bounds_re_timed_in_it_or_as_planned(T,
     assert np.max(np.abs(x[:, 3])) <= 0.6 * (1.0 + BOUND_RTOL)
 
 
+@pytest.mark.slow
 def test_a_plan_in_too_short_a_time_fails_saying_the_time_it_needs():
     short = nonholo.plan(*PARK, mechanism="car", T=2.0, constraints=of_mechanism("car"))
     assert not short.success
@@ -201,6 +204,7 @@ def test_retime_plays_a_stored_plan_under_input_bounds():
 
 # -- state bounds ----------------------------------------------------------------------------
 
+@pytest.mark.slow
 def test_state_bounds_are_kept_along_the_motion():
     """The car's default parking plan swings the steering beyond 0.6 rad; under
     ``StateBounds`` the certified motion keeps it inside (under DOP853 too)."""
@@ -241,8 +245,8 @@ def test_a_least_time_plan_saves_and_loads_and_tampered_bounds_are_refused(car_l
 def test_the_certificate_refuses_controls_beyond_the_bounds():
     res = nonholo.plan(*PARK, mechanism="car", T=15.0, constraints=of_mechanism("car"))
     assert res.success and not type(res.parametrisation).__name__.endswith("Retimed")
-    kw = dict(tol=1e-10, delta_min=1e-2, sign=1.0, q0=res.q0, qd=res.qd)
-    args = (res.R0, res.Rd, res.T, CAR, res.parametrisation, res.replay_steps)
+    kw = dict(tol=1e-10, delta_min=1e-2, sign=1.0)
+    args = (res.start, res.goal, res.T, CAR, res.parametrisation, res.replay_steps)
     assert certify.measure(*args, **kw, input_bounds=CAR_INPUTS.check(CAR),
                            limits=Limits.of(CAR_STATE.check(CAR))).passed
     peak = float(np.max(np.abs(res.u[:, 0])))
@@ -273,7 +277,8 @@ def test_cli_plans_the_car_in_the_least_time_and_prints_it(capsys, car_least):
 
 
 PYTHON = re.compile(r"T=None|\b(leg_speed|leg_length|delta_min|max_iter|allow_imports|csv_rate|R0|Rd)\b|"
-                    r"\w=None|InputBounds|StateBounds|constraints|nonholo\.Mechanism|Strategy subclass")
+                    r"\w=None|InputBounds|StateBounds|LegSpeed|LegStroke|Clearance|Settings|constraints|"
+                    r"nonholo\.Mechanism|Strategy subclass")
 
 
 @pytest.mark.parametrize("argv", [

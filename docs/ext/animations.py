@@ -28,13 +28,14 @@ DPI = {None: 60, "rolling_ball": 54}
 
 
 def problems() -> dict:
-    """Each catalog mechanism's problem: ``{name: (start, goal, plan options)}``.
+    """Each catalog mechanism's problem: ``{name: (start, goal, plan's keywords)}``.
 
     Returns
     -------
     dict
         The problems by mechanism name.
     """
+    from nonholo import Settings
     from nonholo.paper import examples
     from nonholo.spaces import so3
 
@@ -45,7 +46,7 @@ def problems() -> dict:
         "platform_raised": (np.eye(3), so3.from_rpy(0.5, 0.3, -0.3), {}),
         "attitude": (so3.from_rpy(0.1, 0.2, 0.3), so3.from_rpy(0.8, -0.4, 0.5), {}),
         "rolling_ball": ((R_ball, (0.0, 0.0)), (so3.exp(np.array([np.pi / 2, 0.0, 0.0])) @ R_ball, (0.0, 0.0)),
-                         {"strategy": "paper", "harmonics": 4}),
+                         {"strategy": "paper", "settings": Settings(harmonics=4)}),
         "car": ((0.0, 0.0, 0.0, 0.0), (0.0, 1.0, 0.0, 0.0), {}),
         "brockett": ((0.0, 0.0, 0.0), (0.0, 0.0, 1.0), {}),
         "unicycle": ((0.0, 0.0, 0.0), (0.0, 1.0, 0.0), {}),

@@ -48,12 +48,16 @@ SUBPACKAGES = {
     "io": "the plan result, the plan file's codec, CSV export, problem tables and safe writes",
     "certify": "the certificate of a plan, the plan file's checks and the independent re-simulation",
     "motion": "simulation, a plan's controls replayed, frame controls, re-timed and rest-to-rest controls",
-    "model": "the numeric mechanism, the catalog, the legs' stroke, the paper's platform and the "
-             "table of names and units",
+    "integrate": "the CF4 integrator with the variational system, and a mechanism's kernels compiled "
+                 "per mechanism",
+    "model": "the numeric mechanism (data: its generated functions), the catalog, the legs' stroke, "
+             "the paper's platform and the table of names and units",
     "controls": "control parametrisations (Fourier, piecewise constant), stage tables, stitched hops",
-    "integrate": "the CF4 integrator with the variational system and its compiled kernels",
     "spaces": "state spaces (SO(3), Euclidean, their product), the singular set, numeric rotations",
-    "numerics": "numba and native kernels, small compiled numerics, the effort clock, argument checks",
+    "numerics": "numba kernels, small compiled numerics (native where built), the effort clock, "
+                "argument checks",
+    "codegen": "code generation: Python and C emitters, the inliner, Python to C translation, the "
+               "compiler and the verified caches, one configuration per backend",
 }
 
 

@@ -2,14 +2,14 @@
 
 :func:`problems` lays goals on an ``n × n`` grid (cell centres) over two of the numbers of a
 state of the mechanism's space (its command-line numbers,
-:attr:`nonholo.spaces.groups.Product.cli_names`: the RPY angles ``φ, ϑ, ψ`` with an
+:attr:`nonholo.spaces.product.Product.cli_names`: the RPY angles ``φ, ϑ, ψ`` with an
 orientation, then the coordinates), the goal's other numbers those of the start:
 
 - on SO(3) (the default axes ``φ, ϑ``): the RPY slices ``ψ = const`` — ``φ`` about z across
   ``[−π, π)``, ``ϑ`` about y across ``(−π/2, π/2)``, one slice per value of ``psi``;
 - on ``Rᵏ`` (default: the first two coordinates), e.g. the car's goal position ``(x, y)``:
   angle coordinates across ``[−π, π)``, others across the space's sampling box
-  ``[−box, box]`` (:attr:`nonholo.spaces.groups.Euclidean.box`), or any ``extent``;
+  ``[−box, box]`` (:attr:`nonholo.spaces.factors.Euclidean.box`), or any ``extent``;
 - on ``SO(3) × Rᵏ`` either, or one angle and one coordinate.
 
 One problem per goal and planner setting (:data:`SETTINGS`: the paper's algorithm, the
@@ -27,10 +27,10 @@ import json
 import numpy as np
 from matplotlib.colors import BoundaryNorm, ListedColormap, LogNorm
 from matplotlib.figure import Figure
-from scipy.spatial.transform import Rotation
 
-from ..model import catalog, mechanism_file
-from ..model.names import ANGLES, MILLISECOND, RAD, label
+from ..model import catalog, definition_forms
+from ..model.names import MILLISECOND, label
+from ..spaces import SO3
 from ..viz.style import NotebookFigure
 
 #: The planner settings an atlas compares: name → options of :func:`nonholo.plan`.
@@ -45,12 +45,11 @@ QUANTITIES = ("success", "iterations", "time")
 #: Example 1's start (RPY, rad): the atlases' default orientation (coordinates default to 0).
 START = (0.5, 1.2, -0.5)
 #: ASCII names of the RPY angles (``--axes phi theta``), for a space with an orientation.
-ALIASES = {"phi": "φ", "theta": "ϑ", "psi": "ψ"}
+ALIASES = {alias: axis.name for axis in SO3().axes() for alias in axis.aliases}
 #: The RPY angles' ranges (rad).
-RPY_RANGES = {"φ": (-np.pi, np.pi), "ϑ": (-np.pi / 2, np.pi / 2), "ψ": (-np.pi, np.pi)}
+RPY_RANGES = {axis.name: axis.bounds for axis in SO3().axes()}
 #: Success map colours: solved, failed, unreachable.
 _SUCCESS_COLORS = ("#2ca02c", "#d62728", "#d9d9d9")
-_AXIS_TEXT = {angle.symbol: label(f"goal {angle.text}", RAD) for angle in ANGLES}
 _PI_TICKS = {(-np.pi, np.pi): ([-np.pi, -np.pi / 2, 0, np.pi / 2, np.pi], ["−π", "−π/2", "0", "π/2", "π"]),
              (-np.pi / 2, np.pi / 2): ([-np.pi / 2, 0, np.pi / 2], ["−π/2", "0", "π/2"])}
 
@@ -119,7 +118,7 @@ def default_start(space) -> tuple[float, ...]:
     tuple of float
         Example 1's RPY angles with an orientation, the coordinates 0.
     """
-    return (START if space.has_orientation else ()) + (0.0,) * space.k
+    return tuple(space.numbers(rotation=START).tolist())
 
 
 def default_axes(space) -> tuple[str, str]:
@@ -135,7 +134,7 @@ def default_axes(space) -> tuple[str, str]:
     tuple of str
         ``φ, ϑ`` with an orientation, else the first two coordinates.
     """
-    return ("φ", "ϑ") if space.has_orientation else tuple(space.cli_names[:2])
+    return tuple(space.cli_names[:2])
 
 
 def axis_range(space, name: str) -> tuple[float, float]:
@@ -154,15 +153,11 @@ def axis_range(space, name: str) -> tuple[float, float]:
         :data:`RPY_RANGES`, ``[−π, π)`` for an angle coordinate, ``[−box, box]`` for
         another.
     """
-    if name in RPY_RANGES and space.has_orientation:
-        return RPY_RANGES[name]
-    c = space.coordinates
-    index = c.names.index(name)
-    return (-np.pi, np.pi) if c.angles[index] else (-c.box, c.box)
+    return space.axis(name).bounds
 
 
 def resolve_axis(space, name: str) -> str:
-    """An axis' name as one of the space's :attr:`~nonholo.spaces.groups.Product.cli_names`.
+    """An axis' name as one of the space's :attr:`~nonholo.spaces.product.Product.cli_names`.
 
     Parameters
     ----------
@@ -181,34 +176,11 @@ def resolve_axis(space, name: str) -> str:
     BadArgument
         Naming ``axes``, if ``name`` is not one of the state's numbers.
     """
-    names = space.cli_names
-    if name in names:
-        return name
-    if space.has_orientation and name in ALIASES:
-        return ALIASES[name]
-    raise BadArgument("axes", f"must be two of the state's numbers ({' '.join(names)}), got {name!r}")
-
-
-def states(space, numbers) -> tuple[np.ndarray, np.ndarray]:
-    """The states of command-line numbers, vectorised.
-
-    Parameters
-    ----------
-    space : Product
-        The mechanism's state space.
-    numbers : array_like
-        The numbers, shape ``(N, d)``.
-
-    Returns
-    -------
-    tuple of numpy.ndarray
-        ``(R, q)``: shapes ``(N, 3, 3)`` and ``(N, k)``.
-    """
-    numbers = np.asarray(numbers, dtype=float).reshape(-1, len(space.cli_names))
-    if space.has_orientation:
-        R = Rotation.from_euler("ZYX", numbers[:, :3]).as_matrix().reshape(-1, 3, 3)
-        return R, numbers[:, 3:]
-    return np.broadcast_to(np.eye(3), (numbers.shape[0], 3, 3)), numbers
+    try:
+        return space.axis(name).name
+    except ValueError:
+        raise BadArgument("axes", f"must be two of the state's numbers ({' '.join(space.cli_names)}), "
+                                  f"got {name!r}") from None
 
 
 def problems(n: int = 31, psi=None, start=None, mechanism="platform",
@@ -262,7 +234,7 @@ def problems(n: int = 31, psi=None, start=None, mechanism="platform",
     except ValueError as exc:
         raise BadArgument("mechanism", f"refused: {exc}") from None
     # the rows name a catalog mechanism, or hold another's definition (data the workers rebuild it from)
-    in_rows = mech.name if mech.definition is None else mechanism_file.json_data(mech.definition)
+    in_rows = mech.name if mech.definition is None else definition_forms.json_data(mech.definition)
     mechanism = mech.name
     space = mech.space
     names = space.cli_names
@@ -288,10 +260,12 @@ def problems(n: int = 31, psi=None, start=None, mechanism="platform",
         for a, (lo, hi) in zip(axes, bounds):
             if not lo < hi:
                 raise BadArgument("extent", f"of axis {a} must have LO < HI, got {lo:g} {hi:g}")
-    slicing = space.has_orientation and "ψ" not in axes
+    # slices ψ = const of an orientation: its ψ, where the state has one, off the axes
+    psi_at = names.index("ψ") if "ψ" in names else None
+    slicing = psi_at is not None and "ψ" not in axes
     if psi is None:
-        psi = (float(start[2]),) if slicing else (None,)
-    elif not space.has_orientation:
+        psi = (float(start[psi_at]),) if slicing else (None,)
+    elif psi_at is None:
         raise BadArgument("psi", f"takes slices ψ = const of an orientation: {mechanism} has none")
     elif not slicing:
         raise BadArgument("psi", "takes slices ψ = const: not with ψ as an axis")
@@ -307,7 +281,7 @@ def problems(n: int = 31, psi=None, start=None, mechanism="platform",
     which = [names.index(a) for a in axes]
     centres = [cell_centres(n, b) for b in bounds]
     R0, q0 = space.from_cli(start)
-    first = space.public(R0, q0)
+    first = space.public((R0, q0))
     rows = []
     for s in settings:
         for k, p in enumerate(psi):
@@ -315,12 +289,12 @@ def problems(n: int = 31, psi=None, start=None, mechanism="platform",
                 for i, x in enumerate(centres[0]):
                     goal = start.copy()
                     if p is not None:
-                        goal[2] = p
+                        goal[psi_at] = p
                     goal[which] = (x, y)
                     label = {"atlas": s, "slice": k, "i": i, "j": j, "n": n, "axes": list(axes),
                              "extent": [float(v) for b in bounds for v in b], "goal": goal.tolist(),
                              "start": start.tolist(), **({} if p is None else {"psi": p})}
-                    rows.append({"start": first, "goal": space.public(*space.from_cli(goal)),
+                    rows.append({"start": first, "goal": space.public(space.from_cli(goal)),
                                  "mechanism": in_rows, "options": {**(options or {}), **SETTINGS[s]},
                                  "label": json.dumps(label, separators=(",", ":"))})
     return rows
@@ -428,14 +402,7 @@ class Atlas:
         str
             ``RPY(φ, ϑ, ψ)`` and/or ``(x, y, …) = (…)``.
         """
-        space, numbers = self.space, self.start
-        parts = []
-        if space.has_orientation:
-            parts.append(f"RPY{tuple(round(a, 3) for a in numbers[:3])}")
-            numbers = numbers[3:]
-        if space.k:
-            parts.append(f"({', '.join(space.coordinates.names)}) = {tuple(round(a, 3) for a in numbers)}")
-        return ", ".join(parts)
+        return self.space.describe_numbers(self.start)
 
     def singular_values(self, k: int, x, y) -> np.ndarray:
         """``Δ`` over the goals of a slice.
@@ -456,7 +423,7 @@ class Atlas:
         numbers = np.broadcast_to(np.asarray(self.goals[k], dtype=float), x.shape + (len(names),)).copy()
         numbers[..., names.index(self.axes[0])] = x
         numbers[..., names.index(self.axes[1])] = y
-        R, q = states(self.space, numbers.reshape(-1, len(names)))
+        R, q = self.space.from_cli_many(numbers.reshape(-1, len(names)))
         D = self.kinematics.singular.values(R, q)
         return np.asarray(D, dtype=float).reshape(x.shape)
 
@@ -476,11 +443,8 @@ def _row_mechanism(row: dict):
 
 
 def _axis_text(space, name: str) -> str:
-    if space.has_orientation and name in _AXIS_TEXT:
-        return _AXIS_TEXT[name]
-    c = space.coordinates
-    unit = c.units[c.names.index(name)]
-    return label(f"goal {name}", unit)
+    axis = space.axis(name)
+    return label(f"goal {axis.text}", axis.unit)
 
 
 def atlas_figure(table, quantity: str = "success") -> Figure:
@@ -508,7 +472,6 @@ def atlas_figure(table, quantity: str = "success") -> Figure:
         raise ValueError(f"unknown quantity {quantity!r}; known: {', '.join(QUANTITIES)}")
     atlas = Atlas(table)
     space = atlas.space
-    singular = atlas.kinematics.singular
     rows, cols = len(atlas.slices), len(atlas.settings)
     fig = NotebookFigure(figsize=(4.6 * cols + 1.2, 3.4 * rows + 0.8), layout="constrained")
     axes = np.array(fig.subplots(rows, cols, squeeze=False, sharex=True, sharey=True))
@@ -536,11 +499,10 @@ def atlas_figure(table, quantity: str = "success") -> Figure:
                               cmap=ListedColormap([_SUCCESS_COLORS[2]]), vmin=0, vmax=2)
                 mesh = ax.pcolormesh(edges_x, edges_y, np.where(values > 0, values, np.nan),
                                      cmap="viridis", norm=norm)
-            if singular.exists:
-                D = atlas.singular_values(k, fine_x, fine_y)
-                if np.nanmin(D) < 0.0 < np.nanmax(D):
-                    crossed = True
-                    ax.contour(fine_x, fine_y, D, levels=[0.0], colors="k", linewidths=1.6)
+            D = atlas.singular_values(k, fine_x, fine_y)      # +inf without a singular set
+            if np.nanmin(D) < 0.0 < np.nanmax(D):
+                crossed = True
+                ax.contour(fine_x, fine_y, D, levels=[0.0], colors="k", linewidths=1.6)
             if atlas.holds_start(k):
                 ax.plot(atlas.start[which[0]], atlas.start[which[1]], "o", color="k", mfc="yellow", ms=8, mew=1.2)
             solved = atlas.count(setting, "solved")
@@ -548,9 +510,7 @@ def atlas_figure(table, quantity: str = "success") -> Figure:
             where = "" if psi is None else f" ψ = {psi:+.2f};"
             ax.set_title(f"{setting}:{where} solved {solved} of {reachable} reachable", fontsize=9)
             for name, bounds, ticks in ((atlas.axes[0], bx, ax.set_xticks), (atlas.axes[1], by, ax.set_yticks)):
-                angle = name in RPY_RANGES and space.has_orientation or (
-                    name in space.coordinates.names and space.coordinates.angles[space.coordinates.names.index(name)])
-                if angle and tuple(bounds) in _PI_TICKS:
+                if space.axis(name).angle and tuple(bounds) in _PI_TICKS:
                     ticks(*_PI_TICKS[tuple(bounds)])
             if k == rows - 1:
                 ax.set_xlabel(_axis_text(space, atlas.axes[0]))

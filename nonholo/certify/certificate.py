@@ -35,10 +35,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..controls import stages
+from ..integrate.compiled import compiled_system
 from ..model.bounds import input_names
 from ..model.limits import Limits
 from ..motion.playback import replay
-from ..spaces.groups import NO_COORDINATES
 
 #: Factor on the asymptotic Richardson estimate ``|R_M − R_{M/2}|/15`` of the error of ``R_M``.
 SAFETY = 2.0
@@ -62,7 +62,7 @@ SENSITIVITY_AGREEMENT = 0.25
 class Certificate:
     """The physical controls of a plan replayed (see the module).
 
-    Errors and bounds are in the stacked metric of :mod:`nonholo.spaces.groups`.
+    Errors and bounds are in the stacked metric of :mod:`nonholo.spaces.product`.
 
     Parameters
     ----------
@@ -94,7 +94,7 @@ class Certificate:
         The nodes' coordinates (``(M + 1, k)``).
     errors : dict, optional
         The norms of the parts of ``l`` by name
-        (:meth:`nonholo.spaces.groups.Product.error`).
+        (:meth:`nonholo.spaces.product.Product.error`).
     """
 
     replay_steps: int
@@ -146,10 +146,10 @@ def richardson(fine, coarse, mechanism) -> float:
         :data:`SAFETY` times their distance (``|log(R_fine R_coarseᵀ)|`` on SO(3), the
         stacked error's norm beyond) over 15.
     """
-    return SAFETY * mechanism.space.distance(*fine, *coarse) / 15.0
+    return SAFETY * mechanism.space.distance(fine, coarse) / 15.0
 
 
-def sensitivity(R0, par, T: float, mechanism, steps: int, U=None, sign: float | None = None, q0=None):
+def sensitivity(start, par, T: float, mechanism, steps: int, U=None, sign: float | None = None):
     """The sensitivity ``G = max_n |Φ(T, t_n)|_F`` of the physical system along a motion,
     on one grid.
 
@@ -161,8 +161,8 @@ def sensitivity(R0, par, T: float, mechanism, steps: int, U=None, sign: float | 
 
     Parameters
     ----------
-    R0 : array_like
-        The start's orientation.
+    start : State
+        The start (:class:`~nonholo.spaces.state.State`).
     par : Controls or FrameControls
         The physical inputs.
     T : float
@@ -175,8 +175,6 @@ def sensitivity(R0, par, T: float, mechanism, steps: int, U=None, sign: float | 
         Their stage table, if known.
     sign : float, optional
         The side of ``Δ = 0`` (default: the start's).
-    q0 : array_like, optional
-        The start's coordinates.
 
     Returns
     -------
@@ -188,10 +186,9 @@ def sensitivity(R0, par, T: float, mechanism, steps: int, U=None, sign: float | 
     """
     if U is None:
         U = stages.stage_table(par, steps)
-    kern = mechanism.kernels(frame=False)
+    kern = compiled_system(mechanism, frame=False)
     m, d = mechanism.n_inputs, mechanism.n_rates
-    R = np.ascontiguousarray(R0, dtype=float)
-    q = np.ascontiguousarray(NO_COORDINATES if q0 is None else q0, dtype=float)
+    R, q = start
     if sign is None:
         sign = mechanism.singular.sign(R, q)
     Rs, Qs = kern.nodes(steps)
@@ -227,8 +224,8 @@ def agree(G_coarse: float, G_fine: float) -> bool:
     return abs(G_fine - G_coarse) <= SENSITIVITY_AGREEMENT * max(G_fine, G_coarse)
 
 
-def resolved_sensitivity(R0, par, T: float, mechanism, steps: int, U=None, sign: float | None = None,
-                         limit: float = np.inf, max_steps: int | None = None, q0=None):
+def resolved_sensitivity(start, par, T: float, mechanism, steps: int, U=None, sign: float | None = None,
+                         limit: float = np.inf, max_steps: int | None = None):
     """The sensitivity of ``par``'s motion resolved: ``G`` on ``steps/2`` and ``steps`` CF4
     steps (``steps`` alone where the controls' grid forbids ``steps/2``), the grid doubled
     until the last two agree (:func:`agree`) — a coarse grid can miss a fast growth of
@@ -239,7 +236,7 @@ def resolved_sensitivity(R0, par, T: float, mechanism, steps: int, U=None, sign:
 
     Parameters
     ----------
-    R0, par, T, mechanism, sign, q0
+    start, par, T, mechanism, sign
         As for :func:`sensitivity`.
     steps : int
         CF4 steps of the finer of the first two grids.
@@ -276,7 +273,7 @@ def resolved_sensitivity(R0, par, T: float, mechanism, steps: int, U=None, sign:
     R_T = None
     k = first
     while True:
-        G, R_k = sensitivity(R0, par, T, mechanism, k, tables.get(k), sign, q0)
+        G, R_k = sensitivity(start, par, T, mechanism, k, tables.get(k), sign)
         grids[k] = G
         if k == steps:
             R_T = R_k
@@ -306,9 +303,9 @@ def no_basis(steps: int) -> tuple:
     return np.zeros((steps, 3, 0), np.int64), np.zeros((steps, 3, 0)), 0, 0
 
 
-def measure(R0, Rd, T: float, mechanism, par, steps: int, tol: float, delta_min: float,
+def measure(start, goal, T: float, mechanism, par, steps: int, tol: float, delta_min: float,
             sign: float = 1.0, G: float | None = None, R_half=None,
-            max_steps: int | None = None, leg_limits=None, q0=None, qd=None, limits=None,
+            max_steps: int | None = None, leg_limits=None, limits=None,
             input_bounds=None) -> Certificate:
     """The certificate of physical controls (see the module): replays on ``steps/2``·2ᵏ and
     ``steps``·2ᵏ CF4 steps, ``k`` the least with an error estimate below ``ERROR_FRACTION ·
@@ -317,8 +314,8 @@ def measure(R0, Rd, T: float, mechanism, par, steps: int, tol: float, delta_min:
 
     Parameters
     ----------
-    R0, Rd : array_like
-        The start's and the goal's orientations.
+    start, goal : State
+        The start and the goal (:class:`~nonholo.spaces.state.State`).
     T : float
         The horizon (s).
     mechanism : Mechanism
@@ -343,8 +340,6 @@ def measure(R0, Rd, T: float, mechanism, par, steps: int, tol: float, delta_min:
     leg_limits : LegLimits, optional
         Stroke limits (:class:`~nonholo.model.limits.LegLimits`) every node of the replay
         must keep.
-    q0, qd : array_like, optional
-        The start's and the goal's coordinates.
     limits : Limits, optional
         Further clearances every node of the replay must keep, each to within its slack
         (:class:`~nonholo.model.limits.Limits`: the legs' stroke, the coordinates' bounds).
@@ -360,8 +355,6 @@ def measure(R0, Rd, T: float, mechanism, par, steps: int, tol: float, delta_min:
     """
     singular = mechanism.singular
     limits = Limits.of(leg_limits, limits)
-    q0 = np.ascontiguousarray(NO_COORDINATES if q0 is None else q0, dtype=float)
-    qd = NO_COORDINATES if qd is None else qd
     cap = MAX_REPLAY_STEPS if max_steps is None else max_steps
     M = steps
     U = np.ascontiguousarray(stages.stage_table(par, M))
@@ -375,22 +368,22 @@ def measure(R0, Rd, T: float, mechanism, par, steps: int, tol: float, delta_min:
             quarter = False
         limit = SENSITIVITY_FRACTION * tol / REPLAY_PERTURBATION
         if quarter:
-            G, resolved, grids, _ = resolved_sensitivity(R0, par, T, mechanism, M // 4, stages.halve(U),
-                                                         sign, limit, cap, q0)
+            G, resolved, grids, _ = resolved_sensitivity(start, par, T, mechanism, M // 4, stages.halve(U),
+                                                         sign, limit, cap)
         else:
-            G, resolved, grids, R_T = resolved_sensitivity(R0, par, T, mechanism, M // 2, U, sign, limit,
-                                                           cap, q0)
+            G, resolved, grids, R_T = resolved_sensitivity(start, par, T, mechanism, M // 2, U, sign, limit,
+                                                           cap)
             if R_half is None:
                 R_half = R_T
     if R_half is None:
-        half = replay(R0, par, T, mechanism, M // 2, sign, stages.halve(U), q0)
+        half = replay(start, par, T, mechanism, M // 2, sign, stages.halve(U))
         R_half = (half[0][-1], half[3][-1])
     # a sensitivity that already rules the plan out is not worth a finer replay
     hopeless = not resolved or not G * REPLAY_PERTURBATION <= SENSITIVITY_FRACTION * tol
     while True:
         if U is None:
             U = np.ascontiguousarray(stages.stage_table(par, M))
-        R, done, dmin, q = replay(R0, par, T, mechanism, M, sign, U, q0)
+        R, done, dmin, q = replay(start, par, T, mechanism, M, sign, U)
         if done < M:
             return _failed(M, G, R, singular, dmin, f"the physical replay ({M} steps) produced a "
                            f"non-finite angular velocity at t ≈ {done * T / M:.4g} s", mechanism.n_rates)
@@ -399,7 +392,7 @@ def measure(R0, Rd, T: float, mechanism, par, steps: int, tol: float, delta_min:
             break
         R_half, M, U = (R[-1], q[-1]), 2 * M, None
     space = mechanism.space
-    l, errors = space.error(R[-1], q[-1], Rd, qd)
+    l, errors = space.error((R[-1], q[-1]), goal)
     err = space.norm(errors)
     bound = est + G * REPLAY_PERTURBATION
     dmin = singular.reported(dmin)
@@ -407,7 +400,7 @@ def measure(R0, Rd, T: float, mechanism, par, steps: int, tol: float, delta_min:
     correctable = False
     if not np.isfinite(G):
         reason = ("the physical replay's sensitivity is infinite (its variational system "
-                  + ("ran into Δ = 0" if singular.exists else "overflowed") + "): the endpoint cannot be certified")
+                  + singular.blowup + "): the endpoint cannot be certified")
     elif not resolved:
         found = ", ".join(f"{g:.3g} on {k} steps" for k, g in grids.items())
         reason = (f"the physical replay's sensitivity max|Φ(T,t)| is not resolved ({found}): "

@@ -19,15 +19,14 @@ import numpy as np
 from ..controls import stages
 from ..controls.parametrisations import Fourier, PiecewiseConstant
 from ..controls.stitched import Stitched
+from ..integrate.compiled import compiled_system
 from ..model import catalog
 from ..model.bounds import InputBounds, StateBounds, input_names
 from ..model.limits import LegLimits, Limits
 from ..motion import playback
 from ..motion.frame_controls import FrameControls
-from ..motion.retimed import InputRetimed, Retimed
-from ..motion.time_change import RestToRest, is_time_change, planned, played_time
-from ..numerics import kernels
-from ..spaces.groups import NO_COORDINATES
+from ..motion.speed_limits import InputRetimed, Retimed
+from ..motion.time_scaling import RestToRest, is_time_change, planned, played_time
 from . import certificate as certify
 from .plan_fields import (
     FORMAT_1,
@@ -115,7 +114,7 @@ class PlanChecks:
             return
         if not np.array_equal(r.R[0], r.R0):
             fail("R", "starts elsewhere than R0 (R[0] != R0)")
-        if mech.space.k and not np.array_equal(r.q[0], r.q0):
+        if not np.array_equal(r.q[0], r.q0):
             fail("q", "starts elsewhere than q0 (q[0] != q0)")
         self.replay(mech, n)
         self.values(mech, n, complete)
@@ -333,26 +332,28 @@ class PlanChecks:
         n = r.t.shape[0] if r.t.ndim == 1 else -1
         if n < 0:
             fail("t", f"must have shape (n,), got {r.t.shape}")
-        if mech.space.k:
-            if r.q is None or r.q0 is None or r.qd is None:
-                fail("q", f"must be set: mechanism {mech.name!r} has coordinates")
-            arrays["q"] = r.q
-            for key in ("q", "q0", "qd"):
-                if not np.all(np.isfinite(getattr(r, key))):
-                    fail(key, "has non-finite entries (NaN or infinity)")
-        elif r.q is not None or r.q0 is not None or r.qd is not None:
-            fail("q", f"must be null: mechanism {mech.name!r} has no coordinates")
+        arrays["q"] = r.q
+        for key in ("q", "q0", "qd"):
+            if not isinstance(getattr(r, key), np.ndarray):
+                fail(key, "must be a float array")
+            if not np.all(np.isfinite(getattr(r, key))):
+                fail(key, "has non-finite entries (NaN or infinity)")
+        for key in ("q0", "qd"):
+            if getattr(r, key).shape != (mech.n_coordinates,):
+                fail(key, f"must have shape ({mech.n_coordinates},), got {getattr(r, key).shape}")
         for key, shape in (("R", (n, 3, 3)), ("u", (n, mech.n_inputs)), ("q", (n, mech.n_coordinates))):
             if key not in arrays:
                 continue
             if arrays[key].shape != shape:
                 fail(key, f"must have shape {shape} (n = {n} samples in t), got {arrays[key].shape}")
-        if mech.singular.exists:
-            if r.delta is None or r.delta.shape != (n,):
-                fail("delta", f"must have shape ({n},): mechanism {mech.name!r} has a singular set, "
-                               f"got {'null' if r.delta is None else r.delta.shape}")
-        elif r.delta is not None:
-            fail("delta", f"must be null: mechanism {mech.name!r} has no singular set")
+        #: ``Δ`` of the samples (``None`` without a singular set)
+        self.delta = mech.singular.samples(r.R, r.q)
+        if self.delta is None:
+            if r.delta is not None:
+                fail("delta", f"must be null: mechanism {mech.name!r} has no singular set")
+        elif r.delta is None or r.delta.shape != (n,):
+            fail("delta", f"must have shape ({n},): mechanism {mech.name!r} has a singular set, "
+                           f"got {'null' if r.delta is None else r.delta.shape}")
         if n > r.steps + 1:
             fail("t", f"has {n} samples, more than the {r.steps + 1} step points of {r.steps} steps")
         par = r.parametrisation
@@ -416,8 +417,7 @@ class PlanChecks:
         par = planned(r.parametrisation)      # the same path: replayed as planned
         T = par.T
         frame = isinstance(par, FrameControls) and r.replay_steps is None
-        q0 = np.ascontiguousarray(r.q0 if mech.space.k else NO_COORDINATES, dtype=float)
-        self.sign = mech.singular.sign(r.R0, q0)
+        self.sign = mech.singular.sign(*r.start)
         if self.sign == 0.0:
             fail("R0", "lies on the singular surface Δ = 0")
         if r.replay_steps is not None:
@@ -425,15 +425,14 @@ class PlanChecks:
                 fail("replay_steps", f"is set, but the trajectory stops at t = {r.t[-1]:.6g} s < T")
             M = r.replay_steps
             U = np.ascontiguousarray(stages.stage_table(par, M))
-            R_M, done, dmin, Q_M = playback.replay(r.R0, par, T, mech, M, self.sign, U, q0)
+            R_M, done, dmin, Q_M = playback.replay(r.start, par, T, mech, M, self.sign, U)
             Rs, Qs = R_M[::M // r.steps], Q_M[::M // r.steps]
             done //= M // r.steps
         else:
-            kern = mech.kernels(frame=frame)
+            kern = compiled_system(mech, frame=frame)
             U = np.ascontiguousarray(stages.stage_table(par.frame if frame else par, r.steps)[:n - 1])
             Rs, Qs = np.empty((n, 3, 3)), np.empty((n, mech.n_coordinates))
-            done, dmin, _ = kern.forward(np.ascontiguousarray(r.R0, dtype=float), q0,
-                                         U, T / r.steps, self.sign, -np.inf, Rs, Qs)
+            done, dmin, _ = kern.forward(*r.start, U, T / r.steps, self.sign, -np.inf, Rs, Qs)
         if done < n - 1:
             fail("R", f"goes on to t = {r.t[-1]:.6g} s, but the controls replayed from R0 stop at "
                        f"t = {r.t[done]:.6g} s (non-finite angular velocity)")
@@ -445,21 +444,20 @@ class PlanChecks:
             fail("R", f"disagrees with the controls replayed from R0 (the {system} of "
                        f"{mech.name!r}, {steps} steps): by {dev[k]:.3g} at t = {r.t[k]:.6g} s "
                        f"(tolerance {REPLAY_TOL:g})")
-        if mech.space.k:
-            dev = np.max(np.abs(Qs - r.q), axis=1)
-            k = int(np.argmax(dev))
-            if not dev[k] <= REPLAY_TOL:
-                fail("q", f"disagrees with the controls replayed from (R0, q0) by {dev[k]:.3g} at "
-                           f"t = {r.t[k]:.6g} s (tolerance {REPLAY_TOL:g})")
+        dev = np.max(np.abs(Qs - r.q), axis=1, initial=0.0)
+        k = int(np.argmax(dev))
+        if not dev[k] <= REPLAY_TOL:
+            fail("q", f"disagrees with the controls replayed from (R0, q0) by {dev[k]:.3g} at "
+                       f"t = {r.t[k]:.6g} s (tolerance {REPLAY_TOL:g})")
         self.dmin = float(dmin)
         if r.replay_steps is not None:
-            R_half, _, _, Q_half = playback.replay(r.R0, par, T, mech, M // 2, self.sign, stages.halve(U), q0)
+            R_half, _, _, Q_half = playback.replay(r.start, par, T, mech, M // 2, self.sign, stages.halve(U))
             est = certify.richardson((R_M[-1], Q_M[-1]), (R_half[-1], Q_half[-1]), mech)
             # the estimate is a difference of two replays: their rounding (the planner may
             # take the half-step endpoint from the variational replay; another machine rounds
             # otherwise) moves it by up to a careful replay's accuracy per unit of state size
             self.rounding = certify.REPLAY_PERTURBATION * (
-                1.0 + (float(np.max(np.abs(Q_M))) if mech.space.k else 0.0))
+                1.0 + float(np.max(np.abs(Q_M), initial=0.0)))
             if not r.error_bound >= est - self.rounding:
                 fail("error_bound", f"({r.error_bound:.3g}) is below the replay's own error "
                                      f"estimate ({mech.space.amount(est, '.3g')} with {M} steps)")
@@ -467,7 +465,7 @@ class PlanChecks:
             #: the goal (as the certificate measures it), for the success check
             self.replayed, self.replayed_q, self.replay_T = R_M, Q_M, T
             self.estimate = est
-            _, parts = mech.space.error(R_M[-1], Q_M[-1], r.Rd, r.qd if mech.space.k else NO_COORDINATES)
+            _, parts = mech.space.error((R_M[-1], Q_M[-1]), r.goal)
             self.end_error = float(mech.space.norm(parts))
 
     def values(self, mech, n: int, complete: bool) -> None:
@@ -487,27 +485,23 @@ class PlanChecks:
         dev = np.max(np.abs(u - r.u))
         if not dev <= VALUE_RTOL * max(1.0, float(np.max(np.abs(u)))):
             fail("u", f"disagrees with controls(t) by {dev:.3g}")
-        if mech.singular.exists:
-            d = mech.delta_samples(r.R, r.q)
+        if self.delta is not None:
+            d = self.delta
             dev = np.max(np.abs(d - r.delta))
             if not dev <= VALUE_RTOL * max(1.0, float(np.max(np.abs(d)))):
                 fail("delta", f"disagrees with Δ(R) of the samples by {dev:.3g}")
         if complete:
             if r.terminal_error is None:
                 fail("terminal_error", "is null, but the trajectory reaches T")
-            if mech.space.k:
-                err = mech.space.distance(r.R[-1], r.q[-1], r.Rd, r.qd)
-                what = "the distance of the last sample from the goal"
-            else:
-                err = float(kernels.log_error(np.ascontiguousarray(r.R[-1]), np.ascontiguousarray(r.Rd))[1])
-                what = "|log(R[-1] Rdᵀ)|"
+            err = mech.space.distance((r.R[-1], r.q[-1]), (r.Rd, r.qd))
+            what = mech.space.distance_text(("R[-1]", "q[-1]"), ("Rd", "qd"))
             within = max(min(REPLAY_TOL, self.tol), TERMINAL_FLOOR)
             if not abs(err - r.terminal_error) <= within:
                 fail("terminal_error", f"is {r.terminal_error:.6g}, but {what} = {err:.6g} (they must "
                                        f"agree within {within:g}, the plan's tol or less)")
         elif r.terminal_error is not None:
             fail("terminal_error", f"must be null: the trajectory stops at t = {r.t[-1]:.6g} s < T")
-        if mech.singular.exists:
+        if self.delta is not None:
             if r.min_delta is None:
                 fail("min_delta", f"is null, but mechanism {mech.name!r} has a singular set")
             tol = VALUE_RTOL * max(1.0, abs(r.min_delta))
@@ -573,7 +567,7 @@ class PlanChecks:
             if not mech.singular.clear(self.dmin, dmin):
                 fail("success", f"is true, but the replayed motion comes within {self.dmin:.4g} of Δ = 0 "
                                  f"(delta_min = {dmin:g})")
-            if mech.singular.exists and r.min_delta < dmin:
+            if not mech.singular.clear(r.min_delta, dmin):
                 fail("success", f"is true, but min_delta = {r.min_delta:.4g} < delta_min = {dmin:g}")
             if limits is not None and limits.least_clearance(mech, self.replayed) < 0.0:
                 fail("success", f"is true, but the replayed motion leaves the legs' stroke: "
@@ -638,10 +632,8 @@ class PlanChecks:
         r = self.r
         par = r.parametrisation
         steps = r.steps if r.steps % 2 == 0 else 2 * r.steps
-        q0 = r.q0 if mech.space.k else None
-        qd = r.qd if mech.space.k else None
-        cert = certify.measure(r.R0, r.Rd, r.T, mech, par, steps, tol, dmin, self.sign,
-                               leg_limits=limits, q0=q0, qd=qd)
+        cert = certify.measure(r.start, r.goal, r.T, mech, par, steps, tol, dmin, self.sign,
+                               leg_limits=limits)
         if not cert.passed:
             fail("success", f"is true, but the plan's controls are not certified for its tol = {tol:g} "
                              f"and delta_min = {dmin:g}: {cert.reason}")

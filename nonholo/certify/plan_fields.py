@@ -12,7 +12,7 @@ import numpy as np
 
 from ..model.bounds import InputBounds, StateBounds
 from ..model.limits import LegLimits
-from ..motion.retimed import check_leg_speed
+from ..motion.speed_limits import check_leg_speed
 from ..numerics.checks import MAX_STEPS, check_count, is_number
 from ..spaces import so3
 

@@ -186,10 +186,7 @@ def resimulate_path(R0, controls, T: float, mechanism="platform", breakpoints=No
     R = np.concatenate(Rs)
     order = np.argsort(t, kind="stable")
     t, R = t[order], R[order]
-    delta = None
-    if mech.singular.exists:
-        delta = np.array([mech.delta(r) for r in R])
-    return t, R, delta
+    return t, R, mech.singular.samples(R)
 
 
 def terminal_error(R_T, Rd) -> float:
@@ -297,9 +294,9 @@ def resimulate_rk4(R0, controls, T: float, mechanism="platform", steps: int = RK
     L_into = mech.module.L_into
     Y = np.ascontiguousarray(R.transpose(1, 2, 0))                             # (3, 3, P)
     B = np.empty((3, m, P))
-    watched = mech.singular.exists
-    sign = np.sign(mech.delta(Y)) if watched else None
-    dmin = sign * mech.delta(Y) if watched else None
+    singular, none = mech.singular, np.zeros((P, 0))
+    sign = np.sign(singular.values(R, none))
+    dmin = sign * singular.values(R, none)
 
     def f(Y, u):
         L_into(Y, B)
@@ -317,11 +314,9 @@ def resimulate_rk4(R0, controls, T: float, mechanism="platform", steps: int = RK
             k3 = f(Y + 0.5 * h * k2, u1)
             k4 = f(Y + h * k3, u2)
             Y = Y + (h / 6.0) * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
-            if watched:
-                dmin = np.fmin(dmin, sign * mech.delta(Y))
+            dmin = np.fmin(dmin, sign * singular.values(Y.transpose(2, 0, 1), none))
     RT = Y.transpose(2, 0, 1)
-    if watched:
-        dmin = np.where(np.isfinite(RT).all(axis=(1, 2)), dmin, -np.inf)
+    dmin = singular.reported(np.where(np.isfinite(RT).all(axis=(1, 2)), dmin, -np.inf))
     if single:
         return RT[0], None if dmin is None else float(dmin[0])
     return RT, dmin
@@ -514,6 +509,6 @@ def state_errors(mechanism, R_T, q_T, Rd, qd) -> dict:
     -------
     dict
         ``{"rotation": rad, "coordinates": units}`` (angles wrapped,
-        :mod:`nonholo.spaces.groups`).
+        :mod:`nonholo.spaces.product`).
     """
-    return catalog.get(mechanism).space.error(R_T, q_T, Rd, qd)[1]
+    return catalog.get(mechanism).space.error((R_T, q_T), (Rd, qd))[1]

@@ -47,8 +47,24 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     argparse.ArgumentParser
         The subcommand's parser.
     """
-    p = subparsers.add_parser("animate", help="write a GIF or MP4 of a saved plan's motion",
-                              description=plain(__doc__), formatter_class=argparse.RawDescriptionHelpFormatter)
+    from .commands import COMMANDS
+
+    p = subparsers.add_parser("animate", help=COMMANDS["animate"].help)
+    arguments(p)
+    return p
+
+
+def arguments(p: argparse.ArgumentParser) -> None:
+    """Give the ``animate`` sub-command's parser ``p`` its description, its arguments and the
+    function that runs it (:func:`run`).
+
+    Parameters
+    ----------
+    p : argparse.ArgumentParser
+        The sub-command's parser.
+    """
+    p.description = plain(__doc__)
+    p.formatter_class = argparse.RawDescriptionHelpFormatter
     p.add_argument("plan", help="a plan file written by `nonholo plan --out`")
     p.add_argument("--out", required=True, metavar="FILE", help="the animation: FILE.gif or FILE.mp4")
     p.add_argument("--frames", default="60", metavar="N", help="the number of frames (default 60)")
@@ -58,7 +74,6 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
                    help="the plan's mechanism, for a plan whose file does not carry it (a catalog name)")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
     p.set_defaults(func=run)
-    return p
 
 
 def _count(text: str, flag: str, maximum: int) -> int:

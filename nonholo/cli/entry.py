@@ -1,31 +1,33 @@
-"""Command line: ``nonholo derive | audit | mechanisms | plan | execute | animate | reproduce | sweep | atlas``."""
+"""Command line: ``nonholo derive | audit | mechanisms | plan | execute | animate | reproduce | sweep | atlas``.
+
+The parser lists every command (:data:`nonholo.cli.commands.COMMANDS`), but adds the
+arguments of the one command run (of all of them for :func:`build_parser` without
+arguments): a command's module (``plan_command`` …) is imported only when that command runs
+or shows its help, so that ``nonholo --help`` loads none of them.
+"""
 from __future__ import annotations
 
 import argparse
+import importlib
 import json
 import os
 import sys
 import time
 from pathlib import Path
 
-from ..model import bounds, catalog
-from . import animate_command as cli_animate
-from . import execute_command as cli_execute
-from . import plan_command as cli_plan
-from . import reproduce_command as cli_reproduce
-from . import sweep_command as cli_sweep
+from .commands import COMMANDS
 
 
 def _derive(args) -> int:
     from derivations import codegen
 
-    from ..integrate import inliner
+    from ..integrate import compiled
 
     t0 = time.perf_counter()
     outdir = Path(args.dir) if args.dir else codegen.GENERATED_DIR
     why = _derive_dir_error(outdir, args.check)
     if why is None:
-        files = inliner.every_generated_file()
+        files = compiled.generated_files()
         try:
             if args.check:
                 stale = codegen.check(outdir, files)
@@ -88,49 +90,124 @@ def _audit(args) -> int:
 
 
 def _mechanisms(args) -> int:
+    from ..model import bounds, catalog
+
     for name in catalog.names():
         m = catalog.get(name)
-        singular = "singular set Δ = 0" if m.singular.exists else "no singular set"
-        state = "" if not m.space.k else f"state {m.state_space}: " + " ".join(
-            (["φ", "ϑ", "ψ"] if m.space.has_orientation else []) + list(m.coordinates)) + ", "
+        singular = m.singular.summary
+        state = m.space.recorded("coordinates", f"state {m.state_space}: {' '.join(m.space.cli_names)}, ", "")
         limits = bounds.describe(m)
         print(f"{name:<16} {m.description} ({state}{m.n_inputs} inputs, {singular}"
               + (f"; bounds {limits})" if limits else ")"))
     return 0
 
 
-def build_parser() -> argparse.ArgumentParser:
-    """The command line's parser, one subcommand per command.
+def derive_arguments(p: argparse.ArgumentParser) -> None:
+    """Give the ``derive`` command's parser ``p`` its arguments and the function that runs it.
 
-    Returns
-    -------
-    argparse.ArgumentParser
-        The parser; each subcommand sets ``func``, the function that runs it.
+    Parameters
+    ----------
+    p : argparse.ArgumentParser
+        The command's parser.
     """
-    parser = argparse.ArgumentParser(
-        prog="nonholo", description="Motion planning of non-holonomic systems on SO(3).")
-    sub = parser.add_subparsers(dest="command", required=True)
-
-    p = sub.add_parser("derive", help="derive the kinematics symbolically and write nonholo/generated")
     p.add_argument("--check", action="store_true",
                    help="only compare the committed modules with a fresh derivation (exit 1 if stale)")
     p.add_argument("-v", "--verbose", action="store_true", help="print the diff of stale files")
     p.add_argument("--dir", help="generated-modules directory (default: nonholo/generated)")
     p.set_defaults(func=_derive)
 
-    p = sub.add_parser("audit", help="hold the appendix formulas against the derivation")
+
+def audit_arguments(p: argparse.ArgumentParser) -> None:
+    """Give the ``audit`` command's parser ``p`` its arguments and the function that runs it.
+
+    Parameters
+    ----------
+    p : argparse.ArgumentParser
+        The command's parser.
+    """
     p.add_argument("--json", action="store_true", help="print a JSON list instead of a table")
     p.set_defaults(func=_audit)
 
-    p = sub.add_parser("mechanisms", help="list the mechanisms")
+
+def mechanisms_arguments(p: argparse.ArgumentParser) -> None:
+    """Give the ``mechanisms`` command's parser ``p`` the function that runs it.
+
+    Parameters
+    ----------
+    p : argparse.ArgumentParser
+        The command's parser.
+    """
     p.set_defaults(func=_mechanisms)
 
-    cli_plan.add_parser(sub)
-    cli_execute.add_parser(sub)
-    cli_animate.add_parser(sub)
-    cli_reproduce.add_parser(sub)
-    cli_sweep.add_parsers(sub)
+
+def add_command(subparsers, name: str) -> argparse.ArgumentParser:
+    """Add the command ``name`` with its arguments to an ``argparse`` sub-parsers object.
+
+    Parameters
+    ----------
+    subparsers : argparse._SubParsersAction
+        What ``ArgumentParser.add_subparsers`` returned.
+    name : str
+        The command, a key of :data:`nonholo.cli.commands.COMMANDS`.
+
+    Returns
+    -------
+    argparse.ArgumentParser
+        The command's parser; it sets ``func``, the function that runs the command.
+    """
+    p = subparsers.add_parser(name, help=COMMANDS[name].help)
+    _arguments(name)(p)
+    return p
+
+
+def _arguments(name: str):
+    """The function that adds the command ``name``'s arguments to its parser (its module
+    imported now)."""
+    command = COMMANDS[name]
+    return getattr(importlib.import_module(f".{command.module}", __package__), command.arguments)
+
+
+def build_parser(commands=None) -> argparse.ArgumentParser:
+    """The command line's parser, one subcommand per command.
+
+    Parameters
+    ----------
+    commands : iterable of str, optional
+        The commands whose arguments are added (default: every one); the others are listed,
+        with no arguments.
+
+    Returns
+    -------
+    argparse.ArgumentParser
+        The parser; each subcommand with its arguments sets ``func``, the function that runs it.
+    """
+    commands = set(COMMANDS if commands is None else commands)
+    parser = argparse.ArgumentParser(
+        prog="nonholo", description="Motion planning of non-holonomic systems on SO(3).")
+    sub = parser.add_subparsers(dest="command", required=True)
+    for name, command in COMMANDS.items():
+        if name in commands:
+            add_command(sub, name)
+        else:
+            sub.add_parser(name, help=command.help)
     return parser
+
+
+def command_named(argv: list[str]) -> str | None:
+    """The command ``argv`` runs: its first argument not an option (``nonholo`` itself has
+    no option that takes a value).
+
+    Parameters
+    ----------
+    argv : list of str
+        The command line's arguments.
+
+    Returns
+    -------
+    str or None
+        The command's name, or ``None``.
+    """
+    return next((arg for arg in argv if not arg.startswith("-")), None)
 
 
 def tolerate_any_encoding() -> None:
@@ -160,11 +237,14 @@ def main(argv: list[str] | None = None) -> int:
         The exit status.
     """
     tolerate_any_encoding()
-    args = build_parser().parse_args(argv)
+    argv = sys.argv[1:] if argv is None else list(argv)
+    args = build_parser([command_named(argv)]).parse_args(argv)
     try:
         return args.func(args)
     except BrokenPipeError:            # the reader closed stdout (``| head``): not an error
-        cli_plan.discard_stdout()
+        from .plan_command import discard_stdout
+
+        discard_stdout()
         return 0
 
 

@@ -12,7 +12,7 @@ to end nearer the goal, and none once within the plan's tolerance
 (:func:`nonholo.physics.execution.execute`). One line is printed per stage: the error from
 the goal by part, the largest slip and the real-time factor, or why a touch-up was not
 played (touching up ends there), or that MuJoCo went unstable in the stage (the execution
-ends there). ``--touch-ups`` (at most :data:`~nonholo.physics.execution.MAX_TOUCH_UPS`) and
+ends there). ``--touch-ups`` (at most :data:`~nonholo.physics.execution_record.MAX_TOUCH_UPS`) and
 ``--duration`` (at most :data:`~nonholo.physics.execution.MAX_DURATION` s) are checked
 before the plan is read. ``--json`` writes the record (``{"stages": [{"error":
 {"rotation": …, "coordinates": …}, "outcome": "played", "max_slip": …, …}, …]}``, the
@@ -53,8 +53,24 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     argparse.ArgumentParser
         The subcommand's parser.
     """
-    p = subparsers.add_parser("execute", help="play a saved plan on a MuJoCo model of its mechanism",
-                              description=plain(__doc__), formatter_class=argparse.RawDescriptionHelpFormatter)
+    from .commands import COMMANDS
+
+    p = subparsers.add_parser("execute", help=COMMANDS["execute"].help)
+    arguments(p)
+    return p
+
+
+def arguments(p: argparse.ArgumentParser) -> None:
+    """Give the ``execute`` sub-command's parser ``p`` its description, its arguments and the
+    function that runs it (:func:`run`).
+
+    Parameters
+    ----------
+    p : argparse.ArgumentParser
+        The sub-command's parser.
+    """
+    p.description = plain(__doc__)
+    p.formatter_class = argparse.RawDescriptionHelpFormatter
     p.add_argument("plan", help="a plan file written by `nonholo plan --out`")
     p.add_argument("--touch-ups", type=int, default=0, metavar="N",
                    help="re-plan from the measured state and play again, at most N times (default 0)")
@@ -67,7 +83,6 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     p.add_argument("--plot", metavar="FILE", help="write the execution's figure (format by extension)")
     p.add_argument("-q", "--quiet", action="store_true", help="no line per stage")
     p.set_defaults(func=run)
-    return p
 
 
 def describe(record: dict, name: str, units: dict) -> str:
@@ -76,7 +91,7 @@ def describe(record: dict, name: str, units: dict) -> str:
     Parameters
     ----------
     record : dict
-        The stage's record (:class:`~nonholo.physics.execution.Execution`).
+        The stage's record (:class:`~nonholo.physics.execution_record.Execution`).
     name : str
         The stage's name.
     units : dict

@@ -19,16 +19,19 @@ FLAGS = {"leg_speed": "--leg-speed", "leg_length": "--leg-length", "delta_min": 
          "R0": "--from", "Rd": "--to"}
 #: One-word arguments whose flag is the word itself.
 WORDS = ("T", "harmonics", "grid", "steps", "gamma", "tol", "method", "strategy", "route", "objective")
+#: One-word arguments whose flag is another word.
+RENAMED = {"start": "--from", "goal": "--to"}
 #: Phrases of the Python API with no counterpart on the command line, and what stands there.
 PHRASES = {"T=None": "--T min",
            "InputBounds in constraints": "a mechanism's own input bounds (nonholo mechanisms lists them)",
            " (or pass a nonholo.Mechanism)": "", " (or pass a Strategy subclass)": "",
            ", or pass a Strategy subclass": "",
            "allow_imports=True (nonholo plan --allow-imports)": "--allow-imports",
-           "InputBounds": "input bounds", "StateBounds": "coordinate bounds"}
+           "InputBounds": "input bounds", "StateBounds": "coordinate bounds", "LegSpeed": "--leg-speed"}
 
 _NAMED = re.compile(r"(?<![\w/-])(" + "|".join(map(re.escape, FLAGS)) + r")(?![\w])")
 _WORD = re.compile(r"(?<![\w/-])(" + "|".join(WORDS) + r")(?= must\b| is\b| ?=| ?>=| ?<=|:)")
+_RENAMED = re.compile(r"(?<![\w/-])(" + "|".join(RENAMED) + r")(?= must\b| is\b| ?=| ?>=| ?<=|:)")
 _AFTER = re.compile(r"\b(raise|lower) (" + "|".join(WORDS) + r")\b")
 
 
@@ -49,4 +52,5 @@ def in_flags(text: str) -> str:
         text = text.replace(phrase, flag)
     text = _NAMED.sub(lambda m: FLAGS[m.group(1)], text)
     text = _WORD.sub(lambda m: "--" + m.group(1), text)
+    text = _RENAMED.sub(lambda m: RENAMED[m.group(1)], text)
     return _AFTER.sub(lambda m: f"{m.group(1)} --{m.group(2)}", text)

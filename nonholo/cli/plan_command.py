@@ -48,7 +48,8 @@ from pathlib import Path
 from ..io import csv_export as export
 from ..io import safe_write
 from ..model import catalog
-from ..planning import api as planner
+from ..planning.api import METHODS, ROUTES, STRATEGIES, plan
+from ..planning.problem import arguments_of
 from .flag_text import in_flags
 from .help_text import plain
 
@@ -69,9 +70,24 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     argparse.ArgumentParser
         The sub-command's parser (it runs :func:`run`).
     """
-    p = subparsers.add_parser(
-        "plan", help="plan a motion R0 -> Rd (Jacobian algorithm of Tchoń & Jakubiak)",
-        description=plain(__doc__), formatter_class=argparse.RawDescriptionHelpFormatter)
+    from .commands import COMMANDS
+
+    p = subparsers.add_parser("plan", help=COMMANDS["plan"].help)
+    arguments(p)
+    return p
+
+
+def arguments(p: argparse.ArgumentParser) -> None:
+    """Give the ``plan`` sub-command's parser ``p`` its description, its arguments and the
+    function that runs it (:func:`run`).
+
+    Parameters
+    ----------
+    p : argparse.ArgumentParser
+        The sub-command's parser.
+    """
+    p.description = plain(__doc__)
+    p.formatter_class = argparse.RawDescriptionHelpFormatter
     p.add_argument("--from", dest="start", nargs="+", type=float, required=True, metavar="X",
                    help="the start: RPY angles φ ϑ ψ (rad) of the orientation, then the coordinates "
                         "of a mechanism whose state has them (see the description)")
@@ -80,12 +96,12 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     p.add_argument("--T", type=_horizon, default=1.0,
                    help="time horizon in s (default 1), or 'min' for the least time under --leg-speed or, "
                         "for a vehicle with bounds (car, unicycle), under its bounds")
-    p.add_argument("--method", choices=planner.METHODS, default="parametric",
+    p.add_argument("--method", choices=METHODS, default="parametric",
                    help="Fourier controls (parametric) or piecewise constant (nonparametric)")
     p.add_argument("--harmonics", type=int, default=2, help="Fourier harmonics K (default 2)")
     p.add_argument("--grid", type=int, default=100, help="intervals of the nonparametric grid (default 100)")
     p.add_argument("--strategy", default="robust",
-                   help=f"planning strategy: {', '.join(planner.STRATEGIES)} (default: robust), or an import "
+                   help=f"planning strategy: {', '.join(STRATEGIES)} (default: robust), or an import "
                         "path module:Class with --allow-imports")
     p.add_argument("--allow-imports", action="store_true",
                    help="let --strategy be an import path (module:Class), which imports that module and runs "
@@ -99,7 +115,7 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     p.add_argument("--max-iter", type=int, default=200, help="maximum number of iterations")
     p.add_argument("--delta-min", type=float, default=1e-2, help="keep |Δ| >= this along the motion")
     p.add_argument("--steps", type=int, default=None, help="integrator steps on [0, T]")
-    p.add_argument("--route", choices=planner.ROUTES, default="auto",
+    p.add_argument("--route", choices=ROUTES, default="auto",
                    help="auto: one plan from start to goal and, if that fails, hops along a path "
                         "of orientations clear of Δ = 0 (default); local: the one plan only; "
                         "global: only the hops")
@@ -122,7 +138,6 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
                    help=f"samples per second of --csv (default {export.DEFAULT_RATE:g})")
     p.add_argument("--quiet", action="store_true", help="print the summary only")
     p.set_defaults(func=run)
-    return p
 
 
 def _horizon(text: str) -> float | None:
@@ -234,7 +249,7 @@ def state_of(mechanism, values, flag: str):
     if len(values) != len(names):
         raise ValueError(f"{flag} takes {len(names)} numbers for mechanism {catalog.get(mechanism).name!r} "
                          f"({' '.join(names)}), got {len(values)}")
-    return space.public(*space.from_cli(values))
+    return space.public(space.from_cli(values))
 
 
 def run(args) -> int:
@@ -263,13 +278,14 @@ def run(args) -> int:
         mechanism = catalog.resolve(args.mechanism)
         R0 = state_of(mechanism, args.start, "--from")
         Rd = state_of(mechanism, args.goal, "--to")
-        res = planner.plan(
-            R0, Rd, T=args.T, method=args.method, harmonics=args.harmonics, grid=args.grid,
-            strategy=args.strategy, mechanism=mechanism, gamma=args.gamma, tol=args.tol,
-            max_iter=args.max_iter, delta_min=args.delta_min, steps=args.steps, route=args.route,
-            leg_length=args.leg_length, leg_speed=args.leg_speed,
+        flat = dict(method=args.method, harmonics=args.harmonics, grid=args.grid, gamma=args.gamma,
+                    tol=args.tol, max_iter=args.max_iter, delta_min=args.delta_min, steps=args.steps,
+                    leg_length=args.leg_length, leg_speed=args.leg_speed)
+        res = plan(
+            R0, Rd, T=args.T, strategy=args.strategy, mechanism=mechanism, route=args.route,
             objective=None if args.objective == "none" else args.objective,
-            callback=None if args.quiet else _print_record, allow_imports=args.allow_imports)
+            callback=None if args.quiet else _print_record, allow_imports=args.allow_imports,
+            **arguments_of(flat, mechanism))
     except ValueError as exc:
         _error(in_flags(str(exc)))
         return EXIT_BAD_INPUT

@@ -1,19 +1,39 @@
 """``nonholo reproduce``: the project's main job (see :mod:`nonholo.paper.reproduce`)."""
 from __future__ import annotations
 
+import argparse
 import os
 
 
-def add_parser(subparsers) -> None:
+def add_parser(subparsers) -> argparse.ArgumentParser:
     """Add ``nonholo reproduce``.
 
     Parameters
     ----------
     subparsers : argparse._SubParsersAction
         The subcommands of the ``nonholo`` parser.
+
+    Returns
+    -------
+    argparse.ArgumentParser
+        The subcommand's parser.
     """
-    p = subparsers.add_parser(
-        "reproduce", help="check the derivation, audit, solve the examples, write paper_figures/")
+    from .commands import COMMANDS
+
+    p = subparsers.add_parser("reproduce", help=COMMANDS["reproduce"].help)
+    arguments(p)
+    return p
+
+
+def arguments(p: argparse.ArgumentParser) -> None:
+    """Give the ``reproduce`` sub-command's parser ``p`` its arguments and the function that
+    runs it (:func:`run`).
+
+    Parameters
+    ----------
+    p : argparse.ArgumentParser
+        The sub-command's parser.
+    """
     p.add_argument("--out", default="paper_figures", help="output directory (default: paper_figures)")
     p.add_argument("--no-audit", action="store_true", help="skip printing the audit")
     p.add_argument("--no-figures", action="store_true", help="skip the figures")

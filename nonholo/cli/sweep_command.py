@@ -45,8 +45,23 @@ def add_parsers(subparsers) -> None:
     subparsers : argparse._SubParsersAction
         The subcommands of the ``nonholo`` parser.
     """
-    p = subparsers.add_parser("sweep", help="plan every problem of a JSON Lines file, in parallel, into Parquet",
-                              description=plain(__doc__), formatter_class=argparse.RawDescriptionHelpFormatter)
+    from .commands import COMMANDS
+
+    sweep_arguments(subparsers.add_parser("sweep", help=COMMANDS["sweep"].help))
+    atlas_arguments(subparsers.add_parser("atlas", help=COMMANDS["atlas"].help))
+
+
+def sweep_arguments(p: argparse.ArgumentParser) -> None:
+    """Give the ``sweep`` sub-command's parser ``p`` its description, its arguments and the
+    function that runs it (:func:`run_sweep`).
+
+    Parameters
+    ----------
+    p : argparse.ArgumentParser
+        The sub-command's parser.
+    """
+    p.description = plain(__doc__)
+    p.formatter_class = argparse.RawDescriptionHelpFormatter
     p.add_argument("problems", help="JSON Lines file: one problem per line (start, goal, mechanism, options)")
     p.add_argument("--out", required=True, help="results file (Parquet); resumed if a run was interrupted")
     p.add_argument("--workers", type=int, default=None, help="local worker processes (default: one per core)")
@@ -60,8 +75,18 @@ def add_parsers(subparsers) -> None:
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.set_defaults(func=run_sweep)
 
-    p = subparsers.add_parser("atlas", help="write an atlas's problems, or draw the maps of their sweep",
-                              description=plain(__doc__), formatter_class=argparse.RawDescriptionHelpFormatter)
+
+def atlas_arguments(p: argparse.ArgumentParser) -> None:
+    """Give the ``atlas`` sub-command's parser ``p`` its description, its arguments and the
+    function that runs it (:func:`run_atlas`).
+
+    Parameters
+    ----------
+    p : argparse.ArgumentParser
+        The sub-command's parser.
+    """
+    p.description = plain(__doc__)
+    p.formatter_class = argparse.RawDescriptionHelpFormatter
     p.add_argument("results", nargs="?", help="results of a sweep of atlas problems (Parquet)")
     p.add_argument("--out", default="paper_figures", help="directory of the figures (default paper_figures)")
     p.add_argument("--problems", default=None, metavar="FILE",
@@ -106,7 +131,8 @@ def run_sweep(args) -> int:
     int
         The exit status: 0 done, 2 bad input (the error on standard error).
     """
-    from ..batch.sweep import SweepBusy, sweep
+    from ..batch.result_store import SweepBusy
+    from ..batch.sweep import sweep
 
     try:
         table = sweep(args.problems, args.out, workers=args.workers, scheduler=args.scheduler,
@@ -151,7 +177,7 @@ def run_atlas(args) -> int:
         return 0
     if not args.results:
         return _error("give the results of a sweep to draw, or --problems FILE to write an atlas's problems")
-    from ..batch.sweep import load
+    from ..batch.result_store import load
 
     try:
         table = load(args.results)

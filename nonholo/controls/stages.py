@@ -210,7 +210,7 @@ def kernel_basis(controls, steps: int) -> tuple[np.ndarray, np.ndarray, int, int
     tuple
         ``(Bidx, Bval, stride_b, stride_i)``: for Fourier series the dense form (empty
         ``Bidx``, ``Bval`` of shape ``(steps, 3, nb)`` over every index, see
-        :func:`nonholo.integrate.cf4.forward_variational`), else :func:`sparse_basis`'s.
+        :func:`nonholo.integrate.variational_kernels.forward_variational`), else :func:`sparse_basis`'s.
     """
     if isinstance(controls, Fourier):
         steps = check_steps(controls, steps)

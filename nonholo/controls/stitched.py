@@ -16,7 +16,7 @@ the pieces' tables of ``steps/k`` steps each, scaled.
 
 ``waypoints`` (``(k + 1, 3, 3)``) are the orientations the pieces were planned between
 (the route); the motion passes within the planner's tolerance of the inner ones. A
-mechanism whose state goes beyond SO(3) (:mod:`nonholo.spaces.groups`) adds the waypoints'
+mechanism whose state goes beyond SO(3) (:mod:`nonholo.spaces.product`) adds the waypoints'
 ``coordinates`` (``(k + 1, n)``; its waypoint orientations are the identity without
 orientation).
 """

@@ -16,7 +16,7 @@ gives a plan's columns with their units):
   see a jump);
 - ``delta`` [-]: ``Δ(R(t))``, for a mechanism with a singular set.
 
-A mechanism whose state goes beyond SO(3) (:mod:`nonholo.spaces.groups`) has its coordinates as
+A mechanism whose state goes beyond SO(3) (:mod:`nonholo.spaces.product`) has its coordinates as
 columns named as the mechanism names them (the car's ``x, y, theta, phi``), in its units
 (``wheelbase``, ``rad``), after the inputs; the quaternion only if it has an orientation;
 ``delta`` is ``Δ(R(t), q(t))``. The header holds the names alone (a controller reads the
@@ -34,11 +34,11 @@ import math
 
 import numpy as np
 
+from ..integrate.compiled import compiled_system
 from ..model import names
-from ..motion.time_change import planned, planned_time
+from ..motion.time_scaling import planned, planned_time
 from ..motion.simulation import DELTA_STOP
 from ..numerics.checks import is_number
-from ..spaces.groups import NO_COORDINATES
 
 #: Sample rate of :func:`trajectory_table` unless given (Hz).
 DEFAULT_RATE = 100.0
@@ -101,7 +101,7 @@ def states_at(result, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """``(R(t), q(t))`` of a simulated plan: one CF4 step of the physical system from the
     stored sample at or below each ``t`` (none where ``t`` is a sample time); ``q`` has no
     columns on SO(3). A time-changed plan (re-timed or rest-to-rest,
-    :mod:`nonholo.motion.time_change`) moves along its planned path: ``R(τ(t))``, stepped in
+    :mod:`nonholo.motion.time_scaling`) moves along its planned path: ``R(τ(t))``, stepped in
     the planned time ``τ`` with the planned controls.
 
     Parameters
@@ -122,7 +122,7 @@ def states_at(result, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         If the plan's motion does not reach ``T`` or runs into ``Δ = 0``.
     """
     mech = result.kinematics
-    kern = mech.kernels(False)
+    kern = compiled_system(mech, False)
     n_samples = len(result.t)
     if n_samples == 0 or t[-1] > result.t[-1] * (1 + 1e-12):
         raise ValueError("the plan's motion does not reach T (a failed plan): nothing to export")
@@ -135,11 +135,8 @@ def states_at(result, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     idx = np.minimum(np.floor(t / h + 1e-9).astype(np.int64), n_samples - 1)
     s = t - idx * h
     s[np.abs(s) <= 1e-12 * max(1.0, T)] = 0.0
-    q0 = NO_COORDINATES if result.q0 is None else np.asarray(result.q0, dtype=float)
-    Q = np.zeros((n_samples, 0)) if result.q is None else np.asarray(result.q, dtype=float)
-    sgn = 1.0
-    if mech.singular.exists:
-        sgn = float(np.sign(mech.delta_samples(np.asarray(result.R0)[None], q0[None])[0]))
+    Q = np.asarray(result.q, dtype=float)
+    sgn = mech.singular.sign(*result.start)
     starts = idx * h
     U = np.stack([controls(starts), controls(starts + 0.5 * s), controls(starts + s)],
                  axis=1).reshape(len(t), 3, mech.n_inputs)
@@ -154,29 +151,6 @@ def states_at(result, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
                 raise ValueError(f"the motion runs into Δ = 0 at t ≈ {asked[k]:g} s: not a plan to play back")
             out[k], out_q[k] = step[1], step_q[1]
     return out, out_q
-
-
-def continuous_quaternions(R: np.ndarray) -> np.ndarray:
-    """Unit quaternions of rotations, their signs kept continuous.
-
-    Parameters
-    ----------
-    R : numpy.ndarray
-        Rotations, shape ``(n, 3, 3)``.
-
-    Returns
-    -------
-    numpy.ndarray
-        ``(x, y, z, w)`` per rotation, shape ``(n, 4)``, each with the sign nearer the
-        previous one's.
-    """
-    from scipy.spatial.transform import Rotation  # loaded when first needed
-
-    q = Rotation.from_matrix(R).as_quat()
-    for k in range(1, len(q)):
-        if np.dot(q[k], q[k - 1]) < 0.0:
-            q[k] = -q[k]
-    return q
 
 
 def trajectory_table(result, rate: float = DEFAULT_RATE) -> dict[str, np.ndarray]:
@@ -217,14 +191,8 @@ def trajectory_table(result, rate: float = DEFAULT_RATE) -> dict[str, np.ndarray
             cols[f"dl{i + 1}_dt"] = speeds[:, i]
     for i in range(mech.n_inputs):
         cols[f"u{i + 1}"] = u[:, i]
-    for i, name in enumerate(mech.coordinates):
-        cols[name] = q[:, i]
-    if mech.space.has_orientation:
-        quaternion = continuous_quaternions(R)
-        for i, name in enumerate(("qx", "qy", "qz", "qw")):
-            cols[name] = quaternion[:, i]
-    if mech.singular.exists:
-        cols["delta"] = mech.delta_samples(R, q if mech.space.k else None)
+    cols.update(mech.space.columns(R, q))
+    cols.update(mech.singular.columns(R, q))
     return cols
 
 
@@ -246,12 +214,8 @@ def column_names(mechanism) -> list[str]:
     if mechanism.has_legs:
         legs = range(1, len(mechanism.geometry.bases) + 1)
         out += [f"l{i}" for i in legs] + [f"dl{i}_dt" for i in legs]
-    out += [f"u{i + 1}" for i in range(mechanism.n_inputs)] + list(mechanism.coordinates)
-    if mechanism.space.has_orientation:
-        out += ["qx", "qy", "qz", "qw"]
-    if mechanism.singular.exists:
-        out.append("delta")
-    return out
+    out += [f"u{i + 1}" for i in range(mechanism.n_inputs)]
+    return out + [*mechanism.space.column_names(), *mechanism.singular.column_names]
 
 
 def column_units(mechanism) -> dict[str, str]:

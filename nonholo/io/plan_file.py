@@ -19,7 +19,7 @@ time-changed plan wraps one of those as ``{"kind": "retimed", "T", "leg_speed", 
 "bounds", "nodes", "base"}`` (input bounds, one ``[low, high]`` per input, ``null`` where
 free) and/or ``{"kind": "rest_to_rest", "T", "base"}`` (played from rest to rest); see :mod:`nonholo.controls.parametrisations`,
 :mod:`nonholo.motion.frame_controls`, :mod:`nonholo.controls.stitched` and
-:mod:`nonholo.motion.time_change`) from which ``controls(t)`` is rebuilt (identically: the frame
+:mod:`nonholo.motion.time_scaling`) from which ``controls(t)`` is rebuilt (identically: the frame
 motion's nodes are recomputed by the same kernel). Floats are written with
 ``repr`` precision, so a save/load round trip reproduces every number exactly. Quantities
 that do not exist (``min_delta`` for a mechanism without a singular set, the terminal
@@ -29,8 +29,8 @@ of Python, NumPy, SciPy, SymPy and the C compiler (:mod:`nonholo.io.provenance`)
 without it (written before it was recorded) load as well. A plan of a mechanism with a
 definition as data (:meth:`~nonholo.model.mechanism.Mechanism.from_equations`,
 :meth:`~nonholo.model.mechanism.Mechanism.from_file`) carries it, ``mechanism_definition``
-(:func:`nonholo.model.mechanism_file.json_data`), and its SHA-256, ``mechanism_digest``
-(:func:`nonholo.model.mechanism_file.digest`): such a file loads without ``mechanism=``; a
+(:func:`nonholo.model.definition_forms.json_data`), and its SHA-256, ``mechanism_digest``
+(:func:`nonholo.model.definition_forms.digest`): such a file loads without ``mechanism=``; a
 digest that does not match is refused, and the definition is checked as a mechanism file
 is before the mechanism is built. A catalog mechanism's plans hold its name only.
 
@@ -79,12 +79,13 @@ from ..certify.plan_fields import (
 )
 from ..controls.parametrisations import Controls
 from ..controls.stitched import Stitched
-from ..model import catalog, mechanism_file
+from ..model import catalog, definition_forms
 from ..model.bounds import InputBounds
 from ..motion.frame_controls import FrameControls, from_dict
-from ..motion.retimed import InputRetimed, Retimed
-from ..motion.time_change import RestToRest
+from ..motion.speed_limits import InputRetimed, Retimed
+from ..motion.time_scaling import RestToRest
 from ..numerics.checks import is_number
+from ..spaces.state import State
 
 #: the fields of a plan file
 _REQUIRED = ("format", "success", "reason", "terminal_error", "min_delta", "iterations", "history",
@@ -112,16 +113,18 @@ _CONTROL_FIELDS = {"fourier": ("kind", "T", "harmonics", "coeffs"),
 
 
 def _coordinates(d: dict, mech) -> dict:
-    """The coordinate fields of a plan of a mechanism whose state goes beyond SO(3)."""
+    """The coordinate fields of a plan: those of a file's mechanism with coordinates, empty
+    ones on SO(3) (whose files have none)."""
     k = mech.n_coordinates
-    missing = [key for key in ("q0", "qd", "q") if key not in d]
+    shapes = mech.space.recorded("coordinates", {"q0": (k,), "qd": (k,), "q": (None, k)}, {})
+    missing = [key for key in shapes if key not in d]
     if missing:
         fail(missing[0], f"is missing: mechanism {mech.name!r} has coordinates ({', '.join(mech.coordinates)})")
-    errors = d.get("errors")
+    errors = mech.space.recorded("coordinates", d.get("errors"))
     if errors is not None and not (isinstance(errors, dict) and all(is_number(v) for v in errors.values())):
         fail("errors", "must be an object of numbers or null")
-    return {"q0": _array(d["q0"], "q0", (k,)), "qd": _array(d["qd"], "qd", (k,)),
-            "q": _array(d["q"], "q", (None, k)), "errors": errors}
+    return {"q0": np.zeros(0), "qd": np.zeros(0), "q": None, "errors": errors,
+            **{key: _array(d[key], key, shape) for key, shape in shapes.items()}}
 
 
 def _unique_keys(pairs):
@@ -251,7 +254,8 @@ def _controls(d, mech, where: str = "controls", timed: bool = True,
             fail(f"{where}.bounds", f"is not a plan's input bounds: {exc}")
         _controls(d["base"], mech, f"{where}.base", timed=False, rest=False)
     elif isinstance(d, dict) and d.get("kind") == Stitched.kind:
-        _fields(d, _CONTROL_FIELDS["stitched"] + (("coordinates",) if mech.space.k else ()), where)
+        coordinates = mech.space.recorded("coordinates", ("coordinates",), ())
+        _fields(d, _CONTROL_FIELDS["stitched"] + coordinates, where)
         if number_field(d, "T", where=f"{where}.") <= 0:
             fail(f"{where}.T", f"must be positive, got {d['T']}")
         pieces = d["pieces"]
@@ -262,8 +266,8 @@ def _controls(d, mech, where: str = "controls", timed: bool = True,
         W = _array(d["waypoints"], f"{where}.waypoints", (len(pieces) + 1, 3, 3))
         for i, R in enumerate(W):
             rotation_field(R, f"{where}.waypoints[{i}]")
-        if mech.space.k:
-            _array(d["coordinates"], f"{where}.coordinates", (len(pieces) + 1, mech.n_coordinates))
+        for key in coordinates:
+            _array(d[key], f"{where}.{key}", (len(pieces) + 1, mech.n_coordinates))
     else:
         _physical(d, mech, where)
     try:
@@ -337,6 +341,7 @@ def decode(d, mechanism=None) -> tuple[dict, bool]:
     if not isinstance(history, list) or not all(isinstance(r, dict) for r in history):
         raise ValueError("invalid plan: 'history' must be a list of objects")
     delta = d["delta"]
+    coordinates = _coordinates(d, mech)
     fields = dict(
         success=d["success"], reason=string_field(d, "reason", empty=True),
         terminal_error=number_field(d, "terminal_error", null=True),
@@ -347,13 +352,14 @@ def decode(d, mechanism=None) -> tuple[dict, bool]:
         delta=None if delta is None else _array(delta, "delta", (None,)),
         parametrisation=par, mechanism=name, kinematics=mech, method=string_field(d, "method"),
         strategy=string_field(d, "strategy"), T=number_field(d, "T"),
-        R0=_array(d["R0"], "R0", (3, 3)), Rd=_array(d["Rd"], "Rd", (3, 3)),
+        start=State(_array(d["R0"], "R0", (3, 3)), coordinates["q0"]),
+        goal=State(_array(d["Rd"], "Rd", (3, 3)), coordinates["qd"]),
         steps=integer_field(d, "steps", minimum=1), seconds=number_field(d, "seconds", null=True),
         options=dict(options), sensitivity=number_field(d, "sensitivity", null=True),
         error_bound=number_field(d, "error_bound", null=True),
         replay_steps=None if d["replay_steps"] is None else integer_field(d, "replay_steps", minimum=2),
         route=string_field(d, "route"), stitched=stitched, made_by=_made_by(d.get("made_by")),
-        **({} if not mech.space.k else _coordinates(d, mech)))
+        q=coordinates["q"], errors=coordinates["errors"])
     return fields, d["format"] == FORMAT_1
 
 
@@ -388,8 +394,8 @@ def definition_fields(mechanism) -> dict:
     definition = getattr(mechanism, "definition", None)
     if definition is None:
         return {}
-    return {"mechanism_definition": mechanism_file.json_data(definition),
-            "mechanism_digest": mechanism_file.digest(definition)}
+    return {"mechanism_definition": definition_forms.json_data(definition),
+            "mechanism_digest": definition_forms.digest(definition)}
 
 
 def _defined(name: str, mechanism, d: dict):
@@ -406,7 +412,7 @@ def _defined(name: str, mechanism, d: dict):
     if not isinstance(definition, dict):
         fail("mechanism_definition", f"must be an object (a mechanism's definition), got {json_type(definition)}")
     try:
-        actual = mechanism_file.digest(definition)
+        actual = definition_forms.digest(definition)
     except ValueError as exc:
         fail("mechanism_definition", str(exc))
     if actual != digest:
@@ -417,7 +423,7 @@ def _defined(name: str, mechanism, d: dict):
             mech = catalog.resolve(mechanism)
         except ValueError as exc:
             raise ValueError(f"mechanism: {exc}") from None
-        if mech.definition is None or mechanism_file.digest(mech.definition) != digest:
+        if mech.definition is None or definition_forms.digest(mech.definition) != digest:
             fail("mechanism_definition", f"differs from the definition of the mechanism given ({mech.name!r})")
     else:
         try:

@@ -9,7 +9,7 @@ One problem per line, a JSON object::
      "mechanism": "rolling_ball"}
 
 ``start`` and ``goal`` are the states :func:`nonholo.plan` takes as ``R0`` and ``Rd``, in
-the JSON form of the row's mechanism's space (:meth:`nonholo.spaces.groups.Product.to_json`):
+the JSON form of the row's mechanism's space (:meth:`nonholo.spaces.product.Product.to_json`):
 a 3×3 rotation matrix (nested lists) on SO(3), the ``k`` coordinates on ``Rᵏ``, the pair
 ``[R, q]`` on ``SO(3) × Rᵏ``. ``mechanism`` (a name, :func:`nonholo.model.catalog.names`;
 a mechanism file, a path ending in ``.toml`` relative to the table's own directory; or a
@@ -36,7 +36,7 @@ import json
 import math
 from pathlib import Path
 
-from ..model import catalog, mechanism_file
+from ..model import catalog, definition_forms
 from ..model.mechanism import Mechanism
 from ..numerics.checks import is_number
 from . import safe_write
@@ -68,7 +68,7 @@ def _state(space, value, row: int, column: str, mechanism: str):
         if detail.startswith(f"{column} must be {want}"):
             detail = detail[len(f"{column} must be {want}"):].lstrip(":, ")
         _fail(row, column, f"mechanism {mechanism!r} expects {want}; {detail}")
-    return space.public(R, q)
+    return space.public((R, q))
 
 
 def row_mechanism(value, row: int, base=None) -> Mechanism:
@@ -292,10 +292,10 @@ def as_json(problem: dict) -> dict:
     """
     mechanism = problem.get("kinematics") or catalog.resolve(problem["mechanism"])
     space = mechanism.space
-    out = {"start": space.to_json(*space.parse(problem["start"], "start")),
-           "goal": space.to_json(*space.parse(problem["goal"], "goal")),
+    out = {"start": space.to_json(space.parse(problem["start"], "start")),
+           "goal": space.to_json(space.parse(problem["goal"], "goal")),
            "mechanism": (mechanism.name if mechanism.definition is None
-                         else mechanism_file.json_data(mechanism.definition)),
+                         else definition_forms.json_data(mechanism.definition)),
            "options": {k: v for k, v in problem["options"].items() if k != IMPORTS}}
     if problem.get("label") is not None:
         out["label"] = problem["label"]

@@ -63,9 +63,9 @@ def _version(package: str) -> str | None:
 
 def _compiler() -> str | None:
     """The first line of ``<cc> --version`` of the compiler the native kernels use."""
-    from ..numerics import native
+    from ..codegen import build
 
-    cc = native.compiler()
+    cc = build.compiler()
     if cc is None:
         return None
     try:
@@ -78,12 +78,12 @@ def _compiler() -> str | None:
 
 @functools.lru_cache(maxsize=1)
 def _made_by() -> tuple:
-    from ..numerics import native
+    from ..codegen import build
 
     return (("nonholo", _version("nonholo")), ("commit", git_revision(short=False)),
             ("python", platform.python_version()), ("numpy", _version("numpy")),
             ("scipy", _version("scipy")), ("sympy", _version("sympy")),
-            ("compiler", _compiler()), ("kernels", "native" if native.enabled() else "numba"))
+            ("compiler", _compiler()), ("kernels", "native" if build.enabled() else "numba"))
 
 
 def made_by() -> dict:

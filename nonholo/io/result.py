@@ -17,7 +17,8 @@ from ..controls.stitched import Stitched
 from ..model import catalog
 from ..model.mechanism import Mechanism
 from ..motion.frame_controls import FrameControls
-from ..motion.time_change import planned
+from ..motion.time_scaling import planned
+from ..spaces.state import State
 from . import csv_export as export
 from . import plan_file, provenance, safe_write
 
@@ -68,8 +69,9 @@ class PlanResult:
         The names of the mechanism, the method and the strategy planned with.
     T : float
         The horizon (s).
-    R0, Rd : numpy.ndarray
-        The start's and the goal's orientations (the identity without one).
+    start, goal : State
+        The start and the goal (:class:`~nonholo.spaces.state.State`, always complete;
+        :attr:`R0`, :attr:`q0`, :attr:`Rd`, :attr:`qd` give their parts).
     steps : int
         The number of integrator steps of the final trajectory.
     seconds : float or None
@@ -93,10 +95,11 @@ class PlanResult:
         control of the route it was planned from (its hops, waypoints and hand-overs; a
         record: the certificate is the smooth control's); ``None`` otherwise. :attr:`hops`
         gives a global route's stitched control either way.
-    q, q0, qd, errors : numpy.ndarray or dict or None
-        For a mechanism whose state goes beyond SO(3), else ``None``: the coordinates at
-        the samples ``(n, k)``, of the start and of the goal, and the terminal error by
-        part, ``{"rotation": rad, "coordinates": units}`` (:mod:`nonholo.spaces.groups`;
+    q : numpy.ndarray
+        The coordinates at the samples, ``(n, k)`` (``k = 0`` on SO(3)).
+    errors : dict or None
+        For a mechanism with coordinates, else ``None``: the terminal error by part,
+        ``{"rotation": rad, "coordinates": units}`` (:mod:`nonholo.spaces.product`;
         ``terminal_error`` is then the norm of the stacked error, which bounds both).
     kinematics : Mechanism, optional
         The :class:`~nonholo.model.mechanism.Mechanism` itself, which re-timing, export,
@@ -124,8 +127,8 @@ class PlanResult:
     method: str
     strategy: str
     T: float
-    R0: np.ndarray
-    Rd: np.ndarray
+    start: State
+    goal: State
     steps: int
     seconds: float | None
     options: dict = field(default_factory=dict)
@@ -135,8 +138,6 @@ class PlanResult:
     route: str = "local"
     stitched: Stitched | None = None
     q: np.ndarray | None = None
-    q0: np.ndarray | None = None
-    qd: np.ndarray | None = None
     errors: dict | None = None
     kinematics: Mechanism | None = field(default=None, repr=False)
     made_by: dict | None = field(default=None, repr=False)
@@ -144,19 +145,31 @@ class PlanResult:
     def __post_init__(self):
         if self.kinematics is None:
             self.kinematics = catalog.get(self.mechanism)
+        if self.q is None:
+            self.q = np.zeros((len(self.R), self.kinematics.n_coordinates))
 
     @property
-    def start(self):
-        """The start as :func:`nonholo.plan` takes it (``R0``, ``q0`` or ``(R0, q0)``)."""
-        return self._public(self.R0, self.q0)
+    def R0(self) -> np.ndarray:
+        """The start's orientation (the identity without one)."""
+        return self.start.R
 
     @property
-    def goal(self):
-        """The goal as :func:`nonholo.plan` takes it."""
-        return self._public(self.Rd, self.qd)
+    def Rd(self) -> np.ndarray:
+        """The goal's orientation (the identity without one)."""
+        return self.goal.R
 
-    def state(self, k: int = -1):
-        """Sample ``k`` of the trajectory as :func:`nonholo.plan` takes a state.
+    @property
+    def q0(self) -> np.ndarray:
+        """The start's coordinates (shape ``(0,)`` without them)."""
+        return self.start.q
+
+    @property
+    def qd(self) -> np.ndarray:
+        """The goal's coordinates (shape ``(0,)`` without them)."""
+        return self.goal.q
+
+    def state(self, k: int = -1) -> State:
+        """Sample ``k`` of the trajectory.
 
         Parameters
         ----------
@@ -165,15 +178,10 @@ class PlanResult:
 
         Returns
         -------
-        numpy.ndarray or tuple
-            ``R``, ``q`` or ``(R, q)``, as the mechanism's space takes a state.
+        State
+            The state there (:func:`nonholo.plan` takes it as a start or a goal).
         """
-        return self._public(self.R[k], None if self.q is None else self.q[k])
-
-    def _public(self, R, q):
-        if q is None:
-            return R
-        return self.kinematics.space.public(R, q)
+        return State(self.R[k], self.q[k])
 
     # -- controls ----------------------------------------------------------------------
     def controls(self, t) -> np.ndarray:
@@ -249,8 +257,8 @@ class PlanResult:
             "replay_steps": None if self.replay_steps is None else int(self.replay_steps),
             "route": self.route,
             **({} if self.stitched is None else {"stitched": self.stitched.to_dict()}),
-            **({} if self.q0 is None else {"q0": arr(self.q0), "qd": arr(self.qd), "q": arr(self.q),
-                                           "errors": _plain(self.errors)}),
+            **self.kinematics.space.recorded("coordinates", {"q0": arr(self.q0), "qd": arr(self.qd),
+                                                             "q": arr(self.q), "errors": _plain(self.errors)}, {}),
             "R0": arr(self.R0),
             "Rd": arr(self.Rd),
             "controls": self.parametrisation.to_dict(),
@@ -499,22 +507,20 @@ def _plain(x):
     return x
 
 
-def coordinate_fields(mechanism, q, q0, qd, errors) -> dict:
-    """A result's fields that hold coordinates.
+def part_errors(mechanism, errors) -> dict | None:
+    """The terminal error by part a result records: ``errors`` for a mechanism with
+    coordinates, ``None`` on SO(3) (where ``terminal_error`` is the rotation's alone).
 
     Parameters
     ----------
     mechanism : Mechanism
         The plan's mechanism.
-    q, q0, qd, errors
-        The values of :class:`PlanResult`'s fields of those names.
+    errors : dict or None
+        The norms of the error's parts.
 
     Returns
     -------
-    dict
-        The fields by name; empty for a mechanism whose state has no coordinates (an SO(3)
-        mechanism).
+    dict or None
+        What :attr:`PlanResult.errors` holds.
     """
-    if not mechanism.space.k:
-        return {}
-    return {"q": q, "q0": q0, "qd": qd, "errors": errors}
+    return mechanism.space.recorded("coordinates", errors)

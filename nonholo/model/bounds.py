@@ -1,7 +1,7 @@
 """Bounds on a mechanism's inputs and coordinates, as constraint objects.
 
 - :class:`InputBounds` ``(low, high)``: a box on the physical inputs ``u``. The mechanisms
-  are driftless, so a planned path meets it by a time change (:mod:`nonholo.motion.retimed`):
+  are driftless, so a planned path meets it by a time change (:mod:`nonholo.motion.speed_limits`):
   the inputs scale by ``dτ/dt > 0``, which neither turns their sign nor lifts them off zero,
   so every bound must hold zero inside, ``low < 0 < high``.
 - :class:`StateBounds` ``(low, high)``: a box on the coordinates ``q`` of a state beyond
@@ -516,7 +516,7 @@ class StateBounds(Box):
         nodes, cols = np.nonzero(c < threshold)
         if nodes.size == 0:
             return None
-        r = 3 if mechanism.space.has_orientation else 0
+        r = mechanism.space.rows("coordinates").start
         rows = np.zeros((nodes.size, mechanism.n_rates))
         spec = self._columns()
         for a, k in enumerate(cols):

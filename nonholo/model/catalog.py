@@ -15,7 +15,7 @@ from functools import cache
 from pathlib import Path
 
 from ..generated import MECHANISMS as GENERATED
-from . import drawing, mechanism_file
+from . import definition_forms, drawing, mechanism_file
 from .mechanism import Mechanism
 
 #: Mechanisms added at run time (:func:`add`), by name.
@@ -156,7 +156,7 @@ def resolve(value, base=None, *, where=None) -> Mechanism:
     if isinstance(value, Mechanism):
         return value
     if isinstance(value, Mapping):
-        return _built("definition:" + mechanism_file.digest(value),
+        return _built("definition:" + definition_forms.digest(value),
                       lambda: Mechanism.from_definition(value, where=where))
     if isinstance(value, (str, os.PathLike)) and str(value).lower().endswith(".toml"):
         path = Path(value)
@@ -177,7 +177,7 @@ def _built(key: str, build) -> Mechanism:
     definition, so that one definition is one object (its kernels compiled once)."""
     if key not in _BUILT:
         mechanism = build()
-        same = "definition:" + mechanism_file.digest(mechanism.definition)
+        same = "definition:" + definition_forms.digest(mechanism.definition)
         mechanism = _BUILT.get(same, mechanism)
         for k in (same, key):
             _BUILT.pop(k, None)

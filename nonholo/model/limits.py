@@ -67,17 +67,40 @@ class LegLimits:
             return None
         if not mechanism.has_legs:
             raise ValueError(f"leg_length: mechanism {mechanism.name!r} has no legs (only platforms do)")
+        return cls.parsed(value)
+
+    @classmethod
+    def parsed(cls, value, name: str = "leg_length") -> "LegLimits":
+        """The limits of a pair ``(lo, hi)``, checked.
+
+        Parameters
+        ----------
+        value : tuple of float
+            ``(lo, hi)`` with ``0 ≤ lo < hi`` finite.
+        name : str
+            What the caller calls the pair, for messages.
+
+        Returns
+        -------
+        LegLimits
+            The limits.
+
+        Raises
+        ------
+        ValueError
+            Naming ``name``, if ``value`` is not such a pair.
+        """
         try:
             if isinstance(value, (str, bytes)):
                 raise TypeError
             lo, hi = value
         except (TypeError, ValueError):
-            raise ValueError(f"leg_length must be a pair (lo, hi), got {value!r}") from None
-        for name, x in (("lo", lo), ("hi", hi)):
+            raise ValueError(f"{name} must be a pair (lo, hi), got {value!r}") from None
+        for end, x in (("lo", lo), ("hi", hi)):
             if not is_number(x) or not math.isfinite(x) or x < 0:
-                raise ValueError(f"leg_length: {name} must be a finite number >= 0, got {x!r}")
+                raise ValueError(f"{name}: {end} must be a finite number >= 0, got {x!r}")
         if not lo < hi:
-            raise ValueError(f"leg_length: lo must be below hi, got ({lo!r}, {hi!r})")
+            raise ValueError(f"{name}: lo must be below hi, got ({lo!r}, {hi!r})")
         return cls(float(lo), float(hi))
 
     def as_tuple(self) -> tuple[float, float]:

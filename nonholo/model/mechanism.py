@@ -15,9 +15,10 @@ in ``derivations/``) provides
   lengths ``leg_lengths(R)`` (``l_i = |R tip_i − base_i|``) with their derivative rows
   ``leg_gradients(R)`` (``dl_i = G_i s`` along ``∂R = [s] R``), when ``HAS_LEGS``;
 
-each matrix also as ``NAME_into(..., out)`` for the compiled integrator
-(:meth:`Mechanism.kernels`). Nothing downstream depends on which mechanism it is;
-:mod:`nonholo.model.catalog` looks mechanisms up by name.
+each matrix also as ``NAME_into(..., out)`` for the compiled integrator, which compiles
+them (:func:`nonholo.integrate.compiled.compiled_system`): a mechanism is data. Nothing
+downstream depends on which mechanism it is; :mod:`nonholo.model.catalog` looks mechanisms
+up by name.
 
 Every generated module has one schema, whatever the state: the stacked field
 ``G(R, q)`` (rows ``(ω, q̇)``; ``q̇`` only without orientation, ``ω`` only on SO(3), where
@@ -32,10 +33,7 @@ take ``R`` alone (the paper's ``Δ(R)``, ``N(R)``, ``QN(R, w)``, ``W(R)``).
 from __future__ import annotations
 
 import dataclasses
-import hashlib
 import inspect
-import keyword
-import os
 import types
 from dataclasses import dataclass, field
 from functools import cached_property
@@ -44,92 +42,12 @@ from typing import Callable
 
 import numpy as np
 
-from ..integrate import cf4
-from ..numerics import cache_entries, native
+from ..codegen import mechanism_modules
 from ..numerics.checks import real_array
-from ..spaces.groups import Product
+from ..spaces.product import Product
 from ..spaces.singular import NoSingularSet, SingularSet
-from . import mechanism_file
-
-
-@dataclass(frozen=True)
-class Geometry:
-    """Numeric geometry of a two-leg platform with one rolling disk (the symbolic one is
-    ``derivations.mechanisms.PlatformGeometry``): base joints ``base_i`` (world frame),
-    platform joints ``tip_i`` (platform frame, world position ``R tip_i``), the disk's
-    contact point ``contact`` on the sphere and its unit axle direction ``axle`` (world).
-    Lengths in the units of the derivation's drawing dimensions.
-
-    Parameters
-    ----------
-    base1, tip1, base2, tip2 : numpy.ndarray
-        The legs' base joints (world frame) and platform joints (platform frame), 3-vectors.
-    contact : numpy.ndarray
-        The disk's contact point on the sphere; the sphere's radius is ``|contact|``.
-    axle : numpy.ndarray
-        The disk's unit axle direction (world frame).
-    """
-
-    base1: np.ndarray
-    tip1: np.ndarray
-    base2: np.ndarray
-    tip2: np.ndarray
-    contact: np.ndarray
-    axle: np.ndarray
-
-    FIELDS = ("base1", "tip1", "base2", "tip2", "contact", "axle")
-
-    @classmethod
-    def from_mapping(cls, data) -> "Geometry":
-        """From a mapping of the six fields to 3-vectors (the generated ``GEOMETRY``).
-
-        Parameters
-        ----------
-        data : mapping
-            The six fields by name; ``axle`` is normalised.
-
-        Returns
-        -------
-        Geometry
-            The geometry.
-        """
-        vals = {k: np.array(data[k], dtype=float) for k in cls.FIELDS}
-        vals["axle"] = vals["axle"] / np.linalg.norm(vals["axle"])
-        return cls(**vals)
-
-    @property
-    def radius(self) -> float:
-        """The sphere's radius ``|contact|``."""
-        return float(np.linalg.norm(self.contact))
-
-    @property
-    def bases(self) -> tuple[np.ndarray, np.ndarray]:
-        """The legs' base joints ``(base1, base2)``."""
-        return self.base1, self.base2
-
-    @property
-    def tips(self) -> tuple[np.ndarray, np.ndarray]:
-        """The legs' platform joints ``(tip1, tip2)``."""
-        return self.tip1, self.tip2
-
-    def leg_lengths(self, R) -> np.ndarray:
-        """The legs' lengths ``l_i = |R tip_i − base_i|``.
-
-        Parameters
-        ----------
-        R : array_like
-            One rotation ``(3, 3)`` or a stack ``(n, 3, 3)``.
-
-        Returns
-        -------
-        numpy.ndarray
-            Shape ``(2,)`` for one ``R``, ``(n, 2)`` for a stack.
-        """
-        R = np.asarray(R, dtype=float)
-        Rs = R[None] if R.ndim == 2 else R
-        out = np.stack([np.linalg.norm(Rs @ tip - base, axis=-1)
-                        for base, tip in zip(self.bases, self.tips)], axis=-1)
-        return out[0] if R.ndim == 2 else out
+from . import definition_check, definition_forms, field_places, mechanism_file
+from .geometry import Geometry
 
 
 def _on_stack(into, R, shape: tuple) -> np.ndarray:
@@ -156,14 +74,14 @@ def on_rotation(function, module) -> Callable:
     function : callable
         A generated function of ``(R, q, ...)``.
     module : module
-        Its generated module (``q`` is bound to its ``NO_COORDINATES``).
+        Its generated module (``q`` is bound to no coordinates, shape ``(0,)``).
 
     Returns
     -------
     callable
         ``function(R, ...)``: the paper's ``Δ(R)``, ``N(R)``, ``QN(R, w)``, ``W(R)``.
     """
-    none = module.NO_COORDINATES
+    none = np.zeros(0)
 
     def on_R(R, *args):
         return function(R, none, *args)
@@ -298,7 +216,7 @@ class Mechanism:  # signature: __new__'s (*args, **kwargs), the fields below; nu
 
     @cached_property
     def space(self) -> Product:
-        """The state space (:mod:`nonholo.spaces.groups`): ``SO(3)``, ``SO(3) × Rᵏ`` or ``Rᵏ``."""
+        """The state space (:mod:`nonholo.spaces.product`): ``SO(3)``, ``SO(3) × Rᵏ`` or ``Rᵏ``."""
         return Product.of(self.state_space.startswith("SO(3)"), self.coordinates, self.units, self.angles)
 
     @cached_property
@@ -306,10 +224,10 @@ class Mechanism:  # signature: __new__'s (*args, **kwargs), the fields below; nu
         """The singular set ``Δ = 0`` (:class:`~nonholo.spaces.singular.NoSingularSet` without one)."""
         if self.delta is None:
             return NoSingularSet()
-        return SingularSet(self.delta_samples, on_rotations=not self.space.k, owner=self.name)
+        return SingularSet.on(self.space, self.delta_samples, owner=self.name)
 
     def parse_state(self, value, name: str):
-        """The caller's state as ``(R, q)`` (:meth:`nonholo.spaces.groups.Product.parse`).
+        """The caller's state as ``(R, q)`` (:meth:`nonholo.spaces.product.Product.parse`).
 
         Parameters
         ----------
@@ -348,7 +266,7 @@ class Mechanism:  # signature: __new__'s (*args, **kwargs), the fields below; nu
     @property
     def n_rates(self) -> int:
         """``d``: the dimension of a state variation ``s = (s_R, s_q)`` (rows of ``G``)."""
-        return (3 if self.orientation else 0) + self.n_coordinates
+        return self.space.dim
 
     @property
     def n_inputs(self) -> int:
@@ -364,29 +282,6 @@ class Mechanism:  # signature: __new__'s (*args, **kwargs), the fields below; nu
     def has_frame(self) -> bool:
         """Whether the mechanism has a desingularised input frame ``N``."""
         return self.frame is not None
-
-    def kernels(self, frame: bool = False) -> cf4.Kernels:
-        """The compiled integrator kernels (see :func:`nonholo.integrate.cf4.compile_system`).
-
-        Parameters
-        ----------
-        frame : bool
-            ``False``: of ``(ω, q̇) = G(R, q) u``; ``True``: of the desingularised
-            ``N(R, q) w``.
-
-        Returns
-        -------
-        nonholo.integrate.cf4.Kernels
-            The kernels, compiled once per process (native or numba).
-
-        Raises
-        ------
-        ValueError
-            If ``frame`` is asked of a mechanism without a desingularised frame.
-        """
-        if frame and not self.has_frame:
-            raise ValueError(f"mechanism {self.name!r} has no desingularised frame N(R)")
-        return cf4.compile_system(self.module, frame)
 
     @property
     def has_legs(self) -> bool:
@@ -461,23 +356,21 @@ class Mechanism:  # signature: __new__'s (*args, **kwargs), the fields below; nu
         R : array_like
             Rotations, shape ``(n, 3, 3)``.
         q : array_like, optional
-            Coordinates beyond SO(3), shape ``(n, k)``.
+            Coordinates, shape ``(n, k)`` (``(n, 0)`` or ``None`` on SO(3)).
 
         Returns
         -------
         numpy.ndarray or None
-            ``Δ(R[n])`` (``Δ(R[n], q[n])`` beyond SO(3)), shape ``(n,)``; ``None`` without a
-            singular set.
+            ``Δ(R[n], q[n])``, shape ``(n,)``; ``None`` without a singular set.
         """
         if self.delta is None:
             return None
         R = np.asarray(R, dtype=float)
-        # the generated Δ is plain arithmetic on entries R[i, j] (and q[c]): evaluate it
-        # on (3, 3, n) (and (k, n))
-        if self.beyond_so3:
-            value = self.delta(R.transpose(1, 2, 0), np.asarray(q, dtype=float).T)
-        else:
-            value = self.delta(R.transpose(1, 2, 0))
+        q = np.zeros((R.shape[0], 0)) if q is None else np.asarray(q, dtype=float)
+        # the generated Δ(R, q) (behind the paper's Δ(R) on SO(3)) is plain arithmetic on
+        # entries R[i, j] and q[c]: evaluate it on (3, 3, n) and (k, n)
+        generated = getattr(self.delta, "generated", self.delta)
+        value = generated(R.transpose(1, 2, 0), q.T)
         return np.broadcast_to(np.asarray(value, dtype=float), (R.shape[0],)).copy()
 
     def rates(self, R, q, u) -> np.ndarray:
@@ -507,7 +400,7 @@ class Mechanism:  # signature: __new__'s (*args, **kwargs), the fields below; nu
         ----------
         module : module
             A module written by the code generator (``nonholo derive`` or
-            :func:`generated_source`).
+            :mod:`nonholo.codegen.mechanism_modules`).
 
         Returns
         -------
@@ -534,9 +427,10 @@ class Mechanism:  # signature: __new__'s (*args, **kwargs), the fields below; nu
         """The numeric mechanism of a symbolic :class:`derivations.mechanisms.Mechanism`, in one
         call: its module is generated (as ``nonholo derive`` would write it) and loaded
         in this process. With ``cache``, the generated source is kept on disk by a digest of
-        the definition and of the generator (:func:`generated_source`), so a later run skips
-        the generation; its
-        kernels are compiled once and cached on disk too (:mod:`nonholo.numerics.native`).
+        the definition and of the generator
+        (:func:`nonholo.codegen.mechanism_modules.generated_source`), so a later run skips
+        the generation; its kernels are compiled once and cached on disk too
+        (:mod:`nonholo.codegen.build`).
         To add a mechanism for good, put it in ``derivations/definitions.py`` and run
         ``nonholo derive``. To look it up by name, :func:`nonholo.model.catalog.add` it.
 
@@ -566,10 +460,7 @@ class Mechanism:  # signature: __new__'s (*args, **kwargs), the fields below; nu
             raise TypeError(f"mechanism must be a symbolic derivations.mechanisms.Mechanism, not "
                             f"{type(mechanism).__name__}; from equations, use Mechanism.from_equations "
                             "(a velocity field) or Mechanism.from_constraints (Pfaffian constraints)")
-        from derivations import mechanisms  # SymPy: imported only when asked for
-
-        mechanisms.check_definition(mechanism)
-        return cls.from_module(load_source(generated_source(mechanism, cache), mechanism.name))
+        return cls.from_module(mechanism_modules.symbolic_module(mechanism, cache))
 
     @classmethod
     def from_equations(cls, name: str, *, inputs, coordinates=(), rates=(), omega=None, rotation=None,
@@ -639,9 +530,9 @@ class Mechanism:  # signature: __new__'s (*args, **kwargs), the fields below; nu
         """
         arguments = dict(inputs=inputs, coordinates=coordinates, rates=rates, omega=omega, rotation=rotation,
                          angles=angles, parameters=parameters, delta=delta, units=units, description=description)
-        mechanism = cls.from_module(load_source(equations_source("field_mechanism", name, arguments, cache), name))
+        mechanism = cls.from_module(mechanism_modules.equations_module("field_mechanism", name, arguments, cache))
         # the definition as data (text), for mechanism files and plan files
-        return dataclasses.replace(mechanism, definition=mechanism_file.recorded(name, arguments))
+        return dataclasses.replace(mechanism, definition=definition_forms.recorded(name, arguments))
 
     @classmethod
     def from_definition(cls, definition, *, where=None, cache: bool = True) -> "Mechanism":
@@ -671,15 +562,15 @@ class Mechanism:  # signature: __new__'s (*args, **kwargs), the fields below; nu
             Naming the field (``where(field)``) refused.
         """
         if where is None or isinstance(where, str):
-            where = mechanism_file.labelled(where or "definition")
-        definition = mechanism_file.check(definition, where)
+            where = field_places.labelled(where or "definition")
+        definition = definition_check.check(definition, where)
         try:
-            mechanism = cls.from_equations(**mechanism_file.arguments(definition), cache=cache)
+            mechanism = cls.from_equations(**definition_forms.arguments(definition), cache=cache)
         except ValueError as exc:
-            raise ValueError(mechanism_file.located(str(exc), definition, where)) from None
+            raise ValueError(definition_check.located(str(exc), definition, where)) from None
         return dataclasses.replace(mechanism, definition=definition,
-                                   drawing=mechanism_file.drawing_of(definition, where),
-                                   bounds=mechanism_file.bounds_of(definition))
+                                   drawing=definition_check.drawing_of(definition, where),
+                                   bounds=definition_forms.bounds_of(definition))
 
     @classmethod
     def from_file(cls, path, cache: bool = True) -> "Mechanism":
@@ -776,7 +667,7 @@ class Mechanism:  # signature: __new__'s (*args, **kwargs), the fields below; nu
         """
         arguments = dict(coordinates=coordinates, velocities=velocities, constraints=constraints, inputs=inputs,
                          angles=angles, parameters=parameters, units=units, description=description)
-        return cls.from_module(load_source(equations_source("constraint_mechanism", name, arguments, cache), name))
+        return cls.from_module(mechanism_modules.equations_module("constraint_mechanism", name, arguments, cache))
 
     def __repr__(self) -> str:
         return f"Mechanism({self.name!r}: {self.description})"
@@ -784,183 +675,3 @@ class Mechanism:  # signature: __new__'s (*args, **kwargs), the fields below; nu
 
 #: The signature of :class:`Mechanism`'s fields (checked by ``Mechanism.__new__``).
 INIT_SIGNATURE = inspect.signature(Mechanism.__init__)
-
-#: The fields of a symbolic mechanism that define its generated module.
-DEFINING_FIELDS = ("name", "description", "L", "delta", "inputs", "frame", "frame_inputs",
-                   "coordinates", "units", "angles", "X")
-
-
-def definition_digest(mechanism) -> str:
-    """SHA-256 of a symbolic mechanism's definition and of the generator's version
-    (``derivations.generator.generator_version``).
-
-    Parameters
-    ----------
-    mechanism : derivations.mechanisms.Mechanism
-        The symbolic mechanism; its :data:`DEFINING_FIELDS` are hashed as SymPy ``srepr``.
-
-    Returns
-    -------
-    str
-        The hex digest.
-    """
-    import sympy
-
-    from derivations import generator
-
-    h = hashlib.sha256(generator.generator_version().encode())
-    for name in DEFINING_FIELDS:
-        h.update(f"{name}={sympy.srepr(getattr(mechanism, name, None))};".encode())
-    return h.hexdigest()
-
-
-def generated_source(mechanism, cache: bool = True) -> str:
-    """The generated module's source of a symbolic mechanism (``derivations.codegen``).
-
-    Parameters
-    ----------
-    mechanism : derivations.mechanisms.Mechanism
-        The symbolic mechanism.
-    cache : bool
-        Read the source from (or write it to) ``<cache>/generated/<name>_<digest>.py``
-        (the cache of :func:`nonholo.numerics.native.cache_dir`, written atomically).
-
-    Returns
-    -------
-    str
-        The module's source.
-    """
-    from derivations import codegen  # SymPy: imported only when asked for
-
-    if not cache:
-        return codegen.mechanism_module(mechanism)
-    return cached_source(mechanism.name, definition_digest(mechanism),
-                         lambda: codegen.mechanism_module(mechanism))
-
-
-def equations_source(form: str, name, arguments: dict, cache: bool = True) -> str:
-    """The generated module's source of the mechanism ``derivations.equations.<form>(name,
-    **arguments)`` builds.
-
-    Parameters
-    ----------
-    form : str
-        ``"field_mechanism"`` or ``"constraint_mechanism"``.
-    name : str
-        The mechanism's name.
-    arguments : dict
-        The keyword arguments of ``form``.
-    cache : bool
-        Cache the source (:func:`cached_source`) by a digest of the equations as given and
-        the generator's version (:mod:`derivations.generator`), so a cached mechanism is
-        neither derived nor generated again.
-
-    Returns
-    -------
-    str
-        The module's source.
-    """
-    from derivations import equations, generator
-
-    # checked and converted before anything is hashed or derived: the name, text parsed,
-    # the constants, the size budget (derivations.budget)
-    arguments = equations.admitted(form, name, arguments)
-
-    def build() -> str:
-        from derivations import codegen
-
-        return codegen.mechanism_module(getattr(equations, form)(name, **arguments))
-
-    if not cache:
-        return build()
-    text = generator.definition_text(form, name, arguments)
-    digest = hashlib.sha256((generator.generator_version() + text).encode()).hexdigest()
-    return cached_source(name, digest, build)
-
-
-def cached_source(name: str, digest: str, build: Callable[[], str]) -> str:
-    """A generated source, read from the cache — verified before it is used — or built and
-    written to it.
-
-    An entry is used only if :func:`nonholo.numerics.cache_entries.read_entry` verifies it: a
-    regular file of the user's whose bytes hash to the record nonholo wrote beside it with
-    this ``digest``. An entry edited, damaged (truncated, empty, not text), without a
-    record, or not a regular file (a FIFO, a directory, a symbolic link) is passed over
-    with a warning naming it and rebuilt, so that what runs is what the definition
-    generates.
-
-    Parameters
-    ----------
-    name : str
-        The mechanism's name (a Python identifier: it names the file).
-    digest : str
-        The definition's digest; the file is ``<name>_<digest[:24]>.py`` in
-        :func:`generated_cache_dir` (written atomically with its record; a cache that
-        cannot be written is reported once and skipped).
-    build : callable
-        ``build()``: the source, when it is not cached.
-
-    Returns
-    -------
-    str
-        The module's source.
-
-    Raises
-    ------
-    ValueError
-        If ``name`` is not an identifier or is a keyword.
-    """
-    if not isinstance(name, str) or not name.isidentifier() or keyword.iskeyword(name):
-        raise ValueError(f"name must be a Python identifier that is not a keyword (it names the generated "
-                         f"module's file), got {name!r}")
-    path = generated_cache_dir() / f"{name}_{digest[:24]}.py"
-    data = cache_entries.read_entry(path, digest)
-    if data is not None:
-        try:
-            return data.decode("utf-8")
-        except UnicodeDecodeError:          # recorded as written: only a foreign record gets here
-            cache_entries.warn_once(f"cache entry {path}", f"nonholo: ignored the cache entry {path}: it is not "
-                                                    "text; rebuilding it")
-    source = build()
-    try:
-        cache_entries.write_entry(path, source.encode("utf-8"), digest)
-    except OSError as exc:
-        native.warn_once("generated cache", f"nonholo: could not cache the generated module of "
-                                            f"{name!r} ({exc})")
-    return source
-
-
-def generated_cache_dir() -> Path:
-    """Where generated modules are cached.
-
-    Returns
-    -------
-    pathlib.Path
-        ``$NONHOLO_CACHE_DIR/generated`` when that is set (beside the compiled kernels,
-        :func:`nonholo.numerics.native.cache_dir`), else ``generated`` beside the default
-        kernel cache (``~/.cache/nonholo/generated``).
-    """
-    kernels = native.cache_dir()
-    return kernels / "generated" if os.environ.get(native.CACHE_ENV) else kernels.parent / "generated"
-
-
-def load_source(source: str, name: str) -> types.ModuleType:
-    """A generated module's source loaded as a module (not imported: it is not on disk in
-    the package).
-
-    Parameters
-    ----------
-    source : str
-        The source.
-    name : str
-        The mechanism's name (for the module's name and tracebacks).
-
-    Returns
-    -------
-    module
-        The module; its text is kept as ``SOURCE``.
-    """
-    module = types.ModuleType(f"nonholo_symbolic_{name}")
-    module.SOURCE = source
-    exec(compile(source, f"<generated module of mechanism {name!r}>", "exec"), module.__dict__)
-    return module

@@ -51,7 +51,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..spaces import so3
+from ..spaces.factors import RPY
 
 
 @dataclass(frozen=True)
@@ -82,7 +82,7 @@ class Angle:
 
 
 #: The RPY angles, in the order of ``RPY(φ, ϑ, ψ)`` (:func:`nonholo.spaces.so3.as_rpy`).
-ANGLES = (Angle("φ", "yaw", "z", "phi"), Angle("ϑ", "pitch", "y", "theta"), Angle("ψ", "roll", "x", "psi"))
+ANGLES = tuple(Angle(symbol, name, axis, ascii) for symbol, name, axis, ascii, _ in RPY)
 
 #: Radian.
 RAD = "rad"
@@ -166,7 +166,7 @@ def label(name: str, unit: str) -> str:
         The quantity.
     unit : str
         Its unit (``""``: none); several units written ``"(a, b)"`` (as
-        :meth:`nonholo.spaces.groups.Product.part_unit` gives them) are listed in the
+        :meth:`nonholo.spaces.product.Product.part_unit` gives them) are listed in the
         brackets.
 
     Returns
@@ -231,8 +231,8 @@ def input_units(mechanism) -> tuple[str, ...]:
     m, k = mechanism.n_inputs, mechanism.n_coordinates
     if not k or mechanism.G is None:
         return (PER_SECOND,) * m
-    R = so3.from_rpy(*PROBE_RPY) if mechanism.space.has_orientation else np.eye(3)
     q = 0.1 + 0.07 * np.arange(k)
+    R, _ = mechanism.space.from_cli(mechanism.space.numbers(rotation=PROBE_RPY, coordinates=q))
     with np.errstate(all="ignore"):
         G = np.asarray(mechanism.G(R, q), dtype=float)
     rows = G[G.shape[0] - k:]                      # the coordinates' rates
@@ -296,8 +296,8 @@ def csv_units(mechanism, header) -> list[str]:
     geometry = getattr(mechanism, "geometry", None)
     count = {"l{i}": 0 if geometry is None else len(geometry.bases), "u{i}": len(inputs)}
     count["dl{i}_dt"] = count["l{i}"]
-    has = {"qx": mechanism.space.has_orientation, "delta": mechanism.singular.exists}
-    has["qy"] = has["qz"] = has["qw"] = has["qx"]
+    written = (*mechanism.space.column_names(), *mechanism.singular.column_names)
+    has = {column: column in written for column in ("qx", "qy", "qz", "qw", "delta")}
     out = []
     for name in header:
         unit = coordinates.get(name)

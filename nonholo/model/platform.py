@@ -11,6 +11,9 @@ import numpy as np
 from ..generated import platform as _gen
 from ..spaces.so3 import check_rotation
 
+#: The coordinates the generated functions take: the platform's state is ``R`` alone.
+_Q = np.zeros(0)
+
 
 def _inputs(u) -> np.ndarray:
     v = np.asarray(u, dtype=float)
@@ -34,13 +37,13 @@ def delta(R) -> float:
     float
         ``Δ(R)``.
     """
-    return float(_gen.delta(check_rotation(R), _gen.NO_COORDINATES))
+    return float(_gen.delta(check_rotation(R), _Q))
 
 
 def _finite(value: np.ndarray, name: str, R) -> np.ndarray:
     """``value`` if finite; else ``ValueError``: ``R`` is (numerically) on ``Δ = 0``."""
     if not np.all(np.isfinite(value)):
-        d = _gen.delta(R, _gen.NO_COORDINATES)
+        d = _gen.delta(R, _Q)
         raise ValueError(f"R is too close to the singular surface Δ = 0 (Δ(R) = {d:.3g}): "
                          f"{name} is not representable in floating point there")
     return value
@@ -66,7 +69,7 @@ def L(R) -> np.ndarray:
         surface ``Δ(R) = 0`` (``L ~ 1/Δ``).
     """
     R = check_rotation(R)
-    if _gen.delta(R, _gen.NO_COORDINATES) == 0.0:
+    if _gen.delta(R, _Q) == 0.0:
         raise ValueError("R lies on the singular surface Δ(R) = 0, where L(R) is undefined")
     with np.errstate(all="ignore"):         # overflow is reported by _finite
         return _finite(_gen.L(R), "L(R)", R)
@@ -94,7 +97,7 @@ def Q(R, u) -> np.ndarray:
         numerically too close to ``Δ = 0`` (``Q ~ 1/Δ²``).
     """
     R = check_rotation(R)
-    if _gen.delta(R, _gen.NO_COORDINATES) == 0.0:
+    if _gen.delta(R, _Q) == 0.0:
         raise ValueError("R lies on the singular surface Δ(R) = 0, where Q(R, u) is undefined")
     u = _inputs(u)
     with np.errstate(all="ignore"):         # overflow is reported by _finite

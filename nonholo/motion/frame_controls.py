@@ -17,10 +17,11 @@ import numpy as np
 from ..controls import stages, stitched
 from ..controls.parametrisations import Controls, Fourier, PiecewiseConstant
 from ..controls.parametrisations import from_dict as controls_from_dict
+from ..integrate.compiled import compiled_system
 from ..model import catalog
 from ..numerics.checks import check_times
 from ..spaces import so3
-from . import retimed, time_change
+from . import speed_limits, time_scaling
 
 
 class FrameControls:
@@ -138,7 +139,7 @@ class FrameControls:
     def nodes(self) -> np.ndarray:
         """``R(t_n)``, ``t_n = nT/steps``: the CF4 nodes of the frame motion, shape ``(steps+1, 3, 3)``."""
         if self._nodes is None:
-            kern = self.mechanism.kernels(frame=True)
+            kern = compiled_system(self.mechanism, frame=True)
             Rs, Qs = kern.nodes(self.steps)
             n, _, _ = kern.forward(np.ascontiguousarray(self.R0), Qs[0], stages.stage_table(self.frame, self.steps),
                                    self.T / self.steps, 1.0, -np.inf, Rs, Qs)
@@ -184,7 +185,7 @@ class FrameControls:
         Rt = np.empty((n_t, 3, 3))
         u = np.empty((n_t, m))
         nodes = self.nodes              # on SO(3): no coordinates
-        self.mechanism.kernels(frame=True).frame_inputs(
+        compiled_system(self.mechanism, frame=True).frame_inputs(
             nodes, np.empty((len(nodes), 0)), k, s, np.ascontiguousarray(Wst),
             np.ascontiguousarray(w_end), Rt, np.empty((n_t, 0)), u)
         return Rt, u
@@ -303,8 +304,8 @@ def _aligned_indices(steps: int, nodes: int):
 def from_dict(d: dict, mechanism=None):
     """Inverse of ``to_dict`` for a parametrisation (:func:`nonholo.controls.parametrisations.from_dict`), a
     :class:`FrameControls`, a :class:`~nonholo.controls.stitched.Stitched` of them, or any of those
-    :class:`~nonholo.motion.retimed.Retimed`, :class:`~nonholo.motion.retimed.InputRetimed` or
-    :class:`~nonholo.motion.time_change.RestToRest`.
+    :class:`~nonholo.motion.speed_limits.Retimed`, :class:`~nonholo.motion.speed_limits.InputRetimed` or
+    :class:`~nonholo.motion.time_scaling.RestToRest`.
 
     Parameters
     ----------
@@ -328,17 +329,17 @@ def from_dict(d: dict, mechanism=None):
     def rebuilt(p):
         return from_dict(p, mechanism)
 
-    if d.get("kind") in (retimed.Retimed.kind, FrameControls.kind) and mechanism is not None:
+    if d.get("kind") in (speed_limits.Retimed.kind, FrameControls.kind) and mechanism is not None:
         mech = catalog.get(mechanism)
         if d.get("mechanism") != mech.name:
             raise ValueError(f"the controls are of mechanism {d.get('mechanism')!r}, not {mech.name!r}")
     named = d.get("mechanism") if mechanism is None else mechanism
-    if d.get("kind") == retimed.Retimed.kind:
-        return retimed.from_dict(d, rebuilt, named)
-    if d.get("kind") == retimed.InputRetimed.kind:
-        return retimed.input_from_dict(d, rebuilt)
-    if d.get("kind") == time_change.RestToRest.kind:
-        return time_change.from_dict(d, rebuilt)
+    if d.get("kind") == speed_limits.Retimed.kind:
+        return speed_limits.from_dict(d, rebuilt, named)
+    if d.get("kind") == speed_limits.InputRetimed.kind:
+        return speed_limits.input_from_dict(d, rebuilt)
+    if d.get("kind") == time_scaling.RestToRest.kind:
+        return time_scaling.from_dict(d, rebuilt)
     if d.get("kind") == stitched.Stitched.kind:
         return stitched.from_dict(d, rebuilt)
     if d.get("kind") == FrameControls.kind:

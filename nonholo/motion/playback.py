@@ -6,17 +6,17 @@ from __future__ import annotations
 import numpy as np
 
 from ..controls import stages
-from ..spaces.groups import NO_COORDINATES
+from ..integrate.compiled import compiled_system
 
 
-def replay(R0, par, T: float, mechanism, steps: int, sign: float = 1.0, U=None, q0=None):
+def replay(start, par, T: float, mechanism, steps: int, sign: float = 1.0, U=None):
     """Physical inputs replayed on ``dR/dt = [L(R) u] R`` (beyond SO(3), on the
     mechanism's system) with CF4.
 
     Parameters
     ----------
-    R0 : array_like
-        The start's orientation (the identity without one).
+    start : State
+        The start (:class:`~nonholo.spaces.state.State`).
     par : Controls or FrameControls
         The physical inputs (controls or
         :class:`~nonholo.motion.frame_controls.FrameControls`).
@@ -30,8 +30,6 @@ def replay(R0, par, T: float, mechanism, steps: int, sign: float = 1.0, U=None, 
         The side of ``Δ = 0`` the motion keeps to: ``sign·Δ`` is reported.
     U : numpy.ndarray, optional
         The stage table of ``par`` on ``steps`` steps, if already known.
-    q0 : array_like, optional
-        The start's coordinates, beyond SO(3).
 
     Returns
     -------
@@ -45,9 +43,8 @@ def replay(R0, par, T: float, mechanism, steps: int, sign: float = 1.0, U=None, 
         The nodes' coordinates, shape ``(steps + 1, k)``.
     """
     U = np.ascontiguousarray(stages.stage_table(par, steps) if U is None else U)
-    kern = mechanism.kernels(frame=False)
+    kern = compiled_system(mechanism, frame=False)
     Rs, Qs = kern.nodes(steps)
-    q0 = np.ascontiguousarray(NO_COORDINATES if q0 is None else q0, dtype=float)
-    done, dmin, _ = kern.forward(np.ascontiguousarray(R0, dtype=float), q0, U, T / steps, sign,
+    done, dmin, _ = kern.forward(*start, U, T / steps, sign,
                                  -np.inf, Rs, Qs)
     return Rs, int(done), float(dmin), Qs

@@ -24,6 +24,7 @@ import numpy as np
 
 from ..controls import stages
 from ..controls.parametrisations import Controls
+from ..integrate.compiled import compiled_system
 from ..model import catalog
 from ..numerics.checks import MAX_STEPS, check_count, check_time
 
@@ -195,17 +196,18 @@ def _trajectory(mech, Rs, U, T, steps, n, dmin, sgn, Qs=None) -> Trajectory:
         t[-1] = T
     u = np.concatenate([U[:n, 0], U[steps - 1:steps, 2]]) if n == steps else U[:n + 1, 0]
     R = Rs[:n + 1].copy()
-    q = None if Qs is None or not mech.space.k else Qs[:n + 1].copy()
-    return Trajectory(t=t, R=R, u=u.copy(), delta=mech.delta_samples(R, q),
+    q = None if Qs is None else mech.space.recorded("coordinates", Qs[:n + 1].copy())
+    return Trajectory(t=t, R=R, u=u.copy(), delta=mech.singular.samples(R, q),
                       min_delta=mech.singular.reported(dmin),
                       mechanism=mech.name, T=T, steps=steps, q=q)
 
 
 def _stopped(mech, n, t_stop, dmin, sgn, traj) -> SingularTrajectoryError:
-    if mech.singular.exists and dmin <= 0.0:
+    # without a singular set dmin is +inf (Δ ≡ +inf): the motion stopped on a non-finite rate
+    if dmin <= 0.0:
         why = ("reaches the singular surface Δ = 0 (Δ changes sign between two integrator "
                "points: |ω| ~ 1/|Δ| blows up there)")
-    elif mech.singular.exists and dmin < DELTA_STOP:
+    elif dmin < DELTA_STOP:
         why = f"reaches the singular surface Δ = 0 (|Δ| = {dmin:.3g})"
     else:
         why = "produces a non-finite angular velocity"
@@ -214,13 +216,13 @@ def _stopped(mech, n, t_stop, dmin, sgn, traj) -> SingularTrajectoryError:
 
 def _setup(R0, controls, T, mechanism, steps):
     """Checked inputs of a simulation: the mechanism, the start ``(R0, q0)``
-    (:meth:`nonholo.spaces.groups.Product.parse`), ``T``, ``steps``, its kernels, ``sgn Δ`` at the start and
+    (:meth:`nonholo.spaces.product.Product.parse`), ``T``, ``steps``, its kernels, ``sgn Δ`` at the start and
     the controls' stage table."""
     mech = catalog.get(mechanism)
     R0, q0 = mech.parse_state(R0, "R0")
     T = check_time(T)
     steps = check_count(steps, "steps", maximum=MAX_STEPS)
-    kern = mech.kernels()
+    kern = compiled_system(mech)
     sgn = _sign_of_delta(mech, R0, q0)
     return mech, (R0, q0), T, steps, kern, sgn, stage_table(controls, T, steps, mech.n_inputs)
 
@@ -234,7 +236,7 @@ def simulate(R0, controls, T: float, *, mechanism="platform",
     R0
         The start: a rotation matrix, or for a mechanism whose state goes beyond SO(3) its
         coordinates ``q0`` or the pair ``(R0, q0)``
-        (:meth:`nonholo.spaces.groups.Product.parse`; the trajectory's ``q`` holds the
+        (:meth:`nonholo.spaces.product.Product.parse`; the trajectory's ``q`` holds the
         coordinates).
     controls
         A :class:`~nonholo.controls.parametrisations.Controls`, a

@@ -4,10 +4,10 @@ A clock for budgets that must not make a result depend on the machine or its loa
 global route's (:mod:`nonholo.planning.route`) and the least-energy stage's stop trying
 after a budget of effort, not of wall time, so a plan is the same whether it runs alone, beside other work, or on a
 slower machine — only the wall time it takes differs. Every call of a compiled kernel
-(:func:`nonholo.integrate.cf4.compile_system`) adds its steps: a variational step counts 1, a
+(:func:`nonholo.integrate.system_kernels.compile_system`) adds its steps: a variational step counts 1, a
 forward step :data:`FORWARD_WEIGHT` (its share of the work), a partial step of
-:func:`nonholo.integrate.cf4.frame_inputs` as much; the least-energy stage
-(:mod:`nonholo.planning.energy`) adds its iterations' linear algebra. :func:`seconds` converts the count with
+:func:`nonholo.integrate.motion_kernels.frame_inputs` as much; the least-energy stage
+(:mod:`nonholo.planning.energy_optimiser`) adds its iterations' linear algebra. :func:`seconds` converts the count with
 :data:`STEPS_PER_SECOND`, the variational steps a second of planning on the reference
 machine (the benchmarks' 2-core AMD EPYC), so that budgets keep their meaning in seconds
 there (a plan's wall time there is within about 20 % of its effort for nine in ten).

@@ -51,10 +51,12 @@ from pathlib import Path
 
 import numpy as np
 
-from ..certify import resimulate as verify
+from ..certify.resimulate import resimulate, terminal_error
 from ..io import csv_export, provenance
 from ..model import catalog
 from ..planning.api import STRATEGIES, plan
+from ..planning.constraint_objects import LegStroke
+from ..planning.problem import Settings
 from ..planning.retime import retime
 from ..spaces import so3
 from .. import viz
@@ -173,13 +175,13 @@ def solve(example: _examples.Example, method: str, strategy: str) -> Solved:
     Solved
         The plan and its re-simulated error.
     """
-    result = plan(example.R_start, example.R_goal, T=example.T, method=method,
-                  harmonics=example.harmonics, strategy=strategy, objective=None)
+    result = plan(example.R_start, example.R_goal, T=example.T, strategy=strategy, objective=None,
+                  settings=Settings(method=method, harmonics=example.harmonics))
     resim = None
     if len(result.R):
-        R_T = verify.resimulate(example.R_start, result.controls, example.T,
-                                mechanism=result.mechanism, breakpoints=result.breakpoints)
-        resim = verify.terminal_error(R_T, example.R_goal)
+        R_T = resimulate(example.R_start, result.controls, example.T,
+                         mechanism=result.mechanism, breakpoints=result.breakpoints)
+        resim = terminal_error(R_T, example.R_goal)
     return Solved(example, result, resim)
 
 
@@ -215,7 +217,7 @@ def solve_all(progress=_log) -> list[Solved]:
 #: Options of the plan of each card of a mechanism beyond SO(3): the ball's default plan rolls 12 radii out and back;
 #: the paper's strategy with four harmonics finds one within 2 radii (a fraction of the
 #: default's energy ∫|v|² dt), the motion one wants to see.
-STATE_OPTIONS = {"rolling_ball": {"strategy": "paper", "harmonics": 4}, "car": {}}
+STATE_OPTIONS = {"rolling_ball": {"strategy": "paper", "settings": Settings(harmonics=4)}, "car": {}}
 #: The classic problems of the mechanisms beyond SO(3) (start, goal): the ball turned by
 #: π/2 about a horizontal axis in place, the car parked one wheelbase sideways.
 STATE_PROBLEMS = {
@@ -223,12 +225,18 @@ STATE_PROBLEMS = {
                      (so3.exp(np.array([np.pi / 2, 0.0, 0.0])) @ so3.from_rpy(0.4, -0.3, 0.2), (0.0, 0.0))),
     "car": ((0.0, 0.0, 0.0, 0.0), (0.0, 1.0, 0.0, 0.0)),
 }
+#: How the plan of each of :data:`STATE_PROBLEMS` is drawn.
+STATE_FIGURES = {"rolling_ball": state_figures.ball_figure, "car": state_figures.car_figure}
+#: The planned motion (start, goal) of the card of a mechanism without a problem or a geometry
+#: of its own, by its state space.
+CARD_PROBLEMS = {"SO(3)": (so3.from_rpy(0.1, 0.2, 0.3), so3.from_rpy(0.8, -0.4, 0.5))}
 
 
 def mechanism_cards():
     """``(figure, stem)`` of every mechanism: the platforms at a regular pose with their
-    singular sets, the others with a planned motion (RPY(0.1, 0.2, 0.3) → RPY(0.8, -0.4, 0.5));
-    of those beyond SO(3), the ones with a drawing (:data:`STATE_PROBLEMS`).
+    singular sets, the others with a planned motion (:data:`CARD_PROBLEMS` on SO(3): RPY(0.1, 0.2,
+    0.3) → RPY(0.8, -0.4, 0.5)); of those beyond SO(3), the ones with a drawing
+    (:data:`STATE_PROBLEMS`).
 
     Yields
     ------
@@ -239,18 +247,16 @@ def mechanism_cards():
     """
     for name in catalog.names():
         mech = catalog.get(name)
-        if mech.space.k:
-            if name not in STATE_PROBLEMS:
-                continue
+        if name in STATE_PROBLEMS:
             start, goal = STATE_PROBLEMS[name]
-            draw = state_figures.ball_figure if mech.space.has_orientation else state_figures.car_figure
+            draw = STATE_FIGURES[name]
             yield draw(plan(start, goal, mechanism=name, **STATE_OPTIONS[name])), f"mechanism_{name}"
         elif mech.geometry is not None:
-            R = np.eye(3) if abs(float(mech.delta(np.eye(3)))) > 0.1 else _examples.get(1).R_start
+            R = np.eye(3) if abs(mech.singular.value(np.eye(3))) > 0.1 else _examples.get(1).R_start
             psi = float(so3.as_rpy(R)[2])
             yield viz.mechanism_card_figure(name, R=R, psi_slice=psi), f"mechanism_{name}"
-        else:
-            result = plan(so3.from_rpy(0.1, 0.2, 0.3), so3.from_rpy(0.8, -0.4, 0.5), mechanism=name)
+        elif mech.space.name in CARD_PROBLEMS:
+            result = plan(*CARD_PROBLEMS[mech.space.name], mechanism=name)
             yield viz.mechanism_card_figure(name, result=result), f"mechanism_{name}"
 
 
@@ -265,7 +271,7 @@ def plan_limits_goal():
         The plan within :data:`LEG_LENGTH`.
     """
     R0, Rd = (so3.from_rpy(*a) for a in LIMITS_GOAL)
-    return plan(R0, Rd), plan(R0, Rd, leg_length=LEG_LENGTH)
+    return plan(R0, Rd), plan(R0, Rd, constraints=[LegStroke(*LEG_LENGTH)])
 
 
 def plan_quality(free):
@@ -473,7 +479,7 @@ def run(outdir: Path = DEFAULT_OUTDIR, audit: bool = True, draw: bool = True, ch
     from derivations import audit as _audit
     from derivations import codegen
 
-    from ..integrate import inliner
+    from ..integrate import compiled
     from . import appendix_audit
 
     t0 = time.perf_counter()
@@ -482,7 +488,7 @@ def run(outdir: Path = DEFAULT_OUTDIR, audit: bool = True, draw: bool = True, ch
         outdir.mkdir(parents=True, exist_ok=True)
     outputs = Outputs(outdir, check=check)
     _log("checking that the generated modules match a fresh derivation ...")
-    stale = codegen.check(files=inliner.every_generated_file())
+    stale = codegen.check(files=compiled.generated_files())
     if stale:
         for path, _ in stale:
             _log(f"stale generated module: {path} (run `nonholo derive`)")

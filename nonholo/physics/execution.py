@@ -1,5 +1,5 @@
-"""Playing a plan on a MuJoCo model, with touch-ups: :func:`execute` and its record
-:class:`Execution`.
+"""Playing a plan on a MuJoCo model, with touch-ups: :func:`execute`, which records each
+stage in an :class:`~nonholo.physics.execution_record.Execution`.
 
 The plan is played from rest to rest: re-timed so that its inputs vanish at both ends, in
 ``duration`` seconds (:func:`nonholo.planning.retime.retime` with ``rest_to_rest``), on the
@@ -25,7 +25,7 @@ model fitted to the stages played so far, never a trial run:
   for the whole time of the touch-up's motion and settling;
 - the re-plan's own kinematic error (its terminal error and error bound) adds.
 
-``|e|`` is the norm of the stacked error (:meth:`~nonholo.spaces.groups.Product.norm`),
+``|e|`` is the norm of the stacked error (:meth:`~nonholo.spaces.product.Product.norm`),
 the quantity a plan's ``tol`` bounds. Touching up stops at the first touch-up not played:
 once ``|e| ≤ tol`` of the plan (``result.options["tol"]``), when the re-plan is predicted to
 end no nearer, or when it cannot be planned; that touch-up is recorded, with its reason and
@@ -35,9 +35,10 @@ the prediction holds.
 Nothing is played on trust. The mechanism's model is chosen by its kinematics
 (:func:`nonholo.physics.models.matching_model`); the settings lie in the ranges of
 :mod:`nonholo.physics.contact`; ``duration`` is at most :data:`MAX_DURATION`, ``touch_ups`` at
-most :data:`MAX_TOUCH_UPS`, and a stage's motion spans at least :data:`MIN_MOTION_STEPS` and its
-motion and settling at most :data:`~nonholo.physics.contact.MAX_STAGE_STEPS` MuJoCo steps —
-all checked before anything is allocated or played. While playing, MuJoCo's warnings of bad positions, velocities,
+most :data:`~nonholo.physics.execution_record.MAX_TOUCH_UPS`, and a stage's motion spans at
+least :data:`MIN_MOTION_STEPS` and its motion and settling at most
+:data:`~nonholo.physics.contact.MAX_STAGE_STEPS` MuJoCo steps — all checked before anything
+is allocated or played. While playing, MuJoCo's warnings of bad positions, velocities,
 accelerations or controls, and non-finite positions or velocities, are checked at every
 sample: MuJoCo resets an unstable simulation and carries on, so a stage in which it did is
 recorded with the outcome ``"unstable"`` and its reason, its error left at the one before it
@@ -52,20 +53,20 @@ stage's real-time factor (simulated over wall time).
 # ruff: noqa: TRY004 (bad input is refused by a ValueError naming the argument, as across the package)
 from __future__ import annotations
 
-import inspect
-import json
 import math
 import time
 
 import numpy as np
 
-from ..io import safe_write
 from ..io.csv_export import states_at
 from ..io.result import PlanResult
-from ..numerics.checks import check_time, is_number
+from ..numerics.checks import check_time
 from ..planning.api import plan
+from ..planning.problem import Settings, arguments_of
+from ..spaces.state import State
 from ..planning.retime import planned_controls, retime
 from .contact import MAX_STAGE_STEPS, Contact, shown
+from .execution_record import MAX_TOUCH_UPS, Execution
 from .models import model_for
 
 #: ``duration=None`` plays a plan in this many times its planned ``T``.
@@ -80,328 +81,12 @@ MARGIN = 2.0
 #: The last fraction of a stage's settling over which its drift at rest is measured.
 DRIFT_WINDOW = 0.5
 #: The tolerance of a plan whose options record none (that of :func:`nonholo.plan`).
-DEFAULT_TOL = inspect.signature(plan).parameters["tol"].default
-#: What became of a stage: played; why a touch-up was not; or ``"unstable"``: MuJoCo reported
-#: the simulation unstable while playing it, or the mechanism left its contacts (execution
-#: stops there).
-OUTCOMES = ("played", "within tolerance", "predicted worse", "not planned", "unstable")
-#: The format tag of a saved execution.
-FORMAT = "nonholo.execution/1"
+DEFAULT_TOL = Settings().tol
 #: Largest ``duration`` (s) of a stage's motion (explicit or by default :data:`SLOWDOWN` × ``T``).
 MAX_DURATION = 1000.0
-#: Largest number of touch-ups.
-MAX_TOUCH_UPS = 100
 #: Least number of MuJoCo steps a stage's motion spans (fewer would play it in a jump).
 MIN_MOTION_STEPS = 10
-#: The keys of a stage's record (``planned``: records saved before ``outcome``).
-STAGE_KEYS = ("error", "outcome", "reason", "size", "predicted", "drift", "max_slip", "max_contact_force",
-              "sim_time", "real_time_factor", "duration", "planned")
-#: Largest file :meth:`Execution.load` reads (bytes); a record is a few kilobytes.
-MAX_RECORD_BYTES = 4 * 1024 * 1024
-#: Deepest nesting of objects and lists in a saved record (it has 4).
-MAX_RECORD_DEPTH = 6
 
-
-# -- the record ------------------------------------------------------------------------------
-
-class Execution:
-    """The record of :func:`execute`: one entry per stage, the open-loop stage first, then
-    the touch-ups played and at most one stage not played or ``"unstable"``, the last.
-
-    Parameters
-    ----------
-    mechanism : str
-        The mechanism's name.
-    stages : list of dict
-        Per stage: ``error``, the state's error from the goal by part after it (as
-        ``mechanism.space.error`` gives it: ``rotation`` in rad, ``coordinates`` in the
-        mechanism's units; unchanged by a stage not played); ``outcome``, one of
-        :data:`OUTCOMES`; ``size``, :func:`motion_size` of its plan (``None`` if none was
-        planned); ``predicted``, a touch-up's predicted ``|e|`` (``None`` for the open loop,
-        without a plan, and for a prediction that is not finite, which its reason gives);
-        ``drift``, the rate (per second) at which the state moved at rest over the end of its
-        settling; ``max_slip`` (largest tangential speed at a rolling
-        contact, units per second) and ``max_contact_force`` (N), both over the samples taken
-        every :data:`SAMPLE` s; ``sim_time`` (s); ``real_time_factor`` (simulated over wall
-        time); ``duration`` (s of motion, settling aside). A stage not played has a
-        ``reason``, and zero slip, force and times. A stage MuJoCo went unstable in (or with
-        no contact force) has the outcome ``"unstable"``, a ``reason``, the error before it,
-        and slip, force and times up to where that was seen; it is the last; its trace holds
-        the samples before it. Records saved before
-        ``outcome`` had ``planned`` instead; :meth:`from_dict` reads them.
-    contact : Contact
-        The settings played with (resolved: no field ``None``).
-    traces : list of dict, optional
-        Per stage, samples of the motion every :data:`SAMPLE` s: ``t`` (from the stage's
-        start), the planned states ``R_planned``, ``q_planned`` (held at the end after
-        ``duration``), the simulated ``R``, ``q`` and ``slip``; ``None`` for a stage not
-        played. Not saved.
-    kinematics : Mechanism, optional
-        The mechanism played (figures use it; a record read back names a catalog one).
-    """
-
-    def __init__(self, mechanism: str, stages: list, contact: Contact, traces: list | None = None,
-                 kinematics=None):
-        self.mechanism = mechanism
-        self.stages = stages
-        self.contact = contact
-        self.traces = traces
-        #: the :class:`~nonholo.model.mechanism.Mechanism` played (``None`` for a record read
-        #: back: its name then names a catalog mechanism); not saved
-        self.kinematics = kinematics
-
-    @property
-    def errors(self) -> list[dict]:
-        """Each stage's error by part."""
-        return [s["error"] for s in self.stages]
-
-    def to_dict(self) -> dict:
-        """The record as plain JSON values (traces left out).
-
-        Returns
-        -------
-        dict
-            ``{"format", "mechanism", "stages", "contact"}``.
-        """
-        return {"format": FORMAT, "mechanism": self.mechanism,
-                "stages": [dict(s, error=dict(s["error"])) for s in self.stages],
-                "contact": self.contact.to_dict()}
-
-    @classmethod
-    def from_dict(cls, d: dict) -> Execution:
-        """Inverse of :meth:`to_dict`: refuses what :meth:`save` would not write.
-
-        Parameters
-        ----------
-        d : dict
-            A record's object.
-
-        Returns
-        -------
-        Execution
-            The record, without traces; its numbers as floats.
-
-        Raises
-        ------
-        ValueError
-            Naming the field that is missing, unknown or wrong: a number that is not a finite
-            float (or an integer beyond the floats), an unknown outcome, a stage after one
-            not played.
-        """
-        if not isinstance(d, dict):
-            raise ValueError(f"an execution record must be a JSON object, got {type(d).__name__}")
-        if d.get("format", FORMAT) != FORMAT:
-            raise ValueError(f"format: expected {FORMAT!r}, got {shown(d.get('format'))}")
-        unknown = sorted(str(k) for k in d if k not in ("format", "mechanism", "stages", "contact"))
-        if unknown:
-            raise ValueError(f"unknown fields {unknown}: a record has format, mechanism, stages and contact")
-        for key in ("mechanism", "stages", "contact"):
-            if key not in d:
-                raise ValueError(f"{key}: missing")
-        if not isinstance(d["mechanism"], str) or not 0 < len(d["mechanism"]) <= 200:
-            raise ValueError(f"mechanism must be a name, got {shown(d['mechanism'])}")
-        if not isinstance(d["stages"], list) or not d["stages"]:
-            raise ValueError("stages must be a non-empty list")
-        if len(d["stages"]) > MAX_TOUCH_UPS + 1:
-            raise ValueError(f"stages: {len(d['stages'])} stages, more than the {MAX_TOUCH_UPS + 1} an "
-                             "execution has at most")
-        stages = [_stage_from_dict(s, i) for i, s in enumerate(d["stages"])]
-        for i, stage in enumerate(stages[:-1]):
-            if stage["outcome"] != "played":
-                raise ValueError(f"stages[{i}].outcome: a stage {stage['outcome']!r} ends an execution, "
-                                 f"yet {len(stages) - i - 1} stage(s) follow it")
-        try:
-            contact = Contact.from_dict(d["contact"])
-        except ValueError as exc:
-            raise ValueError(f"contact: {exc}") from None
-        return cls(d["mechanism"], stages, contact)
-
-    def save(self, path):
-        """Write the record as JSON (atomically, :mod:`nonholo.io.safe_write`).
-
-        Parameters
-        ----------
-        path : str or pathlib.Path
-            Where to write.
-
-        Returns
-        -------
-        pathlib.Path
-            ``path``.
-
-        Raises
-        ------
-        ValueError
-            If ``path`` cannot be replaced (a directory) or a number is not finite.
-        """
-        safe_write.check_target(path, "path")
-        try:
-            text = json.dumps(self.to_dict(), indent=1, allow_nan=False)
-        except ValueError as exc:
-            raise ValueError(f"cannot save the execution: {exc}") from None
-        return safe_write.write_text(path, text + "\n", "path")
-
-    @classmethod
-    def load(cls, path) -> Execution:
-        """Read a record written by :meth:`save`, refusing anything it would not write: a file
-        larger than :data:`MAX_RECORD_BYTES`, nested deeper than :data:`MAX_RECORD_DEPTH`,
-        ``NaN`` or ``Infinity``, a number beyond the floats (``1e400``, ``10**400``), an
-        unknown field (:meth:`from_dict`).
-
-        Parameters
-        ----------
-        path : str or pathlib.Path
-            The file.
-
-        Returns
-        -------
-        Execution
-            The record, without traces.
-
-        Raises
-        ------
-        ValueError
-            For a file that is not such a record: naming the file and the field, saying why.
-        OSError
-            If the file cannot be read.
-        """
-        with open(path, "rb") as f:
-            raw = f.read(MAX_RECORD_BYTES + 1)
-        if len(raw) > MAX_RECORD_BYTES:
-            raise ValueError(f"{path}: larger than {MAX_RECORD_BYTES} bytes: not an execution record")
-        try:
-            text = raw.decode("utf-8-sig")
-        except UnicodeDecodeError as exc:
-            raise ValueError(f"{path}: not UTF-8 text: {exc.reason} at byte {exc.start}") from None
-        try:
-            d = json.loads(text, parse_constant=_Unrepresentable, parse_float=_json_float, parse_int=_json_int)
-        except json.JSONDecodeError as exc:
-            raise ValueError(f"{path}: not JSON: {exc}") from None
-        except RecursionError:
-            raise ValueError(f"{path}: nested deeper than {MAX_RECORD_DEPTH} levels: not an execution "
-                             "record") from None
-        try:
-            _check_depth(d)
-            return cls.from_dict(d)
-        except ValueError as exc:
-            raise ValueError(f"{path}: {exc}") from None
-
-    def __eq__(self, other) -> bool:
-        if not isinstance(other, Execution):
-            return NotImplemented
-        strip = [{k: v for k, v in s.items() if k != "real_time_factor"} for s in self.stages]
-        other_strip = [{k: v for k, v in s.items() if k != "real_time_factor"} for s in other.stages]
-        return (self.mechanism, strip, self.contact) == (other.mechanism, other_strip, other.contact)
-
-    __hash__ = None
-
-    def __repr__(self) -> str:
-        parts = []
-        for i, s in enumerate(self.stages):
-            err = ", ".join(f"{k} {v:.2e}" for k, v in s["error"].items())
-            outcome = s.get("outcome", "played")
-            what = (f"max slip {s['max_slip']:.2e}" if outcome == "played"
-                    else "MuJoCo unstable" if outcome == "unstable" else f"not played ({outcome})")
-            parts.append(f"  {'open loop' if i == 0 else f'touch-up {i}'}: {err}, {what}")
-        return f"Execution({self.mechanism}, {len(self.stages)} stages\n" + "\n".join(parts) + ")"
-
-
-class _Unrepresentable:
-    """A JSON number no float holds (``NaN``, ``Infinity``, ``1e400``, ``10**400``), kept as
-    text for the message that refuses it: it is not a number to any check."""
-
-    def __init__(self, text: str):
-        self.text = text if len(text) <= 40 else f"{text[:20]}...({len(text)} digits)"
-
-    def __repr__(self) -> str:
-        return self.text
-
-
-def _json_float(text: str):
-    x = float(text)
-    return x if math.isfinite(x) else _Unrepresentable(text)
-
-
-def _json_int(text: str):
-    if len(text.lstrip("-")) > 309:           # beyond any float, and maybe past int()'s digits limit
-        return _Unrepresentable(text)
-    x = int(text)
-    try:
-        float(x)
-    except OverflowError:
-        return _Unrepresentable(text)
-    return x
-
-
-def _check_depth(value) -> None:
-    """Refuse nesting deeper than :data:`MAX_RECORD_DEPTH` (iteratively: no recursion)."""
-    todo = [(value, 0, "")]
-    while todo:
-        v, depth, where = todo.pop()
-        if isinstance(v, (dict, list)):
-            if depth >= MAX_RECORD_DEPTH:
-                raise ValueError(f"{where or 'the record'}: nested deeper than {MAX_RECORD_DEPTH} levels: "
-                                 "not an execution record")
-            if isinstance(v, dict):
-                todo.extend((x, depth + 1, f"{where}.{str(k)[:40]}" if where else str(k)[:40])
-                            for k, x in v.items())
-            else:
-                todo.extend((x, depth + 1, f"{where}[{i}]") for i, x in enumerate(v))
-
-
-def _finite(value, where: str, minimum: float = -math.inf) -> float:
-    """A record's number as a finite float ``≥ minimum``, or a ValueError naming ``where``."""
-    if not is_number(value):
-        raise ValueError(f"{where} must be a finite number, got {shown(value)}")
-    try:
-        x = float(value)
-    except OverflowError:
-        raise ValueError(f"{where} must be a finite number, got {shown(value)}") from None
-    if not math.isfinite(x) or x < minimum:
-        raise ValueError(f"{where} must be a finite number{'' if minimum == -math.inf else f' >= {minimum:g}'}, "
-                         f"got {shown(value)}")
-    return x
-
-
-def _stage_from_dict(s: dict, i: int) -> dict:
-    """A saved stage checked, its numbers as floats, with its ``outcome`` (from ``planned`` in
-    older records)."""
-    at = f"stages[{i}]"
-    if not isinstance(s, dict):
-        raise ValueError(f"{at} must be an object")
-    unknown = sorted(str(k) for k in s if k not in STAGE_KEYS)
-    if unknown:
-        raise ValueError(f"{at}: unknown fields {unknown}; a stage has {', '.join(STAGE_KEYS)}")
-    for key in ("error", "max_slip", "max_contact_force", "sim_time", "real_time_factor"):
-        if key not in s:
-            raise ValueError(f"{at}.{key}: missing")
-    error = s["error"]
-    if not isinstance(error, dict) or not error or not all(k in ("rotation", "coordinates") for k in error):
-        raise ValueError(f"{at}.error must map 'rotation'/'coordinates' to numbers, got {shown(error)}")
-    stage = dict(s, error={k: _finite(v, f"{at}.error.{k}", 0.0) for k, v in error.items()})
-    for key in ("max_slip", "max_contact_force", "sim_time", "real_time_factor", "duration"):
-        if key in stage:
-            stage[key] = _finite(stage[key], f"{at}.{key}", 0.0)
-    for key in ("size", "predicted", "drift"):
-        if stage.get(key) is not None:
-            stage[key] = _finite(stage[key], f"{at}.{key}", 0.0)
-    if "planned" in stage and not isinstance(stage["planned"], bool):
-        raise ValueError(f"{at}.planned must be true or false, got {shown(stage['planned'])}")
-    if "outcome" not in stage:
-        stage["outcome"] = "played" if stage.pop("planned", True) is not False else "not planned"
-    if not isinstance(stage["outcome"], str) or stage["outcome"] not in OUTCOMES:
-        raise ValueError(f"{at}.outcome must be one of {OUTCOMES}, got {shown(stage['outcome'])}")
-    if i == 0 and stage["outcome"] not in ("played", "unstable"):
-        raise ValueError(f"stages[0].outcome must be 'played' or 'unstable' (the open loop), "
-                         f"got {stage['outcome']!r}")
-    if stage["outcome"] != "played" and not isinstance(stage.get("reason"), str):
-        raise ValueError(f"{at}.reason: a stage not played needs its reason, got {shown(stage.get('reason'))}")
-    if stage.get("reason") is not None and not isinstance(stage["reason"], str):
-        raise ValueError(f"{at}.reason must be text, got {shown(stage['reason'])}")
-    return stage
-
-
-# -- playing ----------------------------------------------------------------------------------
 
 def check_touch_ups(touch_ups, name: str = "touch_ups") -> int:
     """A number of touch-ups: a whole number in ``[0, MAX_TOUCH_UPS]``.
@@ -538,9 +223,10 @@ def _check(result, touch_ups, duration, contact, progress):
 
 
 def replan_options(result: PlanResult) -> dict:
-    """The keywords a touch-up re-plans ``result``'s goal with: its horizon, method and
-    strategy, and the options of :data:`REPLAN_OPTIONS` it was planned with (its objective,
-    ``None`` where it records none).
+    """The options a touch-up re-plans ``result``'s goal with, in their flat form
+    (:func:`~nonholo.planning.problem.arguments_of` makes them :func:`nonholo.plan`'s
+    arguments): its horizon, method and strategy, and the options of :data:`REPLAN_OPTIONS`
+    it was planned with (its objective, ``None`` where it records none).
 
     Parameters
     ----------
@@ -550,10 +236,9 @@ def replan_options(result: PlanResult) -> dict:
     Returns
     -------
     dict
-        Keywords of :func:`nonholo.plan`.
+        The flat options.
     """
-    accepted = inspect.signature(plan).parameters
-    opts = {k: v for k, v in result.options.items() if k in REPLAN_OPTIONS and k in accepted}
+    opts = {k: v for k, v in result.options.items() if k in REPLAN_OPTIONS}
     opts.update(T=planned_controls(result).T, method=result.method, strategy=result.strategy)
     opts.setdefault("objective", None)       # recorded only when the plan had one
     if "leg_speed" in opts:
@@ -722,7 +407,7 @@ def execute(result, touch_ups=0, duration=None, contact=None, progress=None) -> 
     touch_ups : int
         Re-plans from the measured state to the plan's goal after the open-loop stage at
         most, each played like it if predicted to end nearer the goal (module docstring);
-        at most :data:`MAX_TOUCH_UPS`.
+        at most :data:`~nonholo.physics.execution_record.MAX_TOUCH_UPS`.
     duration : float, optional
         Seconds each stage's motion takes, settling aside (default: ``SLOWDOWN``
         times the plan's ``T``); at most :data:`MAX_DURATION`.
@@ -842,7 +527,7 @@ def _touch_up(mech, R, q, result, options, tol, so_far, duration, contact):
     if now <= tol:
         return skip("within tolerance", f"|e| = {now:.3g} is within the plan's tolerance {tol:g}")
     try:
-        current = plan(mech.space.public(R, q), result.goal, mechanism=mech, **options)
+        current = plan(State(R, q), result.goal, mechanism=mech, **arguments_of(options, mech))
         reason = None if current.success else current.reason
     except ValueError as exc:              # e.g. a measured state the planner refuses
         reason = str(exc)
@@ -868,7 +553,7 @@ def _drift(mech, trace, T: float, settle: float) -> float:
     k = min(int(np.searchsorted(t, T + (1 - DRIFT_WINDOW) * settle - 1e-9)), len(t) - 2)
     if t[-1] <= t[k]:
         return 0.0
-    e = mech.space.error(trace["R"][k], trace["q"][k], trace["R"][-1], trace["q"][-1])[1]
+    e = mech.space.error((trace["R"][k], trace["q"][k]), (trace["R"][-1], trace["q"][-1]))[1]
     return mech.space.norm(e) / float(t[-1] - t[k])
 
 
@@ -877,5 +562,5 @@ def _coordinates(q) -> np.ndarray:
 
 
 def _error(mech, R, q, Rd, qd) -> dict:
-    parts = mech.space.error(R, q, Rd, qd)[1]
+    parts = mech.space.error((R, q), (Rd, qd))[1]
     return {k: float(v) for k, v in parts.items()}

@@ -139,24 +139,20 @@ def matching_model(mechanism: Mechanism) -> str:
                      f"there are models for {', '.join(known)}")
 
 
-def _samples(rotation: bool, k: int) -> list[tuple[np.ndarray, np.ndarray]]:
-    """:data:`SAMPLES` seeded states ``(R, q)``: random rotations (the identity without an
-    orientation) and coordinates in ``[-SPREAD, SPREAD]``."""
-    from ..spaces import so3
-
+def _samples(space) -> list[tuple[np.ndarray, np.ndarray]]:
+    """:data:`SAMPLES` seeded states ``(R, q)`` of ``space``: the identity moved by random
+    variations, rotations by up to ``π/√3`` per row and coordinates in ``[-SPREAD, SPREAD]``."""
     rng = np.random.default_rng(20240611)
-    out = []
-    for _ in range(SAMPLES):
-        R = so3.exp(rng.uniform(-np.pi / np.sqrt(3), np.pi / np.sqrt(3), 3)) if rotation else np.eye(3)
-        out.append((R, rng.uniform(-SPREAD, SPREAD, k)))
-    return out
+    half = np.full(space.dim, SPREAD)
+    half[space.rows("rotation")] = np.pi / np.sqrt(3)
+    return [tuple(space.retract(space.identity(), rng.uniform(-half, half))) for _ in range(SAMPLES)]
 
 
 def _field(mechanism, R, q) -> np.ndarray | None:
     """``G(R, q)`` of a mechanism as floats, ``None`` where it cannot be evaluated (a singular state)."""
     try:
         with np.errstate(all="ignore"):
-            G = mechanism.G(R, q) if mechanism.space.k else mechanism.L(R)
+            G = mechanism.G(R, q)
         G = np.asarray(G, dtype=float)
     except (ArithmeticError, ValueError, TypeError):
         return None
@@ -173,7 +169,7 @@ def _vehicle_mismatch(mechanism, vehicle) -> str | None:
     if len(mechanism.inputs) != len(vehicle.inputs):
         return f"it has {len(mechanism.inputs)} inputs, the catalog's {vehicle.name!r} {len(vehicle.inputs)}"
     compared = 0
-    for R, q in _samples(vehicle.space.rotation is not None, len(vehicle.coordinates)):
+    for R, q in _samples(vehicle.space):
         G, ref = _field(mechanism, R, q), _field(vehicle, R, q)
         if ref is None:
             continue
@@ -201,8 +197,8 @@ def _platform_mismatch(mechanism) -> str | None:
         return "its geometry's axle is along the contact normal: the disk constrains nothing"
     normal /= size
     compared = 0
-    for R, _ in _samples(True, 0):
-        L = _field(mechanism, R, None)
+    for R, q in _samples(mechanism.space):
+        L = _field(mechanism, R, q)
         if L is None:
             continue
         if L.shape != (3, 2):

@@ -1,6 +1,6 @@
 """A MuJoCo model of a two-leg orienting platform, written from its geometry alone.
 
-:class:`PlatformModel` turns a mechanism's :class:`~nonholo.model.mechanism.Geometry`
+:class:`PlatformModel` turns a mechanism's :class:`~nonholo.model.geometry.Geometry`
 (``base1, tip1, base2, tip2, contact, axle``) into MJCF text and plays a plan on it:
 
 - *Platform*: a sphere of radius ``|contact|`` on a ``ball`` joint at the origin O; sites
@@ -29,7 +29,7 @@
 
 :meth:`PlatformModel.follow` samples the played plan's orientations on the model's time
 grid — :func:`nonholo.physics.execution.execute` plays plans re-timed rest to rest
-(:mod:`nonholo.motion.time_change`: the same path, at rest at both ends, so the soft
+(:mod:`nonholo.motion.time_scaling`: the same path, at rest at both ends, so the soft
 constraints' lag cancels there) — and turns them into the legs' lengths, offset so that the
 legs start where they are commanded now.
 """
@@ -101,7 +101,7 @@ class PlatformModel:
     Parameters
     ----------
     mechanism : Mechanism or str
-        A mechanism with a ``geometry`` (:class:`~nonholo.model.mechanism.Geometry`), or its name.
+        A mechanism with a ``geometry`` (:class:`~nonholo.model.geometry.Geometry`), or its name.
     contact : object, optional
         Contact and drive settings: any object with attributes ``timestep, solref, solimp,
         friction, noslip_iterations, impratio, preload, actuators`` (``"prescribed"`` or

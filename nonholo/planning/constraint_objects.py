@@ -23,7 +23,7 @@ import numpy as np
 
 from ..model.bounds import InputBounds, StateBounds, as_data, of_mechanism
 from ..model.limits import LegLimits
-from ..motion.retimed import check_leg_speed
+from ..motion.speed_limits import check_leg_speed
 from ..numerics.checks import is_number
 
 __all__ = ["InputBounds", "StateBounds", "Clearance", "LegStroke", "LegSpeed", "KINDS", "of_mechanism",
@@ -82,9 +82,7 @@ class Clearance:
         str or None
             The reason, or ``None``: they may be joined.
         """
-        singular = mechanism.singular
-        if not singular.exists:
-            return None
+        singular = mechanism.singular       # Δ ≡ +∞ without a singular set: never a reason
         d0, dd = singular.value(*start), singular.value(*goal)
         where, at0, atd = singular.where, singular.at_start, singular.at_goal
         if dd == 0.0:
@@ -107,11 +105,28 @@ class LegStroke:
 
     Parameters
     ----------
-    limits : LegLimits
-        A platform's stroke (:class:`~nonholo.model.limits.LegLimits`).
+    lo, hi : float
+        A platform's stroke, ``0 ≤ lo < hi`` (its geometry's units,
+        :meth:`~nonholo.model.mechanism.Mechanism.leg_lengths`).
+
+    Raises
+    ------
+    ValueError
+        For ends that are not finite numbers with ``0 ≤ lo < hi``.
     """
 
-    limits: LegLimits
+    lo: float
+    hi: float
+
+    def __post_init__(self):
+        limits = LegLimits.parsed((self.lo, self.hi), "LegStroke")
+        object.__setattr__(self, "lo", limits.lo)
+        object.__setattr__(self, "hi", limits.hi)
+
+    @property
+    def limits(self) -> LegLimits:
+        """The stroke as :class:`~nonholo.model.limits.LegLimits`."""
+        return LegLimits(self.lo, self.hi)
 
     @classmethod
     def of(cls, value, mechanism) -> "LegStroke | None":
@@ -135,7 +150,7 @@ class LegStroke:
             Naming ``leg_length``, for bad limits or a mechanism without legs.
         """
         limits = LegLimits.from_argument(value, mechanism)
-        return None if limits is None else cls(limits)
+        return None if limits is None else cls(limits.lo, limits.hi)
 
     def check(self, mechanism) -> "LegStroke":
         """The constraint, checked against ``mechanism``.

@@ -8,7 +8,7 @@ The task: steer ``dR/dt = [L(R) u] R`` (spatial form) from ``R(0) = R0`` to ``R(
 ``e = log(R_T R_dᵀ) = [l_T]`` is asked to decay as ``dl_T/dθ = −γ l_T`` (4)–(5); with
 ``s_T = P(l_T) dl_T/dθ`` (7), ``P`` the left Jacobian of SO(3) (:func:`nonholo.spaces.so3.dexp`)
 and ``P(l) l = l``, this asks for ``s_T = −γ l_T``, ``s_T = J ∂λ/∂θ`` with the Jacobian
-``J = ∂s_T/∂λ`` of the variational system (9)–(10) (:meth:`Evaluator.evaluate`). Its
+``J = ∂s_T/∂λ`` of the variational system (9)–(10) (:meth:`EndpointMap.evaluate`). Its
 minimum-norm solution in a diagonal metric ``W`` is the update (11):
 ``Δλ = −γh W^{-1/2} (J W^{-1/2})^# l_T`` (:func:`nonholo.numerics.kernels.min_norm_step`).
 
@@ -25,12 +25,11 @@ same minimum-norm solution — so the convergence is quadratic.
 
 A strategy (:class:`Strategy`) chooses the coordinates of the planned control, the
 initial guesses and the step direction; it keeps no state between runs — what it needs
-during a run lives in the :class:`Start` and :class:`Evaluator` it is given.
+during a run lives in the :class:`Start` and :class:`EndpointMap` it is given.
 """
 from __future__ import annotations
 
 import math
-import time
 from abc import ABC, abstractmethod
 from dataclasses import dataclass, field
 from functools import lru_cache
@@ -41,14 +40,15 @@ import numpy as np
 from ..certify.certificate import Certificate
 from ..controls import stages
 from ..controls.parametrisations import Controls
-from ..io.result import PlanResult, coordinate_fields
+from ..integrate.compiled import compiled_system
+from ..io.result import PlanResult, part_errors
 from ..model.limits import Limits
 from ..model.mechanism import Mechanism
 from ..motion.frame_controls import FrameControls
 from ..numerics import kernels
 from ..numerics.checks import check_count, is_number
 from ..spaces import so3
-from ..spaces.groups import NO_COORDINATES
+from ..spaces.state import State
 
 
 @dataclass(frozen=True)
@@ -114,7 +114,7 @@ class Evaluation:
     bounds: :class:`~nonholo.model.limits.Limits`; ``None`` without limits). ``l``, ``error``, ``J``
     only when complete; ``Z`` (``Z(t_n) = Φ(t_n, 0)^{-1}`` at every node, ``(N+1, 3, 3)``)
     and ``Wd`` (the kernel's stage weights, ``(3N, 3m)``, see
-    :func:`nonholo.integrate.cf4.forward_variational`) only when the evaluation was asked for
+    :func:`nonholo.integrate.variational_kernels.forward_variational`) only when the evaluation was asked for
     them (``full``): with them the sensitivity of ``R(t_n)`` to ``λ`` is
     ``s_n = Z_n^{-1} Σ_{stages r before t_n} W_r ∂U_r/∂λ``.
 
@@ -155,7 +155,7 @@ class Evaluation:
         self.R = R
         #: the coordinates at the nodes, ``(n, k)`` (``k = 0`` on SO(3))
         self.q = np.zeros((len(R), 0)) if q is None else q
-        #: ``(rotation, coordinates)``: the norms of the two parts of ``l`` (:mod:`nonholo.spaces.groups`)
+        #: ``(rotation, coordinates)``: the norms of the two parts of ``l`` (:mod:`nonholo.spaces.product`)
         self.errors = None
         self.l = self.error = self.J = self.Z = self.Wd = None
         self._controls = controls
@@ -178,23 +178,24 @@ class Evaluation:
         return self.q[-1] if self.complete else None
 
 
-class Evaluator:
-    """A problem's controls simulated: ``R0 → R_d`` in time ``T`` for one mechanism, with the
-    integrator's buffers.
+class EndpointMap:
+    """The endpoint map of a problem, ``λ ↦ s_T``: its controls simulated from the start in
+    time ``T``, with the terminal error from the goal and its Jacobian from the variational
+    system, on the integrator's buffers.
 
     :meth:`evaluate` simulates a control with the variational system and returns the
     error ``l_T`` and the Jacobian ``J = ∂s_T/∂λ``. ``frame=True`` integrates the system
     in the desingularised frame coordinates ``w`` (``dR/dt = [N(R) w] R``; ``Δ`` is still
     monitored): ``λ`` then parametrises ``w``. ``limits``: the clearances an admissible
     trajectory keeps at every node (:class:`~nonholo.model.limits.Limits`: the legs' stroke,
-    the coordinates' bounds; or a :class:`~nonholo.model.limits.LegLimits` alone), or ``None``. ``q0``, ``qd``: the coordinates of start and goal of a mechanism whose state
-    goes beyond SO(3) (:mod:`nonholo.spaces.groups`; ``R0 = Rd = I`` without orientation); then
-    ``l_T`` is the stacked error ``(l, δq)`` and ``J`` has ``d`` rows.
+    the coordinates' bounds; or a :class:`~nonholo.model.limits.LegLimits` alone), or ``None``.
+    ``l_T`` is the stacked error ``(l, δq)`` of the mechanism's space
+    (:mod:`nonholo.spaces.product`) and ``J`` has ``d`` rows.
 
     Parameters
     ----------
-    R0, Rd : numpy.ndarray
-        Start and goal orientations.
+    start, goal : State
+        Start and goal (:class:`~nonholo.spaces.state.State`).
     T : float
         The time horizon.
     mechanism : Mechanism
@@ -209,28 +210,23 @@ class Evaluator:
         Whether to integrate in the frame coordinates ``w``.
     limits : Limits or None, optional
         The clearances kept at every node, if any.
-    q0, qd : numpy.ndarray, optional
-        Start and goal coordinates beyond SO(3).
     """
 
-    def __init__(self, R0, Rd, T: float, mechanism: Mechanism, method: str, steps: int,
-                 delta_min: float, frame: bool = False, limits: Limits | None = None,
-                 q0=None, qd=None):
+    def __init__(self, start: State, goal: State, T: float, mechanism: Mechanism, method: str, steps: int,
+                 delta_min: float, frame: bool = False, limits: Limits | None = None):
         self.mechanism = mechanism
         self.limits = limits
         self.frame = frame
-        self.kernels = mechanism.kernels(frame)
-        self.R0 = np.ascontiguousarray(R0, dtype=float)
-        self.Rd = np.ascontiguousarray(Rd, dtype=float)
-        self.q0 = np.ascontiguousarray(NO_COORDINATES if q0 is None else q0, dtype=float)
-        self.qd = np.ascontiguousarray(NO_COORDINATES if qd is None else qd, dtype=float)
+        self.kernels = compiled_system(mechanism, frame)
+        self.start = State.of(start)
+        self.goal = State.of(goal)
         self.T = T
         self.method = method
         self.steps = steps
         self.h = T / steps
         self.delta_min = delta_min
         self.singular = mechanism.singular
-        self.sign = self.singular.sign(self.R0, self.q0)
+        self.sign = self.singular.sign(*self.start)
         d = mechanism.n_rates
         self._Rs, self._Qs = self.kernels.nodes(steps)
         self._Zs = np.empty((steps + 1, d, d))
@@ -253,11 +249,11 @@ class Evaluator:
         Returns
         -------
         l : numpy.ndarray
-            The stacked error (:meth:`nonholo.spaces.groups.Product.error`).
+            The stacked error (:meth:`nonholo.spaces.product.Product.error`).
         errors : dict
             The norms of its parts.
         """
-        return self.mechanism.space.error(R, q, self.Rd, self.qd)
+        return self.mechanism.space.error((R, q), self.goal)
 
     def forward(self, U, h: float, stop: float):
         """The motion of a stage table (no variational system).
@@ -281,10 +277,10 @@ class Evaluator:
             Steps done.
         """
         Rs, Qs = self.kernels.nodes(U.shape[0])
-        n, _, _ = self.kernels.forward(self.R0, self.q0, U, h, self.sign, stop, Rs, Qs)
+        n, _, _ = self.kernels.forward(*self.start, U, h, self.sign, stop, Rs, Qs)
         return Rs, Qs, int(n)
 
-    def refined(self, steps: int) -> "Evaluator":
+    def refined(self, steps: int) -> "EndpointMap":
         """The same problem on another grid.
 
         Parameters
@@ -294,11 +290,11 @@ class Evaluator:
 
         Returns
         -------
-        Evaluator
+        EndpointMap
             The problem on that grid.
         """
-        return Evaluator(self.R0, self.Rd, self.T, self.mechanism, self.method, steps, self.delta_min,
-                       self.frame, self.limits, self.q0, self.qd)
+        return EndpointMap(self.start, self.goal, self.T, self.mechanism, self.method, steps, self.delta_min,
+                         self.frame, self.limits)
 
     def use(self, controls: Controls) -> None:
         """Interpret parameter vectors passed to :meth:`evaluate` in a parametrisation.
@@ -342,7 +338,7 @@ class Evaluator:
         U = self._fill(x, self._U)
         J = np.empty((self.mechanism.n_rates, self.n_params))
         n, dmin, t_stop = self.kernels.forward_variational(
-            self.R0, self.q0, U, self.h, self.sign, stop, *self.stage_basis,
+            *self.start, U, self.h, self.sign, stop, *self.stage_basis,
             self._Rs, self._Qs, self._Zs, J, self._M, self._Wd, full)
         self.evaluations += 1
         complete = n == self.steps
@@ -394,7 +390,7 @@ class Evaluator:
         str
             The reason (``"admissible"`` if it is).
         """
-        if self.singular.exists and (ev.min_delta is None or not self.singular.clear(ev.min_delta, self.delta_min)):
+        if not self.singular.clear(ev.min_delta, self.delta_min):
             where = f" at t ≈ {ev.t_stop:.4g} s" if ev.t_stop is not None else ""
             if ev.min_delta <= 0.0:
                 return (f"the trajectory ran into the singular surface Δ = 0{where} (|ω| ~ 1/|Δ| "
@@ -436,31 +432,17 @@ def spatial_gradient_delta(mechanism, R: np.ndarray, eps: float = 1e-6, q=None) 
     numpy.ndarray
         The gradients, ``(n, 3)``; ``(n, d)`` beyond SO(3).
     """
-    if not mechanism.space.k:
-        g = np.empty((len(R), 3))
-        for k in range(3):
-            e = np.zeros(3)
-            e[k] = eps
-            g[:, k] = (mechanism.delta_samples(so3.exp(e) @ R)
-                       - mechanism.delta_samples(so3.exp(-e) @ R)) / (2.0 * eps)
-        return g
-    r = 3 if mechanism.space.has_orientation else 0
-    g = np.empty((len(R), mechanism.n_rates))
-    for k in range(mechanism.n_rates):
-        if k < r:
-            e = np.zeros(3)
-            e[k] = eps
-            plus, minus = (mechanism.delta_samples(so3.exp(e) @ R, q),
-                           mechanism.delta_samples(so3.exp(-e) @ R, q))
-        else:
-            dq = np.zeros(mechanism.n_coordinates)
-            dq[k - r] = eps
-            plus, minus = mechanism.delta_samples(R, q + dq), mechanism.delta_samples(R, q - dq)
-        g[:, k] = (plus - minus) / (2.0 * eps)
+    space, values = mechanism.space, mechanism.singular.values
+    q = np.zeros((len(R), mechanism.n_coordinates)) if q is None else q
+    g = np.empty((len(R), space.dim))
+    for i in range(space.dim):
+        s = np.zeros(space.dim)
+        s[i] = eps
+        g[:, i] = (values(*space.retract_stack(R, q, s)) - values(*space.retract_stack(R, q, -s))) / (2.0 * eps)
     return g
 
 
-def node_gradient(problem: Evaluator, ev: Evaluation, a: np.ndarray) -> np.ndarray:
+def node_gradient(endpoint: EndpointMap, ev: Evaluation, a: np.ndarray) -> np.ndarray:
     """The gradient in ``λ`` of ``Σ_n a_n · s_n``, ``s_n`` the sensitivity of node ``n``'s state.
 
     ``s_n = Z_n^{-1} S_n``, ``S_n = Σ_{stages r before t_n} W_r ∂U_r/∂λ``; with
@@ -469,8 +451,8 @@ def node_gradient(problem: Evaluator, ev: Evaluation, a: np.ndarray) -> np.ndarr
 
     Parameters
     ----------
-    problem : Evaluator
-        The problem.
+    endpoint : EndpointMap
+        The endpoint.
     ev : Evaluation
         A ``full`` evaluation.
     a : numpy.ndarray
@@ -481,13 +463,13 @@ def node_gradient(problem: Evaluator, ev: Evaluation, a: np.ndarray) -> np.ndarr
     numpy.ndarray
         The gradient, one entry per parameter.
     """
-    N, m, D = problem.steps, problem.mechanism.n_inputs, problem.mechanism.n_rates
+    N, m, D = endpoint.steps, endpoint.mechanism.n_inputs, endpoint.mechanism.n_rates
     mu = np.linalg.solve(np.transpose(ev.Z, (0, 2, 1)), a[:, :, None])[:, :, 0]    # a_n Z_n^{-1}
     nu = np.cumsum(mu[::-1], axis=0)[::-1]                  # Σ_{n ≥ k} μ_n
     nu = nu[1:]                                              # Σ_{n > k} μ_n, k = 0 … N−1
     v = np.einsum("ni,ncik->nck", nu, ev.Wd.reshape(N, 3, D, m)).reshape(3 * N, m)
-    Bidx, Bval, sb, si = problem.stage_basis
-    out = np.zeros(problem.n_params)
+    Bidx, Bval, sb, si = endpoint.stage_basis
+    out = np.zeros(endpoint.n_params)
     if Bidx.shape[0] == 0:                                  # dense basis
         G = v.T @ Bval.reshape(3 * N, -1)                    # (m, nb)
         cols = np.arange(G.shape[1])[None, :] * sb + np.arange(m)[:, None] * si
@@ -499,7 +481,7 @@ def node_gradient(problem: Evaluator, ev: Evaluation, a: np.ndarray) -> np.ndarr
     return out
 
 
-def node_sensitivities(problem: Evaluator, ev: Evaluation, nodes: np.ndarray) -> np.ndarray:
+def node_sensitivities(endpoint: EndpointMap, ev: Evaluation, nodes: np.ndarray) -> np.ndarray:
     """``s_n = ∂(state at node n)/∂λ`` at some nodes, from a ``full`` evaluation.
 
     ``s_n = Z_n^{-1} S_n`` with ``S_n = Σ_{stages r before t_n} W_r ∂U_r/∂λ`` (no extra
@@ -510,8 +492,8 @@ def node_sensitivities(problem: Evaluator, ev: Evaluation, nodes: np.ndarray) ->
 
     Parameters
     ----------
-    problem : Evaluator
-        The problem.
+    endpoint : EndpointMap
+        The endpoint.
     ev : Evaluation
         A ``full`` evaluation.
     nodes : array_like of int
@@ -522,11 +504,11 @@ def node_sensitivities(problem: Evaluator, ev: Evaluation, nodes: np.ndarray) ->
     numpy.ndarray
         The sensitivities, ``(len(nodes), d, p)``.
     """
-    N, m, D = problem.steps, problem.mechanism.n_inputs, problem.mechanism.n_rates
+    N, m, D = endpoint.steps, endpoint.mechanism.n_inputs, endpoint.mechanism.n_rates
     nodes = np.asarray(nodes, dtype=int)
     W = ev.Wd.reshape(N, 3, D, m)
-    Bidx, Bval, sb, si = problem.stage_basis
-    p = problem.n_params
+    Bidx, Bval, sb, si = endpoint.stage_basis
+    p = endpoint.n_params
     if Bidx.shape[0] and Bidx.shape[2] == 1 and np.all(Bidx[:, :, 0] == Bidx[:, :1, 0]):
         j = Bidx[:, 0, 0]
         C = np.zeros((N + 1, D, m))
@@ -563,7 +545,7 @@ def node_sensitivities(problem: Evaluator, ev: Evaluation, nodes: np.ndarray) ->
     return np.matmul(np.linalg.inv(ev.Z[nodes]), S[nodes])
 
 
-def step_scale(problem: Evaluator, controls: Controls) -> np.ndarray:
+def step_scale(endpoint: EndpointMap, controls: Controls) -> np.ndarray:
     """``S = W^{-1/2}`` of the metric the minimum norm is taken in.
 
     Euclidean on Fourier coefficients (parametric form, ``J^#``), L2 in time on grid
@@ -571,8 +553,8 @@ def step_scale(problem: Evaluator, controls: Controls) -> np.ndarray:
 
     Parameters
     ----------
-    problem : Evaluator
-        The problem (its ``method``).
+    endpoint : EndpointMap
+        The endpoint (its ``method``).
     controls : Controls
         The parametrisation.
 
@@ -581,7 +563,7 @@ def step_scale(problem: Evaluator, controls: Controls) -> np.ndarray:
     numpy.ndarray
         The diagonal of ``S``, one entry per parameter (read-only).
     """
-    if problem.method == "parametric":
+    if endpoint.method == "parametric":
         return _ones(controls.params.size)
     return 1.0 / np.sqrt(controls.metric())
 
@@ -613,15 +595,15 @@ def record(iteration: int, ev: Evaluation, step: float, phase: str, rejected: in
             "min_delta": ev.min_delta, "phase": phase, "rejected": rejected, **extra}
 
 
-def backtrack(problem: Evaluator, ev: Evaluation, direction: np.ndarray, scale: float,
+def backtrack(endpoint: EndpointMap, ev: Evaluation, direction: np.ndarray, scale: float,
               min_step: float, full: bool = False):
     """Step control of the θ-flow: halve ``scale`` until ``λ − scale·direction`` is
     admissible (reaches ``T`` with ``|Δ| ≥ delta_min``) and lowers ``|l_T|``.
 
     Parameters
     ----------
-    problem : Evaluator
-        The problem.
+    endpoint : EndpointMap
+        The endpoint.
     ev : Evaluation
         The current evaluation, with parameters ``λ``.
     direction : numpy.ndarray
@@ -646,10 +628,10 @@ def backtrack(problem: Evaluator, ev: Evaluation, direction: np.ndarray, scale: 
     """
     rejected = 0
     while True:
-        trial = problem.evaluate(ev.params - scale * direction, full=full)
-        if problem.admissible(trial) and trial.error < ev.error:
+        trial = endpoint.evaluate(ev.params - scale * direction, full=full)
+        if endpoint.admissible(trial) and trial.error < ev.error:
             return trial, scale, rejected, None
-        last = (problem.why_not(trial) if not problem.admissible(trial) else
+        last = (endpoint.why_not(trial) if not endpoint.admissible(trial) else
                 f"|l_T| did not decrease ({trial.error:.3g} >= {ev.error:.3g})")
         rejected += 1
         scale *= 0.5
@@ -688,7 +670,7 @@ class Descent:
     reason: str
 
 
-def descend(problem: Evaluator, ev: Evaluation, options: Options,
+def descend(endpoint: EndpointMap, ev: Evaluation, options: Options,
             direction: Callable[[Evaluation, bool], np.ndarray], *, budget: int, history: list,
             callback=None, first: int = 0, full: Callable[[Evaluation], bool] | None = None,
             stall: tuple[int, float] | None = None, tags: dict | None = None) -> Descent:
@@ -705,8 +687,8 @@ def descend(problem: Evaluator, ev: Evaluation, options: Options,
 
     Parameters
     ----------
-    problem : Evaluator
-        The problem.
+    endpoint : EndpointMap
+        The endpoint.
     ev : Evaluation
         An admissible evaluation to start from.
     options : Options
@@ -749,7 +731,7 @@ def descend(problem: Evaluator, ev: Evaluation, options: Options,
                                f"{100 * (1 - ratio):.3g} % in {w} steps)")
         newton = ev.error < options.newton_below
         scale = 1.0 if newton else options.gamma * h
-        trial, scale, rejected, failure = backtrack(problem, ev, direction(ev, newton), scale,
+        trial, scale, rejected, failure = backtrack(endpoint, ev, direction(ev, newton), scale,
                                                     options.min_step, full=full(ev) if full else False)
         if failure:
             return Descent(ev, it, "failed", failure)
@@ -802,11 +784,11 @@ class Outcome:
         The history entries (:func:`record`).
     iterations : int, default 0
         Steps accepted.
-    problem : Evaluator or None, optional
-        The problem the final evaluation belongs to, when not the one
-        :func:`nonholo.plan` built (e.g. a finer integrator grid).
+    endpoint : EndpointMap or None, optional
+        The endpoint map the final evaluation belongs to, when not the one
+        :func:`nonholo.plan` built (e.g. on a finer integrator grid).
     certificate : Certificate or None, optional
-        The certificate of a success (:mod:`nonholo.planning.certification`); a success
+        The certificate of a success (:mod:`nonholo.planning.correction`); a success
         without one is certified by :func:`nonholo.plan`.
     stopped : bool, default False
         The caller's callback stopped the run (no further route is tried).
@@ -817,10 +799,10 @@ class Outcome:
     reason: str
     history: list = field(default_factory=list)
     iterations: int = 0
-    #: the problem the final evaluation belongs to, when not the one :func:`nonholo.plan`
-    #: built (e.g. a finer integrator grid)
-    problem: Evaluator | None = None
-    #: the certificate of a success (:mod:`nonholo.planning.certification`); a success
+    #: the endpoint map the final evaluation belongs to, when not the one :func:`nonholo.plan`
+    #: built (e.g. on a finer integrator grid)
+    endpoint: EndpointMap | None = None
+    #: the certificate of a success (:mod:`nonholo.planning.correction`); a success
     #: without one is certified by :func:`nonholo.plan`
     certificate: Certificate | None = None
     #: the caller's callback stopped the run (no further route is tried)
@@ -863,13 +845,13 @@ class Strategy(ABC):
         """
         return False
 
-    def initial(self, problem: Evaluator, controls: Controls, given: bool) -> Start:
+    def initial(self, endpoint: EndpointMap, controls: Controls, given: bool) -> Start:
         """The initial control in this strategy's coordinates.
 
         Parameters
         ----------
-        problem : Evaluator
-            The problem.
+        endpoint : EndpointMap
+            The endpoint.
         controls : Controls
             The physical initial control (the default one, or the caller's ``u0``).
         given : bool
@@ -883,14 +865,14 @@ class Strategy(ABC):
         return Start(controls, given)
 
     @abstractmethod
-    def solve(self, problem: Evaluator, start: Start,
+    def solve(self, endpoint: EndpointMap, start: Start,
               callback: Callable[[dict], object] | None = None) -> Outcome:
         """Plan from ``start``.
 
         Parameters
         ----------
-        problem : Evaluator
-            The problem.
+        endpoint : EndpointMap
+            The endpoint.
         start : Start
             The initial control.
         callback : callable, optional
@@ -903,15 +885,15 @@ class Strategy(ABC):
         """
 
 
-def build_result(request, outcome: Outcome | None, success: bool, reason: str,
-                 problem: Evaluator | None = None) -> PlanResult:
+def build_result(problem, outcome: Outcome | None, success: bool, reason: str,
+                 endpoint: EndpointMap | None = None) -> PlanResult:
     """The :class:`~nonholo.io.result.PlanResult` of a run.
 
     A success's samples are those of its certified replay.
 
     Parameters
     ----------
-    request : Problem
+    problem : Problem
         The problem (:class:`~nonholo.planning.problem.Problem`).
     outcome : Outcome or None
         The run's outcome; ``None``: nothing simulated.
@@ -919,7 +901,7 @@ def build_result(request, outcome: Outcome | None, success: bool, reason: str,
         Whether the plan succeeded.
     reason : str
         The result's reason.
-    problem : Evaluator or None, optional
+    endpoint : EndpointMap or None, optional
         The evaluator of the run, unless the outcome names its own.
 
     Returns
@@ -927,20 +909,20 @@ def build_result(request, outcome: Outcome | None, success: bool, reason: str,
     PlanResult
         The result.
     """
-    mech, T = request.mechanism, request.T
+    mech, T = problem.mechanism, problem.T
     ev = outcome.evaluation if outcome is not None else None
     cert = outcome.certificate if outcome is not None and success else None
-    if outcome is not None and outcome.problem is not None:
-        problem = outcome.problem
-    n_steps = request.steps if problem is None else problem.steps
+    if outcome is not None and outcome.endpoint is not None:
+        endpoint = outcome.endpoint
+    n_steps = problem.steps if endpoint is None else endpoint.steps
     n = 0 if ev is None else ev.steps_done + 1
     t = np.arange(n) * (T / n_steps)
     if ev is not None and ev.complete:
         t[-1] = T
     if ev is None:
-        par = request.controls              # nothing simulated: the physical initial control
-    elif problem.frame:
-        par = FrameControls(ev.controls, request.R0, mech, n_steps, nodes=ev.R if ev.complete else None)
+        par = problem.controls              # nothing simulated: the physical initial control
+    elif endpoint.frame:
+        par = FrameControls(ev.controls, problem.start.R, mech, n_steps, nodes=ev.R if ev.complete else None)
     else:
         par = ev.controls
     R = ev.R if ev is not None else np.empty((0, 3, 3))
@@ -963,11 +945,11 @@ def build_result(request, outcome: Outcome | None, success: bool, reason: str,
         iterations=0 if outcome is None else outcome.iterations,
         history=[] if outcome is None else outcome.history,
         t=t, R=R, u=par(t).reshape(n, mech.n_inputs) if u is None else u, delta=mech.delta_samples(R, q),
-        parametrisation=par, mechanism=mech.name, kinematics=mech, method=request.method,
-        strategy=request.strategy, T=T, R0=request.R0, Rd=request.Rd, steps=n_steps,
-        seconds=time.perf_counter() - request.started,
-        options=request.recorded_options(),
+        parametrisation=par, mechanism=mech.name, kinematics=mech, method=problem.method,
+        strategy=problem.strategy, T=T, start=problem.start, goal=problem.goal, steps=n_steps,
+        seconds=None,
+        options=problem.recorded_options(),
         sensitivity=None if outcome is None or outcome.certificate is None else outcome.certificate.sensitivity,
         error_bound=None if cert is None else cert.error_bound,
         replay_steps=None if cert is None else cert.replay_steps,
-        **coordinate_fields(mech, q, request.q0, request.qd, errors))
+        q=q, errors=part_errors(mech, errors))

@@ -11,10 +11,8 @@ from __future__ import annotations
 
 import dataclasses
 import importlib
-import time
 from dataclasses import asdict, dataclass
 
-import numpy as np
 
 from ..certify.certificate import MAX_REPLAY_STEPS
 from ..controls import stages
@@ -26,14 +24,14 @@ from ..controls.parametrisations import (
 )
 from ..model import catalog
 from ..model.mechanism import Mechanism
+from ..spaces.state import State
 from ..motion.simulation import DEFAULT_STEPS
-from ..motion.time_change import check_horizon
-from ..numerics import effort
+from ..motion.time_scaling import check_horizon
 from ..numerics.checks import check_count, check_time
 from ..model.bounds import InputBounds, StateBounds, of_mechanism
 from ..model.limits import Limits
 from .constraint_objects import KINDS, Clearance, LegSpeed, LegStroke, check_all, one_of
-from .core import Evaluator, Options, Strategy
+from .core import EndpointMap, Options, Strategy
 from .strategy_paper import PaperStrategy
 from .strategy_robust import RobustStrategy
 
@@ -262,89 +260,227 @@ def default_steps(method: str, grid: int) -> int:
     return DEFAULT_STEPS
 
 
+#: The clearance from ``Δ = 0`` a plan keeps when ``constraints`` hold no
+#: :class:`~nonholo.planning.constraint_objects.Clearance`.
+DEFAULT_CLEARANCE = 1e-2
+
+
+@dataclass(frozen=True)
+class Settings:
+    """The numerical settings of a plan: its parametrisation and the solver's numbers.
+
+    Parameters
+    ----------
+    method : {"parametric", "nonparametric"}
+        Fourier series with ``harmonics`` = K, or piecewise constant on ``grid`` equal
+        intervals (of the physical inputs ``u`` for ``"paper"``, of the frame coordinates
+        ``w`` for ``"robust"``).
+    harmonics : int
+        Harmonics K of the parametric form.
+    grid : int
+        Intervals of the nonparametric form (at most :data:`MAX_PLAN_STEPS`).
+    steps : int, optional
+        CF4 steps on ``[0, T]`` (default :func:`default_steps`; at most
+        :data:`MAX_PLAN_STEPS`, the most a certificate replays).
+    gamma : float, optional
+        γ: each flow step asks the error to shrink by ``γh`` (default: the strategy's
+        ``default_gamma``).
+    step : float
+        The initial θ-step h.
+    tol : float
+        Stop when the terminal error is at most this (the state's units).
+    max_iter : int
+        Accepted steps at most.
+    newton_below : float
+        Below this error take full Newton steps (``γh = 1``).
+    min_step : float
+        Give up when a step halved below this ``γh``.
+
+    Raises
+    ------
+    ValueError
+        For bad settings, naming the one.
+    """
+
+    method: str = "parametric"
+    harmonics: int = 2
+    grid: int = 100
+    steps: int | None = None
+    gamma: float | None = None
+    step: float = 1.0
+    tol: float = 1e-10
+    max_iter: int = 200
+    newton_below: float = 1e-3
+    min_step: float = 1e-6
+
+    def __post_init__(self):
+        if not one_of_choices(self.method, METHODS):
+            raise ValueError(f"unknown method {self.method!r}; known: {', '.join(METHODS)}")
+        object.__setattr__(self, "harmonics", check_count(self.harmonics, "harmonics"))
+        object.__setattr__(self, "grid", check_count(self.grid, "grid", maximum=MAX_PLAN_STEPS))
+        if self.steps is not None:
+            object.__setattr__(self, "steps", check_count(self.steps, "steps", maximum=MAX_PLAN_STEPS))
+        self.options(1.0 if self.gamma is None else self.gamma, DEFAULT_CLEARANCE)     # the numbers' checks
+
+    def options(self, gamma: float, delta_min: float) -> Options:
+        """The solver's :class:`~nonholo.planning.core.Options` of these settings.
+
+        Parameters
+        ----------
+        gamma : float
+            γ, where the settings leave it to the strategy.
+        delta_min : float
+            The clearance kept.
+
+        Returns
+        -------
+        Options
+            The options, checked.
+        """
+        return Options(gamma=gamma if self.gamma is None else self.gamma, step=self.step, tol=self.tol,
+                       max_iter=self.max_iter, newton_below=self.newton_below, min_step=self.min_step,
+                       delta_min=delta_min)
+
+    @classmethod
+    def of(cls, value) -> "Settings":
+        """``settings`` as :func:`nonholo.plan` takes it: ``None`` (the defaults), a
+        :class:`Settings`, or a mapping of its fields.
+
+        Parameters
+        ----------
+        value : Settings, dict or None
+            The caller's settings.
+
+        Returns
+        -------
+        Settings
+            The settings, checked.
+
+        Raises
+        ------
+        ValueError
+            Naming ``settings``, for an unknown field.
+        TypeError
+            For anything else.
+        """
+        if value is None:
+            return cls()
+        if isinstance(value, cls):
+            return value
+        if isinstance(value, dict):
+            known = {f.name for f in dataclasses.fields(cls)}
+            unknown = sorted(set(value) - known)
+            if unknown:
+                raise ValueError(f"settings: unknown setting {unknown[0]!r}; known: {', '.join(sorted(known))}")
+            return cls(**value)
+        raise TypeError(f"settings must be a nonholo.Settings, a dict of its fields or None, got {value!r}")
+
+
+#: The names of :class:`Settings`' fields.
+SETTINGS_FIELDS = tuple(f.name for f in dataclasses.fields(Settings))
+
+
+def arguments_of(options: dict, mechanism) -> dict:
+    """:func:`nonholo.plan`'s keyword arguments for options in their flat form (a problem
+    table's ``options``, a plan file's recorded options, the command line's flags):
+    ``delta_min``, ``leg_length`` and ``leg_speed`` become constraint objects, the fields of
+    :class:`Settings` one ``settings``; the rest pass as they are.
+
+    Parameters
+    ----------
+    options : dict
+        The flat options.
+    mechanism : str or Mechanism
+        The mechanism planned (the legs' constraints are checked against it).
+
+    Returns
+    -------
+    dict
+        Keyword arguments of :func:`nonholo.plan`.
+
+    Raises
+    ------
+    ValueError
+        Naming the option, for a bad value.
+    """
+    mech = catalog.get(mechanism)
+    out, settings = {}, {}
+    constraints = list(options.get("constraints") or ())
+    for key, value in options.items():
+        if key in SETTINGS_FIELDS:
+            settings[key] = value
+        elif key == "delta_min":
+            constraints.append(Clearance(value))
+        elif key in ("leg_length", "leg_speed"):
+            c = (LegStroke if key == "leg_length" else LegSpeed).of(value, mech)
+            if c is not None:
+                constraints.append(c)
+        elif key != "constraints":
+            out[key] = value
+    if settings:
+        out["settings"] = Settings(**settings)
+    if constraints:
+        out["constraints"] = constraints
+    return out
+
+
 @dataclass(frozen=True, eq=False)
 class Problem:
-    """One planning problem, checked (see the module; build it with :meth:`build`).
+    """One planning problem, checked (see the module; build it with :meth:`build`). A
+    problem holds no clock: the budgets of effort start when it is solved.
 
     Parameters
     ----------
     mechanism : Mechanism
         The mechanism.
-    R0, q0, Rd, qd : numpy.ndarray
-        Start and goal as states ``(R, q)`` (:mod:`nonholo.spaces.groups`).
+    start, goal : State
+        Start and goal (:class:`~nonholo.spaces.state.State`).
     T : float
         The horizon (s).
-    method, harmonics, grid : str, int, int
-        The parametrisation of the planned control.
-    controls : Controls
-        Its physical initial guess.
-    u0_given, gamma_given : bool
-        Whether the initial guess, and ``options.gamma``, are the caller's (not the
-        strategy's defaults).
-    strategy_class : type
-        The :class:`~nonholo.planning.core.Strategy` subclass.
-    options : Options
-        The solver's settings.
-    steps : int
-        CF4 steps on ``[0, T]``.
-    constraints : tuple
-        What the motion keeps (:mod:`nonholo.planning.constraint_objects`).
     objective : {None, "energy", "auto"}
         What is lowered once the plan is found.
+    constraints : tuple
+        What the motion keeps (:mod:`nonholo.planning.constraint_objects`), a
+        :class:`~nonholo.planning.constraint_objects.Clearance` always among them.
+    settings : Settings
+        The parametrisation and the solver's numbers, ``steps`` resolved.
+    strategy_class : type
+        The :class:`~nonholo.planning.core.Strategy` subclass.
     route : {"auto", "local", "global"}
         The route (see :func:`nonholo.plan`).
+    controls : Controls
+        The physical initial guess.
+    u0_given : bool
+        Whether the initial guess is the caller's (not the strategy's default).
     least_time : bool
         ``T`` is the planning horizon of a plan re-timed in the least time.
-    started, started_effort : float
-        When the problem was built (for the result's ``seconds`` and the global route's
-        budget of effort, :mod:`nonholo.numerics.effort`).
     """
 
     mechanism: Mechanism
-    R0: np.ndarray
-    q0: np.ndarray
-    Rd: np.ndarray
-    qd: np.ndarray
+    start: State
+    goal: State
     T: float
-    method: str
-    harmonics: int
-    grid: int
-    controls: Controls
-    u0_given: bool
-    gamma_given: bool
+    objective: str | None
+    constraints: tuple
+    settings: Settings
     strategy_class: type[Strategy]
-    options: Options
-    steps: int
-    constraints: tuple = ()
-    objective: str | None = "auto"
     route: str = "auto"
+    controls: Controls | None = None
+    u0_given: bool = False
     least_time: bool = False
-    started: float = dataclasses.field(default_factory=time.perf_counter)
-    started_effort: float = dataclasses.field(default_factory=effort.seconds)
 
     @classmethod
-    def build(cls, R0, Rd, *, T: float | None = 1.0, method: str = "parametric", harmonics: int = 2,
-              grid: int = 100, u0=None, gamma: float | None = None, step: float = 1.0, tol: float = 1e-10,
-              max_iter: int = 200, strategy="robust", mechanism="platform", delta_min: float = 1e-2,
-              steps: int | None = None, newton_below: float = 1e-3, min_step: float = 1e-6,
-              route: str = "auto", leg_length=None, leg_speed=None, objective: str | None = "auto",
-              constraints=(), allow_imports: bool = False) -> "Problem":
-        """The problem of :func:`nonholo.plan`'s keywords, checked.
+    def build(cls, start, goal, *, mechanism="platform", T: float | None = 1.0, objective: str | None = "auto",
+              constraints=(), strategy="robust", route: str = "auto", settings=None, u0=None,
+              allow_imports: bool = False) -> "Problem":
+        """The problem of :func:`nonholo.plan`'s arguments, checked.
 
         Parameters
         ----------
-        R0, Rd, T, method, harmonics, grid, u0, gamma, step, tol, max_iter, strategy
+        start, goal, mechanism, T, objective, constraints, strategy, route, settings, u0
             As for :func:`nonholo.plan`.
-        mechanism, delta_min, steps, newton_below, min_step, route, leg_length
+        allow_imports : bool
             As for :func:`nonholo.plan`.
-        leg_speed, objective, allow_imports
-            As for :func:`nonholo.plan`.
-        constraints : sequence or None
-            Further constraint objects (:mod:`nonholo.planning.constraint_objects`), besides those
-            of ``delta_min``, ``leg_length`` and ``leg_speed``; ``None``: none. With
-            ``T=None`` the mechanism's own bounds (:func:`~nonholo.model.bounds.of_mechanism`)
-            join them, each kind (:class:`~nonholo.model.bounds.InputBounds`,
-            :class:`~nonholo.model.bounds.StateBounds`) unless given here.
 
         Returns
         -------
@@ -354,53 +490,49 @@ class Problem:
         Raises
         ------
         ValueError
-            For bad input, naming the argument; ``R0``/``Rd`` outside the
+            For bad input, naming the argument; ``start``/``goal`` outside the
             :class:`~nonholo.model.bounds.StateBounds`, naming the coordinate.
         TypeError
-            For ``constraints`` that are not constraint objects, or an ``allow_imports``
-            that is not a bool.
+            For ``constraints`` that are not constraint objects, ``settings`` of another
+            type, or an ``allow_imports`` that is not a bool.
         """
-        started, started_effort = time.perf_counter(), effort.seconds()
         mech = catalog.get(mechanism)
-        speed = LegSpeed.of(leg_speed, mech)
+        settings = Settings.of(settings)
         given = check_all(constraints, mech)
+        for kind in KINDS:
+            one_of(given, kind)
+        if one_of(given, Clearance) is None:
+            given = (Clearance(DEFAULT_CLEARANCE),) + given
+        speed = one_of(given, LegSpeed)
         if T is None and speed is None:
             given = given + least_time_bounds(given, mech)
             if not any(isinstance(c, InputBounds) and not c.free for c in given):
-                raise ValueError(f"T=None asks for the least time, which needs a leg_speed (a platform's) or "
+                raise ValueError(f"T=None asks for the least time, which needs a LegSpeed (a platform's) or "
                                  f"InputBounds in constraints to re-time the path under; mechanism "
                                  f"{mech.name!r} has no input bounds of its own")
         if speed is not None and any(isinstance(c, InputBounds) and not c.free for c in given):
-            raise ValueError("leg_speed and InputBounds cannot be kept together yet (each re-times the path "
+            raise ValueError("LegSpeed and InputBounds cannot be kept together yet (each re-times the path "
                              "on its own): give one of them")
         if not one_of_choices(objective, OBJECTIVES):
             raise ValueError(f"unknown objective {objective!r}; known: None, 'energy', 'auto'")
         if not one_of_choices(route, ROUTES):
             raise ValueError(f"unknown route {route!r}; known: {', '.join(ROUTES)}")
-        stroke = LegStroke.of(leg_length, mech)
-        if not one_of_choices(method, METHODS):
-            raise ValueError(f"unknown method {method!r}; known: {', '.join(METHODS)}")
         solver = check_strategy(strategy, allow_imports)
         least_time = T is None
         T = check_horizon(PLANNING_TIME if least_time else T)
-        harmonics = check_count(harmonics, "harmonics")
-        grid = check_count(grid, "grid", maximum=MAX_PLAN_STEPS)     # at most the steps (below)
-        R0, q0 = mech.parse_state(R0, "R0")
-        Rd, qd = mech.parse_state(Rd, "Rd")
+        start = mech.parse_state(start, "start")
+        goal = mech.parse_state(goal, "goal")
         for c in given:
             if isinstance(c, StateBounds):
-                for name, state, what in (("R0", (R0, q0), "the start"), ("Rd", (Rd, qd), "the goal")):
+                for name, state, what in (("start", start, "the start"), ("goal", goal, "the goal")):
                     outside = c.violation(mech, state, what)
                     if outside is not None:
                         raise ValueError(f"{name}: {outside}")
-        options = Options(gamma=solver.default_gamma if gamma is None else gamma, step=step, tol=tol,
-                          max_iter=max_iter, newton_below=newton_below, min_step=min_step,
-                          delta_min=delta_min)
-        if mech.singular.value(R0, q0) == 0.0:
+        if mech.singular.value(*start) == 0.0:
             raise ValueError(mech.singular.refusal)
         # the certificate replays on twice the steps: at most half its finest replay
-        steps = check_count(default_steps(method, grid) if steps is None else steps, "steps",
-                            maximum=MAX_PLAN_STEPS)
+        method, harmonics, grid = settings.method, settings.harmonics, settings.grid
+        steps = default_steps(method, grid) if settings.steps is None else settings.steps
         if method == "parametric" and 2 * harmonics > steps:
             raise ValueError(f"harmonics = {harmonics} is more than the integrator's steps = {steps} "
                              "can resolve (at most steps/2; raise steps or lower harmonics)")
@@ -411,27 +543,19 @@ class Problem:
                              f"more than {MAX_BASIS:.0e}; lower harmonics or steps")
         controls = initial_controls(method, T, mech.n_inputs, harmonics, grid, u0)
         stages.check_steps(controls, steps)
-        # the keywords' constraints are checked as they are built, the caller's above: at most
-        # one of each kind
-        listed = (Clearance(options.delta_min), stroke, speed)
-        checked = tuple(c for c in listed if c is not None) + given
-        for kind in KINDS:
-            one_of(checked, kind)
-        return cls(mechanism=mech, R0=R0, q0=q0, Rd=Rd, qd=qd, T=T, method=method, harmonics=harmonics,
-                   grid=grid, controls=controls, u0_given=u0 is not None, gamma_given=gamma is not None,
-                   strategy_class=solver,
-                   options=options, steps=steps, constraints=checked, objective=objective, route=route,
-                   least_time=least_time, started=started, started_effort=started_effort)
+        return cls(mechanism=mech, start=start, goal=goal, T=T, objective=objective, constraints=given,
+                   settings=dataclasses.replace(settings, steps=steps), strategy_class=solver, route=route,
+                   controls=controls, u0_given=u0 is not None, least_time=least_time)
 
     def part(self, start, goal, T: float, delta_min: float, strategy) -> "Problem":
-        """A part of the global route, ``start → goal`` (states ``(R, q)``) in ``T``, planned
-        locally with ``strategy`` and the clearance ``delta_min``, under this problem's other
-        constraints but the legs' speed (kept by the whole plan's re-timing), with no
-        objective: the same settings, its own clock.
+        """A part of the global route, ``start → goal`` in ``T``, planned locally with
+        ``strategy`` and the clearance ``delta_min``, under this problem's other constraints
+        but the legs' speed (kept by the whole plan's re-timing), with no objective: the same
+        settings.
 
         Parameters
         ----------
-        start, goal : tuple
+        start, goal : State or tuple
             States ``(R, q)``.
         T : float
             The part's horizon (s).
@@ -446,23 +570,67 @@ class Problem:
             The part.
         """
         mech = self.mechanism
-        solver = strategy_class(strategy)
-        options = dataclasses.replace(self.options, delta_min=delta_min,
-                                      gamma=self.options.gamma if self.gamma_given else solver.default_gamma)
-        controls = initial_controls(self.method, T, mech.n_inputs, self.harmonics, self.grid)
+        s = self.settings
+        controls = initial_controls(s.method, T, mech.n_inputs, s.harmonics, s.grid)
         kept = tuple(c for c in self.constraints if not isinstance(c, (Clearance, LegSpeed, InputBounds)))
         return dataclasses.replace(
-            self, R0=np.asarray(start[0], dtype=float), q0=np.asarray(start[1], dtype=float),
-            Rd=np.asarray(goal[0], dtype=float), qd=np.asarray(goal[1], dtype=float), T=check_time(T),
-            controls=controls, u0_given=False, strategy_class=solver, options=options,
-            constraints=(Clearance(options.delta_min),) + kept, objective=None, route="local",
-            least_time=False, started=time.perf_counter(), started_effort=effort.seconds())
+            self, start=State.of(start), goal=State.of(goal), T=check_time(T),
+            controls=controls, u0_given=False, strategy_class=strategy_class(strategy),
+            constraints=(Clearance(delta_min),) + kept, objective=None, route="local", least_time=False)
+
+    def with_settings(self, **changes) -> "Problem":
+        """The same problem with some settings changed.
+
+        Parameters
+        ----------
+        **changes
+            Fields of :class:`Settings`.
+
+        Returns
+        -------
+        Problem
+            The problem with the new settings.
+        """
+        return dataclasses.replace(self, settings=dataclasses.replace(self.settings, **changes))
+
+    # -- the settings by name ---------------------------------------------------------------
+
+    @property
+    def method(self) -> str:
+        """The parametrisation: ``"parametric"`` or ``"nonparametric"``."""
+        return self.settings.method
+
+    @property
+    def harmonics(self) -> int:
+        """Harmonics of the parametric form."""
+        return self.settings.harmonics
+
+    @property
+    def grid(self) -> int:
+        """Intervals of the nonparametric form."""
+        return self.settings.grid
+
+    @property
+    def steps(self) -> int:
+        """CF4 steps on ``[0, T]``."""
+        return self.settings.steps
+
+    @property
+    def gamma_given(self) -> bool:
+        """Whether γ is the caller's (not the strategy's default)."""
+        return self.settings.gamma is not None
+
+    @property
+    def options(self) -> Options:
+        """The solver's :class:`~nonholo.planning.core.Options`: the settings, γ (the
+        strategy's default unless given) and the clearance."""
+        return self.settings.options(self.strategy_class.default_gamma, self.delta_min)
 
     # -- what the planner reads ---------------------------------------------------------
 
     def evaluator(self, frame: bool = False, method: str | None = None, steps: int | None = None,
-                  delta_min: float | None = None) -> Evaluator:
-        """The :class:`~nonholo.planning.core.Evaluator` of this problem: its start, goal,
+                  delta_min: float | None = None) -> EndpointMap:
+        """The :class:`~nonholo.planning.core.EndpointMap` of this problem: its start, goal,
         horizon, clearance and stroke.
 
         Parameters
@@ -478,14 +646,14 @@ class Problem:
 
         Returns
         -------
-        Evaluator
+        EndpointMap
             The evaluator.
         """
-        return Evaluator(self.R0, self.Rd, self.T, self.mechanism, method or self.method,
+        return EndpointMap(self.start, self.goal, self.T, self.mechanism, method or self.method,
                          self.steps if steps is None else steps,
-                         self.options.delta_min if delta_min is None else max(delta_min, self.options.delta_min),
+                         self.delta_min if delta_min is None else max(delta_min, self.delta_min),
                          frame=frame,
-                         limits=self.limits, q0=self.q0, qd=self.qd)
+                         limits=self.limits)
 
     @property
     def strategy(self) -> str:
@@ -493,19 +661,9 @@ class Problem:
         return self.strategy_class.name
 
     @property
-    def start(self) -> tuple[np.ndarray, np.ndarray]:
-        """The start ``(R0, q0)``."""
-        return self.R0, self.q0
-
-    @property
-    def goal(self) -> tuple[np.ndarray, np.ndarray]:
-        """The goal ``(Rd, qd)``."""
-        return self.Rd, self.qd
-
-    @property
     def delta_min(self) -> float:
         """The clearance from ``Δ = 0`` the motion keeps."""
-        return self.options.delta_min
+        return one_of(self.constraints, Clearance).delta_min
 
     @property
     def leg_limits(self):

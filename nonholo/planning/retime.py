@@ -1,12 +1,12 @@
 """``retime()``: a successful plan played as fast as its legs or its inputs' bounds allow, in a
 given time, or from rest to rest.
 
-:func:`retime` wraps a plan's controls in a time change (:mod:`nonholo.motion.time_change`):
-:class:`~nonholo.motion.retimed.Retimed` keeps every leg at most ``leg_speed`` fast — at that
+:func:`retime` wraps a plan's controls in a time change (:mod:`nonholo.motion.time_scaling`):
+:class:`~nonholo.motion.speed_limits.Retimed` keeps every leg at most ``leg_speed`` fast — at that
 speed throughout for the least time (``T=None``), at ``leg_speed · T̃/T`` for a longer
-``T``, slower only where the path nearly stops (:data:`~nonholo.motion.retimed.FLOOR`: the
+``T``, slower only where the path nearly stops (:data:`~nonholo.motion.speed_limits.FLOOR`: the
 inputs turn there at a bounded rate); ``rest_to_rest=True`` plays the motion by the smoothstep time change
-(:class:`~nonholo.motion.time_change.RestToRest`), which starts and ends at zero speed, for any
+(:class:`~nonholo.motion.time_scaling.RestToRest`), which starts and ends at zero speed, for any
 mechanism. The path is the plan's, so its certificate carries over unchanged: the re-timed
 motion ends where the plan's does, with the same error bound, least ``|Δ|``, sensitivity
 and legs' lengths. The result's samples are the plan's, at the played instants ``t(τ_k)``
@@ -14,7 +14,7 @@ of its step points. :func:`limit_speed` is what :func:`nonholo.plan` does with a
 ``leg_speed``.
 
 Under :class:`~nonholo.model.bounds.InputBounds` the same is done to the inputs
-(:class:`~nonholo.motion.retimed.InputRetimed`): ``T=None`` plays the path in the least time
+(:class:`~nonholo.motion.speed_limits.InputRetimed`): ``T=None`` plays the path in the least time
 that keeps every input within its bounds — the least time *along the planned path*, not the
 least time of the problem (another path may be faster; finding it is a time-optimal control
 problem this does not solve). :func:`limit_inputs` is what :func:`nonholo.plan` does with
@@ -34,7 +34,7 @@ import numpy as np
 from ..io.result import PlanResult
 from ..motion.frame_controls import from_dict as controls_from_dict
 from ..model.bounds import InputBounds, input_names
-from ..motion.retimed import (
+from ..motion.speed_limits import (
     RETIME_NODES,
     InputRetimed,
     InputTimeMap,
@@ -43,7 +43,7 @@ from ..motion.retimed import (
     check_leg_speed,
     node_count,
 )
-from ..motion.time_change import PEAK_RATIO, RestToRest, check_horizon, planned, played_time
+from ..motion.time_scaling import PEAK_RATIO, RestToRest, check_horizon, planned, played_time
 
 
 #: Steps of the grid on which re-timed inputs are checked against their bounds, at least (three
@@ -186,7 +186,7 @@ def retime(result: PlanResult, leg_speed: float | None = None, T: float | None =
         plan's time.
     rest_to_rest : bool
         Play the motion by the smoothstep time change
-        (:class:`~nonholo.motion.time_change.RestToRest`): its inputs are zero at ``0`` and
+        (:class:`~nonholo.motion.time_scaling.RestToRest`): its inputs are zero at ``0`` and
         ``T``. Under a bound it wraps the fastest re-timing, stretched by the smoothstep's
         peak ratio 15/8 so that no leg (or input) exceeds the bound.
     input_bounds : InputBounds, optional
@@ -197,9 +197,9 @@ def retime(result: PlanResult, leg_speed: float | None = None, T: float | None =
     Returns
     -------
     PlanResult
-        A new result whose controls are :class:`~nonholo.motion.retimed.Retimed`,
-        :class:`~nonholo.motion.retimed.InputRetimed` and/or
-        :class:`~nonholo.motion.time_change.RestToRest` of the planned controls (a re-timed
+        A new result whose controls are :class:`~nonholo.motion.speed_limits.Retimed`,
+        :class:`~nonholo.motion.speed_limits.InputRetimed` and/or
+        :class:`~nonholo.motion.time_scaling.RestToRest` of the planned controls (a re-timed
         plan is re-timed from its planned controls); ``options`` records ``leg_speed`` or
         ``input_bounds``. Under ``input_bounds`` a re-timing whose inputs leave them on the
         check's grid (:func:`input_excess`) is returned as a failure saying where.
@@ -211,7 +211,7 @@ def retime(result: PlanResult, leg_speed: float | None = None, T: float | None =
         without ``rest_to_rest``, both a ``leg_speed`` and ``input_bounds``, a bad
         ``leg_speed``, ``input_bounds``, ``T`` or ``rest_to_rest``, a ``T`` shorter than the
         path needs under the bound (the message says how long it needs), or a ``T`` whose
-        inputs are not finite (below :data:`~nonholo.motion.time_change.MIN_TIME`, naming
+        inputs are not finite (below :data:`~nonholo.motion.time_scaling.MIN_TIME`, naming
         ``T``).
     """
     started = time.perf_counter()

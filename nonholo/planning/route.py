@@ -38,7 +38,7 @@ hard part), then ``R_0 → R_m``, each planned as a whole without the hops' sens
 (two legs multiply only two) and with a few initial guesses only
 (:func:`quick_strategy`), stitched and certified as above, within :data:`VIA_TIME` more.
 
-States beyond SO(3) (:mod:`nonholo.spaces.groups`). For a mechanism whose state is ``(R, q)`` or
+States beyond SO(3) (:mod:`nonholo.spaces.product`). For a mechanism whose state is ``(R, q)`` or
 ``q``, the path is the straight path of states (:func:`nonholo.planning.state_path.straight_path`,
 hops of at most :data:`nonholo.planning.state_path.MAX_HOP`, checked clear of ``Δ = 0``), a failed
 hop is split at its straight midpoint, and the hops, stitching, certification and
@@ -54,7 +54,6 @@ steered again along the path of the next cost :data:`nonholo.planning.roadmap.CO
 from __future__ import annotations
 
 import itertools
-import time
 from dataclasses import dataclass, field, replace
 from functools import lru_cache
 from typing import Callable
@@ -65,14 +64,14 @@ from ..certify import certificate as certify
 from ..certify.certificate import Certificate
 from ..controls.parametrisations import Fourier, PiecewiseConstant
 from ..controls.stitched import Stitched
-from ..io.result import PlanResult, coordinate_fields
+from ..io.result import PlanResult, part_errors
 from ..model.mechanism import Mechanism
 from ..numerics import effort
 from ..spaces import so3
-from ..spaces.groups import NO_COORDINATES
+from ..spaces.state import State
 from . import roadmap, state_path
-from .certification import certified
-from .core import Outcome, Evaluator, Start
+from .correction import certified
+from .core import Outcome, EndpointMap, Start
 from .core import build_result as build_local_result
 
 #: The shortest hop a failed hop is split into (rad).
@@ -159,13 +158,13 @@ class Steered:
 
 def _stitch(mechanism: Mechanism, T: float, hops: list, start) -> Stitched:
     R0, q0 = start
-    coordinates = [q0] + [h.qd for h in hops] if mechanism.space.k else None
+    coordinates = mechanism.space.recorded("coordinates", [q0] + [h.qd for h in hops])
     return Stitched(T, [h.parametrisation for h in hops], [R0] + [h.Rd for h in hops], coordinates)
 
 
-def _end(res: PlanResult) -> tuple:
-    """Where a hop's result ends, as a state ``(R, q)``."""
-    return res.R_T, (NO_COORDINATES if res.q is None else res.q[-1])
+def _end(res: PlanResult) -> State:
+    """Where a hop's result ends."""
+    return State(res.R_T, res.q[-1])
 
 
 class RoadmapPaths:
@@ -207,7 +206,7 @@ class RoadmapPaths:
         for power in roadmap.CONDITIONING_POWERS:
             path = roadmap.orientation_path(self.mechanism, start[0], goal[0], delta_min=delta_min,
                                             power=power, legs=leg_limits)
-            yield None if path is None else [(R, NO_COORDINATES) for R in path]
+            yield None if path is None else [self.mechanism.space.state(R) for R in path]
 
     def no_path(self, leg_limits, start, goal) -> str:
         """Why no path of :meth:`paths` was given.
@@ -302,7 +301,7 @@ class StraightPaths(RoadmapPaths):
 
     @property
     def unit(self) -> str:
-        """The stacked error's unit (:attr:`nonholo.spaces.groups.Product.error_unit`), spaced."""
+        """The stacked error's unit (:attr:`nonholo.spaces.product.Product.error_unit`), spaced."""
         unit = self.mechanism.space.error_unit
         return f" {unit}" if unit else ""
 
@@ -531,8 +530,8 @@ def smoothing_guesses(stitched: Stitched, method: str, harmonics: int, grid: int
     return [Fourier.fit(stitched.planned, T, K, m) for K in SMOOTHING_HARMONICS if harmonics < K <= steps // 2]
 
 
-def smooth(request, stitched: Stitched, strategy: type, deadline: float,
-           reserve: float = 0.0) -> tuple[Outcome, Evaluator] | None:
+def smooth(problem, stitched: Stitched, strategy: type, deadline: float,
+           reserve: float = 0.0) -> tuple[Outcome, EndpointMap] | None:
     """The route's motion re-planned as one control (see the module).
 
     Nothing is tried unless :data:`SMOOTHING_TIME` and ``reserve`` fit before
@@ -540,8 +539,8 @@ def smooth(request, stitched: Stitched, strategy: type, deadline: float,
 
     Parameters
     ----------
-    request : Problem
-        The run's problem.
+    problem : Problem
+        The run's endpoint.
     stitched : Stitched
         The stitched control.
     strategy : type
@@ -554,30 +553,30 @@ def smooth(request, stitched: Stitched, strategy: type, deadline: float,
 
     Returns
     -------
-    tuple of (Outcome, Evaluator) or None
-        The certified outcome and its problem, or ``None`` when no guess of
+    tuple of (Outcome, EndpointMap) or None
+        The certified outcome and its endpoint, or ``None`` when no guess of
         :func:`smoothing_guesses` converged to a certified plan in time.
     """
     now = effort.seconds()
     if now + SMOOTHING_TIME + reserve > deadline:
         return None
     deadline = now + SMOOTHING_TIME
-    opts = request.options
+    opts = problem.options
     solver = smoothing_strategy(strategy)(opts)
-    frame = solver.frame(request.mechanism)
+    frame = solver.frame(problem.mechanism)
 
     def out_of_time(record) -> bool:
         return effort.seconds() > deadline
 
-    for guess in smoothing_guesses(stitched, request.method, request.harmonics, request.grid, request.steps):
+    for guess in smoothing_guesses(stitched, problem.method, problem.harmonics, problem.grid, problem.steps):
         if effort.seconds() > deadline:
             return None
-        problem = request.evaluator(frame=frame)
-        outcome = solver.solve(problem, Start(guess, True), out_of_time)
+        endpoint = problem.evaluator(frame=frame)
+        outcome = solver.solve(endpoint, Start(guess, True), out_of_time)
         if outcome.success and outcome.certificate is None:
-            outcome = certified(outcome, problem, opts)
+            outcome = certified(outcome, endpoint, opts)
         if outcome.success:
-            return outcome, problem
+            return outcome, endpoint
     return None
 
 
@@ -599,19 +598,17 @@ def hop_delta_min(mechanism: Mechanism, a, b, delta_min: float) -> float:
         :data:`HOP_DELTA_MIN`, or half the least ``|Δ|`` of its ends if that is less, never
         below the run's ``delta_min`` (which is all a mechanism without a singular set has).
     """
-    if not mechanism.singular.exists:
+    ends = float(np.min(np.abs(mechanism.singular.values(np.stack([a[0], b[0]]), np.stack([a[1], b[1]])))))
+    if not np.isfinite(ends):         # Δ ≡ +∞: no singular set to keep clear of
         return delta_min
-    R = np.stack([a[0], b[0]])
-    q = np.stack([a[1], b[1]])
-    ends = float(np.min(np.abs(mechanism.delta_samples(R, q))))
     return max(delta_min, min(HOP_DELTA_MIN, 0.5 * ends))
 
 
-def steer(mechanism: Mechanism, R0, Rd, T: float, local: Callable, *, tol: float, delta_min: float,
-          sign: float, budget: float | None = None, started: float | None = None,
-          leg_limits=None, rescue: Callable | None = None, q0=None, qd=None,
+def steer(mechanism: Mechanism, start: State, goal: State, T: float, local: Callable, *, tol: float,
+          delta_min: float, sign: float, budget: float | None = None, started: float | None = None,
+          leg_limits=None, rescue: Callable | None = None,
           leg: Callable | None = None, limits=None) -> Steered:
-    """The route ``R0 → Rd`` steered hop by hop (see the module).
+    """The route ``start → goal`` steered hop by hop (see the module).
 
     Along the path of the first cost of :data:`nonholo.planning.roadmap.CONDITIONING_POWERS`,
     then along the path of the next (one not tried yet) while the route fails; beyond
@@ -621,8 +618,8 @@ def steer(mechanism: Mechanism, R0, Rd, T: float, local: Callable, *, tol: float
     ----------
     mechanism : Mechanism
         The mechanism.
-    R0, Rd : array_like
-        Start and goal orientations.
+    start, goal : State
+        Start and goal (:class:`~nonholo.spaces.state.State`).
     T : float
         The time horizon.
     local : callable
@@ -648,8 +645,6 @@ def steer(mechanism: Mechanism, R0, Rd, T: float, local: Callable, *, tol: float
         re-plan from it (:func:`smooth`: an ``(outcome, problem)``, or ``None``) ends the
         search (``Steered.smoothed``) — one smooth control is often far better conditioned
         than the product of its hops'.
-    q0, qd : numpy.ndarray, optional
-        The coordinates of start and goal beyond SO(3).
     leg : callable, optional
         ``leg(start, goal, T, delta_min, quick)``: plans a leg of the last stage (see the
         module) with the run's strategy, without the hops' cap, ``quick``: with
@@ -668,8 +663,6 @@ def steer(mechanism: Mechanism, R0, Rd, T: float, local: Callable, *, tol: float
     if budget is None:
         budget = TIME_BUDGET
     steered, tried = None, []
-    start = (np.asarray(R0, dtype=float), NO_COORDINATES if q0 is None else q0)
-    goal = (np.asarray(Rd, dtype=float), NO_COORDINATES if qd is None else qd)
     provider = paths_for(mechanism)
     for path in provider.paths(start, goal, delta_min, leg_limits):
         if path is None:
@@ -699,13 +692,12 @@ def _same_path(a: list, b: list) -> bool:
 def _steer_path(mechanism: Mechanism, path: list, goal, T: float, local: Callable, *, tol: float,
                 delta_min: float, sign: float, deadline: float, leg_limits=None, limits=None) -> Steered:
     """:func:`steer` along one path of states ``(R, q)`` (``path[0]`` the start)."""
-    start = path[0]
-    R0, q0 = start
+    start = State.of(path[0])
     provider = paths_for(mechanism)
     T_hop = T / (len(path) - 1)
     targets = list(path[1:])
     hops = []
-    here = (np.asarray(R0, dtype=float), q0)
+    here = start
     waypoints = np.stack([p[0] for p in path])
     while targets:
         if len(hops) + len(targets) > MAX_PIECES:
@@ -733,22 +725,21 @@ def _certify_hops(mechanism: Mechanism, start, goal, T: float, hops: list, local
     """The hops' controls stitched and certified as a whole from ``start`` to ``goal``; where
     the replay misses the goal by a correctable error, the last hop is planned again by
     ``local`` from where the stitched replay enters it (at most :data:`MAX_REPAIRS` times)."""
-    (R0, q0), (Rd, qd) = start, goal
     cert = None
     for repair in range(MAX_REPAIRS + 1):
         stitched = _stitch(mechanism, T, hops, start)
         k = len(hops)
         M = k * max(h.replay_steps for h in hops)
         clock = effort.seconds()
-        cert = certify.measure(R0, Rd, T, mechanism, stitched, M, tol, delta_min, sign,
-                               max_steps=min(certify.MAX_REPLAY_STEPS, STITCHED_REFINEMENT * M),
-                               leg_limits=leg_limits, q0=q0, qd=qd, limits=limits)
+        cert = certify.measure(State.of(start), State.of(goal), T, mechanism, stitched, M, tol, delta_min,
+                               sign, max_steps=min(certify.MAX_REPLAY_STEPS, STITCHED_REFINEMENT * M),
+                               leg_limits=leg_limits, limits=limits)
         clock = effort.seconds() - clock
         if cert.passed or not cert.correctable or repair == MAX_REPAIRS:
             break
         # the last hop again, from where the stitched replay enters it
         i = (k - 1) * (cert.replay_steps // k)
-        entry = (cert.R[i], cert.q[i])
+        entry = State(cert.R[i], cert.q[i])
         res = local(entry, goal, hops[-1].T, hop_delta_min(mechanism, entry, goal, delta_min))
         if not res.success:
             break
@@ -771,7 +762,7 @@ def _via(mechanism: Mechanism, start, goal, T: float, leg: Callable, *, tol: flo
     for Rm in roadmap.via_nodes(mechanism, start[0], goal[0], VIA_CANDIDATES, leg_limits):
         if effort.seconds() > deadline:
             return None
-        middle = (Rm, NO_COORDINATES)
+        middle = mechanism.space.state(Rm)
         second = leg(middle, goal, T / 2, delta_min, True)
         if not second.success:
             continue
@@ -785,8 +776,8 @@ def _via(mechanism: Mechanism, start, goal, T: float, leg: Callable, *, tol: flo
     return None
 
 
-def build_result(request, steered: Steered, local_reason: str,
-                 smoothed: tuple[Outcome, Evaluator] | None = None) -> PlanResult:
+def build_result(problem, steered: Steered, local_reason: str,
+                 smoothed: tuple[Outcome, EndpointMap] | None = None) -> PlanResult:
     """The :class:`~nonholo.io.result.PlanResult` of a certified global route.
 
     Its history: the hops' histories one after another (each record tagged with its
@@ -795,13 +786,13 @@ def build_result(request, steered: Steered, local_reason: str,
 
     Parameters
     ----------
-    request : Problem
-        The run's problem.
+    problem : Problem
+        The run's endpoint.
     steered : Steered
         The certified route.
     local_reason : str
         Why the local planner alone did not reach the goal.
-    smoothed : tuple of (Outcome, Evaluator), optional
+    smoothed : tuple of (Outcome, EndpointMap), optional
         The smooth re-plan.
 
     Returns
@@ -811,7 +802,7 @@ def build_result(request, steered: Steered, local_reason: str,
         otherwise the stitched control and its certified replay sampled at ``k·N`` steps
         (``N``: the hops' finest grid).
     """
-    mech, T, cert = request.mechanism, request.T, steered.certificate
+    mech, T, cert = problem.mechanism, problem.T, steered.certificate
     hops = steered.hops
     history = [{**rec, "hop": i} for i, h in enumerate(hops) for rec in h.history]
     provider = paths_for(mech)
@@ -821,8 +812,8 @@ def build_result(request, steered: Steered, local_reason: str,
         route = ("the global route: two legs through an intermediate orientation (a roadmap node; no "
                  f"path's hops were certified), stitched (the local planner: {local_reason})")
     if smoothed is not None:
-        outcome, problem = smoothed
-        res = build_local_result(request, outcome, True, outcome.reason, problem)
+        outcome, endpoint = smoothed
+        res = build_local_result(problem, outcome, True, outcome.reason, endpoint)
         uncertified = "" if steered.controls is not None else f" ({steered.reason})"
         return replace(res, route="global", stitched=steered.controls or steered.draft,
                        history=history + [{**rec, "hop": None} for rec in res.history],
@@ -843,10 +834,10 @@ def build_result(request, steered: Steered, local_reason: str,
         success=True, reason=reason, terminal_error=cert.terminal_error, min_delta=cert.min_delta,
         iterations=sum(h.iterations for h in hops), history=history,
         t=t, R=R, u=par(t).reshape(n, mech.n_inputs), delta=mech.delta_samples(R, q),
-        parametrisation=par, mechanism=mech.name, kinematics=mech, method=request.method,
-        strategy=request.strategy, T=T, R0=request.R0, Rd=request.Rd, steps=steps,
-        seconds=time.perf_counter() - request.started,
-        options=request.recorded_options(),
+        parametrisation=par, mechanism=mech.name, kinematics=mech, method=problem.method,
+        strategy=problem.strategy, T=T, start=problem.start, goal=problem.goal, steps=steps,
+        seconds=None,
+        options=problem.recorded_options(),
         sensitivity=cert.sensitivity, error_bound=cert.error_bound, replay_steps=cert.replay_steps,
         route="global",
-        **coordinate_fields(mech, q, request.q0, request.qd, cert.errors))
+        q=q, errors=part_errors(mech, cert.errors))

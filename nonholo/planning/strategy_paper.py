@@ -36,13 +36,13 @@ class PaperStrategy(Strategy):
 
     name = "paper"
 
-    def solve(self, problem, start, callback=None):
+    def solve(self, endpoint, start, callback=None):
         """Plan from ``start`` in the physical inputs, with the minimum-norm step ``J^#``.
 
         Parameters
         ----------
-        problem : Evaluator
-            The problem.
+        endpoint : EndpointMap
+            The endpoint.
         start : Start
             The initial control.
         callback : callable, optional
@@ -54,15 +54,15 @@ class PaperStrategy(Strategy):
             The run's outcome.
         """
         opt = self.options
-        ev = problem.evaluate(start.controls, delta_stop=DELTA_STOP)
-        if not problem.admissible(ev):
-            return Outcome(ev, False, f"the initial control is not admissible: {problem.why_not(ev)}; "
+        ev = endpoint.evaluate(start.controls, delta_stop=DELTA_STOP)
+        if not endpoint.admissible(ev):
+            return Outcome(ev, False, f"the initial control is not admissible: {endpoint.why_not(ev)}; "
                            "choose another initial control (u0)")
         history = [record(0, ev, 0.0, "initial", 0)]
         if callback is not None and callback(history[-1]):
             return Outcome(ev, False, "stopped by callback", history, 0, stopped=True)
-        scale = step_scale(problem, start.controls)
-        d = descend(problem, ev, opt, lambda ev, newton: kernels.min_norm_step(ev.J, ev.l, scale),
+        scale = step_scale(endpoint, start.controls)
+        d = descend(endpoint, ev, opt, lambda ev, newton: kernels.min_norm_step(ev.J, ev.l, scale),
                     budget=opt.max_iter, history=history, callback=callback)
         reason = f"max_iter = {opt.max_iter} reached with {d.reason}" if d.status == "budget" else d.reason
         return Outcome(d.evaluation, d.status == "converged", reason, history, d.steps,

@@ -13,7 +13,7 @@ at every integrator point and lowers ``|l_T|`` — with these ingredients:
 1. **Frame coordinates.** The control planned is ``w`` in ``ω = N(R) w``, ``N(R)`` the
    orthonormal frame of admissible angular velocities of the generated module (platform:
    constant, ``ω = w_1 (−e_1 + e_2)/√2 + w_2 e_3``): the kernels integrate ``N`` and
-   ``QN`` (:meth:`nonholo.model.mechanism.Mechanism.kernels` with ``frame=True``), ``Δ`` is still monitored, and
+   ``QN`` (:func:`nonholo.integrate.compiled.compiled_system` with ``frame=True``), ``Δ`` is still monitored, and
    the minimum norm is taken in ``w`` (Euclidean on its Fourier coefficients, L2 on the
    grid). In the physical inputs the metric degenerates near ``Δ = 0`` — ``L ~ 1/Δ``
    makes angular velocity cheap there, so minimum-norm steps steer into the singular
@@ -42,7 +42,7 @@ at every integrator point and lowers ``|l_T|`` — with these ingredients:
 4. **Accuracy.** After convergence the integrator's error at ``R(T)`` is estimated by
    Richardson (``N`` vs ``2N`` steps); above 1e-9 rad the grid is doubled (up to 6400
    steps) and Newton steps re-converge (:meth:`RobustStrategy.refine`). Then the plan is
-   certified (:mod:`nonholo.planning.certification`): its physical inputs are replayed,
+   certified (:mod:`nonholo.planning.correction`): its physical inputs are replayed,
    corrected if the replay misses, and a plan that cannot be certified counts as a failed
    attempt — the next initial guess is tried.
 5. **Conditioning.** The certificate carries ``sensitivity = max_t |Φ(T,t)|_F`` of the
@@ -72,12 +72,12 @@ from ..controls.parametrisations import (
 from ..model.limits import BARRIER_CLEARANCE
 from ..motion.simulation import DELTA_STOP, SingularTrajectoryError, simulate
 from ..numerics import kernels
-from .certification import certify
-from .certification import note as certificate_note
+from .correction import certify
+from .correction import note as certificate_note
 from .core import (
     Evaluation,
     Outcome,
-    Evaluator,
+    EndpointMap,
     Start,
     Strategy,
     descend,
@@ -95,17 +95,17 @@ RANDOM_RMS = (0.2, 1.5)
 RANDOM_SEED = 20140901
 
 
-def to_frame(problem: Evaluator, controls: Controls) -> Controls:
-    """The frame control ``w`` that reproduces the physical ``controls`` from ``problem.R0``.
+def to_frame(endpoint: EndpointMap, controls: Controls) -> Controls:
+    """The frame control ``w`` that reproduces the physical ``controls`` from ``endpoint.R0``.
 
     ``w = N(R)ᵀ ω`` with ``ω = L(R) u`` along the physical motion (simulated with
-    ``problem.steps`` CF4 steps), projected on the parametrisation of ``controls``
+    ``endpoint.steps`` CF4 steps), projected on the parametrisation of ``controls``
     (least squares on the Fourier basis; interval means on the grid).
 
     Parameters
     ----------
-    problem : Evaluator
-        The problem.
+    endpoint : EndpointMap
+        The endpoint.
     controls : Controls
         The physical control.
 
@@ -120,28 +120,28 @@ def to_frame(problem: Evaluator, controls: Controls) -> Controls:
         If the physical motion runs into ``Δ = 0``
         (:class:`~nonholo.motion.simulation.SingularTrajectoryError`).
     """
-    mech = problem.mechanism
-    tr = simulate(problem.R0, controls, problem.T, mechanism=mech, steps=problem.steps)
+    mech = endpoint.mechanism
+    tr = simulate(endpoint.start, controls, endpoint.T, mechanism=mech, steps=endpoint.steps)
     N, L = mech.frame.N, mech.L
     w = np.array([N(R).T @ (L(R) @ u) for R, u in zip(tr.R[:-1], tr.u[:-1])])
     t = tr.t[:-1]
     if isinstance(controls, Fourier):
-        phi = fourier_basis(t, problem.T, controls.harmonics)
+        phi = fourier_basis(t, endpoint.T, controls.harmonics)
         coeffs = np.linalg.lstsq(phi, w, rcond=None)[0].T
-        return Fourier(problem.T, coeffs)
+        return Fourier(endpoint.T, coeffs)
     j = controls.interval(t)
     values = np.zeros((controls.grid, controls.n_inputs))
     np.add.at(values, j, w)
     values /= np.bincount(j, minlength=controls.grid)[:, None]
-    return PiecewiseConstant(problem.T, values)
+    return PiecewiseConstant(endpoint.T, values)
 
 
-def barrier_gradient(problem: Evaluator, ev: Evaluation, d0: float) -> np.ndarray | None:
+def barrier_gradient(endpoint: EndpointMap, ev: Evaluation, d0: float) -> np.ndarray | None:
     """Gradient in ``λ`` of the barrier ``φ = Σ_{n=1..N} h ψ(d_n)``, ``d_n = sgn(Δ(R0)) Δ(R(t_n))``.
 
     ``ψ(d) = −log(d/d₀)`` for ``d < d₀`` and 0 above, plus the same barrier on the legs'
     clearances from their stroke limits and the coordinates' from their bounds where the
-    problem has them (:meth:`nonholo.model.limits.Limits.clearance_terms`, below
+    endpoint has them (:meth:`nonholo.model.limits.Limits.clearance_terms`, below
     :data:`nonholo.model.limits.BARRIER_CLEARANCE`).
 
     ``ev`` must hold ``Z`` and the stage weights ``Wd`` (``full`` evaluation). The
@@ -152,8 +152,8 @@ def barrier_gradient(problem: Evaluator, ev: Evaluation, d0: float) -> np.ndarra
 
     Parameters
     ----------
-    problem : Evaluator
-        The problem.
+    endpoint : EndpointMap
+        The endpoint.
     ev : Evaluation
         A ``full`` evaluation.
     d0 : float
@@ -167,20 +167,20 @@ def barrier_gradient(problem: Evaluator, ev: Evaluation, d0: float) -> np.ndarra
     """
     if not ev.complete or ev.Z is None:
         return None
-    N, h = problem.steps, problem.h
-    D = problem.mechanism.n_rates
+    N, h = endpoint.steps, endpoint.h
+    D = endpoint.mechanism.n_rates
     a = np.zeros((N + 1, D))
     any_active = False
-    if problem.singular.exists:
-        d = problem.sign * problem.mechanism.delta_samples(ev.R, ev.q)
-        active = d < d0
-        active[0] = False
-        if active.any():
-            grad = spatial_gradient_delta(problem.mechanism, ev.R[active], q=ev.q[active])
-            a[active] = (h * problem.sign * (-1.0 / d[active]))[:, None] * grad
-            any_active = True
-    if problem.limits is not None:
-        terms = problem.limits.clearance_terms(problem.mechanism, ev.R, q=ev.q)
+    # Δ ≡ +∞ without a singular set: no node is active
+    d = endpoint.sign * endpoint.singular.values(ev.R, ev.q)
+    active = d < d0
+    active[0] = False
+    if active.any():
+        grad = spatial_gradient_delta(endpoint.mechanism, ev.R[active], q=ev.q[active])
+        a[active] = (h * endpoint.sign * (-1.0 / d[active]))[:, None] * grad
+        any_active = True
+    if endpoint.limits is not None:
+        terms = endpoint.limits.clearance_terms(endpoint.mechanism, ev.R, q=ev.q)
         if terms is not None:
             nodes, c, rows = terms
             keep = nodes > 0
@@ -188,7 +188,7 @@ def barrier_gradient(problem: Evaluator, ev: Evaluation, d0: float) -> np.ndarra
             any_active = any_active or bool(keep.any())
     if not any_active:
         return None
-    return node_gradient(problem, ev, a)
+    return node_gradient(endpoint, ev, a)
 
 
 def _like(controls: Controls, func, T: float, harmonics: int | None = None) -> Controls:
@@ -265,7 +265,7 @@ class RobustStrategy(Strategy):
         # frame is not used yet
         return mechanism.has_frame and not mechanism.space.k
 
-    def initial(self, problem, controls, given):
+    def initial(self, endpoint, controls, given):
         """The initial control in this strategy's coordinates.
 
         In frame coordinates: ``u0`` (physical) converted by :func:`to_frame`; without
@@ -273,8 +273,8 @@ class RobustStrategy(Strategy):
 
         Parameters
         ----------
-        problem : Evaluator
-            The problem.
+        endpoint : EndpointMap
+            The endpoint.
         controls : Controls
             The physical initial control (the default one, or the caller's ``u0``).
         given : bool
@@ -285,22 +285,22 @@ class RobustStrategy(Strategy):
         Start
             The initial control, with a note if ``u0`` could not be used.
         """
-        if not (given and problem.frame):
+        if not (given and endpoint.frame):
             return Start(controls, given)
         try:
-            return Start(to_frame(problem, controls), True)
+            return Start(to_frame(endpoint, controls), True)
         except SingularTrajectoryError as exc:
-            return Start(_like(controls, _loop(problem.T, controls.n_inputs, LOOP_AMPLITUDE), problem.T),
+            return Start(_like(controls, _loop(endpoint.T, controls.n_inputs, LOOP_AMPLITUDE), endpoint.T),
                          False, f"u0 not used ({exc})")
 
     # -- initial guesses -----------------------------------------------------------------
-    def attempts(self, problem: Evaluator, start: Start) -> Iterator[tuple[str, Controls]]:
+    def attempts(self, endpoint: EndpointMap, start: Start) -> Iterator[tuple[str, Controls]]:
         """The initial controls tried in turn: ``start``'s, then other loops and drifts.
 
         Parameters
         ----------
-        problem : Evaluator
-            The problem.
+        endpoint : EndpointMap
+            The endpoint.
         start : Start
             The initial control.
 
@@ -312,14 +312,14 @@ class RobustStrategy(Strategy):
             The guess.
         """
         first = start.controls
-        T, m = problem.T, first.n_inputs
-        mech = problem.mechanism
+        T, m = endpoint.T, first.n_inputs
+        mech = endpoint.mechanism
         if mech.space.k:
-            l0 = mech.space.offset(problem.R0, problem.q0, problem.Rd, problem.qd)
-            frame = mech.G(problem.R0, problem.q0)
+            l0 = mech.space.offset(endpoint.start, endpoint.goal)
+            frame = mech.G(*endpoint.start)
         else:
-            l0 = kernels.log_rotation(problem.Rd @ problem.R0.T)
-            frame = mech.frame.N(problem.R0) if problem.frame else mech.L(problem.R0)
+            l0 = kernels.log_rotation(endpoint.goal.R @ endpoint.start.R.T)
+            frame = mech.frame.N(endpoint.start.R) if endpoint.frame else mech.L(endpoint.start.R)
         drift = np.linalg.lstsq(frame, l0, rcond=None)[0] / T
         K = first.harmonics if isinstance(first, Fourier) else None
         if start.given:
@@ -341,13 +341,13 @@ class RobustStrategy(Strategy):
             yield "random", f if K is not None else _like(first, f, T)
 
     # -- one descent ----------------------------------------------------------------------
-    def wants_full(self, problem: Evaluator, ev: Evaluation) -> bool:
+    def wants_full(self, endpoint: EndpointMap, ev: Evaluation) -> bool:
         """Whether the next evaluations should keep ``Z`` and the stage weights (for the barrier).
 
         Parameters
         ----------
-        problem : Evaluator
-            The problem.
+        endpoint : EndpointMap
+            The endpoint.
         ev : Evaluation
             The current evaluation.
 
@@ -356,9 +356,9 @@ class RobustStrategy(Strategy):
         bool
             Whether they should be ``full``.
         """
-        return self.barrier and self.near_limits(problem, ev, 2.0)
+        return self.barrier and self.near_limits(endpoint, ev, 2.0)
 
-    def near_limits(self, problem: Evaluator, ev: Evaluation, factor: float = 1.0) -> bool:
+    def near_limits(self, endpoint: EndpointMap, ev: Evaluation, factor: float = 1.0) -> bool:
         """Whether a trajectory comes within ``factor`` times a barrier's reach of a limit.
 
         The limits: ``Δ = 0`` (:attr:`barrier_d0`), the legs' stroke limits and the
@@ -366,8 +366,8 @@ class RobustStrategy(Strategy):
 
         Parameters
         ----------
-        problem : Evaluator
-            The problem.
+        endpoint : EndpointMap
+            The endpoint.
         ev : Evaluation
             The evaluation.
         factor : float, default 1.0
@@ -378,11 +378,11 @@ class RobustStrategy(Strategy):
         bool
             Whether it comes that close.
         """
-        near_delta = problem.singular.exists and ev.min_delta is not None and ev.min_delta < factor * self.barrier_d0
+        near_delta = ev.min_delta is not None and ev.min_delta < factor * self.barrier_d0
         near_legs = ev.min_clearance is not None and ev.min_clearance < factor * BARRIER_CLEARANCE
         return near_delta or near_legs
 
-    def direction(self, problem: Evaluator, ev: Evaluation, scale: np.ndarray,
+    def direction(self, endpoint: EndpointMap, ev: Evaluation, scale: np.ndarray,
                   newton: bool = False) -> np.ndarray:
         """The step direction (the step is ``−γh`` or ``−1`` times it).
 
@@ -395,8 +395,8 @@ class RobustStrategy(Strategy):
 
         Parameters
         ----------
-        problem : Evaluator
-            The problem.
+        endpoint : EndpointMap
+            The endpoint.
         ev : Evaluation
             The current (complete) evaluation.
         scale : numpy.ndarray
@@ -410,10 +410,10 @@ class RobustStrategy(Strategy):
             The direction.
         """
         d = kernels.min_norm_step(ev.J, ev.l, scale)
-        if newton or not self.barrier or not self.near_limits(problem, ev):
+        if newton or not self.barrier or not self.near_limits(endpoint, ev):
             return d
-        full = ev if ev.Z is not None else problem.evaluate(ev.params, full=True)
-        g = barrier_gradient(problem, full, self.barrier_d0)
+        full = ev if ev.Z is not None else endpoint.evaluate(ev.params, full=True)
+        g = barrier_gradient(endpoint, full, self.barrier_d0)
         if g is None:
             return d
         g = scale * scale * g
@@ -423,7 +423,7 @@ class RobustStrategy(Strategy):
             return d
         return d + (self.barrier_weight * np.linalg.norm(d / scale) / size) * null
 
-    def descend(self, problem: Evaluator, ev: Evaluation, attempt: int, first: int, budget: int,
+    def descend(self, endpoint: EndpointMap, ev: Evaluation, attempt: int, first: int, budget: int,
                 history: list, callback):
         """Flow then Newton steps from an admissible evaluation.
 
@@ -432,8 +432,8 @@ class RobustStrategy(Strategy):
 
         Parameters
         ----------
-        problem : Evaluator
-            The problem.
+        endpoint : EndpointMap
+            The endpoint.
         ev : Evaluation
             The admissible evaluation to start from.
         attempt : int
@@ -452,23 +452,23 @@ class RobustStrategy(Strategy):
         Descent
             How the loop ended.
         """
-        scale = step_scale(problem, ev.parametrisation)
-        d = descend(problem, ev, self.options, lambda ev, newton: self.direction(problem, ev, scale, newton),
+        scale = step_scale(endpoint, ev.parametrisation)
+        d = descend(endpoint, ev, self.options, lambda ev, newton: self.direction(endpoint, ev, scale, newton),
                     budget=budget, history=history, callback=callback, first=first,
-                    full=lambda ev: self.wants_full(problem, ev),
+                    full=lambda ev: self.wants_full(endpoint, ev),
                     stall=(self.stall_window, self.stall_ratio), tags={"attempt": attempt})
         if d.status == "budget":
             d.reason = f"{budget} steps taken with {d.reason}"
         return d
 
     # -- accuracy of the integrator -----------------------------------------------------
-    def discretisation_error(self, problem: Evaluator, ev: Evaluation) -> float:
+    def discretisation_error(self, endpoint: EndpointMap, ev: Evaluation) -> float:
         """Richardson estimate of the integrator's error at ``R(T)`` for an evaluation's control.
 
         Parameters
         ----------
-        problem : Evaluator
-            The problem.
+        endpoint : EndpointMap
+            The endpoint.
         ev : Evaluation
             The (complete) evaluation.
 
@@ -476,14 +476,14 @@ class RobustStrategy(Strategy):
         -------
         float
             ``16/15`` of the distance between the endpoints with ``N`` and ``2N`` CF4 steps
-            (in the state's units, :meth:`nonholo.spaces.groups.Product.amount`).
+            (in the state's units, :meth:`nonholo.spaces.product.Product.amount`).
         """
-        N2 = 2 * problem.steps
-        Rs, Qs, _ = problem.forward(stages.stage_table(ev.controls, N2), 0.5 * problem.h, -np.inf)
-        return problem.mechanism.space.distance(Rs[N2], Qs[N2], ev.R[-1], ev.q[-1]) * 16.0 / 15.0
+        N2 = 2 * endpoint.steps
+        Rs, Qs, _ = endpoint.forward(stages.stage_table(ev.controls, N2), 0.5 * endpoint.h, -np.inf)
+        return endpoint.mechanism.space.distance((Rs[N2], Qs[N2]), (ev.R[-1], ev.q[-1])) * 16.0 / 15.0
 
-    def refine(self, problem: Evaluator, ev: Evaluation, attempt: int, it0: int, history: list,
-               callback) -> tuple[Evaluator, Evaluation, int, str]:
+    def refine(self, endpoint: EndpointMap, ev: Evaluation, attempt: int, it0: int, history: list,
+               callback) -> tuple[EndpointMap, Evaluation, int, str]:
         """Double the integrator's steps while the endpoint's discretisation error is too large.
 
         While it (see :meth:`discretisation_error`) exceeds :attr:`refine_above`, the
@@ -491,8 +491,8 @@ class RobustStrategy(Strategy):
 
         Parameters
         ----------
-        problem : Evaluator
-            The problem.
+        endpoint : EndpointMap
+            The endpoint.
         ev : Evaluation
             The converged evaluation.
         attempt : int
@@ -506,8 +506,8 @@ class RobustStrategy(Strategy):
 
         Returns
         -------
-        problem : Evaluator
-            The problem on the finest grid reached.
+        endpoint : EndpointMap
+            The endpoint on the finest grid reached.
         evaluation : Evaluation
             The plan on it.
         steps : int
@@ -518,30 +518,30 @@ class RobustStrategy(Strategy):
         opt = self.options
         it = 0
         note = ""
-        est = self.discretisation_error(problem, ev)
-        while est > self.refine_above and 2 * problem.steps <= self.max_steps:
-            fine = problem.refined(2 * problem.steps)
+        est = self.discretisation_error(endpoint, ev)
+        while est > self.refine_above and 2 * endpoint.steps <= self.max_steps:
+            fine = endpoint.refined(2 * endpoint.steps)
             trial = fine.evaluate(ev.controls)
             if not fine.admissible(trial):
-                return problem, ev, it, note
+                return endpoint, ev, it, note
             d = self.descend(fine, trial, attempt, it0 + it, 20, history, callback)
             it += d.steps
             trial = d.evaluation
             if d.status == "stopped" or trial.error > opt.tol:
-                return problem, ev, it, note + f"refinement to {fine.steps} steps failed: {d.reason}"
+                return endpoint, ev, it, note + f"refinement to {fine.steps} steps failed: {d.reason}"
             note = (f"integrator refined to {fine.steps} steps (estimated discretisation error "
-                    f"{problem.mechanism.space.amount(est)} with {problem.steps})")
-            problem, ev = fine, trial
-            est = self.discretisation_error(problem, ev)
-        return problem, ev, it, note
+                    f"{endpoint.mechanism.space.amount(est)} with {endpoint.steps})")
+            endpoint, ev = fine, trial
+            est = self.discretisation_error(endpoint, ev)
+        return endpoint, ev, it, note
 
-    def solve(self, problem, start, callback=None):
+    def solve(self, endpoint, start, callback=None):
         """Plan from ``start``: attempt after attempt, each refined and certified (see the module).
 
         Parameters
         ----------
-        problem : Evaluator
-            The problem.
+        endpoint : EndpointMap
+            The endpoint.
         start : Start
             The initial control.
         callback : callable, optional
@@ -560,12 +560,12 @@ class RobustStrategy(Strategy):
         converged = None        # best-conditioned converged plan above max_sensitivity
         notes = []
         tail = f"; {start.note}" if start.note else ""
-        for k, (label, w0) in enumerate(self.attempts(problem, start)):
+        for k, (label, w0) in enumerate(self.attempts(endpoint, start)):
             if k and it >= opt.max_iter:
                 break
-            ev = problem.evaluate(w0, delta_stop=DELTA_STOP)
-            if not problem.admissible(ev):
-                notes.append(f"{label}: initial control not admissible ({problem.why_not(ev)})")
+            ev = endpoint.evaluate(w0, delta_stop=DELTA_STOP)
+            if not endpoint.admissible(ev):
+                notes.append(f"{label}: initial control not admissible ({endpoint.why_not(ev)})")
                 first_failure = first_failure or ev
                 continue
             rec = record(it, ev, 0.0, "initial" if k == 0 else "restart", 0, attempt=k)
@@ -573,25 +573,25 @@ class RobustStrategy(Strategy):
             if callback is not None and callback(rec):
                 return Outcome(ev, False, "stopped by callback", history, it, stopped=True)
             budget = min(self.attempt_iterations, opt.max_iter - it)
-            d = self.descend(problem, ev, k, it, budget, history, callback)
+            d = self.descend(endpoint, ev, k, it, budget, history, callback)
             ev, why = d.evaluation, d.reason
             it += d.steps
             if d.status == "stopped":
                 return Outcome(ev, False, why, history, it, stopped=True)
             if ev.error <= opt.tol:
                 why += f" (attempt {k + 1}: {label})" if k else ""
-                fine, ev, n, note = self.refine(problem, ev, k, it, history, callback)
+                fine, ev, n, note = self.refine(endpoint, ev, k, it, history, callback)
                 it += n
                 why += f"; {note}" if note else ""
                 ev, cert, corrections = certify(fine, ev, opt)
                 if not cert.passed:
                     notes.append(f"{label}: converged on the planner's grid, but not certified: {cert.reason}")
                     continue
-                why += certificate_note(cert, corrections, problem.mechanism.space)
+                why += certificate_note(cert, corrections, endpoint.mechanism.space)
                 G = cert.sensitivity
                 if G <= self.max_sensitivity:
                     return Outcome(ev, True, why + tail, history, it,
-                                   fine if fine is not problem else None, cert)
+                                   fine if fine is not endpoint else None, cert)
                 notes.append(f"{label}: converged with sensitivity {G:.3g} > {self.max_sensitivity:g}")
                 if converged is None or G < converged[0]:
                     converged = (G, ev, fine, why, cert)
@@ -604,10 +604,10 @@ class RobustStrategy(Strategy):
             why += (f"; sensitivity max|Φ(T,t)| = {G:.3g} > {self.max_sensitivity:g} (the best of "
                     f"{sum('converged with' in x for x in notes)} converged attempts; an open-loop "
                     "replay amplifies errors by that much)")
-            return Outcome(ev, True, why + tail, history, it, fine if fine is not problem else None, cert)
+            return Outcome(ev, True, why + tail, history, it, fine if fine is not endpoint else None, cert)
         final = best if best is not None else first_failure
         if final is None:
-            final = problem.evaluate(start.controls, delta_stop=DELTA_STOP)
+            final = endpoint.evaluate(start.controls, delta_stop=DELTA_STOP)
         reason = (f"no attempt converged within max_iter = {opt.max_iter} ({len(notes)} attempts): "
                   + "; ".join(notes) + tail)
         return Outcome(final, False, reason, history, it)

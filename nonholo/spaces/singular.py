@@ -3,7 +3,9 @@ without one (``Δ ≡ +∞``, sign 1), so that callers never branch on whether i
 
 Conventions: ``values`` takes stacks (``R`` ``(n, 3, 3)``, ``q`` ``(n, k)``), ``value`` and
 ``sign`` one state; a planner keeps ``sgnΔ ≥ delta_min`` with ``sgn`` the sign at the start;
-a result reports the least ``sgnΔ`` of its motion, or ``None`` without a singular set.
+a result reports the least ``sgnΔ`` of its motion, or ``None`` without a singular set;
+``samples``, ``columns`` and ``text`` give what a result, a table and a title hold of ``Δ``
+(nothing without a singular set).
 """
 from __future__ import annotations
 
@@ -26,6 +28,14 @@ class SingularSet:
     """
 
     exists = True
+    #: the set in a few words
+    summary = "singular set Δ = 0"
+    #: what a panel of ``Δ`` says in its place (``""``: it draws ``Δ``)
+    placeholder = ""
+    #: what made a variational replay's sensitivity infinite
+    blowup = "ran into Δ = 0"
+    #: the columns of a table of states (:meth:`columns`)
+    column_names = ("delta",)
 
     def __init__(self, samples, on_rotations: bool = True, owner: str = ""):
         self._samples = samples
@@ -54,6 +64,82 @@ class SingularSet:
             ``Δ``, shape ``(n,)``.
         """
         return self._samples(R, q)
+
+    @classmethod
+    def on(cls, space, samples, owner: str = "") -> "SingularSet":
+        """The singular set of a mechanism on ``space``: the messages name a surface in SO(3)
+        where the states have no coordinates, a set of ``owner`` otherwise.
+
+        Parameters
+        ----------
+        space : Product
+            The mechanism's state space.
+        samples : callable
+            As for :class:`SingularSet`.
+        owner : str
+            The mechanism's name.
+
+        Returns
+        -------
+        SingularSet
+            The set.
+        """
+        return cls(samples, on_rotations=not space.coordinates.dim, owner=owner)
+
+    def samples(self, R, q=None) -> np.ndarray | None:
+        """``Δ`` at every state of stacks, as a result records it (:meth:`values`).
+
+        Parameters
+        ----------
+        R : numpy.ndarray
+            Rotations, shape ``(n, 3, 3)``.
+        q : numpy.ndarray, optional
+            Coordinates, shape ``(n, k)``.
+
+        Returns
+        -------
+        numpy.ndarray or None
+            ``Δ``, shape ``(n,)`` (``None`` without a singular set).
+        """
+        return self.values(R, q)
+
+    def columns(self, R, q=None) -> dict:
+        """``Δ`` at stacks of states as a table's column.
+
+        Parameters
+        ----------
+        R : numpy.ndarray
+            Rotations, shape ``(n, 3, 3)``.
+        q : numpy.ndarray, optional
+            Coordinates, shape ``(n, k)``.
+
+        Returns
+        -------
+        dict
+            ``{"delta": Δ}`` (``{}`` without a singular set).
+        """
+        return {"delta": self.values(R, q)}
+
+    def text(self, R, q=None, spec: str = "+.3f", prefix: str = "") -> str:
+        """``Δ`` at one state in words, for titles.
+
+        Parameters
+        ----------
+        R : array_like
+            A rotation matrix.
+        q : array_like, optional
+            Coordinates, shape ``(k,)``.
+        spec : str
+            The value's format spec.
+        prefix : str
+            Put before the text.
+
+        Returns
+        -------
+        str
+            ``prefix + "Δ = +0.123"`` (``""`` without a singular set).
+        """
+        return f"{prefix}Δ = {self.value(R, q):{spec}}"
 
     def value(self, R, q=None) -> float:
         """``Δ(R, q)`` at one state.
@@ -91,19 +177,21 @@ class SingularSet:
         return float(np.sign(self.value(R, q)))
 
     def reported(self, least: float):
-        """The least ``sgnΔ`` of a motion as a result reports it.
+        """The least ``sgnΔ`` of a motion (or of each of a batch) as a result reports it.
 
         Parameters
         ----------
-        least : float or None
-            The least ``sgnΔ`` along the motion.
+        least : float, numpy.ndarray or None
+            The least ``sgnΔ`` along the motion (along each motion).
 
         Returns
         -------
-        float or None
-            ``least`` as a float (``None`` if nothing was simulated).
+        float, numpy.ndarray or None
+            ``least`` as floats (``None`` if nothing was simulated).
         """
-        return None if least is None else float(least)
+        if least is None:
+            return None
+        return float(least) if np.ndim(least) == 0 else np.asarray(least, dtype=float)
 
     def clear(self, least: float, delta_min: float) -> bool:
         """Whether a motion whose least ``sgnΔ`` is ``least`` keeps the clearance ``delta_min``.
@@ -118,18 +206,76 @@ class SingularSet:
         Returns
         -------
         bool
-            ``least ≥ delta_min``.
+            ``least ≥ delta_min`` (false when nothing was simulated, ``least`` ``None``).
         """
-        return least >= delta_min
+        return least is not None and least >= delta_min
 
 
 class NoSingularSet(SingularSet):
     """The singular set of a mechanism that has none: ``Δ ≡ +∞``, sign 1, always clear."""
 
     exists = False
+    summary = placeholder = "no singular set"
+    blowup = "overflowed"
+    column_names = ()
 
     def __init__(self):
         super().__init__(None)
+
+    def samples(self, R, q=None) -> None:
+        """Nothing to record without a singular set.
+
+        Parameters
+        ----------
+        R : numpy.ndarray
+            Rotations (unused).
+        q : numpy.ndarray, optional
+            Coordinates (unused).
+
+        Returns
+        -------
+        None
+            Always.
+        """
+        return None
+
+    def columns(self, R, q=None) -> dict:
+        """No column without a singular set.
+
+        Parameters
+        ----------
+        R : numpy.ndarray
+            Rotations (unused).
+        q : numpy.ndarray, optional
+            Coordinates (unused).
+
+        Returns
+        -------
+        dict
+            ``{}``.
+        """
+        return {}
+
+    def text(self, R, q=None, spec: str = "+.3f", prefix: str = "") -> str:
+        """Nothing to say without a singular set.
+
+        Parameters
+        ----------
+        R : array_like
+            A rotation matrix (unused).
+        q : array_like, optional
+            Coordinates (unused).
+        spec : str
+            Unused.
+        prefix : str
+            Unused.
+
+        Returns
+        -------
+        str
+            ``""``.
+        """
+        return ""
 
     def values(self, R, q=None) -> np.ndarray:
         """``Δ ≡ +∞`` at every state of stacks.

@@ -291,3 +291,26 @@ def geodesic(Ra, Rb, s) -> np.ndarray:
     """
     Ra, Rb = np.asarray(Ra, dtype=float)[None], np.asarray(Rb, dtype=float)[None]
     return geodesic_points(Ra, turns(Ra, Rb), np.asarray(s, dtype=float))[0]
+
+
+def continuous_quaternions(R: np.ndarray) -> np.ndarray:
+    """Unit quaternions of rotations, their signs kept continuous.
+
+    Parameters
+    ----------
+    R : numpy.ndarray
+        Rotations, shape ``(n, 3, 3)``.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(x, y, z, w)`` per rotation, shape ``(n, 4)``, each with the sign nearer the
+        previous one's.
+    """
+    from scipy.spatial.transform import Rotation  # loaded when first needed
+
+    q = Rotation.from_matrix(R).as_quat()
+    for k in range(1, len(q)):
+        if np.dot(q[k], q[k - 1]) < 0.0:
+            q[k] = -q[k]
+    return q

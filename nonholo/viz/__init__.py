@@ -6,12 +6,19 @@
   and a vehicle's plane position, read from its data;
 - :mod:`~nonholo.viz.platform_drawing` -- the platform's geometry and 3D schematic;
 - :mod:`~nonholo.viz.singular_set` -- the singular set ``Δ = 0`` and its normal form;
-- :mod:`~nonholo.viz.plan_figures` -- figures of plans (convergence, controls, RPY, legs,
-  ``Δ``, body axes, global route, leg limits, motion quality, example overview);
+- :mod:`~nonholo.viz.result_lines` -- several plans on one axes told apart: labels, line
+  styles, colours, one legend;
+- :mod:`~nonholo.viz.convergence_figures` -- a planner's iterations (convergence, the
+  closest approach to ``Δ = 0``);
+- :mod:`~nonholo.viz.plan_figures` -- figures of plans along their time (controls, RPY,
+  legs, ``Δ``, body axes, example overview);
+- :mod:`~nonholo.viz.refinement_figures` -- one plan's refinements (global route, leg
+  limits, motion quality);
 - :mod:`~nonholo.viz.mechanism_cards` -- one mechanism at a glance;
 - :mod:`~nonholo.viz.platform_animation` -- a GIF of the platform's motion;
 - :mod:`~nonholo.viz.animation` -- a GIF or an MP4 of a motion of any mechanism
-  (:func:`animate`);
+  (:func:`animate`), its frames drawn per kind of mechanism by
+  :mod:`~nonholo.viz.animation_scenes`;
 - :mod:`~nonholo.viz.plan_summary` -- one plan of any mechanism at a glance (what
   ``nonholo plan --plot`` writes), with a vehicle's path on the plane;
 - :mod:`~nonholo.viz.state_figures` -- plans whose state goes beyond SO(3) (the ball, the
@@ -22,25 +29,19 @@
 The public functions are re-exported here: ``from nonholo import viz; viz.rpy_figure(res)``.
 """
 from .animation import animate
+from .convergence_figures import convergence_figure, newton_switch, plot_convergence, plot_min_delta
 from .execution_figures import execution_figure
 from .mechanism_cards import mechanism_card_figure
 from .plan_figures import (
     body_axes_figure,
     controls_figure,
-    convergence_figure,
     delta_figure,
     example_overview_figure,
-    global_route_figure,
     leg_lengths_figure,
-    leg_limits_figure,
-    motion_quality_figure,
-    newton_switch,
     plot_body_axes,
     plot_controls,
-    plot_convergence,
     plot_delta,
     plot_leg_lengths,
-    plot_min_delta,
     plot_rpy,
     rpy_along,
     rpy_figure,
@@ -66,6 +67,7 @@ from .singular_set import (
     singular_slices_figure,
 )
 from .quantities import input_units, plane_position
+from .refinement_figures import global_route_figure, leg_limits_figure, motion_quality_figure
 from .state_figures import ball_figure, car_figure
 from .style import (
     NEGATIVE_COLOR,

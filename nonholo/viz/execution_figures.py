@@ -1,6 +1,6 @@
 """The figure of a plan played on a physics model (:func:`nonholo.physics.execution.execute`).
 
-:func:`execution_figure` takes an :class:`~nonholo.physics.execution.Execution` with its
+:func:`execution_figure` takes an :class:`~nonholo.physics.execution_record.Execution` with its
 traces (the samples kept by a run; a record loaded from a file has none) and draws four
 panels: the error from the goal after each stage on a log scale (its parts: rotation,
 coordinates; a touch-up not played, hollow, at the error it left unchanged), the simulated
@@ -56,7 +56,7 @@ def tracking_distance(mechanism, trace: dict) -> dict:
         ``{part: array}`` with the parts of ``mechanism.space.error`` (``rotation`` in
         rad, ``coordinates`` in the mechanism's units).
     """
-    rows = [mechanism.space.error(R, q, Rp, qp)[1]
+    rows = [mechanism.space.error((R, q), (Rp, qp))[1]
             for R, q, Rp, qp in zip(trace["R"], trace["q"], trace["R_planned"], trace["q_planned"])]
     return {part: np.array([r[part] for r in rows], dtype=float) for part in rows[0]}
 
@@ -70,7 +70,7 @@ def default_title(name: str, stages: list) -> str:
     name : str
         The mechanism's name.
     stages : list of dict
-        The run's stages (:class:`~nonholo.physics.execution.Execution`).
+        The run's stages (:class:`~nonholo.physics.execution_record.Execution`).
 
     Returns
     -------
@@ -160,7 +160,7 @@ def execution_figure(execution, title: str | None = None) -> NotebookFigure:
 
     ax = fig.add_subplot(grid[1, 0])
     first = traces[0]
-    if mech.space.k >= 2:
+    if len(mech.space.axes("coordinates")) >= 2:
         cu = coordinate_units(mech)
         ax.plot(first["q_planned"][:, 0], first["q_planned"][:, 1], "--", color="0.3", label="plan")
         ax.plot(first["q"][:, 0], first["q"][:, 1], color=RESULT_COLORS[0], lw=1.2, label="simulated")

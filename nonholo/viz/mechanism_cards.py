@@ -42,14 +42,13 @@ def mechanism_card_figure(mechanism: str, R=None, result=None, psi_slice: float 
     R = np.eye(3) if R is None else np.asarray(R, dtype=float)
     if mech.geometry is not None:
         draw_platform(ax, R, mechanism)
-        dtext = f",  Δ = {float(mech.delta(R)):+.3f}" if mech.singular.exists else ""
-        ax.set_title(f"{rpy_text(R)}{dtext}")
+        ax.set_title(f"{rpy_text(R)}{mech.singular.text(R, prefix=',  ')}")
     elif result is not None:
         plot_body_axes(ax, result)
         ax.set_title("paths of the body axes $R(t)e_k$")
     ax2 = fig.add_subplot(gs[1])
-    if mech.singular.exists:
-        cs = draw_slice(ax2, psi_slice, n=181, mechanism=mechanism)
+    cs = draw_slice(ax2, psi_slice, n=181, mechanism=mechanism)     # None without a singular set
+    if cs is not None:
         cb = fig.colorbar(cs, ax=ax2, shrink=0.9, ticks=np.linspace(-1, 1, 5))
         cb.set_label(label("Δ / max|Δ|", NONE))
     elif result is not None:

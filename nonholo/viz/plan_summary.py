@@ -180,7 +180,7 @@ def plan_figure(result) -> NotebookFigure:
     drawn = len(result.R) > 0
     groups = unit_groups(mech)
     panels = [("inputs",)]
-    if mech.space.has_orientation:
+    if mech.space.axes("rotation"):         # the rotation's numbers: its RPY angles
         panels.append(("rpy",))
     panels += [("coordinates", unit, indices) for unit, indices in groups]
     if result.delta is not None:

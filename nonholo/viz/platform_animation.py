@@ -7,8 +7,8 @@ import matplotlib
 import numpy as np
 from matplotlib.figure import Figure
 
-from .plan_figures import has_trajectory
 from .platform_drawing import MECHANISM_VIEW, delta_along, draw_platform, geometry_for
+from .result_lines import has_trajectory
 from .style import STYLE, TRIPLE_COLORS
 
 

@@ -15,7 +15,8 @@ from mpl_toolkits.mplot3d import proj3d
 from mpl_toolkits.mplot3d.art3d import Poly3DCollection
 
 from ..model import catalog
-from ..model.mechanism import Geometry, Mechanism
+from ..model.geometry import Geometry, paper_geometry
+from ..model.mechanism import Mechanism
 from ..model.names import RADIUS, label
 from ..spaces import so3
 from .style import NotebookFigure, PAIR_COLORS, TRIPLE_COLORS, styled
@@ -34,11 +35,12 @@ def _numeric_vector(v, dims) -> np.ndarray:
 
 def as_geometry(geometry=None, a: float | None = None, b: float | None = None,
                 rho: float | None = None) -> Geometry:
-    """A numeric :class:`~nonholo.model.mechanism.Geometry`.
+    """A numeric :class:`~nonholo.model.geometry.Geometry`.
 
-    ``geometry`` may be ``None`` (the paper's platform, from its derivation: leg 1 from
-    ``a e_2`` to ``R (b e_2)``, leg 2 from ``a e_1`` to ``R (b e_1)``, the disk at the pole
-    ``ρ e_3`` with its axle along ``(e_1 - e_2)/√2``), a :class:`Geometry`, a
+    ``geometry`` may be ``None`` (the paper's platform: the generated one, or at other
+    dimensions :func:`~nonholo.model.geometry.paper_geometry`: leg 1 from ``a e_2`` to
+    ``R (b e_2)``, leg 2 from ``a e_1`` to ``R (b e_1)``, the disk at the pole ``ρ e_3`` with
+    its axle along ``(e_1 - e_2)/√2``), a :class:`Geometry`, a
     :class:`~nonholo.model.mechanism.Mechanism` or a mechanism name (its geometry), a mapping
     with the six fields, or any object with the six attributes -- e.g. a symbolic
     ``PlatformGeometry``, whose symbols ``a, b, rho`` are replaced by the given numbers
@@ -69,11 +71,7 @@ def as_geometry(geometry=None, a: float | None = None, b: float | None = None,
     if geometry is None:
         if all(v is None for v in given.values()):
             return platform.geometry
-        from derivations.mechanisms import (
-            PAPER_GEOMETRY,  # SymPy: only for other dimensions
-        )
-
-        geometry = PAPER_GEOMETRY
+        return paper_geometry(dims["a"], dims["b"], dims["rho"])
     if isinstance(geometry, (str, Mechanism)):
         mech = catalog.get(geometry)
         if mech.geometry is None:
@@ -185,10 +183,9 @@ def delta_along(R, mechanism="platform") -> np.ndarray | None:
         ``Δ``, shape (n,); ``None`` if the mechanism has no singular set.
     """
     mech = mechanism_named(mechanism)
-    if mech is None or not mech.singular.exists:
+    if mech is None:
         return None
-    R = np.asarray(R, dtype=float)
-    return np.array([float(mech.delta(Ri)) for Ri in R.reshape(-1, 3, 3)])
+    return mech.singular.samples(np.asarray(R, dtype=float).reshape(-1, 3, 3))
 
 
 def _sphere_lines(n_lat=5, n_lon=12, n=73):
@@ -453,7 +450,7 @@ def mechanism_figure(R_start, R_goal=None, geometry=None, title: str | None = No
         ax = fig.add_subplot(1, len(poses), k + 1, projection="3d")
         R = so3.check_rotation(R, f"R_{pose}")
         draw_platform(ax, R, g, view=view)
-        dtxt = f",  Δ = {float(mech.delta(R)):+.3f}" if mech is not None and mech.singular.exists else ""
+        dtxt = "" if mech is None else mech.singular.text(R, prefix=",  ")
         ax.set_title(f"{pose if len(poses) > 1 else name}\n{rpy_text(R)}{dtxt}")
     if title is None:
         title = f"{mech.name}: {mech.description}" if mech is not None else "a platform of the given geometry"

@@ -143,11 +143,9 @@ PI_TICKS = ([-np.pi, -np.pi / 2, 0, np.pi / 2, np.pi], ["−π", "−π/2", "0",
 HALF_PI_TICKS = ([-np.pi / 2, 0, np.pi / 2], ["−π/2", "0", "π/2"])
 
 
-def mechanism_delta_rpy(mechanism, phi, theta, psi) -> np.ndarray:
-    """``Δ(RPY(φ, ϑ, ψ))`` of any mechanism with a singular set, on arrays of angles.
-
-    The generated ``delta(R)`` reads the entries ``R[i, j]``: given a stack of rotations
-    transposed to shape (3, 3, ...) it evaluates all of them at once.
+def mechanism_delta_rpy(mechanism, phi, theta, psi) -> np.ndarray | None:
+    """``Δ(RPY(φ, ϑ, ψ))`` of a mechanism on SO(3), on arrays of angles, evaluated on the
+    whole stack of rotations at once (:meth:`~nonholo.spaces.singular.SingularSet.samples`).
 
     Parameters
     ----------
@@ -158,13 +156,14 @@ def mechanism_delta_rpy(mechanism, phi, theta, psi) -> np.ndarray:
 
     Returns
     -------
-    numpy.ndarray
-        ``Δ``, of their broadcast shape.
+    numpy.ndarray or None
+        ``Δ``, of their broadcast shape (``None`` without a singular set).
     """
     mech = catalog.get(mechanism)
     phi, theta, psi = np.broadcast_arrays(*(np.asarray(a, dtype=float) for a in (phi, theta, psi)))
     R = Rotation.from_euler("ZYX", np.stack([phi, theta, psi], -1).reshape(-1, 3)).as_matrix()
-    return np.asarray(mech.delta(np.moveaxis(R, 0, -1)), dtype=float).reshape(phi.shape)
+    D = mech.singular.samples(R.reshape(-1, 3, 3))
+    return None if D is None else D.reshape(phi.shape)
 
 
 def draw_slice(ax, psi: float, n: int = 241, marks=None, mechanism: str = "platform"):
@@ -185,14 +184,17 @@ def draw_slice(ax, psi: float, n: int = 241, marks=None, mechanism: str = "platf
 
     Returns
     -------
-    matplotlib.contour.QuadContourSet
-        The filled contours (for a colour bar).
+    matplotlib.contour.QuadContourSet or None
+        The filled contours (for a colour bar); ``None``, nothing drawn, for a mechanism
+        without a singular set.
     """
     F, T = np.meshgrid(np.linspace(-np.pi, np.pi, n), np.linspace(-np.pi / 2, np.pi / 2, n))
     if mechanism == "platform":
         D = delta_rpy(F, T, psi)
     else:
         D = mechanism_delta_rpy(mechanism, F, T, psi)
+        if D is None:
+            return None
         D = D / np.max(np.abs(D))  # the colour scale is [-1, 1]
     levels = np.linspace(-1.0, 1.0, 21)
     cs = ax.contourf(F, T, D, levels=levels, cmap="RdBu_r", vmin=-1.05, vmax=1.05)

@@ -2,32 +2,31 @@
 
 A native module ``nonholo.generated.native.<name>`` carries the digest of what its C was
 translated from (``SOURCE_DIGEST``: the Python sources and the translator's, see
-:func:`digest`), so that a module built from other sources is never used. :func:`load`
-returns, in this order:
+:func:`nonholo.codegen.cache.digest`), so that a module built from other sources is never
+used. :func:`load` returns, in this order:
 
 1. the module built at install: ``nonholo.generated.native.<name>`` (``pip install``
    compiles the catalog's C with the system compiler, see ``setup.py``), if its digest is
    the source's;
-2. the module in the disk cache (:func:`cache_dir`), if built before from the same source;
+2. the module in the disk cache (:func:`nonholo.codegen.cache.cache_dir`), if built before
+   from the same source;
 3. a module compiled now with the system compiler (``cc``/``gcc``, the Python headers and
    NumPy's) into the disk cache;
 
 or ``None`` where there is no compiler, the compilation fails, or ``NONHOLO_BACKEND=numba``
 is set; the caller then compiles its kernels with numba, said once in a warning. The cache
 is written atomically (a file renamed into place), so concurrent processes and killed runs
-never leave a half-written module behind.
+never leave a half-written module behind. :func:`native_kernels` loads the integrator's
+kernels of a mechanism (:mod:`nonholo.codegen.emit`) so.
 
 Nothing in the cache runs unverified: every entry is written and read by
-:mod:`nonholo.numerics.cache_entries` (a record of its hash beside it, checked before it is
+:mod:`nonholo.codegen.cache` (a record of its hash beside it, checked before it is
 used; a compiled module imported from the very bytes checked). The modules built at install
 (``nonholo.generated.native``) are part of the installation, not of the cache.
 """
 from __future__ import annotations
 
-import hashlib
 import importlib
-import importlib.machinery
-import importlib.util
 import os
 import shutil
 import subprocess
@@ -35,39 +34,16 @@ import sysconfig
 import tempfile
 from pathlib import Path
 
-from .c_translation import TranslationError
-from .cache_entries import import_verified, read_entry, warn_once, write_entry
+from .c_config import C
+from .c_subset import TranslationError
+from .cache import cache_dir, import_verified, read_entry, warn_once, write_entry
+from .python_config import PYTHON
 
 #: Environment variable choosing the kernels' backend: ``native`` (the default: C where a
 #: compiler is found, else numba) or ``numba``.
 BACKEND_ENV = "NONHOLO_BACKEND"
-#: Environment variable naming the disk cache of compiled modules (default: the user's cache).
-CACHE_ENV = "NONHOLO_CACHE_DIR"
-#: The compiler's flags: optimised, no contraction into fused multiply-adds (the numba
-#: kernels' arithmetic, operation for operation), position-independent.
-CFLAGS = ("-O2", "-fno-math-errno", "-ffp-contract=off", "-fPIC", "-shared", "-std=gnu99",
-          "-Wno-unused-variable", "-Wno-unused-but-set-variable")
 
 _LOADED: dict[str, object] = {}
-
-
-def digest(*texts: str) -> str:
-    """SHA-256 of what a native module is translated from.
-
-    Parameters
-    ----------
-    *texts : str
-        The Python sources and the translator's.
-
-    Returns
-    -------
-    str
-        The hex digest; the module records it as ``SOURCE_DIGEST``.
-    """
-    h = hashlib.sha256()
-    for t in texts:
-        h.update(hashlib.sha256(t.encode()).digest())
-    return h.hexdigest()
 
 
 def enabled() -> bool:
@@ -83,25 +59,10 @@ def enabled() -> bool:
     ValueError
         If ``NONHOLO_BACKEND`` is neither ``native`` nor ``numba``.
     """
-    value = os.environ.get(BACKEND_ENV, "native").strip().lower()
-    if value not in ("native", "numba"):
-        raise ValueError(f"{BACKEND_ENV} must be 'native' or 'numba', not {value!r}")
-    return value == "native"
-
-
-def cache_dir() -> Path:
-    """The disk cache of compiled modules.
-
-    Returns
-    -------
-    pathlib.Path
-        ``$NONHOLO_CACHE_DIR``, else ``$XDG_CACHE_HOME/nonholo/native``, else
-        ``~/.cache/nonholo/native``.
-    """
-    if os.environ.get(CACHE_ENV):
-        return Path(os.environ[CACHE_ENV])
-    base = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
-    return Path(base) / "nonholo" / "native"
+    value = os.environ.get(BACKEND_ENV, C.backend).strip().lower()
+    if value not in (C.backend, PYTHON.backend):
+        raise ValueError(f"{BACKEND_ENV} must be {C.backend!r} or {PYTHON.backend!r}, not {value!r}")
+    return value == C.backend
 
 
 def compiler() -> str | None:
@@ -139,7 +100,7 @@ def installed(name: str, want: str):
     name : str
         The module's name in ``nonholo.generated.native``.
     want : str
-        The digest of the sources (:func:`digest`).
+        The digest of the sources (:func:`nonholo.codegen.cache.digest`).
 
     Returns
     -------
@@ -147,7 +108,7 @@ def installed(name: str, want: str):
         The module, ``None`` if it is absent or built from other sources.
     """
     try:
-        module = importlib.import_module(f"nonholo.generated.native.{name}")
+        module = importlib.import_module(C.module_name(name))
     except ImportError:
         return None
     return module if getattr(module, "SOURCE_DIGEST", None) == want else None
@@ -181,7 +142,8 @@ def compile_module(name: str, source: str, target: Path, key: str | None = None)
         src = Path(tmp) / f"{name}.c"
         src.write_text(source)
         out = Path(tmp) / target.name
-        cmd = [cc, *CFLAGS, *(f"-I{d}" for d in include_dirs()), str(src), "-o", str(out), "-lm"]
+        cmd = [cc, *C.cflags, *(f"-I{d}" for d in include_dirs()), str(src), "-o", str(out),
+               *(f"-l{lib}" for lib in C.libraries)]
         run = subprocess.run(cmd, capture_output=True, text=True, check=False)
         if run.returncode != 0:
             raise RuntimeError(f"compiling {name} failed:\n{run.stderr[-4000:]}")
@@ -227,8 +189,7 @@ def load(name: str, want: str, source):
         return _LOADED[key]
     module = installed(name, want)
     if module is None:
-        suffix = sysconfig.get_config_var("EXT_SUFFIX") or ".so"
-        target = cache_dir() / f"{name}_{want[:16]}{suffix}"
+        target = cache_dir() / f"{name}_{want[:16]}{C.suffix()}"
         try:
             data = read_entry(target, want)            # verified before anything in it runs
             if data is None:
@@ -236,7 +197,7 @@ def load(name: str, want: str, source):
                 data = read_entry(target, want)
                 if data is None:
                     raise RuntimeError(f"{target} could not be read back once compiled")
-            module = import_verified(f"nonholo.generated.native.{name}", data, target)
+            module = import_verified(C.module_name(name), data, target)
             if getattr(module, "SOURCE_DIGEST", None) != want:
                 raise RuntimeError(f"{target} does not hold the expected kernels")
         except (OSError, RuntimeError, ImportError, TranslationError) as exc:
@@ -245,3 +206,33 @@ def load(name: str, want: str, source):
             module = None
     _LOADED[key] = module
     return module
+
+
+def native_kernels(module, frame: bool, parts: dict):
+    """The native kernels of a system of a generated module (:func:`load`).
+
+    Parameters
+    ----------
+    module : module
+        The mechanism's generated module.
+    frame : bool
+        Whether the system is the frame's.
+    parts : dict
+        The integrator's own pieces (:func:`nonholo.codegen.emit.functions`).
+
+    Returns
+    -------
+    dict or None
+        ``{"forward": …, "forward_variational": …, "frame_inputs": …}``, or ``None`` where
+        native kernels are unavailable (see :func:`load`).
+    """
+    if not enabled():
+        return None
+    from . import emit       # the emitters: loaded when a mechanism's kernels are built
+
+    name = emit.module_name(module)
+    lib = load(name, emit.source_digest(module, parts), lambda: emit.kernel_source(module, parts))
+    if lib is None:
+        return None
+    system = "frame" if frame else "physical"
+    return {kernel: getattr(lib, f"{kernel}__{system}", None) for kernel in emit.EXPORTED}

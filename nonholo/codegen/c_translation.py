@@ -1,144 +1,26 @@
 """C from the package's compiled Python: one source for the numba kernels and the native ones.
 
-The kernels (:mod:`nonholo.generated.cf4_kernels`, the generated fields, the small
-numerics of :mod:`nonholo.numerics.kernels`) are written once, in the subset of Python
-that numba compiles. :func:`translate` turns such functions into C99 with the same
-arithmetic in the same order, and :func:`extension_source` wraps them as a CPython
-extension module; :mod:`nonholo.numerics.native` compiles and loads it.
-
-Conventions of the subset (checked; anything else raises :class:`TranslationError`):
-
-- Arguments have declared kinds (:data:`KINDS`): ``"f8"``, ``"i8"``, ``"b1"`` scalars, or
-  C-contiguous arrays ``"f8[1]"``, ``"f8[2]"``, ``"f8[3]"``, ``"i8[3]"`` (dtype and number of
-  dimensions). An array is a pointer with its shape; an index with fewer subscripts than
-  dimensions is a view (a pointer into the array). Indices are non-negative.
-- Statements: assignment (also to several names, to a tuple, to an element or to every
-  element ``A[:, :] = x``), augmented assignment, ``for … in range(…)``, ``if``/``else``,
-  ``break``, ``continue``, ``return`` (a scalar or a tuple of scalars), calls.
-- Local arrays (``np.empty``, ``np.zeros``, ``x.copy()``) live on the stack of the function
-  (``alloca``), so they may not be made inside a loop. Locals are typed by what is assigned
-  to them (``double`` unless every value is an integer or a truth value).
-- ``/`` is true division, ``min``/``max`` keep Python's order (``min(a, b) = b if b < a else
-  a``), ``**`` is ``pow`` but for a constant integer exponent ``|n| ≤ 4``, which is a product
-  (and its reciprocal for ``n < 0``: what numba's fast-math makes of it, round-off apart);
-  NumPy's element functions map to C's ``<math.h>``.
-- A call of a function whose body is ``return (a, b, …)`` assigned to a tuple of names is
-  expanded in place (the allocations of a workspace).
-- ``np.dot(A.T, B.reshape((r, c)))`` (the one matrix product, of the dense Jacobian) is a
-  loop over the rows of ``A`` and ``B``.
+:func:`translate` turns functions written in the subset of Python that numba compiles
+(:mod:`nonholo.codegen.c_subset`: the conventions, the argument kinds) into C99 with the
+same arithmetic in the same order; :func:`nonholo.codegen.c_extension.extension_source`
+wraps them as a CPython extension module.
 """
 from __future__ import annotations
 
 import ast
-import functools
-import inspect
-import textwrap
-from dataclasses import dataclass, field
 
-#: The kinds of an argument: C type and, for arrays, the number of dimensions.
-KINDS = {
-    "f8": ("double", 0), "i8": ("int64_t", 0), "b1": ("int", 0),
-    "f8[1]": ("double", 1), "f8[2]": ("double", 2), "f8[3]": ("double", 3),
-    "i8[1]": ("int64_t", 1), "i8[2]": ("int64_t", 2), "i8[3]": ("int64_t", 3),
-}
-
-#: NumPy element functions and their C names.
-MATH = {
-    "sqrt": "sqrt", "sin": "sin", "cos": "cos", "tan": "tan", "arctan2": "atan2", "arctan": "atan",
-    "arcsin": "asin", "arccos": "acos", "exp": "exp", "log": "log", "cbrt": "cbrt", "abs": "fabs",
-    "fabs": "fabs", "sinh": "sinh", "cosh": "cosh", "tanh": "tanh", "hypot": "hypot",
-    "floor": "floor", "ceil": "ceil", "log1p": "log1p", "expm1": "expm1",
-}
-#: NumPy constants.
-CONSTANTS = {"inf": "INFINITY", "nan": "NAN", "pi": "M_PI", "e": "M_E"}
-NUMPY = ("np", "numpy", "math")
-
-
-class TranslationError(ValueError):
-    """A construct outside the translated subset (the message names function and line)."""
-
-
-@dataclass
-class Array:
-    """A C array: element type and shape expressions.
-
-    Parameters
-    ----------
-    ctype : str
-        The C element type.
-    shape : list of str
-        The C expressions of its dimensions.
-    """
-    ctype: str
-    shape: list
-
-
-@dataclass
-class Function:
-    """A Python function to translate.
-
-    Parameters
-    ----------
-    func : function or str
-        The function, or its source.
-    cname : str
-        Its C name.
-    kinds : dict
-        The kind (:data:`KINDS`) of every argument, by name.
-    calls : dict
-        The names it reads that are bound to other functions (C names, or a function whose
-        body returns a tuple of new arrays, expanded in place).
-    constants : dict
-        The names it reads that are bound to constants.
-    exported : bool, default True
-        Whether the extension module exposes it.
-    returns : tuple
-        Filled by :func:`translate`: the C types of the returned values.
-    written : frozenset
-        Filled by :func:`translate`: the array arguments the function writes (itself or
-        through a callee).
-    """
-    func: object
-    cname: str
-    kinds: dict
-    calls: dict = field(default_factory=dict)
-    constants: dict = field(default_factory=dict)
-    exported: bool = True
-    #: filled by :func:`translate`: the C types of the returned values, and the array
-    #: arguments the function writes (itself or through a callee)
-    returns: tuple = ()
-    written: frozenset = frozenset()
-
-
-def _tree(func) -> ast.FunctionDef:
-    """A fresh syntax tree of ``func`` (the translation rewrites it; parsing is cheaper than a copy)."""
-    node = ast.parse(_source(func)).body[0]
-    if not isinstance(node, ast.FunctionDef):
-        raise TranslationError("expected a function definition")
-    return node
-
-
-@functools.cache
-def _source(func) -> str:
-    return textwrap.dedent(func if isinstance(func, str) else inspect.getsource(func))
-
-
-@functools.cache
-def _parameters(func) -> tuple[str, ...]:
-    """The names of ``func``'s parameters."""
-    return tuple(a.arg for a in _tree(func).args.args)
-
-
-def _small_integer(node) -> int | None:
-    """The exponent of ``x ** n`` when it is a constant integer (``2``, ``-2.0``) of at most 4."""
-    sign = 1
-    if isinstance(node, ast.UnaryOp) and isinstance(node.op, ast.USub):
-        sign, node = -1, node.operand
-    if isinstance(node, ast.Constant) and isinstance(node.value, (int, float)) and not isinstance(node.value, bool):
-        v = float(node.value)
-        if v.is_integer() and abs(v) <= 4:
-            return sign * int(v)
-    return None
+from .c_subset import (
+    CONSTANTS,
+    KINDS,
+    MATH,
+    NUMPY,
+    Array,
+    Function,
+    TranslationError,
+    function_tree,
+    parameters,
+    small_integer,
+)
 
 
 class _Translator:
@@ -147,7 +29,7 @@ class _Translator:
     def __init__(self, fn: Function, known: dict):
         self.fn = fn
         self.known = known                   # C name → Function (already translated callees)
-        self.tree = _tree(fn.func)
+        self.tree = function_tree(fn.func)
         self.name = self.tree.name
         self.arrays: dict[str, Array] = {}
         self.scalars: dict[str, str] = {}
@@ -181,7 +63,7 @@ class _Translator:
             if (isinstance(s, ast.Assign) and len(s.targets) == 1 and isinstance(s.targets[0], ast.Tuple)
                     and isinstance(s.value, ast.Call) and isinstance(s.value.func, ast.Name)
                     and s.value.func.id in self.fn.calls and callable(self.fn.calls[s.value.func.id])):
-                callee = _tree(self.fn.calls[s.value.func.id])
+                callee = function_tree(self.fn.calls[s.value.func.id])
                 ret = [b for b in callee.body if isinstance(b, ast.Return)]
                 if len(ret) != 1 or not isinstance(ret[0].value, ast.Tuple):
                     self.fail(s, f"{s.value.func.id} is not a workspace (one `return (…)`)")
@@ -461,7 +343,7 @@ class _Translator:
             if isinstance(op, ast.Pow):
                 if self.typeof(node) == "int64_t":
                     return f"((int64_t)pow((double)({a}), (double)({b})))"
-                n = _small_integer(node.right)
+                n = small_integer(node.right)
                 if n is not None:            # x**n by products, as LLVM's fast-math does (pow is slow)
                     self.tmp += 1
                     x = f"_p{self.tmp}"
@@ -537,7 +419,7 @@ class _Translator:
             if callee is None:
                 self.fail(node, f"call of {f.id}, which is not bound to a translated function")
             args = []
-            params = _parameters(callee.func)
+            params = parameters(callee.func)
             if len(node.args) != len(params) or node.keywords:
                 self.fail(node, f"{f.id} takes {len(params)} positional arguments")
             for p, a in zip(params, node.args):
@@ -806,180 +688,3 @@ def translate(functions: list[Function]) -> tuple[str, dict]:
         known[fn.cname] = fn
         out.append(code)
     return "\n".join(out), known
-
-
-# --------------------------------------------------------------------------------------
-# The CPython extension module
-# --------------------------------------------------------------------------------------
-
-_PRELUDE = r"""#define PY_SSIZE_T_CLEAN
-#include <Python.h>
-#define NPY_NO_DEPRECATED_API NPY_1_7_API_VERSION
-#include <numpy/arrayobject.h>
-#include <math.h>
-#include <stdint.h>
-#include <string.h>
-#include <alloca.h>
-
-/* An argument of a wrapper: a C-contiguous array of the given type and dimensions. An
-   argument only read is converted (a new reference in *hold, released by the caller); an
-   argument written must already be such an array (a copy would lose the writes). */
-static int nh_array(PyObject *o, int type, int nd, int written, const char *fname, const char *arg,
-                    PyObject **hold, void **data, int64_t *shape)
-{
-    PyArrayObject *a = (PyArrayObject *)o;
-    *hold = NULL;
-    if (!(PyArray_Check(o) && PyArray_TYPE(a) == type && PyArray_NDIM(a) == nd && PyArray_IS_C_CONTIGUOUS(a))) {
-        if (written || !(PyArray_Check(o) || PySequence_Check(o))) {
-            PyErr_Format(PyExc_TypeError, "%s: argument '%s' must be a C-contiguous %d-d%s array of %s",
-                         fname, arg, nd, written ? " writable" : "", type == NPY_FLOAT64 ? "float64" : "int64");
-            return 0;
-        }
-        *hold = PyArray_FROMANY(o, type, nd, nd, NPY_ARRAY_IN_ARRAY | NPY_ARRAY_FORCECAST);
-        if (*hold == NULL) return 0;
-        a = (PyArrayObject *)*hold;
-    } else if (written && !PyArray_ISWRITEABLE(a)) {
-        PyErr_Format(PyExc_ValueError, "%s: argument '%s' is read-only", fname, arg);
-        return 0;
-    }
-    *data = PyArray_DATA(a);
-    for (int i = 0; i < nd; i++) shape[i] = (int64_t)PyArray_DIM(a, i);
-    return 1;
-}
-"""
-
-
-def _wrapper(fn: Function) -> str:
-    """A METH_FASTCALL wrapper of ``fn`` (arguments checked, the GIL released while it runs)."""
-    params = _parameters(fn.func)
-    arrays = [p for p in params if KINDS[fn.kinds[p]][1]]
-    lines = [f"static PyObject *py_{fn.cname}(PyObject *self, PyObject *const *args, Py_ssize_t nargs)", "{"]
-    lines.append(f"    if (nargs != {len(params)}) {{ PyErr_Format(PyExc_TypeError, \"{fn.cname} takes {len(params)} arguments (%zd given)\", nargs); return NULL; }}")
-    if arrays:
-        lines.append(f"    PyObject *hold[{len(arrays)}] = {{NULL}};")
-        lines.append("    PyObject *result = NULL;")
-    release = f"for (int _h = 0; _h < {len(arrays)}; _h++) Py_XDECREF(hold[_h]);" if arrays else ""
-    fail = "goto done;" if arrays else "return NULL;"
-    call = []
-    decl = []
-    for i, p in enumerate(params):
-        ctype, nd = KINDS[fn.kinds[p]]
-        if nd:
-            npy = "NPY_FLOAT64" if ctype == "double" else "NPY_INT64"
-            h = arrays.index(p)
-            decl.append(f"    void *{p}_d = NULL; int64_t {p}_sh[{nd}] = {{0}};")
-            lines.append(f"    if (!nh_array(args[{i}], {npy}, {nd}, {int(p in fn.written)}, \"{fn.cname}\", \"{p}\", "
-                         f"&hold[{h}], &{p}_d, {p}_sh)) {fail}")
-            call.append(f"({ctype} *){p}_d")
-            call.extend(f"{p}_sh[{j}]" for j in range(nd))
-        elif ctype == "double":
-            decl.append(f"    double {p} = 0;")
-            lines.append(f"    {p} = PyFloat_AsDouble(args[{i}]);")
-            lines.append(f"    if ({p} == -1.0 && PyErr_Occurred()) {fail}")
-            call.append(p)
-        elif ctype == "int64_t":
-            decl.append(f"    int64_t {p} = 0;")
-            lines.append(f"    {p} = (int64_t)PyLong_AsLongLong(args[{i}]);")
-            lines.append(f"    if ({p} == -1 && PyErr_Occurred()) {fail}")
-            call.append(p)
-        else:
-            decl.append(f"    int {p} = 0;")
-            lines.append(f"    {p} = PyObject_IsTrue(args[{i}]);")
-            lines.append(f"    if ({p} < 0) {fail}")
-            call.append(p)
-    rets = fn.returns
-    box = {"double": "PyFloat_FromDouble", "int64_t": "PyLong_FromLongLong", "int": "PyBool_FromLong"}
-    for i, t in enumerate(rets):
-        decl.append(f"    {t} r{i} = 0;")
-    if len(rets) > 1:
-        call.extend(f"&r{i}" for i in range(len(rets)))
-    lines.append("    Py_BEGIN_ALLOW_THREADS")
-    lines.append(f"    {'r0 = ' if len(rets) == 1 else ''}{fn.cname}({', '.join(call)});")
-    lines.append("    Py_END_ALLOW_THREADS")
-    if len(rets) > 1:
-        value = f"nh_tuple({len(rets)}, " + ", ".join(f"{box[t]}(r{i})" for i, t in enumerate(rets)) + ")"
-    elif rets:
-        value = f"{box[rets[0]]}(r0)"
-    else:
-        value = "Py_NewRef(Py_None)"
-    if arrays:
-        lines.append(f"    result = {value};")
-        lines.append("done:")
-        lines.append(f"    {release}")
-        lines.append("    return result;")
-    else:
-        lines.append(f"    return {value};")
-    lines.append("}")
-    return "\n".join(lines[:2] + decl + lines[2:]) + "\n"
-
-
-_TUPLE = r"""
-/* A tuple of new references (stolen). */
-static PyObject *nh_tuple(Py_ssize_t n, ...)
-{
-    va_list ap;
-    PyObject *t = PyTuple_New(n);
-    va_start(ap, n);
-    for (Py_ssize_t i = 0; i < n; i++) {
-        PyObject *o = va_arg(ap, PyObject *);
-        if (t == NULL || o == NULL) { Py_XDECREF(o); continue; }
-        PyTuple_SET_ITEM(t, i, o);
-    }
-    va_end(ap);
-    if (t != NULL) for (Py_ssize_t i = 0; i < n; i++) if (PyTuple_GET_ITEM(t, i) == NULL) { Py_DECREF(t); return NULL; }
-    return t;
-}
-"""
-
-
-def extension_source(module_name: str, header: str, functions: list[Function], digest: str) -> str:
-    """The C source of a CPython extension module exposing translated functions.
-
-    Parameters
-    ----------
-    module_name : str
-        The module's full name (its last dotted part is the init name).
-    header : str
-        The comment at the top of the source.
-    functions : list of Function
-        The functions, translated in order; the exported ones are exposed under their C
-        names.
-    digest : str
-        The module's attribute ``SOURCE_DIGEST`` (of what it was translated from).
-
-    Returns
-    -------
-    str
-        The C source.
-
-    Raises
-    ------
-    TranslationError
-        For a construct outside the translated subset.
-    """
-    body, _ = translate(functions)
-    short = module_name.rsplit(".", 1)[-1]
-    exported = [f for f in functions if f.exported]
-    wrappers = "\n".join(_wrapper(f) for f in exported)
-    table = "\n".join(f'    {{"{f.cname}", (PyCFunction)(void (*)(void))py_{f.cname}, METH_FASTCALL, NULL}},' for f in exported)
-    return f"""/* {header} */
-{_PRELUDE}#include <stdarg.h>
-{_TUPLE}
-{body}
-{wrappers}
-static PyMethodDef methods[] = {{
-{table}
-    {{NULL, NULL, 0, NULL}}
-}};
-
-static struct PyModuleDef moduledef = {{PyModuleDef_HEAD_INIT, "{module_name}", NULL, -1, methods}};
-
-PyMODINIT_FUNC PyInit_{short}(void)
-{{
-    import_array();
-    PyObject *m = PyModule_Create(&moduledef);
-    if (m == NULL) return NULL;
-    if (PyModule_AddStringConstant(m, "SOURCE_DIGEST", "{digest}") < 0) {{ Py_DECREF(m); return NULL; }}
-    return m;
-}}
-"""

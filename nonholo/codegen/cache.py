@@ -1,7 +1,12 @@
-"""Entries of nonholo's disk caches that are verified before anything in them runs.
+"""nonholo's disk caches, whose entries are verified before anything in them runs.
+
+Where they are (:func:`cache_dir`, :func:`generated_cache_dir`), the digest that keys an
+entry by what it is built from (:func:`digest`), and the generated sources kept there
+(:func:`cached_source`).
 
 Nothing in the cache runs unverified. Every entry nonholo writes there (a compiled module,
-or a generated module's source, :mod:`nonholo.model.mechanism`) gets a record beside it,
+:mod:`nonholo.codegen.build`, or a generated module's source,
+:mod:`nonholo.codegen.mechanism_modules`) gets a record beside it,
 ``<entry>.sha256.json``: the SHA-256 of the file and the key of what it was built from
 (:func:`write_entry`). An entry is read (:func:`read_entry`) only if it is a regular file
 of the user's own (or root's), not writable by others, opened without following a link or
@@ -19,14 +24,20 @@ import hashlib
 import importlib.machinery
 import importlib.util
 import json
+import keyword
 import os
 import stat
 import tempfile
 import warnings
 from pathlib import Path
+from typing import Callable
 
-__all__ = ["RECORD_SUFFIX", "ENTRY_LIMIT", "RECORD_LIMIT", "RefusedEntry", "warn_once", "record_path",
-           "read_entry", "write_entry", "import_verified"]
+__all__ = ["CACHE_ENV", "RECORD_SUFFIX", "ENTRY_LIMIT", "RECORD_LIMIT", "RefusedEntry", "cache_dir",
+           "generated_cache_dir", "digest", "warn_once", "record_path", "read_entry", "write_entry",
+           "import_verified", "cached_source"]
+
+#: Environment variable naming the disk cache of compiled modules (default: the user's cache).
+CACHE_ENV = "NONHOLO_CACHE_DIR"
 
 #: The suffix of the record nonholo writes beside a cache entry (:func:`write_entry`).
 RECORD_SUFFIX = ".sha256.json"
@@ -40,6 +51,54 @@ _WARNED: set[str] = set()
 
 class RefusedEntry(Exception):
     """A cache entry that is not used (the message says why)."""
+
+
+def cache_dir() -> Path:
+    """The disk cache of compiled modules.
+
+    Returns
+    -------
+    pathlib.Path
+        ``$NONHOLO_CACHE_DIR``, else ``$XDG_CACHE_HOME/nonholo/native``, else
+        ``~/.cache/nonholo/native``.
+    """
+    if os.environ.get(CACHE_ENV):
+        return Path(os.environ[CACHE_ENV])
+    base = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
+    return Path(base) / "nonholo" / "native"
+
+
+def generated_cache_dir() -> Path:
+    """Where generated modules are cached.
+
+    Returns
+    -------
+    pathlib.Path
+        ``$NONHOLO_CACHE_DIR/generated`` when that is set (beside the compiled kernels,
+        :func:`cache_dir`), else ``generated`` beside the default kernel cache
+        (``~/.cache/nonholo/generated``).
+    """
+    kernels = cache_dir()
+    return kernels / "generated" if os.environ.get(CACHE_ENV) else kernels.parent / "generated"
+
+
+def digest(*texts: str) -> str:
+    """SHA-256 of what a native module is translated from.
+
+    Parameters
+    ----------
+    *texts : str
+        The Python sources and the translator's.
+
+    Returns
+    -------
+    str
+        The hex digest; the module records it as ``SOURCE_DIGEST``.
+    """
+    h = hashlib.sha256()
+    for t in texts:
+        h.update(hashlib.sha256(t.encode()).digest())
+    return h.hexdigest()
 
 
 def warn_once(key: str, message: str) -> None:
@@ -246,3 +305,53 @@ def import_verified(name: str, data: bytes, origin: Path):
         module.__file__ = str(origin)
         return module
     raise last_error
+
+
+def cached_source(name: str, key: str, build: Callable[[], str]) -> str:
+    """A generated source, read from the cache — verified before it is used — or built and
+    written to it.
+
+    An entry is used only if :func:`read_entry` verifies it: a regular file of the user's
+    whose bytes hash to the record nonholo wrote beside it with this ``key``. An entry
+    edited, damaged (truncated, empty, not text), without a record, or not a regular file
+    (a FIFO, a directory, a symbolic link) is passed over with a warning naming it and
+    rebuilt, so that what runs is what the definition generates.
+
+    Parameters
+    ----------
+    name : str
+        The mechanism's name (a Python identifier: it names the file).
+    key : str
+        The definition's digest; the file is ``<name>_<key[:24]>.py`` in
+        :func:`generated_cache_dir` (written atomically with its record; a cache that
+        cannot be written is reported once and skipped).
+    build : callable
+        ``build()``: the source, when it is not cached.
+
+    Returns
+    -------
+    str
+        The module's source.
+
+    Raises
+    ------
+    ValueError
+        If ``name`` is not an identifier or is a keyword.
+    """
+    if not isinstance(name, str) or not name.isidentifier() or keyword.iskeyword(name):
+        raise ValueError(f"name must be a Python identifier that is not a keyword (it names the generated "
+                         f"module's file), got {name!r}")
+    path = generated_cache_dir() / f"{name}_{key[:24]}.py"
+    data = read_entry(path, key)
+    if data is not None:
+        try:
+            return data.decode("utf-8")
+        except UnicodeDecodeError:          # recorded as written: only a foreign record gets here
+            warn_once(f"cache entry {path}", f"nonholo: ignored the cache entry {path}: it is not "
+                                             "text; rebuilding it")
+    source = build()
+    try:
+        write_entry(path, source.encode("utf-8"), key)
+    except OSError as exc:
+        warn_once("generated cache", f"nonholo: could not cache the generated module of {name!r} ({exc})")
+    return source

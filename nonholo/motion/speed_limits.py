@@ -68,7 +68,7 @@ from ..model.bounds import InputBounds
 from ..numerics.checks import check_count, check_times, is_number
 from ..spaces import so3
 from . import playback
-from .time_change import MIN_TIME, TimeChange, check_horizon
+from .time_scaling import MIN_TIME, TimeChange, check_horizon
 
 if TYPE_CHECKING:                       # SciPy's splines load when first needed
     from scipy.interpolate import PPoly
@@ -390,8 +390,9 @@ def _speed_spline(base, R0, mech, nodes: int) -> tuple[PPoly, np.ndarray]:
     jumps (one PPoly with values of shape ``(k,)``), and the jumps' times."""
     T = base.T
     U = np.ascontiguousarray(stages.stage_table(base, nodes))
-    sign = float(np.sign(mech.delta(R0))) if mech.singular.exists else 1.0
-    Rs, done, _, _ = playback.replay(np.asarray(R0, dtype=float), base, T, mech, nodes, sign, U)
+    start = mech.space.state(R0)
+    sign = mech.singular.sign(*start)
+    Rs, done, _, _ = playback.replay(start, base, T, mech, nodes, sign, U)
     if done < nodes:
         raise ValueError("the planned motion runs into a non-finite angular velocity: not re-timed")
     right = mech.leg_speeds(Rs[:-1], U[:, 0])          # s_i at the start of each step

@@ -1,4 +1,4 @@
-"""Certifying a converged plan (:mod:`nonholo.certify.certificate`), correcting it where that is all it needs.
+"""Certifying a converged plan (:mod:`nonholo.certify.certificate`) and correcting it until the certificate holds.
 
 A plan converged on the planner's grid ends within ``tol`` of the goal *on that grid*; its
 physical controls, replayed accurately, may end a discretisation error away (for strategy
@@ -20,19 +20,19 @@ from ..certify import certificate as replay_certificate
 from ..certify.certificate import Certificate
 from ..motion.frame_controls import FrameControls
 from ..numerics import kernels
-from .core import Evaluation, Options, Outcome, Evaluator, step_scale
+from .core import Evaluation, Options, Outcome, EndpointMap, step_scale
 
 #: Newton corrections on the replayed endpoint at most.
 MAX_CORRECTIONS = 4
 
 
-def physical(problem: Evaluator, ev: Evaluation):
+def physical(endpoint: EndpointMap, ev: Evaluation):
     """The physical inputs of an evaluation's control.
 
     Parameters
     ----------
-    problem : Evaluator
-        The problem.
+    endpoint : EndpointMap
+        The endpoint.
     ev : Evaluation
         The evaluation.
 
@@ -42,18 +42,18 @@ def physical(problem: Evaluator, ev: Evaluation):
         The control itself, or for a plan in frame coordinates the
         :class:`~nonholo.motion.frame_controls.FrameControls` along ``ev``'s nodes.
     """
-    if not problem.frame:
+    if not endpoint.frame:
         return ev.controls
-    return FrameControls(ev.controls, problem.R0, problem.mechanism, problem.steps, nodes=ev.R)
+    return FrameControls(ev.controls, endpoint.start.R, endpoint.mechanism, endpoint.steps, nodes=ev.R)
 
 
-def certify(problem: Evaluator, ev: Evaluation, options: Options) -> tuple[Evaluation, Certificate, int]:
+def certify(endpoint: EndpointMap, ev: Evaluation, options: Options) -> tuple[Evaluation, Certificate, int]:
     """The certificate of a converged plan, after corrections where they help (see the module).
 
     Parameters
     ----------
-    problem : Evaluator
-        The problem.
+    endpoint : EndpointMap
+        The endpoint.
     ev : Evaluation
         The converged (complete) evaluation.
     options : Options
@@ -69,31 +69,31 @@ def certify(problem: Evaluator, ev: Evaluation, options: Options) -> tuple[Evalu
     corrections : int
         The corrections made (0 for a failure).
     """
-    mech = problem.mechanism
+    mech = endpoint.mechanism
 
     def measure(ev: Evaluation, steps: int, G=None) -> Certificate:
         # planned in the physical inputs: the planner's trajectory is the replay on steps/2
         half = None
-        if not problem.frame and steps == 2 * problem.steps:
+        if not endpoint.frame and steps == 2 * endpoint.steps:
             half = (ev.R[-1], ev.q[-1])
-        return replay_certificate.measure(problem.R0, problem.Rd, problem.T, mech, physical(problem, ev),
-                                          steps, options.tol, options.delta_min, problem.sign, G, half,
-                                          limits=problem.limits, q0=problem.q0, qd=problem.qd)
+        return replay_certificate.measure(endpoint.start, endpoint.goal, endpoint.T, mech, physical(endpoint, ev),
+                                          steps, options.tol, options.delta_min, endpoint.sign, G, half,
+                                          limits=endpoint.limits)
 
     # the first replays: on N and 2N steps (N: the planner's) when the planner's trajectory
     # is the replay on N, else on N/2 and N where the controls allow it
-    N = problem.steps
+    N = endpoint.steps
     grid = getattr(ev.parametrisation, "grid", None)
     halves = N % 2 == 0 and (grid is None or (N // 2) % grid == 0)
-    first = N if problem.frame and halves else 2 * N
+    first = N if endpoint.frame and halves else 2 * N
     given = ev, measure(ev, first)
     cert = given[1]
     G = cert.sensitivity
     corrections = 0
     while not cert.passed and cert.correctable and corrections < MAX_CORRECTIONS:
-        d = kernels.min_norm_step(ev.J, cert.l, step_scale(problem, ev.parametrisation))
-        trial = problem.evaluate(ev.params - d)
-        if not problem.admissible(trial):
+        d = kernels.min_norm_step(ev.J, cert.l, step_scale(endpoint, ev.parametrisation))
+        trial = endpoint.evaluate(ev.params - d)
+        if not endpoint.admissible(trial):
             break
         trial_cert = measure(trial, cert.replay_steps, G)
         if not trial_cert.terminal_error < 0.5 * cert.terminal_error:
@@ -107,15 +107,15 @@ def certify(problem: Evaluator, ev: Evaluation, options: Options) -> tuple[Evalu
     return ev, cert, corrections
 
 
-def certified(outcome: Outcome, problem: Evaluator, options: Options) -> Outcome:
+def certified(outcome: Outcome, endpoint: EndpointMap, options: Options) -> Outcome:
     """A success without a certificate, certified.
 
     Parameters
     ----------
     outcome : Outcome
         The success.
-    problem : Evaluator
-        The problem, unless the outcome names its own.
+    endpoint : EndpointMap
+        The endpoint, unless the outcome names its own.
     options : Options
         The run's settings.
 
@@ -125,7 +125,7 @@ def certified(outcome: Outcome, problem: Evaluator, options: Options) -> Outcome
         With its certificate and the evaluation it belongs to, or turned into a failure
         whose reason says why.
     """
-    prob = outcome.problem if outcome.problem is not None else problem
+    prob = outcome.endpoint if outcome.endpoint is not None else endpoint
     ev, cert, corrections = certify(prob, outcome.evaluation, options)
     if not cert.passed:
         return replace(outcome, success=False,
@@ -143,7 +143,7 @@ def note(cert: Certificate, corrections: int, space) -> str:
     corrections : int
         The corrections made.
     space : Product
-        The mechanism's state space (:class:`~nonholo.spaces.groups.Product`), whose units
+        The mechanism's state space (:class:`~nonholo.spaces.product.Product`), whose units
         the errors are given in.
 
     Returns

@@ -4,7 +4,7 @@ The mechanisms are driftless, so for controls ``u(τ)`` on ``[0, T_b]`` and an i
 map ``τ(t)`` of ``[0, T]`` onto ``[0, T_b]`` the controls ``ũ(t) = u(τ(t)) dτ/dt`` move
 along the same path, ``x̃(t) = x(τ(t))``, and end where ``u`` does. Two time changes exist:
 
-- :class:`~nonholo.motion.retimed.Retimed`: the fastest one under a bound on the legs'
+- :class:`~nonholo.motion.speed_limits.Retimed`: the fastest one under a bound on the legs'
   speed (or a given longer time);
 - :class:`RestToRest`: ``τ(t) = T_b σ(t/T)`` with the quintic smoothstep
   ``σ(s) = 10s³ − 15s⁴ + 6s⁵``, ``σ'(s) = 30 s²(1 − s)²``. The motion starts and ends at
@@ -274,7 +274,7 @@ def is_time_change(controls) -> bool:
     -------
     bool
         ``True`` for a :class:`TimeChange` (:class:`RestToRest`,
-        :class:`~nonholo.motion.retimed.Retimed`).
+        :class:`~nonholo.motion.speed_limits.Retimed`).
     """
     return isinstance(controls, TimeChange)
 

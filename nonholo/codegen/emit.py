@@ -1,33 +1,53 @@
-"""The CF4 kernels of a mechanism as C: translated from the same Python numba compiles.
+"""The generated code of the mechanisms and of the integrator: the Python and C emitters.
 
-:func:`kernel_source` assembles, for the generated module of a mechanism, one C extension
-module holding the kernels of each of its systems (:mod:`nonholo.integrate.cf4`): the
-physical ``G(R, q) u`` and, where the mechanism has one, the desingularised frame
-``N(R, q) w``. Every function in it is translated by :mod:`nonholo.numerics.c_translation`
-from the Python that numba compiles — the generated fields (``G_into``, ``QG_into``,
-``delta``, …), the inlined kernels of :mod:`nonholo.generated.cf4_kernels` and the helpers
-they call — with the system's names and layout (``field_into``, ``D``, ``ROTATION``, …)
-bound as :func:`nonholo.integrate.cf4.compile_system` binds them. The kernels are exported
-as ``<kernel>__<system>`` (``forward__physical``, ``forward_variational__frame``, …).
+Python (:data:`~nonholo.codegen.python_config.PYTHON`, the modules numba compiles):
 
-``nonholo derive`` writes the catalog's sources to ``nonholo/generated/native/`` (built by
-``pip install``); :func:`native_kernels` loads a mechanism's module through
-:func:`nonholo.numerics.native.load` (installed, cached on disk, or compiled now).
+- :func:`mechanism_files`: the mechanisms' modules, derived with SymPy (``derivations``,
+  imported when asked for);
+- :func:`python_kernels`: :mod:`nonholo.generated.cf4_kernels`, the integrator's kernels
+  with the step expanded in place (:mod:`nonholo.codegen.inline`).
+
+C (:data:`~nonholo.codegen.c_config.C`): :func:`kernel_source` assembles, for the generated
+module of a mechanism, one C extension module holding the kernels of each of its systems
+(:mod:`nonholo.integrate.system_kernels`): the physical ``G(R, q) u`` and, where the mechanism has
+one, the desingularised frame ``N(R, q) w``. Every function in it is translated by
+:mod:`nonholo.codegen.c_translation` from the Python that numba compiles — the generated
+fields (``G_into``, ``QG_into``, ``delta``, …), the inlined kernels of
+:mod:`nonholo.generated.cf4_kernels` and the helpers they call — with the system's names
+and layout (``field_into``, ``D``, ``ROTATION``, …) bound as
+:func:`nonholo.integrate.system_kernels.compile_system` binds them. The kernels are exported as
+``<kernel>__<system>`` (``forward__physical``, ``forward_variational__frame``, …).
+:func:`native_files` gives the catalog's sources, which ``nonholo derive`` writes to
+``nonholo/generated/native/`` (built by ``pip install``);
+:func:`nonholo.codegen.build.native_kernels` loads a mechanism's module (installed, cached
+on disk, or compiled now).
+
+The integrator passes its own pieces — its source, the functions translated besides the
+inlined kernels and the helpers they call (``parts``) — so that code generation imports
+nothing above it.
 """
 from __future__ import annotations
 
 import ast
 import functools
 import sys
+import types
 from pathlib import Path
 
 from ..generated import cf4_kernels as inlined
-from ..numerics import kernels as small
-from ..numerics import native
-from ..numerics.c_translation import Function, extension_source
+from . import inline
+from .c_config import C
+from .c_extension import extension_source, translator_sources
+from .c_subset import Function
+from .cache import digest
+from .python_config import PYTHON
 
-#: Argument kinds of the translated functions (see :data:`nonholo.numerics.c_translation.KINDS`).
-FIELD_KINDS = {"R": "f8[2]", "q": "f8[1]", "v": "f8[1]", "u": "f8[1]", "out": "f8[2]"}
+#: The integrator's functions whose calls are expanded in place (:func:`python_kernels`).
+INLINED = ("cf4_step", "cf4_stage", "cf4_close", "zpredict", "advance")
+#: The kernels written with them.
+KERNELS = ("forward", "forward_variational", "frame_inputs")
+#: Argument kinds of the translated functions (see :data:`nonholo.codegen.c_subset.KINDS`):
+#: the helpers (``parts``), the integrator's pieces and its kernels.
 HELPER_KINDS = {
     "rodrigues": {"wx": "f8", "wy": "f8", "wz": "f8", "E": "f8[2]"},
     "exp_times": {"wx": "f8", "wy": "f8", "wz": "f8", "R": "f8[2]", "E": "f8[2]", "out": "f8[2]"},
@@ -47,8 +67,42 @@ KERNEL_KINDS = {
     "frame_inputs": {"nodes": "f8[3]", "qnodes": "f8[2]", "idx": "i8[1]", "s": "f8[1]", "Wst": "f8[3]",
                      "w_end": "f8[2]", "Rout": "f8[3]", "Qout": "f8[2]", "out": "f8[2]"},
 }
-#: The kernels a :class:`~nonholo.integrate.cf4.Kernels` holds.
+#: The kernels a :class:`~nonholo.integrate.system_kernels.Kernels` holds.
 EXPORTED = ("forward", "forward_variational", "frame_inputs")
+
+
+def mechanism_files() -> dict[str, str]:
+    """The mechanisms' generated modules (:func:`derivations.codegen.generated_files`).
+
+    Returns
+    -------
+    dict of str to str
+        File name → source, ``__init__.py`` (with ``MECHANISMS``) included.
+    """
+    from derivations import codegen  # SymPy: imported only when asked for
+
+    return codegen.generated_files()
+
+
+def python_kernels(sources: dict[str, str]) -> str:
+    """The source of ``nonholo/generated/cf4_kernels.py``: the integrator's :data:`KERNELS`
+    with every call of the functions in :data:`INLINED` expanded in place.
+
+    Parameters
+    ----------
+    sources : dict of str to str
+        The integrator's modules that define them: file, relative to the repository (named
+        in the header) → source.
+
+    Returns
+    -------
+    str
+        The module's source.
+    """
+    paths = ", ".join(sources)
+    header = PYTHON.header("The CF4 kernels with the step inlined (see nonholo.integrate.system_kernels).",
+                           "nonholo/codegen/inline.py", paths)
+    return inline.inlined_module(tuple(sources.values()), INLINED, KERNELS, header)
 
 
 def module_name(module) -> str:
@@ -140,22 +194,22 @@ def functions(module, parts: dict, kernels_text: str | None = None) -> list:
     module : module
         The mechanism's generated module.
     parts : dict
-        The kernels' own pieces of :mod:`nonholo.integrate.cf4` (``rates``, ``zstage``,
-        ``no_singularity``, ``step_workspace``), passed by it.
+        The integrator's own pieces (``rates``, ``zstage``, ``no_singularity``,
+        ``step_workspace``) and the helpers of :data:`HELPER_KINDS`, by name, passed by it
+        (:func:`nonholo.integrate.system_kernels.native_parts`).
     kernels_text : str, optional
         The inlined kernels' source (by default :mod:`nonholo.generated.cf4_kernels`').
 
     Returns
     -------
     list of Function
-        The :class:`~nonholo.numerics.c_translation.Function` objects to translate.
+        The :class:`~nonholo.codegen.c_subset.Function` objects to translate.
     """
     text = module_text(module)
     kernels_text = kernels_text if kernels_text is not None else Path(inlined.__file__).read_text()
-    helpers = [Function(getattr(small, n), f"nh_{n}", kinds, exported=False,
-                        calls={"rodrigues": "nh_rodrigues"}) for n, kinds in HELPER_KINDS.items()]
-    out = list(helpers)
-    helper_calls = {n: f"nh_{n}" for n in HELPER_KINDS}
+    helper_calls = {n: f"{C.helper_prefix}{n}" for n in HELPER_KINDS}
+    out = [Function(parts[n], helper_calls[n], kinds, exported=False, calls={"rodrigues": helper_calls["rodrigues"]})
+           for n, kinds in HELPER_KINDS.items()]
     for system in systems(module):
         frame = system == "frame"
         G, QG = ("N_into", "QN_into") if frame else ("G_into", "QG_into")
@@ -192,23 +246,20 @@ def source_digest(module, parts: dict, kernels_text: str | None = None) -> str:
     module : module
         The mechanism's generated module.
     parts : dict
-        The kernels' own pieces of :mod:`nonholo.integrate.cf4`.
+        The integrator's own pieces and helpers (:func:`functions`).
     kernels_text : str, optional
         The inlined kernels' source (by default :mod:`nonholo.generated.cf4_kernels`').
 
     Returns
     -------
     str
-        :func:`nonholo.numerics.native.digest` of the generated module's source, the
-        kernels' and helpers' modules, and the translator's.
+        :func:`nonholo.codegen.cache.digest` of the generated module's source, the
+        kernels', the modules defining ``parts``, the translator's and this module's.
     """
-    from ..numerics import c_translation
-
-    cf4 = sys.modules[parts["rates"].__module__]
     kernels_text = kernels_text if kernels_text is not None else Path(inlined.__file__).read_text()
-    texts = [module_text(module), kernels_text] + [Path(m.__file__).read_text()
-                                                   for m in (cf4, small, c_translation, sys.modules[__name__])]
-    return native.digest(*texts)
+    defining = dict.fromkeys(sys.modules[f.__module__] for f in parts.values())
+    texts = [module_text(module), kernels_text] + [Path(m.__file__).read_text() for m in defining]
+    return digest(*texts, *translator_sources(), Path(__file__).read_text())
 
 
 def kernel_source(module, parts: dict, kernels_text: str | None = None) -> str:
@@ -219,7 +270,7 @@ def kernel_source(module, parts: dict, kernels_text: str | None = None) -> str:
     module : module
         The mechanism's generated module.
     parts : dict
-        The kernels' own pieces of :mod:`nonholo.integrate.cf4`.
+        The integrator's own pieces and helpers (:func:`functions`).
     kernels_text : str, optional
         The inlined kernels' source (by default :mod:`nonholo.generated.cf4_kernels`').
 
@@ -228,35 +279,39 @@ def kernel_source(module, parts: dict, kernels_text: str | None = None) -> str:
     str
         The C source.
     """
-    header = (f"Native CF4 kernels of the mechanism {module.NAME!r}. Generated by `nonholo derive` "
-              f"(nonholo/integrate/native_kernels.py, nonholo/numerics/c_translation.py) from "
-              f"its generated module and nonholo/generated/cf4_kernels.py. Do not edit.")
-    return extension_source(f"nonholo.generated.native.{module_name(module)}", header, functions(module, parts, kernels_text),
+    header = C.header(f"Native CF4 kernels of the mechanism {module.NAME!r}",
+                      "nonholo/codegen/emit.py, nonholo/codegen/c_translation.py",
+                      "its generated module and nonholo/generated/cf4_kernels.py")
+    return extension_source(C.module_name(module_name(module)), header, functions(module, parts, kernels_text),
                             source_digest(module, parts, kernels_text))
 
 
-def native_kernels(module, frame: bool, parts: dict):
-    """The native kernels of a system of a generated module.
+def native_files(files: dict[str, str], parts: dict) -> dict[str, str]:
+    """The C sources of the mechanisms' native kernels, built by ``pip install``.
 
     Parameters
     ----------
-    module : module
-        The mechanism's generated module.
-    frame : bool
-        Whether the system is the frame's.
+    files : dict of str to str
+        The generated modules, name → source: the mechanisms' (:func:`mechanism_files`) and
+        ``cf4_kernels.py`` (:func:`python_kernels`).
     parts : dict
-        The kernels' own pieces of :mod:`nonholo.integrate.cf4`.
+        The integrator's own pieces and helpers (:func:`functions`).
 
     Returns
     -------
-    dict or None
-        ``{"forward": …, "forward_variational": …, "frame_inputs": …}``, or ``None`` where
-        native kernels are unavailable (see :func:`nonholo.numerics.native.load`).
+    dict of str to str
+        ``native/<mechanism>.c`` and ``native/__init__.py``, name → source.
     """
-    if not native.enabled():
-        return None
-    lib = native.load(module_name(module), source_digest(module, parts), lambda: kernel_source(module, parts))
-    if lib is None:
-        return None
-    system = "frame" if frame else "physical"
-    return {name: getattr(lib, f"{name}__{system}", None) for name in EXPORTED}
+    out = {}
+    for name in files["__init__.py"].split("MECHANISMS = ")[1].strip().strip("()").replace("'", "").split(","):
+        name = name.strip()
+        if not name:
+            continue
+        text = files[f"{name}.py"]
+        module = types.ModuleType(PYTHON.module_name(name))
+        exec(compile(text, f"nonholo/generated/{name}.py", "exec"), module.__dict__)
+        module.SOURCE = text
+        out[C.source_file(name)] = kernel_source(module, parts, files["cf4_kernels.py"])
+    out[f"{C.directory}/__init__.py"] = ('"""Native kernels built by `pip install` from the C sources here '
+                                        '(generated by `nonholo derive`; do not edit)."""\n')
+    return out
