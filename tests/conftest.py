@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from nonholo.certify.resimulate import resimulate, resimulate_path, terminal_error
+from nonholo.certify.resimulate import resimulate, resimulate_path, resimulate_rk4, terminal_error
 from nonholo.controls.parametrisations import Fourier, paper_initial
 from nonholo.generated import MECHANISMS as GENERATED_MECHANISMS
 from nonholo.model import catalog
@@ -235,7 +235,7 @@ def check_into_forms(module, rotations, rng):
 
 
 #: The package's mechanisms whose state is an orientation alone (the rest, e.g. the
-#: rolling ball and the car, are tested by ``tests/test_state_spaces.py``).
+#: rolling ball and the car, are tested by ``tests/planning/test_state_spaces.py``).
 SO3_MECHANISMS = tuple(n for n in GENERATED_MECHANISMS if not catalog.get(n).beyond_so3)
 
 
@@ -246,3 +246,32 @@ def interpreted_kernels(tmp_path_factory):
     import kernel_runs
 
     return kernel_runs.interpreted(tmp_path_factory.mktemp("kernels"))
+
+
+#: A pair of the benchmark goal set the local planner misses (the global route's test case).
+FAR = "uniform-platform-0021"
+
+
+def far_pair(mechanism="platform", pid=FAR):
+    """A pair of :func:`benchmarks.goalset.uniform_pairs` by its id (default :data:`FAR`)."""
+    from benchmarks import goalset
+
+    return {p["id"]: p for p in goalset.uniform_pairs(mechanism, 1000)}[pid]
+
+
+def rk4_check(results, pairs, least=3200):
+    """Per plan: (RK4 endpoint error, least sgnΔ at the RK4 nodes), steps aligned with the
+    plan's, at least ``least`` and the certified replay's. Plans of one mechanism and one
+    step count are replayed in one batch (on the finest step count any of them needs)."""
+    groups: dict = {}
+    for i, r in enumerate(results):
+        groups.setdefault((r.mechanism, r.steps), []).append(i)
+    out = [None] * len(results)
+    for (mechanism, steps), members in groups.items():
+        S = max(steps * -(-max(least, results[i].replay_steps or 0) // steps) for i in members)
+        RT, dmin = resimulate_rk4(np.stack([pairs[i]["R0"] for i in members]),
+                                  [results[i].parametrisation for i in members],
+                                  np.array([results[i].T for i in members]), mechanism, steps=S)
+        for j, i in enumerate(members):
+            out[i] = (terminal_error(RT[j], pairs[i]["Rd"]), None if dmin is None else float(dmin[j]))
+    return out

@@ -35,7 +35,7 @@ PAGES = ROOT / "docs" / "benchmarks" / "results"
 API_PAGES = ROOT / "docs" / "api" / "modules"
 PACKAGE = "nonholo"
 
-#: The subpackages, top layer first (``tests/test_architecture.py`` holds the order), with
+#: The subpackages, top layer first (``tests/project/test_architecture.py`` holds the order), with
 #: what each one does; one not named here is listed after them.
 SUBPACKAGES = {
     "cli": "the command line ``nonholo``: argument parsing and one module per command",

@@ -229,7 +229,7 @@ def resolved_sensitivity(start, par, T: float, mechanism, steps: int, U=None, si
     """The sensitivity of ``par``'s motion resolved: ``G`` on ``steps/2`` and ``steps`` CF4
     steps (``steps`` alone where the controls' grid forbids ``steps/2``), the grid doubled
     until the last two agree (:func:`agree`) — a coarse grid can miss a fast growth of
-    ``Φ`` almost entirely (a motion near ``Δ = 0`` with large inputs; ``tests/test_certify.py``
+    ``Φ`` almost entirely (a motion near ``Δ = 0`` with large inputs; ``tests/certify/test_certify.py``
     keeps one) while its endpoint looks converged. Stops early when both exceed
     ``limit`` (too ill-conditioned either way) or one is infinite, and at
     :data:`MAX_REPLAY_STEPS` (or ``max_steps``).

@@ -25,7 +25,7 @@ compilation time. ``nonholo derive`` writes :mod:`nonholo.generated.cf4_kernels`
 kernels with every call of the functions listed in :data:`nonholo.codegen.emit.INLINED`
 expanded in place (:mod:`nonholo.codegen.inline`); that is what gets compiled.
 ``compile_system(..., inlined=False)`` compiles the kernels as written, and
-``tests/test_cf4.py`` checks that both give the same numbers, bit for bit.
+``tests/integrate/test_cf4.py`` checks that both give the same numbers, bit for bit.
 """
 from __future__ import annotations
 

@@ -17,7 +17,7 @@ import pytest
 from nonholo.cli import entry
 from nonholo.cli.help_text import plain
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 SOURCES = ([ROOT / "README.md"] + sorted((ROOT / "notebooks").glob("*.ipynb"))
            + sorted(p for p in (ROOT / "nonholo").rglob("*.py") if "generated" not in p.parts))
 #: ``nonholo.a.b`` not inside a word, a path, a quoted key or a format name (``nonholo.plan/3``)

@@ -20,7 +20,7 @@ def _load_module():
 
         return casadi_ms
     except ImportError:
-        path = pathlib.Path(__file__).resolve().parents[1] / "benchmarks" / "casadi_ms.py"
+        path = pathlib.Path(__file__).resolve().parents[2] / "benchmarks" / "casadi_ms.py"
         spec = importlib.util.spec_from_file_location("casadi_ms", path)
         mod = importlib.util.module_from_spec(spec)
         sys.modules[spec.name] = mod  # needed by dataclasses

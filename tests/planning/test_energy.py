@@ -176,7 +176,7 @@ def test_the_same_call_gives_the_same_plan_in_any_process_under_any_load(tmp_pat
     kernel caches (numba's and the native kernels', compiled anew) beside a process burning
     a CPU, return bit-identical controls although the budget ends the search (the in-place
     quarter turn of the ball takes several times this budget)."""
-    root = str(Path(__file__).resolve().parents[1])
+    root = str(Path(__file__).resolve().parents[2])
     env = {**os.environ, "PYTHONPATH": root}
     empty = {**env, "NUMBA_CACHE_DIR": str(tmp_path / "numba"), "NONHOLO_CACHE_DIR": str(tmp_path / "native")}
 

@@ -13,7 +13,7 @@ from scipy.integrate import solve_ivp
 
 from nonholo.spaces import so3
 
-README = Path(__file__).resolve().parents[1] / "README.md"
+README = Path(__file__).resolve().parents[2] / "README.md"
 
 
 def section_blocks(title: str = "Adding a mechanism") -> list[str]:

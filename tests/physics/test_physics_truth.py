@@ -29,7 +29,7 @@ from nonholo.physics.execution_record import MAX_TOUCH_UPS
 from nonholo.physics.models import matching_model
 from nonholo.physics.vehicle_models import CarModel, UnicycleModel
 
-#: A coarse step (and the stiffest contact it allows), as in tests/test_physics.py.
+#: A coarse step (and the stiffest contact it allows), as in tests/physics/test_physics.py.
 COARSE = Contact(timestep=0.005, solref=(0.01, 1.0))
 x, y, th, phi, v, w, ell = sp.symbols("x y theta phi v w ell", real=True)
 

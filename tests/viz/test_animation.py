@@ -26,7 +26,7 @@ from nonholo.model.drawing import Drawing
 from nonholo.spaces import so3
 from nonholo.viz import animation
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 
 #: A short motion of each catalog mechanism: start, goal, and what its animation shows.
 MOTIONS = {

@@ -25,7 +25,7 @@ from nonholo import Settings
 from nonholo.constraints import Clearance
 
 PLATFORM = catalog.get("platform")
-DATA = Path(__file__).parent / "data"
+DATA = Path(__file__).parents[1] / "data"
 
 
 def goal_slice(per_band: int = 6) -> list[dict]:

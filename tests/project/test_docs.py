@@ -24,7 +24,7 @@ from urllib.parse import unquote, urljoin, urlsplit
 import numpy as np
 import pytest
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 nbformat = pytest.importorskip("nbformat")
 
 
@@ -180,7 +180,7 @@ class NotInstalled:
             return None
         with open(LOG, "a", encoding="utf-8") as log:
             log.write(f"import {{name}}\\n" + "".join(traceback.format_stack()) + "\\n")
-        raise ModuleNotFoundError(f"No module named {{name!r}} (tests/test_docs.py: not in the docs extra)",
+        raise ModuleNotFoundError(f"No module named {{name!r}} (tests/project/test_docs.py: not in the docs extra)",
                                   name=name)
 
 

@@ -24,7 +24,7 @@ from nonholo.model import catalog, definition_forms, field_places, mechanism_fil
 from nonholo.model.mechanism import Mechanism
 from nonholo.spaces import so3
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 #: The example the guide shows (docs/guide/mechanisms.md, "A mechanism in one file").
 EXAMPLE = ROOT / "docs" / "guide" / "car_trailer.toml"
 #: A goal the car with its trailer reaches on a local plan (a step forward).

@@ -14,7 +14,7 @@ import pytest
 from nbclient import NotebookClient
 from PIL import Image
 
-NOTEBOOKS = sorted((Path(__file__).resolve().parent.parent / "notebooks").glob("*.ipynb"))
+NOTEBOOKS = sorted((Path(__file__).resolve().parents[2] / "notebooks").glob("*.ipynb"))
 #: a call of a figure function (``save_figure`` writes files, it draws nothing)
 FIGURE_CALL = re.compile(r"\b(?!save_figure\b)\w+_figure\(")
 #: a figure displayed as its text form

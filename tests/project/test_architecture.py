@@ -18,7 +18,7 @@ from pathlib import Path
 
 import pytest
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 PACKAGE = "nonholo"
 
 
@@ -270,3 +270,14 @@ def test_no_private_name_is_imported_from_another_module():
 def test_imports_resolve_to_modules_of_the_package(module):
     for target, _, line in imports(module):
         assert target in MODULES, f"{module}:{line} imports {target}"
+
+
+def test_the_tests_mirror_the_package():
+    """Each folder of ``tests/`` is a subpackage's (its tests), or holds the tests of the
+    whole project, the derivations or the peer baselines; no test file lies loose."""
+    folders = {p.name for p in (ROOT / "tests").iterdir() if p.is_dir() and p.name not in ("data", "__pycache__")}
+    subpackages = {p.name for p in (ROOT / "nonholo").iterdir() if (p / "__init__.py").exists()}
+    assert folders - subpackages <= {"project", "derivations", "peers"}, folders - subpackages
+    assert not list((ROOT / "tests").glob("test_*.py"))
+    untested = subpackages - folders - {"generated"}
+    assert not untested, f"subpackages without tests of their own: {sorted(untested)}"

@@ -9,7 +9,7 @@ import pytest
 try:
     from benchmarks import goalset
 except ImportError:  # run from outside the repository root
-    sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1]))
+    sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[2]))
     from benchmarks import goalset
 from nonholo.certify.resimulate import resimulate, terminal_error  # noqa: E402
 from nonholo.controls.parametrisations import from_dict  # noqa: E402

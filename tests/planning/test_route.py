@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 from benchmarks import goalset
+from conftest import far_pair, rk4_check
 from conftest import assert_inputs_match
 from nonholo.certify.resimulate import resimulate, resimulate_rk4, terminal_error
 from nonholo.controls import stages
@@ -140,11 +141,6 @@ def test_stitched_controls_round_trip_and_refuse_bad_input():
 # -- the global route of plan() --------------------------------------------------------------
 
 #: a uniform pair (platform) whose goal the local planner misses
-FAR = "uniform-platform-0021"
-
-
-def far_pair(mechanism="platform", pid=FAR):
-    return {p["id"]: p for p in goalset.uniform_pairs(mechanism, 1000)}[pid]
 
 
 @pytest.mark.slow
@@ -317,7 +313,6 @@ def test_cli_takes_the_route(tmp_path, capsys):
 def test_default_plan_solves_a_slice_of_the_random_band_set(mechanism, first, stop):
     """Far pairs of ``benchmarks.goalset.band_pairs`` (1.8–π rad), some of which the local
     planner misses: the default ``plan()`` solves each, certified, and RK4 confirms it."""
-    from test_certify import rk4_check
 
     far = [p for p in goalset.band_pairs(mechanism, 500) if p["band"] == "1.8-pi"][first:stop]
     results = [plan(p["R0"], p["Rd"], mechanism=mechanism) for p in far]

@@ -5,7 +5,7 @@ import time
 
 import numpy as np
 import pytest
-from test_route import far_pair
+from conftest import far_pair
 
 from nonholo.controls import stages
 from nonholo.controls.parametrisations import Fourier

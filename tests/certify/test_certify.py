@@ -7,7 +7,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from conftest import example
+from conftest import example, rk4_check
 
 from benchmarks import goalset
 from nonholo.certify import certificate as certify
@@ -22,25 +22,7 @@ from nonholo.planning.core import Outcome, Strategy
 from nonholo import Settings
 
 MISS = 1e-8
-DATA = Path(__file__).parent / "data"
-
-
-def rk4_check(results, pairs, least=3200):
-    """Per plan: (RK4 endpoint error, least sgnΔ at the RK4 nodes), steps aligned with the
-    plan's, at least ``least`` and the certified replay's. Plans of one mechanism and one
-    step count are replayed in one batch (on the finest step count any of them needs)."""
-    groups: dict = {}
-    for i, r in enumerate(results):
-        groups.setdefault((r.mechanism, r.steps), []).append(i)
-    out = [None] * len(results)
-    for (mechanism, steps), members in groups.items():
-        S = max(steps * -(-max(least, results[i].replay_steps or 0) // steps) for i in members)
-        RT, dmin = resimulate_rk4(np.stack([pairs[i]["R0"] for i in members]),
-                                  [results[i].parametrisation for i in members],
-                                  np.array([results[i].T for i in members]), mechanism, steps=S)
-        for j, i in enumerate(members):
-            out[i] = (terminal_error(RT[j], pairs[i]["Rd"]), None if dmin is None else float(dmin[j]))
-    return out
+DATA = Path(__file__).parents[1] / "data"
 
 
 def assert_certified(res, R0, Rd):

@@ -45,7 +45,7 @@ from nonholo.model import catalog, names  # noqa: E402
 from nonholo.paper import examples, reproduce  # noqa: E402
 from nonholo.spaces import so3  # noqa: E402
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 SYMBOLS = "φϑψ"
 #: Axis labels without a unit: their axes draw quantities of different units, each named
 #: with its unit in the legend.
