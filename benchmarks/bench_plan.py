@@ -362,7 +362,8 @@ def _iteration_rows(rows, ratios, forwards, k, R0, Rd, method, backend, mech, re
     from nonholo.controls import stages
     from nonholo.numerics import kernels
     from nonholo.planning.api import plan
-    from nonholo.planning.core import EndpointMap, record, step_scale
+    from nonholo.planning.core import record, step_scale
+    from nonholo.planning.endpoint_map import EndpointMap
 
     res = plan(R0, Rd, settings=Settings(method=method), strategy="paper")
     steps = res.steps

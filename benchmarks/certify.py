@@ -42,7 +42,7 @@ from benchmarks import goalset
 from benchmarks.report import Report
 from nonholo.model import catalog
 from nonholo.planning.api import plan
-from nonholo.planning.problem import arguments_of
+from nonholo.planning.settings import arguments_of
 from nonholo.certify.resimulate import resimulate, resimulate_rk4, terminal_error
 
 MECHANISMS = ("platform", "platform_raised", "attitude")

@@ -327,7 +327,8 @@ def main(argv, per_band: int, peer_pairs: int, peers: list[str], out: Path) -> i
             "ompl_budget": ompl_control.BUDGET}
     t = time.perf_counter()
     for m in MECHANISMS:
-        roadmap.roadmap(catalog.get(m), roadmap.default_clearance(m))
+        mech = catalog.get(m)
+        roadmap.roadmap(mech, roadmap.default_clearance(mech))
     meta["roadmap_seconds"] = time.perf_counter() - t
     for m in MECHANISMS:   # numba, the frame and the hops' kernels
         p = pairs[m][-1]

@@ -42,7 +42,7 @@ def plan_all(name: str, goals: list[dict], options: dict | None = None, mechanis
     """``[(seconds, PlanResult)]``: ``plan(R0, Rd, T=T, mechanism=..., **arguments_of(options))``
     for every goal, in order, through a sweep named ``name`` (see the module); ``options`` are
     flat, as a problem table holds them (``"delta_min"``, ``"harmonics"``, ...:
-    :func:`nonholo.planning.problem.arguments_of` makes them constraints and settings). A plan
+    :func:`nonholo.planning.settings.arguments_of` makes them constraints and settings). A plan
     that raised raises ``RuntimeError`` with its error."""
     safe = "".join(c if c.isalnum() or c in "-_." else "_" for c in name)
     out = (directory or runs_dir()) / f"{safe}.parquet"

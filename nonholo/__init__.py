@@ -6,7 +6,7 @@ The numeric kinematics come from generated modules (``nonholo.generated``, writt
 - ``nonholo.plan(start, goal, mechanism=..., T=..., constraints=[...], settings=...)`` →
   :class:`~nonholo.io.result.PlanResult` (:mod:`nonholo.planning.api`); ``nonholo.solve``
   plans a :class:`~nonholo.planning.problem.Problem` built beforehand, and
-  :class:`~nonholo.planning.problem.Settings` holds the numerical settings;
+  :class:`~nonholo.planning.settings.Settings` holds the numerical settings;
 - :class:`~nonholo.spaces.state.State`: a state ``(R, q)``, always complete;
 - ``nonholo.simulate(R0, controls, T, ...)`` → :class:`~nonholo.motion.simulation.Trajectory`
   (:mod:`nonholo.motion.simulation`);
@@ -30,7 +30,8 @@ from .motion.simulation import simulate  # noqa: E402
 from .planning.api import plan, solve  # noqa: E402
 from .planning.retime import retime  # noqa: E402
 
-from .planning.problem import Problem, Settings  # noqa: E402
+from .planning.problem import Problem  # noqa: E402
+from .planning.settings import Settings  # noqa: E402
 from .spaces.state import State  # noqa: E402
 from . import constraints  # noqa: E402
 

@@ -196,16 +196,16 @@ def forbid_simulation(monkeypatch):
     """Make every way into the integrator fail the test: compiling or fetching kernels
     (:func:`nonholo.integrate.system_kernels.compile_system`, which
     :func:`nonholo.integrate.compiled.compiled_system` calls) and building a planning
-    :class:`~nonholo.planning.core.EndpointMap`. Raises ``AssertionError`` (not a
+    :class:`~nonholo.planning.endpoint_map.EndpointMap`. Raises ``AssertionError`` (not a
     ``ValueError``), so a ``pytest.raises(ValueError)`` around the call does not swallow it."""
     from nonholo.integrate import system_kernels
-    from nonholo.planning import core
+    from nonholo.planning import endpoint_map
 
     def forbidden(*args, **kwargs):
         raise AssertionError("simulated (or compiled kernels) although nothing should be simulated")
 
     monkeypatch.setattr(system_kernels, "compile_system", forbidden)
-    monkeypatch.setattr(core.EndpointMap, "__init__", forbidden)
+    monkeypatch.setattr(endpoint_map.EndpointMap, "__init__", forbidden)
 
 
 def check_into_forms(module, rotations, rng):

@@ -9,7 +9,7 @@ orientation, then the coordinates), the goal's other numbers those of the start:
   ``[−π, π)``, ``ϑ`` about y across ``(−π/2, π/2)``, one slice per value of ``psi``;
 - on ``Rᵏ`` (default: the first two coordinates), e.g. the car's goal position ``(x, y)``:
   angle coordinates across ``[−π, π)``, others across the space's sampling box
-  ``[−box, box]`` (:attr:`nonholo.spaces.factors.Euclidean.box`), or any ``extent``;
+  ``[−box, box]`` (:attr:`nonholo.spaces.euclidean.Euclidean.box`), or any ``extent``;
 - on ``SO(3) × Rᵏ`` either, or one angle and one coordinate.
 
 One problem per goal and planner setting (:data:`SETTINGS`: the paper's algorithm, the
@@ -28,6 +28,7 @@ import numpy as np
 from matplotlib.colors import BoundaryNorm, ListedColormap, LogNorm
 from matplotlib.figure import Figure
 
+from ..io.problems import row_mechanism
 from ..model import catalog, definition_forms
 from ..model.names import MILLISECOND, label
 from ..spaces import SO3
@@ -331,7 +332,7 @@ class Atlas:
         first = keep[0][1]
         self.n, self.start = first["n"], tuple(first["start"])
         self.mechanism = keep[0][0]["mechanism"]
-        self.kinematics = mech = _row_mechanism(keep[0][0])
+        self.kinematics = mech = _row_mechanism(keep[0][0], rows.index(keep[0][0]))
         self.space = space = mech.space
         # labels without axes: an RPY slice atlas
         self.axes = tuple(first.get("axes", ("φ", "ϑ")))
@@ -428,18 +429,18 @@ class Atlas:
         return np.asarray(D, dtype=float).reshape(x.shape)
 
 
-def _row_mechanism(row: dict):
-    """The mechanism of a results row: the catalog's of its name, else the one its
-    ``problem`` holds the definition of."""
-    name = row["mechanism"]
-    if name not in catalog.names():
+def _row_mechanism(row: dict, index: int):
+    """The mechanism of the results row ``index`` (:func:`nonholo.io.problems.row_mechanism`):
+    the catalog's of its name, else the one its ``problem`` holds the definition of."""
+    value = row["mechanism"]
+    if value not in catalog.names():
         try:
-            value = json.loads(row.get("problem") or "{}").get("mechanism")
+            given = json.loads(row.get("problem") or "{}").get("mechanism")
         except (ValueError, AttributeError):
-            value = None
-        if isinstance(value, dict):
-            return catalog.resolve(value)
-    return catalog.get(name)
+            given = None
+        if isinstance(given, dict):
+            value = given
+    return row_mechanism(value, index)
 
 
 def _axis_text(space, name: str) -> str:

@@ -72,7 +72,7 @@ def solve(index: int, row: dict) -> dict:
         the plan raised is recorded in ``error``.
     """
     from ..planning.api import plan
-    from ..planning.problem import arguments_of
+    from ..planning.settings import arguments_of
 
     problem = problem_table.check_row(row, index, allow_imports=True)
     out = {"index": index, "label": problem["label"], "mechanism": problem["mechanism"],
@@ -152,7 +152,8 @@ def check_options(problems: list[dict]) -> None:
     ValueError
         Naming the first bad row and the option (or ``start``/``goal``).
     """
-    from ..planning.problem import Problem, arguments_of
+    from ..planning.problem import Problem
+    from ..planning.settings import arguments_of
 
     for i, p in enumerate(problems):
         try:

@@ -20,7 +20,6 @@ from ..controls import stages
 from ..controls.parametrisations import Fourier, PiecewiseConstant
 from ..controls.stitched import Stitched
 from ..integrate.compiled import compiled_system
-from ..model import catalog
 from ..model.bounds import InputBounds, StateBounds, input_names
 from ..model.limits import LegLimits, Limits
 from ..motion import playback
@@ -164,16 +163,11 @@ class PlanChecks:
         Returns
         -------
         Mechanism
-            The plan's mechanism.
+            The plan's mechanism (its ``kinematics``).
         """
         r = self.r
-        mech = getattr(r, "kinematics", None)
-        if mech is None:
-            try:
-                mech = catalog.get(r.mechanism)
-            except ValueError as exc:
-                fail("mechanism", f"is unknown: {exc}")
-        elif mech.name != r.mechanism:
+        mech = r.kinematics
+        if mech.name != r.mechanism:
             fail("mechanism", f"is {r.mechanism!r}, but the plan's kinematics are of {mech.name!r}")
         par = r.parametrisation
         if isinstance(par, RestToRest):

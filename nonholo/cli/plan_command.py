@@ -49,7 +49,7 @@ from ..io import csv_export as export
 from ..io import safe_write
 from ..model import catalog
 from ..planning.api import METHODS, ROUTES, STRATEGIES, plan
-from ..planning.problem import arguments_of
+from ..planning.settings import arguments_of
 from .flag_text import in_flags
 from .help_text import plain
 

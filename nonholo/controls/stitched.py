@@ -130,7 +130,7 @@ class Stitched:
         calling the object (frame systems are driftless too).
 
         The initial guess of a re-plan of the whole motion
-        (:func:`nonholo.planning.route.smooth`).
+        (:func:`nonholo.planning.route_smoothing.smooth`).
 
         Parameters
         ----------

@@ -419,10 +419,7 @@ def _defined(name: str, mechanism, d: dict):
         fail("mechanism_digest", f"does not match 'mechanism_definition' (whose SHA-256 is {actual}): the "
                                  "definition or its digest was changed")
     if mechanism is not None:
-        try:
-            mech = catalog.resolve(mechanism)
-        except ValueError as exc:
-            raise ValueError(f"mechanism: {exc}") from None
+        mech = mechanism
         if mech.definition is None or definition_forms.digest(mech.definition) != digest:
             fail("mechanism_definition", f"differs from the definition of the mechanism given ({mech.name!r})")
     else:
@@ -449,10 +446,7 @@ def _mechanism(name: str, mechanism, d: dict | None = None):
     if d is not None and ("mechanism_definition" in d or "mechanism_digest" in d):
         return _defined(name, mechanism, d)
     if mechanism is not None:
-        try:
-            mech = catalog.get(mechanism)
-        except ValueError as exc:
-            raise ValueError(f"mechanism: {exc}") from None
+        mech = mechanism
         if mech.name != name:
             raise ValueError(f"invalid plan: 'mechanism': the plan is of mechanism {name!r}, but the "
                              f"mechanism given is {mech.name!r}")

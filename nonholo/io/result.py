@@ -292,6 +292,11 @@ class PlanResult:
         ValueError
             Naming the field that is wrong.
         """
+        if mechanism is not None:
+            try:
+                mechanism = catalog.resolve(mechanism)
+            except ValueError as exc:
+                raise ValueError(f"mechanism: {exc}") from None
         values, legacy = plan_file.decode(d, mechanism)
         res = cls(**values)
         plan_checks.check(res, legacy=legacy)

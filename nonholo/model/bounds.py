@@ -593,7 +593,7 @@ def describe(mechanism) -> str:
 
     Parameters
     ----------
-    mechanism : str or Mechanism
+    mechanism : Mechanism
         The mechanism.
 
     Returns
@@ -601,7 +601,6 @@ def describe(mechanism) -> str:
     str
         The inputs' bounds, then the coordinates'; empty without bounds.
     """
-    mechanism = catalog.get(mechanism)
     parts = []
     for b in of_mechanism(mechanism):
         parts.append(b.text(input_names(mechanism)) if isinstance(b, InputBounds) else b.text(mechanism))

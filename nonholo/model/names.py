@@ -51,7 +51,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..spaces.factors import RPY
+from ..spaces.rotation_factors import RPY
 
 
 @dataclass(frozen=True)

@@ -18,7 +18,6 @@ from ..controls import stages, stitched
 from ..controls.parametrisations import Controls, Fourier, PiecewiseConstant
 from ..controls.parametrisations import from_dict as controls_from_dict
 from ..integrate.compiled import compiled_system
-from ..model import catalog
 from ..numerics.checks import check_times
 from ..spaces import so3
 from . import speed_limits, time_scaling
@@ -43,8 +42,8 @@ class FrameControls:
         The planned ``w`` (rad/s).
     R0 : array_like
         The start, a rotation matrix.
-    mechanism : str or Mechanism
-        A :class:`~nonholo.model.mechanism.Mechanism` with a frame, or its name.
+    mechanism : Mechanism
+        A :class:`~nonholo.model.mechanism.Mechanism` with a frame.
     steps : int
         CF4 steps of the frame motion (a multiple of a grid's).
     nodes : array_like, optional
@@ -62,10 +61,10 @@ class FrameControls:
 
     kind = "frame"
 
-    def __init__(self, frame: Controls, R0, mechanism="platform", steps: int = 400, nodes=None):
+    def __init__(self, frame: Controls, R0, mechanism, steps: int = 400, nodes=None):
         if not isinstance(frame, (Fourier, PiecewiseConstant)):
             raise ValueError(f"frame must be Fourier or PiecewiseConstant controls, got {type(frame).__name__}")
-        mech = catalog.get(mechanism)
+        mech = mechanism
         if not mech.has_frame:
             raise ValueError(f"mechanism {mech.name!r} has no desingularised frame N(R)")
         if mech.n_inputs != frame.n_inputs:
@@ -313,7 +312,8 @@ def from_dict(d: dict, mechanism=None):
         The description.
     mechanism : Mechanism, optional
         The :class:`~nonholo.model.mechanism.Mechanism` controls that name their mechanism
-        are rebuilt with (it need not be in the catalog); by default the one of that name.
+        (frame controls, re-timed under a leg speed) are rebuilt with; it must have that
+        name (it need not be in the catalog); controls that name none are rebuilt without it.
 
     Returns
     -------
@@ -323,19 +323,20 @@ def from_dict(d: dict, mechanism=None):
     Raises
     ------
     ValueError
-        If the description names another mechanism than ``mechanism``, or is otherwise
-        invalid.
+        If the description names a mechanism and ``mechanism`` is not given or has another
+        name, or is otherwise invalid.
     """
     def rebuilt(p):
         return from_dict(p, mechanism)
 
-    if d.get("kind") in (speed_limits.Retimed.kind, FrameControls.kind) and mechanism is not None:
-        mech = catalog.get(mechanism)
-        if d.get("mechanism") != mech.name:
-            raise ValueError(f"the controls are of mechanism {d.get('mechanism')!r}, not {mech.name!r}")
-    named = d.get("mechanism") if mechanism is None else mechanism
+    if d.get("kind") in (speed_limits.Retimed.kind, FrameControls.kind):
+        if mechanism is None:
+            raise ValueError(f"the controls are of mechanism {d.get('mechanism')!r}: they are rebuilt "
+                             "with its Mechanism (mechanism=)")
+        if d.get("mechanism") != mechanism.name:
+            raise ValueError(f"the controls are of mechanism {d.get('mechanism')!r}, not {mechanism.name!r}")
     if d.get("kind") == speed_limits.Retimed.kind:
-        return speed_limits.from_dict(d, rebuilt, named)
+        return speed_limits.from_dict(d, rebuilt, mechanism)
     if d.get("kind") == speed_limits.InputRetimed.kind:
         return speed_limits.input_from_dict(d, rebuilt)
     if d.get("kind") == time_scaling.RestToRest.kind:
@@ -343,5 +344,5 @@ def from_dict(d: dict, mechanism=None):
     if d.get("kind") == stitched.Stitched.kind:
         return stitched.from_dict(d, rebuilt)
     if d.get("kind") == FrameControls.kind:
-        return FrameControls(controls_from_dict(d["frame"]), d["R0"], named, d["steps"])
+        return FrameControls(controls_from_dict(d["frame"]), d["R0"], mechanism, d["steps"])
     return controls_from_dict(d)

@@ -63,7 +63,6 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from ..controls import stages
-from ..model import catalog
 from ..model.bounds import InputBounds
 from ..numerics.checks import check_count, check_times, is_number
 from ..spaces import so3
@@ -155,7 +154,7 @@ class TimeMap:
         The planned physical controls, on ``[0, T_base]``.
     R0 : array_like
         The start, a rotation matrix.
-    mechanism : str or Mechanism
+    mechanism : Mechanism
         The platform.
     leg_speed : float
         ``v``, the legs' top speed (geometry units per second).
@@ -174,7 +173,7 @@ class TimeMap:
 
     def __init__(self, base, R0, mechanism, leg_speed: float, T: float | None = None,
                  nodes: int = RETIME_NODES):
-        mech = catalog.get(mechanism)
+        mech = mechanism
         self.leg_speed = check_leg_speed(leg_speed, mech)
         if self.leg_speed is None:
             raise ValueError("leg_speed must be a positive finite speed, got None")
@@ -549,7 +548,7 @@ class Retimed(MappedTimeChange):
         The planned physical controls, on ``[0, T_base]`` (not re-timed already).
     R0 : array_like
         The start, a rotation matrix.
-    mechanism : str or Mechanism
+    mechanism : Mechanism
         The platform.
     leg_speed : float
         ``v``, the legs' top speed (geometry units per second).
@@ -571,7 +570,7 @@ class Retimed(MappedTimeChange):
                  nodes: int = RETIME_NODES):
         if isinstance(base, MappedTimeChange):
             raise ValueError("base is re-timed already: re-time its own base instead")
-        self.mechanism = catalog.get(mechanism)
+        self.mechanism = mechanism
         R = np.array(so3.check_rotation(R0, "R0"), dtype=float)
         R.setflags(write=False)
         self.R0 = R
@@ -600,7 +599,7 @@ class Retimed(MappedTimeChange):
                 f"{self.leg_speed:g} fast)")
 
 
-def from_dict(d: dict, base_from_dict, mechanism=None) -> Retimed:
+def from_dict(d: dict, base_from_dict, mechanism) -> Retimed:
     """Inverse of :meth:`Retimed.to_dict`; the time map is rebuilt by the same computation.
 
     Parameters
@@ -609,16 +608,15 @@ def from_dict(d: dict, base_from_dict, mechanism=None) -> Retimed:
         The description.
     base_from_dict : callable
         Reads the base controls.
-    mechanism : Mechanism, optional
-        The mechanism (by default the one ``d`` names).
+    mechanism : Mechanism
+        The mechanism, of the name ``d`` gives.
 
     Returns
     -------
     Retimed
         The controls.
     """
-    return Retimed(base_from_dict(d["base"]), d["R0"], d["mechanism"] if mechanism is None else mechanism,
-                   d["leg_speed"], T=d["T"], nodes=d["nodes"])
+    return Retimed(base_from_dict(d["base"]), d["R0"], mechanism, d["leg_speed"], T=d["T"], nodes=d["nodes"])
 
 
 class InputRetimed(MappedTimeChange):

@@ -8,12 +8,10 @@
   rank-deficient ``J`` that is compiled only if a run needs it.
 
 The numba-compiled functions are the ``_into`` cores (outputs passed in). The functions the
-planners call (:func:`log_rotation`, :func:`log_error`, :func:`cholesky_step`,
-:func:`all_finite`, :func:`min_norm_step`) run the same cores translated to C
-(:data:`NATIVE`, the module ``nonholo.generated.native.numerics``) where that is available
-(:mod:`nonholo.codegen.build`), else numba's.
-
-The integrator itself is :mod:`nonholo.integrate.cf4`.
+planners call (:func:`log_rotation`, :func:`log_error`, :func:`cholesky_step`, :func:`all_finite`,
+:func:`min_norm_step`) run the same cores translated to C (:data:`NATIVE`, the module
+``nonholo.generated.native.numerics``) where that is available (:mod:`nonholo.codegen.build`),
+else numba's. The integrator itself is :mod:`nonholo.integrate.cf4`.
 """
 from __future__ import annotations
 
@@ -387,9 +385,7 @@ def cholesky_into(J, l, scale, x):
 
 @jit
 def pinv_into(J, l, scale, x):
-    """``x = S² Jᵀ (J S² Jᵀ)^# l`` by the eigen pseudo-inverse.
-
-    Eigenvalues below ``1e-14·max`` are dropped.
+    """``x = S² Jᵀ (J S² Jᵀ)^# l`` by the eigen pseudo-inverse (eigenvalues below ``1e-14·max`` dropped).
 
     Parameters
     ----------
@@ -418,14 +414,12 @@ def min_norm_step(J, l, scale):
     """``x = S (J S)^# l`` with ``S = diag(scale)``: the least ``|S^{-1} x|`` minimising ``|J x − l|``.
 
     ``(J S)^# = (J S)ᵀ ((J S)(J S)ᵀ)^{-1}``: the 3×3 system ``J S² Jᵀ y = l`` is solved by
-    Cholesky (:func:`cholesky_step`); when a pivot falls below :data:`CHOLESKY_PIVOT`
-    times the largest diagonal entry (``J`` rank-deficient or nearly so) by the
-    pseudo-inverse from an eigen decomposition instead (:func:`pinv_step`), so a
-    rank-deficient ``J`` gives the minimum-norm least-squares step rather than a blow-up.
-    (The fallback is called from here rather than from the compiled code so that it is
-    compiled only by a run that needs it.) For ``d ≠ 3`` rows (a state beyond SO(3)) the
-    pseudo-inverse of ``J S`` is NumPy's (singular values below :data:`PINV_RCOND`
-    relative dropped).
+    Cholesky (:func:`cholesky_step`) or, when a pivot falls below :data:`CHOLESKY_PIVOT`
+    times the largest diagonal entry (``J`` rank-deficient or nearly so), by the eigen
+    pseudo-inverse (:func:`pinv_step`, called from here so that only a run that needs it
+    compiles it): the minimum-norm least-squares step rather than a blow-up. For ``d ≠ 3``
+    rows (a state beyond SO(3)) the pseudo-inverse of ``J S`` is NumPy's (singular values
+    below :data:`PINV_RCOND` relative dropped).
 
     Parameters
     ----------
@@ -663,10 +657,9 @@ def cholesky_step(J, l, scale):
 
 
 def pinv_step(J, l, scale):
-    """``x = S² Jᵀ (J S² Jᵀ)^# l`` by the eigen pseudo-inverse.
+    """``x = S² Jᵀ (J S² Jᵀ)^# l`` by the eigen pseudo-inverse: the rank-deficient fallback.
 
-    Eigenvalues below ``1e-14·max`` are dropped; compiled by numba on first use: a
-    rank-deficient fallback.
+    Eigenvalues below ``1e-14·max`` are dropped; compiled by numba on first use.
 
     Parameters
     ----------

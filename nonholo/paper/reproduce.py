@@ -56,7 +56,7 @@ from ..io import csv_export, provenance
 from ..model import catalog
 from ..planning.api import STRATEGIES, plan
 from ..planning.constraint_objects import LegStroke
-from ..planning.problem import Settings
+from ..planning.settings import Settings
 from ..planning.retime import retime
 from ..spaces import so3
 from .. import viz

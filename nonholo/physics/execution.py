@@ -62,7 +62,7 @@ from ..io.csv_export import states_at
 from ..io.result import PlanResult
 from ..numerics.checks import check_time
 from ..planning.api import plan
-from ..planning.problem import Settings, arguments_of
+from ..planning.settings import Settings, arguments_of
 from ..spaces.state import State
 from ..planning.retime import planned_controls, retime
 from .contact import MAX_STAGE_STEPS, Contact, shown
@@ -224,7 +224,7 @@ def _check(result, touch_ups, duration, contact, progress):
 
 def replan_options(result: PlanResult) -> dict:
     """The options a touch-up re-plans ``result``'s goal with, in their flat form
-    (:func:`~nonholo.planning.problem.arguments_of` makes them :func:`nonholo.plan`'s
+    (:func:`~nonholo.planning.settings.arguments_of` makes them :func:`nonholo.plan`'s
     arguments): its horizon, method and strategy, and the options of :data:`REPLAN_OPTIONS`
     it was planned with (its objective, ``None`` where it records none).
 

@@ -40,7 +40,6 @@ from types import SimpleNamespace
 import numpy as np
 
 from ..io.csv_export import states_at
-from ..model import catalog
 from ..spaces import so3
 from .contact import MAX_STAGE_STEPS
 
@@ -100,8 +99,8 @@ class PlatformModel:
 
     Parameters
     ----------
-    mechanism : Mechanism or str
-        A mechanism with a ``geometry`` (:class:`~nonholo.model.geometry.Geometry`), or its name.
+    mechanism : Mechanism
+        A mechanism with a ``geometry`` (:class:`~nonholo.model.geometry.Geometry`).
     contact : object, optional
         Contact and drive settings: any object with attributes ``timestep, solref, solimp,
         friction, noslip_iterations, impratio, preload, actuators`` (``"prescribed"`` or
@@ -127,7 +126,7 @@ class PlatformModel:
     """
 
     def __init__(self, mechanism, contact=None):
-        mech = catalog.get(mechanism) if isinstance(mechanism, str) else mechanism
+        mech = mechanism
         geometry = getattr(mech, "geometry", None)
         if geometry is None:
             raise ValueError(f"mechanism {getattr(mech, 'name', mech)!r} has no geometry: "

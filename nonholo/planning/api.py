@@ -5,9 +5,11 @@
 hands it to :func:`solve`, which runs the strategy and, if asked, the global route.
 
 The method is the appendix's (Tchoń & Jakubiak, eqs. (4)–(11)); the planning core it
-runs on — problem, evaluation, options, the step loop of the θ-flow, the result — is
-:mod:`nonholo.planning.core`. A *strategy* decides the coordinates, the initial guesses
-and the step direction; :data:`STRATEGIES` maps the names :func:`plan` accepts to them:
+runs on — options, the step loop of the θ-flow — is :mod:`nonholo.planning.core`, on the
+endpoint map of :mod:`nonholo.planning.endpoint_map`; the result is assembled by
+:mod:`nonholo.planning.result_builder`. A *strategy* decides the coordinates, the initial
+guesses and the step direction; :data:`STRATEGIES` maps the names :func:`plan` accepts to
+them:
 
 - ``"paper"`` (:mod:`nonholo.planning.strategy_paper`): the appendix's algorithm in the physical
   inputs ``u``;
@@ -33,16 +35,14 @@ from ..numerics import effort
 from ..numerics.blas import one_thread
 from . import energy
 from . import route as global_route
+from . import route_paths, route_smoothing
 from .correction import certified
 from .constraint_objects import first_refusal
-from .core import build_result
-from .problem import (
+from .problem import OBJECTIVES, PLANNING_TIME, ROUTES, Problem
+from .result_builder import build_result, build_route_result
+from .settings import (
     METHODS,
-    OBJECTIVES,
-    PLANNING_TIME,
-    ROUTES,
     STRATEGIES,
-    Problem,
     Settings,
     default_steps,
     initial_controls,
@@ -81,7 +81,7 @@ def plan(start, goal, *, mechanism="platform", T: float | None = 1.0, objective:
     strategy, route : str
         ``"robust"`` or ``"paper"`` (or a Strategy subclass); ``"auto"``, ``"local"`` or ``"global"``.
     settings : Settings, dict or None
-        The parametrisation and the solver's numbers (:class:`~nonholo.planning.problem.Settings`).
+        The parametrisation and the solver's numbers (:class:`~nonholo.planning.settings.Settings`).
     u0, callback, allow_imports
         The initial control; ``callback(record)`` after each iteration (true: stop); let
         ``strategy`` be an import path ``"package.module:Class"``.
@@ -207,17 +207,18 @@ def solve_path(problem: Problem, callback: Callable[[dict], object] | None = Non
         local_reason = outcome.reason
 
     def hop(a, b, T_hop, hop_delta_min):
-        strategy = global_route.hop_strategy(cls, global_route.max_hop_sensitivity(mech))
+        strategy = global_route.hop_strategy(cls, route_paths.max_hop_sensitivity(mech))
         return solve_path(problem.part(a, b, T_hop, hop_delta_min, strategy))
 
     def leg(a, b, T_leg, leg_delta_min, quick):
         strategy = global_route.quick_strategy(cls) if quick else cls
         return solve_path(problem.part(a, b, T_leg, leg_delta_min, strategy))
 
-    route_started, budget = global_route.time_budget(mech, started_effort)
+    route_started, budget = route_paths.time_budget(mech, started_effort)
 
     def smooth(stitched, reserve):
-        return global_route.smooth(problem, stitched, cls, deadline=route_started + budget, reserve=reserve)
+        return route_smoothing.smooth(problem, stitched, cls, deadline=route_started + budget,
+                                      reserve=reserve)
 
     steered = global_route.steer(mech, problem.start, problem.goal, problem.T, hop, tol=options.tol,
                                  delta_min=options.delta_min, sign=evaluator.sign, started=route_started,
@@ -227,7 +228,7 @@ def solve_path(problem: Problem, callback: Callable[[dict], object] | None = Non
         return build_result(problem, outcome, False,
                             f"{local_reason}; the global route failed too: {steered.reason}", evaluator)
     smoothed = steered.smoothed or smooth(steered.controls, steered.certify_seconds)
-    result = global_route.build_result(problem, steered, local_reason, smoothed)
+    result = build_route_result(problem, steered, local_reason, smoothed)
     return objective(problem, result)
 
 

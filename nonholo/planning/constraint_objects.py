@@ -5,7 +5,7 @@ the legs' stroke and the legs' speed, bounds on the inputs and on the coordinate
 Each constraint is checked against its mechanism when a :class:`~nonholo.planning.problem.Problem`
 is built (``ValueError`` naming the argument), and says whether a start and a goal can be
 joined at all (their ``refusal``, before anything is simulated). Along the motion the planner
-and the certificate keep them (:mod:`nonholo.planning.core`, :mod:`nonholo.certify.certificate`);
+and the certificate keep them (:mod:`nonholo.planning.endpoint_map`, :mod:`nonholo.certify.certificate`);
 the legs' speed and the inputs' bounds are kept by re-timing the planned path
 (:mod:`nonholo.planning.retime`), the coordinates' bounds like the legs' stroke
 (:mod:`nonholo.model.limits`).

@@ -20,7 +20,8 @@ from ..certify import certificate as replay_certificate
 from ..certify.certificate import Certificate
 from ..motion.frame_controls import FrameControls
 from ..numerics import kernels
-from .core import Evaluation, Options, Outcome, EndpointMap, step_scale
+from .core import Options, Outcome, step_scale
+from .endpoint_map import Evaluation, EndpointMap
 
 #: Newton corrections on the replayed endpoint at most.
 MAX_CORRECTIONS = 4

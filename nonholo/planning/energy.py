@@ -27,7 +27,7 @@ import itertools
 from dataclasses import replace
 
 from ..io.result import PlanResult
-from .core import build_result
+from .result_builder import build_result
 from .energy_objective import energy, plan_energy_of
 from .energy_search import ENERGY_GRID, search, starts
 from .energy_smoothing import smooth_clearance, smoothed

@@ -15,7 +15,7 @@ import numpy as np
 
 from ..io.result import PlanResult
 from ..model.limits import BARRIER_CLEARANCE
-from .core import Evaluation, EndpointMap, node_sensitivities, spatial_gradient_delta
+from .endpoint_map import Evaluation, EndpointMap, node_sensitivities, spatial_gradient_delta
 
 # -- the barrier on the clearance from Δ = 0 (:func:`barrier_terms`, :class:`Objective`)
 #: The barrier on the clearance from ``Δ = 0`` acts where ``sgnΔ`` is below this (or below

@@ -31,7 +31,8 @@ from scipy.linalg import cho_factor, cho_solve
 from scipy.linalg.blas import dger
 
 from ..numerics import effort
-from .core import Evaluation, EndpointMap, Options, record
+from .core import Options, record
+from .endpoint_map import Evaluation, EndpointMap
 from .energy_objective import Objective, energy
 
 # -- the iteration (:func:`descend`)
@@ -492,7 +493,7 @@ def newton_steps(endpoint: EndpointMap, ev: Evaluation, metric: np.ndarray, tol:
     steps : int
         Steps at most.
     full : bool, default False
-        Keep the nodes' sensitivities (:meth:`~nonholo.planning.core.EndpointMap.evaluate`).
+        Keep the nodes' sensitivities (:meth:`~nonholo.planning.endpoint_map.EndpointMap.evaluate`).
     note : callable, optional
         ``note(evaluation)``, called after each step taken.
 

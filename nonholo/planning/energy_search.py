@@ -27,9 +27,11 @@ from ..controls.parametrisations import Controls, Fourier, PiecewiseConstant
 from ..motion.frame_controls import FrameControls
 from ..numerics import effort
 from .correction import certified
-from .core import EndpointMap, Options, Outcome, record
+from .core import Options, Outcome, record
+from .endpoint_map import EndpointMap
 from .energy_objective import energy
 from .energy_optimiser import POLISH_BELOW, Run, descend, least_energy_step, onto, polish
+from .strategy_robust import frame_coordinates
 
 #: Intervals of the piecewise-constant controls the energy is lowered over (the plan's
 #: integrator steps are rounded up to a multiple of it).
@@ -154,7 +156,7 @@ def loop_starts(endpoint: EndpointMap):
     """
     mech, T = endpoint.mechanism, endpoint.T
     m = mech.n_inputs
-    in_frame = mech.has_frame and not mech.space.k
+    in_frame = frame_coordinates(mech)
     offset = mech.space.offset(endpoint.start, endpoint.goal)
     field = mech.frame.N(endpoint.start.R) if in_frame else mech.G(*endpoint.start)
     drift = np.linalg.lstsq(field, offset, rcond=None)[0] / T

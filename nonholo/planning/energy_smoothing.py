@@ -13,7 +13,8 @@ from dataclasses import replace
 
 from ..controls.parametrisations import Controls, Fourier
 from ..io.result import PlanResult
-from .core import EndpointMap, Options, Outcome, record
+from .core import Options, Outcome, record
+from .endpoint_map import EndpointMap
 from .energy_objective import energy, plan_energy_of
 from .energy_optimiser import RESTORE_STEPS, Run, descend, newton_steps, polish
 from .energy_search import certified_or_finer

@@ -27,7 +27,6 @@ from functools import lru_cache
 
 import numpy as np
 
-from ..model import catalog
 from ..spaces import so3
 
 #: Orientations sampled for a roadmap (before those too close to ``Δ = 0`` are dropped).
@@ -107,8 +106,8 @@ class Roadmap:
 
     Parameters
     ----------
-    mechanism : Mechanism or str
-        The mechanism, or its name in the catalog.
+    mechanism : Mechanism
+        The mechanism.
     clearance : float
         The least ``|Δ|`` of the nodes and of every checked point of the edges.
     samples : int, default ROADMAP_SAMPLES
@@ -126,7 +125,7 @@ class Roadmap:
         from scipy.spatial import cKDTree  # SciPy's spatial module: loaded when first needed
         from scipy.spatial.transform import Rotation
 
-        mech = catalog.get(mechanism)
+        mech = mechanism
         if not mech.singular.exists:
             raise ValueError(f"mechanism {mech.name!r} has no singular set: it needs no roadmap")
         self.mechanism = mech
@@ -296,7 +295,7 @@ def via_nodes(mechanism, R0, Rd, count: int, legs=None) -> np.ndarray:
 
     Parameters
     ----------
-    mechanism : Mechanism or str
+    mechanism : Mechanism
         The mechanism.
     R0, Rd : numpy.ndarray
         Start and goal orientations.
@@ -311,7 +310,7 @@ def via_nodes(mechanism, R0, Rd, count: int, legs=None) -> np.ndarray:
         The nodes, ``(k, 3, 3)``; none without a singular set, or where ``R0`` and ``Rd``
         lie on different sides of ``Δ = 0``.
     """
-    mech = catalog.get(mechanism)
+    mech = mechanism
     if not mech.singular.exists:
         return np.empty((0, 3, 3))
     sign = float(np.sign(mech.delta(R0)))
@@ -329,7 +328,7 @@ def default_clearance(mechanism) -> float:
 
     Parameters
     ----------
-    mechanism : Mechanism or str
+    mechanism : Mechanism
         The mechanism.
 
     Returns
@@ -337,7 +336,7 @@ def default_clearance(mechanism) -> float:
     float
         :data:`CLEARANCE_QUANTILE` of ``|Δ|`` over Haar-uniform orientations (fixed seed).
     """
-    return _clearance(catalog.get(mechanism))
+    return _clearance(mechanism)
 
 
 @lru_cache(maxsize=8)
@@ -419,7 +418,7 @@ def orientation_path(mechanism, R0, Rd, *, delta_min: float = 1e-2, clearance: f
 
     Parameters
     ----------
-    mechanism : Mechanism or str
+    mechanism : Mechanism
         The mechanism.
     R0, Rd : array_like
         Start and goal orientations.
@@ -445,7 +444,7 @@ def orientation_path(mechanism, R0, Rd, *, delta_min: float = 1e-2, clearance: f
     ValueError
         If ``R0`` or ``Rd`` is not a rotation.
     """
-    mech = catalog.get(mechanism)
+    mech = mechanism
     R0 = so3.check_rotation(R0, "R0")
     Rd = so3.check_rotation(Rd, "Rd")
     if not mech.singular.exists:

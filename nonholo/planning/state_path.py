@@ -26,7 +26,7 @@ import numpy as np
 MAX_HOP = 4.0
 #: The largest sensitivity of a hop the global route keeps beyond SO(3) (a larger one is
 #: split). On SO(3) a hop's sensitivity grows with its closeness to ``Δ = 0`` and the
-#: stitched motion multiplies its hops' (:data:`nonholo.planning.route.MAX_HOP_SENSITIVITY`);
+#: stitched motion multiplies its hops' (:data:`nonholo.planning.route_paths.MAX_HOP_SENSITIVITY`);
 #: a straight path of states keeps away from ``Δ = 0`` by construction, and a hop's
 #: sensitivity grows with its length as a lever arm (a heading error ``δθ`` moves a car's
 #: end by about its distance times ``δθ``), which the stitched motion adds up rather than

@@ -75,17 +75,14 @@ from ..numerics import kernels
 from .correction import certify
 from .correction import note as certificate_note
 from .core import (
-    Evaluation,
     Outcome,
-    EndpointMap,
     Start,
     Strategy,
     descend,
-    node_gradient,
     record,
-    spatial_gradient_delta,
     step_scale,
 )
+from .endpoint_map import Evaluation, EndpointMap, node_gradient, spatial_gradient_delta
 
 #: Amplitude (rad/s) of the loop ``w = a (sin ωt, cos ωt)`` of the initial guesses.
 LOOP_AMPLITUDE = 0.3
@@ -211,6 +208,25 @@ def _loop(T: float, m: int, amplitude: float, phase: float = 0.0, mean=None):
     return f
 
 
+
+def frame_coordinates(mechanism) -> bool:
+    """Whether plans of ``mechanism`` run in its desingularised frame coordinates ``w``: a
+    capability of the mechanisms on SO(3) with a frame ``N``; beyond SO(3) the physical
+    inputs are planned (the barrier keeps Δ away) and the frame is not used yet.
+
+    Parameters
+    ----------
+    mechanism : Mechanism
+        The mechanism planned.
+
+    Returns
+    -------
+    bool
+        ``True`` for frame coordinates.
+    """
+    return mechanism.has_frame and not mechanism.space.k
+
+
 class RobustStrategy(Strategy):
     """Jacobian method in the desingularised frame coordinates, with restarts (see the module).
 
@@ -261,9 +277,7 @@ class RobustStrategy(Strategy):
         bool
             ``True`` for frame coordinates, ``False`` for physical inputs.
         """
-        # beyond SO(3) the physical inputs are planned (the barrier keeps Δ away) and the
-        # frame is not used yet
-        return mechanism.has_frame and not mechanism.space.k
+        return frame_coordinates(mechanism)
 
     def initial(self, endpoint, controls, given):
         """The initial control in this strategy's coordinates.

@@ -1,7 +1,9 @@
 """State spaces: the state value, the factors and their product, the singular set, numeric
 rotations."""
-from .factors import SO3, Axis, Euclidean, FixedRotation
+from .axes import Axis
+from .euclidean import Euclidean
 from .product import Product
+from .rotation_factors import SO3, FixedRotation
 from .singular import NoSingularSet, SingularSet
 from .state import State
 

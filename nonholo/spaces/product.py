@@ -2,27 +2,27 @@
 
 Conventions
 -----------
-- A product has a rotation factor (:class:`~nonholo.spaces.factors.SO3`, or the trivial
-  :class:`~nonholo.spaces.factors.FixedRotation` for a mechanism without an orientation)
-  and a coordinate factor (:class:`~nonholo.spaces.factors.Euclidean`, ``k ≥ 0``), like
-  OMPL's compound state space or manif's bundle. Its states are
-  :class:`~nonholo.spaces.state.State` values ``(R, q)``; every method loops over the
-  factors, so no caller asks which kind of space it has.
-- The terminal error is the stacked vector ``e = (l, δq)`` of a variation
-  ``s = (s_R, s_q)`` (the factors' variations, in order); its parts are reported by name
-  (``"rotation"`` in rad, ``"coordinates"`` in the mechanism's units), the parts the
-  space has.
+- A product has a rotation factor (:class:`~nonholo.spaces.rotation_factors.SO3`, or the
+  trivial :class:`~nonholo.spaces.rotation_factors.FixedRotation` for a mechanism without an
+  orientation) and a coordinate factor (:class:`~nonholo.spaces.euclidean.Euclidean`,
+  ``k ≥ 0``), like OMPL's compound state space or manif's bundle. Its states are
+  :class:`~nonholo.spaces.state.State` values ``(R, q)``; every method loops over the factors,
+  so no caller asks which kind of space it has.
+- The terminal error is the stacked vector ``e = (l, δq)`` of a variation ``s = (s_R, s_q)``
+  (the factors' variations, in order); its parts are reported by name (``"rotation"`` in rad,
+  ``"coordinates"`` in the mechanism's units), the parts the space has.
 - The caller's form of a state: that of the one non-trivial factor (a rotation matrix for
-  SO(3), the ``k`` numbers for ``Rᵏ``), or the pair ``(R, q)`` for ``SO(3) × Rᵏ``; in JSON
-  the same with nested lists (``[R, q]`` for the pair). Units: an error's norm is written
-  with :meth:`Product.amount` (its unit, or the units it mixes:
-  ``"3e-11 (wheelbase, rad)"``).
+  SO(3), the ``k`` numbers for ``Rᵏ``), or the pair ``(R, q)`` for ``SO(3) × Rᵏ``; in JSON the
+  same with nested lists (``[R, q]`` for the pair). Units: an error's norm is written with
+  :meth:`Product.amount` (its unit, or the units it mixes: ``"3e-11 (wheelbase, rad)"``).
 """
 from __future__ import annotations
 
 import numpy as np
 
-from .factors import SO3, Euclidean, FixedRotation, kind_of, unit_of
+from .axes import kind_of, unit_of
+from .euclidean import Euclidean
+from .rotation_factors import SO3, FixedRotation
 from .state import State
 
 
@@ -32,8 +32,8 @@ class Product:
     Parameters
     ----------
     *factors : SO3 or Euclidean
-        At most one rotation factor and one coordinate factor, the rotation first; a part
-        not given is trivial (:class:`~nonholo.spaces.factors.FixedRotation`, ``Euclidean(0)``).
+        At most one rotation factor and one coordinate factor, the rotation first; a part not
+        given is trivial (:class:`~nonholo.spaces.rotation_factors.FixedRotation`, ``Euclidean(0)``).
 
     Raises
     ------
@@ -61,8 +61,7 @@ class Product:
 
     @classmethod
     def of(cls, orientation: bool, names=(), units=None, angles=None) -> "Product":
-        """The space of a mechanism with or without an orientation and the coordinates
-        ``names``.
+        """The space of a mechanism with or without an orientation and the coordinates ``names``.
 
         Parameters
         ----------
@@ -199,8 +198,7 @@ class Product:
         return State(self.rotation.identity() if R is None else R, self.coordinates.identity() if q is None else q)
 
     def rows(self, part: str) -> slice:
-        """The rows of a variation ``s = (s_R, s_q)`` (of ``G``, of the stacked error) that
-        belong to one part of the state.
+        """The rows of one part of the state in a variation ``s = (s_R, s_q)``, ``G`` and ``e``.
 
         Parameters
         ----------
@@ -217,9 +215,8 @@ class Product:
         return slice(start, start + factor.dim)
 
     def recorded(self, part: str, value, otherwise=None):
-        """What a record of this space's states keeps of one of their parts: ``value`` where
-        the states have the part, ``otherwise`` where they do not (a plan of a mechanism on
-        SO(3) records no coordinates).
+        """What a record of this space's states keeps of one of their parts: ``value`` where the
+        states have the part, ``otherwise`` where they do not (a plan on SO(3) records no ``q``).
 
         Parameters
         ----------
@@ -368,8 +365,7 @@ class Product:
         Returns
         -------
         str
-            ``"|log(R[-1] Rdᵀ)|"`` on SO(3), ``"|q[-1] ⊖ qd|"`` on ``Rᵏ``, both stacked on
-            ``SO(3) × Rᵏ``.
+            ``"|log(R[-1] Rdᵀ)|"`` on SO(3), ``"|q[-1] ⊖ qd|"`` on ``Rᵏ``, both on ``SO(3) × Rᵏ``.
         """
         parts = [f.difference_text(a, b) for f, a, b in zip(self.factors, x, goal) if f.dim]
         return f"|{parts[0]}|" if len(parts) == 1 else f"|({', '.join(parts)})|"
@@ -390,8 +386,7 @@ class Product:
         return self.error(goal, start)[0]
 
     def retract(self, x, s) -> State:
-        """``x ⊕ s``: the state ``x`` moved by the variation ``s = (s_R, s_q)``
-        (``exp([s_R]) R``, ``q + s_q``).
+        """``x ⊕ s = (exp([s_R]) R, q + s_q)``: the state ``x`` moved by the variation ``s``.
 
         Parameters
         ----------
@@ -577,9 +572,8 @@ class Product:
         Returns
         -------
         tuple of Axis
-            The RPY angles of a rotation, then the coordinates
-            (:class:`~nonholo.spaces.factors.Axis`: name, aliases, default range, angle or not,
-            unit, text).
+            The RPY angles of a rotation, then the coordinates (:class:`~nonholo.spaces.axes.Axis`:
+            name, aliases, default range, angle or not, unit, text).
         """
         factors = self.factors if part is None else (self._factor(part),)
         return tuple(a for f in factors for a in f.axes())
@@ -633,8 +627,7 @@ class Product:
         return np.concatenate(parts)
 
     def from_cli_many(self, numbers) -> tuple[np.ndarray, np.ndarray]:
-        """The states of rows of command-line numbers, vectorised (:meth:`from_cli` of each row,
-        to rounding).
+        """:meth:`from_cli` of each row of command-line numbers, vectorised (to rounding).
 
         Parameters
         ----------

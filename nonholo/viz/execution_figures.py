@@ -14,7 +14,6 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..model import catalog
 from ..model.names import RAD, SECOND, angle_label, length_unit, per_second
 from ..spaces import so3
 from .quantities import coordinate_units, label
@@ -116,7 +115,7 @@ def execution_figure(execution, title: str | None = None) -> NotebookFigure:
     if not traces or traces[0] is None:
         raise ValueError("execution has no traces to draw (a record loaded from a file keeps only "
                          "its numbers): draw the figure from the run itself")
-    mech = getattr(execution, "kinematics", None) or catalog.get(execution.mechanism)
+    mech = execution.kinematics
     stages = execution.stages
     names = stage_names(len(stages))
     fig = NotebookFigure(figsize=(10.5, 7.2))

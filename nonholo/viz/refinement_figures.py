@@ -12,7 +12,6 @@ import numpy as np
 from matplotlib.figure import Figure
 from scipy.spatial.transform import Rotation
 
-from ..model import catalog
 from ..model.names import PER_SECOND, RADIUS, SECOND, angle_label, label, per_second
 from ..spaces import so3
 from .plan_figures import plot_controls, plot_delta
@@ -115,7 +114,7 @@ def leg_limits_figure(free, limited, title: str | None = None) -> Figure:
     NotebookFigure
         The figure.
     """
-    mech = catalog.get(limited.mechanism)
+    mech = limited.kinematics
     lo, hi = limited.options["leg_length"]
     fig = NotebookFigure(figsize=(7.2, 4.4), layout="constrained")
     ax = fig.add_subplot()
@@ -160,7 +159,7 @@ def motion_quality_figure(plain, cheap, fast, title: str | None = None) -> Figur
     NotebookFigure
         The figure.
     """
-    mech = catalog.get(plain.mechanism)
+    mech = plain.kinematics
     fig = NotebookFigure(figsize=(12.0, 4.4), layout="constrained")
     left, right = fig.add_subplot(1, 2, 1), fig.add_subplot(1, 2, 2)
     for res, ls, what in ((plain, "--", "as planned"), (cheap, "-", "least energy")):

@@ -50,7 +50,7 @@ def test_impossible_options_are_refused_naming_row_and_option_before_anything_ru
     assert nothing_left(out)
     # the same with plan() itself: the message is plan()'s own
     from nonholo.planning.api import plan
-    from nonholo.planning.problem import arguments_of
+    from nonholo.planning.settings import arguments_of
 
     with pytest.raises(ValueError, match=match):
         plan(CAR["start"], CAR["goal"], mechanism="car", **arguments_of(options, "car"))

@@ -10,6 +10,7 @@ import pytest
 from conftest import example, rk4_check
 
 from benchmarks import goalset
+from nonholo import mechanism_named
 from nonholo.certify import certificate as certify
 from nonholo.certify.resimulate import resimulate, resimulate_rk4, terminal_error
 from nonholo.model import catalog
@@ -177,7 +178,7 @@ def ill_conditioned_plan():
     """Frame controls an earlier certificate passed: a motion near Δ = 0 with large inputs
     (``benchmarks.goalset.uniform_pairs("platform", 1000)[301]``, nonparametric), and its goal."""
     d = json.loads((DATA / "ill_conditioned_frame_plan.json").read_text())
-    return replay.from_dict(d), np.array(d["Rd"])
+    return replay.from_dict(d, mechanism_named(d["mechanism"])), np.array(d["Rd"])
 
 
 def test_sensitivity_is_resolved_where_a_coarse_grid_misses_it():

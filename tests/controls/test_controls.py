@@ -5,6 +5,7 @@ import numpy as np
 import pytest
 from conftest import example
 
+from nonholo import mechanism_named
 from nonholo.controls import parametrisations as C
 from nonholo.controls import stages
 from nonholo.controls.stages import stage_values
@@ -161,7 +162,7 @@ def frame_controls(kind="fourier", R0=None):
     R0 = example(1)[0] if R0 is None else R0
     w = (C.Fourier(1.0, [[0.2, 0.5, 0.1, 0.0, 0.1], [0.1, 0.0, 0.4, 0.2, 0.0]]) if kind == "fourier"
          else C.PiecewiseConstant(1.0, np.random.default_rng(2).normal(scale=0.4, size=(8, 2))))
-    return FrameControls(w, R0, "platform", 400)
+    return FrameControls(w, R0, mechanism_named("platform"), 400)
 
 
 @pytest.mark.parametrize("kind", ["fourier", "grid"])
@@ -186,7 +187,7 @@ def test_frame_controls_are_the_physical_inputs(kind):
 @pytest.mark.parametrize("kind", ["fourier", "grid"])
 def test_frame_controls_round_trip_and_stage_table(kind):
     u = frame_controls(kind)
-    v = replay.from_dict(u.to_dict())
+    v = replay.from_dict(u.to_dict(), mechanism_named("platform"))
     assert v == u and type(v) is FrameControls
     # the replay holds the Mechanism; its description names it
     assert v.mechanism is catalog.get("platform") and u.to_dict()["mechanism"] == "platform"
@@ -219,7 +220,7 @@ def test_frame_controls_given_nodes_and_stages_on_nodes(kind):
     """Nodes handed over by a planner are used as they are; a stage table whose stage times
     are all nodes (here 200 steps of 2h) is ``W(R_n) w(t_n)`` at those nodes."""
     u = frame_controls(kind)
-    v = FrameControls(u.frame, u.R0, "platform", 400, nodes=u.nodes)
+    v = FrameControls(u.frame, u.R0, mechanism_named("platform"), 400, nodes=u.nodes)
     t = np.random.default_rng(3).uniform(0.0, 1.0, 20)
     np.testing.assert_array_equal(v(t), u(t))
     U = v.stage_table(200)
@@ -229,17 +230,17 @@ def test_frame_controls_given_nodes_and_stages_on_nodes(kind):
         for c in range(3):
             np.testing.assert_allclose(U[j, c], W(nodes[2 * j + c]) @ w_end[j, c], rtol=0, atol=1e-15)
     with pytest.raises(ValueError, match="nodes"):
-        FrameControls(u.frame, u.R0, "platform", 400, nodes=u.nodes[:-1])
+        FrameControls(u.frame, u.R0, mechanism_named("platform"), 400, nodes=u.nodes[:-1])
     with pytest.raises(ValueError, match="nodes"):
-        FrameControls(u.frame, u.R0, "platform", 400, nodes=u.nodes[::-1])
+        FrameControls(u.frame, u.R0, mechanism_named("platform"), 400, nodes=u.nodes[::-1])
 
 
 @pytest.mark.parametrize("bad", [
-    lambda: FrameControls(frame_controls(), np.eye(3), "platform", 400),
-    lambda: FrameControls(C.Fourier(1.0, np.zeros((3, 5))), np.eye(3), "platform", 400),
-    lambda: FrameControls(C.Fourier(1.0, np.zeros((2, 5))), np.eye(3), "tripod", 400),
-    lambda: FrameControls(C.Fourier(1.0, np.zeros((2, 5))), np.ones((3, 3)), "platform", 400),
-    lambda: FrameControls(C.PiecewiseConstant(1.0, np.zeros((7, 2))), np.eye(3), "platform", 400),
+    lambda: FrameControls(frame_controls(), np.eye(3), mechanism_named("platform"), 400),
+    lambda: FrameControls(C.Fourier(1.0, np.zeros((3, 5))), np.eye(3), mechanism_named("platform"), 400),
+    lambda: FrameControls(C.Fourier(1.0, np.zeros((2, 5))), np.eye(3), mechanism_named("tripod"), 400),
+    lambda: FrameControls(C.Fourier(1.0, np.zeros((2, 5))), np.ones((3, 3)), mechanism_named("platform"), 400),
+    lambda: FrameControls(C.PiecewiseConstant(1.0, np.zeros((7, 2))), np.eye(3), mechanism_named("platform"), 400),
 ])
 def test_frame_controls_bad_input(bad):
     with pytest.raises(ValueError):

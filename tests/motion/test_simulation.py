@@ -5,6 +5,7 @@ import numpy as np
 import pytest
 from conftest import example, platform_delta
 
+from nonholo import mechanism_named
 from nonholo.certify.resimulate import mobility_lyapunov, resimulate
 from nonholo.controls import parametrisations as C
 from nonholo.controls import stages
@@ -13,7 +14,7 @@ from nonholo.model import catalog
 from nonholo.motion import simulation as S
 from nonholo.motion.frame_controls import FrameControls
 from nonholo.numerics import kernels
-from nonholo.planning.core import EndpointMap
+from nonholo.planning.endpoint_map import EndpointMap
 from nonholo.spaces import so3
 from nonholo.spaces import State
 
@@ -226,11 +227,11 @@ def test_frame_jacobian_matches_finite_differences(mechanism):
     for j in range(10):
         e = np.zeros(10)
         e[j] = eps
-        Rp = FrameControls(w.with_params(w.params + e), R0, mechanism, 400).nodes[-1]
-        Rm = FrameControls(w.with_params(w.params - e), R0, mechanism, 400).nodes[-1]
+        Rp = FrameControls(w.with_params(w.params + e), R0, mechanism_named(mechanism), 400).nodes[-1]
+        Rm = FrameControls(w.with_params(w.params - e), R0, mechanism_named(mechanism), 400).nodes[-1]
         fd[:, j] = endpoint_variation(Rp, Rm, eps)
     assert rel(ev.J, fd) <= 1e-7
-    np.testing.assert_allclose(ev.R[-1], FrameControls(w, R0, mechanism, 400).nodes[-1], atol=1e-14)
+    np.testing.assert_allclose(ev.R[-1], FrameControls(w, R0, mechanism_named(mechanism), 400).nodes[-1], atol=1e-14)
 
 
 def test_min_norm_step_cholesky_and_fallback():
@@ -261,7 +262,7 @@ def test_log_error():
 def test_physical_simulation_of_frame_controls():
     """simulate/variational accept FrameControls: the physical system re-traces the frame motion."""
     R0, _ = example(1)
-    u = FrameControls(bumpy(seed=2), R0, "platform", 400)
+    u = FrameControls(bumpy(seed=2), R0, mechanism_named("platform"), 400)
     tr = S.simulate(R0, u, 1.0, steps=800)
     assert so3.distance(tr.R_T, u.nodes[-1]) <= 1e-9
     var = S.variational(R0, u, 1.0)

@@ -13,12 +13,13 @@ import pytest
 mujoco = pytest.importorskip("mujoco")
 
 import nonholo
+from nonholo import mechanism_named
 from nonholo.model import catalog
 from nonholo.paper import examples
 from nonholo.physics import Contact, execute
 from nonholo.physics.execution import replan_options
 from nonholo.physics.platform_model import DEFAULTS, PlatformModel
-from nonholo.planning.problem import arguments_of
+from nonholo.planning.settings import arguments_of
 from nonholo.planning.retime import retime
 from nonholo.spaces import so3
 
@@ -27,7 +28,7 @@ COARSE = SimpleNamespace(**{**DEFAULTS, "timestep": 1e-3, "solref": (0.002, 1.0)
 
 
 def built(mechanism="platform", contact=COARSE):
-    pm = PlatformModel(mechanism, contact)
+    pm = PlatformModel(mechanism_named(mechanism), contact)
     model = mujoco.MjModel.from_xml_string(pm.mjcf())
     return pm, model, mujoco.MjData(model)
 
@@ -57,7 +58,7 @@ def example1():
 
 @pytest.mark.parametrize("name", ["platform", "platform_raised"])
 def test_the_mjcf_loads_from_text_and_from_a_file(name, tmp_path):
-    pm = PlatformModel(name)
+    pm = PlatformModel(mechanism_named(name))
     text = pm.mjcf()
     model = mujoco.MjModel.from_xml_string(text)
     path = tmp_path / f"{name}.xml"
@@ -137,13 +138,13 @@ def test_the_raised_platform_plays_a_plan_of_its_own():
 
 def test_a_mechanism_without_geometry_or_a_bad_drive_is_refused(example1):
     with pytest.raises(ValueError, match="mechanism"):
-        PlatformModel("car")
+        PlatformModel(mechanism_named("car"))
     with pytest.raises(ValueError, match="actuators"):
-        PlatformModel("platform", SimpleNamespace(actuators="magic"))
-    pm = PlatformModel("platform", SimpleNamespace(timestep=2e-3))      # the rest: DEFAULTS
+        PlatformModel(mechanism_named("platform"), SimpleNamespace(actuators="magic"))
+    pm = PlatformModel(mechanism_named("platform"), SimpleNamespace(timestep=2e-3))      # the rest: DEFAULTS
     assert pm.settings["preload"] == DEFAULTS["preload"]
     with pytest.raises(ValueError, match="platform_raised"):
-        PlatformModel("platform_raised").follow(example1[2], example1[0], np.zeros(0))
+        PlatformModel(mechanism_named("platform_raised")).follow(example1[2], example1[0], np.zeros(0))
 
 
 def test_the_servo_drive_lags_but_still_lands_near_the_goal(example1):

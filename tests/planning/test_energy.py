@@ -253,7 +253,7 @@ def test_node_sensitivities_agree_with_the_backward_pass_and_the_jacobian():
     """The nodes' sensitivities (the barrier's derivatives): row i of node n against the
     gradient of the i-th state variation at node n by the planner's backward pass, and the
     last node against the Jacobian J of the variational system; grid and Fourier controls."""
-    from nonholo.planning.core import node_gradient, node_sensitivities
+    from nonholo.planning.endpoint_map import node_gradient, node_sensitivities
     from nonholo.planning.problem import Problem
 
     problem = Problem.build([0.0, 0.0, 0.0, 0.1], [1.0, 0.5, 0.2, 0.0], mechanism="car")

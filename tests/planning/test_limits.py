@@ -10,7 +10,7 @@ from nonholo.io.result import PlanResult
 from nonholo.model import catalog
 from nonholo.model.limits import LegLimits
 from nonholo.planning.api import plan
-from nonholo.planning.problem import arguments_of
+from nonholo.planning.settings import arguments_of
 from nonholo.spaces import so3
 from nonholo.constraints import LegStroke
 

@@ -31,7 +31,7 @@ from nonholo.planning.core import Outcome, Strategy, descend, record
 from nonholo.planning.strategy_paper import PaperStrategy
 from nonholo.spaces import so3
 from nonholo import Settings
-from nonholo.planning.problem import arguments_of
+from nonholo.planning.settings import arguments_of
 
 EXAMPLES = (1, 2)       # the examples (nonholo.paper.examples) solved by both strategies and both methods
 

@@ -18,7 +18,8 @@ from nonholo.motion.frame_controls import FrameControls
 from nonholo.paper import examples
 from nonholo.planning.api import METHODS, STRATEGIES, plan
 from nonholo.planning import strategy_robust as robust
-from nonholo.planning.core import EndpointMap, Start
+from nonholo.planning.core import Start
+from nonholo.planning.endpoint_map import EndpointMap
 from nonholo.spaces import so3
 from nonholo.spaces import State
 from nonholo import Settings
@@ -189,7 +190,7 @@ def test_physical_u0_is_converted_to_frame_coordinates():
     from nonholo.motion.simulation import simulate
 
     R_u = simulate(R0, u0, 1.0).R_T
-    R_w = FrameControls(w0, R0, "platform", 400).nodes[-1]
+    R_w = FrameControls(w0, R0, PLATFORM, 400).nodes[-1]
     assert so3.distance(R_u, R_w) < 2e-2        # K = 2 truncation of w(t) only
 
 

@@ -34,7 +34,8 @@ from nonholo.io.result import PlanResult
 from nonholo.model import catalog
 from nonholo.planning.api import STRATEGIES, plan
 from nonholo.planning import correction
-from nonholo.planning.problem import MAX_PLAN_STEPS, Problem, arguments_of
+from nonholo.planning.problem import Problem
+from nonholo.planning.settings import MAX_PLAN_STEPS, arguments_of
 from nonholo import Settings
 
 R0, RD = example(1)
@@ -152,7 +153,7 @@ def test_least_time_inputs_turn_at_a_bounded_rate_where_the_path_nearly_stops():
     def u(t):
         return np.stack([0.3 * np.cos(2 * np.pi * t), 0.2 * np.cos(2 * np.pi * t) + 1e-3], axis=-1)
 
-    timed = Retimed(Fourier.fit(u, 1.0, 2, 2), R0, "platform", 0.5)
+    timed = Retimed(Fourier.fit(u, 1.0, 2, 2), R0, nonholo.mechanism_named("platform"), 0.5)
     bp = timed.breakpoints
 
     def quotient(n):

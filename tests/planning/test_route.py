@@ -10,6 +10,7 @@ import pytest
 from benchmarks import goalset
 from conftest import far_pair, rk4_check
 from conftest import assert_inputs_match
+from nonholo import mechanism_named
 from nonholo.certify.resimulate import resimulate, resimulate_rk4, terminal_error
 from nonholo.controls import stages
 from nonholo.controls.parametrisations import Fourier
@@ -19,7 +20,7 @@ from nonholo.motion import frame_controls as replay
 from nonholo.motion import simulation
 from nonholo.motion.frame_controls import FrameControls
 from nonholo.planning.api import plan
-from nonholo.planning import roadmap, route
+from nonholo.planning import roadmap, route, route_paths, route_smoothing
 from nonholo.spaces import so3
 
 
@@ -81,7 +82,7 @@ def test_roadmap_is_the_same_in_every_build():
 
 def test_without_a_singular_set_the_path_is_the_geodesic():
     p = goalset.uniform_pairs("attitude", 1)[0]
-    path = roadmap.orientation_path("attitude", p["R0"], p["Rd"], max_hop=0.5)
+    path = roadmap.orientation_path(mechanism_named("attitude"), p["R0"], p["Rd"], max_hop=0.5)
     d = so3.distance(p["R0"], p["Rd"])
     assert len(path) - 1 == int(np.ceil(d / 0.5))
     total = sum(so3.distance(a, b) for a, b in zip(path[:-1], path[1:]))
@@ -122,7 +123,7 @@ def test_stitched_controls_retime_their_pieces():
 def test_stitched_controls_round_trip_and_refuse_bad_input():
     mech, path, a, b = two_pieces()
     s = Stitched(2.0, [a.parametrisation, b.parametrisation], [path[0], path[1], path[2]])
-    back = replay.from_dict(s.to_dict())
+    back = replay.from_dict(s.to_dict(), mech)
     assert back == s
     t = np.linspace(0.0, 2.0, 41)
     # the pieces are frame controls: the loaded ones re-integrate their nodes (forward kernel),
@@ -154,13 +155,13 @@ def test_global_route_reaches_a_goal_the_local_planner_misses(tmp_path):
     # by default the stitched route is re-planned as one smooth control
     assert isinstance(res.stitched, Stitched) and res.hops is res.stitched
     assert isinstance(res.parametrisation, FrameControls)
-    assert res.parametrisation.frame.harmonics in route.SMOOTHING_HARMONICS
+    assert res.parametrisation.frame.harmonics in route_smoothing.SMOOTHING_HARMONICS
     assert None in {rec["hop"] for rec in res.history}
 
 
 @pytest.mark.slow
 def test_a_route_that_is_not_smoothed_keeps_the_stitched_control(tmp_path, monkeypatch):
-    monkeypatch.setattr(route, "SMOOTHING_HARMONICS", ())
+    monkeypatch.setattr(route_smoothing, "SMOOTHING_HARMONICS", ())
     p = far_pair()
     res = plan(p["R0"], p["Rd"])
     assert res.success and res.route == "global", res.reason
@@ -335,7 +336,7 @@ def test_a_stitched_control_too_ill_conditioned_to_certify_is_rescued_by_smoothi
     error bound; one is certified on some CPUs, refused on others). The smooth re-plan is the
     one a certified route gets by default, here from the refused control (the time budget
     lifted: the test must not depend on the machine's speed)."""
-    monkeypatch.setattr(route, "TIME_BUDGET", 60.0)
+    monkeypatch.setattr(route_paths, "TIME_BUDGET", 60.0)
     measure = route.certify.measure
     refused = []
 
@@ -358,7 +359,7 @@ def test_a_stitched_control_too_ill_conditioned_to_certify_is_rescued_by_smoothi
     assert any(res.stitched is par for par in refused)
     assert not isinstance(res.parametrisation, Stitched)
     assert isinstance(res.parametrisation, FrameControls)
-    assert res.parametrisation.frame.harmonics in route.SMOOTHING_HARMONICS
+    assert res.parametrisation.frame.harmonics in route_smoothing.SMOOTHING_HARMONICS
     assert "then re-planned as one smooth control from the stitched one" in res.reason
     assert "the stitched control is not certified: the motion is too ill-conditioned (the test's limit)" \
         in res.reason
@@ -386,7 +387,7 @@ def test_a_goal_whose_routes_are_all_too_ill_conditioned_takes_two_legs(tmp_path
     legs = res.hops
     assert legs.n_pieces == 2
     assert any(np.array_equal(legs.waypoints[1], R)
-               for R in roadmap.via_nodes("platform_raised", p["R0"], p["Rd"], route.VIA_CANDIDATES))
+               for R in roadmap.via_nodes(mechanism_named("platform_raised"), p["R0"], p["Rd"], route.VIA_CANDIDATES))
     assert res.terminal_error + res.error_bound <= res.options["tol"]
     RT = resimulate(p["R0"], res.controls, res.T, "platform_raised", res.breakpoints)
     assert terminal_error(RT, p["Rd"]) <= 1e-8
@@ -405,4 +406,4 @@ def test_via_nodes_keep_the_start_component():
     across = so3.from_rpy(-1.0, 0.9, -0.5)
     assert np.sign(mech.delta(across)) != np.sign(mech.delta(R0))
     assert len(roadmap.via_nodes(mech, R0, across, 20)) == 0
-    assert len(roadmap.via_nodes("attitude", R0, Rd, 20)) == 0
+    assert len(roadmap.via_nodes(mechanism_named("attitude"), R0, Rd, 20)) == 0

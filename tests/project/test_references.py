@@ -63,7 +63,7 @@ def instance_attribute(cls: type, attr: str) -> bool:
 
 def test_the_scanner_sees_stale_names():
     assert resolves("nonholo.planning.strategy_paper") and resolves("nonholo.viz.plan_figure")
-    assert resolves("nonholo.spaces.factors.Euclidean.box") and not resolves("nonholo.spaces.factors.Euclidean.boxes")
+    assert resolves("nonholo.spaces.euclidean.Euclidean.box") and not resolves("nonholo.spaces.euclidean.Euclidean.boxes")
     assert not resolves("nonholo.robust") and not resolves("nonholo.verify")
     assert DOTTED.findall("see :mod:`nonholo.robust`.") == ["nonholo.robust"]
     assert not DOTTED.findall('"format": "nonholo.plan/3"') and not DOTTED.findall('b"nonholo.x"')
@@ -100,5 +100,5 @@ def test_help_is_plain_text():
 
 def test_plain_text_of_rest():
     doc = ("See :mod:`nonholo.io.safe_write` and :func:`~nonholo.io.result.PlanResult.load`, "
-           ":attr:`the box <nonholo.spaces.factors.Euclidean.box>`; ``--out x``.\n\nExample::\n\n    x\n")
+           ":attr:`the box <nonholo.spaces.euclidean.Euclidean.box>`; ``--out x``.\n\nExample::\n\n    x\n")
     assert plain(doc) == ("See nonholo.io.safe_write and load, the box; --out x.\n\nExample:\n\n    x\n")

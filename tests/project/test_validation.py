@@ -8,7 +8,7 @@ from scipy.spatial.transform import Rotation
 from nonholo import plan, simulate, Settings
 from nonholo.controls.parametrisations import Fourier
 from nonholo.model import platform
-from nonholo.planning.problem import arguments_of
+from nonholo.planning.settings import arguments_of
 
 R0, RD = example(1)
 

@@ -15,7 +15,7 @@ from scipy.spatial.transform import Rotation
 
 from nonholo.model import catalog
 from nonholo.spaces import SO3, Euclidean, FixedRotation, Product, State
-from nonholo.spaces.factors import wrap
+from nonholo.spaces.axes import wrap
 
 rng = np.random.default_rng(20140901)
 

@@ -2521,6 +2521,6 @@ PyMODINIT_FUNC PyInit_attitude(void)
     import_array();
     PyObject *m = PyModule_Create(&moduledef);
     if (m == NULL) return NULL;
-    if (PyModule_AddStringConstant(m, "SOURCE_DIGEST", "02181c9f5f506cc1154b8a064966c33aeba58b3da3fde11ecba50dbc72210028") < 0) { Py_DECREF(m); return NULL; }
+    if (PyModule_AddStringConstant(m, "SOURCE_DIGEST", "8d936b7d1463b98a5dc2e817a382b9d4c5771a69465273747be6b901da437f08") < 0) { Py_DECREF(m); return NULL; }
     return m;
 }

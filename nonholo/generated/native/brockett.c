@@ -1161,6 +1161,6 @@ PyMODINIT_FUNC PyInit_brockett(void)
     import_array();
     PyObject *m = PyModule_Create(&moduledef);
     if (m == NULL) return NULL;
-    if (PyModule_AddStringConstant(m, "SOURCE_DIGEST", "9e56d68460eee77e546c314ec809635abe872ae443b8450d6c2a66d19c4bc1b2") < 0) { Py_DECREF(m); return NULL; }
+    if (PyModule_AddStringConstant(m, "SOURCE_DIGEST", "b1d59d8d9b88e9c8244cd5866c7fd7c110d8bcf7411c372c126ebb9f20272243") < 0) { Py_DECREF(m); return NULL; }
     return m;
 }

@@ -2440,6 +2440,6 @@ PyMODINIT_FUNC PyInit_car(void)
     import_array();
     PyObject *m = PyModule_Create(&moduledef);
     if (m == NULL) return NULL;
-    if (PyModule_AddStringConstant(m, "SOURCE_DIGEST", "1d6a6dc557a32cefa7e9acfed1e470128340ffc2c16e809d9b658116f7d7f5ee") < 0) { Py_DECREF(m); return NULL; }
+    if (PyModule_AddStringConstant(m, "SOURCE_DIGEST", "b665c0baf16711c4e97a1f5fd63adb11465c389d58aaf7154fdde2a2477714a1") < 0) { Py_DECREF(m); return NULL; }
     return m;
 }

@@ -384,6 +384,6 @@ PyMODINIT_FUNC PyInit_numerics(void)
     import_array();
     PyObject *m = PyModule_Create(&moduledef);
     if (m == NULL) return NULL;
-    if (PyModule_AddStringConstant(m, "SOURCE_DIGEST", "df4a032cf8c28d1a509bcfa0a8e8a22747ff240d50cea3e7b1680ed49ce2fa94") < 0) { Py_DECREF(m); return NULL; }
+    if (PyModule_AddStringConstant(m, "SOURCE_DIGEST", "81aa5ffa62ab7ef8d248ef649f20c537b2799cba33f752a1498d074351023e3e") < 0) { Py_DECREF(m); return NULL; }
     return m;
 }

@@ -2565,6 +2565,6 @@ PyMODINIT_FUNC PyInit_platform(void)
     import_array();
     PyObject *m = PyModule_Create(&moduledef);
     if (m == NULL) return NULL;
-    if (PyModule_AddStringConstant(m, "SOURCE_DIGEST", "1bcc939b31c29f7254c9dfdf55ae1a8942d8c472fc7fb1e7bda2fab8b53f6041") < 0) { Py_DECREF(m); return NULL; }
+    if (PyModule_AddStringConstant(m, "SOURCE_DIGEST", "df24de292c058378c083ba13979072436fb405ba9cf03b65feae6b4490aa4203") < 0) { Py_DECREF(m); return NULL; }
     return m;
 }

@@ -2583,6 +2583,6 @@ PyMODINIT_FUNC PyInit_platform_raised(void)
     import_array();
     PyObject *m = PyModule_Create(&moduledef);
     if (m == NULL) return NULL;
-    if (PyModule_AddStringConstant(m, "SOURCE_DIGEST", "d4f1e3ad6d5aaaaa02745b0d1f5a19d0db5458ea3bcad4cc54ee9a6f2cda5741") < 0) { Py_DECREF(m); return NULL; }
+    if (PyModule_AddStringConstant(m, "SOURCE_DIGEST", "4568db1a2c90f4a85d4396e9cf1ffdd1533a415ff5ea492ca7310b0b47c7e1c2") < 0) { Py_DECREF(m); return NULL; }
     return m;
 }

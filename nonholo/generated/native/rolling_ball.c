@@ -1201,6 +1201,6 @@ PyMODINIT_FUNC PyInit_rolling_ball(void)
     import_array();
     PyObject *m = PyModule_Create(&moduledef);
     if (m == NULL) return NULL;
-    if (PyModule_AddStringConstant(m, "SOURCE_DIGEST", "ab3c09288834e7264ef80c64552e185da3951b196aa9f54d7ff054180fea4776") < 0) { Py_DECREF(m); return NULL; }
+    if (PyModule_AddStringConstant(m, "SOURCE_DIGEST", "29f980ff73898b196f21c75619c2034bc452b08f087665e941a55bef300ff355") < 0) { Py_DECREF(m); return NULL; }
     return m;
 }

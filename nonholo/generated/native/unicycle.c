@@ -1159,6 +1159,6 @@ PyMODINIT_FUNC PyInit_unicycle(void)
     import_array();
     PyObject *m = PyModule_Create(&moduledef);
     if (m == NULL) return NULL;
-    if (PyModule_AddStringConstant(m, "SOURCE_DIGEST", "90f656b8fd813e26c421c35331287720aa76a64543fe094ca1b183e410453d5f") < 0) { Py_DECREF(m); return NULL; }
+    if (PyModule_AddStringConstant(m, "SOURCE_DIGEST", "eeb03c3278ecb0c69195c7bdae88a729bb192be3e1a1acdce4652b6a58dcb986") < 0) { Py_DECREF(m); return NULL; }
     return m;
 }
