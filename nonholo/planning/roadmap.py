@@ -71,7 +71,7 @@ def _profile(mech, sign: float, Ra: np.ndarray, Rb: np.ndarray, points: int | No
     length = np.linalg.norm(v, axis=1)
     S = points or int(np.ceil(length.max() / RESOLUTION)) + 1
     pts = so3.geodesic_points(Ra, v, np.linspace(0.0, 1.0, S)).reshape(-1, 3, 3)
-    d = sign * mech.delta_samples(pts).reshape(len(Ra), S)
+    d = sign * mech.singular.values(pts).reshape(len(Ra), S)
     within = None if legs is None else legs.clearances(mech, pts).reshape(len(Ra), -1).min(axis=1)
     return d, length, within
 
@@ -132,7 +132,7 @@ class Roadmap:
         self.clearance = float(clearance)
         rot = Rotation.random(samples, random_state=np.random.default_rng(seed))
         R = rot.as_matrix()
-        d = mech.delta_samples(R)
+        d = mech.singular.values(R)
         keep = np.abs(d) >= self.clearance
         self.R = R[keep]
         self.q = rot.as_quat()[keep]
@@ -248,7 +248,7 @@ class Roadmap:
         """
         from scipy.sparse.csgraph import dijkstra  # loaded when first needed
 
-        sign = float(np.sign(self.mechanism.delta(R0)))
+        sign = self.mechanism.singular.sign(R0)
         n = len(self.R)
         s_i, s_j, s_l = self._links(R0, sign, level, n, power, legs)
         g_i, g_j, g_l = self._links(Rd, sign, level, n + 1, power, legs)
@@ -313,8 +313,8 @@ def via_nodes(mechanism, R0, Rd, count: int, legs=None) -> np.ndarray:
     mech = mechanism
     if not mech.singular.exists:
         return np.empty((0, 3, 3))
-    sign = float(np.sign(mech.delta(R0)))
-    if sign == 0.0 or np.sign(mech.delta(Rd)) != sign:
+    sign = mech.singular.sign(R0)
+    if sign == 0.0 or mech.singular.sign(Rd) != sign:
         return np.empty((0, 3, 3))
     rm = roadmap(mech, default_clearance(mech))
     nodes = rm.R[rm.sign == sign]
@@ -344,7 +344,7 @@ def _clearance(mech) -> float:
     from scipy.spatial.transform import Rotation  # loaded when first needed
 
     R = Rotation.random(20000, random_state=np.random.default_rng(ROADMAP_SEED + 1)).as_matrix()
-    return float(np.quantile(np.abs(mech.delta_samples(R)), CLEARANCE_QUANTILE))
+    return float(np.quantile(np.abs(mech.singular.values(R)), CLEARANCE_QUANTILE))
 
 
 def shortcut(mech, sign: float, path: np.ndarray, level: float, power: float = CONDITIONING_POWERS[0],
@@ -453,10 +453,10 @@ def orientation_path(mechanism, R0, Rd, *, delta_min: float = 1e-2, clearance: f
         return subdivide(np.stack([R0, Rd]), max_hop)
     if clearance is None:
         clearance = default_clearance(mech)
-    sign = float(np.sign(mech.delta(R0)))
-    if sign == 0.0 or np.sign(mech.delta(Rd)) != sign:
+    sign = mech.singular.sign(R0)
+    if sign == 0.0 or mech.singular.sign(Rd) != sign:
         return None
-    level = max(delta_min, min(clearance, 0.9 * sign * float(mech.delta(R0)), 0.9 * sign * float(mech.delta(Rd))))
+    level = max(delta_min, min(clearance, 0.9 * sign * mech.singular.value(R0), 0.9 * sign * mech.singular.value(Rd)))
     path = roadmap(mech, clearance).path(R0, Rd, level, power, legs)
     if path is None:
         return None
