@@ -155,7 +155,7 @@ def summary(rows: list[dict]) -> list[list]:
     for mech, label in keys:
         rs = [r for r in rows if r["mechanism"] == mech and r["config"] == label]
         ok = [r for r in rs if r["success"]]
-        has_delta = catalog.get(mech).has_singular_set
+        has_delta = catalog.get(mech).delta is not None
         miss = [r for r in ok if not r["miss"] <= MISS]
         near = [r for r in ok if has_delta and not r["min_delta"] >= _delta_min(label)]
         worst = max((r["miss"] for r in ok), default=None)

@@ -135,7 +135,7 @@ def _uniform_stream(mechanism, seed: int, min_delta: float):
     rng = np.random.default_rng([seed, 3, zlib.crc32(mech.name.encode())])
     while True:
         A, B = _random_rotation(rng), _random_rotation(rng)
-        if mech.has_singular_set:
+        if mech.delta is not None:
             dA, dB = float(mech.delta(A)), float(mech.delta(B))
             if np.sign(dA) != np.sign(dB) or min(abs(dA), abs(dB)) < min_delta:
                 continue

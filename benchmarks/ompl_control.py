@@ -133,7 +133,7 @@ class Planner:
         si.setMinMaxControlDuration(*CONTROL_STEPS)
         self.sign = 1.0
         kern = compiled_system(self.mechanism, frame=False)
-        has_delta = self.mechanism.has_singular_set
+        has_delta = self.mechanism.delta is not None
 
         def valid(state) -> bool:
             if not has_delta:
@@ -174,8 +174,8 @@ class Planner:
         R0 = so3.check_rotation(R0, "R0")
         Rd = so3.check_rotation(Rd, "Rd")
         mech = self.mechanism
-        self.sign = float(np.sign(mech.delta(R0))) if mech.has_singular_set else 1.0
-        if mech.has_singular_set:
+        self.sign = float(np.sign(mech.delta(R0))) if mech.delta is not None else 1.0
+        if mech.delta is not None:
             # R0 turned until Δ changes sign: an orientation no valid motion can reach
             turned = (so3.exp(angle * axis) @ R0 for angle in np.linspace(0.1, np.pi, 32) for axis in np.eye(3))
             self.invalid = next((R for R in turned if self.sign * float(mech.delta(R)) < -self.delta_min),

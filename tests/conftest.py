@@ -75,7 +75,7 @@ def check_solution(res, R0, Rd, tol=1e-10, mechanism=None):
     assert terminal_error(R_T, Rd) <= 1e-8
     # the planner's own endpoint is within the integrator's discretisation error (≤ 1e-9)
     assert so3.distance(res.R_T, R_T) <= 1e-9
-    if mech.has_singular_set:
+    if mech.delta is not None:
         assert res.min_delta >= res.options["delta_min"]
         assert np.abs(res.delta).min() >= res.min_delta - 1e-15
     else:
@@ -113,14 +113,14 @@ def reachable_goals(mechanism, count, seed):
     goals = []
     while len(goals) < count:
         R0 = Rotation.random(random_state=rng.integers(1 << 31)).as_matrix()
-        if mech.has_singular_set and abs(mech.delta(R0)) < 0.3:
+        if mech.delta is not None and abs(mech.delta(R0)) < 0.3:
             continue
         controls = Fourier(1.0, rng.normal(scale=0.4, size=(mech.n_inputs, 5)))
         try:
             traj = simulate(R0, controls, 1.0, mechanism=mech)
         except ValueError:  # ran into Δ = 0
             continue
-        if mech.has_singular_set and np.min(np.abs(traj.delta)) < 0.1:
+        if mech.delta is not None and np.min(np.abs(traj.delta)) < 0.1:
             continue
         goals.append((R0, traj.R_T))
     return goals
@@ -142,7 +142,7 @@ def regular_motion(mechanism, seed: int, clearance: float = 0.1):
             traj = simulate(R0, u, 1.0, mechanism=mech)
         except ValueError:  # ran into Δ = 0
             continue
-        if not mech.has_singular_set or np.min(np.abs(traj.delta)) >= clearance:
+        if mech.delta is None or np.min(np.abs(traj.delta)) >= clearance:
             return R0, Rd, u
     raise AssertionError(f"no regular start and control of {mech.name!r}")
 
@@ -236,7 +236,7 @@ def check_into_forms(module, rotations, rng):
 
 #: The package's mechanisms whose state is an orientation alone (the rest, e.g. the
 #: rolling ball and the car, are tested by ``tests/planning/test_state_spaces.py``).
-SO3_MECHANISMS = tuple(n for n in GENERATED_MECHANISMS if not catalog.get(n).beyond_so3)
+SO3_MECHANISMS = tuple(n for n in GENERATED_MECHANISMS if not catalog.get(n).n_coordinates)
 
 
 @pytest.fixture(scope="session")

@@ -254,11 +254,6 @@ class Mechanism:  # signature: __new__'s (*args, **kwargs), the fields below; nu
         return self.state_space.startswith("SO(3)")
 
     @property
-    def beyond_so3(self) -> bool:
-        """Whether the state has coordinates ``q`` besides (or instead of) ``R``."""
-        return self.state_space != "SO(3)"
-
-    @property
     def n_coordinates(self) -> int:
         """``k``: the number of coordinates ``q``."""
         return len(self.coordinates)
@@ -272,11 +267,6 @@ class Mechanism:  # signature: __new__'s (*args, **kwargs), the fields below; nu
     def n_inputs(self) -> int:
         """``m``: the number of inputs."""
         return len(self.inputs)
-
-    @property
-    def has_singular_set(self) -> bool:
-        """Whether the mechanism has a singularity function ``Δ``."""
-        return self.delta is not None
 
     @property
     def has_frame(self) -> bool:

@@ -99,6 +99,24 @@ def _survey(mech, sign: float, Ra: np.ndarray, Rb: np.ndarray, level, power: flo
     return clear, np.where(clear, _cost(d, length, power), np.inf)
 
 
+
+def has_surface(mechanism) -> bool:
+    """Whether ``mechanism`` has a singular surface for a roadmap to go around (the
+    roadmap's capability: a mechanism on SO(3) with ``Δ``).
+
+    Parameters
+    ----------
+    mechanism : Mechanism
+        The mechanism.
+
+    Returns
+    -------
+    bool
+        Whether it has one.
+    """
+    return mechanism.singular.exists
+
+
 class Roadmap:
     """The roadmap of one mechanism at one clearance (see the module): ``R`` (nodes,
     ``(n, 3, 3)``), ``sign`` (``sgnΔ`` of each), ``edges`` (node pairs) and their
@@ -126,7 +144,7 @@ class Roadmap:
         from scipy.spatial.transform import Rotation
 
         mech = mechanism
-        if not mech.singular.exists:
+        if not has_surface(mech):
             raise ValueError(f"mechanism {mech.name!r} has no singular set: it needs no roadmap")
         self.mechanism = mech
         self.clearance = float(clearance)
@@ -311,7 +329,7 @@ def via_nodes(mechanism, R0, Rd, count: int, legs=None) -> np.ndarray:
         lie on different sides of ``Δ = 0``.
     """
     mech = mechanism
-    if not mech.singular.exists:
+    if not has_surface(mech):
         return np.empty((0, 3, 3))
     sign = mech.singular.sign(R0)
     if sign == 0.0 or mech.singular.sign(Rd) != sign:
@@ -447,7 +465,7 @@ def orientation_path(mechanism, R0, Rd, *, delta_min: float = 1e-2, clearance: f
     mech = mechanism
     R0 = so3.check_rotation(R0, "R0")
     Rd = so3.check_rotation(Rd, "Rd")
-    if not mech.singular.exists:
+    if not has_surface(mech):
         if legs is not None and not _survey(mech, 1.0, R0[None], Rd[None], -np.inf, legs=legs)[0][0]:
             return None
         return subdivide(np.stack([R0, Rd]), max_hop)

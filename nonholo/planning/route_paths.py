@@ -248,7 +248,7 @@ class StraightPaths(RoadmapPaths):
         str
             ``"a straight path of states"``, clear of ``Δ = 0`` where there is a singular set.
         """
-        return "a straight path of states" + (" clear of Δ = 0" if self.mechanism.singular.exists else "")
+        return "a straight path of states" + self.mechanism.singular.kept_clear
 
 
 def paths_for(mechanism: Mechanism) -> RoadmapPaths:

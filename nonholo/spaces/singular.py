@@ -34,6 +34,8 @@ class SingularSet:
     placeholder = ""
     #: what made a variational replay's sensitivity infinite
     blowup = "ran into Δ = 0"
+    #: what a path kept away from the set is, in words (appended to its description)
+    kept_clear = " clear of Δ = 0"
     #: the columns of a table of states (:meth:`columns`)
     column_names = ("delta",)
 
@@ -217,6 +219,7 @@ class NoSingularSet(SingularSet):
     exists = False
     summary = placeholder = "no singular set"
     blowup = "overflowed"
+    kept_clear = ""
     column_names = ()
 
     def __init__(self):

@@ -128,7 +128,7 @@ def test_kernels_against_dop853_on_the_generated_field(name, frame):
     R0, q0 = start(name)
     d, m = mech.n_rates, mech.n_inputs
     controls = Fourier(1.0, 0.15 * rng.normal(size=(m, 5)))
-    sign = np.sign(mech.delta_samples(R0[None], q0[None])[0]) if mech.has_singular_set else 1.0
+    sign = np.sign(mech.delta_samples(R0[None], q0[None])[0]) if mech.delta is not None else 1.0
     steps = 1000
     U = stages.stage_table(controls, steps)
     Rs, Qs = kern.nodes(steps)

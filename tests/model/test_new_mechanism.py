@@ -83,7 +83,7 @@ def test_from_symbolic_builds_the_numeric_mechanism(symbolic, moved, own_catalog
     assert isinstance(moved, Mechanism)
     assert (moved.name, moved.description) == (NAME, symbolic.description)
     assert moved.inputs == symbolic.inputs and moved.n_inputs == 2
-    assert moved.has_singular_set and moved.has_frame and moved.state_space == "SO(3)"
+    assert moved.delta is not None and moved.has_frame and moved.state_space == "SO(3)"
     # its drawing geometry: the symbolic one at the drawing dimensions a = 1.6, b = rho = 1
     num = viz.as_geometry(MOVED)
     for name in moved.geometry.FIELDS:
