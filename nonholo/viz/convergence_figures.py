@@ -13,7 +13,7 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from ..model.names import NONE, RAD, label
-from .result_lines import as_results, line_color, line_style, result_labels, singular_placeholder
+from .result_lines import as_results, line_color, line_style, note_no_singular_set, result_labels
 from .style import NotebookFigure, styled
 
 
@@ -151,9 +151,7 @@ def plot_min_delta(ax, results, threshold: float | None = 1e-2, labels=None) -> 
     ax.set_xlabel(label("iteration", NONE))
     ax.set_ylabel(label("min over t of |Δ(R(t))|", NONE))
     ax.set_title("closest approach to Δ = 0 per iteration")
-    placeholder = singular_placeholder(results)
-    if placeholder is not None:
-        ax.text(0.5, 0.5, placeholder, transform=ax.transAxes, ha="center", va="center", color="0.4")
+    if note_no_singular_set(ax, results):
         return
     for i, (res, lab) in enumerate(zip(results, labels)):
         md = np.abs([np.nan if h.get("min_delta") is None else float(h["min_delta"])

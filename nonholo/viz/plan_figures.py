@@ -32,10 +32,10 @@ from .result_lines import (
     has_trajectory,
     line_color,
     line_style,
+    note_no_singular_set,
     note_no_trajectory,
     result_labels,
     results_legend,
-    singular_placeholder,
 )
 from .style import NotebookFigure, PAIR_COLORS, TRIPLE_COLORS, styled
 
@@ -303,9 +303,7 @@ def plot_delta(ax, results, threshold: float | None = 1e-2, labels=None) -> None
     ax.set_xlabel(label("time t", SECOND))
     ax.set_ylabel(label("Δ(R(t))", NONE))
     ax.set_title("distance from the singular set (▼: min |Δ|)")
-    placeholder = singular_placeholder(results)
-    if placeholder is not None:
-        ax.text(0.5, 0.5, placeholder, transform=ax.transAxes, ha="center", va="center", color="0.4")
+    if note_no_singular_set(ax, results):
         return
     for i, (res, lab) in enumerate(zip(results, labels)):
         if not has_trajectory(res):

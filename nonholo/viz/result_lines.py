@@ -161,20 +161,27 @@ def results_legend(ax, results, labels, loc="best") -> None:
         ax.legend(handles=handles, loc=loc, framealpha=0.9)
 
 
-def singular_placeholder(results) -> str | None:
-    """What a panel of ``Δ`` of the results says in place of ``Δ`` (the platform's by default).
+def note_no_singular_set(ax, results) -> bool:
+    """Say so on ``ax`` in place of ``Δ`` when the results' mechanism has no singular set
+    (the platform's by default, like :func:`note_no_trajectory` for a missing trajectory).
 
     Parameters
     ----------
+    ax : matplotlib.axes.Axes
+        The axes of a panel of ``Δ``.
     results : sequence of PlanResult
         The results (the first one's mechanism is theirs).
 
     Returns
     -------
-    str or None
-        ``"no singular set (car)"`` for a mechanism without one; ``None`` for a mechanism
-        with one, or an unknown mechanism (the panel draws ``Δ``).
+    bool
+        True if the mechanism has none (``"no singular set (car)"`` is then written); False
+        for one with a singular set, or an unknown mechanism (the panel draws ``Δ``).
     """
     mech = result_mechanism(results[0]) if results else mechanism_named("platform")
     note = "" if mech is None else mech.singular.placeholder
-    return f"{note} ({results[0].mechanism})" if note else None
+    if not note:
+        return False
+    ax.text(0.5, 0.5, f"{note} ({results[0].mechanism})", transform=ax.transAxes, ha="center", va="center",
+            color="0.4")
+    return True
