@@ -59,13 +59,14 @@ def inputs(name: str, frame: bool) -> dict:
         sparse_idx=rng.integers(0, BASIS, size=(STEPS, 3, 2)).astype(np.int64),
         sparse_val=rng.normal(size=(STEPS, 3, 2)), dense_val=rng.normal(size=(STEPS, 3, BASIS)),
         idx=rng.integers(0, STEPS, size=n_t).astype(np.int64), s=s,
-        Wst=rng.normal(size=(n_t, 3, m)), w_end=rng.normal(size=(n_t, m)))
+        Wst=rng.normal(size=(n_t, 3, m)), w_end=rng.normal(size=(n_t, m)), p0=rng.normal(size=d) * 0.4)
 
 
 def run(kern, inp: dict, frame: bool) -> dict[str, np.ndarray]:
     """Every output of ``kern`` on ``inp``: forward; forward_variational with a sparse and
-    a dense basis, each with and without ``M(T)``; frame_inputs at the forward run's nodes.
-    A run stopped at the singular set gives its nodes up to the stop."""
+    a dense basis, each with and without ``M(T)``; frame_inputs at the forward run's nodes;
+    the normal extremal (physical systems). A run stopped at the singular set gives its
+    nodes up to the stop."""
     N, d, m, k = STEPS, inp["d"], inp["m"], inp["k"]
     out = {}
     Rs, Qs = kern.nodes(N)
@@ -94,6 +95,12 @@ def run(kern, inp: dict, frame: bool) -> dict[str, np.ndarray]:
         idx = np.minimum(inp["idx"], out["forward_R"].shape[0] - 2)
         kern.frame_inputs(Rs, Qs, idx, inp["s"], inp["Wst"], inp["w_end"], Rout, Qout, u)
         out.update(frame_R=Rout, frame_q=Qout, frame_u=u)
+    else:
+        Re, Qe, Pe, Ue = np.empty((N + 1, 3, 3)), np.empty((N + 1, k)), np.empty((N + 1, d)), np.empty((N, 3, m))
+        r = kern.extremal(inp["R0"], inp["q0"], inp["p0"], inp["h"], inp["sgn"], 1e-9, Re, Qe, Pe, Ue)
+        n = r[0]
+        out.update(extremal_result=np.array(r, dtype=float), extremal_R=Re[:n + 1], extremal_q=Qe[:n + 1],
+                   extremal_p=Pe[:n + 1], extremal_U=Ue[:n])
     return out
 
 

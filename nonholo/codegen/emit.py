@@ -43,9 +43,9 @@ from .cache import digest
 from .python_config import PYTHON
 
 #: The integrator's functions whose calls are expanded in place (:func:`python_kernels`).
-INLINED = ("cf4_step", "cf4_stage", "cf4_close", "zpredict", "advance")
+INLINED = ("cf4_step", "cf4_stage", "cf4_close", "zpredict", "advance", "extremal_stage")
 #: The kernels written with them.
-KERNELS = ("forward", "forward_variational", "frame_inputs")
+KERNELS = ("forward", "forward_variational", "frame_inputs", "extremal")
 #: Argument kinds of the translated functions (see :data:`nonholo.codegen.c_subset.KINDS`):
 #: the helpers (``parts``), the integrator's pieces and its kernels.
 HELPER_KINDS = {
@@ -66,9 +66,11 @@ KERNEL_KINDS = {
                             "Mq": "f8[2]", "Wd": "f8[2]", "full": "b1"},
     "frame_inputs": {"nodes": "f8[3]", "qnodes": "f8[2]", "idx": "i8[1]", "s": "f8[1]", "Wst": "f8[3]",
                      "w_end": "f8[2]", "Rout": "f8[3]", "Qout": "f8[2]", "out": "f8[2]"},
+    "extremal": {"R0": "f8[2]", "q0": "f8[1]", "p0": "f8[1]", "h": "f8", "sgn": "f8", "delta_stop": "f8",
+                 "Rs": "f8[3]", "Qs": "f8[2]", "Ps": "f8[2]", "U": "f8[3]"},
 }
 #: The kernels a :class:`~nonholo.integrate.system_kernels.Kernels` holds.
-EXPORTED = ("forward", "forward_variational", "frame_inputs")
+EXPORTED = ("forward", "forward_variational", "frame_inputs", "extremal")
 
 
 def mechanism_files() -> dict[str, str]:
@@ -231,7 +233,7 @@ def functions(module, parts: dict, kernels_text: str | None = None) -> list:
                                 calls=calls, constants=constants))
             calls[name] = f"{system}_{name}"
         for name in EXPORTED:
-            if name == "frame_inputs" and not frame:
+            if (name == "frame_inputs" and not frame) or (name == "extremal" and frame):
                 continue
             out.append(Function(function_source(kernels_text, name), f"{name}__{system}", KERNEL_KINDS[name],
                                 calls=calls, constants=constants))

@@ -17,7 +17,7 @@ from . import system_kernels
 #: The integrator's files the inlined kernels are generated from (the step's and the
 #: kernels'), relative to the repository (named in the generated header).
 KERNEL_SOURCES = ("nonholo/integrate/cf4.py", "nonholo/integrate/motion_kernels.py",
-                  "nonholo/integrate/variational_kernels.py")
+                  "nonholo/integrate/variational_kernels.py", "nonholo/integrate/extremal_kernels.py")
 
 
 def compiled_system(mechanism, frame: bool = False) -> system_kernels.Kernels:

@@ -41,7 +41,7 @@ from ..generated import cf4_kernels as kernels_inlined
 from ..numerics import effort
 from ..numerics.jit import jit
 from ..numerics.kernels import exp_times, inv33, inverse_into, rodrigues
-from . import cf4, motion_kernels, variational_kernels
+from . import cf4, extremal_kernels, motion_kernels, variational_kernels
 
 @dataclass(frozen=True)
 class Kernels:
@@ -62,6 +62,8 @@ class Kernels:
         :func:`~nonholo.integrate.variational_kernels.forward_variational`.
     frame_inputs : callable or None
         The kernel :func:`~nonholo.integrate.motion_kernels.frame_inputs` (frame systems).
+    extremal : callable or None
+        The kernel :func:`~nonholo.integrate.extremal_kernels.extremal` (physical systems).
     n_coordinates : int, default 0
         ``k``, the number of coordinates ``q`` of the state (0 on SO(3)).
     backend : str, default "numba"
@@ -75,6 +77,7 @@ class Kernels:
     forward: object
     forward_variational: object
     frame_inputs: object = None
+    extremal: object = None
     #: ``k``, the number of coordinates ``q`` of the state (0 on SO(3))
     n_coordinates: int = 0
     #: ``"native"`` (C translated from these kernels, :mod:`nonholo.codegen.emit`)
@@ -104,15 +107,15 @@ class Kernels:
 #: ``nonholo derive``, see :mod:`nonholo.codegen.inline`); the helpers they still call,
 #: specialised first.
 _TEMPLATES = (cf4.rates, variational_kernels.zstage, kernels_inlined.forward,
-              kernels_inlined.forward_variational, kernels_inlined.frame_inputs)
+              kernels_inlined.forward_variational, kernels_inlined.frame_inputs, kernels_inlined.extremal)
 #: The kernels as written (``compile_system(..., inlined=False)``).
 _WRITTEN = (cf4.rates, cf4.advance, variational_kernels.zpredict, cf4.cf4_stage, cf4.cf4_step,
             variational_kernels.zstage, motion_kernels.forward, variational_kernels.forward_variational,
-            motion_kernels.frame_inputs)
+            motion_kernels.frame_inputs, extremal_kernels.extremal_stage, extremal_kernels.extremal)
 #: The globals of every kernel's copy before the system's names are bound (:func:`specialise`):
 #: those of the modules that write the kernels and the step (the step's module last: its
 #: name is the copies' module).
-_KERNEL_GLOBALS = {**vars(motion_kernels), **vars(variational_kernels), **vars(cf4)}
+_KERNEL_GLOBALS = {**vars(motion_kernels), **vars(variational_kernels), **vars(extremal_kernels), **vars(cf4)}
 
 
 def specialise(template, namespace: dict, bindings: dict, tag: str, cache: bool):
@@ -292,6 +295,7 @@ def _native(module, frame: bool, required: bool) -> Kernels | None:
                    forward_variational=metered(fns["forward_variational"], 1.0, 2),
                    frame_inputs=None if fns["frame_inputs"] is None
                    else metered(fns["frame_inputs"], effort.FORWARD_WEIGHT, 2),
+                   extremal=None if fns["extremal"] is None else metered(fns["extremal"], effort.EXTREMAL_WEIGHT, 9),
                    backend="native")
     _NATIVE[module, frame] = kern
     return kern
@@ -313,7 +317,7 @@ def _compile(module, frame: bool, templates, tag: str, cache: bool, fast_derivat
     if frame:
         bindings["W_into"] = jit(module.W_into, cache=False, lazy=False)
     for template in templates:
-        if template.__name__ == "frame_inputs" and not frame:
+        if (template.__name__ == "frame_inputs" and not frame) or (template.__name__ == "extremal" and frame):
             continue
         bindings[template.__name__] = specialise(template, _KERNEL_GLOBALS, bindings, tag, cache)
     frame_kernel = bindings.get("frame_inputs")
@@ -321,7 +325,8 @@ def _compile(module, frame: bool, templates, tag: str, cache: bool, fast_derivat
                    n_coordinates=len(module.COORDINATES),
                    forward=metered(bindings["forward"], effort.FORWARD_WEIGHT, 2),
                    forward_variational=metered(bindings["forward_variational"], 1.0, 2),
-                   frame_inputs=None if frame_kernel is None else metered(frame_kernel, effort.FORWARD_WEIGHT, 2))
+                   frame_inputs=None if frame_kernel is None else metered(frame_kernel, effort.FORWARD_WEIGHT, 2),
+                   extremal=None if frame else metered(bindings["extremal"], effort.EXTREMAL_WEIGHT, 9))
     return kern
 
 

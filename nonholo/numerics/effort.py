@@ -5,7 +5,8 @@ global route's (:mod:`nonholo.planning.route`) and the least-energy stage's stop
 after a budget of effort, not of wall time, so a plan is the same whether it runs alone, beside other work, or on a
 slower machine — only the wall time it takes differs. Every call of a compiled kernel
 (:func:`nonholo.integrate.system_kernels.compile_system`) adds its steps: a variational step counts 1, a
-forward step :data:`FORWARD_WEIGHT` (its share of the work), a partial step of
+forward step :data:`FORWARD_WEIGHT` (its share of the work), a step of a normal extremal
+:data:`EXTREMAL_WEIGHT`, a partial step of
 :func:`nonholo.integrate.motion_kernels.frame_inputs` as much; the least-energy stage
 (:mod:`nonholo.planning.energy_optimiser`) adds its iterations' linear algebra. :func:`seconds` converts the count with
 :data:`STEPS_PER_SECOND`, the variational steps a second of planning on the reference
@@ -35,6 +36,9 @@ SECONDS_PER_UNIT = 2.0 ** -22
 STEPS_PER_SECOND = 1.0 / (UNITS_PER_STEP * SECONDS_PER_UNIT)
 #: A forward step's effort, in variational steps (forward replays run about 2.5× faster).
 FORWARD_WEIGHT = 0.4
+#: A step of a normal extremal (state and costate, :mod:`nonholo.integrate.extremal_kernels`),
+#: in variational steps (a whole number of units, like :data:`FORWARD_WEIGHT`).
+EXTREMAL_WEIGHT = 0.6
 
 _count = [0]
 

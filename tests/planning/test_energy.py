@@ -301,6 +301,7 @@ def test_the_search_stops_once_runs_agree_on_the_least_energy(monkeypatch):
     critical point: the search stops once two runs agree (CONFIRMATIONS), after less
     than half the starts, with the energy of the search that takes every start — both
     confirmed by DOP853."""
+    monkeypatch.setattr(energy, "EXTREMAL_EFFORT", 0.0)   # the search itself, without the extremals
     R0, Rd, T = goal("near-s1-04")
     started = []
     begin = energy_search.begin
@@ -369,6 +370,7 @@ def test_the_search_on_half_the_steps_certifies_on_the_plans_own(monkeypatch):
     """A near platform goal: the search on half the plan's integrator steps
     (SEARCH_COARSENING) returns a plan on the full steps with the energy of the search on
     the full steps (both confirmed by DOP853), for less effort."""
+    monkeypatch.setattr(energy, "EXTREMAL_EFFORT", 0.0)   # the search itself, without the extremals
     R0, Rd, T = goal("near-s6-07")
     coarse, coarse_effort = effort_of(lambda: nonholo.plan(R0, Rd, T=T, objective="energy"))
     monkeypatch.setattr(energy, "SEARCH_COARSENING", 1)
@@ -383,6 +385,7 @@ def test_where_the_search_on_fewer_steps_certifies_nothing_it_searches_on_the_pl
     """Where the search on half the steps returns nothing certified (here refused: a motion
     riding a limit may stop short of the goal on the coarser steps), the search runs again
     on the plan's own steps and lowers the plan's energy as the search does (DOP853)."""
+    monkeypatch.setattr(energy, "EXTREMAL_EFFORT", 0.0)   # the search itself, without the extremals
     R0, Rd, T = goal("near-s1-04")
     usual = nonholo.plan(R0, Rd, T=T, objective="energy")
     searched = []
@@ -509,11 +512,12 @@ LIMIT_PAIR = ([2.096230047574747, 0.46216472194268254, 1.8030320833764233, 0.781
 
 
 @pytest.mark.slow
-def test_auto_makes_the_plan_smooth_where_the_least_energy_fit_cannot_reach_the_goal():
+def test_auto_makes_the_plan_smooth_where_the_least_energy_fit_cannot_reach_the_goal(monkeypatch):
     """On that pair the default descends from the Fourier fit of the plan instead: a smooth
     motion DOP853 confirms (the goal, and most of the plan's clearance from Δ = 0), below
     REFIT_BELOW of the plan's energy and within 3× of the least energy found by
     ``objective="energy"``."""
+    monkeypatch.setattr(energy, "WASTEFUL", 0.0)   # the quick search, as for a wasteful plan
     start, goal = LIMIT_PAIR
     plain = nonholo.plan(start, goal, mechanism="car", constraints=[Clearance(0.01)], objective=None)
     least = nonholo.plan(start, goal, mechanism="car", constraints=[Clearance(0.01)], objective="energy")
@@ -533,6 +537,7 @@ def test_auto_keeps_the_plan_where_no_smooth_fit_reaches_the_goal_below_it(monke
     iterations stays at the plan's energy, above REFIT_BELOW of it), the default keeps the
     plan as found, its reason saying why: grid controls, which jump at every interval, are
     no motion to execute."""
+    monkeypatch.setattr(energy, "WASTEFUL", 0.0)   # the quick search, as for a wasteful plan
     start, goal = LIMIT_PAIR
     monkeypatch.setattr(energy_smoothing, "SMOOTH_PLAN_ITERATIONS", 0)
     found = nonholo.plan(start, goal, mechanism="car", constraints=[Clearance(0.01)], objective=None)

@@ -1095,6 +1095,367 @@ static void forward_variational__physical(double *R0, int64_t R0_s0, int64_t R0_
     return;
 }
 
+static void extremal__physical(double *R0, int64_t R0_s0, int64_t R0_s1, double *q0, int64_t q0_s0, double *p0, int64_t p0_s0, double h, double sgn, double delta_stop, double *Rs, int64_t Rs_s0, int64_t Rs_s1, int64_t Rs_s2, double *Qs, int64_t Qs_s0, int64_t Qs_s1, double *Ps, int64_t Ps_s0, int64_t Ps_s1, double *U, int64_t U_s0, int64_t U_s1, int64_t U_s2, int64_t *_r0, double *_r1, double *_r2)
+{
+    (void)R0_s0; (void)R0_s1; (void)q0_s0; (void)p0_s0; (void)Rs_s0; (void)Rs_s1; (void)Rs_s2; (void)Qs_s0; (void)Qs_s1; (void)Ps_s0; (void)Ps_s1; (void)U_s0; (void)U_s1; (void)U_s2;
+    int64_t i = 0;
+    int64_t n = 0;
+    int64_t j = 0;
+    int64_t N = 0;
+    int64_t m = 0;
+    int64_t k = 0;
+    double dmin = 0;
+    int64_t n_done = 0;
+    double t_stop = 0;
+    int ok = 0;
+    double d = 0;
+    double tx = 0;
+    double ty = 0;
+    double tz = 0;
+    double cx = 0;
+    double cy = 0;
+    double cz = 0;
+    double s = 0;
+    double *R = NULL;
+    int64_t R_s0 = 0, R_s1 = 0;
+    double *Y = NULL;
+    int64_t Y_s0 = 0, Y_s1 = 0;
+    double *E = NULL;
+    int64_t E_s0 = 0, E_s1 = 0;
+    double *q = NULL;
+    int64_t q_s0 = 0;
+    double *P = NULL;
+    int64_t P_s0 = 0;
+    double *p = NULL;
+    int64_t p_s0 = 0;
+    double *pc = NULL;
+    int64_t pc_s0 = 0;
+    double *B = NULL;
+    int64_t B_s0 = 0, B_s1 = 0;
+    double *A = NULL;
+    int64_t A_s0 = 0, A_s1 = 0;
+    double *u = NULL;
+    int64_t u_s0 = 0;
+    double *F1 = NULL;
+    int64_t F1_s0 = 0;
+    double *F2 = NULL;
+    int64_t F2_s0 = 0;
+    double *F3 = NULL;
+    int64_t F3_s0 = 0;
+    double *F4 = NULL;
+    int64_t F4_s0 = 0;
+    double *G1 = NULL;
+    int64_t G1_s0 = 0;
+    double *G2 = NULL;
+    int64_t G2_s0 = 0;
+    double *G3 = NULL;
+    int64_t G3_s0 = 0;
+    double *G4 = NULL;
+    int64_t G4_s0 = 0;
+    double *K = NULL;
+    int64_t K_s0 = 0;
+    N = U_s0;
+    m = U_s2;
+    k = q0_s0;
+    R_s0 = R0_s0;
+    R_s1 = R0_s1;
+    R = (double *)alloca(sizeof(double) * ((R_s0) * (R_s1) + 1));
+    memcpy(R, R0, sizeof(double) * ((R_s0) * (R_s1)));
+    Y_s0 = R0_s0;
+    Y_s1 = R0_s1;
+    Y = (double *)alloca(sizeof(double) * ((Y_s0) * (Y_s1) + 1));
+    memcpy(Y, R0, sizeof(double) * ((Y_s0) * (Y_s1)));
+    E_s0 = INT64_C(3);
+    E_s1 = INT64_C(3);
+    E = (double *)alloca(sizeof(double) * ((E_s0) * (E_s1) + 1));
+    q_s0 = q0_s0;
+    q = (double *)alloca(sizeof(double) * ((q_s0) + 1));
+    memcpy(q, q0, sizeof(double) * ((q_s0)));
+    P_s0 = k;
+    P = (double *)alloca(sizeof(double) * ((P_s0) + 1));
+    p_s0 = p0_s0;
+    p = (double *)alloca(sizeof(double) * ((p_s0) + 1));
+    memcpy(p, p0, sizeof(double) * ((p_s0)));
+    pc_s0 = INT64_C(5);
+    pc = (double *)alloca(sizeof(double) * ((pc_s0) + 1));
+    B_s0 = INT64_C(5);
+    B_s1 = m;
+    B = (double *)alloca(sizeof(double) * ((B_s0) * (B_s1) + 1));
+    A_s0 = INT64_C(5);
+    A_s1 = INT64_C(5);
+    A = (double *)alloca(sizeof(double) * ((A_s0) * (A_s1) + 1));
+    u_s0 = m;
+    u = (double *)alloca(sizeof(double) * ((u_s0) + 1));
+    F1_s0 = INT64_C(5);
+    F1 = (double *)alloca(sizeof(double) * ((F1_s0) + 1));
+    F2_s0 = INT64_C(5);
+    F2 = (double *)alloca(sizeof(double) * ((F2_s0) + 1));
+    F3_s0 = INT64_C(5);
+    F3 = (double *)alloca(sizeof(double) * ((F3_s0) + 1));
+    F4_s0 = INT64_C(5);
+    F4 = (double *)alloca(sizeof(double) * ((F4_s0) + 1));
+    G1_s0 = INT64_C(5);
+    G1 = (double *)alloca(sizeof(double) * ((G1_s0) + 1));
+    G2_s0 = INT64_C(5);
+    G2 = (double *)alloca(sizeof(double) * ((G2_s0) + 1));
+    G3_s0 = INT64_C(5);
+    G3 = (double *)alloca(sizeof(double) * ((G3_s0) + 1));
+    G4_s0 = INT64_C(5);
+    G4 = (double *)alloca(sizeof(double) * ((G4_s0) + 1));
+    K_s0 = INT64_C(3);
+    K = (double *)alloca(sizeof(double) * ((K_s0) + 1));
+    for (i = 0; i < INT64_C(3); i += 1) {
+        for (j = 0; j < INT64_C(3); j += 1) {
+            Rs[((INT64_C(0)) * Rs_s1 + (i)) * Rs_s2 + (j)] = R0[(i) * R0_s1 + (j)];
+        }
+    }
+    for (i = 0; i < k; i += 1) {
+        Qs[(INT64_C(0)) * Qs_s1 + (i)] = q0[i];
+    }
+    for (i = 0; i < INT64_C(5); i += 1) {
+        Ps[(INT64_C(0)) * Ps_s1 + (i)] = p0[i];
+    }
+    dmin = INFINITY;
+    n_done = INT64_C(0);
+    t_stop = (-1.0);
+    for (n = 0; n < N; n += 1) {
+        ok = 0;
+        d = (sgn * physical_delta(R, R_s0, R_s1, q, q_s0));
+        dmin = ({ double _a1 = dmin; double _b1 = d; (_b1 < _a1) ? _b1 : _a1; });
+        if ((((d) >= (delta_stop)))) {
+            physical_G_into(R, R_s0, R_s1, q, q_s0, B, B_s0, B_s1);
+            m = B_s1;
+            for (i = 0; i < m; i += 1) {
+                s = 0.0;
+                for (j = 0; j < INT64_C(5); j += 1) {
+                    s += (B[(j) * B_s1 + (i)] * p[j]);
+                }
+                u[i] = s;
+            }
+            ok = physical_rates(B, B_s0, B_s1, u, u_s0, F1, F1_s0);
+            physical_QG_into(R, R_s0, R_s1, q, q_s0, u, u_s0, A, A_s0, A_s1);
+            A[(INT64_C(0)) * A_s1 + (INT64_C(1))] -= F1[INT64_C(2)];
+            A[(INT64_C(0)) * A_s1 + (INT64_C(2))] += F1[INT64_C(1)];
+            A[(INT64_C(1)) * A_s1 + (INT64_C(0))] += F1[INT64_C(2)];
+            A[(INT64_C(1)) * A_s1 + (INT64_C(2))] -= F1[INT64_C(0)];
+            A[(INT64_C(2)) * A_s1 + (INT64_C(0))] -= F1[INT64_C(1)];
+            A[(INT64_C(2)) * A_s1 + (INT64_C(1))] += F1[INT64_C(0)];
+            for (j = 0; j < INT64_C(5); j += 1) {
+                s = 0.0;
+                for (i = 0; i < INT64_C(5); i += 1) {
+                    s += (A[(i) * A_s1 + (j)] * p[i]);
+                }
+                G1[j] = (-s);
+                ok = ((ok) && (isfinite(s)));
+            }
+        }
+        if ((!(ok))) {
+            t_stop = (n * h);
+            break;
+        }
+        for (i = 0; i < m; i += 1) {
+            U[((n) * U_s1 + (INT64_C(0))) * U_s2 + (i)] = u[i];
+        }
+        nh_exp_times(((0.5 * h) * F1[INT64_C(0)]), ((0.5 * h) * F1[INT64_C(1)]), ((0.5 * h) * F1[INT64_C(2)]), R, R_s0, R_s1, E, E_s0, E_s1, Y, Y_s0, Y_s1);
+        for (i = 0; i < k; i += 1) {
+            P[i] = (q[i] + ((0.5 * h) * F1[(INT64_C(3) + i)]));
+        }
+        for (i = 0; i < INT64_C(5); i += 1) {
+            pc[i] = (p[i] + ((0.5 * h) * G1[i]));
+        }
+        ok = 0;
+        d = (sgn * physical_delta(Y, Y_s0, Y_s1, P, P_s0));
+        dmin = ({ double _a2 = dmin; double _b2 = d; (_b2 < _a2) ? _b2 : _a2; });
+        if ((((d) >= (delta_stop)))) {
+            physical_G_into(Y, Y_s0, Y_s1, P, P_s0, B, B_s0, B_s1);
+            m = B_s1;
+            for (i = 0; i < m; i += 1) {
+                s = 0.0;
+                for (j = 0; j < INT64_C(5); j += 1) {
+                    s += (B[(j) * B_s1 + (i)] * pc[j]);
+                }
+                u[i] = s;
+            }
+            ok = physical_rates(B, B_s0, B_s1, u, u_s0, F2, F2_s0);
+            physical_QG_into(Y, Y_s0, Y_s1, P, P_s0, u, u_s0, A, A_s0, A_s1);
+            A[(INT64_C(0)) * A_s1 + (INT64_C(1))] -= F2[INT64_C(2)];
+            A[(INT64_C(0)) * A_s1 + (INT64_C(2))] += F2[INT64_C(1)];
+            A[(INT64_C(1)) * A_s1 + (INT64_C(0))] += F2[INT64_C(2)];
+            A[(INT64_C(1)) * A_s1 + (INT64_C(2))] -= F2[INT64_C(0)];
+            A[(INT64_C(2)) * A_s1 + (INT64_C(0))] -= F2[INT64_C(1)];
+            A[(INT64_C(2)) * A_s1 + (INT64_C(1))] += F2[INT64_C(0)];
+            for (j = 0; j < INT64_C(5); j += 1) {
+                s = 0.0;
+                for (i = 0; i < INT64_C(5); i += 1) {
+                    s += (A[(i) * A_s1 + (j)] * pc[i]);
+                }
+                G2[j] = (-s);
+                ok = ((ok) && (isfinite(s)));
+            }
+        }
+        if ((!(ok))) {
+            t_stop = (n * h);
+            break;
+        }
+        for (i = 0; i < m; i += 1) {
+            U[((n) * U_s1 + (INT64_C(1))) * U_s2 + (i)] = (0.5 * u[i]);
+        }
+        tx = ((0.5 * h) * F1[INT64_C(0)]);
+        ty = ((0.5 * h) * F1[INT64_C(1)]);
+        tz = ((0.5 * h) * F1[INT64_C(2)]);
+        cx = ((ty * F2[INT64_C(2)]) - (tz * F2[INT64_C(1)]));
+        cy = ((tz * F2[INT64_C(0)]) - (tx * F2[INT64_C(2)]));
+        cz = ((tx * F2[INT64_C(1)]) - (ty * F2[INT64_C(0)]));
+        F2[INT64_C(0)] = ((F2[INT64_C(0)] - (0.5 * cx)) + ((double)(((ty * cz) - (tz * cy))) / (double)(12.0)));
+        F2[INT64_C(1)] = ((F2[INT64_C(1)] - (0.5 * cy)) + ((double)(((tz * cx) - (tx * cz))) / (double)(12.0)));
+        F2[INT64_C(2)] = ((F2[INT64_C(2)] - (0.5 * cz)) + ((double)(((tx * cy) - (ty * cx))) / (double)(12.0)));
+        nh_exp_times(((0.5 * h) * F2[INT64_C(0)]), ((0.5 * h) * F2[INT64_C(1)]), ((0.5 * h) * F2[INT64_C(2)]), R, R_s0, R_s1, E, E_s0, E_s1, Y, Y_s0, Y_s1);
+        for (i = 0; i < k; i += 1) {
+            P[i] = (q[i] + ((0.5 * h) * F2[(INT64_C(3) + i)]));
+        }
+        for (i = 0; i < INT64_C(5); i += 1) {
+            pc[i] = (p[i] + ((0.5 * h) * G2[i]));
+        }
+        ok = 0;
+        d = (sgn * physical_delta(Y, Y_s0, Y_s1, P, P_s0));
+        dmin = ({ double _a3 = dmin; double _b3 = d; (_b3 < _a3) ? _b3 : _a3; });
+        if ((((d) >= (delta_stop)))) {
+            physical_G_into(Y, Y_s0, Y_s1, P, P_s0, B, B_s0, B_s1);
+            m = B_s1;
+            for (i = 0; i < m; i += 1) {
+                s = 0.0;
+                for (j = 0; j < INT64_C(5); j += 1) {
+                    s += (B[(j) * B_s1 + (i)] * pc[j]);
+                }
+                u[i] = s;
+            }
+            ok = physical_rates(B, B_s0, B_s1, u, u_s0, F3, F3_s0);
+            physical_QG_into(Y, Y_s0, Y_s1, P, P_s0, u, u_s0, A, A_s0, A_s1);
+            A[(INT64_C(0)) * A_s1 + (INT64_C(1))] -= F3[INT64_C(2)];
+            A[(INT64_C(0)) * A_s1 + (INT64_C(2))] += F3[INT64_C(1)];
+            A[(INT64_C(1)) * A_s1 + (INT64_C(0))] += F3[INT64_C(2)];
+            A[(INT64_C(1)) * A_s1 + (INT64_C(2))] -= F3[INT64_C(0)];
+            A[(INT64_C(2)) * A_s1 + (INT64_C(0))] -= F3[INT64_C(1)];
+            A[(INT64_C(2)) * A_s1 + (INT64_C(1))] += F3[INT64_C(0)];
+            for (j = 0; j < INT64_C(5); j += 1) {
+                s = 0.0;
+                for (i = 0; i < INT64_C(5); i += 1) {
+                    s += (A[(i) * A_s1 + (j)] * pc[i]);
+                }
+                G3[j] = (-s);
+                ok = ((ok) && (isfinite(s)));
+            }
+        }
+        if ((!(ok))) {
+            t_stop = (n * h);
+            break;
+        }
+        for (i = 0; i < m; i += 1) {
+            U[((n) * U_s1 + (INT64_C(1))) * U_s2 + (i)] += (0.5 * u[i]);
+        }
+        tx = ((0.5 * h) * F2[INT64_C(0)]);
+        ty = ((0.5 * h) * F2[INT64_C(1)]);
+        tz = ((0.5 * h) * F2[INT64_C(2)]);
+        cx = ((ty * F3[INT64_C(2)]) - (tz * F3[INT64_C(1)]));
+        cy = ((tz * F3[INT64_C(0)]) - (tx * F3[INT64_C(2)]));
+        cz = ((tx * F3[INT64_C(1)]) - (ty * F3[INT64_C(0)]));
+        F3[INT64_C(0)] = ((F3[INT64_C(0)] - (0.5 * cx)) + ((double)(((ty * cz) - (tz * cy))) / (double)(12.0)));
+        F3[INT64_C(1)] = ((F3[INT64_C(1)] - (0.5 * cy)) + ((double)(((tz * cx) - (tx * cz))) / (double)(12.0)));
+        F3[INT64_C(2)] = ((F3[INT64_C(2)] - (0.5 * cz)) + ((double)(((tx * cy) - (ty * cx))) / (double)(12.0)));
+        nh_exp_times((h * F3[INT64_C(0)]), (h * F3[INT64_C(1)]), (h * F3[INT64_C(2)]), R, R_s0, R_s1, E, E_s0, E_s1, Y, Y_s0, Y_s1);
+        for (i = 0; i < k; i += 1) {
+            P[i] = (q[i] + (h * F3[(INT64_C(3) + i)]));
+        }
+        for (i = 0; i < INT64_C(5); i += 1) {
+            pc[i] = (p[i] + (h * G3[i]));
+        }
+        ok = 0;
+        d = (sgn * physical_delta(Y, Y_s0, Y_s1, P, P_s0));
+        dmin = ({ double _a4 = dmin; double _b4 = d; (_b4 < _a4) ? _b4 : _a4; });
+        if ((((d) >= (delta_stop)))) {
+            physical_G_into(Y, Y_s0, Y_s1, P, P_s0, B, B_s0, B_s1);
+            m = B_s1;
+            for (i = 0; i < m; i += 1) {
+                s = 0.0;
+                for (j = 0; j < INT64_C(5); j += 1) {
+                    s += (B[(j) * B_s1 + (i)] * pc[j]);
+                }
+                u[i] = s;
+            }
+            ok = physical_rates(B, B_s0, B_s1, u, u_s0, F4, F4_s0);
+            physical_QG_into(Y, Y_s0, Y_s1, P, P_s0, u, u_s0, A, A_s0, A_s1);
+            A[(INT64_C(0)) * A_s1 + (INT64_C(1))] -= F4[INT64_C(2)];
+            A[(INT64_C(0)) * A_s1 + (INT64_C(2))] += F4[INT64_C(1)];
+            A[(INT64_C(1)) * A_s1 + (INT64_C(0))] += F4[INT64_C(2)];
+            A[(INT64_C(1)) * A_s1 + (INT64_C(2))] -= F4[INT64_C(0)];
+            A[(INT64_C(2)) * A_s1 + (INT64_C(0))] -= F4[INT64_C(1)];
+            A[(INT64_C(2)) * A_s1 + (INT64_C(1))] += F4[INT64_C(0)];
+            for (j = 0; j < INT64_C(5); j += 1) {
+                s = 0.0;
+                for (i = 0; i < INT64_C(5); i += 1) {
+                    s += (A[(i) * A_s1 + (j)] * pc[i]);
+                }
+                G4[j] = (-s);
+                ok = ((ok) && (isfinite(s)));
+            }
+        }
+        if ((!(ok))) {
+            t_stop = (n * h);
+            break;
+        }
+        for (i = 0; i < m; i += 1) {
+            U[((n) * U_s1 + (INT64_C(2))) * U_s2 + (i)] = u[i];
+        }
+        tx = (h * F3[INT64_C(0)]);
+        ty = (h * F3[INT64_C(1)]);
+        tz = (h * F3[INT64_C(2)]);
+        cx = ((ty * F4[INT64_C(2)]) - (tz * F4[INT64_C(1)]));
+        cy = ((tz * F4[INT64_C(0)]) - (tx * F4[INT64_C(2)]));
+        cz = ((tx * F4[INT64_C(1)]) - (ty * F4[INT64_C(0)]));
+        F4[INT64_C(0)] = ((F4[INT64_C(0)] - (0.5 * cx)) + ((double)(((ty * cz) - (tz * cy))) / (double)(12.0)));
+        F4[INT64_C(1)] = ((F4[INT64_C(1)] - (0.5 * cy)) + ((double)(((tz * cx) - (tx * cz))) / (double)(12.0)));
+        F4[INT64_C(2)] = ((F4[INT64_C(2)] - (0.5 * cz)) + ((double)(((tx * cy) - (ty * cx))) / (double)(12.0)));
+        for (i = 0; i < INT64_C(3); i += 1) {
+            K[i] = (((double)(h) / (double)(6.0)) * (((F1[i] + (2.0 * F2[i])) + (2.0 * F3[i])) + F4[i]));
+        }
+        nh_exp_times(K[INT64_C(0)], K[INT64_C(1)], K[INT64_C(2)], R, R_s0, R_s1, E, E_s0, E_s1, Y, Y_s0, Y_s1);
+        for (i = 0; i < INT64_C(3); i += 1) {
+            for (j = 0; j < INT64_C(3); j += 1) {
+                R[(i) * R_s1 + (j)] = Y[(i) * Y_s1 + (j)];
+            }
+        }
+        for (i = 0; i < k; i += 1) {
+            j = (INT64_C(3) + i);
+            q[i] = (q[i] + (((double)(h) / (double)(6.0)) * (((F1[j] + (2.0 * F2[j])) + (2.0 * F3[j])) + F4[j])));
+        }
+        for (i = 0; i < INT64_C(5); i += 1) {
+            p[i] = (p[i] + (((double)(h) / (double)(6.0)) * (((G1[i] + (2.0 * G2[i])) + (2.0 * G3[i])) + G4[i])));
+        }
+        d = (sgn * physical_delta(R, R_s0, R_s1, q, q_s0));
+        dmin = ({ double _a5 = dmin; double _b5 = d; (_b5 < _a5) ? _b5 : _a5; });
+        if ((!((((d) >= (delta_stop)))))) {
+            t_stop = ((n + INT64_C(1)) * h);
+            break;
+        }
+        for (i = 0; i < INT64_C(3); i += 1) {
+            for (j = 0; j < INT64_C(3); j += 1) {
+                Rs[(((n + INT64_C(1))) * Rs_s1 + (i)) * Rs_s2 + (j)] = R[(i) * R_s1 + (j)];
+            }
+        }
+        for (i = 0; i < k; i += 1) {
+            Qs[((n + INT64_C(1))) * Qs_s1 + (i)] = q[i];
+        }
+        for (i = 0; i < INT64_C(5); i += 1) {
+            Ps[((n + INT64_C(1))) * Ps_s1 + (i)] = p[i];
+        }
+        n_done = (n + INT64_C(1));
+    }
+    *_r0 = n_done;
+    *_r1 = dmin;
+    *_r2 = t_stop;
+    return;
+}
+
 static PyObject *py_forward__physical(PyObject *self, PyObject *const *args, Py_ssize_t nargs)
 {
     void *R0_d = NULL; int64_t R0_sh[2] = {0};
@@ -1188,9 +1549,50 @@ done:
     return result;
 }
 
+static PyObject *py_extremal__physical(PyObject *self, PyObject *const *args, Py_ssize_t nargs)
+{
+    void *R0_d = NULL; int64_t R0_sh[2] = {0};
+    void *q0_d = NULL; int64_t q0_sh[1] = {0};
+    void *p0_d = NULL; int64_t p0_sh[1] = {0};
+    double h = 0;
+    double sgn = 0;
+    double delta_stop = 0;
+    void *Rs_d = NULL; int64_t Rs_sh[3] = {0};
+    void *Qs_d = NULL; int64_t Qs_sh[2] = {0};
+    void *Ps_d = NULL; int64_t Ps_sh[2] = {0};
+    void *U_d = NULL; int64_t U_sh[3] = {0};
+    int64_t r0 = 0;
+    double r1 = 0;
+    double r2 = 0;
+    if (nargs != 10) { PyErr_Format(PyExc_TypeError, "extremal__physical takes 10 arguments (%zd given)", nargs); return NULL; }
+    PyObject *hold[7] = {NULL};
+    PyObject *result = NULL;
+    if (!nh_array(args[0], NPY_FLOAT64, 2, 0, "extremal__physical", "R0", &hold[0], &R0_d, R0_sh)) goto done;
+    if (!nh_array(args[1], NPY_FLOAT64, 1, 0, "extremal__physical", "q0", &hold[1], &q0_d, q0_sh)) goto done;
+    if (!nh_array(args[2], NPY_FLOAT64, 1, 0, "extremal__physical", "p0", &hold[2], &p0_d, p0_sh)) goto done;
+    h = PyFloat_AsDouble(args[3]);
+    if (h == -1.0 && PyErr_Occurred()) goto done;
+    sgn = PyFloat_AsDouble(args[4]);
+    if (sgn == -1.0 && PyErr_Occurred()) goto done;
+    delta_stop = PyFloat_AsDouble(args[5]);
+    if (delta_stop == -1.0 && PyErr_Occurred()) goto done;
+    if (!nh_array(args[6], NPY_FLOAT64, 3, 1, "extremal__physical", "Rs", &hold[3], &Rs_d, Rs_sh)) goto done;
+    if (!nh_array(args[7], NPY_FLOAT64, 2, 1, "extremal__physical", "Qs", &hold[4], &Qs_d, Qs_sh)) goto done;
+    if (!nh_array(args[8], NPY_FLOAT64, 2, 1, "extremal__physical", "Ps", &hold[5], &Ps_d, Ps_sh)) goto done;
+    if (!nh_array(args[9], NPY_FLOAT64, 3, 1, "extremal__physical", "U", &hold[6], &U_d, U_sh)) goto done;
+    Py_BEGIN_ALLOW_THREADS
+    extremal__physical((double *)R0_d, R0_sh[0], R0_sh[1], (double *)q0_d, q0_sh[0], (double *)p0_d, p0_sh[0], h, sgn, delta_stop, (double *)Rs_d, Rs_sh[0], Rs_sh[1], Rs_sh[2], (double *)Qs_d, Qs_sh[0], Qs_sh[1], (double *)Ps_d, Ps_sh[0], Ps_sh[1], (double *)U_d, U_sh[0], U_sh[1], U_sh[2], &r0, &r1, &r2);
+    Py_END_ALLOW_THREADS
+    result = nh_tuple(3, PyLong_FromLongLong(r0), PyFloat_FromDouble(r1), PyFloat_FromDouble(r2));
+done:
+    for (int _h = 0; _h < 7; _h++) Py_XDECREF(hold[_h]);
+    return result;
+}
+
 static PyMethodDef methods[] = {
     {"forward__physical", (PyCFunction)(void (*)(void))py_forward__physical, METH_FASTCALL, NULL},
     {"forward_variational__physical", (PyCFunction)(void (*)(void))py_forward_variational__physical, METH_FASTCALL, NULL},
+    {"extremal__physical", (PyCFunction)(void (*)(void))py_extremal__physical, METH_FASTCALL, NULL},
     {NULL, NULL, 0, NULL}
 };
 
@@ -1201,6 +1603,6 @@ PyMODINIT_FUNC PyInit_rolling_ball(void)
     import_array();
     PyObject *m = PyModule_Create(&moduledef);
     if (m == NULL) return NULL;
-    if (PyModule_AddStringConstant(m, "SOURCE_DIGEST", "29f980ff73898b196f21c75619c2034bc452b08f087665e941a55bef300ff355") < 0) { Py_DECREF(m); return NULL; }
+    if (PyModule_AddStringConstant(m, "SOURCE_DIGEST", "f7d71fb0ec687b3d0d942dfe1a99dd1356251fc514ca1673c0074d5b0767d8fc") < 0) { Py_DECREF(m); return NULL; }
     return m;
 }
