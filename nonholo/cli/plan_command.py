@@ -124,10 +124,12 @@ def arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--leg-speed", type=float, default=None, metavar="V",
                    help="keep every leg's speed |dl/dt| <= V (geometry units per second): the plan "
                         "is re-timed, in the least time with --T min")
-    p.add_argument("--objective", choices=("none", "energy", "auto"), default="auto",
-                   help="auto (default): the plan, unless a quick search finds a smooth motion of far "
-                        "less energy; energy: then the least energy ∫|u|² dt a search finds, with the goal "
-                        "and limits kept; none: the plan as found")
+    p.add_argument("--objective", choices=("none", "energy", "auto", "time"), default="auto",
+                   help="auto (default): the plan, unless the extremal through it (or, for a wasteful plan, a "
+                        "quick search) finds a smooth motion of far less energy; energy: then the least energy "
+                        "∫|u|² dt, with the goal and limits kept; time: the path of least time under the input "
+                        "bounds (the mechanism's own unless given), played at full use of them; none: the plan "
+                        "as found")
     p.add_argument("--out", default=None, help="write the result as JSON to this file")
     p.add_argument("--plot", default=None, help="write a figure of the plan to this file (inputs, orientation, "
                         "coordinates, Δ against t; a vehicle's path on the plane)")

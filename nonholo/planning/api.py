@@ -33,7 +33,7 @@ import numpy as np
 from ..io.result import PlanResult
 from ..numerics import effort
 from ..numerics.blas import one_thread
-from . import energy
+from . import energy, least_time
 from . import route as global_route
 from . import route_paths, route_smoothing
 from .correction import certified
@@ -74,8 +74,10 @@ def plan(start, goal, *, mechanism="platform", T: float | None = 1.0, objective:
     T : float or None
         The horizon (s); ``None``: the least time under a
         :class:`~nonholo.planning.constraint_objects.LegSpeed` or input bounds.
-    objective : {"auto", None, "energy"}
-        What is lowered once the goal is reached (:mod:`nonholo.planning.energy`).
+    objective : {"auto", None, "energy", "time"}
+        What is lowered once the goal is reached: the energy (:mod:`nonholo.planning.energy`)
+        or, under input bounds, the time (:mod:`nonholo.planning.least_time`; ``T`` is then
+        the horizon the path is planned in first).
     constraints : sequence
         Constraint objects (:mod:`nonholo.constraints`); a ``Clearance(1e-2)`` unless given.
     strategy, route : str
@@ -245,8 +247,12 @@ def objective(problem: Problem, result: PlanResult) -> PlanResult:
     Returns
     -------
     PlanResult
-        The plan as it is for the objective ``None``; else after the least-energy stage.
+        The plan as it is for the objective ``None``; for ``"time"`` the path of least time
+        under the input bounds (:func:`nonholo.planning.least_time.least_time_path`, re-timed
+        by :func:`solve`); else after the least-energy stage.
     """
     if problem.objective is None:
         return result
+    if problem.objective == "time":
+        return least_time.least_time_path(problem, result)
     return energy.improve(problem, result, quick=problem.objective == "auto")

@@ -44,7 +44,7 @@ MAX_BASIS = 2 * 10**7
 #: What :func:`nonholo.plan` optimises once the goal is reached: nothing (the plan as found),
 #: the energy ∫|u|² dt, or the plan unless a quick search finds a motion of far less energy
 #: (:func:`nonholo.planning.energy.improve`).
-OBJECTIVES = (None, "energy", "auto")
+OBJECTIVES = (None, "energy", "auto", "time")
 #: The planning horizon (s) of a plan asked for in the least time (``T=None``): the path is
 #: planned in this time, then re-timed (:mod:`nonholo.planning.retime`).
 PLANNING_TIME = 1.0
@@ -84,8 +84,8 @@ class Problem:
         Start and goal (:class:`~nonholo.spaces.state.State`).
     T : float
         The horizon (s).
-    objective : {None, "energy", "auto"}
-        What is lowered once the plan is found.
+    objective : {None, "energy", "auto", "time"}
+        What is lowered once the plan is found (``"time"``: the horizon, under input bounds).
     constraints : tuple
         What the motion keeps (:mod:`nonholo.planning.constraint_objects`), a
         :class:`~nonholo.planning.constraint_objects.Clearance` always among them.
@@ -151,7 +151,16 @@ class Problem:
         if one_of(given, Clearance) is None:
             given = (Clearance(DEFAULT_CLEARANCE),) + given
         speed = one_of(given, LegSpeed)
-        if T is None and speed is None:
+        if not one_of_choices(objective, OBJECTIVES):
+            raise ValueError(f"unknown objective {objective!r}; known: None, 'energy', 'auto', 'time'")
+        if objective == "time" and speed is None:
+            given = given + least_time_bounds(given, mech)
+            bounds = one_of(given, InputBounds)
+            if bounds is None or bounds.free:
+                raise ValueError(f"objective='time' asks for the least time, which needs InputBounds in "
+                                 f"constraints (or a platform's LegSpeed); mechanism {mech.name!r} has no input "
+                                 f"bounds of its own")
+        elif T is None and speed is None:
             given = given + least_time_bounds(given, mech)
             if not any(isinstance(c, InputBounds) and not c.free for c in given):
                 raise ValueError(f"T=None asks for the least time, which needs a LegSpeed (a platform's) or "
@@ -160,13 +169,11 @@ class Problem:
         if speed is not None and any(isinstance(c, InputBounds) and not c.free for c in given):
             raise ValueError("LegSpeed and InputBounds cannot be kept together yet (each re-times the path "
                              "on its own): give one of them")
-        if not one_of_choices(objective, OBJECTIVES):
-            raise ValueError(f"unknown objective {objective!r}; known: None, 'energy', 'auto'")
         if not one_of_choices(route, ROUTES):
             raise ValueError(f"unknown route {route!r}; known: {', '.join(ROUTES)}")
         solver = check_strategy(strategy, allow_imports)
-        least_time = T is None
-        T = check_horizon(PLANNING_TIME if least_time else T)
+        least_time = T is None or objective == "time"
+        T = check_horizon(PLANNING_TIME if T is None else T)
         start = mech.parse_state(start, "start")
         goal = mech.parse_state(goal, "goal")
         for c in given:
