@@ -24,7 +24,10 @@ The sets (each case planned three times: with ``objective="energy"``, with the d
   :func:`benchmarks.casadi_ms.solve`, fine setting: 40 intervals, 8 substeps, Δ at the
   substeps; the car: the same multiple shooting written here for its four coordinates);
 - ``random``: uniform random pairs of every catalog mechanism (same component of
-  ``Δ ≠ 0``, ``|Δ| ≥ 0.1`` at both ends).
+  ``Δ ≠ 0``, ``|Δ| ≥ 0.1`` at both ends);
+- ``time``: ``objective="time"``, the least time under bounds: the unicycle's obstacle-free
+  park of Dynobench (``|v|, |ω| ≤ 0.5``) and car goals as above (``|v| ≤ 1``, ``|φ̇| ≤ 1``,
+  ``|φ| ≤ 0.6``) against CasADi/IPOPT's free-time transcription (:func:`casadi_car_time`).
 
 Every claimed success is re-simulated by DOP853 (rtol = atol = 1e-13, SciPy; on the
 hand-written models beyond SO(3)): *solved* = final error ≤ 1e-8 and ``sgnΔ ≥ delta_min``
@@ -59,7 +62,7 @@ SUCCESS_TOL = 1e-8
 SEED = 20260226
 #: Cases per set (``--quick``: the second number).
 SIZES = {"attitude": (12, 4), "brockett": (8, 3), "rolling_ball": (8, 3), "platform": (8, 2), "car": (6, 2),
-         "random": (4, 1)}
+         "random": (4, 1), "time": (6, 2)}
 SETS = tuple(SIZES)
 #: How each case is planned (:func:`run_plan`).
 KINDS = ("energy", "default", "found")
@@ -149,8 +152,25 @@ def random_cases(n: int, rng) -> list[dict]:
     return out
 
 
+#: The bounds of the least-time set: the car's (|v| ≤ 1, |φ̇| ≤ 1, |φ| ≤ 0.6) and the unicycle's
+#: (|v|, |ω| ≤ 0.5).
+CAR_TIME_BOUNDS = ((-1.0, -1.0), (1.0, 1.0), 0.6)
+UNICYCLE_TIME_BOUNDS = ((-0.5, -0.5), (0.5, 0.5))
+
+
+def time_cases(n: int, rng) -> list[dict]:
+    out = [{"mechanism": "unicycle", "start": np.array([0.7, 0.8, 0.0]), "goal": np.array([1.9, 0.3, 0.0]),
+            "T": 1.0, "reference": 2.95, "label": "park (0.7, 0.8, 0) → (1.9, 0.3, 0)", "band": "park"}]
+    for band, (box, ang) in (("near", (1.0, 1.0)), ("far", (3.0, np.pi))):
+        for _ in range(n):
+            qd = np.array([*rng.uniform(-box, box, 2), rng.uniform(-ang, ang), rng.uniform(-0.5, 0.5)])
+            out.append({"mechanism": "car", "start": np.zeros(4), "goal": qd, "T": 1.0, "reference": None,
+                        "label": f"({qd[0]:.2f}, {qd[1]:.2f}, {qd[2]:.2f}, {qd[3]:.2f})", "band": band})
+    return out
+
+
 MAKERS = {"attitude": attitude_cases, "brockett": brockett_cases, "rolling_ball": ball_cases,
-          "platform": platform_cases, "car": car_cases, "random": random_cases}
+          "platform": platform_cases, "car": car_cases, "random": random_cases, "time": time_cases}
 
 
 # --------------------------------------------------------------------------------------
@@ -187,9 +207,47 @@ def run_plan(case: dict, kind: str) -> dict:
     wall = time.perf_counter() - t
     c = check(case, res.controls, res.breakpoints, res.T) if res.success else None
     solved = c is not None and c["final_error"] <= SUCCESS_TOL and c["least_delta"] >= DELTA_MIN
-    return {"seconds": wall, "claimed": bool(res.success), "solved": solved,
+    return {"seconds": wall, "reported": res.seconds, "claimed": bool(res.success), "solved": solved,
             "energy": controls_energy(res.controls, res.breakpoints, res.T) if solved else None,
             "method": res.method, "reason": res.reason[-240:]}
+
+
+def time_constraints(case: dict) -> list:
+    from nonholo.constraints import InputBounds, StateBounds
+
+    if case["mechanism"] == "car":
+        low, high, phi = CAR_TIME_BOUNDS
+        return [InputBounds(low, high), StateBounds([-math.inf] * 3 + [-phi], [math.inf] * 3 + [phi])]
+    return [InputBounds(*UNICYCLE_TIME_BOUNDS)]
+
+
+def run_time(case: dict) -> dict:
+    """``plan(..., objective="time")`` under the set's bounds; DOP853 on the hand-written model
+    checks the goal, the clearance, the steering bound (car) along the dense path and the
+    inputs' bounds on a fine grid (1e-9 relative)."""
+    t = time.perf_counter()
+    res = plan(case["start"], case["goal"], mechanism=case["mechanism"], objective="time",
+               constraints=[Clearance(DELTA_MIN), *time_constraints(case)])
+    wall = time.perf_counter() - t
+    solved = False
+    if res.success:
+        c = check(case, res.controls, res.breakpoints, res.T)
+        _, _, q, _ = resimulate_state(case["start"], res.controls, res.T, case["mechanism"], res.breakpoints)
+        low, high = (CAR_TIME_BOUNDS[:2] if case["mechanism"] == "car" else UNICYCLE_TIME_BOUNDS)
+        u = np.asarray(res.controls(np.linspace(0.0, res.T, 100001)), dtype=float)
+        inside = np.all(u <= np.asarray(high) * (1 + 1e-9)) and np.all(u >= np.asarray(low) * (1 + 1e-9))
+        if case["mechanism"] == "car":
+            inside = inside and np.max(np.abs(q[:, 3])) <= CAR_TIME_BOUNDS[2] * (1 + 1e-9)
+        solved = c["final_error"] <= SUCCESS_TOL and c["least_delta"] >= DELTA_MIN and bool(inside)
+    return {"seconds": wall, "reported": res.seconds, "claimed": bool(res.success), "solved": solved,
+            "T": res.T if solved else None, "reason": res.reason[-240:]}
+
+
+def run_casadi_time(case: dict) -> dict:
+    t = time.perf_counter()
+    low, high, phi = CAR_TIME_BOUNDS
+    ok, T = casadi_car_time(case["start"], case["goal"], N=50, v_max=high[0], rate_max=high[1], phi_max=phi)
+    return {"seconds": time.perf_counter() - t, "solved": ok, "T": T if ok else None}
 
 
 # --------------------------------------------------------------------------------------
@@ -349,6 +407,19 @@ def main(argv=None) -> int:
     warmed = set()
     records = []
     for i, case in enumerate(cases):
+        if case["set"] == "time":
+            if ("time", case["mechanism"]) not in warmed:
+                run_time(case)
+                warmed.add(("time", case["mechanism"]))
+            rec = {k: case[k] for k in ("set", "mechanism", "band", "label", "reference", "T")}
+            rec["time"] = run_time(case)
+            if case["mechanism"] == "car" and not args.no_casadi:
+                rec["casadi_time"] = run_casadi_time(case)
+            records.append(rec)
+            _log(f"{i + 1}/{len(cases)} time {case['mechanism']} {case['label']}: T {rec['time']['T']} "
+                 f"({rec['time']['seconds']:.2f} s)"
+                 + (f", casadi {rec['casadi_time']['T']}" if "casadi_time" in rec else ""))
+            continue
         peer = case["set"] in ("platform", "car") and not args.no_casadi
         if case["mechanism"] not in warmed:
             for kind in KINDS:
@@ -370,14 +441,16 @@ def main(argv=None) -> int:
     return 0
 
 
-def report(records: list[dict], argv, args) -> None:
+def report(all_records: list[dict], argv, args) -> None:
+    records = [r for r in all_records if r["set"] != "time"]
+    timed = [r for r in all_records if r["set"] == "time"]
     rep = Report("optimality.md", "Least-energy plans against known optima and CasADi", "benchmarks.optimality",
                  argv, extra_packages=("casadi",))
     rep.paragraph(
         "Each case planned by `plan(start, goal, T, constraints=[Clearance(0.01)], objective=\"energy\")` "
         "(*energy*), by `plan(start, goal, T, constraints=[Clearance(0.01)])` (*default*: "
-        "`objective=\"auto\"`, the plan as found unless a quick search finds a smooth motion of far less "
-        "energy) and with `objective=None` (*found*: the plan as "
+        "`objective=\"auto\"`, the plan as found unless the extremal through it — or, for a wasteful plan, "
+        "a quick search — finds a smooth motion of far less energy) and with `objective=None` (*found*: the plan as "
         "found), timed per call after a warm-up call per mechanism. "
         f"Every claimed success re-simulated by DOP853 (rtol = atol = 1e-13): *solved* = final error ≤ "
         f"{SUCCESS_TOL:g} and sgnΔ ≥ {DELTA_MIN:g} along the dense path. Energy ∫|u|² dt by quadrature of the "
@@ -437,7 +510,49 @@ def report(records: list[dict], argv, args) -> None:
     rep.table(["set", "mechanism", "cases", "default solved", "energy solved", "default / energy",
                "above 3×", "found / energy", "above 3×", "default median ms", "found median ms",
                "energy median ms"], rows, align="llrrrrrrrrrr")
-    false = [(r, k) for r in records for k in KINDS if r[k]["claimed"] and not r[k]["solved"]]
+    if records:
+        rep.heading("Time: the default and the least energy against the plan as found")
+        rep.paragraph("Median wall time of each set over the median of the plan as found on the same cases "
+                      "(the median over the sets' ratios last).")
+        rows, d_ratios, e_ratios = [], [], []
+        for name in SETS:
+            rs = [r for r in records if r["set"] == name]
+            if not rs:
+                continue
+            found = float(np.median([r["found"]["seconds"] for r in rs]))
+            d = float(np.median([r["default"]["seconds"] for r in rs])) / found
+            e = float(np.median([r["energy"]["seconds"] for r in rs])) / found
+            d_ratios.append(d), e_ratios.append(e)
+            rows.append([name, len(rs), _ms([r["found"]["seconds"] for r in rs]), f"{d:.2f}×", f"{e:.2f}×"])
+        rows.append(["median of the sets", "", "", f"{np.median(d_ratios):.2f}×", f"{np.median(e_ratios):.2f}×"])
+        rep.table(["set", "cases", "found median ms", "default / found", "energy / found"], rows, align="lrrrr")
+    calls = [r[k] for r in all_records for k in (*KINDS, "time") if k in r and r[k].get("reported")]
+    if calls:
+        share = [c["reported"] / c["seconds"] for c in calls]
+        rep.paragraph(f"`PlanResult.seconds` over the call's wall time: median {np.median(share):.3f}, "
+                      f"least {min(share):.3f} ({len(calls)} calls).")
+    if timed:
+        rep.heading("The least time under bounds (`objective=\"time\"`)")
+        rep.paragraph("`plan(start, goal, objective=\"time\", constraints=[Clearance(0.01), bounds])`: the "
+                      "unicycle with |v|, |ω| ≤ 0.5 (Dynobench's obstacle-free park, reference T ≤ 2.95 s), the "
+                      "car with |v| ≤ 1, |φ̇| ≤ 1, |φ| ≤ 0.6 against CasADi/IPOPT's free-time transcription "
+                      "(`casadi_car_time`: the same 50 equal intervals, RK4 substeps, straight-line start). "
+                      "*Solved*: DOP853 ends within 1e-8 of the goal, with the clearance, the steering bound "
+                      "along the dense path and the inputs' bounds on a fine grid kept to 1e-9 relative.")
+        rows = []
+        for mech, band in (("unicycle", "park"), ("car", "near"), ("car", "far")):
+            rs = [r for r in timed if r["mechanism"] == mech and r["band"] == band]
+            if not rs:
+                continue
+            ok = [r for r in rs if r["time"]["solved"]]
+            both = [r for r in ok if r.get("casadi_time", {}).get("solved")]
+            rows.append([mech, band, len(rs), len(ok), _stats([r["time"]["T"] for r in ok]),
+                         _stats([r["time"]["T"] / r["casadi_time"]["T"] for r in both]) if both else "–",
+                         _ms([r["time"]["seconds"] for r in rs]),
+                         _ms([r["casadi_time"]["seconds"] for r in rs if "casadi_time" in r])])
+        rep.table(["mechanism", "goals", "cases", "solved", "T [s]", "T / casadi", "median ms", "casadi median ms"],
+                  rows, align="llrrrrrr")
+    false = [(r, k) for r in all_records for k in (*KINDS, "time") if k in r and r[k]["claimed"] and not r[k]["solved"]]
     rep.paragraph(f"False claims (a claimed success DOP853 does not confirm): {len(false)}.")
     missed = [r for r in records if not r["energy"]["solved"] or not r["default"]["solved"]]
     if missed:
@@ -447,7 +562,7 @@ def report(records: list[dict], argv, args) -> None:
                     else "solved", r["default"]["reason"][-120:] if not r["default"]["solved"] else "solved"]
                    for r in missed], align="lllll")
     rep.write()
-    (RESULTS_DIR / "optimality.json").write_text(json.dumps({"records": records}, indent=1, default=float))
+    (RESULTS_DIR / "optimality.json").write_text(json.dumps({"records": all_records}, indent=1, default=float))
 
 
 if __name__ == "__main__":

@@ -100,13 +100,15 @@ def plan(start, goal, *, mechanism="platform", T: float | None = 1.0, objective:
     """
     if callback is not None and not callable(callback):
         raise TypeError(f"callback must be callable (it is given each iteration's record), got {callback!r}")
+    started = time.perf_counter()
     problem = Problem.build(start, goal, mechanism=mechanism, T=T, objective=objective, constraints=constraints,
                             strategy=strategy, route=route, settings=settings, u0=u0,
                             allow_imports=allow_imports)
-    return solve(problem, callback)
+    return solve(problem, callback, started=started)
 
 
-def solve(problem: Problem, callback: Callable[[dict], object] | None = None) -> PlanResult:
+def solve(problem: Problem, callback: Callable[[dict], object] | None = None, *,
+          started: float | None = None) -> PlanResult:
     """The plan of ``problem``: its path (:func:`solve_path`), re-timed under its legs'
     speed or its inputs' bounds if it has them (:func:`nonholo.planning.retime.limit_speed`,
     :func:`~nonholo.planning.retime.limit_inputs`), with BLAS on one thread
@@ -120,13 +122,17 @@ def solve(problem: Problem, callback: Callable[[dict], object] | None = None) ->
     callback : callable, optional
         ``callback(record)`` after each accepted iteration of the local plan; a true value
         returned stops the run.
+    started : float, optional
+        The :func:`time.perf_counter` reading the call began at (:func:`plan`'s, before it
+        built the problem), from which ``PlanResult.seconds`` counts (default: now).
 
     Returns
     -------
     PlanResult
         The certified plan, or a failed one with its reason.
     """
-    started, started_effort = time.perf_counter(), effort.seconds()
+    started = time.perf_counter() if started is None else started
+    started_effort = effort.seconds()
     with one_thread():
         result = solve_path(problem, callback, started_effort)
         T = None if problem.least_time else problem.T
