@@ -432,6 +432,31 @@ class PiecewiseConstant(Controls):
             If ``T`` or ``grid`` is invalid, or ``func`` gives other than ``n_inputs``
             inputs.
         """
+        return cls.fit_with_energy(func, T, grid, n_inputs)[0]
+
+    @classmethod
+    def fit_with_energy(cls, func, T: float, grid: int, n_inputs: int | None = None) -> tuple["PiecewiseConstant", float]:
+        """:meth:`fit`, and ``∫|u|² dt`` of ``func`` by the same samples (5-point
+        Gauss–Legendre on each interval: exact for polynomials of degree 9 there).
+
+        Parameters
+        ----------
+        func : callable
+            ``func(t) -> (n, m)``, vectorised.
+        T : float
+            The horizon (s).
+        grid : int
+            The number of intervals.
+        n_inputs : int, optional
+            ``m`` expected of ``func``.
+
+        Returns
+        -------
+        fit : PiecewiseConstant
+            The means.
+        energy : float
+            The energy of ``func``.
+        """
         T = check_time(T)
         grid = check_count(grid, "grid")
         x, w = np.polynomial.legendre.leggauss(5)
@@ -442,7 +467,8 @@ class PiecewiseConstant(Controls):
         u = np.asarray(func(t), dtype=float).reshape(grid, 5, -1)
         if n_inputs is not None and u.shape[2] != n_inputs:
             raise ValueError(f"func gives {u.shape[2]} inputs, expected {n_inputs}")
-        return cls(T, 0.5 * np.einsum("k,jki->ji", w, u))
+        energy = float(np.einsum("j,k,jki->", half, w, u * u))
+        return cls(T, 0.5 * np.einsum("k,jki->ji", w, u)), energy
 
     def __repr__(self) -> str:
         return f"PiecewiseConstant(T={self.T:g}, grid={self.grid}, m={self.n_inputs})"

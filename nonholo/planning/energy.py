@@ -33,7 +33,7 @@ import itertools
 import math
 from dataclasses import replace
 
-from ..controls.parametrisations import Fourier
+from ..controls.parametrisations import Fourier, PiecewiseConstant
 from ..io.result import PlanResult
 from .result_builder import build_result
 from .energy_objective import energy, plan_energy_of
@@ -137,12 +137,14 @@ def improve(problem, result: PlanResult, quick: bool = False, budget: float | No
     steps = -(-problem.steps // grid) * grid
     endpoint = problem.evaluator(method="nonparametric", steps=steps,
                                 delta_min=smooth_clearance(result) if quick else None)
-    plan_energy = plan_energy_of(result)
     if quick:
+        # the plan's grid means and its energy from one sampling of its inputs
+        means, plan_energy = PiecewiseConstant.fit_with_energy(result.controls, problem.T, grid,
+                                                               problem.mechanism.n_inputs)
         budget = QUICK_EFFORT if budget is None else budget
         ceiling = REPLACE_BELOW * plan_energy
-        found = extremals.least_energy(endpoint, [("plan", result.parametrisation)], problem.options, grid,
-                                       QUICK_EXTREMAL_EFFORT, confirmations=1, ceiling=ceiling)
+        found = extremals.least_energy(endpoint, [("plan", means)], problem.options, grid,
+                                       QUICK_EXTREMAL_EFFORT, confirmations=1, ceiling=ceiling, continued=0)
         outcome, why = found.outcome, found.why
         if outcome is None and min(found.least, plan_energy) > WASTEFUL * loop_energy(endpoint, QUICK_STARTS - 1):
             # the plan is not near a motion of the loops' energy: the quick search from its
@@ -150,6 +152,7 @@ def improve(problem, result: PlanResult, quick: bool = False, budget: float | No
             initial = itertools.islice(starts(endpoint, result.parametrisation), QUICK_STARTS)
             outcome, why = search(endpoint, initial, problem.options, budget, ceiling)
     else:
+        plan_energy = plan_energy_of(result)
         budget = ENERGY_EFFORT if budget is None else budget
         ceiling = plan_energy
         outcome, why = None, ""

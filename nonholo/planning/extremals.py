@@ -283,12 +283,14 @@ def costate_guess(endpoint: EndpointMap, controls: Controls, grid: int) -> np.nd
     with Simpson's weights ``w = (h/6, 2h/3, h/6)`` (the middle one the mean of the two
     middle stages), so the normal equations are ``Σ_c (Wd_c Wd_cᵀ / w_c) p₀ = Σ_c Wd_c u_c``.
 
+    The plan's grid controls are evaluated on one integrator step an interval.
+
     Parameters
     ----------
     endpoint : EndpointMap
-        The problem, its steps a multiple of ``grid``.
+        The problem.
     controls : Controls
-        The plan's physical inputs.
+        The plan's physical inputs (grid controls on ``grid`` intervals are taken as they are).
     grid : int
         Intervals of the grid controls the plan is evaluated as.
 
@@ -298,8 +300,11 @@ def costate_guess(endpoint: EndpointMap, controls: Controls, grid: int) -> np.nd
         The initial costate.
     """
     mech = endpoint.mechanism
+    if endpoint.steps != grid:
+        endpoint = endpoint.refined(grid)             # one step an interval: the guess needs no more
     N, d, m = endpoint.steps, mech.n_rates, mech.n_inputs
-    fitted = PiecewiseConstant.fit(controls, endpoint.T, grid, m)
+    fitted = controls if isinstance(controls, PiecewiseConstant) and controls.grid == grid else \
+        PiecewiseConstant.fit(controls, endpoint.T, grid, m)
     ev = endpoint.evaluate(fitted, full=True)
     if not ev.complete:
         return None
