@@ -254,11 +254,14 @@ def objective(problem: Problem, result: PlanResult) -> PlanResult:
     -------
     PlanResult
         The plan as it is for the objective ``None``; for ``"time"`` the path of least time
-        under the input bounds (:func:`nonholo.planning.least_time.least_time_path`, re-timed
-        by :func:`solve`); else after the least-energy stage.
+        under the input bounds (:func:`nonholo.planning.least_time.least_time_path`, from the
+        least-energy path, re-timed by :func:`solve`); else after the least-energy stage.
     """
     if problem.objective is None:
         return result
     if problem.objective == "time":
-        return least_time.least_time_path(problem, result)
+        # from the least-energy path: a short path, in the homotopy class a time-optimal one
+        # mostly shares (the plan as found may loop)
+        shortest = energy.improve(problem, result)
+        return least_time.least_time_path(problem, shortest if shortest.success else result)
     return energy.improve(problem, result, quick=problem.objective == "auto")

@@ -51,7 +51,7 @@ ENERGY_EFFORT = 1.0
 
 #: Seconds of effort the extremals (:mod:`nonholo.planning.extremals`) may take before the
 #: search.
-EXTREMAL_EFFORT = 0.25
+EXTREMAL_EFFORT = 0.1
 
 # -- ``objective="auto"``
 #: ``objective="auto"``: the budget of the extremal through the plan (seconds of effort).
@@ -157,9 +157,18 @@ def improve(problem, result: PlanResult, quick: bool = False, budget: float | No
         ceiling = plan_energy
         outcome, why = None, ""
         if EXTREMAL_EFFORT > 0:
+            # where the plan's own extremal does not reach the goal the search is left to find
+            # the motion (one riding a limit is no extremal); where the loops are in frame
+            # coordinates (a mechanism on SO(3) planned in its desingularised frame, whose
+            # plans start from a small control) the plan's extremal is taken unconfirmed
+            framed = math.isinf(loop_energy(endpoint, 1))
             found = extremals.least_energy(endpoint, starts(endpoint, result.parametrisation), problem.options,
-                                           grid, EXTREMAL_EFFORT, ceiling=ceiling * (1.0 + 1e-9))
+                                           grid, EXTREMAL_EFFORT, ceiling=ceiling * (1.0 + 1e-9),
+                                           first_below=math.inf if framed else 0.0, first_or_none=True)
             outcome, why = found.outcome, found.why
+            if outcome is None and found.confirmed and found.least >= ceiling:
+                # the plan needs no more than the least extremal: nothing to search for
+                return replace(result, reason=f"{result.reason}; energy not lowered: {why}", options=options)
     final = None
     if outcome is None and not quick:
         # no extremal confirmed at the goal (one that rides a limit is none): the search

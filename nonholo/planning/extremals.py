@@ -371,16 +371,20 @@ class Found:
         Whether an extremal from a start reached the goal.
     least : float, default inf
         The least energy of an extremal at the goal.
+    confirmed : bool, default False
+        Whether that least energy is confirmed (by enough extremals, or from the first start).
     """
 
     outcome: Outcome | None
     why: str
     reached: bool
     least: float = math.inf
+    confirmed: bool = False
 
 
 def least_energy(endpoint: EndpointMap, initial, options: Options, grid: int, budget: float,
-                 confirmations: int = 2, ceiling: float = math.inf, continued: int = 1) -> Found:
+                 confirmations: int = 2, ceiling: float = math.inf, continued: int = 1,
+                 first_below: float = 0.0, first_or_none: bool = False) -> Found:
     """The least-energy normal extremal through the projections of labelled controls, as
     certified grid controls (see the module).
 
@@ -410,6 +414,11 @@ def least_energy(endpoint: EndpointMap, initial, options: Options, grid: int, bu
     continued : int, default 1
         The continuation is tried from this many first starts (a plan's, which ends at the
         goal, is the best placed for it).
+    first_below : float, default 0
+        An extremal from the first start needing less than this needs no confirmation.
+    first_or_none : bool, default False
+        Give up where the first start's extremal does not reach the goal (a plan's that
+        does not is far from any extremal: its least-energy motion rides a limit).
 
     Returns
     -------
@@ -428,9 +437,13 @@ def least_energy(endpoint: EndpointMap, initial, options: Options, grid: int, bu
             continue
         shot = shooting.solve(p0, deadline, continuation=tried <= continued)
         closest = min(closest, shot.error)
+        if first_or_none and tried == 1 and not (shot.complete and shot.error <= SHOOTING_TOL):
+            break
         if shot.complete and shot.error <= SHOOTING_TOL:
             found.append((shot_energy(shot, shooting.h), label, shot))
             least = min(e for e, _, _ in found)
+            if tried == 1 and least < first_below:
+                confirmations = 1
             if sum(e <= least * (1.0 + AGREE_RTOL) for e, _, _ in found) >= confirmations:
                 break
     if not found:
@@ -443,7 +456,7 @@ def least_energy(endpoint: EndpointMap, initial, options: Options, grid: int, bu
         return Found(None, (f"{agree} of {len(found)} extremals at the goal ({tried} starts) agree on the "
                             f"least energy {least:.6g}, not {confirmations}"), True, least)
     if least >= ceiling:
-        return Found(None, f"the least-energy extremal needs {least:.6g}, not below {ceiling:.6g}", True, least)
+        return Found(None, f"the least-energy extremal needs {least:.6g}, not below {ceiling:.6g}", True, least, True)
     why = ""
     for _, label, shot in found[:agree]:
         ev = endpoint.evaluate(PiecewiseConstant(endpoint.T, grid_values(shot.U, grid)))
@@ -466,6 +479,6 @@ def least_energy(endpoint: EndpointMap, initial, options: Options, grid: int, bu
                           history=run.history, iterations=len(run.history))
         outcome = certified_or_finer(outcome, endpoint, options, math.inf)
         if outcome.success:
-            return Found(outcome, "", True, least)
+            return Found(outcome, "", True, least, True)
         why = why or outcome.reason
-    return Found(None, why, True, least)
+    return Found(None, why, True, least, True)

@@ -8,8 +8,9 @@ bounds on the controls, the endpoint as a nonlinear equality and the limits of t
 (the coordinates' bounds, the legs' stroke, the clearance from ``Δ = 0``) as nonlinear
 inequalities at the nodes — the same least time as a free-time transcription on the same
 grid of equal intervals. It is solved on grid controls (:data:`TIME_GRID` intervals) by
-SciPy's SLSQP from the plan as found, with the endpoint's Jacobian and the nodes'
-sensitivities of the variational system (:mod:`nonholo.planning.endpoint_map`); the path
+SciPy's SLSQP from a given path — :func:`nonholo.plan` gives the least-energy one, short and
+mostly in the time-optimal path's class, where the plan as found may loop — with the
+endpoint's Jacobian and the nodes' sensitivities of the variational system (:mod:`nonholo.planning.endpoint_map`); the path
 found is then brought onto the goal, certified, and re-timed to the least time along it by
 :func:`nonholo.planning.retime.limit_inputs` (the caller's step).
 
@@ -151,7 +152,8 @@ class PathProblem:
 def least_time_path(problem, result: PlanResult) -> PlanResult:
     """The path of least time under the problem's input bounds, from a plan (see the
     module), certified on grid controls; ``result`` with its reason saying why where none
-    is found.
+    is found. The plan's grid controls need only reach ``T``: SLSQP starts where they
+    break a limit or miss the goal as well.
 
     Parameters
     ----------
@@ -174,12 +176,13 @@ def least_time_path(problem, result: PlanResult) -> PlanResult:
     steps = -(-problem.steps // grid) * grid
     endpoint = problem.evaluator(method="nonparametric", steps=steps)
     fitted = PiecewiseConstant.fit(result.controls, endpoint.T, grid, problem.mechanism.n_inputs)
-    ev = endpoint.evaluate(fitted)
-    ev = newton_steps(endpoint, ev, fitted.metric(), problem.options.tol, RESTORE_STEPS)
-    if not (endpoint.admissible(ev) and ev.error <= 1e-6):
+    ev = endpoint.evaluate(fitted, delta_stop=-math.inf)
+    if ev.complete:
+        ev = newton_steps(endpoint, ev, fitted.metric(), problem.options.tol, RESTORE_STEPS)
+    if not ev.complete:
         return replace(result, options=options,
-                       reason=f"{result.reason}; the least-time path not sought: the plan's grid controls are "
-                              f"not admissible or do not reach the goal")
+                       reason=f"{result.reason}; the least-time path not sought: the plan's grid controls do "
+                              f"not reach T")
     path = PathProblem(endpoint, grid, low, high)
     lam = ev.params
     U = lam.reshape(grid, -1)

@@ -77,15 +77,20 @@ def test_the_same_call_gives_the_same_path():
     assert a.T == b.T and np.array_equal(a.params, b.params)
 
 
-def test_the_platform_under_leg_speed_is_timed_along_its_path():
+def test_the_platform_under_leg_speed_is_timed_along_its_least_energy_path():
     """The platform's legs' speed is no input bound: ``objective="time"`` with a LegSpeed
-    re-times the plan as found, as ``T=None`` does."""
+    re-times the least-energy path, at least as fast as ``T=None`` re-times the plan as
+    found; DOP853 confirms the goal."""
     from conftest import example
+    from nonholo.certify.resimulate import resimulate_path, terminal_error
 
     R0, Rd = example(1)
     fastest = nonholo.plan(R0, Rd, objective="time", constraints=[LegSpeed(1.0)])
     along = nonholo.plan(R0, Rd, T=None, constraints=[LegSpeed(1.0)])
-    assert fastest.success and fastest.T == pytest.approx(along.T, rel=1e-12)
+    assert fastest.success and along.success
+    assert fastest.T <= along.T
+    _, R, _ = resimulate_path(R0, fastest.controls, fastest.T, "platform", fastest.breakpoints)
+    assert terminal_error(R[-1], Rd) <= 1e-8
 
 
 def test_time_needs_bounds_around_zero():
