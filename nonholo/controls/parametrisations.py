@@ -456,6 +456,12 @@ class PiecewiseConstant(Controls):
             The means.
         energy : float
             The energy of ``func``.
+
+        Raises
+        ------
+        ValueError
+            If ``T`` or ``grid`` is invalid, or ``func`` gives other than ``n_inputs``
+            inputs.
         """
         T = check_time(T)
         grid = check_count(grid, "grid")

@@ -12,6 +12,9 @@
 - ``motion_quality``: the same goal's default plan, its least-energy plan
   (``objective="energy"``) and the plan re-timed in the least time under the legs' speed
   bound :data:`LEG_SPEED` (figure; ``plans/least_time.json`` and ``plans/least_time.csv``);
+- ``least_time_vehicle``: the unicycle's obstacle-free park :data:`VEHICLE_PARK` in the least
+  time under :data:`VEHICLE_BOUNDS` (``objective="time"``) against the plan as found re-timed
+  along its path (figure);
 - ``physics_example3``, ``physics_rolling_ball``, ``physics_car``: Example 3, the ball's
   reorientation in place and the car's parking played on their mechanisms' MuJoCo models
   with three touch-ups (:func:`nonholo.physics.execution.execute`; figures of
@@ -55,6 +58,7 @@ from ..certify.resimulate import resimulate, terminal_error
 from ..io import csv_export, provenance
 from ..model import catalog
 from ..planning.api import STRATEGIES, plan
+from ..model.bounds import InputBounds
 from ..planning.constraint_objects import LegStroke
 from ..planning.settings import Settings
 from ..planning.retime import retime
@@ -81,6 +85,10 @@ LEG_LENGTH = (1.2, 2.0)
 #: ``motion_quality``, ``plans/least_time.json`` and ``.csv``), in radius per second (the
 #: length unit of the geometry, :mod:`nonholo.model.names`).
 LEG_SPEED = 0.5
+#: The least-time vehicle: Dynobench's obstacle-free unicycle park (start, goal).
+VEHICLE_PARK = ((0.7, 0.8, 0.0), (1.9, 0.3, 0.0))
+#: The bounds ``(low, high)`` of the unicycle's inputs ``v``, ``ω`` in :data:`VEHICLE_PARK`.
+VEHICLE_BOUNDS = ((-0.5, -0.5), (0.5, 0.5))
 
 
 def strongest_strategy() -> str:
@@ -293,6 +301,25 @@ def plan_quality(free):
     return plan(R0, Rd, objective="energy"), retime(free, LEG_SPEED)
 
 
+def plan_vehicle_least_time():
+    """:data:`VEHICLE_PARK` in the least time under :data:`VEHICLE_BOUNDS` (``objective="time"``),
+    and the plan as found re-timed along its path (``T=None``).
+
+    Returns
+    -------
+    fastest : PlanResult
+        The path of least time.
+    along : PlanResult
+        The plan as found, re-timed.
+    bounds : InputBounds
+        The bounds.
+    """
+    bounds = InputBounds(*VEHICLE_BOUNDS)
+    start, goal = VEHICLE_PARK
+    return (plan(start, goal, mechanism="unicycle", objective="time", constraints=[bounds]),
+            plan(start, goal, mechanism="unicycle", T=None, constraints=[bounds]), bounds)
+
+
 def plan_far_goal():
     """:data:`FAR_GOAL` planned by :func:`nonholo.plan` with its defaults.
 
@@ -367,6 +394,11 @@ def write_figures(solved: list[Solved], outputs: Outputs, progress=_log) -> None
         keep(fast, "plans/least_time.json", outputs)
         outputs.text("plans/least_time.csv", csv_export.csv_text(fast, 100))
         progress("      plans/least_time.json and plans/least_time.csv")
+    fastest, along, bounds = plan_vehicle_least_time()
+    if fastest.success and along.success:
+        save(viz.least_time_figure(fastest, along, bounds), "least_time_vehicle")
+    else:
+        progress(f"      note: the unicycle's park was not solved ({fastest.reason[:120]}); no least_time_vehicle figure")
     ex3 = [s for s in solved if s.example.number == 3 and len(s.result.R)]
     if ex3:
         motion = ex3[0].result

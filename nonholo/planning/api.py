@@ -123,7 +123,7 @@ def solve(problem: Problem, callback: Callable[[dict], object] | None = None, *,
         ``callback(record)`` after each accepted iteration of the local plan; a true value
         returned stops the run.
     started : float, optional
-        The :func:`time.perf_counter` reading the call began at (:func:`plan`'s, before it
+        The ``time.perf_counter()`` reading the call began at (:func:`plan`'s, before it
         built the problem), from which ``PlanResult.seconds`` counts (default: now).
 
     Returns

@@ -71,7 +71,18 @@ class PathProblem:
         self._key, self._ev = None, None
 
     def evaluation(self, x: np.ndarray):
-        """The full evaluation of ``x``'s controls (kept for the next call with the same ``x``)."""
+        """The full evaluation of ``x``'s controls (kept for the next call with the same ``x``).
+
+        Parameters
+        ----------
+        x : numpy.ndarray
+            The variables ``(λ, s)``.
+
+        Returns
+        -------
+        Evaluation
+            The evaluation, with the nodes' sensitivities.
+        """
         key = x[:self.p].tobytes()
         if key != self._key:
             self._ev = self.endpoint.evaluate(PiecewiseConstant(self.endpoint.T, x[:self.p].reshape(self.grid, self.m)),
@@ -81,7 +92,13 @@ class PathProblem:
         return self._ev
 
     def bounds_matrix(self) -> np.ndarray:
-        """``A x ≥ 0``: ``s·high_i − u_ji ≥ 0`` and ``u_ji − s·low_i ≥ 0`` for the finite sides."""
+        """``A x ≥ 0``: ``s·high_i − u_ji ≥ 0`` and ``u_ji − s·low_i ≥ 0`` for the finite sides.
+
+        Returns
+        -------
+        numpy.ndarray
+            ``A``, one row per finite side of every interval's input.
+        """
         rows = []
         for j in range(self.grid):
             for i in range(self.m):
@@ -96,14 +113,36 @@ class PathProblem:
 
     def goal(self, x):
         """The terminal error ``l_T`` (the equality ``l_T = 0``); a motion that stops short
-        of ``T`` is far from the goal."""
+        of ``T`` is far from the goal.
+
+        Parameters
+        ----------
+        x : numpy.ndarray
+            The variables ``(λ, s)``.
+
+        Returns
+        -------
+        numpy.ndarray
+            ``l_T``, d entries.
+        """
         ev = self.evaluation(x)
         if not ev.complete:
             return np.full(self.mechanism.n_rates, 1e3)
         return ev.l
 
     def goal_jacobian(self, x):
-        """``∂l_T/∂x`` (``J``, and no dependence on ``s``)."""
+        """``∂l_T/∂x`` (``J``, and no dependence on ``s``).
+
+        Parameters
+        ----------
+        x : numpy.ndarray
+            The variables ``(λ, s)``.
+
+        Returns
+        -------
+        numpy.ndarray
+            The Jacobian, ``(d, p + 1)``.
+        """
         ev = self.evaluation(x)
         out = np.zeros((self.mechanism.n_rates, self.p + 1))
         if ev.complete:
@@ -139,12 +178,34 @@ class PathProblem:
         return np.concatenate(values), jac
 
     def limits(self, x):
-        """The clearances (``≥ 0``); a motion that stops short of ``T`` breaks them."""
+        """The clearances (``≥ 0``); a motion that stops short of ``T`` breaks them.
+
+        Parameters
+        ----------
+        x : numpy.ndarray
+            The variables ``(λ, s)``.
+
+        Returns
+        -------
+        numpy.ndarray
+            One clearance per node and limit.
+        """
         out = self._limits(x)
         return -np.ones(self.nodes.size) if out is None else out[0]
 
     def limits_jacobian(self, x):
-        """Their gradients."""
+        """The clearances' gradients.
+
+        Parameters
+        ----------
+        x : numpy.ndarray
+            The variables ``(λ, s)``.
+
+        Returns
+        -------
+        numpy.ndarray
+            One row per clearance.
+        """
         out = self._limits(x)
         return np.zeros((self.nodes.size, self.p + 1)) if out is None else out[1]
 

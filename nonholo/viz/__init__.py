@@ -68,7 +68,7 @@ from .singular_set import (
 )
 from .quantities import input_units, plane_position
 from .refinement_figures import global_route_figure, leg_limits_figure, motion_quality_figure
-from .state_figures import ball_figure, car_figure
+from .state_figures import ball_figure, car_figure, least_time_figure
 from .style import (
     NEGATIVE_COLOR,
     PAIR_COLORS,
@@ -92,5 +92,5 @@ __all__ = [
     "rpy_figure", "leg_lengths_figure", "delta_figure", "body_axes_figure", "global_route_figure",
     "leg_limits_figure", "motion_quality_figure", "example_overview_figure",
     "mechanism_card_figure", "animate_platform", "animate", "plan_figure", "plot_plane_path",
-    "ball_figure", "car_figure", "execution_figure",
+    "ball_figure", "car_figure", "least_time_figure", "execution_figure",
 ]

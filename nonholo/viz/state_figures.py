@@ -171,3 +171,58 @@ def car_figure(result, frames: int = 8) -> NotebookFigure:
     _time_panels(fig, grid, result, "heading, steering and inputs",
                  [(q[:, 2], "k", "heading θ"), (q[:, 3], "tab:purple", "steering φ")])
     return fig
+
+
+@styled
+def least_time_figure(fastest, along, bounds) -> NotebookFigure:
+    """A planar vehicle's path of least time under input bounds against the plan as found
+    re-timed along its own path (left, the first two coordinates), and both plans' use of
+    each input's bound, ``u_i/high_i`` or ``u_i/low_i``, against time (right).
+
+    Parameters
+    ----------
+    fastest : PlanResult
+        The plan of ``objective="time"``.
+    along : PlanResult
+        The same goal with ``T=None`` (the plan as found, re-timed along its path).
+    bounds : InputBounds
+        The bounds both keep.
+
+    Returns
+    -------
+    NotebookFigure
+        The figure.
+
+    Raises
+    ------
+    ValueError
+        If the plans are not of one mechanism with a trajectory.
+    """
+    _check(fastest, fastest.mechanism)
+    _check(along, fastest.mechanism)
+    fig, grid, ax = _layout()
+    plans = ((fastest, "tab:blue", f"least time, T = {fastest.T:.3f} s"),
+             (along, "0.55", f"plan as found, re-timed: T = {along.T:.3f} s"))
+    for res, colour, name in plans:
+        ax.plot(res.q[:, 0], res.q[:, 1], color=colour, lw=1.8, label=name)
+    _mark_ends(ax, fastest)
+    _path_labels(ax, fastest, "paths on the plane", 0.15)
+    low, high = np.asarray(bounds.lows, dtype=float), np.asarray(bounds.highs, dtype=float)
+    names = _input_labels(fastest)
+    for row, (res, colour, name) in enumerate(plans):
+        panel = fig.add_subplot(grid[row, 1])
+        t = np.linspace(0.0, res.T, 2001)
+        u = np.asarray(res.controls(t), dtype=float)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            share = np.where(u >= 0, u / high, u / -low)          # signed: ±1 at a bound
+        for j, style in zip(range(u.shape[1]), ("-", "--")):
+            panel.plot(t, share[:, j], style, color=colour, lw=1.2, label=names[j])
+        panel.axhline(1.0, color="tab:red", lw=0.8, ls=":")
+        panel.axhline(-1.0, color="tab:red", lw=0.8, ls=":")
+        panel.set_ylim(-1.15, 1.15)
+        panel.set_ylabel("input / its bound")
+        panel.set_title(name, fontsize=9)
+        panel.legend(fontsize=7, loc="lower right")
+    panel.set_xlabel(label("time t", SECOND))
+    fig.tight_layout()
+    return fig
