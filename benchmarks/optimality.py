@@ -270,17 +270,11 @@ class _PiecewiseControls:
         return self.values[j]
 
 
-def casadi_car(q0, qd, T: float, N: int = 40, substeps: int = 8, delta_min: float = DELTA_MIN,
-               max_iter: int = 500, tol: float = 1e-10):
-    """Minimum ``∫|u|² dt`` of the kinematic car (``ẋ = v cos θ``, ``ẏ = v sin θ``, ``θ̇ = v tan φ``,
-    ``φ̇ = u₂``) by multiple shooting with RK4 substeps and ``cos φ ≥ delta_min`` at every
-    substep, solved by IPOPT (exact Hessians); states initialised on the straight line.
-    Returns ``(success, controls, breakpoints, status)``."""
+def car_shooting(opti, X, U, h, N: int, substeps: int, each_substep=None) -> None:
+    """The kinematic car's multiple shooting in ``opti`` (``ẋ = v cos θ``, ``ẏ = v sin θ``,
+    ``θ̇ = v tan φ``, ``φ̇ = u₂``): RK4 substeps of ``h`` on each of ``N`` intervals, the states
+    ``X`` continuous at the nodes; ``each_substep(x)`` is called with every substep's state."""
     import casadi as ca
-
-    opti = ca.Opti()
-    X, U = opti.variable(4, N + 1), opti.variable(2, N)
-    h = T / N / substeps
 
     def f(x, u):
         return ca.vertcat(u[0] * ca.cos(x[2]), u[0] * ca.sin(x[2]), u[0] * ca.tan(x[3]), u[1])
@@ -293,8 +287,23 @@ def casadi_car(q0, qd, T: float, N: int = 40, substeps: int = 8, delta_min: floa
             k3 = f(x + h / 2 * k2, U[:, k])
             k4 = f(x + h * k3, U[:, k])
             x = x + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
-            opti.subject_to(ca.cos(x[3]) >= delta_min)
+            if each_substep is not None:
+                each_substep(x)
         opti.subject_to(X[:, k + 1] == x)
+
+
+def casadi_car(q0, qd, T: float, N: int = 40, substeps: int = 8, delta_min: float = DELTA_MIN,
+               max_iter: int = 500, tol: float = 1e-10):
+    """Minimum ``∫|u|² dt`` of the kinematic car (``ẋ = v cos θ``, ``ẏ = v sin θ``, ``θ̇ = v tan φ``,
+    ``φ̇ = u₂``) by multiple shooting with RK4 substeps and ``cos φ ≥ delta_min`` at every
+    substep, solved by IPOPT (exact Hessians); states initialised on the straight line.
+    Returns ``(success, controls, breakpoints, status)``."""
+    import casadi as ca
+
+    opti = ca.Opti()
+    X, U = opti.variable(4, N + 1), opti.variable(2, N)
+    car_shooting(opti, X, U, T / N / substeps, N, substeps,
+                 each_substep=lambda x: opti.subject_to(ca.cos(x[3]) >= delta_min))
     opti.subject_to(X[:, 0] == np.asarray(q0, float))
     opti.subject_to(X[:, N] == np.asarray(qd, float))
     opti.minimize(T / N * ca.sumsqr(U))
@@ -322,20 +331,7 @@ def casadi_car_time(q0, qd, N: int = 50, substeps: int = 4, v_max: float = 1.0, 
     q0, qd = np.asarray(q0, float), np.asarray(qd, float)
     opti = ca.Opti()
     X, U, T = opti.variable(4, N + 1), opti.variable(2, N), opti.variable()
-    h = T / N / substeps
-
-    def f(x, u):
-        return ca.vertcat(u[0] * ca.cos(x[2]), u[0] * ca.sin(x[2]), u[0] * ca.tan(x[3]), u[1])
-
-    for k in range(N):
-        x = X[:, k]
-        for _ in range(substeps):
-            k1 = f(x, U[:, k])
-            k2 = f(x + h / 2 * k1, U[:, k])
-            k3 = f(x + h / 2 * k2, U[:, k])
-            k4 = f(x + h * k3, U[:, k])
-            x = x + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
-        opti.subject_to(X[:, k + 1] == x)
+    car_shooting(opti, X, U, T / N / substeps, N, substeps)
     opti.subject_to(opti.bounded(-v_max, U[0, :], v_max))
     opti.subject_to(opti.bounded(-rate_max, U[1, :], rate_max))
     opti.subject_to(opti.bounded(-phi_max, X[3, :], phi_max))

@@ -43,7 +43,7 @@ from .cache import digest
 from .python_config import PYTHON
 
 #: The integrator's functions whose calls are expanded in place (:func:`python_kernels`).
-INLINED = ("cf4_step", "cf4_stage", "cf4_close", "zpredict", "advance", "extremal_stage")
+INLINED = ("cf4_step", "cf4_stage", "cf4_close", "zpredict", "advance", "extremal_stage", "dexp_inverse")
 #: The kernels written with them.
 KERNELS = ("forward", "forward_variational", "frame_inputs", "extremal")
 #: Argument kinds of the translated functions (see :data:`nonholo.codegen.c_subset.KINDS`):

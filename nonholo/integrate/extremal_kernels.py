@@ -1,5 +1,6 @@
 """Normal extremals of the energy: the kernel that integrates a state together with its
-costate (:func:`extremal`), and its stage (:func:`extremal_stage`).
+costate (:func:`extremal`), its stage (:func:`extremal_stage`) and the pull-back of a stage's
+angular velocity (:func:`dexp_inverse`).
 
 Least energy ``∫|u|² dt`` for the system ``(ω, q̇) = G(R, q) u`` (conventions of
 :mod:`nonholo.integrate.cf4`): with the stacked variation ``s = (s_R, s_q)`` of
@@ -85,6 +86,25 @@ def extremal_stage(Y, P, p, sgn, delta_stop, dmin, B, A, u, F, dp):
             dp[j] = -s
             ok = ok and np.isfinite(s)
     return ok, dmin
+
+
+def dexp_inverse(tx, ty, tz, F):
+    """``F[:3] ← K = ω − ½ θ × ω + θ × (θ × ω)/12``: the stage's angular velocity ``ω = F[:3]``
+    pulled back by ``dexp⁻¹`` at ``θ = (tx, ty, tz)``, truncated after its second commutator.
+
+    Parameters
+    ----------
+    tx, ty, tz : float
+        The stage rotation ``θ``.
+    F : numpy.ndarray
+        The stage's stacked rates (updated in place).
+    """
+    cx = ty * F[2] - tz * F[1]
+    cy = tz * F[0] - tx * F[2]
+    cz = tx * F[1] - ty * F[0]
+    F[0] = F[0] - 0.5 * cx + (ty * cz - tz * cy) / 12.0
+    F[1] = F[1] - 0.5 * cy + (tz * cx - tx * cz) / 12.0
+    F[2] = F[2] - 0.5 * cz + (tx * cy - ty * cx) / 12.0
 
 
 def extremal(R0, q0, p0, h, sgn, delta_stop, Rs, Qs, Ps, U):
@@ -173,15 +193,7 @@ def extremal(R0, q0, p0, h, sgn, delta_stop, Rs, Qs, Ps, U):
         for i in range(m):
             U[n, 1, i] = 0.5 * u[i]
         if ROTATION:
-            tx = 0.5 * h * F1[0]
-            ty = 0.5 * h * F1[1]
-            tz = 0.5 * h * F1[2]
-            cx = ty * F2[2] - tz * F2[1]
-            cy = tz * F2[0] - tx * F2[2]
-            cz = tx * F2[1] - ty * F2[0]
-            F2[0] = F2[0] - 0.5 * cx + (ty * cz - tz * cy) / 12.0
-            F2[1] = F2[1] - 0.5 * cy + (tz * cx - tx * cz) / 12.0
-            F2[2] = F2[2] - 0.5 * cz + (tx * cy - ty * cx) / 12.0
+            dexp_inverse(0.5 * h * F1[0], 0.5 * h * F1[1], 0.5 * h * F1[2], F2)
             exp_times(0.5 * h * F2[0], 0.5 * h * F2[1], 0.5 * h * F2[2], R, E, Y)
         # stage 3 at θ = h/2 K2
         for i in range(k):
@@ -195,15 +207,7 @@ def extremal(R0, q0, p0, h, sgn, delta_stop, Rs, Qs, Ps, U):
         for i in range(m):
             U[n, 1, i] += 0.5 * u[i]
         if ROTATION:
-            tx = 0.5 * h * F2[0]
-            ty = 0.5 * h * F2[1]
-            tz = 0.5 * h * F2[2]
-            cx = ty * F3[2] - tz * F3[1]
-            cy = tz * F3[0] - tx * F3[2]
-            cz = tx * F3[1] - ty * F3[0]
-            F3[0] = F3[0] - 0.5 * cx + (ty * cz - tz * cy) / 12.0
-            F3[1] = F3[1] - 0.5 * cy + (tz * cx - tx * cz) / 12.0
-            F3[2] = F3[2] - 0.5 * cz + (tx * cy - ty * cx) / 12.0
+            dexp_inverse(0.5 * h * F2[0], 0.5 * h * F2[1], 0.5 * h * F2[2], F3)
             exp_times(h * F3[0], h * F3[1], h * F3[2], R, E, Y)
         # stage 4 at θ = h K3
         for i in range(k):
@@ -217,15 +221,7 @@ def extremal(R0, q0, p0, h, sgn, delta_stop, Rs, Qs, Ps, U):
         for i in range(m):
             U[n, 2, i] = u[i]
         if ROTATION:
-            tx = h * F3[0]
-            ty = h * F3[1]
-            tz = h * F3[2]
-            cx = ty * F4[2] - tz * F4[1]
-            cy = tz * F4[0] - tx * F4[2]
-            cz = tx * F4[1] - ty * F4[0]
-            F4[0] = F4[0] - 0.5 * cx + (ty * cz - tz * cy) / 12.0
-            F4[1] = F4[1] - 0.5 * cy + (tz * cx - tx * cz) / 12.0
-            F4[2] = F4[2] - 0.5 * cz + (tx * cy - ty * cx) / 12.0
+            dexp_inverse(h * F3[0], h * F3[1], h * F3[2], F4)
             for i in range(3):
                 K[i] = h / 6.0 * (F1[i] + 2.0 * F2[i] + 2.0 * F3[i] + F4[i])
             exp_times(K[0], K[1], K[2], R, E, Y)

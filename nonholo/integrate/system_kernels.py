@@ -111,7 +111,8 @@ _TEMPLATES = (cf4.rates, variational_kernels.zstage, kernels_inlined.forward,
 #: The kernels as written (``compile_system(..., inlined=False)``).
 _WRITTEN = (cf4.rates, cf4.advance, variational_kernels.zpredict, cf4.cf4_stage, cf4.cf4_step,
             variational_kernels.zstage, motion_kernels.forward, variational_kernels.forward_variational,
-            motion_kernels.frame_inputs, extremal_kernels.extremal_stage, extremal_kernels.extremal)
+            motion_kernels.frame_inputs, extremal_kernels.extremal_stage, extremal_kernels.dexp_inverse,
+            extremal_kernels.extremal)
 #: The globals of every kernel's copy before the system's names are bound (:func:`specialise`):
 #: those of the modules that write the kernels and the step (the step's module last: its
 #: name is the copies' module).

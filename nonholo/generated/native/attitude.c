@@ -2923,6 +2923,6 @@ PyMODINIT_FUNC PyInit_attitude(void)
     import_array();
     PyObject *m = PyModule_Create(&moduledef);
     if (m == NULL) return NULL;
-    if (PyModule_AddStringConstant(m, "SOURCE_DIGEST", "cf2e66d39647a23f04262170a714aee5b2a4bd52ec27721d8d587cdfe7a15a76") < 0) { Py_DECREF(m); return NULL; }
+    if (PyModule_AddStringConstant(m, "SOURCE_DIGEST", "ed1e858fe76683c222138099628cf67d1af2816acf1f0b0d58f1f771f25d4cba") < 0) { Py_DECREF(m); return NULL; }
     return m;
 }

@@ -1500,6 +1500,6 @@ PyMODINIT_FUNC PyInit_brockett(void)
     import_array();
     PyObject *m = PyModule_Create(&moduledef);
     if (m == NULL) return NULL;
-    if (PyModule_AddStringConstant(m, "SOURCE_DIGEST", "6303e5a8e67051d3dd44ae9bda4b1debe7036583c293213803b75c97e701688f") < 0) { Py_DECREF(m); return NULL; }
+    if (PyModule_AddStringConstant(m, "SOURCE_DIGEST", "33a9df63e2a8d377fcc3f620639c7fbf0d4913c6626d316fbc602575cc511376") < 0) { Py_DECREF(m); return NULL; }
     return m;
 }

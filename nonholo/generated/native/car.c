@@ -2779,6 +2779,6 @@ PyMODINIT_FUNC PyInit_car(void)
     import_array();
     PyObject *m = PyModule_Create(&moduledef);
     if (m == NULL) return NULL;
-    if (PyModule_AddStringConstant(m, "SOURCE_DIGEST", "f6d385e7eb67456e7b346dbf12526e11483e0f5abe70ab9bb74977851c9cf265") < 0) { Py_DECREF(m); return NULL; }
+    if (PyModule_AddStringConstant(m, "SOURCE_DIGEST", "2db7c8030c21d509f1e27f3be36a4b1bbace9abeb5b410e3e96a9794ac8ba62a") < 0) { Py_DECREF(m); return NULL; }
     return m;
 }

@@ -2967,6 +2967,6 @@ PyMODINIT_FUNC PyInit_platform(void)
     import_array();
     PyObject *m = PyModule_Create(&moduledef);
     if (m == NULL) return NULL;
-    if (PyModule_AddStringConstant(m, "SOURCE_DIGEST", "0906dc46c2888b5c11decc4d5a3d5016e17400351e701d47656e2acb87a152ad") < 0) { Py_DECREF(m); return NULL; }
+    if (PyModule_AddStringConstant(m, "SOURCE_DIGEST", "305eacd32511466756082de0b46739ab822e96b0d9b268008f5a0a3cb0070aeb") < 0) { Py_DECREF(m); return NULL; }
     return m;
 }

@@ -2985,6 +2985,6 @@ PyMODINIT_FUNC PyInit_platform_raised(void)
     import_array();
     PyObject *m = PyModule_Create(&moduledef);
     if (m == NULL) return NULL;
-    if (PyModule_AddStringConstant(m, "SOURCE_DIGEST", "2a5255368bc5ffb303311f49f3f7a6458401aca8043b398aaea95e5fe7c683f3") < 0) { Py_DECREF(m); return NULL; }
+    if (PyModule_AddStringConstant(m, "SOURCE_DIGEST", "f73a8077cbc1bed3687431fafa46b6acb7915b45de24596716619b013f7b362e") < 0) { Py_DECREF(m); return NULL; }
     return m;
 }

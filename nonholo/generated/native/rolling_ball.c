@@ -1603,6 +1603,6 @@ PyMODINIT_FUNC PyInit_rolling_ball(void)
     import_array();
     PyObject *m = PyModule_Create(&moduledef);
     if (m == NULL) return NULL;
-    if (PyModule_AddStringConstant(m, "SOURCE_DIGEST", "f7d71fb0ec687b3d0d942dfe1a99dd1356251fc514ca1673c0074d5b0767d8fc") < 0) { Py_DECREF(m); return NULL; }
+    if (PyModule_AddStringConstant(m, "SOURCE_DIGEST", "c7a4e5ac9e9c4ee2740d6014a12dacc5145c567d755a08da96e4c54222e51e7d") < 0) { Py_DECREF(m); return NULL; }
     return m;
 }

@@ -1498,6 +1498,6 @@ PyMODINIT_FUNC PyInit_unicycle(void)
     import_array();
     PyObject *m = PyModule_Create(&moduledef);
     if (m == NULL) return NULL;
-    if (PyModule_AddStringConstant(m, "SOURCE_DIGEST", "292ddb1d416f5abc4c32cbc51b236eb4e8c5b285f1a557cf2666877c3a441d64") < 0) { Py_DECREF(m); return NULL; }
+    if (PyModule_AddStringConstant(m, "SOURCE_DIGEST", "5cd44f86687ef80dd518df488babce7978a8b4e84dfc3decea2a4e132e3ba9b9") < 0) { Py_DECREF(m); return NULL; }
     return m;
 }
