@@ -52,6 +52,10 @@ ENERGY_EFFORT = 1.0
 #: Seconds of effort the extremals (:mod:`nonholo.planning.extremals`) may take before the
 #: search.
 EXTREMAL_EFFORT = 0.1
+#: A confirmed least extremal within this relative margin above the plan's energy is the
+#: plan itself, laid on the grid: the search is not run. (One needing more is not: the
+#: least motion then rides a limit, where no extremal is.)
+AT_THE_PLAN = 1e-3
 
 # -- ``objective="auto"``
 #: ``objective="auto"``: the budget of the extremal through the plan (seconds of effort).
@@ -166,8 +170,8 @@ def improve(problem, result: PlanResult, quick: bool = False, budget: float | No
                                            grid, EXTREMAL_EFFORT, ceiling=ceiling * (1.0 + 1e-9),
                                            first_below=math.inf if framed else 0.0, first_or_none=True)
             outcome, why = found.outcome, found.why
-            if outcome is None and found.confirmed and found.least >= ceiling:
-                # the plan needs no more than the least extremal: nothing to search for
+            if outcome is None and found.confirmed and ceiling <= found.least <= ceiling * (1.0 + AT_THE_PLAN):
+                # the plan is the least extremal (to the grid's resolution): nothing to search for
                 return replace(result, reason=f"{result.reason}; energy not lowered: {why}", options=options)
     final = None
     if outcome is None and not quick:
