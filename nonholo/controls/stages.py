@@ -81,9 +81,9 @@ def stage_values(lam, Bidx, Bval, stride_b, stride_i, m):
     return U
 
 
-@jit
 def grid_stage_values(values, out):
-    """Stage table of grid controls: ``out[n, c] = values[n // r]`` (``r = N / grid``).
+    """Stage table of grid controls: ``out[n, c] = values[n // r]`` (``r = N / grid``): one broadcast
+    assignment, NumPy's (no compiled kernel to load for grid controls).
 
     Parameters
     ----------
@@ -97,14 +97,7 @@ def grid_stage_values(values, out):
     numpy.ndarray
         ``out``.
     """
-    g = values.shape[0]
-    m = values.shape[1]
-    r = out.shape[0] // g
-    for j in range(g):
-        for n in range(j * r, (j + 1) * r):
-            for c in range(3):
-                for i in range(m):
-                    out[n, c, i] = values[j, i]
+    out[:] = np.repeat(values, out.shape[0] // values.shape[0], axis=0)[:, None, :]
     return out
 
 

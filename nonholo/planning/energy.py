@@ -69,7 +69,7 @@ WASTEFUL = 3.0
 #: first size).
 QUICK_STARTS = 5
 #: ``objective="auto"``: the quick search's budget (seconds of effort).
-QUICK_EFFORT = 0.3
+QUICK_EFFORT = 0.1
 #: ``objective="auto"``: the fraction of the plan's energy a motion the quick search finds
 #: must need less than to replace it (a plan kept needs at most 1/0.6 ≈ 1.7 times what it
 #: found).

@@ -23,7 +23,6 @@ import math
 from dataclasses import replace
 
 import numpy as np
-from scipy.optimize import minimize
 
 from ..controls.parametrisations import PiecewiseConstant
 from ..io.result import PlanResult
@@ -244,6 +243,8 @@ def least_time_path(problem, result: PlanResult) -> PlanResult:
         return replace(result, options=options,
                        reason=f"{result.reason}; the least-time path not sought: the plan's grid controls do "
                               f"not reach T")
+    from scipy.optimize import minimize      # loaded by the first least-time plan, not by `import nonholo`
+
     path = PathProblem(endpoint, grid, low, high)
     lam = ev.params
     U = lam.reshape(grid, -1)

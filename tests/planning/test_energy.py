@@ -518,6 +518,7 @@ def test_auto_makes_the_plan_smooth_where_the_least_energy_fit_cannot_reach_the_
     REFIT_BELOW of the plan's energy and within 3× of the least energy found by
     ``objective="energy"``."""
     monkeypatch.setattr(energy, "WASTEFUL", 0.0)   # the quick search, as for a wasteful plan
+    monkeypatch.setattr(energy, "QUICK_EFFORT", 0.3)   # a budget that finds the least-energy motion
     start, goal = LIMIT_PAIR
     plain = nonholo.plan(start, goal, mechanism="car", constraints=[Clearance(0.01)], objective=None)
     least = nonholo.plan(start, goal, mechanism="car", constraints=[Clearance(0.01)], objective="energy")
@@ -538,6 +539,7 @@ def test_auto_keeps_the_plan_where_no_smooth_fit_reaches_the_goal_below_it(monke
     plan as found, its reason saying why: grid controls, which jump at every interval, are
     no motion to execute."""
     monkeypatch.setattr(energy, "WASTEFUL", 0.0)   # the quick search, as for a wasteful plan
+    monkeypatch.setattr(energy, "QUICK_EFFORT", 0.3)   # a budget that finds the least-energy motion
     start, goal = LIMIT_PAIR
     monkeypatch.setattr(energy_smoothing, "SMOOTH_PLAN_ITERATIONS", 0)
     found = nonholo.plan(start, goal, mechanism="car", constraints=[Clearance(0.01)], objective=None)
