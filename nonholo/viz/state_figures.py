@@ -11,7 +11,7 @@ import matplotlib
 import numpy as np
 from matplotlib.patches import Polygon
 
-from ..model.names import RAD, SECOND
+from ..model.names import NONE, RAD, SECOND
 from .platform_drawing import result_mechanism
 from .quantities import coordinate_units, input_units, label
 from .style import NotebookFigure, styled
@@ -220,7 +220,7 @@ def least_time_figure(fastest, along, bounds) -> NotebookFigure:
         panel.axhline(1.0, color="tab:red", lw=0.8, ls=":")
         panel.axhline(-1.0, color="tab:red", lw=0.8, ls=":")
         panel.set_ylim(-1.15, 1.15)
-        panel.set_ylabel("input / its bound")
+        panel.set_ylabel(label("input / its bound", NONE))
         panel.set_title(name, fontsize=9)
         panel.legend(fontsize=7, loc="lower right")
     panel.set_xlabel(label("time t", SECOND))

@@ -42,6 +42,7 @@ from nonholo import viz  # noqa: E402
 from nonholo.batch import atlas, sweep  # noqa: E402
 from nonholo.io import csv_export  # noqa: E402
 from nonholo.model import catalog, names  # noqa: E402
+from nonholo.constraints import InputBounds  # noqa: E402
 from nonholo.paper import examples, reproduce  # noqa: E402
 from nonholo.spaces import so3  # noqa: E402
 
@@ -244,6 +245,11 @@ def drawn(plans, tmp_path_factory):
             axes("plot_plane_path", name, res)
     add("ball_figure", viz.ball_figure(plans["rolling_ball"]), "rolling_ball")
     add("car_figure", viz.car_figure(plans["car"]), "car")
+    bounds = InputBounds([-0.5, -0.5], [0.5, 0.5])
+    park = ([0.7, 0.8, 0.0], [1.9, 0.3, 0.0])
+    add("least_time_figure", viz.least_time_figure(
+        nonholo.plan(*park, mechanism="unicycle", objective="time", constraints=[bounds]),
+        nonholo.plan(*park, mechanism="unicycle", T=None, constraints=[bounds]), bounds), "unicycle")
     coarse = Contact(timestep=0.005, solref=(0.01, 1.0))
     for name in ("platform", "car", "rolling_ball"):
         add("execution_figure", viz.execution_figure(execute(plans[name], touch_ups=1, contact=coarse)), name)
