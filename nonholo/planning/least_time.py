@@ -247,10 +247,7 @@ def least_time_path(problem, result: PlanResult) -> PlanResult:
 
     path = PathProblem(endpoint, grid, low, high)
     lam = ev.params
-    U = lam.reshape(grid, -1)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        use = np.maximum(np.where(np.isfinite(high), U / high, 0.0), np.where(np.isfinite(low), U / low, 0.0))
-    x0 = np.append(lam, max(float(use.max()), 1e-9))
+    x0 = np.append(lam, max(float(bounds.usage(lam.reshape(grid, -1)).max()), 1e-9))
     A = path.bounds_matrix()
     constraints = [{"type": "eq", "fun": path.goal, "jac": path.goal_jacobian},
                    {"type": "ineq", "fun": lambda x: A @ x, "jac": lambda x: A},
