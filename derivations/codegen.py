@@ -259,17 +259,28 @@ def codegen_field(mechanism: Mechanism, name: str, G: sp.Matrix, doc: str) -> st
     unpack = _unpack(mechanism)
     d = G.shape[0]
     forms, auxiliaries = _auxiliary(mechanism)
+    drift = name == "G" and mechanism.has_drift
     if name in forms:                       # the derivation's own forms (see Mechanism.derivation)
         G = forms[name]
         Q = forms[f"Q{name}"].xreplace(dict(zip(inputs(m), v)))
+    elif drift:                             # the rates f + G v: the field [G | f] at the inputs (v, 1)
+        Q = Q_matrix(mechanism, G.row_join(mechanism.drift), v.col_join(sp.Matrix([1])))
     else:
         Q = Q_matrix(mechanism, G, v)
-    return (_function(name, "R, q", unpack, list(G), (d, m), doc, auxiliaries)
+    of = (f"(F + {name} v)(exp(e[s_R]) R, q + e s_q)" if drift
+          else f"{name}(exp(e[s_R]) R, q + e s_q) v")
+    text = (_function(name, "R, q", unpack, list(G), (d, m), doc, auxiliaries)
             + "\n\n" +
             _function(f"Q{name}", "R, q, v", unpack | {v[k]: f"v[{k}]" for k in range(m)},
                       list(Q), (d, d),
-                      f"Q{name}(R, q, v) s = d/de {name}(exp(e[s_R]) R, q + e s_q) v at e = 0 "
-                      "(s = (s_R, s_q)).", auxiliaries))
+                      f"Q{name}(R, q, v) s = d/de {of} at e = 0 (s = (s_R, s_q)).", auxiliaries))
+    if drift:
+        text += ("\n\n" + _function("F", "R, q", unpack, list(mechanism.drift), (d,),
+                                     "F(R, q): the drift f, the state's rates at rest.", auxiliaries)
+                 + "\n\n" + _function("GF", "R, q", unpack, list(G.row_join(mechanism.drift)), (d, m + 1),
+                                       "GF(R, q) = [G | f]: the field with the drift as a last column "
+                                       "(the kernels' field, played at the inputs (u, 1)).", auxiliaries))
+    return text
 
 
 def _auxiliary(mechanism: Mechanism) -> tuple[dict, tuple]:
@@ -323,6 +334,8 @@ def mechanism_module(mechanism: Mechanism) -> str:
                  f"UNITS = {tuple(mechanism.units)!r}\n"
                  f"ANGLES = {tuple(bool(a) for a in mechanism.angles)!r}\n"
                  f"HAS_SINGULAR_SET = {mechanism.delta is not None}\n"
+                 "#: whether the rates at rest, F(R, q), are not zero (dq/dt = F + G u)\n"
+                 f"DRIFT = {mechanism.has_drift}\n"
                  "#: the coordinates of a state without any (``q`` on SO(3))\n"
                  "NO_COORDINATES = numpy.zeros(0)\n")
     geometry = mechanism.derivation.get("geometry")

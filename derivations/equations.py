@@ -1,8 +1,9 @@
 """A mechanism from its equations, checked: the velocity field, or Pfaffian constraints.
 
-- :func:`field_mechanism`: the driftless field itself — the coordinates' rates
-  ``ẋ = G(x) u`` (a state in ``Rᵏ``), the spatial angular velocity ``ω = Ω(R, x) u`` of an
-  orientation (``dR/dt = [ω] R``, a state on ``SO(3)``), or both (``SO(3) × Rᵏ``).
+- :func:`field_mechanism`: the field itself — the coordinates' rates ``ẋ = f(x) + G(x) u``
+  (a state in ``Rᵏ``; the drift ``f`` is zero for a kinematic mechanism), the spatial
+  angular velocity ``ω = f_ω + Ω(R, x) u`` of an orientation (``dR/dt = [ω] R``, a state
+  on ``SO(3)``), or both (``SO(3) × Rᵏ``).
 - :func:`constraint_mechanism`: the rates ``ẋ`` bound by linear equations
   ``A(x) ẋ = B(x) u`` — Pfaffian constraints ``A(x) ẋ = 0`` with the inputs chosen among the
   rates, and equations that define other inputs (a rolling speed) — solved for the rates
@@ -116,11 +117,12 @@ def admitted(form: str, name, arguments: Mapping) -> dict:
 def field_mechanism(name: str, *, inputs, coordinates=(), rates=(), omega=None, rotation=None,
                     angles=(), parameters=None, delta=None, units=None,
                     description: str | None = None) -> Mechanism:
-    """The mechanism of a driftless field, given by its equations.
+    """The mechanism of a field, given by its equations.
 
     - ``inputs``: the input symbols ``u``; ``coordinates``: the symbols ``x`` of a Euclidean
-      state and ``rates`` their rates ``ẋ`` (one expression each, linear in the inputs);
-    - ``omega``: the spatial angular velocity (3 expressions, linear in the inputs) of an
+      state and ``rates`` their rates ``ẋ`` (one expression each, affine in the inputs: the
+      terms without an input are the drift ``f(x)``);
+    - ``omega``: the spatial angular velocity (3 expressions, affine in the inputs) of an
       orientation ``R``, ``dR/dt = [ω] R`` (body rates ``Ω`` give ``ω = R Ω``), written in the
       entries of ``rotation`` (a 3×3 matrix of symbols; default
       :data:`derivations.rotations.r`, ``r11 … r33``);
@@ -159,13 +161,19 @@ def field_mechanism(name: str, *, inputs, coordinates=(), rates=(), omega=None, 
         _declared(exprs, key, declared, R)
     to_r = {**values, **({} if R is None else dict(zip(R, r)))}
     parts = {key: _substituted(exprs, to_r, key, name) for key, exprs in parts.items()}
-    X = _linear(parts["rates"], u, [f"the rate of {c}" for c in x]) if x else None
-    L = _linear(parts["omega"], u, [f"omega[{i}]" for i in range(3)]) if omega is not None else None
+    X, fx = _affine(parts["rates"], u, [f"the rate of {c}" for c in x]) if x else (None, None)
+    L, fw = (_affine(parts["omega"], u, [f"omega[{i}]" for i in range(3)]) if omega is not None
+             else (None, None))
     field = X if L is None else (L if X is None else sp.Matrix.vstack(L, X))
+    drift = None
+    if fx is not None or fw is not None:
+        rows = ([] if L is None else list(fw if fw is not None else sp.zeros(3, 1))) + \
+               ([] if X is None else list(fx if fx is not None else sp.zeros(len(x), 1)))
+        drift = sp.Matrix(rows)
     is_angle = _angles(angles, x)
     return Mechanism(
         name=name, description=given["description"] or f"{name} (from its equations)",
-        L=L, X=X, coordinates=x, inputs=tuple(str(s) for s in u),
+        L=L, X=X, drift=drift, coordinates=x, inputs=tuple(str(s) for s in u),
         delta=parts["delta"][0] if "delta" in parts else singular_factor(field),
         angles=is_angle, units=_units(given["units"], x, is_angle),
         derivation={"rates": tuple(parts["rates"]), "omega": parts.get("omega"), "parameters": values})
@@ -397,24 +405,26 @@ def _rotation(rotation) -> sp.Matrix:
     return sp.Matrix(rows)
 
 
-def _linear(exprs, u, labels) -> sp.Matrix:
-    """The matrix ``G`` with ``exprs = G u``; ``ValueError`` naming an expression that is not
-    linear in ``u`` or has a term without an input (a drift)."""
+def _affine(exprs, u, labels) -> tuple[sp.Matrix, sp.Matrix | None]:
+    """``(G, f)`` with ``exprs = f + G u`` (``f``, the drift, ``None`` where it is zero);
+    ``ValueError`` naming an expression's term that is not affine in ``u``."""
     G = sp.Matrix(exprs).jacobian(list(u))
     allowance = budget.Allowance()
+    drifts = []
     for i, label in enumerate(labels):
         if G.row(i).has(*u):
-            raise ValueError(f"{label} = {_shown(exprs[i])} is not linear in the inputs {', '.join(map(str, u))}")
-        # linear in u (G free of u): the expression is G u plus its value at u = 0, the drift
+            terms = sp.Add.make_args(budget.expanded(exprs[i]))
+            term = next((t for t in terms if any(sp.diff(t, a).has(*u) for a in u)), exprs[i])
+            raise ValueError(f"{label} = {_shown(exprs[i])}: its term {_shown(term)} is not affine in the inputs "
+                             f"{', '.join(map(str, u))} (rates = f(x) + G(x) u)")
+        # affine in u (G free of u): the expression is G u plus its value at u = 0, the drift
         drift = exprs[i].xreplace({a: 0 for a in u})
         if drift != 0:
             drift = budget.expanded(drift)
         if drift != 0:
             drift = budget.simplified(drift, allowance)
-        if drift != 0:
-            raise ValueError(f"{label} = {_shown(exprs[i])} has the term {_shown(drift)} without an input: the "
-                             "field must be driftless (rates = G(x) u)")
-    return G
+        drifts.append(drift)
+    return G, (sp.Matrix(drifts) if any(e != 0 for e in drifts) else None)
 
 
 def _angles(angles, x) -> tuple[bool, ...]:

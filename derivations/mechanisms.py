@@ -33,7 +33,8 @@ from .rotations import e1, e2, e3, hat, r
 
 @dataclass(frozen=True)
 class Mechanism:
-    """A driftless system on ``SO(3)``, ``SO(3) × Rᵏ`` or ``Rᵏ`` (see the module docstring).
+    """A system on ``SO(3)``, ``SO(3) × Rᵏ`` or ``Rᵏ``, driftless or with a :attr:`drift`
+    (see the module docstring).
 
     Attributes:
         name: identifier used by the CLI and the generated module's file name.
@@ -55,6 +56,8 @@ class Mechanism:
         units: the unit of each coordinate (for reports: ``"m"``, ``"rad"``, ...).
         angles: which coordinates are angles (errors of an angle are taken modulo 2π).
         X: k×m rates of the coordinates per unit input (``None``: no coordinates).
+        drift: the rates at rest, a column with the rows of :attr:`field` (``(ω, ẋ) = f + G u``;
+            ``None``: driftless).
         derivation: named intermediate results (leg rows, constraint matrix, ...); the code
             generator takes ``auxiliary_forms`` — the generated ``G``, ``QG`` (in the inputs
             ``u1 … um``) and ``delta`` written in symbols of ``auxiliaries`` (pairs of a symbol
@@ -72,6 +75,7 @@ class Mechanism:
     units: tuple[str, ...] = ()
     angles: tuple[bool, ...] = ()
     X: sp.Matrix | None = None
+    drift: sp.Matrix | None = None
     derivation: dict = field(default_factory=dict, compare=False, repr=False)
 
     def __post_init__(self):
@@ -102,7 +106,8 @@ class Mechanism:
             if getattr(self, key) and len(getattr(self, key)) != self.n_coordinates:
                 raise ValueError(f"{where}: {key} needs one entry per coordinate")
         d = (3 if self.orientation else 0) + self.n_coordinates
-        for key, shape in (("frame", (d, self.n_inputs)), ("frame_inputs", (self.n_inputs, self.n_inputs))):
+        for key, shape in (("frame", (d, self.n_inputs)), ("frame_inputs", (self.n_inputs, self.n_inputs)),
+                           ("drift", (d, 1))):
             value = getattr(self, key)
             if value is not None and value.shape != shape:
                 raise ValueError(f"{where}: {key} must be {shape[0]}×{shape[1]}, got "
@@ -113,7 +118,7 @@ class Mechanism:
                                  "other than those of the generated code (R, q, v, out, numpy, r_ij, s_i, "
                                  "u_i, v_i)")
         known = set(self.coordinates) | (set(r) if self.orientation else set())
-        for key in ("L", "X", "delta", "frame", "frame_inputs"):
+        for key in ("L", "X", "delta", "frame", "frame_inputs", "drift"):
             value = getattr(self, key)
             stray = set() if value is None else sp.sympify(value).free_symbols - known
             if stray:
@@ -156,6 +161,11 @@ class Mechanism:
         return sp.Matrix.vstack(self.L, self.X) if self.orientation else self.X
 
     @property
+    def has_drift(self) -> bool:
+        """Whether the rates at rest are not zero (:attr:`drift`)."""
+        return self.drift is not None and any(e != 0 for e in self.drift)
+
+    @property
     def state_space(self) -> str:
         """``"SO(3)"``, ``"SO(3)xR^k"`` or ``"R^k"``."""
         k = self.n_coordinates
@@ -165,7 +175,7 @@ class Mechanism:
 
 
 #: The fields of a :class:`Mechanism` that hold matrices.
-MATRIX_FIELDS = ("L", "X", "frame", "frame_inputs")
+MATRIX_FIELDS = ("L", "X", "frame", "frame_inputs", "drift")
 
 
 def check_definition(mechanism) -> None:

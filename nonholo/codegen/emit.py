@@ -214,7 +214,8 @@ def functions(module, parts: dict, kernels_text: str | None = None) -> list:
            for n, kinds in HELPER_KINDS.items()]
     for system in systems(module):
         frame = system == "frame"
-        G, QG = ("N_into", "QN_into") if frame else ("G_into", "QG_into")
+        G, QG = ("N_into", "QN_into") if frame else (("GF_into" if getattr(module, "DRIFT", False) else "G_into"),
+                                                     "QG_into")
         fields = {"field_into": (G, {"R": "f8[2]", "q": "f8[1]", "out": "f8[2]"}),
                   "field_derivative_into": (QG, {"R": "f8[2]", "q": "f8[1]", "v": "f8[1]", "out": "f8[2]"})}
         if frame:
@@ -227,7 +228,8 @@ def functions(module, parts: dict, kernels_text: str | None = None) -> list:
             calls[bound] = f"{system}_{name}"
         constants = {"ROTATION": bool(module.ORIENTATION),
                      "D": (3 if module.ORIENTATION else 0) + len(module.COORDINATES),
-                     "OFFSET": 3 if module.ORIENTATION else 0}
+                     "OFFSET": 3 if module.ORIENTATION else 0,
+                     "DRIFT_COLUMNS": int(bool(getattr(module, "DRIFT", False)) and not frame)}
         for name in ("rates", "zstage"):
             out.append(Function(parts[name], f"{system}_{name}", KERNEL_KINDS[name], exported=False,
                                 calls=calls, constants=constants))

@@ -17,6 +17,8 @@ COORDINATES = ()
 UNITS = ()
 ANGLES = ()
 HAS_SINGULAR_SET = False
+#: whether the rates at rest, F(R, q), are not zero (dq/dt = F + G u)
+DRIFT = False
 #: the coordinates of a state without any (``q`` on SO(3))
 NO_COORDINATES = numpy.zeros(0)
 

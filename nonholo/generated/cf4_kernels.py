@@ -39,7 +39,7 @@ def forward(R0, q0, U, h, sgn, delta_stop, Rs, Qs):
     k = q0.shape[0]
     R = R0.copy()
     q = q0.copy()
-    Rn, qn, Y2, Y3, Y4, P2, P3, P4, Rh, E, B1, B2, B3, B4, F1, F2, F3, F4 = step_workspace(R0, k, D, m)
+    Rn, qn, Y2, Y3, Y4, P2, P3, P4, Rh, E, B1, B2, B3, B4, F1, F2, F3, F4 = step_workspace(R0, k, D, m + DRIFT_COLUMNS)
     for i in range(3):
         for j in range(3):
             Rs[0, i, j] = R0[i, j]
@@ -212,10 +212,10 @@ def forward_variational(R0, q0, U, h, sgn, delta_stop, Bidx, Bval, stride_b, str
     Y4 = np.empty((3, 3))
     Rh = np.empty((3, 3))
     E = np.empty((3, 3))
-    B1 = np.empty((D, m))
-    B2 = np.empty((D, m))
-    B3 = np.empty((D, m))
-    B4 = np.empty((D, m))
+    B1 = np.empty((D, m + DRIFT_COLUMNS))
+    B2 = np.empty((D, m + DRIFT_COLUMNS))
+    B3 = np.empty((D, m + DRIFT_COLUMNS))
+    B4 = np.empty((D, m + DRIFT_COLUMNS))
     F1 = np.empty(D)
     F2 = np.empty(D)
     F3 = np.empty(D)
@@ -478,7 +478,7 @@ def frame_inputs(nodes, qnodes, idx, s, Wst, w_end, Rout, Qout, out):
     k = qnodes.shape[1]
     R = np.empty((3, 3))
     q = np.empty(k)
-    Rn, qn, Y2, Y3, Y4, P2, P3, P4, Rh, E, B1, B2, B3, B4, F1, F2, F3, F4 = step_workspace(nodes[0], k, D, m)
+    Rn, qn, Y2, Y3, Y4, P2, P3, P4, Rh, E, B1, B2, B3, B4, F1, F2, F3, F4 = step_workspace(nodes[0], k, D, m + DRIFT_COLUMNS)
     Wm = np.empty((m, m))
     for t in range(n_t):
         for i in range(3):
@@ -623,7 +623,7 @@ def extremal(R0, q0, p0, h, sgn, delta_stop, Rs, Qs, Ps, U):
     P = np.empty(k)
     p = p0.copy()
     pc = np.empty(D)
-    B = np.empty((D, m))
+    B = np.empty((D, m + DRIFT_COLUMNS))
     A = np.empty((D, D))
     u = np.empty(m)
     F1 = np.empty(D)
@@ -651,7 +651,7 @@ def extremal(R0, q0, p0, h, sgn, delta_stop, Rs, Qs, Ps, U):
         dmin = min(dmin, d)
         if d >= delta_stop:
             field_into(R, q, B)
-            m = B.shape[1]
+            m = u.shape[0]
             for i in range(m):
                 s = 0.0
                 for j in range(D):
@@ -688,7 +688,7 @@ def extremal(R0, q0, p0, h, sgn, delta_stop, Rs, Qs, Ps, U):
         dmin = min(dmin, d)
         if d >= delta_stop:
             field_into(Y, P, B)
-            m = B.shape[1]
+            m = u.shape[0]
             for i in range(m):
                 s = 0.0
                 for j in range(D):
@@ -734,7 +734,7 @@ def extremal(R0, q0, p0, h, sgn, delta_stop, Rs, Qs, Ps, U):
         dmin = min(dmin, d)
         if d >= delta_stop:
             field_into(Y, P, B)
-            m = B.shape[1]
+            m = u.shape[0]
             for i in range(m):
                 s = 0.0
                 for j in range(D):
@@ -780,7 +780,7 @@ def extremal(R0, q0, p0, h, sgn, delta_stop, Rs, Qs, Ps, U):
         dmin = min(dmin, d)
         if d >= delta_stop:
             field_into(Y, P, B)
-            m = B.shape[1]
+            m = u.shape[0]
             for i in range(m):
                 s = 0.0
                 for j in range(D):

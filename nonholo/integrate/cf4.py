@@ -139,6 +139,10 @@ W_into = _placeholder
 ROTATION = True
 D = 3
 OFFSET = 3
+#: The field's columns past the inputs: 1 for a system with drift ``ẋ = f(x) + G(x) u``,
+#: whose ``field_into`` fills ``[G | f]`` (the drift a last column, played at the input 1;
+#: ``field_derivative_into`` is then that of ``f + G v``), else 0.
+DRIFT_COLUMNS = 0
 
 
 def no_singularity(R, q):
@@ -160,12 +164,13 @@ def no_singularity(R, q):
 
 
 def rates(B, v, out):
-    """``out = B v`` (d×m times m).
+    """``out = B v`` (d×m times m), plus the drift column of a system with drift
+    (:data:`DRIFT_COLUMNS`).
 
     Parameters
     ----------
     B : numpy.ndarray
-        The field, d×m.
+        The field, d×(m + ``DRIFT_COLUMNS``).
     v : numpy.ndarray
         The inputs, m entries.
     out : numpy.ndarray
@@ -176,12 +181,14 @@ def rates(B, v, out):
     bool
         ``False`` if a rate is not finite.
     """
-    m = B.shape[1]
+    m = v.shape[0]
     ok = True
     for i in range(D):
         s = 0.0
         for k in range(m):
             s += B[i, k] * v[k]
+        for k in range(DRIFT_COLUMNS):
+            s += B[i, m + k]
         out[i] = s
         ok = ok and np.isfinite(s)
     return ok
@@ -315,7 +322,7 @@ def cf4_step(R, q, Rn, qn, v0, v1, v2, h, sgn, delta_stop, dmin, Y2, Y3, Y4, P2,
     Rh, E : numpy.ndarray
         Scratch, 3×3.
     B1, B2, B3, B4 : numpy.ndarray
-        The stage fields (output), d×m.
+        The stage fields (output), d×(m + ``DRIFT_COLUMNS``).
     F1, F2, F3, F4 : numpy.ndarray
         The stage rates (output), d entries.
 
@@ -391,7 +398,7 @@ def step_workspace(R0, k, d, m):
     d : int
         Rates.
     m : int
-        Inputs.
+        The field's columns (the inputs, and the drift's: :data:`DRIFT_COLUMNS`).
 
     Returns
     -------

@@ -7,7 +7,9 @@ Least energy ``∫|u|² dt`` for the system ``(ω, q̇) = G(R, q) u`` (conventio
 :mod:`nonholo.integrate.variational_kernels`, ``ds/dt = A s``, ``A = QG(R, q, u) + [ω] ⊕ 0``,
 the Hamiltonian ``H = pᵀ G u − ½|u|²`` is largest at ``u = Gᵀ p`` and the costate — the
 right-trivialised one on SO(3) — obeys ``dp/dt = −Aᵀ p``. A normal extremal is the motion
-of ``(R, q, p)`` from ``(R0, q0, p0)``; its controls are ``u(t) = G(R, q)ᵀ p``.
+of ``(R, q, p)`` from ``(R0, q0, p0)``; its controls are ``u(t) = G(R, q)ᵀ p``. With drift,
+``ẋ = f(x) + G(x) u`` (:data:`~nonholo.integrate.cf4.DRIFT_COLUMNS`), ``H`` gains ``pᵀ f``:
+the controls are the same, and ``A`` — the derivative of ``f + G u`` — carries the drift's.
 
 The scheme is RKMK4 (Munthe-Kaas, BIT 38, 1998) on ``(R, q, p)``: classical RK4 on ``q``
 and ``p``; for ``R``, the stages' angular velocities pulled back by ``dexp⁻¹`` truncated
@@ -23,7 +25,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..numerics.kernels import exp_times
-from .cf4 import D, OFFSET, ROTATION, delta, field_derivative_into, field_into, rates
+from .cf4 import D, DRIFT_COLUMNS, OFFSET, ROTATION, delta, field_derivative_into, field_into, rates
 
 
 def extremal_stage(Y, P, p, sgn, delta_stop, dmin, B, A, u, F, dp):
@@ -42,7 +44,7 @@ def extremal_stage(Y, P, p, sgn, delta_stop, dmin, B, A, u, F, dp):
     dmin : float
         The least ``sgnΔ`` so far.
     B : numpy.ndarray
-        The field ``G(Y, P)`` (output), d×m.
+        The field ``G(Y, P)`` (output), d×(m + ``DRIFT_COLUMNS``).
     A : numpy.ndarray
         ``QG(Y, P, u) + [ω] ⊕ 0`` (output), d×d.
     u : numpy.ndarray
@@ -64,7 +66,7 @@ def extremal_stage(Y, P, p, sgn, delta_stop, dmin, B, A, u, F, dp):
     dmin = min(dmin, d)
     if d >= delta_stop:
         field_into(Y, P, B)
-        m = B.shape[1]
+        m = u.shape[0]
         for i in range(m):
             s = 0.0
             for j in range(D):
@@ -149,7 +151,7 @@ def extremal(R0, q0, p0, h, sgn, delta_stop, Rs, Qs, Ps, U):
     P = np.empty(k)
     p = p0.copy()
     pc = np.empty(D)
-    B = np.empty((D, m))
+    B = np.empty((D, m + DRIFT_COLUMNS))
     A = np.empty((D, D))
     u = np.empty(m)
     F1 = np.empty(D)

@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .cf4 import D, W_into, cf4_step, delta, step_workspace
+from .cf4 import D, DRIFT_COLUMNS, W_into, cf4_step, delta, step_workspace
 
 
 def forward(R0, q0, U, h, sgn, delta_stop, Rs, Qs):
@@ -50,7 +50,7 @@ def forward(R0, q0, U, h, sgn, delta_stop, Rs, Qs):
     R = R0.copy()
     q = q0.copy()
     (Rn, qn, Y2, Y3, Y4, P2, P3, P4, Rh, E, B1, B2, B3, B4,
-     F1, F2, F3, F4) = step_workspace(R0, k, D, m)
+     F1, F2, F3, F4) = step_workspace(R0, k, D, m + DRIFT_COLUMNS)
     for i in range(3):
         for j in range(3):
             Rs[0, i, j] = R0[i, j]
@@ -107,7 +107,7 @@ def frame_inputs(nodes, qnodes, idx, s, Wst, w_end, Rout, Qout, out):
     R = np.empty((3, 3))
     q = np.empty(k)
     (Rn, qn, Y2, Y3, Y4, P2, P3, P4, Rh, E, B1, B2, B3, B4,
-     F1, F2, F3, F4) = step_workspace(nodes[0], k, D, m)
+     F1, F2, F3, F4) = step_workspace(nodes[0], k, D, m + DRIFT_COLUMNS)
     Wm = np.empty((m, m))
     for t in range(n_t):
         for i in range(3):

@@ -304,7 +304,7 @@ def _native(module, frame: bool, required: bool) -> Kernels | None:
 
 def _compile(module, frame: bool, templates, tag: str, cache: bool, fast_derivative: bool = True) -> Kernels:
     """Compile ``templates`` for a system of ``module`` (see :func:`compile_system`)."""
-    G, QG = (module.N_into, module.QN_into) if frame else (module.G_into, module.QG_into)
+    G, QG = (module.N_into, module.QN_into) if frame else (field_function(module), module.QG_into)
     bindings = {
         "field_into": jit(G, cache=False, lazy=False),
         # QG feeds only the variational system (the Jacobian): fast-math lets LLVM turn
@@ -314,6 +314,7 @@ def _compile(module, frame: bool, templates, tag: str, cache: bool, fast_derivat
         "ROTATION": bool(module.ORIENTATION),
         "D": (3 if module.ORIENTATION else 0) + len(module.COORDINATES),
         "OFFSET": 3 if module.ORIENTATION else 0,
+        "DRIFT_COLUMNS": drift_columns(module, frame),
     }
     if frame:
         bindings["W_into"] = jit(module.W_into, cache=False, lazy=False)
@@ -329,6 +330,42 @@ def _compile(module, frame: bool, templates, tag: str, cache: bool, fast_derivat
                    frame_inputs=None if frame_kernel is None else metered(frame_kernel, effort.FORWARD_WEIGHT, 2),
                    extremal=None if frame else metered(bindings["extremal"], effort.EXTREMAL_WEIGHT, 9))
     return kern
+
+
+def drift_columns(module, frame: bool) -> int:
+    """The field's columns past the inputs: 1 for the physical system of a mechanism with
+    drift (:data:`nonholo.integrate.cf4.DRIFT_COLUMNS`), else 0.
+
+    Parameters
+    ----------
+    module : module
+        The mechanism's generated module.
+    frame : bool
+        Whether the system is the frame's.
+
+    Returns
+    -------
+    int
+        0 or 1.
+    """
+    return int(bool(getattr(module, "DRIFT", False)) and not frame)
+
+
+def field_function(module):
+    """The generated function the kernels call as ``field_into`` for the physical system:
+    ``GF_into`` (``[G | f]``) with drift, else ``G_into``.
+
+    Parameters
+    ----------
+    module : module
+        The mechanism's generated module.
+
+    Returns
+    -------
+    function
+        The generated function.
+    """
+    return module.GF_into if drift_columns(module, False) else module.G_into
 
 
 def metered(kernel, weight: float, counted: int):

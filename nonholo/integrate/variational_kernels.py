@@ -35,7 +35,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..numerics.kernels import inv33, inverse_into
-from .cf4 import D, OFFSET, ROTATION, cf4_step, delta, field_derivative_into
+from .cf4 import D, DRIFT_COLUMNS, OFFSET, ROTATION, cf4_step, delta, field_derivative_into
 
 
 def zpredict(Z, a, f, out):
@@ -71,7 +71,7 @@ def zstage(Zc, Y, P, v, F, B, Qm, f, K):
     F : numpy.ndarray
         The stage's rates.
     B : numpy.ndarray
-        The stage's field, d×m.
+        The stage's field, d×(m + ``DRIFT_COLUMNS``): its first m columns are read.
     Qm : numpy.ndarray
         Scratch, d×d (``QG``).
     f : numpy.ndarray
@@ -80,7 +80,7 @@ def zstage(Zc, Y, P, v, F, B, Qm, f, K):
         The output ``Zc B``, d×m.
     """
     field_derivative_into(Y, P, v, Qm)
-    m = B.shape[1]
+    m = K.shape[1]
     if OFFSET == D:
         # on SO(3) (d = 3): A in locals (lets LLVM keep it in registers: the arrays could alias)
         a00 = Qm[0, 0]
@@ -203,10 +203,10 @@ def forward_variational(R0, q0, U, h, sgn, delta_stop, Bidx, Bval, stride_b, str
     Y4 = np.empty((3, 3))
     Rh = np.empty((3, 3))
     E = np.empty((3, 3))
-    B1 = np.empty((D, m))
-    B2 = np.empty((D, m))
-    B3 = np.empty((D, m))
-    B4 = np.empty((D, m))
+    B1 = np.empty((D, m + DRIFT_COLUMNS))
+    B2 = np.empty((D, m + DRIFT_COLUMNS))
+    B3 = np.empty((D, m + DRIFT_COLUMNS))
+    B4 = np.empty((D, m + DRIFT_COLUMNS))
     F1 = np.empty(D)
     F2 = np.empty(D)
     F3 = np.empty(D)

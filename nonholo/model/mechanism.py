@@ -174,6 +174,9 @@ class Mechanism:  # signature: __new__'s (*args, **kwargs), the fields below; nu
         How it is drawn (:mod:`nonholo.model.drawing`).
     bounds : dict or None
         Bounds on the inputs and coordinates, as data.
+    drift : callable or None
+        The rates at rest ``F(R, q)`` of a system with drift, ``(ω, q̇) = F + G u``;
+        ``None`` for a driftless one.
     """
 
     name: str
@@ -200,6 +203,8 @@ class Mechanism:  # signature: __new__'s (*args, **kwargs), the fields below; nu
     #: bounds as data, ``{"inputs": {name: (low, high)}, "coordinates": {name: (low, high)}}``
     #: (``±inf`` where free); ``None`` without
     bounds: dict | None = field(default=None, repr=False)
+    #: the rates at rest ``F(R, q)`` of a system with drift (``None``: driftless)
+    drift: Callable | None = field(default=None, repr=False)
 
     def __new__(cls, *args, **kwargs):
         """Arguments that do not fit the fields raise a ``TypeError`` saying how a mechanism
@@ -267,6 +272,11 @@ class Mechanism:  # signature: __new__'s (*args, **kwargs), the fields below; nu
     def n_inputs(self) -> int:
         """``m``: the number of inputs."""
         return len(self.inputs)
+
+    @property
+    def has_drift(self) -> bool:
+        """Whether the state moves at rest: ``(ω, q̇) = F(R, q) + G(R, q) u``."""
+        return self.drift is not None
 
     @property
     def has_frame(self) -> bool:
@@ -364,7 +374,8 @@ class Mechanism:  # signature: __new__'s (*args, **kwargs), the fields below; nu
         return np.broadcast_to(np.asarray(value, dtype=float), (R.shape[0],)).copy()
 
     def rates(self, R, q, u) -> np.ndarray:
-        """The stacked rates ``G(R, q) u`` of a state beyond SO(3).
+        """The stacked rates ``G(R, q) u`` (``F(R, q) + G(R, q) u`` with drift) of a state
+        beyond SO(3).
 
         Parameters
         ----------
@@ -380,7 +391,9 @@ class Mechanism:  # signature: __new__'s (*args, **kwargs), the fields below; nu
         numpy.ndarray
             ``(ω, q̇)``, shape ``(d,)``.
         """
-        return self.G(np.asarray(R, dtype=float), np.asarray(q, dtype=float)) @ np.asarray(u, dtype=float)
+        R, q = np.asarray(R, dtype=float), np.asarray(q, dtype=float)
+        rates = self.G(R, q) @ np.asarray(u, dtype=float)
+        return rates if self.drift is None else rates + self.drift(R, q)
 
     @classmethod
     def from_module(cls, module: types.ModuleType) -> "Mechanism":
@@ -399,18 +412,19 @@ class Mechanism:  # signature: __new__'s (*args, **kwargs), the fields below; nu
         """
         delta = module.delta if module.HAS_SINGULAR_SET else None
         frame = Frame(module.N, module.QN, module.W) if module.HAS_FRAME else None
+        drift = module.F if getattr(module, "DRIFT", False) else None
         if module.STATE_SPACE != "SO(3)":
             return cls(name=module.NAME, description=module.DESCRIPTION, inputs=tuple(module.INPUTS),
                        L=None, Q=None, delta=delta, frame=frame, geometry=None, module=module,
                        state_space=module.STATE_SPACE, coordinates=tuple(module.COORDINATES),
-                       units=tuple(module.UNITS), angles=tuple(module.ANGLES), G=module.G)
+                       units=tuple(module.UNITS), angles=tuple(module.ANGLES), G=module.G, drift=drift)
         if frame is not None:
             frame = Frame(*(on_rotation(f, module) for f in (module.N, module.QN, module.W)))
         geometry = getattr(module, "GEOMETRY", None)
         return cls(name=module.NAME, description=module.DESCRIPTION, inputs=tuple(module.INPUTS),
                    L=checked_on_R(module.L), Q=checked_on_R(module.Q), delta=None if delta is None else on_rotation(delta, module),
                    frame=frame, geometry=None if geometry is None else Geometry.from_mapping(geometry),
-                   module=module, G=module.G)
+                   module=module, G=module.G, drift=None if drift is None else on_rotation(drift, module))
 
     @classmethod
     def from_symbolic(cls, mechanism, cache: bool = True) -> "Mechanism":

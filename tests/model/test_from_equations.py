@@ -125,8 +125,8 @@ def test_an_orientation_from_body_rates_and_a_ball_on_the_product():
 BAD = [
     (dict(rates=[v * cos(th), v * sin(th0), w, v * sin(th0 - th1)]), "rates use theta, not declared"),
     (dict(rates=[v * cos(th0), v * sin(th0), w]), "3 expression"),              # one short
-    (dict(rates=[v * cos(th0), v * sin(th0), w, w ** 2]), "not linear"),
-    (dict(rates=[v * cos(th0), v * sin(th0), w, v + 1]), "without an input"),
+    (dict(rates=[v * cos(th0), v * sin(th0), w, w ** 2]), r"the rate of theta1 = w\*\*2: its term w\*\*2 is not affine"),
+    (dict(rates=[v * cos(th0), v * sin(th0), w + v * w * sin(th1), th0]), r"its term v\*w\*sin\(theta1\) is not affine"),
     (dict(angles=[th0, phi]), "phi is not among the coordinates"),
     (dict(inputs=[v, x]), "x is given both in coordinates and in inputs"),
     (dict(rates=[v * cos(th0), v * sin(th0), w, v * sp.Symbol("r11", real=True)]), "omega="),

@@ -264,12 +264,15 @@ static int physical_rates(double *B, int64_t B_s0, int64_t B_s1, double *v, int6
     int64_t m = 0;
     int ok = 0;
     double s = 0;
-    m = B_s1;
+    m = v_s0;
     ok = 1;
     for (i = 0; i < INT64_C(3); i += 1) {
         s = 0.0;
         for (k = 0; k < m; k += 1) {
             s += (B[(i) * B_s1 + (k)] * v[k]);
+        }
+        for (k = 0; k < INT64_C(0); k += 1) {
+            s += B[(i) * B_s1 + ((m + k))];
         }
         out[i] = s;
         ok = ((ok) && (isfinite(s)));
@@ -298,7 +301,7 @@ static void physical_zstage(double *Zc, int64_t Zc_s0, int64_t Zc_s1, double *Y,
     double z2 = 0;
     double s = 0;
     physical_QG_into(Y, Y_s0, Y_s1, P, P_s0, v, v_s0, Qm, Qm_s0, Qm_s1);
-    m = B_s1;
+    m = K_s1;
     if ((((INT64_C(3)) == (INT64_C(3))))) {
         a00 = Qm[(INT64_C(0)) * Qm_s1 + (INT64_C(0))];
         a01 = (Qm[(INT64_C(0)) * Qm_s1 + (INT64_C(1))] - F[INT64_C(2)]);
@@ -453,16 +456,16 @@ static void forward__physical(double *R0, int64_t R0_s0, int64_t R0_s1, double *
     E_s1 = INT64_C(3);
     E = (double *)alloca(sizeof(double) * ((E_s0) * (E_s1) + 1));
     B1_s0 = INT64_C(3);
-    B1_s1 = m;
+    B1_s1 = (m + INT64_C(0));
     B1 = (double *)alloca(sizeof(double) * ((B1_s0) * (B1_s1) + 1));
     B2_s0 = INT64_C(3);
-    B2_s1 = m;
+    B2_s1 = (m + INT64_C(0));
     B2 = (double *)alloca(sizeof(double) * ((B2_s0) * (B2_s1) + 1));
     B3_s0 = INT64_C(3);
-    B3_s1 = m;
+    B3_s1 = (m + INT64_C(0));
     B3 = (double *)alloca(sizeof(double) * ((B3_s0) * (B3_s1) + 1));
     B4_s0 = INT64_C(3);
-    B4_s1 = m;
+    B4_s1 = (m + INT64_C(0));
     B4 = (double *)alloca(sizeof(double) * ((B4_s0) * (B4_s1) + 1));
     F1_s0 = INT64_C(3);
     F1 = (double *)alloca(sizeof(double) * ((F1_s0) + 1));
@@ -750,16 +753,16 @@ static void forward_variational__physical(double *R0, int64_t R0_s0, int64_t R0_
     E_s1 = INT64_C(3);
     E = (double *)alloca(sizeof(double) * ((E_s0) * (E_s1) + 1));
     B1_s0 = INT64_C(3);
-    B1_s1 = m;
+    B1_s1 = (m + INT64_C(0));
     B1 = (double *)alloca(sizeof(double) * ((B1_s0) * (B1_s1) + 1));
     B2_s0 = INT64_C(3);
-    B2_s1 = m;
+    B2_s1 = (m + INT64_C(0));
     B2 = (double *)alloca(sizeof(double) * ((B2_s0) * (B2_s1) + 1));
     B3_s0 = INT64_C(3);
-    B3_s1 = m;
+    B3_s1 = (m + INT64_C(0));
     B3 = (double *)alloca(sizeof(double) * ((B3_s0) * (B3_s1) + 1));
     B4_s0 = INT64_C(3);
-    B4_s1 = m;
+    B4_s1 = (m + INT64_C(0));
     B4 = (double *)alloca(sizeof(double) * ((B4_s0) * (B4_s1) + 1));
     F1_s0 = INT64_C(3);
     F1 = (double *)alloca(sizeof(double) * ((F1_s0) + 1));
@@ -1193,7 +1196,7 @@ static void extremal__physical(double *R0, int64_t R0_s0, int64_t R0_s1, double 
     pc_s0 = INT64_C(3);
     pc = (double *)alloca(sizeof(double) * ((pc_s0) + 1));
     B_s0 = INT64_C(3);
-    B_s1 = m;
+    B_s1 = (m + INT64_C(0));
     B = (double *)alloca(sizeof(double) * ((B_s0) * (B_s1) + 1));
     A_s0 = INT64_C(3);
     A_s1 = INT64_C(3);
@@ -1238,7 +1241,7 @@ static void extremal__physical(double *R0, int64_t R0_s0, int64_t R0_s1, double 
         dmin = ({ double _a1 = dmin; double _b1 = d; (_b1 < _a1) ? _b1 : _a1; });
         if ((((d) >= (delta_stop)))) {
             physical_G_into(R, R_s0, R_s1, q, q_s0, B, B_s0, B_s1);
-            m = B_s1;
+            m = u_s0;
             for (i = 0; i < m; i += 1) {
                 s = 0.0;
                 for (j = 0; j < INT64_C(3); j += 1) {
@@ -1282,7 +1285,7 @@ static void extremal__physical(double *R0, int64_t R0_s0, int64_t R0_s1, double 
         dmin = ({ double _a2 = dmin; double _b2 = d; (_b2 < _a2) ? _b2 : _a2; });
         if ((((d) >= (delta_stop)))) {
             physical_G_into(Y, Y_s0, Y_s1, P, P_s0, B, B_s0, B_s1);
-            m = B_s1;
+            m = u_s0;
             for (i = 0; i < m; i += 1) {
                 s = 0.0;
                 for (j = 0; j < INT64_C(3); j += 1) {
@@ -1335,7 +1338,7 @@ static void extremal__physical(double *R0, int64_t R0_s0, int64_t R0_s1, double 
         dmin = ({ double _a3 = dmin; double _b3 = d; (_b3 < _a3) ? _b3 : _a3; });
         if ((((d) >= (delta_stop)))) {
             physical_G_into(Y, Y_s0, Y_s1, P, P_s0, B, B_s0, B_s1);
-            m = B_s1;
+            m = u_s0;
             for (i = 0; i < m; i += 1) {
                 s = 0.0;
                 for (j = 0; j < INT64_C(3); j += 1) {
@@ -1388,7 +1391,7 @@ static void extremal__physical(double *R0, int64_t R0_s0, int64_t R0_s1, double 
         dmin = ({ double _a4 = dmin; double _b4 = d; (_b4 < _a4) ? _b4 : _a4; });
         if ((((d) >= (delta_stop)))) {
             physical_G_into(Y, Y_s0, Y_s1, P, P_s0, B, B_s0, B_s1);
-            m = B_s1;
+            m = u_s0;
             for (i = 0; i < m; i += 1) {
                 s = 0.0;
                 for (j = 0; j < INT64_C(3); j += 1) {
@@ -1552,12 +1555,15 @@ static int frame_rates(double *B, int64_t B_s0, int64_t B_s1, double *v, int64_t
     int64_t m = 0;
     int ok = 0;
     double s = 0;
-    m = B_s1;
+    m = v_s0;
     ok = 1;
     for (i = 0; i < INT64_C(3); i += 1) {
         s = 0.0;
         for (k = 0; k < m; k += 1) {
             s += (B[(i) * B_s1 + (k)] * v[k]);
+        }
+        for (k = 0; k < INT64_C(0); k += 1) {
+            s += B[(i) * B_s1 + ((m + k))];
         }
         out[i] = s;
         ok = ((ok) && (isfinite(s)));
@@ -1586,7 +1592,7 @@ static void frame_zstage(double *Zc, int64_t Zc_s0, int64_t Zc_s1, double *Y, in
     double z2 = 0;
     double s = 0;
     frame_QN_into(Y, Y_s0, Y_s1, P, P_s0, v, v_s0, Qm, Qm_s0, Qm_s1);
-    m = B_s1;
+    m = K_s1;
     if ((((INT64_C(3)) == (INT64_C(3))))) {
         a00 = Qm[(INT64_C(0)) * Qm_s1 + (INT64_C(0))];
         a01 = (Qm[(INT64_C(0)) * Qm_s1 + (INT64_C(1))] - F[INT64_C(2)]);
@@ -1741,16 +1747,16 @@ static void forward__frame(double *R0, int64_t R0_s0, int64_t R0_s1, double *q0,
     E_s1 = INT64_C(3);
     E = (double *)alloca(sizeof(double) * ((E_s0) * (E_s1) + 1));
     B1_s0 = INT64_C(3);
-    B1_s1 = m;
+    B1_s1 = (m + INT64_C(0));
     B1 = (double *)alloca(sizeof(double) * ((B1_s0) * (B1_s1) + 1));
     B2_s0 = INT64_C(3);
-    B2_s1 = m;
+    B2_s1 = (m + INT64_C(0));
     B2 = (double *)alloca(sizeof(double) * ((B2_s0) * (B2_s1) + 1));
     B3_s0 = INT64_C(3);
-    B3_s1 = m;
+    B3_s1 = (m + INT64_C(0));
     B3 = (double *)alloca(sizeof(double) * ((B3_s0) * (B3_s1) + 1));
     B4_s0 = INT64_C(3);
-    B4_s1 = m;
+    B4_s1 = (m + INT64_C(0));
     B4 = (double *)alloca(sizeof(double) * ((B4_s0) * (B4_s1) + 1));
     F1_s0 = INT64_C(3);
     F1 = (double *)alloca(sizeof(double) * ((F1_s0) + 1));
@@ -2038,16 +2044,16 @@ static void forward_variational__frame(double *R0, int64_t R0_s0, int64_t R0_s1,
     E_s1 = INT64_C(3);
     E = (double *)alloca(sizeof(double) * ((E_s0) * (E_s1) + 1));
     B1_s0 = INT64_C(3);
-    B1_s1 = m;
+    B1_s1 = (m + INT64_C(0));
     B1 = (double *)alloca(sizeof(double) * ((B1_s0) * (B1_s1) + 1));
     B2_s0 = INT64_C(3);
-    B2_s1 = m;
+    B2_s1 = (m + INT64_C(0));
     B2 = (double *)alloca(sizeof(double) * ((B2_s0) * (B2_s1) + 1));
     B3_s0 = INT64_C(3);
-    B3_s1 = m;
+    B3_s1 = (m + INT64_C(0));
     B3 = (double *)alloca(sizeof(double) * ((B3_s0) * (B3_s1) + 1));
     B4_s0 = INT64_C(3);
-    B4_s1 = m;
+    B4_s1 = (m + INT64_C(0));
     B4 = (double *)alloca(sizeof(double) * ((B4_s0) * (B4_s1) + 1));
     F1_s0 = INT64_C(3);
     F1 = (double *)alloca(sizeof(double) * ((F1_s0) + 1));
@@ -2508,16 +2514,16 @@ static void frame_inputs__frame(double *nodes, int64_t nodes_s0, int64_t nodes_s
     E_s1 = INT64_C(3);
     E = (double *)alloca(sizeof(double) * ((E_s0) * (E_s1) + 1));
     B1_s0 = INT64_C(3);
-    B1_s1 = m;
+    B1_s1 = (m + INT64_C(0));
     B1 = (double *)alloca(sizeof(double) * ((B1_s0) * (B1_s1) + 1));
     B2_s0 = INT64_C(3);
-    B2_s1 = m;
+    B2_s1 = (m + INT64_C(0));
     B2 = (double *)alloca(sizeof(double) * ((B2_s0) * (B2_s1) + 1));
     B3_s0 = INT64_C(3);
-    B3_s1 = m;
+    B3_s1 = (m + INT64_C(0));
     B3 = (double *)alloca(sizeof(double) * ((B3_s0) * (B3_s1) + 1));
     B4_s0 = INT64_C(3);
-    B4_s1 = m;
+    B4_s1 = (m + INT64_C(0));
     B4 = (double *)alloca(sizeof(double) * ((B4_s0) * (B4_s1) + 1));
     F1_s0 = INT64_C(3);
     F1 = (double *)alloca(sizeof(double) * ((F1_s0) + 1));
@@ -2923,6 +2929,6 @@ PyMODINIT_FUNC PyInit_attitude(void)
     import_array();
     PyObject *m = PyModule_Create(&moduledef);
     if (m == NULL) return NULL;
-    if (PyModule_AddStringConstant(m, "SOURCE_DIGEST", "ed1e858fe76683c222138099628cf67d1af2816acf1f0b0d58f1f771f25d4cba") < 0) { Py_DECREF(m); return NULL; }
+    if (PyModule_AddStringConstant(m, "SOURCE_DIGEST", "da6693029640ed185e4603de2eb7be0f1812ac6f5b7f1e863375189be3f38972") < 0) { Py_DECREF(m); return NULL; }
     return m;
 }

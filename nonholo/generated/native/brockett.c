@@ -238,12 +238,15 @@ static int physical_rates(double *B, int64_t B_s0, int64_t B_s1, double *v, int6
     int64_t m = 0;
     int ok = 0;
     double s = 0;
-    m = B_s1;
+    m = v_s0;
     ok = 1;
     for (i = 0; i < INT64_C(3); i += 1) {
         s = 0.0;
         for (k = 0; k < m; k += 1) {
             s += (B[(i) * B_s1 + (k)] * v[k]);
+        }
+        for (k = 0; k < INT64_C(0); k += 1) {
+            s += B[(i) * B_s1 + ((m + k))];
         }
         out[i] = s;
         ok = ((ok) && (isfinite(s)));
@@ -272,7 +275,7 @@ static void physical_zstage(double *Zc, int64_t Zc_s0, int64_t Zc_s1, double *Y,
     double z2 = 0;
     double s = 0;
     physical_QG_into(Y, Y_s0, Y_s1, P, P_s0, v, v_s0, Qm, Qm_s0, Qm_s1);
-    m = B_s1;
+    m = K_s1;
     if ((((INT64_C(0)) == (INT64_C(3))))) {
         a00 = Qm[(INT64_C(0)) * Qm_s1 + (INT64_C(0))];
         a01 = (Qm[(INT64_C(0)) * Qm_s1 + (INT64_C(1))] - F[INT64_C(2)]);
@@ -421,16 +424,16 @@ static void forward__physical(double *R0, int64_t R0_s0, int64_t R0_s1, double *
     E_s1 = INT64_C(3);
     E = (double *)alloca(sizeof(double) * ((E_s0) * (E_s1) + 1));
     B1_s0 = INT64_C(3);
-    B1_s1 = m;
+    B1_s1 = (m + INT64_C(0));
     B1 = (double *)alloca(sizeof(double) * ((B1_s0) * (B1_s1) + 1));
     B2_s0 = INT64_C(3);
-    B2_s1 = m;
+    B2_s1 = (m + INT64_C(0));
     B2 = (double *)alloca(sizeof(double) * ((B2_s0) * (B2_s1) + 1));
     B3_s0 = INT64_C(3);
-    B3_s1 = m;
+    B3_s1 = (m + INT64_C(0));
     B3 = (double *)alloca(sizeof(double) * ((B3_s0) * (B3_s1) + 1));
     B4_s0 = INT64_C(3);
-    B4_s1 = m;
+    B4_s1 = (m + INT64_C(0));
     B4 = (double *)alloca(sizeof(double) * ((B4_s0) * (B4_s1) + 1));
     F1_s0 = INT64_C(3);
     F1 = (double *)alloca(sizeof(double) * ((F1_s0) + 1));
@@ -707,16 +710,16 @@ static void forward_variational__physical(double *R0, int64_t R0_s0, int64_t R0_
     E_s1 = INT64_C(3);
     E = (double *)alloca(sizeof(double) * ((E_s0) * (E_s1) + 1));
     B1_s0 = INT64_C(3);
-    B1_s1 = m;
+    B1_s1 = (m + INT64_C(0));
     B1 = (double *)alloca(sizeof(double) * ((B1_s0) * (B1_s1) + 1));
     B2_s0 = INT64_C(3);
-    B2_s1 = m;
+    B2_s1 = (m + INT64_C(0));
     B2 = (double *)alloca(sizeof(double) * ((B2_s0) * (B2_s1) + 1));
     B3_s0 = INT64_C(3);
-    B3_s1 = m;
+    B3_s1 = (m + INT64_C(0));
     B3 = (double *)alloca(sizeof(double) * ((B3_s0) * (B3_s1) + 1));
     B4_s0 = INT64_C(3);
-    B4_s1 = m;
+    B4_s1 = (m + INT64_C(0));
     B4 = (double *)alloca(sizeof(double) * ((B4_s0) * (B4_s1) + 1));
     F1_s0 = INT64_C(3);
     F1 = (double *)alloca(sizeof(double) * ((F1_s0) + 1));
@@ -1139,7 +1142,7 @@ static void extremal__physical(double *R0, int64_t R0_s0, int64_t R0_s1, double 
     pc_s0 = INT64_C(3);
     pc = (double *)alloca(sizeof(double) * ((pc_s0) + 1));
     B_s0 = INT64_C(3);
-    B_s1 = m;
+    B_s1 = (m + INT64_C(0));
     B = (double *)alloca(sizeof(double) * ((B_s0) * (B_s1) + 1));
     A_s0 = INT64_C(3);
     A_s1 = INT64_C(3);
@@ -1184,7 +1187,7 @@ static void extremal__physical(double *R0, int64_t R0_s0, int64_t R0_s1, double 
         dmin = ({ double _a1 = dmin; double _b1 = d; (_b1 < _a1) ? _b1 : _a1; });
         if ((((d) >= (delta_stop)))) {
             physical_G_into(R, R_s0, R_s1, q, q_s0, B, B_s0, B_s1);
-            m = B_s1;
+            m = u_s0;
             for (i = 0; i < m; i += 1) {
                 s = 0.0;
                 for (j = 0; j < INT64_C(3); j += 1) {
@@ -1221,7 +1224,7 @@ static void extremal__physical(double *R0, int64_t R0_s0, int64_t R0_s1, double 
         dmin = ({ double _a2 = dmin; double _b2 = d; (_b2 < _a2) ? _b2 : _a2; });
         if ((((d) >= (delta_stop)))) {
             physical_G_into(Y, Y_s0, Y_s1, P, P_s0, B, B_s0, B_s1);
-            m = B_s1;
+            m = u_s0;
             for (i = 0; i < m; i += 1) {
                 s = 0.0;
                 for (j = 0; j < INT64_C(3); j += 1) {
@@ -1258,7 +1261,7 @@ static void extremal__physical(double *R0, int64_t R0_s0, int64_t R0_s1, double 
         dmin = ({ double _a3 = dmin; double _b3 = d; (_b3 < _a3) ? _b3 : _a3; });
         if ((((d) >= (delta_stop)))) {
             physical_G_into(Y, Y_s0, Y_s1, P, P_s0, B, B_s0, B_s1);
-            m = B_s1;
+            m = u_s0;
             for (i = 0; i < m; i += 1) {
                 s = 0.0;
                 for (j = 0; j < INT64_C(3); j += 1) {
@@ -1295,7 +1298,7 @@ static void extremal__physical(double *R0, int64_t R0_s0, int64_t R0_s1, double 
         dmin = ({ double _a4 = dmin; double _b4 = d; (_b4 < _a4) ? _b4 : _a4; });
         if ((((d) >= (delta_stop)))) {
             physical_G_into(Y, Y_s0, Y_s1, P, P_s0, B, B_s0, B_s1);
-            m = B_s1;
+            m = u_s0;
             for (i = 0; i < m; i += 1) {
                 s = 0.0;
                 for (j = 0; j < INT64_C(3); j += 1) {
@@ -1500,6 +1503,6 @@ PyMODINIT_FUNC PyInit_brockett(void)
     import_array();
     PyObject *m = PyModule_Create(&moduledef);
     if (m == NULL) return NULL;
-    if (PyModule_AddStringConstant(m, "SOURCE_DIGEST", "33a9df63e2a8d377fcc3f620639c7fbf0d4913c6626d316fbc602575cc511376") < 0) { Py_DECREF(m); return NULL; }
+    if (PyModule_AddStringConstant(m, "SOURCE_DIGEST", "1e3306ed55e4d2526c8fb2acf50f6a40d0d7126d80816cebb71157a230fcd5ff") < 0) { Py_DECREF(m); return NULL; }
     return m;
 }

@@ -334,12 +334,15 @@ static int physical_rates(double *B, int64_t B_s0, int64_t B_s1, double *v, int6
     int64_t m = 0;
     int ok = 0;
     double s = 0;
-    m = B_s1;
+    m = v_s0;
     ok = 1;
     for (i = 0; i < INT64_C(3); i += 1) {
         s = 0.0;
         for (k = 0; k < m; k += 1) {
             s += (B[(i) * B_s1 + (k)] * v[k]);
+        }
+        for (k = 0; k < INT64_C(0); k += 1) {
+            s += B[(i) * B_s1 + ((m + k))];
         }
         out[i] = s;
         ok = ((ok) && (isfinite(s)));
@@ -368,7 +371,7 @@ static void physical_zstage(double *Zc, int64_t Zc_s0, int64_t Zc_s1, double *Y,
     double z2 = 0;
     double s = 0;
     physical_QG_into(Y, Y_s0, Y_s1, P, P_s0, v, v_s0, Qm, Qm_s0, Qm_s1);
-    m = B_s1;
+    m = K_s1;
     if ((((INT64_C(3)) == (INT64_C(3))))) {
         a00 = Qm[(INT64_C(0)) * Qm_s1 + (INT64_C(0))];
         a01 = (Qm[(INT64_C(0)) * Qm_s1 + (INT64_C(1))] - F[INT64_C(2)]);
@@ -523,16 +526,16 @@ static void forward__physical(double *R0, int64_t R0_s0, int64_t R0_s1, double *
     E_s1 = INT64_C(3);
     E = (double *)alloca(sizeof(double) * ((E_s0) * (E_s1) + 1));
     B1_s0 = INT64_C(3);
-    B1_s1 = m;
+    B1_s1 = (m + INT64_C(0));
     B1 = (double *)alloca(sizeof(double) * ((B1_s0) * (B1_s1) + 1));
     B2_s0 = INT64_C(3);
-    B2_s1 = m;
+    B2_s1 = (m + INT64_C(0));
     B2 = (double *)alloca(sizeof(double) * ((B2_s0) * (B2_s1) + 1));
     B3_s0 = INT64_C(3);
-    B3_s1 = m;
+    B3_s1 = (m + INT64_C(0));
     B3 = (double *)alloca(sizeof(double) * ((B3_s0) * (B3_s1) + 1));
     B4_s0 = INT64_C(3);
-    B4_s1 = m;
+    B4_s1 = (m + INT64_C(0));
     B4 = (double *)alloca(sizeof(double) * ((B4_s0) * (B4_s1) + 1));
     F1_s0 = INT64_C(3);
     F1 = (double *)alloca(sizeof(double) * ((F1_s0) + 1));
@@ -820,16 +823,16 @@ static void forward_variational__physical(double *R0, int64_t R0_s0, int64_t R0_
     E_s1 = INT64_C(3);
     E = (double *)alloca(sizeof(double) * ((E_s0) * (E_s1) + 1));
     B1_s0 = INT64_C(3);
-    B1_s1 = m;
+    B1_s1 = (m + INT64_C(0));
     B1 = (double *)alloca(sizeof(double) * ((B1_s0) * (B1_s1) + 1));
     B2_s0 = INT64_C(3);
-    B2_s1 = m;
+    B2_s1 = (m + INT64_C(0));
     B2 = (double *)alloca(sizeof(double) * ((B2_s0) * (B2_s1) + 1));
     B3_s0 = INT64_C(3);
-    B3_s1 = m;
+    B3_s1 = (m + INT64_C(0));
     B3 = (double *)alloca(sizeof(double) * ((B3_s0) * (B3_s1) + 1));
     B4_s0 = INT64_C(3);
-    B4_s1 = m;
+    B4_s1 = (m + INT64_C(0));
     B4 = (double *)alloca(sizeof(double) * ((B4_s0) * (B4_s1) + 1));
     F1_s0 = INT64_C(3);
     F1 = (double *)alloca(sizeof(double) * ((F1_s0) + 1));
@@ -1263,7 +1266,7 @@ static void extremal__physical(double *R0, int64_t R0_s0, int64_t R0_s1, double 
     pc_s0 = INT64_C(3);
     pc = (double *)alloca(sizeof(double) * ((pc_s0) + 1));
     B_s0 = INT64_C(3);
-    B_s1 = m;
+    B_s1 = (m + INT64_C(0));
     B = (double *)alloca(sizeof(double) * ((B_s0) * (B_s1) + 1));
     A_s0 = INT64_C(3);
     A_s1 = INT64_C(3);
@@ -1308,7 +1311,7 @@ static void extremal__physical(double *R0, int64_t R0_s0, int64_t R0_s1, double 
         dmin = ({ double _a1 = dmin; double _b1 = d; (_b1 < _a1) ? _b1 : _a1; });
         if ((((d) >= (delta_stop)))) {
             physical_G_into(R, R_s0, R_s1, q, q_s0, B, B_s0, B_s1);
-            m = B_s1;
+            m = u_s0;
             for (i = 0; i < m; i += 1) {
                 s = 0.0;
                 for (j = 0; j < INT64_C(3); j += 1) {
@@ -1352,7 +1355,7 @@ static void extremal__physical(double *R0, int64_t R0_s0, int64_t R0_s1, double 
         dmin = ({ double _a2 = dmin; double _b2 = d; (_b2 < _a2) ? _b2 : _a2; });
         if ((((d) >= (delta_stop)))) {
             physical_G_into(Y, Y_s0, Y_s1, P, P_s0, B, B_s0, B_s1);
-            m = B_s1;
+            m = u_s0;
             for (i = 0; i < m; i += 1) {
                 s = 0.0;
                 for (j = 0; j < INT64_C(3); j += 1) {
@@ -1405,7 +1408,7 @@ static void extremal__physical(double *R0, int64_t R0_s0, int64_t R0_s1, double 
         dmin = ({ double _a3 = dmin; double _b3 = d; (_b3 < _a3) ? _b3 : _a3; });
         if ((((d) >= (delta_stop)))) {
             physical_G_into(Y, Y_s0, Y_s1, P, P_s0, B, B_s0, B_s1);
-            m = B_s1;
+            m = u_s0;
             for (i = 0; i < m; i += 1) {
                 s = 0.0;
                 for (j = 0; j < INT64_C(3); j += 1) {
@@ -1458,7 +1461,7 @@ static void extremal__physical(double *R0, int64_t R0_s0, int64_t R0_s1, double 
         dmin = ({ double _a4 = dmin; double _b4 = d; (_b4 < _a4) ? _b4 : _a4; });
         if ((((d) >= (delta_stop)))) {
             physical_G_into(Y, Y_s0, Y_s1, P, P_s0, B, B_s0, B_s1);
-            m = B_s1;
+            m = u_s0;
             for (i = 0; i < m; i += 1) {
                 s = 0.0;
                 for (j = 0; j < INT64_C(3); j += 1) {
@@ -1614,12 +1617,15 @@ static int frame_rates(double *B, int64_t B_s0, int64_t B_s1, double *v, int64_t
     int64_t m = 0;
     int ok = 0;
     double s = 0;
-    m = B_s1;
+    m = v_s0;
     ok = 1;
     for (i = 0; i < INT64_C(3); i += 1) {
         s = 0.0;
         for (k = 0; k < m; k += 1) {
             s += (B[(i) * B_s1 + (k)] * v[k]);
+        }
+        for (k = 0; k < INT64_C(0); k += 1) {
+            s += B[(i) * B_s1 + ((m + k))];
         }
         out[i] = s;
         ok = ((ok) && (isfinite(s)));
@@ -1648,7 +1654,7 @@ static void frame_zstage(double *Zc, int64_t Zc_s0, int64_t Zc_s1, double *Y, in
     double z2 = 0;
     double s = 0;
     frame_QN_into(Y, Y_s0, Y_s1, P, P_s0, v, v_s0, Qm, Qm_s0, Qm_s1);
-    m = B_s1;
+    m = K_s1;
     if ((((INT64_C(3)) == (INT64_C(3))))) {
         a00 = Qm[(INT64_C(0)) * Qm_s1 + (INT64_C(0))];
         a01 = (Qm[(INT64_C(0)) * Qm_s1 + (INT64_C(1))] - F[INT64_C(2)]);
@@ -1803,16 +1809,16 @@ static void forward__frame(double *R0, int64_t R0_s0, int64_t R0_s1, double *q0,
     E_s1 = INT64_C(3);
     E = (double *)alloca(sizeof(double) * ((E_s0) * (E_s1) + 1));
     B1_s0 = INT64_C(3);
-    B1_s1 = m;
+    B1_s1 = (m + INT64_C(0));
     B1 = (double *)alloca(sizeof(double) * ((B1_s0) * (B1_s1) + 1));
     B2_s0 = INT64_C(3);
-    B2_s1 = m;
+    B2_s1 = (m + INT64_C(0));
     B2 = (double *)alloca(sizeof(double) * ((B2_s0) * (B2_s1) + 1));
     B3_s0 = INT64_C(3);
-    B3_s1 = m;
+    B3_s1 = (m + INT64_C(0));
     B3 = (double *)alloca(sizeof(double) * ((B3_s0) * (B3_s1) + 1));
     B4_s0 = INT64_C(3);
-    B4_s1 = m;
+    B4_s1 = (m + INT64_C(0));
     B4 = (double *)alloca(sizeof(double) * ((B4_s0) * (B4_s1) + 1));
     F1_s0 = INT64_C(3);
     F1 = (double *)alloca(sizeof(double) * ((F1_s0) + 1));
@@ -2100,16 +2106,16 @@ static void forward_variational__frame(double *R0, int64_t R0_s0, int64_t R0_s1,
     E_s1 = INT64_C(3);
     E = (double *)alloca(sizeof(double) * ((E_s0) * (E_s1) + 1));
     B1_s0 = INT64_C(3);
-    B1_s1 = m;
+    B1_s1 = (m + INT64_C(0));
     B1 = (double *)alloca(sizeof(double) * ((B1_s0) * (B1_s1) + 1));
     B2_s0 = INT64_C(3);
-    B2_s1 = m;
+    B2_s1 = (m + INT64_C(0));
     B2 = (double *)alloca(sizeof(double) * ((B2_s0) * (B2_s1) + 1));
     B3_s0 = INT64_C(3);
-    B3_s1 = m;
+    B3_s1 = (m + INT64_C(0));
     B3 = (double *)alloca(sizeof(double) * ((B3_s0) * (B3_s1) + 1));
     B4_s0 = INT64_C(3);
-    B4_s1 = m;
+    B4_s1 = (m + INT64_C(0));
     B4 = (double *)alloca(sizeof(double) * ((B4_s0) * (B4_s1) + 1));
     F1_s0 = INT64_C(3);
     F1 = (double *)alloca(sizeof(double) * ((F1_s0) + 1));
@@ -2570,16 +2576,16 @@ static void frame_inputs__frame(double *nodes, int64_t nodes_s0, int64_t nodes_s
     E_s1 = INT64_C(3);
     E = (double *)alloca(sizeof(double) * ((E_s0) * (E_s1) + 1));
     B1_s0 = INT64_C(3);
-    B1_s1 = m;
+    B1_s1 = (m + INT64_C(0));
     B1 = (double *)alloca(sizeof(double) * ((B1_s0) * (B1_s1) + 1));
     B2_s0 = INT64_C(3);
-    B2_s1 = m;
+    B2_s1 = (m + INT64_C(0));
     B2 = (double *)alloca(sizeof(double) * ((B2_s0) * (B2_s1) + 1));
     B3_s0 = INT64_C(3);
-    B3_s1 = m;
+    B3_s1 = (m + INT64_C(0));
     B3 = (double *)alloca(sizeof(double) * ((B3_s0) * (B3_s1) + 1));
     B4_s0 = INT64_C(3);
-    B4_s1 = m;
+    B4_s1 = (m + INT64_C(0));
     B4 = (double *)alloca(sizeof(double) * ((B4_s0) * (B4_s1) + 1));
     F1_s0 = INT64_C(3);
     F1 = (double *)alloca(sizeof(double) * ((F1_s0) + 1));
@@ -2985,6 +2991,6 @@ PyMODINIT_FUNC PyInit_platform_raised(void)
     import_array();
     PyObject *m = PyModule_Create(&moduledef);
     if (m == NULL) return NULL;
-    if (PyModule_AddStringConstant(m, "SOURCE_DIGEST", "f73a8077cbc1bed3687431fafa46b6acb7915b45de24596716619b013f7b362e") < 0) { Py_DECREF(m); return NULL; }
+    if (PyModule_AddStringConstant(m, "SOURCE_DIGEST", "8f07dd972c9b2716b6599d5f577eb9532081fe07fa154f7b1f645c8eb7a5ec13") < 0) { Py_DECREF(m); return NULL; }
     return m;
 }

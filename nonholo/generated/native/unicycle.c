@@ -236,12 +236,15 @@ static int physical_rates(double *B, int64_t B_s0, int64_t B_s1, double *v, int6
     int64_t m = 0;
     int ok = 0;
     double s = 0;
-    m = B_s1;
+    m = v_s0;
     ok = 1;
     for (i = 0; i < INT64_C(3); i += 1) {
         s = 0.0;
         for (k = 0; k < m; k += 1) {
             s += (B[(i) * B_s1 + (k)] * v[k]);
+        }
+        for (k = 0; k < INT64_C(0); k += 1) {
+            s += B[(i) * B_s1 + ((m + k))];
         }
         out[i] = s;
         ok = ((ok) && (isfinite(s)));
@@ -270,7 +273,7 @@ static void physical_zstage(double *Zc, int64_t Zc_s0, int64_t Zc_s1, double *Y,
     double z2 = 0;
     double s = 0;
     physical_QG_into(Y, Y_s0, Y_s1, P, P_s0, v, v_s0, Qm, Qm_s0, Qm_s1);
-    m = B_s1;
+    m = K_s1;
     if ((((INT64_C(0)) == (INT64_C(3))))) {
         a00 = Qm[(INT64_C(0)) * Qm_s1 + (INT64_C(0))];
         a01 = (Qm[(INT64_C(0)) * Qm_s1 + (INT64_C(1))] - F[INT64_C(2)]);
@@ -419,16 +422,16 @@ static void forward__physical(double *R0, int64_t R0_s0, int64_t R0_s1, double *
     E_s1 = INT64_C(3);
     E = (double *)alloca(sizeof(double) * ((E_s0) * (E_s1) + 1));
     B1_s0 = INT64_C(3);
-    B1_s1 = m;
+    B1_s1 = (m + INT64_C(0));
     B1 = (double *)alloca(sizeof(double) * ((B1_s0) * (B1_s1) + 1));
     B2_s0 = INT64_C(3);
-    B2_s1 = m;
+    B2_s1 = (m + INT64_C(0));
     B2 = (double *)alloca(sizeof(double) * ((B2_s0) * (B2_s1) + 1));
     B3_s0 = INT64_C(3);
-    B3_s1 = m;
+    B3_s1 = (m + INT64_C(0));
     B3 = (double *)alloca(sizeof(double) * ((B3_s0) * (B3_s1) + 1));
     B4_s0 = INT64_C(3);
-    B4_s1 = m;
+    B4_s1 = (m + INT64_C(0));
     B4 = (double *)alloca(sizeof(double) * ((B4_s0) * (B4_s1) + 1));
     F1_s0 = INT64_C(3);
     F1 = (double *)alloca(sizeof(double) * ((F1_s0) + 1));
@@ -705,16 +708,16 @@ static void forward_variational__physical(double *R0, int64_t R0_s0, int64_t R0_
     E_s1 = INT64_C(3);
     E = (double *)alloca(sizeof(double) * ((E_s0) * (E_s1) + 1));
     B1_s0 = INT64_C(3);
-    B1_s1 = m;
+    B1_s1 = (m + INT64_C(0));
     B1 = (double *)alloca(sizeof(double) * ((B1_s0) * (B1_s1) + 1));
     B2_s0 = INT64_C(3);
-    B2_s1 = m;
+    B2_s1 = (m + INT64_C(0));
     B2 = (double *)alloca(sizeof(double) * ((B2_s0) * (B2_s1) + 1));
     B3_s0 = INT64_C(3);
-    B3_s1 = m;
+    B3_s1 = (m + INT64_C(0));
     B3 = (double *)alloca(sizeof(double) * ((B3_s0) * (B3_s1) + 1));
     B4_s0 = INT64_C(3);
-    B4_s1 = m;
+    B4_s1 = (m + INT64_C(0));
     B4 = (double *)alloca(sizeof(double) * ((B4_s0) * (B4_s1) + 1));
     F1_s0 = INT64_C(3);
     F1 = (double *)alloca(sizeof(double) * ((F1_s0) + 1));
@@ -1137,7 +1140,7 @@ static void extremal__physical(double *R0, int64_t R0_s0, int64_t R0_s1, double 
     pc_s0 = INT64_C(3);
     pc = (double *)alloca(sizeof(double) * ((pc_s0) + 1));
     B_s0 = INT64_C(3);
-    B_s1 = m;
+    B_s1 = (m + INT64_C(0));
     B = (double *)alloca(sizeof(double) * ((B_s0) * (B_s1) + 1));
     A_s0 = INT64_C(3);
     A_s1 = INT64_C(3);
@@ -1182,7 +1185,7 @@ static void extremal__physical(double *R0, int64_t R0_s0, int64_t R0_s1, double 
         dmin = ({ double _a1 = dmin; double _b1 = d; (_b1 < _a1) ? _b1 : _a1; });
         if ((((d) >= (delta_stop)))) {
             physical_G_into(R, R_s0, R_s1, q, q_s0, B, B_s0, B_s1);
-            m = B_s1;
+            m = u_s0;
             for (i = 0; i < m; i += 1) {
                 s = 0.0;
                 for (j = 0; j < INT64_C(3); j += 1) {
@@ -1219,7 +1222,7 @@ static void extremal__physical(double *R0, int64_t R0_s0, int64_t R0_s1, double 
         dmin = ({ double _a2 = dmin; double _b2 = d; (_b2 < _a2) ? _b2 : _a2; });
         if ((((d) >= (delta_stop)))) {
             physical_G_into(Y, Y_s0, Y_s1, P, P_s0, B, B_s0, B_s1);
-            m = B_s1;
+            m = u_s0;
             for (i = 0; i < m; i += 1) {
                 s = 0.0;
                 for (j = 0; j < INT64_C(3); j += 1) {
@@ -1256,7 +1259,7 @@ static void extremal__physical(double *R0, int64_t R0_s0, int64_t R0_s1, double 
         dmin = ({ double _a3 = dmin; double _b3 = d; (_b3 < _a3) ? _b3 : _a3; });
         if ((((d) >= (delta_stop)))) {
             physical_G_into(Y, Y_s0, Y_s1, P, P_s0, B, B_s0, B_s1);
-            m = B_s1;
+            m = u_s0;
             for (i = 0; i < m; i += 1) {
                 s = 0.0;
                 for (j = 0; j < INT64_C(3); j += 1) {
@@ -1293,7 +1296,7 @@ static void extremal__physical(double *R0, int64_t R0_s0, int64_t R0_s1, double 
         dmin = ({ double _a4 = dmin; double _b4 = d; (_b4 < _a4) ? _b4 : _a4; });
         if ((((d) >= (delta_stop)))) {
             physical_G_into(Y, Y_s0, Y_s1, P, P_s0, B, B_s0, B_s1);
-            m = B_s1;
+            m = u_s0;
             for (i = 0; i < m; i += 1) {
                 s = 0.0;
                 for (j = 0; j < INT64_C(3); j += 1) {
@@ -1498,6 +1501,6 @@ PyMODINIT_FUNC PyInit_unicycle(void)
     import_array();
     PyObject *m = PyModule_Create(&moduledef);
     if (m == NULL) return NULL;
-    if (PyModule_AddStringConstant(m, "SOURCE_DIGEST", "5cd44f86687ef80dd518df488babce7978a8b4e84dfc3decea2a4e132e3ba9b9") < 0) { Py_DECREF(m); return NULL; }
+    if (PyModule_AddStringConstant(m, "SOURCE_DIGEST", "04816b847b9c21e447973eb45af5a2f04738a370ed86a7f6fb774e85706c7e39") < 0) { Py_DECREF(m); return NULL; }
     return m;
 }
