@@ -20,7 +20,14 @@ from .mechanisms import (
     rho,
 )
 from .rotations import e1, e2, e3
-from .vehicles import brockett_integrator, kinematic_car, rolling_ball, unicycle
+from .vehicles import (
+    brockett_integrator,
+    double_integrator,
+    kinematic_car,
+    rolling_ball,
+    second_order_unicycle,
+    unicycle,
+)
 
 #: A second placement of the platform's legs and disk. The paper's legs are radial at
 #: the identity (base and platform joints on one line through O), which makes the
@@ -48,6 +55,9 @@ MECHANISMS: dict[str, Callable[[], Mechanism]] = {
     # the textbook systems whose least-energy motions are known in closed form
     "brockett": brockett_integrator,
     "unicycle": unicycle,
+    # systems with drift, dx/dt = f(x) + G(x) u
+    "double_integrator": double_integrator,
+    "unicycle2": second_order_unicycle,
 }
 
 

@@ -9,8 +9,14 @@
 - :func:`brockett_integrator`: Brockett's non-holonomic integrator, ``(x, y, z) ∈ R³``,
   ``ẋ = u₁``, ``ẏ = u₂``, ``ż = x u₂ − y u₁``: the textbook system whose least-energy
   motions (circles) are known in closed form.
+- :func:`double_integrator`: a planar point mass driven by accelerations,
+  ``(x, y, ẋ, ẏ) ∈ R⁴``: the linear system with drift whose least-energy motions are known
+  in closed form (the controllability Gramian).
+- :func:`second_order_unicycle`: the unicycle driven by its accelerations,
+  ``(x, y, θ, v, ω) ∈ R⁵``, as Dynobench's ``unicycle2_v0`` models it.
 
-Each is built as the platform is (:mod:`derivations.mechanisms`): the constraints are
+The last two have drift, ``ẋ = f(x) + G(x) u``: they are written as their equations of
+motion (:func:`derivations.equations.field_mechanism`). The others are built as the platform is (:mod:`derivations.mechanisms`): the constraints are
 written as linear equations in the unknown rates, solved symbolically, and the
 determinant of the constraint matrix gives the singularity function (none vanishes for
 the last two).
@@ -147,3 +153,33 @@ def brockett_integrator(name: str = "brockett") -> Mechanism:
         coordinates=(x, y, z), units=("", "", ""), angles=(False, False, False),
         X=X, derivation={"constraint_matrix": C, "constraint_rhs": rhs, "determinant": C.det()},
     )
+
+
+def double_integrator(name: str = "double_integrator") -> Mechanism:
+    """A planar point mass of unit mass driven by the force ``(a_x, a_y)``: ``ẋ = v_x``,
+    ``ẏ = v_y``, ``v̇_x = a_x``, ``v̇_y = a_y``. The drift ``(v_x, v_y, 0, 0)`` moves it at
+    rest; the least energy from rest to rest over a distance ``d`` in time ``T`` is
+    ``12 d²/T³``.
+    """
+    from .equations import field_mechanism
+
+    x, y, vx, vy, ax, ay = sp.symbols("x y vx vy ax ay", real=True)
+    return field_mechanism(
+        name, coordinates=[x, y, vx, vy], inputs=[ax, ay], rates=[vx, vy, ax, ay],
+        units=["m", "m", "m/s", "m/s"],
+        description="double integrator: a planar point mass driven by accelerations")
+
+
+def second_order_unicycle(name: str = "unicycle2") -> Mechanism:
+    """The unicycle driven by its accelerations (Dynobench's ``unicycle2``): ``ẋ = v cos θ``,
+    ``ẏ = v sin θ``, ``θ̇ = ω``, ``v̇ = a``, ``ω̇ = α``; the speed and the turning rate are
+    coordinates (``speed``, ``omega``), the inputs their rates.
+    """
+    from .equations import field_mechanism
+
+    x, y, th, v, w, a, alpha = sp.symbols("x y theta speed omega a alpha", real=True)
+    return field_mechanism(
+        name, coordinates=[x, y, th, v, w], inputs=[a, alpha],
+        rates=[v * sp.cos(th), v * sp.sin(th), w, a, alpha], angles=[th],
+        units=["m", "m", "rad", "m/s", "rad/s"],
+        description="second-order unicycle: a wheel rolling upright, driven by its accelerations")

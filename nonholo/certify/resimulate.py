@@ -417,12 +417,56 @@ def brockett_rates(R, x, u):
     return np.zeros(3), np.array([u1, u2, x[0] * u2 - x[1] * u1])
 
 
+def double_integrator_rates(R, x, u):
+    """The planar double integrator: ``(ẋ, ẏ) = (v_x, v_y)``, ``(v̇_x, v̇_y) = (a_x, a_y)``.
+
+    Parameters
+    ----------
+    R : numpy.ndarray
+        Unused (no orientation in SO(3)).
+    x : numpy.ndarray
+        The state ``(x, y, v_x, v_y)``.
+    u : numpy.ndarray
+        The inputs ``(a_x, a_y)``.
+
+    Returns
+    -------
+    tuple of numpy.ndarray
+        ``(ω = 0, ẋ)``.
+    """
+    return np.zeros(3), np.array([x[2], x[3], u[0], u[1]])
+
+
+def second_order_unicycle_rates(R, x, u):
+    """The unicycle driven by accelerations: ``ẋ = v cos θ``, ``ẏ = v sin θ``, ``θ̇ = ω``,
+    ``v̇ = a``, ``ω̇ = α``.
+
+    Parameters
+    ----------
+    R : numpy.ndarray
+        Unused (no orientation in SO(3)).
+    x : numpy.ndarray
+        The state ``(x, y, θ, v, ω)``.
+    u : numpy.ndarray
+        The inputs ``(a, α)``.
+
+    Returns
+    -------
+    tuple of numpy.ndarray
+        ``(ω = 0, ẋ)``.
+    """
+    _, _, th, v, w = x
+    return np.zeros(3), np.array([v * np.cos(th), v * np.sin(th), w, u[0], u[1]])
+
+
 #: The hand-written models of the mechanisms beyond SO(3), and their singularity
 #: functions (``None``: no singular set), by mechanism name.
 MODELS = {"rolling_ball": (rolling_ball_rates, None),
           "car": (car_rates, lambda R, x: np.cos(x[3])),
           "unicycle": (unicycle_rates, None),
-          "brockett": (brockett_rates, None)}
+          "brockett": (brockett_rates, None),
+          "double_integrator": (double_integrator_rates, None),
+          "unicycle2": (second_order_unicycle_rates, None)}
 
 
 def resimulate_state(start, controls, T: float, mechanism, breakpoints=None, samples: int = 2001,

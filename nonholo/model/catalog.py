@@ -43,13 +43,17 @@ def names() -> tuple[str, ...]:
 #:
 #: - ``car`` (wheelbase 1; lengths in wheelbases): rear-axle speed ``|v| ≤ 1`` wheelbase/s,
 #:   steering rate ``|φ̇| ≤ 1`` rad/s, steering angle ``|φ| ≤ 0.6`` rad (34°);
-#: - ``unicycle``: ``|v| ≤ 0.5`` m/s, ``|ω| ≤ 0.5`` rad/s, as Dynobench's ``unicycle1_v0``.
+#: - ``unicycle``: ``|v| ≤ 0.5`` m/s, ``|ω| ≤ 0.5`` rad/s, as Dynobench's ``unicycle1_v0``;
+#: - ``unicycle2``: ``|a| ≤ 0.25`` m/s², ``|α| ≤ 0.25`` rad/s², speed ``|v| ≤ 0.5`` m/s and
+#:   turning rate ``|ω| ≤ 0.5`` rad/s, as Dynobench's ``unicycle2_v0``.
 #:
 #: ``rolling_ball`` has none: its inputs are the velocity of the ball's centre, for which no
 #: reference gives a bound, and a box on ``(v1, v2)`` would not be a bound on its speed.
 CATALOG_BOUNDS: dict[str, dict] = {
     "car": {"inputs": {"v": (-1.0, 1.0), "u2": (-1.0, 1.0)}, "coordinates": {"phi": (-0.6, 0.6)}},
     "unicycle": {"inputs": {"v": (-0.5, 0.5), "omega": (-0.5, 0.5)}},
+    "unicycle2": {"inputs": {"a": (-0.25, 0.25), "alpha": (-0.25, 0.25)},
+                  "coordinates": {"speed": (-0.5, 0.5), "omega": (-0.5, 0.5)}},
 }
 
 

@@ -545,6 +545,10 @@ CATALOG_DRAWINGS = {
         "bodies": [{"x": "x", "y": "y", "heading": "theta", "length": 0.5, "width": 0.3, "offset": 0.0}],
         "wheels": [{"body": 0, "at": [0.0, 0.0], "diameter": 0.4, "width": 0.06}],
     },
+    "unicycle2": {      # Dynobench's box, 0.5 × 0.25
+        "bodies": [{"x": "x", "y": "y", "heading": "theta", "length": 0.5, "width": 0.25, "offset": 0.0}],
+        "wheels": [{"body": 0, "at": [0.0, 0.0], "diameter": 0.4, "width": 0.06}],
+    },
 }
 
 

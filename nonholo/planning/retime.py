@@ -207,7 +207,8 @@ def retime(result: PlanResult, leg_speed: float | None = None, T: float | None =
     Raises
     ------
     ValueError
-        For a failed plan, a mechanism without legs under a ``leg_speed``, no bound
+        For a failed plan, a plan of a mechanism with drift (whose path a time change does
+        not keep), a mechanism without legs under a ``leg_speed``, no bound
         without ``rest_to_rest``, both a ``leg_speed`` and ``input_bounds``, a bad
         ``leg_speed``, ``input_bounds``, ``T`` or ``rest_to_rest``, a ``T`` shorter than the
         path needs under the bound (the message says how long it needs), or a ``T`` whose
@@ -237,6 +238,10 @@ def retime(result: PlanResult, leg_speed: float | None = None, T: float | None =
         T = check_horizon(T)
     if not result.success:
         raise ValueError(f"only a successful plan can be re-timed; this one failed: {result.reason}")
+    if mech.has_drift:
+        raise ValueError(f"result: mechanism {mech.name!r} has drift (its state moves at rest), so a plan of it "
+                         "cannot be re-timed: a time change keeps the path of a driftless system only; plan "
+                         "again with the time T wanted")
     base = planned_controls(result)
     timed, how = base, []
     if v is not None or bounds is not None:

@@ -20,12 +20,16 @@ STARTS = {
     "rolling_ball": (np.ascontiguousarray(example(1)[0]), np.array([0.1, -0.2])),
     "unicycle": (np.eye(3), np.array([0.1, -0.2, 0.3])),
     "brockett": (np.eye(3), np.array([0.1, -0.2, 0.3])),
+    "double_integrator": (np.eye(3), np.array([0.1, -0.2, 0.3, -0.1])),
+    "unicycle2": (np.eye(3), np.array([0.1, -0.2, 0.3, 0.2, -0.1])),
 }
 SYSTEMS = [(name, frame) for name in catalog.names() for frame in (False, True)
            if not frame or catalog.get(name).has_frame]
 
 
 def start(name):
+    if name not in STARTS:
+        assert catalog.get(name).state_space == "SO(3)", f"give {name!r} a start in STARTS"
     return STARTS.get(name, (np.ascontiguousarray(example(1)[0]), np.zeros(0)))
 
 
@@ -80,7 +84,8 @@ def test_a_car_stops_before_its_singular_set():
 
 
 def dop853_variational(mech, frame, R0, q0, controls, T):
-    """The motion of the generated field (``G``, or ``N`` with ``frame``), its sensitivity
+    """The motion of the generated field (``G``, plus the drift ``F`` where there is one, or
+    ``N`` with ``frame``), its sensitivity
     ``J = ∂s_T/∂λ`` (``ds/dt = A s + B ∂v/∂λ``, ``s(0) = 0``) and ``M(T)`` (``Ṁ = A M + M Aᵀ +
     B Bᵀ``, ``M(0) = 0``), ``A = QG + [ω] ⊕ 0``, ``B = G``, by SciPy's DOP853 on the generated
     functions: ``(R_T, q_T, J, M)``."""
@@ -100,6 +105,8 @@ def dop853_variational(mech, frame, R0, q0, controls, T):
         v = controls(tt)[0]
         B = G(R, q)
         F = B @ v
+        if not frame and mech.has_drift:        # the drift F(R, q): QG is already that of F + G v
+            F = F + mech.module.F(R, q)
         A = QG(R, q, v).copy()
         dR = np.zeros((3, 3))
         if rot:

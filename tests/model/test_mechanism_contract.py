@@ -35,13 +35,14 @@ def regular_state(mech, rng, clearance: float = 0.2):
 
 
 def dop853(mech, R0, q0, controls, T):
-    """``(R(T), q(T))`` of ``dR/dt = [ω] R``, ``dq/dt = q̇`` with ``(ω, q̇) = G(R, q) u(t)`` by
+    """``(R(T), q(T))`` of ``dR/dt = [ω] R``, ``dq/dt = q̇`` with ``(ω, q̇) = G(R, q) u(t)`` (plus the
+    drift ``F(R, q)`` where there is one) by
     DOP853 (on SO(3) × Rᵏ: the nine entries of ``R`` and ``q``)."""
     k, r_rows = mech.space.k, 3 if mech.space.has_orientation else 0
 
     def f(t, y):
         R, q = y[:9].reshape(3, 3), y[9:]
-        rates = mech.G(np.ascontiguousarray(R), np.ascontiguousarray(q)) @ controls(np.array([t]))[0]
+        rates = mech.rates(np.ascontiguousarray(R), np.ascontiguousarray(q), controls(np.array([t]))[0])
         dR = so3.hat(rates[:3]) @ R if r_rows else np.zeros((3, 3))
         return np.concatenate([dR.ravel(), rates[r_rows:r_rows + k]])
 
