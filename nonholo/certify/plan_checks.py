@@ -17,7 +17,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..controls import stages
-from ..controls.parametrisations import Fourier, PiecewiseConstant
+from ..controls.parametrisations import Fourier, Legendre, PiecewiseConstant
 from ..controls.stitched import Stitched
 from ..integrate.compiled import compiled_system
 from ..model.bounds import InputBounds, StateBounds, input_names
@@ -281,8 +281,8 @@ class PlanChecks:
         r = self.r
         frame = isinstance(par, FrameControls)
         inner = par.frame if frame else par
-        if not isinstance(inner, (Fourier, PiecewiseConstant)):
-            fail(where, f"must be Fourier, piecewise-constant or frame controls, got {type(par).__name__}")
+        if not isinstance(inner, (Fourier, Legendre, PiecewiseConstant)):
+            fail(where, f"must be Fourier, Legendre, piecewise-constant or frame controls, got {type(par).__name__}")
         if r.method != METHOD_OF_KIND[inner.kind] and not record:
             fail("method", f"is {r.method!r}, but the controls are {inner.kind!r} "
                             f"(method {METHOD_OF_KIND[inner.kind]!r})")

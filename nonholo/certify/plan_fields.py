@@ -27,7 +27,7 @@ FORMAT_1 = "nonholo.plan/1"
 ROUTES = ("local", "global")
 
 #: the planner's methods, by the kind of the parametrisation each plans with
-METHOD_OF_KIND = {"fourier": "parametric", "piecewise_constant": "nonparametric"}
+METHOD_OF_KIND = {"fourier": "parametric", "legendre": "parametric", "piecewise_constant": "nonparametric"}
 #: the options every plan records (``plan()``'s settings, :class:`nonholo.planning.core.Options`,
 #: and its parametrisation's size), in every format: by the rule ``plan()`` checks each with —
 #: a positive number, a non-negative number, or an integer >= the minimum

@@ -1,4 +1,5 @@
-"""Control parametrisations: truncated Fourier series and piecewise-constant grid controls.
+"""Control parametrisations: truncated Fourier series, piecewise-constant grid controls and
+Legendre series.
 
 A parametrisation maps a flat parameter vector ``λ`` to a control ``u(t) ∈ R^m`` on
 ``[0, T]`` (``m`` = number of inputs of the mechanism, in the mechanism's physical input
@@ -10,8 +11,10 @@ units — for the platform the scaled leg rates ``u_i = d(l_i²)/dt / (4ab)``, 1
 - :class:`PiecewiseConstant` (the nonparametric form, eq. (11), discretised):
   ``u(t) = v_j`` for ``t ∈ [t_j, t_{j+1})`` on a uniform grid ``t_j = jT/n`` (``u(T) =
   v_{n−1}``); ``n·m`` parameters ``values[j, i]``, flattened row by row.
+- :class:`Legendre`: ``u_i(t) = Σ_{k=0..K} λ_ik P_k(2t/T − 1)``, a smooth control that need
+  not be periodic (a least-energy extremal with drift); ``m(K+1)`` parameters.
 
-Both evaluate vectorised: ``controls(t)`` with ``t`` of shape ``(n,)`` gives ``(n, m)``
+All evaluate vectorised: ``controls(t)`` with ``t`` of shape ``(n,)`` gives ``(n, m)``
 (a scalar ``t`` gives ``(m,)``), and provide the diagonal of the L2 Gram matrix
 ``∫ uᵀu dt = λᵀ diag(metric) λ`` and a JSON-able description. What the integrator makes of
 them (stage tables, the stage basis it differentiates) is :mod:`nonholo.controls.stages`; the
@@ -301,6 +304,142 @@ class Fourier(Controls):
 
 
 # ------------------------------------------------------------------------------------------
+# Legendre series (smooth controls that need not be periodic)
+# ------------------------------------------------------------------------------------------
+
+
+def legendre_basis(t, T: float, K: int) -> np.ndarray:
+    """``φ(t) = (P_0(x), …, P_K(x))`` at ``x = 2t/T − 1``: the Legendre polynomials on ``[0, T]``.
+
+    Parameters
+    ----------
+    t : array_like
+        Times (s), shape ``(n,)``.
+    T : float
+        The horizon (s).
+    K : int
+        The degree.
+
+    Returns
+    -------
+    numpy.ndarray
+        Shape ``(n, K+1)``.
+    """
+    return np.polynomial.legendre.legvander(2.0 * np.asarray(t, dtype=float) / T - 1.0, K)
+
+
+class Legendre(Controls):
+    """``u_i(t) = Σ_{k=0..K} λ_ik P_k(2t/T − 1)``: a polynomial of degree ``K`` in the
+    Legendre basis, orthogonal on ``[0, T]`` (``∫ P_k² dt = T/(2k+1)``). The form of a smooth
+    control that is not periodic — a least-energy extremal of a system with drift.
+
+    Parameters
+    ----------
+    T : float
+        The horizon (s).
+    coeffs : array_like
+        ``coeffs[i] = (λ_i0, …, λ_iK)``, shape ``(m, K+1)``.
+
+    Raises
+    ------
+    ValueError
+        If ``T`` is not a positive finite time, or ``coeffs`` has not that shape or is not
+        finite.
+    """
+
+    kind = "legendre"
+
+    def __init__(self, T: float, coeffs):
+        super().__init__(T)
+        c = np.array(coeffs, dtype=float)
+        if c.ndim != 2 or c.shape[0] < 1 or c.shape[1] < 1:
+            raise ValueError(f"Legendre coefficients must have shape (m, K+1), got {c.shape}")
+        if not np.all(np.isfinite(c)):
+            raise ValueError("Legendre coefficients must be finite")
+        self._set(c)
+
+    def _set(self, params):
+        c = params.reshape(self.coeffs.shape if hasattr(self, "coeffs") else params.shape)
+        c.setflags(write=False)
+        self.coeffs = c
+        self._flat = c.reshape(-1)
+
+    @property
+    def degree(self) -> int:
+        """``K``, the polynomials' degree."""
+        return self.coeffs.shape[1] - 1
+
+    @property
+    def n_inputs(self) -> int:
+        """``m``, the number of inputs."""
+        return self.coeffs.shape[0]
+
+    @property
+    def params(self) -> np.ndarray:
+        """The flat parameter vector ``λ``, ``coeffs`` row by row (a copy)."""
+        return self.coeffs.ravel().copy()
+
+    def __call__(self, t):
+        return legendre_basis(check_times(t), self.T, self.degree) @ self.coeffs.T
+
+    def metric(self) -> np.ndarray:
+        """Diagonal of the L2 Gram matrix: ``T/(2k+1)`` for ``P_k``.
+
+        Returns
+        -------
+        numpy.ndarray
+            ``metric``, of the size of :attr:`params`.
+        """
+        return np.broadcast_to(self.T / (2.0 * np.arange(self.degree + 1) + 1.0), self.coeffs.shape).ravel()
+
+    def to_dict(self) -> dict:
+        """A JSON-able description for :func:`from_dict`.
+
+        Returns
+        -------
+        dict
+            ``{"kind": "legendre", "T", "degree", "coeffs"}``.
+        """
+        return {"kind": self.kind, "T": self.T, "degree": self.degree, "coeffs": self.coeffs.tolist()}
+
+    @classmethod
+    def fit(cls, t, u, T: float, degree: int) -> "Legendre":
+        """The least-squares polynomial of degree ``degree`` through samples.
+
+        Parameters
+        ----------
+        t : array_like
+            Sample times in ``[0, T]``, shape ``(n,)``, ``n > degree``.
+        u : array_like
+            The inputs there, shape ``(n, m)``.
+        T : float
+            The horizon (s).
+        degree : int
+            ``K ≥ 0``.
+
+        Returns
+        -------
+        Legendre
+            The fit.
+
+        Raises
+        ------
+        ValueError
+            If ``T`` or ``degree`` is invalid, or there are not more samples than ``degree``.
+        """
+        T = check_time(T)
+        K = check_count(degree, "degree", minimum=0)
+        t = np.asarray(t, dtype=float)
+        u = np.asarray(u, dtype=float).reshape(t.size, -1)
+        if t.size <= K:
+            raise ValueError(f"{t.size} samples cannot fix a polynomial of degree {K}")
+        return cls(T, np.polynomial.legendre.legfit(2.0 * t / T - 1.0, u, K).T)
+
+    def __repr__(self) -> str:
+        return f"Legendre(T={self.T:g}, K={self.degree}, m={self.n_inputs})"
+
+
+# ------------------------------------------------------------------------------------------
 # Piecewise-constant controls on a uniform grid (nonparametric form)
 # ------------------------------------------------------------------------------------------
 
@@ -480,7 +619,8 @@ class PiecewiseConstant(Controls):
         return f"PiecewiseConstant(T={self.T:g}, grid={self.grid}, m={self.n_inputs})"
 
 
-KINDS: dict[str, type[Controls]] = {Fourier.kind: Fourier, PiecewiseConstant.kind: PiecewiseConstant}
+KINDS: dict[str, type[Controls]] = {Fourier.kind: Fourier, PiecewiseConstant.kind: PiecewiseConstant,
+                                    Legendre.kind: Legendre}
 
 
 def from_dict(d: dict) -> Controls:
@@ -506,6 +646,8 @@ def from_dict(d: dict) -> Controls:
         return Fourier(d["T"], d["coeffs"])
     if kind == PiecewiseConstant.kind:
         return PiecewiseConstant(d["T"], d["values"])
+    if kind == Legendre.kind:
+        return Legendre(d["T"], d["coeffs"])
     raise ValueError(f"unknown control parametrisation {kind!r}; known: {', '.join(KINDS)}")
 
 

@@ -11,7 +11,7 @@ is described by a *stage basis* ``(Bidx, Bval, stride_b, stride_i)``:
 ``U[n, c, i] = Σ_q Bval[n, c, q] λ[Bidx[n, c, q]·stride_b + i·stride_i]`` — the map the
 variational kernel differentiates to accumulate the Jacobian ``∂s_T/∂λ``
 (:func:`sparse_basis`; :func:`kernel_basis` gives the dense form it contracts fastest for
-Fourier series). :func:`stage_function` is the same map from a bare parameter vector
+Fourier and Legendre series). :func:`stage_function` is the same map from a bare parameter vector
 into a preallocated table (the planner's fast path).
 """
 from __future__ import annotations
@@ -22,7 +22,7 @@ import numpy as np
 
 from ..numerics.checks import MAX_STEPS, check_count
 from ..numerics.jit import jit
-from .parametrisations import Fourier, PiecewiseConstant, fourier_basis
+from .parametrisations import Fourier, Legendre, PiecewiseConstant, fourier_basis, legendre_basis
 
 #: Stage times of one CF4 step, as fractions of the step.
 STAGE_FRACTIONS = np.array([0.0, 0.5, 1.0])
@@ -106,6 +106,36 @@ def _fourier_stage_basis(T: float, K: int, steps: int) -> np.ndarray:
     return fourier_basis(stage_times(T, steps).ravel(), T, K).reshape(steps, 3, 2 * K + 1)
 
 
+@lru_cache(maxsize=32)
+def _legendre_stage_basis(T: float, K: int, steps: int) -> np.ndarray:
+    return legendre_basis(stage_times(T, steps).ravel(), T, K).reshape(steps, 3, K + 1)
+
+
+#: The series: controls ``coeffs @ φ(t)ᵀ`` on a basis of functions of time, whose stage
+#: basis is dense.
+SERIES = (Fourier, Legendre)
+
+
+def series_stage_basis(controls, steps: int) -> np.ndarray:
+    """The basis functions of a series at the stage times.
+
+    Parameters
+    ----------
+    controls : Fourier or Legendre
+        A series.
+    steps : int
+        The number of CF4 steps.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``φ`` at the stage times, shape ``(steps, 3, nb)`` (cached: read only).
+    """
+    if isinstance(controls, Fourier):
+        return _fourier_stage_basis(controls.T, controls.harmonics, steps)
+    return _legendre_stage_basis(controls.T, controls.degree, steps)
+
+
 _EMPTY_INDEX = np.zeros((0, 3, 0), dtype=np.int64)
 
 
@@ -161,8 +191,8 @@ def sparse_basis(controls, steps: int) -> tuple[np.ndarray, np.ndarray, int, int
 
     Parameters
     ----------
-    controls : Fourier or PiecewiseConstant
-        A :class:`~nonholo.controls.parametrisations.Fourier` or
+    controls : Fourier, Legendre or PiecewiseConstant
+        A series (:data:`SERIES`) or
         :class:`~nonholo.controls.parametrisations.PiecewiseConstant` control.
     steps : int
         The number of CF4 steps (:func:`check_steps`).
@@ -179,10 +209,9 @@ def sparse_basis(controls, steps: int) -> tuple[np.ndarray, np.ndarray, int, int
         For other controls, or ``steps`` :func:`check_steps` refuses.
     """
     steps = check_steps(controls, steps)
-    if isinstance(controls, Fourier):
+    if isinstance(controls, SERIES):
         nb = controls.coeffs.shape[1]
-        return (_fourier_indices(steps, nb), _fourier_stage_basis(controls.T, controls.harmonics, steps),
-                1, nb)
+        return _fourier_indices(steps, nb), series_stage_basis(controls, steps), 1, nb
     if isinstance(controls, PiecewiseConstant):
         return _grid_basis(controls.grid, steps) + (controls.n_inputs, 1)
     raise ValueError(f"{type(controls).__name__} is not linear in its parameters: no stage basis")
@@ -201,14 +230,13 @@ def kernel_basis(controls, steps: int) -> tuple[np.ndarray, np.ndarray, int, int
     Returns
     -------
     tuple
-        ``(Bidx, Bval, stride_b, stride_i)``: for Fourier series the dense form (empty
+        ``(Bidx, Bval, stride_b, stride_i)``: for a series the dense form (empty
         ``Bidx``, ``Bval`` of shape ``(steps, 3, nb)`` over every index, see
         :func:`nonholo.integrate.variational_kernels.forward_variational`), else :func:`sparse_basis`'s.
     """
-    if isinstance(controls, Fourier):
+    if isinstance(controls, SERIES):
         steps = check_steps(controls, steps)
-        return (_EMPTY_INDEX, _fourier_stage_basis(controls.T, controls.harmonics, steps), 1,
-                controls.coeffs.shape[1])
+        return _EMPTY_INDEX, series_stage_basis(controls, steps), 1, controls.coeffs.shape[1]
     return sparse_basis(controls, steps)
 
 
@@ -237,6 +265,9 @@ def stage_table(controls, steps: int) -> np.ndarray:
         if steps > FFT_ABOVE and 2 * controls.harmonics < steps:
             return fourier_stage_values(controls, steps)
         basis = _fourier_stage_basis(controls.T, controls.harmonics, steps)
+        return (basis.reshape(3 * steps, -1) @ controls.coeffs.T).reshape(steps, 3, controls.n_inputs)
+    if isinstance(controls, Legendre):
+        basis = _legendre_stage_basis(controls.T, controls.degree, check_steps(controls, steps))
         return (basis.reshape(3 * steps, -1) @ controls.coeffs.T).reshape(steps, 3, controls.n_inputs)
     if isinstance(controls, PiecewiseConstant):
         out = np.empty((check_steps(controls, steps), 3, controls.n_inputs))
@@ -301,9 +332,9 @@ def stage_function(controls, steps: int):
         For other controls, or ``steps`` :func:`check_steps` refuses.
     """
     steps = check_steps(controls, steps)
-    if isinstance(controls, Fourier):
+    if isinstance(controls, SERIES):
         m, nb = controls.coeffs.shape
-        basis = _fourier_stage_basis(controls.T, controls.harmonics, steps).reshape(3 * steps, nb)
+        basis = series_stage_basis(controls, steps).reshape(3 * steps, nb)
 
         def fill(params, out):
             np.dot(basis, np.ascontiguousarray(params.reshape(m, nb).T), out=out.reshape(3 * steps, m))

@@ -103,6 +103,7 @@ _OPTIONAL = ("sensitivity", "error_bound", "replay_steps", "route", "stitched",
 _MADE_BY_TEXT = 200
 #: the fields of each kind of ``controls``
 _CONTROL_FIELDS = {"fourier": ("kind", "T", "harmonics", "coeffs"),
+                   "legendre": ("kind", "T", "degree", "coeffs"),
                    "piecewise_constant": ("kind", "T", "grid", "values"),
                    "frame": ("kind", "T", "mechanism", "steps", "R0", "frame"),
                    "stitched": ("kind", "T", "pieces", "waypoints"),
@@ -189,7 +190,7 @@ def _fields(d: dict, expected: tuple, where: str) -> None:
 
 
 def _parametrisation(d, where: str, m: int) -> None:
-    """Check the description of Fourier or grid controls with ``m`` inputs (``where``: its field)."""
+    """Check the description of Fourier, Legendre or grid controls with ``m`` inputs (``where``: its field)."""
     if not isinstance(d, dict):
         fail(where, f"must be an object, got {json_type(d)}")
     kind = d.get("kind")
@@ -202,6 +203,9 @@ def _parametrisation(d, where: str, m: int) -> None:
     if kind == "fourier":
         K = integer_field(d, "harmonics", 1, where=where + ".")
         _array(d["coeffs"], where + ".coeffs", (m, 2 * K + 1))
+    elif kind == "legendre":
+        K = integer_field(d, "degree", 0, where=where + ".")
+        _array(d["coeffs"], where + ".coeffs", (m, K + 1))
     else:
         g = integer_field(d, "grid", 1, where=where + ".")
         _array(d["values"], where + ".values", (g, m))

@@ -33,7 +33,7 @@ import itertools
 import math
 from dataclasses import replace
 
-from ..controls.parametrisations import Fourier, PiecewiseConstant
+from ..controls.parametrisations import Fourier, Legendre, PiecewiseConstant
 from ..io.result import PlanResult
 from .result_builder import build_result
 from .energy_objective import energy, plan_energy_of
@@ -148,7 +148,8 @@ def improve(problem, result: PlanResult, quick: bool = False, budget: float | No
         budget = QUICK_EFFORT if budget is None else budget
         ceiling = REPLACE_BELOW * plan_energy
         found = extremals.least_energy(endpoint, [("plan", means)], problem.options, grid,
-                                       QUICK_EXTREMAL_EFFORT, confirmations=1, ceiling=ceiling, continued=0)
+                                       QUICK_EXTREMAL_EFFORT, confirmations=1, ceiling=ceiling, continued=0,
+                                       smooth=problem.mechanism.has_drift)
         outcome, why = found.outcome, found.why
         if outcome is None and min(found.least, plan_energy) > WASTEFUL * loop_energy(endpoint, QUICK_STARTS - 1):
             # the plan is not near a motion of the loops' energy: the quick search from its
@@ -168,7 +169,8 @@ def improve(problem, result: PlanResult, quick: bool = False, budget: float | No
             framed = math.isinf(loop_energy(endpoint, 1))
             found = extremals.least_energy(endpoint, starts(endpoint, result.parametrisation), problem.options,
                                            grid, EXTREMAL_EFFORT, ceiling=ceiling * (1.0 + 1e-9),
-                                           first_below=math.inf if framed else 0.0, first_or_none=True)
+                                           first_below=math.inf if framed else 0.0, first_or_none=True,
+                                           smooth=problem.mechanism.has_drift)
             outcome, why = found.outcome, found.why
             if outcome is None and found.confirmed and ceiling <= found.least <= ceiling * (1.0 + AT_THE_PLAN):
                 # the plan is the least extremal (to the grid's resolution): nothing to search for
@@ -188,8 +190,11 @@ def improve(problem, result: PlanResult, quick: bool = False, budget: float | No
             endpoint = final
             outcome, why = search(endpoint, starts(endpoint, result.parametrisation), problem.options, budget,
                                   ceiling)
-    lowered = problem.with_settings(method="nonparametric", grid=grid, steps=steps)
-    if outcome is not None and quick:
+    series = outcome is not None and isinstance(outcome.evaluation.parametrisation, Legendre)
+    lowered = problem.with_settings(method="parametric" if series else "nonparametric", grid=grid, steps=steps)
+    if outcome is not None and quick and not series:
+        # grid controls, which jump at every interval, made smooth (an extremal as a Legendre
+        # series is smooth already)
         found = energy(outcome.evaluation, outcome.evaluation.parametrisation.metric())
         lowered, endpoint, outcome, why = smoothed(problem, outcome, ceiling, result)
         if outcome is None:

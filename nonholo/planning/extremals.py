@@ -30,7 +30,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..controls.parametrisations import Controls, PiecewiseConstant
+from ..controls.parametrisations import Controls, Legendre, PiecewiseConstant
 from ..integrate.compiled import compiled_system
 from ..numerics import effort
 from ..spaces.state import State
@@ -59,6 +59,12 @@ AGREE_RTOL = 1e-5
 #: SQP iterations at most that bring an extremal's grid controls to the grid's own
 #: first-order conditions.
 POLISH_ITERATIONS = 6
+#: The degrees of the Legendre series tried in turn for a smooth extremal's inputs
+#: (:func:`smooth_extremal`).
+SMOOTH_DEGREES = (8, 12, 16, 24, 32, 48)
+#: A series fits an extremal's inputs where its largest residual at the nodes is below this
+#: fraction of their largest value.
+SMOOTH_FIT = 1e-10
 
 
 @dataclass
@@ -356,6 +362,92 @@ def shot_energy(shot: Shot, h: float) -> float:
     return float(h / 6.0 * np.sum(U2[:, 0] + 4.0 * U2[:, 1] + U2[:, 2]))
 
 
+def node_inputs(shooting: "Shooting", p0: np.ndarray) -> np.ndarray | None:
+    """The inputs ``u_n = G(x_n)ᵀ p_n`` of the extremal from ``p₀`` at its nodes (``None`` where it
+    does not reach ``T``).
+
+    Parameters
+    ----------
+    shooting : Shooting
+        The extremals' problem and grid.
+    p0 : numpy.ndarray
+        The initial costate.
+
+    Returns
+    -------
+    numpy.ndarray or None
+        Shape ``(N+1, m)``.
+    """
+    ep = shooting.endpoint
+    U = np.empty((shooting.steps, 3, ep.mechanism.n_inputs))
+    n, _, _ = shooting.kernel(*ep.start, p0, shooting.h, ep.sign, ep.delta_min,
+                              shooting._Rs, shooting._Qs, shooting._Ps, U)
+    if n < shooting.steps:
+        return None
+    G = ep.mechanism.G
+    return np.stack([G(R, q).T @ p for R, q, p in zip(shooting._Rs, shooting._Qs, shooting._Ps)])
+
+
+def smooth_extremal(endpoint: EndpointMap, shot: Shot, options: Options, label: str, deadline: float,
+                    extremals: int) -> tuple[Outcome | None, str]:
+    """An extremal at the goal as a smooth control: its initial costate brought onto the goal on
+    the planner's own steps, its inputs at the nodes fitted by a Legendre series of the least
+    degree of :data:`SMOOTH_DEGREES` that fits them to :data:`SMOOTH_FIT`, that series brought
+    onto the goal by Newton steps of least energy and certified.
+
+    A motion so found is the extremal itself up to the integrator's error, not grid controls
+    near it: its inputs are those of the closed form where there is one (a linear system).
+
+    Parameters
+    ----------
+    endpoint : EndpointMap
+        The problem.
+    shot : Shot
+        An extremal at the goal.
+    options : Options
+        The run's settings.
+    label : str
+        The start it came from.
+    deadline : float
+        Stop once the effort passes this.
+    extremals : int
+        Extremals shot so far (for the reason).
+
+    Returns
+    -------
+    outcome : Outcome or None
+        The certified motion.
+    why : str
+        Why there is none (empty if there is).
+    """
+    fine = Shooting(endpoint, endpoint.steps)
+    goal = endpoint.goal
+    refined = fine.newton(fine.shoot(shot.p0, goal), goal, 0.1 * options.tol, deadline)
+    u = node_inputs(fine, refined.p0) if refined.complete else None
+    if u is None:
+        return None, "the extremal did not reach T on the planner's steps"
+    t = np.arange(fine.steps + 1) * fine.h
+    scale = max(float(np.abs(u).max()), 1e-300)
+    for degree in SMOOTH_DEGREES:
+        series = Legendre.fit(t, u, endpoint.T, degree)
+        if np.abs(series(t) - u).max() <= SMOOTH_FIT * scale:
+            break
+    else:
+        return None, f"no Legendre series up to degree {SMOOTH_DEGREES[-1]} fits the extremal's inputs"
+    ev = endpoint.evaluate(series)
+    metric = series.metric()
+    ev = newton_steps(endpoint, ev, metric, options.tol, RESTORE_STEPS)
+    if not (endpoint.admissible(ev) and ev.error <= options.tol):
+        return None, f"the extremal's Legendre series (degree {series.degree}) ended {ev.error:.2g} from the goal"
+    E = energy(ev, metric)
+    outcome = Outcome(evaluation=ev, success=True,
+                      reason=(f"least energy {E:.6g}: the normal extremal from the start '{label}' "
+                              f"({extremals + fine.shots} extremals), as a Legendre series of degree {series.degree}"),
+                      history=[record(1, ev, 1.0, "energy", 0, energy=E, start=label, extremal=True)], iterations=1)
+    outcome = certified_or_finer(outcome, endpoint, options, math.inf)
+    return (outcome, "") if outcome.success else (None, outcome.reason)
+
+
 @dataclass
 class Found:
     """What :func:`least_energy` found: the certified motion (or ``None``), why there is
@@ -384,7 +476,7 @@ class Found:
 
 def least_energy(endpoint: EndpointMap, initial, options: Options, grid: int, budget: float,
                  confirmations: int = 2, ceiling: float = math.inf, continued: int = 1,
-                 first_below: float = 0.0, first_or_none: bool = False) -> Found:
+                 first_below: float = 0.0, first_or_none: bool = False, smooth: bool = False) -> Found:
     """The least-energy normal extremal through the projections of labelled controls, as
     certified grid controls (see the module).
 
@@ -419,6 +511,9 @@ def least_energy(endpoint: EndpointMap, initial, options: Options, grid: int, bu
     first_or_none : bool, default False
         Give up where the first start's extremal does not reach the goal (a plan's that
         does not is far from any extremal: its least-energy motion rides a limit).
+    smooth : bool, default False
+        Return the extremal as a smooth control (:func:`smooth_extremal`) where it can,
+        else as grid controls.
 
     Returns
     -------
@@ -459,6 +554,10 @@ def least_energy(endpoint: EndpointMap, initial, options: Options, grid: int, bu
         return Found(None, f"the least-energy extremal needs {least:.6g}, not below {ceiling:.6g}", True, least, True)
     why = ""
     for _, label, shot in found[:agree]:
+        if smooth:
+            outcome, why = smooth_extremal(endpoint, shot, options, label, deadline, shooting.shots)
+            if outcome is not None:
+                return Found(outcome, "", True, least, True)
         ev = endpoint.evaluate(PiecewiseConstant(endpoint.T, grid_values(shot.U, grid)))
         metric = ev.parametrisation.metric()
         ev = newton_steps(endpoint, ev, metric, options.tol, RESTORE_STEPS)

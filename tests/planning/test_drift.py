@@ -1,0 +1,142 @@
+"""Systems with drift, ``ẋ = f(x) + G(x) u``: planned, certified and least-energy.
+
+The least energy of a linear system ``ẋ = A x + B u`` from ``x0`` to ``xd`` in ``T`` is known in
+closed form (the controllability Gramian), computed here by Van Loan's block exponential —
+independently of the planner — and checked against a quadrature of its definition.
+"""
+import numpy as np
+import pytest
+import sympy as sp
+from scipy.integrate import quad_vec, solve_ivp
+from scipy.linalg import expm
+
+import nonholo
+from nonholo import Mechanism
+from nonholo.certify import resimulate
+
+
+def gramian(A, B, T):
+    """``W(T) = ∫₀ᵀ e^{As} B Bᵀ e^{Aᵀs} ds`` by Van Loan's block exponential."""
+    n = A.shape[0]
+    M = np.block([[-A, B @ B.T], [np.zeros((n, n)), A.T]])
+    F = expm(M * T)
+    return F[n:, n:].T @ F[:n, n:]
+
+
+def closed_form(A, B, x0, xd, T):
+    """The least energy and its control ``u(t) = Bᵀ e^{Aᵀ(T−t)} W⁻¹ (xd − e^{AT} x0)``."""
+    W = gramian(A, B, T)
+    eta = np.linalg.solve(W, xd - expm(A * T) @ x0)
+    energy = float((xd - expm(A * T) @ x0) @ eta)
+
+    def u(t):
+        return np.stack([B.T @ expm(A.T * (T - s)) @ eta for s in np.atleast_1d(t)])
+
+    return energy, u
+
+
+def linear_mechanism(name, A, B):
+    """``ẋ = A x + B u`` from its equations (entries as exact decimals)."""
+    n, m = B.shape
+    x = sp.symbols(f"x1:{n + 1}", real=True)
+    u = sp.symbols(f"w1:{m + 1}", real=True)
+    exact = lambda a: sp.Rational(str(a))
+    rates = [sum(exact(A[i, j]) * x[j] for j in range(n)) + sum(exact(B[i, k]) * u[k] for k in range(m))
+             for i in range(n)]
+    return Mechanism.from_equations(name, coordinates=x, inputs=u, rates=rates, cache=False)
+
+
+def random_pair(rng, n, m, unstable):
+    """A controllable pair ``(A, B)`` of 2-decimal entries, ``A`` with an eigenvalue of real part
+    +0.5 (``unstable``) or all at most −0.5, its Gramian on ``[0, 1]`` conditioned below 1e8."""
+    while True:
+        A = rng.normal(size=(n, n))
+        A = np.round(A - (max(np.linalg.eigvals(A).real) + (-0.5 if unstable else 0.5)) * np.eye(n), 2)
+        B = np.round(rng.normal(size=(n, m)), 2)
+        C = np.hstack([np.linalg.matrix_power(A, k) @ B for k in range(n)])
+        stable = max(np.linalg.eigvals(A).real) < 0
+        if (np.linalg.matrix_rank(C) == n and stable != unstable
+                and np.linalg.cond(gramian(A, B, 1.0)) < 1e8):
+            return A, B
+
+
+def test_the_gramian_by_block_exponential_is_its_definition():
+    rng = np.random.default_rng(0)
+    A, B = random_pair(rng, 4, 2, True)
+    by_quadrature, _ = quad_vec(lambda s: expm(A * s) @ B @ B.T @ expm(A.T * s), 0.0, 1.3, epsabs=1e-13)
+    np.testing.assert_allclose(gramian(A, B, 1.3), by_quadrature, rtol=1e-10, atol=1e-12)
+
+
+CASES = [(n, m, unstable) for n in range(2, 7) for m in (1, 2) for unstable in (False, True)]
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("n, m, unstable", CASES)
+def test_least_energy_of_a_linear_system_is_the_closed_form(n, m, unstable):
+    """``objective="energy"`` on a random controllable linear system: the energy within 1.0001×
+    of the Gramian's, the controls within 1e-6 of the closed form (relative to their size)."""
+    rng = np.random.default_rng(100 * n + 10 * m + unstable)
+    A, B = random_pair(rng, n, m, unstable)
+    x0, xd = rng.normal(size=n), rng.normal(size=n)
+    mech = linear_mechanism(f"linear_{n}_{m}_{int(unstable)}", A, B)
+    assert mech.has_drift
+    result = nonholo.plan(x0, xd, mechanism=mech, T=1.0, objective="energy")
+    assert result.success, result.reason
+    least, u_star = closed_form(A, B, x0, xd, 1.0)
+    t = np.linspace(0.0, 1.0, 401)
+    u, ref = result.controls(t), u_star(t)
+    energy = float(np.trapezoid(np.sum(result.controls(np.linspace(0, 1, 20001)) ** 2, axis=1),
+                                np.linspace(0, 1, 20001)))
+    assert least * (1 - 1e-6) <= energy <= 1.0001 * least, (energy, least)
+    assert np.abs(u - ref).max() <= 1e-6 * max(1.0, np.abs(ref).max()), np.abs(u - ref).max()
+    # the plan reaches the goal on the system itself, integrated apart from the planner
+    sol = solve_ivp(lambda s, x: A @ x + B @ result.controls(np.array([s]))[0], (0.0, 1.0), x0,
+                    method="DOP853", rtol=1e-12, atol=1e-12)
+    assert np.abs(sol.y[:, -1] - xd).max() < 1e-8
+
+
+def test_double_integrator_rest_to_rest_is_twelve_d_squared_over_T_cubed():
+    d, T = 1.5, 2.0
+    result = nonholo.plan([0, 0, 0, 0], [d, 0, 0, 0], mechanism="double_integrator", T=T, objective="energy")
+    assert result.success, result.reason
+    t = np.linspace(0.0, T, 801)
+    # u(t) = 6d/T² (1 − 2t/T) along x, none along y
+    np.testing.assert_allclose(result.controls(t)[:, 0], 6 * d / T ** 2 * (1 - 2 * t / T), atol=1e-8)
+    np.testing.assert_allclose(result.controls(t)[:, 1], 0.0, atol=1e-8)
+    energy = float(result.parametrisation.metric() @ result.parametrisation.params ** 2)
+    assert energy == pytest.approx(12 * d ** 2 / T ** 3, rel=1e-9)
+
+
+@pytest.mark.parametrize("name, start, goal, T", [
+    ("double_integrator", [0, 0, 0, 0], [1, 0.5, 0, 0], 1.0),
+    ("unicycle2", [0, 0, 0, 0, 0], [1, 0.5, 0.3, 0, 0], 5.0),
+])
+@pytest.mark.parametrize("objective", [None, "auto", "energy"])
+def test_a_plan_with_drift_reaches_its_goal_in_a_replay_of_the_hand_written_model(name, start, goal, T, objective):
+    result = nonholo.plan(start, goal, mechanism=name, T=T, objective=objective)
+    assert result.success, result.reason
+    _, _, q, _ = resimulate.resimulate_state(start, result.controls, T, name,
+                                             breakpoints=result.parametrisation.breakpoints)
+    assert np.abs(q[-1] - np.asarray(goal, dtype=float)).max() < 1e-8
+
+
+def test_what_a_time_change_cannot_do_with_drift_is_refused_saying_so():
+    with pytest.raises(ValueError, match="T=None.*has drift"):
+        nonholo.plan([0, 0, 0, 0], [1, 0, 0, 0], mechanism="double_integrator", T=None)
+    with pytest.raises(ValueError, match="objective='time'.*has drift"):
+        nonholo.plan([0, 0, 0, 0], [1, 0, 0, 0], mechanism="double_integrator", objective="time")
+    result = nonholo.plan([0, 0, 0, 0], [1, 0, 0, 0], mechanism="double_integrator", objective=None)
+    with pytest.raises(ValueError, match="result: .*has drift.*cannot be re-timed"):
+        nonholo.retime(result, T=2.0, rest_to_rest=True)
+
+
+def test_a_rate_not_affine_in_the_inputs_is_refused_naming_the_term():
+    x, vel, a = sp.symbols("x vel a", real=True)
+    with pytest.raises(ValueError, match=r"the rate of vel = .*its term a\*\*3 is not affine"):
+        Mechanism.from_equations("cubic", coordinates=[x, vel], inputs=[a], rates=[vel, a ** 3 + x], cache=False)
+    # a term in the input times the state is affine: the term named is the square
+    with pytest.raises(ValueError, match=r"its term a\*\*2 is not affine"):
+        Mechanism.from_equations("square", coordinates=[x, vel], inputs=[a], rates=[vel, a * x + a * a], cache=False)
+    bilinear = Mechanism.from_equations("bilinear", coordinates=[x, vel], inputs=[a], rates=[vel, a * x], cache=False)
+    assert bilinear.has_drift
+    np.testing.assert_allclose(bilinear.rates(np.eye(3), [2.0, 3.0], [0.5]), [3.0, 1.0])
