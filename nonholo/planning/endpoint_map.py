@@ -317,7 +317,10 @@ class EndpointMap:
                         "blows up there; the fixed-step integrator stepped across it)")
             return f"|Δ| fell to {ev.min_delta:.6g} < delta_min = {self.delta_min:g}{where}"
         if not ev.complete:
-            return f"the angular velocity became non-finite at t ≈ {ev.t_stop:.4g} s"
+            if self.mechanism.n_coordinates == 0:
+                return f"the angular velocity became non-finite at t ≈ {ev.t_stop:.4g} s"
+            escaped = " (the drift carried the state to infinity)" if self.mechanism.has_drift else ""
+            return f"the rates became non-finite at t ≈ {ev.t_stop:.4g} s{escaped}"
         if self.limits is not None and ev.min_clearance < 0.0:
             return self.limits.describe(self.mechanism, ev.R, np.arange(len(ev.R)) * self.h, ev.q)
         return "admissible"

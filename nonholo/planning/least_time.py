@@ -19,13 +19,15 @@ gives the same path on any machine under any load.
 """
 from __future__ import annotations
 
+import dataclasses
 import math
-from dataclasses import replace
+from dataclasses import dataclass, replace
 
 import numpy as np
 
 from ..controls.parametrisations import PiecewiseConstant
 from ..io.result import PlanResult
+from ..model.bounds import BOUND_RTOL
 from .core import Outcome, record
 from .correction import certified
 from .endpoint_map import EndpointMap, node_sensitivities, spatial_gradient_delta
@@ -209,11 +211,92 @@ class PathProblem:
         return np.zeros((self.nodes.size, self.p + 1)) if out is None else out[1]
 
 
+@dataclass
+class Use:
+    """The least use of the input bounds found at one horizon (:func:`least_use`).
+
+    Parameters
+    ----------
+    endpoint : EndpointMap
+        The problem on grid controls at that horizon.
+    evaluation : Evaluation
+        The path found, brought onto the goal.
+    use : float
+        The fraction ``s`` of the bounds it uses.
+    start_use : float
+        The fraction its first guess used.
+    message : str
+        SLSQP's message.
+    iterations : int
+        SLSQP's iterations.
+    evaluations : int
+        Evaluations of the endpoint map.
+    """
+
+    endpoint: EndpointMap
+    evaluation: object
+    use: float
+    start_use: float
+    message: str
+    iterations: int
+    evaluations: int
+
+
+def least_use(problem, controls) -> Use | str:
+    """The path of least use ``s`` of the problem's input bounds in its ``T`` (the problem of
+    :class:`PathProblem`), from the grid means of ``controls``, brought onto the goal; or why
+    there is none.
+
+    Parameters
+    ----------
+    problem : Problem
+        The problem (its input bounds around zero).
+    controls : callable
+        The first guess ``u(t)`` on ``[0, T]``.
+
+    Returns
+    -------
+    Use or str
+        The path found, or the reason there is none.
+    """
+    bounds = problem.input_bounds
+    grid = TIME_GRID
+    steps = -(-problem.steps // grid) * grid
+    endpoint = problem.evaluator(method="nonparametric", steps=steps)
+    fitted = PiecewiseConstant.fit(controls, endpoint.T, grid, problem.mechanism.n_inputs)
+    ev = endpoint.evaluate(fitted, delta_stop=-math.inf)
+    if ev.complete:
+        ev = newton_steps(endpoint, ev, fitted.metric(), problem.options.tol, RESTORE_STEPS)
+    if not ev.complete:
+        return "the first guess's grid controls do not reach T"
+    from scipy.optimize import minimize      # loaded by the first least-time plan, not by `import nonholo`
+
+    path = PathProblem(endpoint, grid, bounds.lows, bounds.highs)
+    lam = ev.params
+    x0 = np.append(lam, max(float(bounds.usage(lam.reshape(grid, -1)).max()), 1e-9))
+    A = path.bounds_matrix()
+    constraints = [{"type": "eq", "fun": path.goal, "jac": path.goal_jacobian},
+                   {"type": "ineq", "fun": lambda x: A @ x, "jac": lambda x: A},
+                   {"type": "ineq", "fun": path.limits, "jac": path.limits_jacobian}]
+    objective_row = np.zeros(path.p + 1)
+    objective_row[-1] = 1.0
+    found = minimize(lambda x: x[-1], x0, jac=lambda x: objective_row, method="SLSQP", constraints=constraints,
+                     options={"maxiter": MAX_ITERATIONS, "ftol": FTOL})
+    values = found.x[:path.p].reshape(grid, -1)
+    ev = endpoint.evaluate(PiecewiseConstant(endpoint.T, values))
+    ev = newton_steps(endpoint, ev, fitted.metric(), problem.options.tol, RESTORE_STEPS)
+    if not (endpoint.admissible(ev) and ev.error <= problem.options.tol):
+        return f"its motion is not admissible or does not end at the goal ({found.message})"
+    return Use(endpoint, ev, float(bounds.usage(ev.params.reshape(grid, -1)).max()), float(x0[-1]),
+               str(found.message), int(found.nit), path.evaluations)
+
+
 def least_time_path(problem, result: PlanResult) -> PlanResult:
     """The path of least time under the problem's input bounds, from a plan (see the
     module), certified on grid controls; ``result`` with its reason saying why where none
     is found. The plan's grid controls need only reach ``T``: SLSQP starts where they
-    break a limit or miss the goal as well.
+    break a limit or miss the goal as well. A mechanism with drift has its own search
+    (:func:`least_time_with_drift`).
 
     Parameters
     ----------
@@ -228,52 +311,138 @@ def least_time_path(problem, result: PlanResult) -> PlanResult:
         The path of least time (not re-timed), or ``result``.
     """
     options = {**result.options, "objective": "time"}
-    bounds = problem.input_bounds
-    if not result.success or bounds is None:
+    if not result.success or problem.input_bounds is None:
         return replace(result, options=options)
-    low, high = bounds.lows, bounds.highs
-    grid = TIME_GRID
-    steps = -(-problem.steps // grid) * grid
-    endpoint = problem.evaluator(method="nonparametric", steps=steps)
-    fitted = PiecewiseConstant.fit(result.controls, endpoint.T, grid, problem.mechanism.n_inputs)
-    ev = endpoint.evaluate(fitted, delta_stop=-math.inf)
-    if ev.complete:
-        ev = newton_steps(endpoint, ev, fitted.metric(), problem.options.tol, RESTORE_STEPS)
-    if not ev.complete:
-        return replace(result, options=options,
-                       reason=f"{result.reason}; the least-time path not sought: the plan's grid controls do "
-                              f"not reach T")
-    from scipy.optimize import minimize      # loaded by the first least-time plan, not by `import nonholo`
+    if problem.mechanism.has_drift:
+        return least_time_with_drift(problem, result)
+    used = least_use(problem, result.controls)
+    if isinstance(used, str) or not used.use < used.start_use:
+        why = used if isinstance(used, str) else \
+            f"it is not faster than the plan's ({used.use:.6g} ≥ {used.start_use:.6g} of the bounds in T)"
+        return replace(result, options=options, reason=f"{result.reason}; the least-time path not taken: {why}")
+    reason = (f"{result.reason}; then the path of least time under the input bounds: {used.use:.6g} of them in "
+              f"T = {problem.T:g} s (the plan's {used.start_use:.6g}; SLSQP, {used.iterations} iterations, "
+              f"{used.evaluations} evaluations: {used.message})")
+    return finished(problem, result, used, reason)
 
-    path = PathProblem(endpoint, grid, low, high)
-    lam = ev.params
-    x0 = np.append(lam, max(float(bounds.usage(lam.reshape(grid, -1)).max()), 1e-9))
-    A = path.bounds_matrix()
-    constraints = [{"type": "eq", "fun": path.goal, "jac": path.goal_jacobian},
-                   {"type": "ineq", "fun": lambda x: A @ x, "jac": lambda x: A},
-                   {"type": "ineq", "fun": path.limits, "jac": path.limits_jacobian}]
-    objective_row = np.zeros(path.p + 1)
-    objective_row[-1] = 1.0
-    found = minimize(lambda x: x[-1], x0, jac=lambda x: objective_row, method="SLSQP", constraints=constraints,
-                     options={"maxiter": MAX_ITERATIONS, "ftol": FTOL})
-    ev = endpoint.evaluate(PiecewiseConstant(endpoint.T, found.x[:path.p].reshape(grid, -1)))
-    ev = newton_steps(endpoint, ev, fitted.metric(), problem.options.tol, RESTORE_STEPS)
-    s0, s = float(x0[-1]), float(found.x[-1])
-    if not (endpoint.admissible(ev) and ev.error <= problem.options.tol) or not s < s0:
-        why = ("its motion is not admissible or does not end at the goal" if s < s0
-               else f"it is not faster than the plan's ({s:.6g} ≥ {s0:.6g} of the bounds in T)")
-        return replace(result, options=options,
-                       reason=f"{result.reason}; the least-time path not taken ({found.message}): {why}")
-    outcome = Outcome(evaluation=ev, success=True,
-                      reason=(f"{result.reason}; then the path of least time under the input bounds: "
-                              f"{s:.6g} of them in T = {endpoint.T:g} s (the plan's {s0:.6g}; SLSQP, "
-                              f"{found.nit} iterations, {path.evaluations} evaluations: {found.message})"),
-                      history=result.history + [record(result.iterations + 1, ev, 1.0, "time", 0, use=s)],
-                      iterations=result.iterations + int(found.nit))
+
+def finished(problem, result: PlanResult, used: Use, reason: str) -> PlanResult:
+    """A path found by :func:`least_use`, certified, as the result (``result`` with its reason
+    saying why where the certificate fails).
+
+    Parameters
+    ----------
+    problem : Problem
+        The problem at the path's horizon.
+    result : PlanResult
+        The plan it replaces.
+    used : Use
+        The path.
+    reason : str
+        The result's reason.
+
+    Returns
+    -------
+    PlanResult
+        The certified path, or ``result``.
+    """
+    options = {**result.options, "objective": "time"}
+    ev, endpoint = used.evaluation, used.endpoint
+    outcome = Outcome(evaluation=ev, success=True, reason=reason,
+                      history=result.history + [record(result.iterations + 1, ev, 1.0, "time", 0, use=used.use)],
+                      iterations=result.iterations + used.iterations)
     outcome = certified(outcome, endpoint, problem.options)
     if not outcome.success:
         return replace(result, options=options,
                        reason=f"{result.reason}; the least-time path not taken: {outcome.reason}")
-    lowered = problem.with_settings(method="nonparametric", grid=grid, steps=steps)
+    lowered = problem.with_settings(method="nonparametric", grid=TIME_GRID, steps=endpoint.steps)
     built = build_result(lowered, outcome, True, outcome.reason, endpoint)
     return replace(built, options={**built.options, "objective": "time"}, route=result.route)
+
+
+def least_time_with_drift(problem, result: PlanResult) -> PlanResult:
+    """The least time under the input bounds of a mechanism with drift, whose paths a time
+    change does not keep: the horizon ``T`` at which the least use of the bounds
+    (:func:`least_use`) is 1, found by the secant method on ``log s`` against ``log T`` (the
+    first step as for a system driven by accelerations, ``s ∝ T⁻²``), kept inside the
+    bracket of the horizons tried (bisection where it leaves it), each solve started from
+    the last path found; the path at the least horizon where the bounds hold.
+
+    Parameters
+    ----------
+    problem : Problem
+        The problem (its input bounds around zero; its ``T`` the first horizon tried).
+    result : PlanResult
+        Its certified plan at that horizon.
+
+    Returns
+    -------
+    PlanResult
+        The least-time path at its own horizon, or ``result`` with its reason saying why.
+    """
+    options = {**result.options, "objective": "time"}
+    T, guess = problem.T, (result.controls, problem.T)
+    tried, best, slow, fast = [], None, math.inf, 0.0
+    for _ in range(HORIZONS):
+        at = dataclasses.replace(problem, T=T)
+        used = least_use(at, _stretched(guess, T))
+        if isinstance(used, str):
+            s = math.inf
+        else:
+            s = used.use
+            guess = (used.evaluation.controls, T)
+            if s <= KEPT and T < slow:
+                best, slow = (at, used), T
+        if s > KEPT:
+            fast = max(fast, T)
+        tried.append((math.log(T), math.log(s) if math.isfinite(s) else math.inf))
+        if best is not None and (1.0 - TIME_RTOL <= s <= KEPT or slow <= fast * (1.0 + TIME_RTOL)):
+            break
+        T = _next_horizon(tried, fast, slow)
+    if best is None:
+        return replace(result, options=options,
+                       reason=(f"{result.reason}; no horizon tried ({', '.join(f'{math.exp(x):.4g}' for x, _ in tried)} s) "
+                               f"keeps the input bounds"))
+    at, used = best
+    reason = (f"{result.reason}; then the least time under the input bounds with drift: T = {at.T:.6g} s, "
+              f"{used.use:.6g} of the bounds ({len(tried)} horizons tried; SLSQP: {used.message})")
+    return finished(at, result, used, reason)
+
+
+#: Horizons tried at most by the least-time search with drift.
+HORIZONS = 14
+#: The least-time search with drift ends at a horizon within this relative margin of the least.
+TIME_RTOL = 1e-4
+#: A path keeps the bounds where it uses at most this fraction of them (their check's
+#: relative tolerance, :data:`~nonholo.model.bounds.BOUND_RTOL`).
+KEPT = 1.0 + BOUND_RTOL
+
+
+def _stretched(guess: tuple, T: float):
+    """Controls ``(u, T0)`` on their horizon ``T0`` read on ``[0, T]`` at the same fraction of it."""
+    controls, T0 = guess
+
+    def u(t):
+        return controls(np.minimum(np.asarray(t, dtype=float) * (T0 / T), T0))
+
+    return u
+
+
+def _next_horizon(tried: list, fast: float, slow: float) -> float:
+    """The next horizon: the secant root of ``log s`` against ``log T`` through the last two
+    finite tries (the first with slope −2), inside ``(fast, slow)``, else the bracket's middle
+    (geometric) or a doubling."""
+    finite = [(x, y) for x, y in tried if math.isfinite(y)]
+    if not finite:
+        return math.exp(tried[-1][0]) * 2.0
+    x1, y1 = finite[-1]
+    if len(finite) >= 2 and finite[-2][1] != y1:
+        x0, y0 = finite[-2]
+        x = x1 - y1 * (x1 - x0) / (y1 - y0)
+    else:
+        x = x1 + y1 / 2.0
+    T = math.exp(x)
+    hi = slow if math.isfinite(slow) else math.inf
+    if not (fast < T < hi) or not math.isfinite(T):
+        T = math.sqrt(fast * hi) if math.isfinite(hi) and fast > 0 else (2.0 * fast if fast > 0 else 0.5 * hi)
+    return T

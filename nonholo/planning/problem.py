@@ -156,10 +156,6 @@ class Problem:
         if mech.has_drift and T is None:
             raise ValueError(f"T=None asks for the least time by re-timing a path, which a time change keeps "
                              f"only without drift; mechanism {mech.name!r} has drift: give the time T")
-        if mech.has_drift and objective == "time":
-            raise ValueError(f"objective='time' finds the least time by scaling a path's pace, which keeps the "
-                             f"path only without drift; mechanism {mech.name!r} has drift, for which the least "
-                             f"time is not built yet: plan with objective='energy' at a given T")
         if objective == "time" and speed is None:
             given = given + least_time_bounds(given, mech)
             bounds = one_of(given, InputBounds)

@@ -341,7 +341,8 @@ def limit_inputs(result: PlanResult, bounds: InputBounds | None, T: float | None
         ``None``: a success re-timed in the least time along its path. A given ``T``: a
         success whose inputs keep the bounds (on the check's grid) is returned as planned;
         one that does not is re-timed in ``T`` if its path needs no more, else fails saying
-        the time it needs.
+        the time it needs. A plan of a mechanism with drift is never re-timed: it is
+        returned as planned where its inputs keep the bounds, else it fails saying so.
 
     Returns
     -------
@@ -353,13 +354,18 @@ def limit_inputs(result: PlanResult, bounds: InputBounds | None, T: float | None
     options = {**result.options, "input_bounds": bounds.record()}
     if not result.success:
         return dataclasses.replace(result, options=options)
-    if T is None:
-        return retime(result, input_bounds=bounds)
     mech = result.kinematics
+    if T is None and not mech.has_drift:
+        return retime(result, input_bounds=bounds)
     steps = max(CHECK_STEPS, result.replay_steps or 0)
     out = input_excess(result.parametrisation, bounds, mech, steps)
     if out is None:
         return dataclasses.replace(result, options=options)
+    if mech.has_drift:
+        reason = (f"the plan's inputs leave their bounds ({bounds.text(input_names(mech))}; {out.split(' (')[0]}), "
+                  f"and a plan of a mechanism with drift cannot be re-timed into them: plan with "
+                  f"objective='time' for the least time that keeps them")
+        return dataclasses.replace(result, success=False, reason=reason, options=options)
     fastest = input_time_map(result, bounds)
     if fastest.minimum_time <= T:
         return retime(result, T=T, input_bounds=bounds)

@@ -321,7 +321,8 @@ class RobustStrategy(Strategy):
         Yields
         ------
         label : str
-            The guess's kind (``"u0"``, ``"drift"``, ``"loop"``, ``"harmonics"``, ``"random"``).
+            The guess's kind (``"u0"``, ``"rest"`` (a mechanism with drift), ``"drift"``,
+            ``"loop"``, ``"harmonics"``, ``"random"``).
         controls : Controls
             The guess.
         """
@@ -338,6 +339,10 @@ class RobustStrategy(Strategy):
         K = first.harmonics if isinstance(first, Fourier) else None
         if start.given:
             yield "u0", first
+        if mech.has_drift:
+            # the inputs at rest: a motion of the drift alone, inside whatever bounds the
+            # state keeps where it rests
+            yield "rest", _like(first, Fourier.zeros(T, 1, m), T)
         yield "drift", _like(first, _loop(T, m, LOOP_AMPLITUDE, 0.0, drift), T)
         if not start.given:
             yield "loop", first

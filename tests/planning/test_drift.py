@@ -13,6 +13,7 @@ from scipy.linalg import expm
 import nonholo
 from nonholo import Mechanism
 from nonholo.certify import resimulate
+from nonholo.constraints import InputBounds, of_mechanism
 
 
 def gramian(A, B, T):
@@ -120,11 +121,42 @@ def test_a_plan_with_drift_reaches_its_goal_in_a_replay_of_the_hand_written_mode
     assert np.abs(q[-1] - np.asarray(goal, dtype=float)).max() < 1e-8
 
 
+@pytest.mark.parametrize("d, a_max", [(1.0, 1.0), (0.6, 0.25)])
+def test_least_time_of_the_double_integrator_is_bang_bang(d, a_max):
+    """Rest to rest over ``d`` with ``|a| ≤ a_max``: full thrust, then full braking, in
+    ``T = 2 √(d / a_max)`` — whatever horizon the search starts from."""
+    result = nonholo.plan([0, 0, 0, 0], [d, 0, 0, 0], mechanism="double_integrator", T=1.0, objective="time",
+                          constraints=[InputBounds([-a_max, -a_max], [a_max, a_max])])
+    assert result.success, result.reason
+    assert result.T == pytest.approx(2 * np.sqrt(d / a_max), rel=1e-4)
+    t = np.linspace(0.0, result.T, 2001)
+    assert np.abs(result.controls(t)).max() <= a_max * (1 + 1e-9)
+
+
+def test_least_time_of_the_second_order_unicycle_keeps_every_bound():
+    """Dynobench's parallel park of ``unicycle2`` without its obstacles: accelerations and
+    speeds within their bounds, replayed on the hand-written model."""
+    start, goal = [0.7, 0.8, 0, 0, 0], [1.9, 0.3, 0, 0, 0]
+    result = nonholo.plan(start, goal, mechanism="unicycle2", T=6.0, objective="time")
+    assert result.success, result.reason
+    assert 3.0 < result.T < 6.0
+    t, _, q, _ = resimulate.resimulate_state(start, result.controls, result.T, "unicycle2",
+                                             breakpoints=result.parametrisation.breakpoints)
+    assert np.abs(q[-1] - goal).max() < 1e-8
+    assert np.abs(result.controls(t)).max() <= 0.25 * (1 + 1e-9)
+    assert np.abs(q[:, 3:]).max() <= 0.5 * (1 + 1e-9)
+
+
+def test_input_bounds_a_plan_with_drift_leaves_fail_it_saying_so():
+    result = nonholo.plan([0.7, 0.8, 0, 0, 0], [1.9, 0.3, 0, 0, 0], mechanism="unicycle2", T=6.0,
+                          constraints=of_mechanism("unicycle2"))
+    assert not result.success
+    assert "cannot be re-timed into them" in result.reason and "objective='time'" in result.reason
+
+
 def test_what_a_time_change_cannot_do_with_drift_is_refused_saying_so():
     with pytest.raises(ValueError, match="T=None.*has drift"):
         nonholo.plan([0, 0, 0, 0], [1, 0, 0, 0], mechanism="double_integrator", T=None)
-    with pytest.raises(ValueError, match="objective='time'.*has drift"):
-        nonholo.plan([0, 0, 0, 0], [1, 0, 0, 0], mechanism="double_integrator", objective="time")
     result = nonholo.plan([0, 0, 0, 0], [1, 0, 0, 0], mechanism="double_integrator", objective=None)
     with pytest.raises(ValueError, match="result: .*has drift.*cannot be re-timed"):
         nonholo.retime(result, T=2.0, rest_to_rest=True)
@@ -140,3 +172,22 @@ def test_a_rate_not_affine_in_the_inputs_is_refused_naming_the_term():
     bilinear = Mechanism.from_equations("bilinear", coordinates=[x, vel], inputs=[a], rates=[vel, a * x], cache=False)
     assert bilinear.has_drift
     np.testing.assert_allclose(bilinear.rates(np.eye(3), [2.0, 3.0], [0.5]), [3.0, 1.0])
+
+
+def test_drift_that_escapes_to_infinity_gives_a_failed_result_that_says_so(recwarn):
+    x, y, u = sp.symbols("x y u", real=True)
+    mech = Mechanism.from_equations("blowup", coordinates=[x, y], inputs=[u], rates=[x ** 2, u], cache=False)
+    # x' = x² from x = 1 escapes at t = 1, before T, whatever the inputs
+    result = nonholo.plan([1.0, 0.0], [5.0, 0.0], mechanism=mech, T=3.0)
+    assert not result.success
+    assert "the drift carried the state to infinity" in result.reason
+    assert not [w for w in recwarn if issubclass(w.category, RuntimeWarning)]
+
+
+def test_a_goal_off_the_reachable_set_gives_a_failed_result():
+    x, y, u = sp.symbols("x y u", real=True)
+    # y' = −y whatever the inputs: from y = 1 the goal's y = 1 is out of reach
+    mech = Mechanism.from_equations("decaying", coordinates=[x, y], inputs=[u], rates=[u, -y], cache=False)
+    result = nonholo.plan([0.0, 1.0], [1.0, 1.0], mechanism=mech, T=1.0)
+    assert not result.success
+    assert "did not decrease" in result.reason
