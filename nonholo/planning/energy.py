@@ -167,10 +167,13 @@ def improve(problem, result: PlanResult, quick: bool = False, budget: float | No
             # coordinates (a mechanism on SO(3) planned in its desingularised frame, whose
             # plans start from a small control) the plan's extremal is taken unconfirmed
             framed = math.isinf(loop_energy(endpoint, 1))
+            # (with drift, a plan's own extremal says less: its loops are no loops, and the
+            # others' are tried as well)
+            drift = problem.mechanism.has_drift
             found = extremals.least_energy(endpoint, starts(endpoint, result.parametrisation), problem.options,
                                            grid, EXTREMAL_EFFORT, ceiling=ceiling * (1.0 + 1e-9),
-                                           first_below=math.inf if framed else 0.0, first_or_none=True,
-                                           smooth=problem.mechanism.has_drift)
+                                           first_below=math.inf if framed else 0.0, first_or_none=not drift,
+                                           smooth=drift)
             outcome, why = found.outcome, found.why
             if outcome is None and found.confirmed and ceiling <= found.least <= ceiling * (1.0 + AT_THE_PLAN):
                 # the plan is the least extremal (to the grid's resolution): nothing to search for
