@@ -92,12 +92,14 @@ def _audit(args) -> int:
 def _mechanisms(args) -> int:
     from ..model import bounds, catalog
 
-    for name in catalog.names():
+    names = catalog.names()
+    width = max(16, *(len(n) for n in names))
+    for name in names:
         m = catalog.get(name)
-        singular = m.singular.summary
+        singular = m.singular.summary + (", with drift" if m.has_drift else "")
         state = m.space.recorded("coordinates", f"state {m.state_space}: {' '.join(m.space.cli_names)}, ", "")
         limits = bounds.describe(m)
-        print(f"{name:<16} {m.description} ({state}{m.n_inputs} inputs, {singular}"
+        print(f"{name:<{width}} {m.description} ({state}{m.n_inputs} inputs, {singular}"
               + (f"; bounds {limits})" if limits else ")"))
     return 0
 
