@@ -41,6 +41,8 @@ SUBPACKAGES = {
     "cli": "the command line ``nonholo``: argument parsing and one module per command",
     "paper": "the ARK 2014 paper end to end: its examples, the main job and the audit's numeric checks",
     "batch": "many plans at once: sweeps on local processes or Dask, atlases over a grid of goals",
+    "dynobench": "Dynobench's instances and trajectories: reading them, planning them, writing and checking "
+                 "trajectories",
     "viz": "figures of mechanisms, singular sets, planned motions and their executions",
     "physics": "plans played on MuJoCo models generated from the mechanisms' data, with touch-ups",
     "planning": "the planner: ``plan``, the problem, constraints, strategies, the certificate's use, "
@@ -51,8 +53,8 @@ SUBPACKAGES = {
     "integrate": "the CF4 integrator with the variational system, and a mechanism's kernels compiled "
                  "per mechanism",
     "model": "the numeric mechanism (data: its generated functions), the catalog, the legs' stroke, "
-             "the paper's platform and the table of names and units",
-    "controls": "control parametrisations (Fourier, piecewise constant), stage tables, stitched hops",
+             "obstacles, the paper's platform and the table of names and units",
+    "controls": "control parametrisations (Fourier, Legendre, piecewise constant), stage tables, stitched hops",
     "spaces": "state spaces (SO(3), Euclidean, their product), the singular set, numeric rotations",
     "numerics": "numba kernels, small compiled numerics (native where built), the effort clock, "
                 "argument checks",

@@ -41,4 +41,6 @@ COMMANDS = {
                      "sweep_arguments"),
     "atlas": Command("write an atlas's problems, or draw the maps of their sweep", "sweep_command",
                      "atlas_arguments"),
+    "dynobench": Command("plan a Dynobench instance, write its trajectory in Dynobench's format",
+                         "dynobench_command", "arguments"),
 }

@@ -1,4 +1,5 @@
-"""Command line: ``nonholo derive | audit | mechanisms | plan | execute | animate | reproduce | sweep | atlas``.
+"""Command line: ``nonholo derive | audit | mechanisms | plan | execute | animate | reproduce | sweep | atlas |
+dynobench``.
 
 The parser lists every command (:data:`nonholo.cli.commands.COMMANDS`), but adds the
 arguments of the one command run (of all of them for :func:`build_parser` without

@@ -25,6 +25,8 @@ timings of the strategies: ``benchmarks/results/`` (``bench_robust.md``,
 """
 from __future__ import annotations
 
+import dataclasses
+
 import time
 from typing import Callable
 
@@ -137,8 +139,35 @@ def solve(problem: Problem, callback: Callable[[dict], object] | None = None, *,
         result = solve_path(problem, callback, started_effort)
         T = None if problem.least_time else problem.T
         result = limit_inputs(limit_speed(result, problem.leg_speed, T), problem.input_bounds, T)
+        result = keep_clear(result, problem.obstacles)
     result.seconds = time.perf_counter() - started
     return result
+
+
+def keep_clear(result: PlanResult, obstacles) -> PlanResult:
+    """``result``, failed where its certified motion brings a body within the obstacles'
+    margin (the planner keeps obstacles inside the least-time path only).
+
+    Parameters
+    ----------
+    result : PlanResult
+        The plan.
+    obstacles : Obstacles or None
+        The obstacles (``None``: ``result`` itself).
+
+    Returns
+    -------
+    PlanResult
+        The plan; ``options`` records the obstacles.
+    """
+    if obstacles is None:
+        return result
+    options = {**result.options, "obstacles": obstacles.record()}
+    where = obstacles.violation(result.kinematics, result.q) if result.success else None
+    if where is None:
+        return dataclasses.replace(result, options=options)
+    return dataclasses.replace(result, success=False, options=options,
+                               reason=f"{result.reason}; but its motion meets an obstacle: {where}")
 
 
 def field_refusal(problem) -> str | None:

@@ -8,11 +8,15 @@ joined at all (their ``refusal``, before anything is simulated). Along the motio
 and the certificate keep them (:mod:`nonholo.planning.endpoint_map`, :mod:`nonholo.certify.certificate`);
 the legs' speed and the inputs' bounds are kept by re-timing the planned path
 (:mod:`nonholo.planning.retime`), the coordinates' bounds like the legs' stroke
-(:mod:`nonholo.model.limits`).
+(:mod:`nonholo.model.limits`). :class:`~nonholo.model.obstacles.Obstacles` (:mod:`nonholo.model.obstacles`), the
+bodies of a planar vehicle kept clear of polygons, are kept inside the least-time path
+(``objective="time"``); a plan whose certified motion still meets one fails saying where.
 
 Its objects are public in :mod:`nonholo.constraints`: :class:`InputBounds` and
 :class:`StateBounds` (:mod:`nonholo.model.bounds`), :class:`Clearance`, :class:`LegStroke`,
-:class:`LegSpeed`, and :func:`of_mechanism`, a mechanism's own bounds as objects.
+:class:`LegSpeed`, :class:`~nonholo.model.obstacles.Obstacles` with their
+:class:`~nonholo.model.obstacles.Body`, and :func:`of_mechanism`, a
+mechanism's own bounds as objects.
 """
 from __future__ import annotations
 
@@ -23,11 +27,12 @@ import numpy as np
 
 from ..model.bounds import InputBounds, StateBounds, as_data, of_mechanism
 from ..model.limits import LegLimits
+from ..model.obstacles import Body, Obstacles
 from ..motion.speed_limits import check_leg_speed
 from ..numerics.checks import is_number
 
-__all__ = ["InputBounds", "StateBounds", "Clearance", "LegStroke", "LegSpeed", "KINDS", "of_mechanism",
-           "as_data"]
+__all__ = ["InputBounds", "StateBounds", "Clearance", "LegStroke", "LegSpeed", "Obstacles", "Body", "KINDS",
+           "of_mechanism", "as_data"]
 
 
 @dataclass(frozen=True)
@@ -268,7 +273,7 @@ class LegSpeed:
 
 
 #: The kinds of constraint the planner keeps.
-KINDS = (Clearance, LegStroke, LegSpeed, InputBounds, StateBounds)
+KINDS = (Clearance, LegStroke, LegSpeed, InputBounds, StateBounds, Obstacles)
 
 
 def check_all(constraints, mechanism) -> tuple:

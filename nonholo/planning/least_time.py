@@ -56,10 +56,13 @@ class PathProblem:
         The intervals.
     low, high : numpy.ndarray
         The inputs' bounds (``±inf`` where free; ``low ≤ 0 ≤ high``).
+    obstacles : Obstacles, optional
+        Polygons the vehicle's bodies keep clear of at the nodes.
     """
 
-    def __init__(self, endpoint: EndpointMap, grid: int, low: np.ndarray, high: np.ndarray):
+    def __init__(self, endpoint: EndpointMap, grid: int, low: np.ndarray, high: np.ndarray, obstacles=None):
         self.endpoint = endpoint
+        self.obstacles = obstacles
         self.mechanism = endpoint.mechanism
         self.grid = grid
         self.m = self.mechanism.n_inputs
@@ -169,6 +172,11 @@ class PathProblem:
             values.append(endpoint.sign * mech.singular.values(R, q) - endpoint.delta_min - MARGIN)
             rows.append(endpoint.sign * spatial_gradient_delta(mech, R, q=q))
             at.append(self.nodes)
+        if self.obstacles is not None:
+            c, grad = self.obstacles.clearance_rows(mech, ev.q[self.nodes])       # (a, b), (a, b, k)
+            values.append((c - self.obstacles.margin - MARGIN).ravel())
+            rows.append(grad.reshape(-1, grad.shape[-1]))
+            at.append(np.repeat(self.nodes, c.shape[1]))
         if not values:
             return np.zeros(0), np.zeros((0, self.p + 1))
         at = np.concatenate(at)
@@ -271,7 +279,7 @@ def least_use(problem, controls) -> Use | str:
         return "the first guess's grid controls do not reach T"
     from scipy.optimize import minimize      # loaded by the first least-time plan, not by `import nonholo`
 
-    path = PathProblem(endpoint, grid, bounds.lows, bounds.highs)
+    path = PathProblem(endpoint, grid, bounds.lows, bounds.highs, problem.obstacles)
     lam = ev.params
     x0 = np.append(lam, max(float(bounds.usage(lam.reshape(grid, -1)).max()), 1e-9))
     A = path.bounds_matrix()

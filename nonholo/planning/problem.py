@@ -23,7 +23,7 @@ from ..motion.time_scaling import check_horizon
 from ..numerics.checks import check_time
 from ..model.bounds import InputBounds, StateBounds, of_mechanism
 from ..model.limits import Limits
-from .constraint_objects import KINDS, Clearance, LegSpeed, LegStroke, check_all, one_of
+from .constraint_objects import KINDS, Clearance, LegSpeed, LegStroke, Obstacles, check_all, one_of
 from .core import Options, Strategy
 from .endpoint_map import EndpointMap
 from .settings import (
@@ -340,6 +340,12 @@ class Problem:
         (also for bounds free everywhere)."""
         bounds = one_of(self.constraints, InputBounds)
         return None if bounds is None or bounds.free else bounds
+
+    @property
+    def obstacles(self):
+        """The obstacles the vehicle's bodies keep clear of, if given
+        (:class:`~nonholo.model.obstacles.Obstacles`)."""
+        return one_of(self.constraints, Obstacles)
 
     @property
     def state_bounds(self) -> StateBounds | None:

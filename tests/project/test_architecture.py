@@ -166,7 +166,7 @@ def test_layer_of_every_module():
 #: The subpackages from the bottom up: a module may import from its own layer and the layers
 #: below it, never from a layer above (``nonholo`` itself, the public face, is the top).
 LAYERS = ("generated", "codegen", "numerics", "spaces", "controls", "model", "integrate", "motion",
-          "certify", "io", "planning", "physics", "viz", "batch", "paper", "cli", "nonholo")
+          "certify", "io", "planning", "physics", "viz", "batch", "dynobench", "paper", "cli", "nonholo")
 
 #: At most this many modules directly in ``nonholo/`` besides the subpackages.
 MAX_TOP_MODULES = 12

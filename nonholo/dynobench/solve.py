@@ -1,0 +1,164 @@
+"""A Dynobench instance planned in the least time under its model's bounds, on a whole number
+of the model's steps, exported and checked.
+
+:func:`solve` plans it.
+
+The instance's mechanism is planned from its start to its goal with ``objective="time"``
+under the model's input bounds and state bounds (the workspace bounds the position); the
+least time found is rounded up to a whole number ``K`` of steps ``dt`` and the motion played
+in ``K dt`` — re-timed along its path without drift, re-planned at that horizon with drift —
+then exported (:func:`~nonholo.dynobench.trajectory.to_dynobench`) and checked by the
+project's own checker (:func:`~nonholo.dynobench.checker.check`). The obstacles are not yet
+kept inside the optimisation: a motion through one is reported as failing the collision
+check.
+"""
+from __future__ import annotations
+
+import dataclasses
+import math
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..model import catalog
+from ..model.bounds import InputBounds, StateBounds
+from .checker import Report, check
+from .trajectory import to_dynobench
+
+#: The first horizon tried: this many times the straight distance at the model's top speed.
+HORIZON_FACTOR = 2.0
+
+
+@dataclass
+class Solution:
+    """What :func:`solve` found.
+
+    Parameters
+    ----------
+    solved : bool
+        Whether the trajectory passes every check.
+    reason : str
+        Why not, or how it was found.
+    result : PlanResult or None
+        The plan at the trajectory's horizon.
+    trajectory : dict or None
+        Its ``states`` and ``actions``.
+    report : Report or None
+        Its check.
+    seconds : float
+        Wall time of the whole solve.
+    """
+
+    solved: bool
+    reason: str
+    result: object = None
+    trajectory: dict | None = None
+    report: Report | None = None
+    seconds: float = 0.0
+
+
+def constraints(instance) -> list:
+    """The model's bounds as constraint objects of its mechanism.
+
+    Parameters
+    ----------
+    instance : Instance
+        The instance.
+
+    Returns
+    -------
+    list
+        ``InputBounds`` of the actions and ``StateBounds`` of the state (the workspace's on
+        the position).
+    """
+    mech = catalog.get(instance.mechanism)
+    low, high = np.full(mech.n_coordinates, -np.inf), np.full(mech.n_coordinates, np.inf)
+    n = min(instance.state_low.size, mech.n_coordinates)
+    low[:n], high[:n] = instance.state_low[:n], instance.state_high[:n]
+    return [InputBounds(tuple(instance.input_low), tuple(instance.input_high)),
+            StateBounds(tuple(low), tuple(high))]
+
+
+def first_horizon(instance) -> float:
+    """The horizon the least-time search starts from: :data:`HORIZON_FACTOR` times the
+    straight distance at the top speed, at least one step.
+
+    Parameters
+    ----------
+    instance : Instance
+        The instance.
+
+    Returns
+    -------
+    float
+        The horizon (s).
+    """
+    top = float(max(abs(instance.input_high[0]), abs(instance.input_low[0])))
+    if instance.dynamics == "unicycle2":
+        top = float(max(abs(instance.state_high[3]), abs(instance.state_low[3])))
+    straight = float(np.hypot(*(instance.goal[:2] - instance.start[:2])))
+    return max(HORIZON_FACTOR * straight / top, instance.dt)
+
+
+def solve(instance) -> Solution:
+    """Plan an instance (see the module).
+
+    Parameters
+    ----------
+    instance : Instance
+        The instance.
+
+    Returns
+    -------
+    Solution
+        The trajectory and its check, or why there is none.
+    """
+    from ..planning import least_time
+    from ..planning.api import plan
+    from ..planning.problem import Problem
+    from ..planning.retime import retime
+
+    started = time.perf_counter()
+    if instance.mechanism not in catalog.names():
+        return Solution(False, f"the {instance.dynamics} model ({instance.robot}) is not planned yet",
+                        seconds=time.perf_counter() - started)
+    given = constraints(instance)
+    try:
+        result = plan(instance.start, instance.goal, mechanism=instance.mechanism, T=first_horizon(instance),
+                      objective="time", constraints=given)
+    except ValueError as exc:                 # a bound the planner does not keep yet
+        return Solution(False, f"not planned: {exc}", seconds=time.perf_counter() - started)
+    if not result.success:
+        return Solution(False, f"no plan: {result.reason}", result, seconds=time.perf_counter() - started)
+    K = max(1, math.ceil(result.T / instance.dt - 1e-9))
+    T = K * instance.dt
+    if not result.kinematics.has_drift:
+        played = retime(result, T=T, input_bounds=given[0])
+    else:
+        problem = Problem.build(instance.start, instance.goal, mechanism=instance.mechanism, T=T, objective=None,
+                                constraints=given)
+        used = least_time.least_use(problem, _stretched(result, T))
+        if isinstance(used, str) or used.use > least_time.KEPT:
+            why = used if isinstance(used, str) else f"it needs {used.use:.6g} of the bounds"
+            return Solution(False, f"the least time {result.T:.6g} s found, but not at {T:g} s: {why}", result,
+                            seconds=time.perf_counter() - started)
+        played = least_time.finished(problem, result, used, f"{result.reason}; played in {K} steps of {instance.dt:g} s")
+        played = dataclasses.replace(played, options={**played.options, "input_bounds": given[0].record()})
+    if not played.success:
+        return Solution(False, f"not at {T:g} s: {played.reason}", played, seconds=time.perf_counter() - started)
+    trajectory = to_dynobench(played, instance)
+    report = check(instance, trajectory["states"], trajectory["actions"])
+    reason = (f"cost {report.cost:.6g} s ({K} steps of {instance.dt:g} s; the least time {result.T:.6g} s)"
+              if report.feasible else f"the trajectory fails Dynobench's checks: {'; '.join(report.failures())}")
+    return Solution(report.feasible, reason, played, trajectory, report, time.perf_counter() - started)
+
+
+def _stretched(result, T: float):
+    """A plan's controls read on ``[0, T]`` at the same fraction of its horizon."""
+    T0, u = result.T, result.controls
+
+    def stretched(t):
+        return u(np.minimum(np.asarray(t, dtype=float) * (T0 / T), T0))
+
+    return stretched

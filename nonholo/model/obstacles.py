@@ -1,0 +1,323 @@
+"""Obstacles in the plane and the boxes a vehicle carries: the clearance a planar vehicle
+keeps, as a constraint object of ``nonholo.plan``.
+
+:class:`Obstacles` are the polygons, :class:`Body` a box the vehicle carries.
+
+A body is a box attached to the vehicle: centred on the point ``(x, y)`` of its coordinates
+(or ``behind`` that far back along its heading, a trailer's hitch) and turned by its heading
+coordinate. An obstacle is a convex polygon. The clearance of a body from an obstacle is
+their signed distance — apart, the distance between them; overlapping, minus the depth of
+the overlap, the least translation that separates them — which for convex polygons is the
+distance of the origin from their Minkowski difference, the convex hull of the differences
+of their corners (negative inside it). The geometry is shapely's (vectorised over the
+nodes of a motion); its derivatives in the coordinates are central differences.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+#: The step of the central differences of a clearance in the coordinates.
+DIFFERENCE_STEP = 1e-6
+#: A clearance this far below the margin still keeps it (the geometry's round-off).
+CLEARANCE_TOL = 1e-9
+
+
+@dataclass(frozen=True)
+class Body:
+    """A box attached to a planar vehicle (see the module).
+
+    Parameters
+    ----------
+    length, width : float
+        Its sides, along and across the heading.
+    x, y, heading : str, default "x", "y", "theta"
+        The coordinates of the point it hangs from and of its heading.
+    behind : float, default 0
+        How far behind that point, along the heading, its centre is (a trailer's hitch).
+    """
+
+    length: float
+    width: float
+    x: str = "x"
+    y: str = "y"
+    heading: str = "theta"
+    behind: float = 0.0
+
+
+@dataclass(frozen=True)
+class Obstacles:
+    """Convex polygons the vehicle's bodies keep clear of (see the module): by ``margin`` at
+    the nodes of the least-time path (``objective="time"``), which keeps them; a plan whose
+    motion overlaps one fails.
+
+    Parameters
+    ----------
+    polygons : sequence of sequence of (float, float)
+        The obstacles' corners, each a convex polygon.
+    bodies : sequence of Body
+        The vehicle's boxes.
+    margin : float, default 0
+        The least clearance kept.
+
+    Raises
+    ------
+    ValueError
+        Naming the argument: a polygon of fewer than three finite corners or not convex, a
+        body of sides that are not positive, a negative margin.
+    """
+
+    polygons: tuple
+    bodies: tuple = (Body(0.5, 0.25),)
+    margin: float = 0.0
+
+    def __post_init__(self):
+        polygons = []
+        for i, corners in enumerate(self.polygons):
+            c = np.asarray(corners, dtype=float)
+            if c.ndim != 2 or c.shape[1] != 2 or c.shape[0] < 3 or not np.all(np.isfinite(c)):
+                raise ValueError(f"polygons[{i}] must be three or more finite corners (x, y), got {corners!r}")
+            if _hull(c).area <= 0.0 or abs(_hull(c).area - _polygon(c).area) > 1e-12 * max(1.0, _hull(c).area):
+                raise ValueError(f"polygons[{i}] must be a convex polygon")
+            polygons.append(tuple(map(tuple, c)))
+        for i, b in enumerate(self.bodies):
+            if not isinstance(b, Body):
+                raise ValueError(f"bodies[{i}] must be a Body, got {type(b).__name__}")
+            if not (b.length > 0 and b.width > 0 and math.isfinite(b.length) and math.isfinite(b.width)):
+                raise ValueError(f"bodies[{i}]: length and width must be positive, got {b.length!r}, {b.width!r}")
+        if not (self.margin >= 0 and math.isfinite(self.margin)):
+            raise ValueError(f"margin must be a non-negative number, got {self.margin!r}")
+        object.__setattr__(self, "polygons", tuple(polygons))
+        object.__setattr__(self, "bodies", tuple(self.bodies))
+
+    @classmethod
+    def boxes(cls, centers, sizes, bodies=(Body(0.5, 0.25),), margin: float = 0.0) -> "Obstacles":
+        """Axis-aligned boxes by centre and sides (Dynobench's form).
+
+        Parameters
+        ----------
+        centers, sizes : sequence of (float, float)
+            The boxes' centres and sides.
+        bodies : sequence of Body
+            The vehicle's boxes.
+        margin : float, default 0
+            The least clearance kept.
+
+        Returns
+        -------
+        Obstacles
+            The boxes.
+        """
+        polygons = []
+        for (cx, cy), (a, b) in zip(centers, sizes):
+            polygons.append(((cx - a / 2, cy - b / 2), (cx + a / 2, cy - b / 2), (cx + a / 2, cy + b / 2),
+                             (cx - a / 2, cy + b / 2)))
+        return cls(tuple(polygons), tuple(bodies), margin)
+
+    def check(self, mechanism) -> "Obstacles":
+        """The obstacles for ``mechanism``: its coordinates must name every body's.
+
+        Parameters
+        ----------
+        mechanism : Mechanism
+            The mechanism planned.
+
+        Returns
+        -------
+        Obstacles
+            ``self``.
+
+        Raises
+        ------
+        ValueError
+            Naming the body and the coordinate the mechanism does not have.
+        """
+        for i, b in enumerate(self.bodies):
+            for key in ("x", "y", "heading"):
+                if getattr(b, key) not in mechanism.coordinates:
+                    raise ValueError(f"Obstacles: bodies[{i}].{key} = {getattr(b, key)!r} is not a coordinate of "
+                                     f"mechanism {mechanism.name!r} ({', '.join(mechanism.coordinates)})")
+        return self
+
+    def refusal(self, mechanism, start, goal) -> str | None:
+        """Why a motion cannot start or end where asked: a body that meets an obstacle there.
+
+        Parameters
+        ----------
+        mechanism : Mechanism
+            The mechanism.
+        start, goal : tuple
+            States ``(R, q)``.
+
+        Returns
+        -------
+        str or None
+            The reason, or ``None``.
+        """
+        for where, (_, q) in (("start", start), ("goal", goal)):
+            c = self.clearances(mechanism, np.asarray(q, dtype=float)[None])[0]
+            if np.min(c) < self.margin:
+                return (f"the {where} puts body {int(np.argmin(c))} {'into' if np.min(c) < 0 else 'within'} an "
+                        f"obstacle (clearance {np.min(c):.3g} < margin {self.margin:g})")
+        return None
+
+    def violation(self, mechanism, q) -> str | None:
+        """Where a motion's states bring a body into an obstacle (``None`` where none does:
+        the margin is kept at the nodes of the optimisation, the states between them only
+        clear of the obstacles).
+
+        Parameters
+        ----------
+        mechanism : Mechanism
+            The mechanism.
+        q : array_like
+            Its states, ``(n, k)``.
+
+        Returns
+        -------
+        str or None
+            The first state and by how much.
+        """
+        c = self.clearances(mechanism, q).min(axis=1)
+        bad = np.nonzero(c < -CLEARANCE_TOL)[0]
+        if bad.size == 0:
+            return None
+        i = int(bad[np.argmin(c[bad])])
+        return f"a body overlaps an obstacle by {-c[i]:.3g} at state {i} of {len(c)}"
+
+    def record(self) -> dict:
+        """The obstacles as data, for a plan's options.
+
+        Returns
+        -------
+        dict
+            ``polygons``, ``bodies`` and ``margin``.
+        """
+        return {"polygons": [list(map(list, p)) for p in self.polygons],
+                "bodies": [dict(length=b.length, width=b.width, x=b.x, y=b.y, heading=b.heading, behind=b.behind)
+                           for b in self.bodies],
+                "margin": self.margin}
+
+    def clearances(self, mechanism, q) -> np.ndarray:
+        """The least clearance of each body from any obstacle at each state.
+
+        Parameters
+        ----------
+        mechanism : Mechanism
+            The mechanism.
+        q : array_like
+            States, ``(n, k)``.
+
+        Returns
+        -------
+        numpy.ndarray
+            ``(n, bodies)`` (``inf`` without obstacles).
+        """
+        q = np.atleast_2d(np.asarray(q, dtype=float))
+        return np.stack([self._least(mechanism, q, b) for b in self.bodies], axis=1)
+
+    def clearance_rows(self, mechanism, q) -> tuple[np.ndarray, np.ndarray]:
+        """:meth:`clearances` and their gradients in the coordinates.
+
+        Parameters
+        ----------
+        mechanism : Mechanism
+            The mechanism.
+        q : array_like
+            States, ``(n, k)``.
+
+        Returns
+        -------
+        values : numpy.ndarray
+            ``(n, bodies)``.
+        gradients : numpy.ndarray
+            ``(n, bodies, k)``: ``d value = gradient · δq``.
+        """
+        q = np.atleast_2d(np.asarray(q, dtype=float))
+        n, k = q.shape
+        values = np.empty((n, len(self.bodies)))
+        grads = np.zeros((n, len(self.bodies), k))
+        for j, b in enumerate(self.bodies):
+            values[:, j] = self._least(mechanism, q, b)
+            for name in dict.fromkeys((b.x, b.y, b.heading)):
+                c = mechanism.coordinates.index(name)
+                up, down = q.copy(), q.copy()
+                up[:, c] += DIFFERENCE_STEP
+                down[:, c] -= DIFFERENCE_STEP
+                grads[:, j, c] = (self._least(mechanism, up, b) - self._least(mechanism, down, b)) / (2 * DIFFERENCE_STEP)
+        return values, grads
+
+    def _least(self, mechanism, q, body: Body) -> np.ndarray:
+        """The least signed distance of ``body`` from any obstacle at each state of ``q``."""
+        import shapely
+
+        if not self.polygons:
+            return np.full(q.shape[0], np.inf)
+        corners = body_corners(mechanism, q, body)                         # (n, 4, 2)
+        placed = shapely.polygons(corners)
+        obstacles = shapely.polygons([np.asarray(p) for p in self.polygons])
+        d = shapely.distance(placed[:, None], obstacles[None, :])          # (n, K): 0 where they meet
+        for i, j in zip(*np.nonzero(d <= 0.0)):
+            d[i, j] = -overlap_depth(corners[i], np.asarray(self.polygons[j]))
+        return d.min(axis=1)
+
+
+def body_corners(mechanism, q, body: Body) -> np.ndarray:
+    """A body's corners at each state.
+
+    Parameters
+    ----------
+    mechanism : Mechanism
+        The mechanism.
+    q : numpy.ndarray
+        States, ``(n, k)``.
+    body : Body
+        The body.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(n, 4, 2)``, counter-clockwise.
+    """
+    names = mechanism.coordinates
+    x, y, h = (q[:, names.index(body.x)], q[:, names.index(body.y)], q[:, names.index(body.heading)])
+    c, s = np.cos(h), np.sin(h)
+    cx, cy = x - body.behind * c, y - body.behind * s
+    a, b = body.length / 2, body.width / 2
+    local = np.array([(-a, -b), (a, -b), (a, b), (-a, b)])
+    return np.stack([cx[:, None] + c[:, None] * local[:, 0] - s[:, None] * local[:, 1],
+                     cy[:, None] + s[:, None] * local[:, 0] + c[:, None] * local[:, 1]], axis=-1)
+
+
+def overlap_depth(a: np.ndarray, b: np.ndarray) -> float:
+    """The depth of the overlap of two convex polygons (corners ``a``, ``b``): the distance of
+    the origin from the boundary of their Minkowski difference.
+
+    Parameters
+    ----------
+    a, b : numpy.ndarray
+        Corners, ``(p, 2)`` and ``(r, 2)``.
+
+    Returns
+    -------
+    float
+        The depth (0 where they only touch).
+    """
+    import shapely
+
+    difference = _hull((a[:, None, :] - b[None, :, :]).reshape(-1, 2))
+    return float(shapely.distance(difference.exterior, shapely.Point(0.0, 0.0)))
+
+
+def _hull(points: np.ndarray):
+    import shapely
+
+    return shapely.convex_hull(shapely.multipoints(points))
+
+
+def _polygon(points: np.ndarray):
+    import shapely
+
+    return shapely.polygons(points)

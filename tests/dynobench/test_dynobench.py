@@ -1,0 +1,177 @@
+"""Dynobench's instances and trajectories: reading, the project's own checker (against the
+repository's reference solutions and, where installed, the ``dynobench`` bindings' collision
+distances), the obstacles kept by the least-time path, and the command."""
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+import yaml
+
+import nonholo
+from nonholo import dynobench
+from nonholo.constraints import Body, Obstacles
+from nonholo.dynobench import checker
+from nonholo.dynobench.solve import constraints
+from nonholo.model import catalog
+
+ROOT = Path(__file__).resolve().parents[2]
+COPIES = ROOT / "benchmarks" / "dynobench"
+ENVS = sorted(COPIES.glob("envs/*/*.yaml"))
+
+
+def test_every_copied_instance_is_read():
+    assert len(ENVS) == 11
+    for path in ENVS:
+        inst = dynobench.load(path)
+        assert inst.start.size == inst.goal.size == {"unicycle1": 3, "unicycle2": 5, "car_with_trailers": 4}[inst.dynamics]
+        assert inst.dt == 0.1 and inst.obstacles
+        assert inst.robot == path.parent.name
+
+
+@pytest.mark.parametrize("robot", ["unicycle1_v0", "car1_v0", "unicycle2_v0"])
+def test_the_checker_passes_the_reference_solutions_with_their_own_numbers(robot):
+    inst = dynobench.load(COPIES / "envs" / robot / "parallelpark_0.yaml")
+    sol = yaml.safe_load((COPIES / "solutions" / robot / "parallelpark_0.yaml").read_text())
+    report = dynobench.check(inst, sol["states"], sol["actions"])
+    assert report.feasible, report.failures()
+    assert report.cost == pytest.approx(sol["cost"])
+    # the files round their states to 6 digits: the distances agree to that
+    assert report.goal_distance == pytest.approx(sol["goal_distance"], abs=1e-5)
+    assert report.max_collision == sol["max_collision"] == 0
+
+
+def test_the_checker_finds_what_is_wrong_with_a_trajectory():
+    inst = dynobench.load(COPIES / "envs" / "unicycle1_v0" / "parallelpark_0.yaml")
+    sol = yaml.safe_load((COPIES / "solutions" / "unicycle1_v0" / "parallelpark_0.yaml").read_text())
+    X, U = np.array(sol["states"]), np.array(sol["actions"])
+    U2 = U.copy()
+    U2[5, 1] += 0.4                                     # an action the states do not follow
+    assert any("dynamics residual" in f for f in dynobench.check(inst, X, U2).failures())
+    U3 = U.copy()
+    U3[3, 0] = 0.6                                      # beyond |v| ≤ 0.5, and not followed either
+    assert any("input bounds" in f for f in dynobench.check(inst, X, U3).failures())
+    X4 = X.copy()
+    X4[-1, 0] += 0.1
+    assert any("goal distance" in f for f in dynobench.check(inst, X4, U).failures())
+    X5 = X.copy()
+    X5[10] = [1.1, 0.35, 0.0]                           # inside the middle box
+    assert any("collision" in f for f in dynobench.check(inst, X5, U).failures())
+
+
+def test_signed_distances_are_those_of_the_dynobench_bindings():
+    pytest.importorskip("dynobench", reason="the dynobench wheel (cp311) is not installed")
+    import dynobench as bindings
+
+    env = COPIES / "envs" / "unicycle1_v0" / "parallelpark_0.yaml"
+    robot = bindings.robot_factory_with_env(str(COPIES / "models" / "unicycle1_v0.yaml"), str(env))
+    inst = dynobench.load(env)
+    rng = np.random.default_rng(0)
+    for _ in range(20):
+        x = np.array([rng.uniform(0.2, 2.9), rng.uniform(0.1, 0.6), rng.uniform(-3, 3)])
+        out = bindings.CollisionOut()
+        robot.collision_distance(x, out)
+        # (the bindings report single precision)
+        assert checker.state_clearance(inst, x)[0] == pytest.approx(out.distance, abs=1e-6)
+
+
+BAD = {
+    "not yaml": ("robots: [", "not YAML"),
+    "no robots": ("environment: {min: [0, 0], max: [1, 1]}\n", "robots is missing"),
+    "unknown robot": ("environment: {min: [0, 0], max: [3, 3]}\nrobots: [{type: hovercraft, start: [1, 1, 0], "
+                      "goal: [2, 2, 0]}]\n", "robots[0].type: unknown robot type 'hovercraft'"),
+    "start in an obstacle": ("environment: {min: [0, 0], max: [3, 3], obstacles: [{type: box, center: [1, 1], "
+                             "size: [0.5, 0.5]}]}\nrobots: [{type: unicycle1_v0, start: [1, 1, 0], "
+                             "goal: [2, 2, 0]}]\n", "robots[0].start: the robot's body overlaps obstacle 0"),
+    "start of two numbers": ("environment: {min: [0, 0], max: [3, 3]}\nrobots: [{type: unicycle1_v0, "
+                             "start: [1, 1], goal: [2, 2, 0]}]\n", "robots[0].start must hold 3 numbers"),
+    "obstacle not a box": ("environment: {min: [0, 0], max: [3, 3], obstacles: [{type: sphere, center: [1, 1], "
+                           "size: [1]}]}\nrobots: [{type: unicycle1_v0, start: [1, 2, 0], goal: [2, 2, 0]}]\n",
+                           "environment.obstacles[0].type must be 'box'"),
+    "an unknown field": ("script: x\nenvironment: {min: [0, 0], max: [3, 3]}\nrobots: []\n",
+                         "script is not a field"),
+}
+
+
+@pytest.mark.parametrize("case", sorted(BAD))
+def test_a_bad_instance_is_refused_naming_the_field(case, tmp_path):
+    text, says = BAD[case]
+    env = tmp_path / "envs" / "mine" / "bad.yaml"
+    env.parent.mkdir(parents=True)
+    env.write_text(text)
+    with pytest.raises(ValueError) as info:
+        dynobench.load(env, models=COPIES / "models")
+    assert str(env) in str(info.value) and says in str(info.value), str(info.value)
+    run = subprocess.run([sys.executable, "-m", "nonholo", "dynobench", str(env), "--models", str(COPIES / "models")],
+                         capture_output=True, text=True, timeout=120)
+    assert run.returncode == 2 and says in run.stderr
+
+
+def test_obstacle_clearances_and_their_gradients():
+    inst = dynobench.load(COPIES / "envs" / "unicycle1_v0" / "parallelpark_0.yaml")
+    obstacles = Obstacles.boxes([o.center for o in inst.obstacles], [o.size for o in inst.obstacles],
+                                (Body(*inst.bodies[0]),))
+    mech = catalog.get("unicycle")
+    rng = np.random.default_rng(3)
+    q = np.column_stack([rng.uniform(0.2, 2.9, 60), rng.uniform(0.1, 0.6, 60), rng.uniform(-3, 3, 60)])
+    values, grads = obstacles.clearance_rows(mech, q)
+    np.testing.assert_allclose(values[:, 0], [checker.state_clearance(inst, x)[0] for x in q], atol=1e-12)
+    for c in range(3):
+        for e in (1e-5, -1e-5):
+            moved = q.copy()
+            moved[:, c] += e
+            step = (obstacles.clearances(mech, moved)[:, 0] - values[:, 0]) / e
+            # the clearance is smooth but where the nearest feature changes: most states agree
+            assert np.mean(np.abs(step - grads[:, 0, c]) < 1e-3) > 0.9
+    with pytest.raises(ValueError, match=r"bodies\[0\].heading = 'yaw' is not a coordinate"):
+        nonholo.plan([0.7, 0.8, 0], [1.9, 0.8, 0], mechanism="unicycle", constraints=[
+            Obstacles((((0, 0), (1, 0), (0, 1)),), (Body(0.5, 0.25, heading="yaw"),))])
+    with pytest.raises(ValueError, match=r"polygons\[0\] must be a convex polygon"):
+        Obstacles((((0, 0), (2, 0), (1, 0.2), (1, 2)),))
+
+
+def test_the_least_time_path_keeps_clear_of_the_obstacles():
+    """Dynobench's unicycle park: the obstacle-free least time runs through a parked box;
+    with the obstacles kept at the nodes, the motion replayed at Dynobench's steps clears
+    them within its tolerance and passes every other check."""
+    inst = dynobench.load(COPIES / "envs" / "unicycle1_v0" / "parallelpark_0.yaml")
+    free = nonholo.plan(inst.start, inst.goal, mechanism="unicycle", T=3.0, objective="time",
+                        constraints=constraints(inst))
+    assert free.success and free.T < 2.9
+    obstacles = Obstacles.boxes([o.center for o in inst.obstacles], [o.size for o in inst.obstacles],
+                                (Body(*inst.bodies[0]),), margin=0.01)
+    assert obstacles.violation(free.kinematics, free.q) is not None
+    kept = nonholo.plan(inst.start, inst.goal, mechanism="unicycle", T=3.0, objective="time",
+                        constraints=constraints(inst) + [obstacles])
+    assert kept.success, kept.reason
+    assert kept.T > free.T
+    assert np.min(obstacles.clearances(kept.kinematics, kept.q)) >= 0.0
+
+
+def test_a_plan_exported_at_dynobench_steps_passes_its_checks(tmp_path):
+    """Without obstacles in the way (the wall instance's start and goal moved below it), a
+    least-time plan re-timed to whole steps: dynamics, goal and bounds within Dynobench's
+    thresholds, written and read back."""
+    inst = dynobench.load(COPIES / "envs" / "unicycle1_v0" / "parallelpark_0.yaml")
+    start, goal = np.array([0.7, 0.9, 0.0]), np.array([2.0, 0.9, 0.5])
+    result = nonholo.plan(start, goal, mechanism="unicycle", T=4.0, objective="time", constraints=constraints(inst))
+    K = int(np.ceil(result.T / inst.dt))
+    played = nonholo.retime(result, T=K * inst.dt, input_bounds=constraints(inst)[0])
+    moved = type(inst)(**{**inst.__dict__, "start": start, "goal": goal})
+    trajectory = dynobench.to_dynobench(played, moved)
+    report = dynobench.check(moved, trajectory["states"], trajectory["actions"])
+    assert report.feasible, report.failures()
+    assert report.cost == pytest.approx(K * inst.dt) and report.goal_distance < 1e-8
+    path = dynobench.write(tmp_path / "sol.yaml", trajectory, report)
+    again = dynobench.read(path)
+    np.testing.assert_allclose(again["states"], trajectory["states"])
+    assert yaml.safe_load(path.read_text())["cost"] == pytest.approx(report.cost)
+
+
+def test_the_command_writes_the_trajectory_and_says_why_it_fails(tmp_path):
+    out = tmp_path / "sol.yaml"
+    run = subprocess.run([sys.executable, "-m", "nonholo", "dynobench",
+                          str(COPIES / "envs" / "car1_v0" / "parallelpark_0.yaml"), "--out", str(out)],
+                         capture_output=True, text=True, timeout=300)
+    assert run.returncode == 1 and "not planned yet" in run.stdout
