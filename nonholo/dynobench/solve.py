@@ -8,9 +8,10 @@ under the model's input bounds and state bounds (the workspace bounds the positi
 least time found is rounded up to a whole number ``K`` of steps ``dt`` and the motion played
 in ``K dt`` — re-timed along its path without drift, re-planned at that horizon with drift —
 then exported (:func:`~nonholo.dynobench.trajectory.to_dynobench`) and checked by the
-project's own checker (:func:`~nonholo.dynobench.checker.check`). The obstacles are not yet
-kept inside the optimisation: a motion through one is reported as failing the collision
-check.
+project's own checker (:func:`~nonholo.dynobench.checker.check`). The obstacles are kept
+at the nodes of the least-time path (:class:`~nonholo.model.obstacles.Obstacles`), which
+starts from the least-energy path without them: a local method, which brings a motion out
+of an obstacle it crosses near its edge but finds no route round a wall.
 """
 from __future__ import annotations
 
@@ -23,11 +24,15 @@ import numpy as np
 
 from ..model import catalog
 from ..model.bounds import InputBounds, StateBounds
+from ..model.obstacles import Body, Obstacles
 from .checker import Report, check
 from .trajectory import to_dynobench
 
 #: The first horizon tried: this many times the straight distance at the model's top speed.
 HORIZON_FACTOR = 2.0
+#: The clearance kept from the obstacles at the nodes of the least-time path (the motion
+#: between them may come closer: it must not overlap one).
+MARGIN = 5e-3
 
 
 @dataclass
@@ -56,6 +61,28 @@ class Solution:
     trajectory: dict | None = None
     report: Report | None = None
     seconds: float = 0.0
+
+
+def obstacles(instance, margin: float = 0.0):
+    """The instance's obstacles and the robot's bodies as a constraint object.
+
+    Parameters
+    ----------
+    instance : Instance
+        The instance.
+    margin : float, default 0
+        The clearance kept at the nodes.
+
+    Returns
+    -------
+    Obstacles
+        The boxes, with the vehicle's body (a car's trailer behind its hitch).
+    """
+    bodies = [Body(*instance.bodies[0])]
+    if instance.dynamics == "car_with_trailers":
+        bodies.append(Body(*instance.bodies[1], heading="theta1", behind=instance.hitch))
+    return Obstacles.boxes([o.center for o in instance.obstacles], [o.size for o in instance.obstacles],
+                           tuple(bodies), margin)
 
 
 def constraints(instance) -> list:
@@ -123,7 +150,7 @@ def solve(instance) -> Solution:
     if instance.mechanism not in catalog.names():
         return Solution(False, f"the {instance.dynamics} model ({instance.robot}) is not planned yet",
                         seconds=time.perf_counter() - started)
-    given = constraints(instance)
+    given = constraints(instance) + [obstacles(instance, MARGIN)]
     try:
         result = plan(instance.start, instance.goal, mechanism=instance.mechanism, T=first_horizon(instance),
                       objective="time", constraints=given)
@@ -137,7 +164,7 @@ def solve(instance) -> Solution:
         played = retime(result, T=T, input_bounds=given[0])
     else:
         problem = Problem.build(instance.start, instance.goal, mechanism=instance.mechanism, T=T, objective=None,
-                                constraints=given)
+                                constraints=given)     # the obstacles kept in the least use at T too
         used = least_time.least_use(problem, _stretched(result, T))
         if isinstance(used, str) or used.use > least_time.KEPT:
             why = used if isinstance(used, str) else f"it needs {used.use:.6g} of the bounds"
