@@ -22,6 +22,7 @@ from .mechanisms import (
 from .rotations import e1, e2, e3
 from .vehicles import (
     brockett_integrator,
+    car_with_trailer,
     double_integrator,
     kinematic_car,
     rolling_ball,
@@ -52,6 +53,7 @@ MECHANISMS: dict[str, Callable[[], Mechanism]] = {
     # state beyond SO(3) (derivations/vehicles.py)
     "rolling_ball": rolling_ball,
     "car": kinematic_car,
+    "car_with_trailer": car_with_trailer,
     # the textbook systems whose least-energy motions are known in closed form
     "brockett": brockett_integrator,
     "unicycle": unicycle,

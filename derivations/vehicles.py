@@ -4,6 +4,8 @@
   plane z = 0; state ``(R, p) ∈ SO(3) × R²``, inputs ``v = ṗ``.
 - :func:`kinematic_car`: the kinematic car with the steering angle as a state,
   ``x = (x, y, θ, φ) ∈ R⁴``, inputs ``(v, φ̇)``; singular where ``cos φ = 0``.
+- :func:`car_with_trailer`: the same car towing a trailer hitched at its rear axle,
+  ``(x, y, θ, φ, θ₁) ∈ R⁵``, as Dynobench's ``car1`` (wheelbase 0.25, hitch 0.5).
 - :func:`unicycle`: the wheel rolling upright on the plane, ``(x, y, θ) ∈ R³``, inputs
   ``(v, ω)``.
 - :func:`brockett_integrator`: Brockett's non-holonomic integrator, ``(x, y, z) ∈ R³``,
@@ -183,3 +185,40 @@ def second_order_unicycle(name: str = "unicycle2") -> Mechanism:
         rates=[v * sp.cos(th), v * sp.sin(th), w, a, alpha], angles=[th],
         units=["m", "m", "rad", "m/s", "rad/s"],
         description="second-order unicycle: a wheel rolling upright, driven by its accelerations")
+
+
+def car_with_trailer(wheelbase=0.25, hitch=0.5, name: str = "car_with_trailer") -> Mechanism:
+    """The kinematic car (:func:`kinematic_car`, wheelbase ``ℓ``) towing a trailer hitched at
+    the midpoint of its rear axle, the trailer's axle a hitch length ``d`` behind: state
+    ``(x, y, θ, φ, θ₁)``, ``θ₁`` the trailer's heading; inputs ``(v, φ̇)``.
+
+    Unknown besides the car's: ``θ̇₁``. Constraint: the trailer's wheels, at
+    ``(x, y) − d (cos θ₁, sin θ₁)``, do not slip sideways:
+    ``−ẋ₁ sin θ₁ + ẏ₁ cos θ₁ = 0``, whence ``θ̇₁ = (v/d) sin(θ − θ₁)``. Defaults: Dynobench's
+    ``car1_v0`` (``ℓ = 0.25``, ``d = 0.5``).
+    """
+    car = kinematic_car(wheelbase, name)
+    admission.constant(hitch, "hitch")
+    d = sp.Integer(hitch) if isinstance(hitch, int) else sp.nsimplify(hitch)
+    x, y, th, ph = car.coordinates
+    th1 = sp.Symbol("theta1", real=True)
+    v = sp.Symbol("v", real=True)
+    rates = car.X * sp.Matrix(sp.symbols("v u2", real=True))          # (ẋ, ẏ, θ̇, φ̇)
+    xd, yd, thd1 = sp.symbols("xdot ydot theta1dot", real=True)
+    # the trailer's axle (x − d cos θ₁, y − d sin θ₁) moves along its heading
+    trailer = (xd + d * sp.sin(th1) * thd1, yd - d * sp.cos(th1) * thd1)
+    constraint = -trailer[0] * sp.sin(th1) + trailer[1] * sp.cos(th1)
+    linear = constraint.subs({xd: rates[0], yd: rates[1]})            # a θ̇₁ + b = 0, a = −d
+    a = sp.simplify(sp.trigsimp(sp.expand(linear.diff(thd1))))
+    solved = sp.simplify(sp.trigsimp(sp.expand_trig(-linear.subs(thd1, 0) / a)))
+    row = sp.Matrix([[sp.simplify(solved.diff(v)), 0]])
+    X = sp.Matrix.vstack(car.X, row)
+    frame = sp.Matrix.vstack(car.frame, (row * sp.diag(car.delta, 1)).applyfunc(sp.simplify))
+    return Mechanism(
+        name=name,
+        description=f"kinematic car with the steering angle as a state (wheelbase {car.derivation['wheelbase']}) "
+                    f"towing a trailer (hitch {d})",
+        inputs=car.inputs, coordinates=(x, y, th, ph, th1), units=("m", "m", "rad", "rad", "rad"),
+        angles=(False, False, True, True, True), X=X, delta=car.delta, frame=frame,
+        derivation={**car.derivation, "trailer_constraint": constraint, "hitch": d},
+    )

@@ -417,6 +417,32 @@ def brockett_rates(R, x, u):
     return np.zeros(3), np.array([u1, u2, x[0] * u2 - x[1] * u1])
 
 
+def car_with_trailer_rates(R, x, u, wheelbase: float = 0.25, hitch: float = 0.5):
+    """The kinematic car towing a trailer: the car's rates (:func:`car_rates`) and
+    ``θ̇₁ = (v/d) sin(θ − θ₁)``.
+
+    Parameters
+    ----------
+    R : numpy.ndarray
+        Unused (no orientation in SO(3)).
+    x : numpy.ndarray
+        The state ``(x, y, θ, φ, θ₁)``.
+    u : numpy.ndarray
+        The inputs ``(v, φ̇)``.
+    wheelbase, hitch : float
+        ``ℓ`` and ``d``.
+
+    Returns
+    -------
+    tuple of numpy.ndarray
+        ``(ω = 0, ẋ)``.
+    """
+    _, _, th, ph, th1 = x
+    v, dphi = u
+    return np.zeros(3), np.array([v * np.cos(th), v * np.sin(th), v * np.tan(ph) / wheelbase, dphi,
+                                  v * np.sin(th - th1) / hitch])
+
+
 def double_integrator_rates(R, x, u):
     """The planar double integrator: ``(ẋ, ẏ) = (v_x, v_y)``, ``(v̇_x, v̇_y) = (a_x, a_y)``.
 
@@ -465,6 +491,7 @@ MODELS = {"rolling_ball": (rolling_ball_rates, None),
           "car": (car_rates, lambda R, x: np.cos(x[3])),
           "unicycle": (unicycle_rates, None),
           "brockett": (brockett_rates, None),
+          "car_with_trailer": (car_with_trailer_rates, lambda R, x: np.cos(x[3])),
           "double_integrator": (double_integrator_rates, None),
           "unicycle2": (second_order_unicycle_rates, None)}
 

@@ -23,7 +23,7 @@ from pathlib import Path
 import numpy as np
 
 #: The dynamics read, and the catalog mechanism each is planned as.
-MECHANISMS = {"unicycle1": "unicycle", "unicycle2": "unicycle2", "car_with_trailers": "car_trailer"}
+MECHANISMS = {"unicycle1": "unicycle", "unicycle2": "unicycle2", "car_with_trailers": "car_with_trailer"}
 #: The state's size of each dynamics.
 STATE_SIZES = {"unicycle1": 3, "unicycle2": 5, "car_with_trailers": 4}
 #: The largest file read (bytes).

@@ -101,10 +101,40 @@ def constraints(instance) -> list:
     """
     mech = catalog.get(instance.mechanism)
     low, high = np.full(mech.n_coordinates, -np.inf), np.full(mech.n_coordinates, np.inf)
-    n = min(instance.state_low.size, mech.n_coordinates)
-    low[:n], high[:n] = instance.state_low[:n], instance.state_high[:n]
+    low[:2], high[:2] = instance.low, instance.high
+    if instance.dynamics == "car_with_trailers":
+        # Dynobench's steering angle, an action there, is the catalog car's state φ; its rate
+        # is bounded as the catalog's car_with_trailer bounds it
+        steer = float(instance.input_high[1])
+        low[3], high[3] = -steer, steer
+        own = mech.bounds["inputs"]["u2"]
+        return [InputBounds((instance.input_low[0], own[0]), (instance.input_high[0], own[1])),
+                StateBounds(tuple(low), tuple(high))]
+    low[2:], high[2:] = instance.state_low[2:], instance.state_high[2:]
     return [InputBounds(tuple(instance.input_low), tuple(instance.input_high)),
             StateBounds(tuple(low), tuple(high))]
+
+
+def mechanism_state(instance, x) -> np.ndarray:
+    """A Dynobench state as the catalog mechanism's: a car's steering angle (an action in
+    Dynobench) inserted, straight.
+
+    Parameters
+    ----------
+    instance : Instance
+        The instance.
+    x : numpy.ndarray
+        Dynobench's state.
+
+    Returns
+    -------
+    numpy.ndarray
+        The mechanism's.
+    """
+    x = np.asarray(x, dtype=float)
+    if instance.dynamics == "car_with_trailers":
+        return np.array([x[0], x[1], x[2], 0.0, x[3]])
+    return x
 
 
 def first_horizon(instance) -> float:
@@ -151,8 +181,9 @@ def solve(instance) -> Solution:
         return Solution(False, f"the {instance.dynamics} model ({instance.robot}) is not planned yet",
                         seconds=time.perf_counter() - started)
     given = constraints(instance) + [obstacles(instance, MARGIN)]
+    start, goal = mechanism_state(instance, instance.start), mechanism_state(instance, instance.goal)
     try:
-        result = plan(instance.start, instance.goal, mechanism=instance.mechanism, T=first_horizon(instance),
+        result = plan(start, goal, mechanism=instance.mechanism, T=first_horizon(instance),
                       objective="time", constraints=given)
     except ValueError as exc:                 # a bound the planner does not keep yet
         return Solution(False, f"not planned: {exc}", seconds=time.perf_counter() - started)
@@ -163,7 +194,7 @@ def solve(instance) -> Solution:
     if not result.kinematics.has_drift:
         played = retime(result, T=T, input_bounds=given[0])
     else:
-        problem = Problem.build(instance.start, instance.goal, mechanism=instance.mechanism, T=T, objective=None,
+        problem = Problem.build(start, goal, mechanism=instance.mechanism, T=T, objective=None,
                                 constraints=given)     # the obstacles kept in the least use at T too
         used = least_time.least_use(problem, _stretched(result, T))
         if isinstance(used, str) or used.use > least_time.KEPT:

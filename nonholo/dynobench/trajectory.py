@@ -7,7 +7,7 @@ held for the model's ``dt``); its cost is ``K dt``. A plan's motion is sampled a
 ``t_k = k dt`` of its horizon (a whole number of them), from its certified replay on the
 mechanism's hand-written model (DOP853, :func:`nonholo.certify.resimulate.resimulate_state`);
 the actions are the model's inputs averaged over each step, in Dynobench's form — a car's steering angle, a state of the catalog's
-``car_trailer``, is its action there.
+``car_with_trailer``, is its action there.
 """
 from __future__ import annotations
 

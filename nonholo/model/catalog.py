@@ -44,6 +44,9 @@ def names() -> tuple[str, ...]:
 #: - ``car`` (wheelbase 1; lengths in wheelbases): rear-axle speed ``|v| ≤ 1`` wheelbase/s,
 #:   steering rate ``|φ̇| ≤ 1`` rad/s, steering angle ``|φ| ≤ 0.6`` rad (34°);
 #: - ``unicycle``: ``|v| ≤ 0.5`` m/s, ``|ω| ≤ 0.5`` rad/s, as Dynobench's ``unicycle1_v0``;
+#: - ``car_with_trailer``: Dynobench's ``car1_v0``: ``v ∈ [−0.1, 0.5]`` m/s, steering ``|φ| ≤ π/3``,
+#:   its rate ``|φ̇| ≤ 10`` rad/s (the model's ``max_angular_vel``: Dynobench's steering is an
+#:   input, free to jump);
 #: - ``unicycle2``: ``|a| ≤ 0.25`` m/s², ``|α| ≤ 0.25`` rad/s², speed ``|v| ≤ 0.5`` m/s and
 #:   turning rate ``|ω| ≤ 0.5`` rad/s, as Dynobench's ``unicycle2_v0``.
 #:
@@ -52,6 +55,8 @@ def names() -> tuple[str, ...]:
 CATALOG_BOUNDS: dict[str, dict] = {
     "car": {"inputs": {"v": (-1.0, 1.0), "u2": (-1.0, 1.0)}, "coordinates": {"phi": (-0.6, 0.6)}},
     "unicycle": {"inputs": {"v": (-0.5, 0.5), "omega": (-0.5, 0.5)}},
+    "car_with_trailer": {"inputs": {"v": (-0.1, 0.5), "u2": (-10.0, 10.0)},
+                    "coordinates": {"phi": (-1.047198, 1.047198)}},
     "unicycle2": {"inputs": {"a": (-0.25, 0.25), "alpha": (-0.25, 0.25)},
                   "coordinates": {"speed": (-0.5, 0.5), "omega": (-0.5, 0.5)}},
 }

@@ -545,6 +545,13 @@ CATALOG_DRAWINGS = {
         "bodies": [{"x": "x", "y": "y", "heading": "theta", "length": 0.5, "width": 0.3, "offset": 0.0}],
         "wheels": [{"body": 0, "at": [0.0, 0.0], "diameter": 0.4, "width": 0.06}],
     },
+    "car_with_trailer": {    # Dynobench's boxes, 0.5 × 0.25 and 0.3 × 0.25, the trailer's 0.5 behind
+        "bodies": [{"x": "x", "y": "y", "heading": "theta", "length": 0.5, "width": 0.25, "offset": 0.0},
+                   {"x": "x - 0.5*cos(theta1)", "y": "y - 0.5*sin(theta1)", "heading": "theta1", "length": 0.3,
+                    "width": 0.25, "offset": 0.0}],
+        "wheels": [{"body": 0, "at": [0.125, -0.1], "steer": "phi", "diameter": 0.12, "width": 0.04},
+                   {"body": 0, "at": [0.125, 0.1], "steer": "phi", "diameter": 0.12, "width": 0.04}],
+    },
     "unicycle2": {      # Dynobench's box, 0.5 × 0.25
         "bodies": [{"x": "x", "y": "y", "heading": "theta", "length": 0.5, "width": 0.25, "offset": 0.0}],
         "wheels": [{"body": 0, "at": [0.0, 0.0], "diameter": 0.4, "width": 0.06}],

@@ -169,9 +169,54 @@ def test_a_plan_exported_at_dynobench_steps_passes_its_checks(tmp_path):
     assert yaml.safe_load(path.read_text())["cost"] == pytest.approx(report.cost)
 
 
+WALLED = """\
+environment:
+  min: [0.0, 0.0]
+  max: [4.0, 4.0]
+  obstacles:
+    - {type: box, center: [3.0, 2.0], size: [1.6, 0.2]}
+    - {type: box, center: [3.0, 3.0], size: [1.6, 0.2]}
+    - {type: box, center: [2.3, 2.5], size: [0.2, 1.2]}
+    - {type: box, center: [3.7, 2.5], size: [0.2, 1.2]}
+robots:
+  - {type: unicycle1_v0, start: [1.0, 1.0, 0.0], goal: [3.0, 2.5, 0.0]}
+"""
+
+
 def test_the_command_writes_the_trajectory_and_says_why_it_fails(tmp_path):
+    """A goal walled off from the start: exit 1, the reason said, no trajectory claimed."""
+    env = tmp_path / "envs" / "unicycle1_v0" / "walled.yaml"
+    env.parent.mkdir(parents=True)
+    env.write_text(WALLED)
     out = tmp_path / "sol.yaml"
-    run = subprocess.run([sys.executable, "-m", "nonholo", "dynobench",
-                          str(COPIES / "envs" / "car1_v0" / "parallelpark_0.yaml"), "--out", str(out)],
-                         capture_output=True, text=True, timeout=300)
-    assert run.returncode == 1 and "not planned yet" in run.stdout
+    run = subprocess.run([sys.executable, "-m", "nonholo", "dynobench", str(env), "--models", str(COPIES / "models"),
+                          "--out", str(out)], capture_output=True, text=True, timeout=600)
+    assert run.returncode == 1, run.stdout + run.stderr
+    assert "not solved" in run.stdout and "obstacle" in run.stdout
+
+
+@pytest.mark.slow
+def test_the_parallel_parks_are_solved_and_pass_the_checks(tmp_path):
+    """The unicycle's and the second-order unicycle's parks: solved, the written trajectory
+    passing the project's checker and, where installed, Dynobench's own model functions."""
+    for robot in ("unicycle1_v0", "unicycle2_v0"):
+        env = COPIES / "envs" / robot / "parallelpark_0.yaml"
+        out = tmp_path / f"{robot}.yaml"
+        run = subprocess.run([sys.executable, "-m", "nonholo", "dynobench", str(env), "--out", str(out)],
+                             capture_output=True, text=True, timeout=600)
+        assert run.returncode == 0, run.stdout + run.stderr
+        inst, trajectory = dynobench.load(env), dynobench.read(out)
+        assert dynobench.check(inst, trajectory["states"], trajectory["actions"]).feasible
+        try:
+            import dynobench as bindings
+        except ImportError:
+            continue
+        model = bindings.robot_factory_with_env(str(COPIES / "models" / f"{robot}.yaml"), str(env))
+        for k in range(len(trajectory["actions"])):
+            nxt = np.zeros(inst.start.size)
+            model.step(nxt, trajectory["states"][k], trajectory["actions"][k], inst.dt)
+            assert model.distance(nxt, trajectory["states"][k + 1]) < 1e-2
+        for x in trajectory["states"]:
+            hit = bindings.CollisionOut()
+            model.collision_distance(x, hit)
+            assert hit.distance > -1e-2

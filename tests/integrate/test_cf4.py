@@ -21,6 +21,7 @@ STARTS = {
     "unicycle": (np.eye(3), np.array([0.1, -0.2, 0.3])),
     "brockett": (np.eye(3), np.array([0.1, -0.2, 0.3])),
     "double_integrator": (np.eye(3), np.array([0.1, -0.2, 0.3, -0.1])),
+    "car_with_trailer": (np.eye(3), np.array([0.1, 0.2, 0.3, 0.2, 0.1])),
     "unicycle2": (np.eye(3), np.array([0.1, -0.2, 0.3, 0.2, -0.1])),
 }
 SYSTEMS = [(name, frame) for name in catalog.names() for frame in (False, True)
