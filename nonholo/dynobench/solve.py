@@ -188,7 +188,9 @@ def solve(instance) -> Solution:
     except ValueError as exc:                 # a bound the planner does not keep yet
         return Solution(False, f"not planned: {exc}", seconds=time.perf_counter() - started)
     if not result.success:
-        return Solution(False, f"no plan: {result.reason}", result, seconds=time.perf_counter() - started)
+        # the reason's last clause says what stopped it (the ones before, how far it came)
+        return Solution(False, f"no plan: {result.reason.rsplit('; ', 1)[-1]}", result,
+                        seconds=time.perf_counter() - started)
     K = max(1, math.ceil(result.T / instance.dt - 1e-9))
     T = K * instance.dt
     if not result.kinematics.has_drift:
