@@ -130,6 +130,62 @@ class Controls(ABC):
 
 
 # ------------------------------------------------------------------------------------------
+# Series: coefficients on a basis of functions of time
+# ------------------------------------------------------------------------------------------
+
+
+class Series(Controls):
+    """``u_i(t) = Σ_q coeffs[i, q] φ_q(t)``: coefficients on a basis of functions of time
+    (:meth:`basis`), ``coeffs`` of shape ``(m, nb)`` flattened row by row — what
+    :class:`Fourier` and :class:`Legendre` share.
+
+    Parameters
+    ----------
+    T : float
+        The horizon (s).
+
+    Raises
+    ------
+    ValueError
+        If ``T`` is not a positive finite time.
+    """
+
+    def _set(self, params):
+        c = params.reshape(self.coeffs.shape if hasattr(self, "coeffs") else params.shape)
+        c.setflags(write=False)
+        self.coeffs = c
+        self._flat = c.reshape(-1)
+
+    @property
+    def n_inputs(self) -> int:
+        """``m``, the number of inputs."""
+        return self.coeffs.shape[0]
+
+    @property
+    def params(self) -> np.ndarray:
+        """The flat parameter vector ``λ``, ``coeffs`` row by row (a copy)."""
+        return self.coeffs.ravel().copy()
+
+    def __call__(self, t):
+        return self.basis(check_times(t)) @ self.coeffs.T
+
+    @abstractmethod
+    def basis(self, t) -> np.ndarray:
+        """The basis functions at times ``t``.
+
+        Parameters
+        ----------
+        t : numpy.ndarray
+            Times (s), shape ``(n,)``.
+
+        Returns
+        -------
+        numpy.ndarray
+            Shape ``(n, nb)``.
+        """
+
+
+# ------------------------------------------------------------------------------------------
 # Truncated Fourier series (parametric form)
 # ------------------------------------------------------------------------------------------
 
@@ -161,7 +217,7 @@ def fourier_basis(t, T: float, K: int) -> np.ndarray:
     return out
 
 
-class Fourier(Controls):
+class Fourier(Series):
     """``u_i(t) = λ_i0 + Σ_k λ_i,2k−1 sin kωt + λ_i,2k cos kωt``, ``ω = 2π/T``.
 
     Parameters
@@ -190,29 +246,25 @@ class Fourier(Controls):
             raise ValueError("Fourier coefficients must be finite")
         self._set(c)
 
-    def _set(self, params):
-        c = params.reshape(self.coeffs.shape if hasattr(self, "coeffs") else params.shape)
-        c.setflags(write=False)
-        self.coeffs = c
-        self._flat = c.reshape(-1)
-
     @property
     def harmonics(self) -> int:
         """``K``, the number of harmonics."""
         return (self.coeffs.shape[1] - 1) // 2
 
-    @property
-    def n_inputs(self) -> int:
-        """``m``, the number of inputs."""
-        return self.coeffs.shape[0]
+    def basis(self, t) -> np.ndarray:
+        """``(1, sin ωt, cos ωt, …)`` at times ``t`` (:func:`fourier_basis`).
 
-    @property
-    def params(self) -> np.ndarray:
-        """The flat parameter vector ``λ``, ``coeffs`` row by row (a copy)."""
-        return self.coeffs.ravel().copy()
+        Parameters
+        ----------
+        t : numpy.ndarray
+            Times (s), shape ``(n,)``.
 
-    def __call__(self, t):
-        return fourier_basis(check_times(t), self.T, self.harmonics) @ self.coeffs.T
+        Returns
+        -------
+        numpy.ndarray
+            Shape ``(n, 2K+1)``.
+        """
+        return fourier_basis(t, self.T, self.harmonics)
 
     def metric(self) -> np.ndarray:
         """Diagonal of the L2 Gram matrix: ``T`` for the constant terms, ``T/2`` for the others.
@@ -328,7 +380,7 @@ def legendre_basis(t, T: float, K: int) -> np.ndarray:
     return np.polynomial.legendre.legvander(2.0 * np.asarray(t, dtype=float) / T - 1.0, K)
 
 
-class Legendre(Controls):
+class Legendre(Series):
     """``u_i(t) = Σ_{k=0..K} λ_ik P_k(2t/T − 1)``: a polynomial of degree ``K`` in the
     Legendre basis, orthogonal on ``[0, T]`` (``∫ P_k² dt = T/(2k+1)``). The form of a smooth
     control that is not periodic — a least-energy extremal of a system with drift.
@@ -358,29 +410,25 @@ class Legendre(Controls):
             raise ValueError("Legendre coefficients must be finite")
         self._set(c)
 
-    def _set(self, params):
-        c = params.reshape(self.coeffs.shape if hasattr(self, "coeffs") else params.shape)
-        c.setflags(write=False)
-        self.coeffs = c
-        self._flat = c.reshape(-1)
-
     @property
     def degree(self) -> int:
         """``K``, the polynomials' degree."""
         return self.coeffs.shape[1] - 1
 
-    @property
-    def n_inputs(self) -> int:
-        """``m``, the number of inputs."""
-        return self.coeffs.shape[0]
+    def basis(self, t) -> np.ndarray:
+        """``(P_0, …, P_K)`` on ``[0, T]`` at times ``t`` (:func:`legendre_basis`).
 
-    @property
-    def params(self) -> np.ndarray:
-        """The flat parameter vector ``λ``, ``coeffs`` row by row (a copy)."""
-        return self.coeffs.ravel().copy()
+        Parameters
+        ----------
+        t : numpy.ndarray
+            Times (s), shape ``(n,)``.
 
-    def __call__(self, t):
-        return legendre_basis(check_times(t), self.T, self.degree) @ self.coeffs.T
+        Returns
+        -------
+        numpy.ndarray
+            Shape ``(n, K+1)``.
+        """
+        return legendre_basis(t, self.T, self.degree)
 
     def metric(self) -> np.ndarray:
         """Diagonal of the L2 Gram matrix: ``T/(2k+1)`` for ``P_k``.

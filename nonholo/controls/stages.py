@@ -22,7 +22,7 @@ import numpy as np
 
 from ..numerics.checks import MAX_STEPS, check_count
 from ..numerics.jit import jit
-from .parametrisations import Fourier, Legendre, PiecewiseConstant, fourier_basis, legendre_basis
+from .parametrisations import Fourier, Legendre, PiecewiseConstant, Series, fourier_basis, legendre_basis
 
 #: Stage times of one CF4 step, as fractions of the step.
 STAGE_FRACTIONS = np.array([0.0, 0.5, 1.0])
@@ -113,7 +113,7 @@ def _legendre_stage_basis(T: float, K: int, steps: int) -> np.ndarray:
 
 #: The series: controls ``coeffs @ φ(t)ᵀ`` on a basis of functions of time, whose stage
 #: basis is dense.
-SERIES = (Fourier, Legendre)
+SERIES = (Series,)
 
 
 def series_stage_basis(controls, steps: int) -> np.ndarray:
