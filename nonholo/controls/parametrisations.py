@@ -135,9 +135,10 @@ class Controls(ABC):
 
 
 class Series(Controls):
-    """``u_i(t) = Σ_q coeffs[i, q] φ_q(t)``: coefficients on a basis of functions of time
-    (:meth:`basis`), ``coeffs`` of shape ``(m, nb)`` flattened row by row — what
-    :class:`Fourier` and :class:`Legendre` share.
+    """``u_i(t) = Σ_q coeffs[i, q] φ_q(t)``: coefficients on a basis of functions of time.
+
+    The basis is the subclass's ``basis(t)``; ``coeffs`` has shape ``(m, nb)``, flattened row
+    by row. :class:`Fourier` and :class:`Legendre` are series.
 
     Parameters
     ----------
@@ -272,7 +273,7 @@ class Fourier(Series):
         Returns
         -------
         numpy.ndarray
-            ``metric``, of the size of :attr:`params`.
+            ``metric``, of the size of ``params``.
         """
         w = np.full(self.coeffs.shape, self.T / 2.0)
         w[:, 0] = self.T
@@ -436,7 +437,7 @@ class Legendre(Series):
         Returns
         -------
         numpy.ndarray
-            ``metric``, of the size of :attr:`params`.
+            ``metric``, of the size of ``params``.
         """
         return np.broadcast_to(self.T / (2.0 * np.arange(self.degree + 1) + 1.0), self.coeffs.shape).ravel()
 
