@@ -11,6 +11,7 @@ import math
 import numpy as np
 
 from ..model.bounds import InputBounds, StateBounds
+from ..model.obstacles import Obstacles
 from ..model.limits import LegLimits
 from ..motion.speed_limits import check_leg_speed
 from ..numerics.checks import MAX_STEPS, check_count, is_number
@@ -35,7 +36,7 @@ OPTION_RULES = {"gamma": "positive", "step": "positive", "tol": "positive", "min
                 "newton_below": "non-negative", "delta_min": "non-negative",
                 "max_iter": 0, "harmonics": 1, "grid": 1}
 #: the options a plan records only when they were given (absent: none)
-OPTIONAL_OPTIONS = ("leg_length", "leg_speed", "objective", "input_bounds", "state_bounds")
+OPTIONAL_OPTIONS = ("leg_length", "leg_speed", "objective", "input_bounds", "state_bounds", "obstacles")
 #: the objectives a plan may record
 OBJECTIVES = ("energy", "auto")
 #: ``R0``, ``Rd`` and the samples ``R``: ``|RᵀR − I| ≤`` this (as :func:`nonholo.plan` accepts)
@@ -259,7 +260,8 @@ def check_options(options, mechanism) -> None:
     It holds every option of :data:`OPTION_RULES` with a value :func:`nonholo.plan` accepts
     (checked by its own rules), and otherwise only ``leg_length``, ``leg_speed`` (as
     ``plan()`` checks them for ``mechanism``), ``input_bounds``, ``state_bounds``
-    (:meth:`~nonholo.model.bounds.Box.from_record`) and ``objective``: a missing
+    (:meth:`~nonholo.model.bounds.Box.from_record`), ``obstacles``
+    (:meth:`~nonholo.model.obstacles.Obstacles.from_record`) and ``objective``: a missing
     option is refused, never taken as unchecked.
 
     Parameters
@@ -306,7 +308,7 @@ def check_options(options, mechanism) -> None:
             if options["leg_speed"] is None:
                 raise ValueError("leg_speed is recorded only when given: null is not a value")
             check_leg_speed(options["leg_speed"], mechanism)
-        for key, kind in (("input_bounds", InputBounds), ("state_bounds", StateBounds)):
+        for key, kind in (("input_bounds", InputBounds), ("state_bounds", StateBounds), ("obstacles", Obstacles)):
             if key in options:
                 kind.from_record(options[key], mechanism, key)
     except ValueError as exc:

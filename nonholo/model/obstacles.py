@@ -200,6 +200,58 @@ class Obstacles:
                            for b in self.bodies],
                 "margin": self.margin}
 
+    @classmethod
+    def from_record(cls, record, mechanism, name: str = "obstacles") -> "Obstacles":
+        """The obstacles of a record (:meth:`record`; a plan file's options), checked for
+        ``mechanism``: numbers and names only, nothing evaluated.
+
+        Parameters
+        ----------
+        record : dict
+            ``polygons``, ``bodies`` and ``margin``.
+        mechanism : Mechanism
+            The mechanism planned.
+        name : str, default "obstacles"
+            The field, for messages.
+
+        Returns
+        -------
+        Obstacles
+            The obstacles.
+
+        Raises
+        ------
+        ValueError
+            Naming ``name`` and what is wrong.
+        """
+        if not isinstance(record, dict) or set(record) != {"polygons", "bodies", "margin"}:
+            raise ValueError(f"{name}: must hold exactly polygons, bodies and margin, got {record!r:.200}")
+        bodies = record["bodies"]
+        if not isinstance(bodies, list) or not all(isinstance(b, dict) for b in bodies):
+            raise ValueError(f"{name}: bodies must be a list of objects")
+        keys = {"length", "width", "x", "y", "heading", "behind"}
+        made = []
+        for i, b in enumerate(bodies):
+            if set(b) != keys or not all(isinstance(b[k], str) for k in ("x", "y", "heading")) \
+                    or not all(isinstance(b[k], (int, float)) and not isinstance(b[k], bool)
+                               for k in ("length", "width", "behind")):
+                raise ValueError(f"{name}: bodies[{i}] must hold the numbers length, width, behind and the "
+                                 f"coordinates' names x, y, heading")
+            made.append(Body(**b))
+        polygons = record["polygons"]
+        if not isinstance(polygons, list) or not all(
+                isinstance(p, list) and all(isinstance(c, list) and len(c) == 2 and all(
+                    isinstance(v, (int, float)) and not isinstance(v, bool) for v in c) for c in p)
+                for p in polygons):
+            raise ValueError(f"{name}: polygons must be lists of corners [x, y] (numbers)")
+        margin = record["margin"]
+        if isinstance(margin, bool) or not isinstance(margin, (int, float)):
+            raise ValueError(f"{name}: margin must be a number, got {margin!r}")
+        try:
+            return cls(tuple(tuple(map(tuple, p)) for p in polygons), tuple(made), float(margin)).check(mechanism)
+        except ValueError as exc:
+            raise ValueError(f"{name}: {exc}") from None
+
     def clearances(self, mechanism, q) -> np.ndarray:
         """The least clearance of each body from any obstacle at each state.
 

@@ -228,3 +228,20 @@ def test_the_parallel_parks_are_solved_and_pass_the_checks(tmp_path):
             hit = wheel.CollisionOut()
             model.collision_distance(x, hit)
             assert hit.distance > -1e-2
+
+
+def test_a_plan_with_obstacles_is_saved_and_loaded_and_a_bad_record_refused(tmp_path):
+    import json
+
+    obstacles = Obstacles.boxes([(5.0, 5.0)], [(1.0, 1.0)], (Body(0.5, 0.25),), margin=0.01)
+    result = nonholo.plan([0, 0, 0], [1, 0.5, 0], mechanism="unicycle", constraints=[obstacles])
+    assert result.success, result.reason
+    path = result.save(tmp_path / "plan.json")
+    again = nonholo.PlanResult.load(path)
+    assert again.success and again.options["obstacles"] == obstacles.record()
+    assert Obstacles.from_record(again.options["obstacles"], result.kinematics) == obstacles
+    data = json.loads(path.read_text())
+    data["options"]["obstacles"]["bodies"][0]["x"] = "__import__('os')"
+    path.write_text(json.dumps(data))
+    with pytest.raises(ValueError, match="is not a coordinate of mechanism 'unicycle'"):
+        nonholo.PlanResult.load(path)
