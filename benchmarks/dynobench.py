@@ -10,7 +10,8 @@ The command returns one solution, so its time is also its time to the first feas
 Same command twice: the trajectories are compared (the same on a busy machine as on an idle
 one: every budget counts effort).
 
-Usage: ``python -m benchmarks.dynobench [--instances robot/instance,...]``.
+Usage: ``python -m benchmarks.dynobench [--instances robot/instance,...]``; the full run also
+draws ``benchmarks/results/dynobench.png``, the solved instances' motions among their obstacles.
 """
 from __future__ import annotations
 
@@ -68,6 +69,47 @@ def bindings_check(robot: str, env: Path, solution: Path) -> str:
             f"goal {robot_model.distance(X[-1], goal):.1e})")
 
 
+def draw(solved: dict, path: Path) -> None:
+    """One panel per solved instance: the workspace, the obstacles, and the robot's bodies
+    along its trajectory (every fifth state, the last darker)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from matplotlib.patches import Polygon, Rectangle
+
+    from nonholo import dynobench
+    from nonholo.dynobench.checker import bodies
+
+    fig, axes = plt.subplots(1, len(solved), figsize=(4.2 * len(solved), 4.2), squeeze=False)
+    for ax, (name, (env, trajectory, cost)) in zip(axes[0], solved.items()):
+        inst = dynobench.load(env)
+        ax.add_patch(Rectangle(inst.low, *(inst.high - inst.low), fill=False, lw=1.2, color="k"))
+        for o in inst.obstacles:
+            ax.add_patch(Rectangle((o.center[0] - o.size[0] / 2, o.center[1] - o.size[1] / 2), *o.size,
+                                   color="0.45"))
+        states = np.asarray(trajectory["states"])
+        for k, x in enumerate(states):
+            if k % 5 and k != len(states) - 1:
+                continue
+            last = k == len(states) - 1
+            for body in bodies(inst, x):
+                ax.add_patch(Polygon(np.asarray(body.exterior.coords), closed=True, fill=False,
+                                     lw=1.2 if last else 0.6, color="C3" if last else "C0"))
+        ax.plot(states[:, 0], states[:, 1], "C0", lw=0.8)
+        ax.plot(*inst.start[:2], "go", ms=4)
+        ax.plot(*inst.goal[:2], "r*", ms=7)
+        ax.set_aspect("equal")
+        ax.set_xlim(inst.low[0] - 0.1, inst.high[0] + 0.1)
+        ax.set_ylim(inst.low[1] - 0.1, inst.high[1] + 0.1)
+        ax.set_title(f"{name}: {cost:.1f} s", fontsize=9)
+        ax.set_xlabel("x [m]")
+        ax.set_ylabel("y [m]")
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
 def run(name: str, out: Path) -> tuple[int, float, str]:
     """``nonholo dynobench`` on one instance in a fresh process: exit status, wall time, output."""
     env = COPIES / "envs" / f"{name}.yaml"
@@ -92,7 +134,7 @@ def main(argv=None) -> None:
         "Published: the best final cost J_f and iDb-A*'s first-solution time t_st, medians over 20 runs "
         "(iDb-A* T-RO 2024 table, Intel i9-14900KF; unicycle2's t_st not quoted). Costs are durations, "
         "steps of dt = 0.1 s.")
-    rows, details = [], []
+    rows, details, solved = [], [], {}
     with tempfile.TemporaryDirectory() as tmp:
         for name in names:
             outs = [Path(tmp) / f"{name.replace('/', '_')}_{i}.yaml" for i in range(2)]
@@ -112,12 +154,18 @@ def main(argv=None) -> None:
                          "–" if first is None else f"{first:.1f}", bind,
                          "yes" if same else ("–" if not all(o.is_file() for o in outs) else "NO")])
             details.append(f"- `{name}`: {line}")
+            if status == 0:
+                solved[name] = (COPIES / "envs" / f"{name}.yaml", yaml.safe_load(outs[0].read_text()), cost)
             print(rows[-1], flush=True)
     report.heading("Results")
     report.table(["instance", "result", "cost [s]", "best published J_f [s]", "≤ J_f", "wall time [s]",
                   "iDb-A* t_st [s]", "bindings", "same twice"], rows, ["l", "l", "r", "r", "l", "r", "r", "l", "l"])
     report.heading("What the command said")
     report.paragraph(*details)
+    if solved and not args.instances:
+        draw(solved, report.path.with_suffix(".png"))
+        report.paragraph("The figure below: the solved instances' workspaces, obstacles (grey), and the robot's "
+                         "bodies every fifth state along its trajectory (the last in red); start green, goal red.")
     report.write()
 
 
