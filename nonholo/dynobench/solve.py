@@ -198,7 +198,7 @@ def solve(instance) -> Solution:
     else:
         problem = Problem.build(start, goal, mechanism=instance.mechanism, T=T, objective=None,
                                 constraints=given)     # the obstacles kept in the least use at T too
-        used = least_time.least_use(problem, _stretched(result, T))
+        used = least_time.least_use(problem, least_time.stretched(result.controls, result.T, T))
         if isinstance(used, str) or used.use > least_time.KEPT:
             why = used if isinstance(used, str) else f"it needs {used.use:.6g} of the bounds"
             return Solution(False, f"the least time {result.T:.6g} s found, but not at {T:g} s: {why}", result,
@@ -212,13 +212,3 @@ def solve(instance) -> Solution:
     reason = (f"cost {report.cost:.6g} s ({K} steps of {instance.dt:g} s; the least time {result.T:.6g} s)"
               if report.feasible else f"the trajectory fails Dynobench's checks: {'; '.join(report.failures())}")
     return Solution(report.feasible, reason, played, trajectory, report, time.perf_counter() - started)
-
-
-def _stretched(result, T: float):
-    """A plan's controls read on ``[0, T]`` at the same fraction of its horizon."""
-    T0, u = result.T, result.controls
-
-    def stretched(t):
-        return u(np.minimum(np.asarray(t, dtype=float) * (T0 / T), T0))
-
-    return stretched

@@ -393,7 +393,7 @@ def least_time_with_drift(problem, result: PlanResult) -> PlanResult:
     tried, best, slow, fast = [], None, math.inf, 0.0
     for _ in range(HORIZONS):
         at = dataclasses.replace(problem, T=T)
-        used = least_use(at, _stretched(guess, T))
+        used = least_use(at, stretched(*guess, T))
         if isinstance(used, str):
             s = math.inf
         else:
@@ -426,9 +426,24 @@ TIME_RTOL = 1e-4
 KEPT = 1.0 + BOUND_RTOL
 
 
-def _stretched(guess: tuple, T: float):
-    """Controls ``(u, T0)`` on their horizon ``T0`` read on ``[0, T]`` at the same fraction of it."""
-    controls, T0 = guess
+def stretched(controls, T0: float, T: float):
+    """Controls on their horizon ``T0`` read on ``[0, T]`` at the same fraction of it (the
+    first guess of a path at another horizon).
+
+    Parameters
+    ----------
+    controls : callable
+        ``u(t)`` on ``[0, T0]``.
+    T0 : float
+        Their horizon (s).
+    T : float
+        The new horizon (s).
+
+    Returns
+    -------
+    callable
+        ``t ↦ u(t T0 / T)``.
+    """
 
     def u(t):
         return controls(np.minimum(np.asarray(t, dtype=float) * (T0 / T), T0))
