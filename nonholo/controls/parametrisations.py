@@ -28,6 +28,9 @@ import numpy as np
 
 from ..numerics.checks import check_count, check_time, check_times
 
+#: The 5-point Gauss–Legendre nodes and weights on [-1, 1] of the interval means
+#: (:meth:`PiecewiseConstant.fit_with_energy`).
+MEAN_NODES = np.polynomial.legendre.leggauss(5)
 
 class Controls(ABC):
     """A control ``u(t)`` on ``[0, T]`` given by a flat parameter vector ``params``.
@@ -653,7 +656,7 @@ class PiecewiseConstant(Controls):
         """
         T = check_time(T)
         grid = check_count(grid, "grid")
-        x, w = np.polynomial.legendre.leggauss(5)
+        x, w = MEAN_NODES
         edges = np.linspace(0.0, T, grid + 1)
         mid = 0.5 * (edges[:-1] + edges[1:])
         half = 0.5 * np.diff(edges)

@@ -141,10 +141,13 @@ def improve(problem, result: PlanResult, quick: bool = False, budget: float | No
     steps = -(-problem.steps // grid) * grid
     endpoint = problem.evaluator(method="nonparametric", steps=steps,
                                 delta_min=smooth_clearance(result) if quick else None)
+    # the plan's grid means and its energy from one sampling of its inputs (a stitched
+    # route's jumps off the grid: its energy by quadrature between them)
+    means, plan_energy = PiecewiseConstant.fit_with_energy(result.controls, problem.T, grid,
+                                                           problem.mechanism.n_inputs)
+    if result.hops is not None:
+        plan_energy = plan_energy_of(result)
     if quick:
-        # the plan's grid means and its energy from one sampling of its inputs
-        means, plan_energy = PiecewiseConstant.fit_with_energy(result.controls, problem.T, grid,
-                                                               problem.mechanism.n_inputs)
         budget = QUICK_EFFORT if budget is None else budget
         ceiling = REPLACE_BELOW * plan_energy
         found = extremals.least_energy(endpoint, [("plan", means)], problem.options, grid,
@@ -157,7 +160,6 @@ def improve(problem, result: PlanResult, quick: bool = False, budget: float | No
             initial = itertools.islice(starts(endpoint, result.parametrisation), QUICK_STARTS)
             outcome, why = search(endpoint, initial, problem.options, budget, ceiling)
     else:
-        plan_energy = plan_energy_of(result)
         budget = ENERGY_EFFORT if budget is None else budget
         ceiling = plan_energy
         outcome, why = None, ""
@@ -170,7 +172,8 @@ def improve(problem, result: PlanResult, quick: bool = False, budget: float | No
             # (with drift, a plan's own extremal says less: its loops are no loops, and the
             # others' are tried as well)
             drift = problem.mechanism.has_drift
-            found = extremals.least_energy(endpoint, starts(endpoint, result.parametrisation), problem.options,
+            initial = itertools.chain([("plan", means)], loop_starts(endpoint))
+            found = extremals.least_energy(endpoint, initial, problem.options,
                                            grid, EXTREMAL_EFFORT, ceiling=ceiling * (1.0 + 1e-9),
                                            first_below=math.inf if framed else 0.0, first_or_none=not drift,
                                            smooth=drift)

@@ -28,6 +28,8 @@ MIN_BARRIER_R = 1e-4
 # -- the quadrature of any controls' energy (:func:`controls_energy`)
 #: Panels of :func:`controls_energy`'s quadrature on ``[0, T]`` at least.
 ENERGY_PANELS = 64
+#: The 8-point Gauss–Legendre nodes and weights on [-1, 1] of :func:`controls_energy`.
+ENERGY_NODES = np.polynomial.legendre.leggauss(8)
 
 
 def energy(ev: Evaluation, metric: np.ndarray) -> float:
@@ -262,7 +264,7 @@ def controls_energy(controls, breakpoints, T: float) -> float:
     float
         The energy.
     """
-    x, w = np.polynomial.legendre.leggauss(8)
+    x, w = ENERGY_NODES
     bps = [] if breakpoints is None else np.asarray(breakpoints, dtype=float)
     b = np.unique(np.concatenate([np.linspace(0.0, T, ENERGY_PANELS + 1), bps]))
     b = b[(b >= 0.0) & (b <= T)]

@@ -37,7 +37,7 @@ from ..spaces.state import State
 from .core import Options, Outcome, record
 from .endpoint_map import EndpointMap
 from .energy_objective import energy
-from .energy_optimiser import RESTORE_STEPS, Run, descend, newton_steps, polish
+from .energy_optimiser import RESTORE_STEPS, newton_steps
 from .energy_search import certified_or_finer
 
 #: Newton steps of the shooting at most, per goal (the final one and each intermediate).
@@ -56,9 +56,6 @@ STALL = 0.7
 SHOOTING_TOL = 1e-8
 #: Extremals agree on the least energy within this relative difference.
 AGREE_RTOL = 1e-5
-#: SQP iterations at most that bring an extremal's grid controls to the grid's own
-#: first-order conditions.
-POLISH_ITERATIONS = 6
 #: The degrees of the Legendre series tried in turn for a smooth extremal's inputs
 #: (:func:`smooth_extremal`).
 SMOOTH_DEGREES = (8, 12, 16, 24, 32, 48)
@@ -483,9 +480,9 @@ def least_energy(endpoint: EndpointMap, initial, options: Options, grid: int, bu
     The starts are taken in turn until ``confirmations`` extremals at the goal agree on the
     least energy of any (relative difference below :data:`AGREE_RTOL`), the starts run out
     or the budget ends; only an extremal so confirmed, needing less than ``ceiling``, is
-    landed on the grid, brought to the grid's own first-order conditions by at most
-    :data:`POLISH_ITERATIONS` SQP iterations (:func:`~nonholo.planning.energy_optimiser.descend`)
-    and certified.
+    landed on the grid (its means over the intervals, within ``O(h²)`` of the grid's own
+    least-energy controls), brought onto the goal by Newton steps of least energy and
+    certified.
 
     Parameters
     ----------
@@ -565,17 +562,12 @@ def least_energy(endpoint: EndpointMap, initial, options: Options, grid: int, bu
             why = why or f"the extremal's grid controls ended {ev.error:.2g} from the goal"
             continue
         E = energy(ev, metric)
-        run = Run(label, ev, E, history=[record(1, ev, 1.0, "energy", 0, energy=E, start=label, extremal=True)])
-        descend(endpoint, run, options, POLISH_ITERATIONS, math.inf)
-        polish(endpoint, run, options)
-        if not run.evaluation.error <= options.tol:
-            why = why or f"the extremal's grid controls ended {run.evaluation.error:.2g} from the goal"
-            continue
-        outcome = Outcome(evaluation=run.evaluation, success=True,
-                          reason=(f"least energy {run.energy:.6g}: the normal extremal from the start '{label}' "
+        outcome = Outcome(evaluation=ev, success=True,
+                          reason=(f"least energy {E:.6g}: the normal extremal from the start '{label}' "
                                   f"({len(found)} of {tried} starts at the goal, {shooting.shots} extremals), "
                                   f"on {grid} intervals"),
-                          history=run.history, iterations=len(run.history))
+                          history=[record(1, ev, 1.0, "energy", 0, energy=E, start=label, extremal=True)],
+                          iterations=1)
         outcome = certified_or_finer(outcome, endpoint, options, math.inf)
         if outcome.success:
             return Found(outcome, "", True, least, True)

