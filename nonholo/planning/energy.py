@@ -40,6 +40,7 @@ from .energy_objective import energy, plan_energy_of
 from . import extremals
 from .energy_search import ENERGY_GRID, loop_starts, search, starts
 from .energy_smoothing import smooth_clearance, smoothed
+from .strategy_robust import frame_coordinates
 
 # -- the search of ``objective="energy"``
 #: The full search integrates with this many times fewer steps than the plan (at least one
@@ -94,6 +95,8 @@ def loop_energy(endpoint, count: int) -> float:
     float
         Their least energy (``inf`` without loops of physical inputs).
     """
+    if frame_coordinates(endpoint.mechanism):
+        return math.inf
     least = math.inf
     for _, loop in itertools.islice(loop_starts(endpoint), count):
         if not isinstance(loop, Fourier):
@@ -152,7 +155,7 @@ def improve(problem, result: PlanResult, quick: bool = False, budget: float | No
         ceiling = REPLACE_BELOW * plan_energy
         found = extremals.least_energy(endpoint, [("plan", means)], problem.options, grid,
                                        QUICK_EXTREMAL_EFFORT, confirmations=1, ceiling=ceiling, continued=0,
-                                       smooth=problem.mechanism.has_drift)
+                                       smooth=problem.mechanism.has_drift, abandon=ceiling)
         outcome, why = found.outcome, found.why
         if outcome is None and min(found.least, plan_energy) > WASTEFUL * loop_energy(endpoint, QUICK_STARTS - 1):
             # the plan is not near a motion of the loops' energy: the quick search from its

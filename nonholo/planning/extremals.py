@@ -81,6 +81,8 @@ class Shot:
         Its norm (``inf`` unless complete).
     U : numpy.ndarray
         The controls' stage table, ``(N, 3, m)``.
+    pT : numpy.ndarray or None, default None
+        The costate at ``T`` (``None`` unless complete).
     """
 
     p0: np.ndarray
@@ -88,6 +90,7 @@ class Shot:
     l: np.ndarray | None
     error: float
     U: np.ndarray
+    pT: np.ndarray | None = None
 
 
 class Shooting:
@@ -139,7 +142,7 @@ class Shooting:
         error = float(np.linalg.norm(l))
         if not math.isfinite(error):
             return Shot(p0, False, None, math.inf, U)
-        return Shot(p0, True, l, error, U)
+        return Shot(p0, True, l, error, U, self._Ps[-1].copy())
 
     def jacobian(self, shot: Shot, target: State) -> np.ndarray | None:
         """``∂l_T/∂p₀`` at a complete shot, by forward differences (``None`` where a
@@ -168,7 +171,7 @@ class Shooting:
             J[:, j] = (other.l - shot.l) / eps
         return J
 
-    def newton(self, shot: Shot, target: State, tol: float, deadline: float) -> Shot:
+    def newton(self, shot: Shot, target: State, tol: float, deadline: float, abandon: float = math.inf) -> Shot:
         """Newton steps on ``p₀`` toward ``target`` from a complete shot (least-squares
         steps where the Jacobian is singular).
 
@@ -176,7 +179,9 @@ class Shooting:
         rank-one updates along the steps taken; where a full step does not lower the
         error it is taken afresh and the step halved until it does. The iteration ends at
         ``tol``, after :data:`NEWTON_STEPS` steps, or once two steps in a row lower the
-        error by less than :data:`STALL`.
+        error by less than :data:`STALL`, or once the energy at the target is surely above
+        ``abandon``: the shot's energy less ``4|p_T||l_T|``, twice the first-order change
+        ``2p_Tᵀ δx`` of the least energy with the endpoint.
 
         Parameters
         ----------
@@ -188,6 +193,8 @@ class Shooting:
             Stop below this error.
         deadline : float
             Stop once the effort passes this.
+        abandon : float, default inf
+            Stop once the energy at the target is surely above this.
 
         Returns
         -------
@@ -197,6 +204,9 @@ class Shooting:
         J, fresh, slow = None, False, 0
         for _ in range(NEWTON_STEPS):
             if shot.error <= tol or effort.seconds() > deadline:
+                break
+            if math.isfinite(abandon) and \
+                    shot_energy(shot, self.h) - 4.0 * float(np.linalg.norm(shot.pT)) * shot.error > abandon:
                 break
             if J is None:
                 J, fresh = self.jacobian(shot, target), True
@@ -228,7 +238,7 @@ class Shooting:
                 break
         return shot
 
-    def solve(self, p0: np.ndarray, deadline: float, continuation: bool = True) -> Shot:
+    def solve(self, p0: np.ndarray, deadline: float, continuation: bool = True, abandon: float = math.inf) -> Shot:
         """The extremal from ``p₀`` brought onto the goal: Newton, then, where it stalls
         and ``continuation`` is asked for, continuation through intermediate goals
         (:data:`CONTINUATION`).
@@ -241,6 +251,8 @@ class Shooting:
             Stop once the effort passes this.
         continuation : bool, default True
             Whether to try the continuation.
+        abandon : float, default inf
+            Newton stops once the energy at the goal is surely above this (:meth:`newton`).
 
         Returns
         -------
@@ -251,7 +263,7 @@ class Shooting:
         first = self.shoot(p0, goal)
         if not first.complete:
             return first
-        best = self.newton(first, goal, SHOOTING_TOL, deadline)
+        best = self.newton(first, goal, SHOOTING_TOL, deadline, abandon)
         if best.error <= SHOOTING_TOL or not continuation:
             return best
         # from where the first guess ends, along the straight path to the goal
@@ -473,7 +485,8 @@ class Found:
 
 def least_energy(endpoint: EndpointMap, initial, options: Options, grid: int, budget: float,
                  confirmations: int = 2, ceiling: float = math.inf, continued: int = 1,
-                 first_below: float = 0.0, first_or_none: bool = False, smooth: bool = False) -> Found:
+                 first_below: float = 0.0, first_or_none: bool = False, smooth: bool = False,
+                 abandon: float = math.inf) -> Found:
     """The least-energy normal extremal through the projections of labelled controls, as
     certified grid controls (see the module).
 
@@ -511,6 +524,9 @@ def least_energy(endpoint: EndpointMap, initial, options: Options, grid: int, bu
     smooth : bool, default False
         Return the extremal as a smooth control (:func:`smooth_extremal`) where it can,
         else as grid controls.
+    abandon : float, default inf
+        An extremal is given up once its energy at the goal is surely above this
+        (:meth:`Shooting.newton`).
 
     Returns
     -------
@@ -527,7 +543,7 @@ def least_energy(endpoint: EndpointMap, initial, options: Options, grid: int, bu
         tried += 1
         if p0 is None or not np.all(np.isfinite(p0)):
             continue
-        shot = shooting.solve(p0, deadline, continuation=tried <= continued)
+        shot = shooting.solve(p0, deadline, continuation=tried <= continued, abandon=abandon)
         closest = min(closest, shot.error)
         if first_or_none and tried == 1 and not (shot.complete and shot.error <= SHOOTING_TOL):
             break
