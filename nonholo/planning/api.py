@@ -113,7 +113,9 @@ def solve(problem: Problem, callback: Callable[[dict], object] | None = None, *,
           started: float | None = None) -> PlanResult:
     """The plan of ``problem``: its path (:func:`solve_path`), re-timed under its legs'
     speed or its inputs' bounds if it has them (:func:`nonholo.planning.retime.limit_speed`,
-    :func:`~nonholo.planning.retime.limit_inputs`), with BLAS on one thread
+    :func:`~nonholo.planning.retime.limit_inputs`) — at a given ``T``, a path that cannot be
+    re-timed into the bounds replaced by the path of least use of them
+    (:func:`nonholo.planning.least_time.within_bounds`) — with BLAS on one thread
     (:func:`nonholo.numerics.blas.one_thread`).
 
     Parameters
@@ -138,7 +140,12 @@ def solve(problem: Problem, callback: Callable[[dict], object] | None = None, *,
     with one_thread():
         result = solve_path(problem, callback, started_effort)
         T = None if problem.least_time else problem.T
-        result = limit_inputs(limit_speed(result, problem.leg_speed, T), problem.input_bounds, T)
+        result = limit_speed(result, problem.leg_speed, T)
+        limited = limit_inputs(result, problem.input_bounds, T)
+        if T is not None and result.success and not limited.success:
+            # the bounds shape the motion in T rather than refuse the goal
+            limited = least_time.within_bounds(problem, result, limited)
+        result = limited
         result = keep_clear(result, problem.obstacles)
     result.seconds = time.perf_counter() - started
     return result

@@ -334,7 +334,46 @@ def least_time_path(problem, result: PlanResult) -> PlanResult:
     return finished(problem, result, used, reason)
 
 
-def finished(problem, result: PlanResult, used: Use, reason: str) -> PlanResult:
+def within_bounds(problem, result: PlanResult, limited: PlanResult) -> PlanResult:
+    """At a given ``T``, a certified plan whose inputs leave the problem's bounds and whose
+    path cannot be re-timed into them in ``T`` (``limited``, the failed result of
+    :func:`~nonholo.planning.retime.limit_inputs`) replaced by the path of least use of the
+    bounds in ``T`` (:func:`least_use`, from the plan), where that use is at most 1: the
+    bounds shape the motion rather than refuse the goal. Where it is above 1, ``limited``
+    with the least use found.
+
+    Parameters
+    ----------
+    problem : Problem
+        The problem (its ``T`` given, its input bounds around zero).
+    result : PlanResult
+        Its certified plan.
+    limited : PlanResult
+        The plan refused under the bounds.
+
+    Returns
+    -------
+    PlanResult
+        The path of least use, certified, or ``limited``.
+    """
+    used = least_use(problem, result.controls)
+    if isinstance(used, str):
+        return replace(limited, reason=f"{limited.reason}; no path keeps them in T either: {used}")
+    if used.use > KEPT:
+        need = "more time" if problem.mechanism.has_drift else f"T >= {problem.T * used.use:.6g} s along it"
+        return replace(limited, reason=(f"{limited.reason}; the path of least use of the bounds in T uses "
+                                        f"{used.use:.6g} of them (it needs {need})"))
+    reason = (f"{result.reason}; it leaves the input bounds and cannot be re-timed into them in T: the path of least use "
+              f"of them in T = {problem.T:g} s, {used.use:.6g} of them (SLSQP, {used.iterations} iterations, "
+              f"{used.evaluations} evaluations: {used.message})")
+    shaped = finished(problem, result, used, reason, objective=result.options.get("objective"), fallback=limited)
+    if shaped is limited or not shaped.success:
+        return shaped
+    return replace(shaped, options={**shaped.options, "input_bounds": problem.input_bounds.record()})
+
+
+def finished(problem, result: PlanResult, used: Use, reason: str, objective: str | None = "time",
+             fallback: PlanResult | None = None) -> PlanResult:
     """A path found by :func:`least_use`, certified, as the result (``result`` with its reason
     saying why where the certificate fails).
 
@@ -348,24 +387,31 @@ def finished(problem, result: PlanResult, used: Use, reason: str) -> PlanResult:
         The path.
     reason : str
         The result's reason.
+    objective : str or None, default "time"
+        The objective the result's options record.
+    fallback : PlanResult, optional
+        What is returned, its reason saying why, where the certificate fails (default
+        ``result``).
 
     Returns
     -------
     PlanResult
-        The certified path, or ``result``.
+        The certified path, or ``fallback``.
     """
-    options = {**result.options, "objective": "time"}
+    options = {**result.options, "objective": objective}
     ev, endpoint = used.evaluation, used.endpoint
     outcome = Outcome(evaluation=ev, success=True, reason=reason,
                       history=result.history + [record(result.iterations + 1, ev, 1.0, "time", 0, use=used.use)],
                       iterations=result.iterations + used.iterations)
     outcome = certified(outcome, endpoint, problem.options)
     if not outcome.success:
+        if fallback is not None:
+            return replace(fallback, reason=f"{fallback.reason}; the path of least use not taken: {outcome.reason}")
         return replace(result, options=options,
                        reason=f"{result.reason}; the least-time path not taken: {outcome.reason}")
     lowered = problem.with_settings(method="nonparametric", grid=TIME_GRID, steps=endpoint.steps)
     built = build_result(lowered, outcome, True, outcome.reason, endpoint)
-    return replace(built, options={**built.options, "objective": "time"}, route=result.route)
+    return replace(built, options={**built.options, "objective": objective}, route=result.route)
 
 
 def least_time_with_drift(problem, result: PlanResult) -> PlanResult:

@@ -20,7 +20,8 @@ least time of the problem (another path may be faster; finding it is a time-opti
 problem this does not solve). :func:`limit_inputs` is what :func:`nonholo.plan` does with
 them: with ``T=None`` the least time along the path; with a given ``T`` the plan as found if
 its inputs keep the bounds, else re-timed in ``T`` if its path can be, else a failure saying
-the time the path needs. Every re-timing under input bounds is checked on a fine grid
+the time the path needs (which :func:`nonholo.plan` then answers with the path of least use
+of the bounds in ``T``, :func:`nonholo.planning.least_time.within_bounds`). Every re-timing under input bounds is checked on a fine grid
 (:data:`CHECK_STEPS`): inputs beyond a bound by more than
 :data:`~nonholo.model.bounds.BOUND_RTOL` (relative) make the plan a failure.
 """

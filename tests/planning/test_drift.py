@@ -147,11 +147,23 @@ def test_least_time_of_the_second_order_unicycle_keeps_every_bound():
     assert np.abs(q[:, 3:]).max() <= 0.5 * (1 + 1e-9)
 
 
-def test_input_bounds_a_plan_with_drift_leaves_fail_it_saying_so():
-    result = nonholo.plan([0.7, 0.8, 0, 0, 0], [1.9, 0.3, 0, 0, 0], mechanism="unicycle2", T=6.0,
-                          constraints=of_mechanism("unicycle2"))
-    assert not result.success
-    assert "cannot be re-timed into them" in result.reason and "objective='time'" in result.reason
+def test_input_bounds_shape_a_plan_with_drift_or_fail_it_saying_so():
+    """In T = 6 s the plan as found leaves the bounds and, with drift, cannot be re-timed: the
+    path of least use of them in T keeps them (checked by DOP853 on the hand-written
+    model); in T = 4.5 s, below the least time (5.64 s), none does and the failure says so."""
+    start, goal = [0.7, 0.8, 0, 0, 0], [1.9, 0.3, 0, 0, 0]
+    result = nonholo.plan(start, goal, mechanism="unicycle2", T=6.0, constraints=of_mechanism("unicycle2"))
+    assert result.success, result.reason
+    assert "path of least use" in result.reason
+    t, _, q, _ = resimulate.resimulate_state(np.asarray(start, dtype=float), result.controls, result.T, "unicycle2",
+                                             breakpoints=result.parametrisation.breakpoints)
+    assert np.abs(q[-1] - goal).max() < 1e-8
+    assert np.abs(result.controls(t)).max() <= 0.25 * (1 + 1e-9)
+    assert np.abs(q[:, 3:]).max() <= 0.5 * (1 + 1e-9)
+    short = nonholo.plan(start, goal, mechanism="unicycle2", T=4.5, constraints=of_mechanism("unicycle2"))
+    assert not short.success
+    assert "cannot be re-timed into them" in short.reason and "objective='time'" in short.reason
+    assert "needs more time" in short.reason
 
 
 def test_what_a_time_change_cannot_do_with_drift_is_refused_saying_so():

@@ -189,6 +189,26 @@ def test_a_plan_in_too_short_a_time_fails_saying_the_time_it_needs():
     assert short.options["input_bounds"] == CAR_INPUTS.record()
 
 
+def test_bounds_shape_a_plan_in_a_given_time_whose_path_cannot_keep_them():
+    """The unicycle's park in T = 3 s under |v|, |ω| ≤ 0.5: the path as found needs 3.44 s,
+    so the bounds shape the motion inside the optimisation (the path of least use of them
+    in T) rather than refuse the goal; in 2.5 s, below the least time 2.897 s, no path
+    keeps them and the failure says the time the least-use path needs."""
+    bounds = InputBounds((-0.5, -0.5), (0.5, 0.5))
+    res = nonholo.plan(*UNICYCLE_PARK, mechanism="unicycle", T=3.0, constraints=[bounds])
+    assert res.success, res.reason
+    assert res.T == 3.0 and "path of least use" in res.reason
+    assert res.options["input_bounds"] == bounds.record()
+    t = np.linspace(0.0, res.T, 100001)
+    assert usage(bounds, res.controls(t)).max() <= 1.0 + BOUND_RTOL
+    _, x = dop853(res, UNICYCLE)
+    assert np.max(np.abs(x[-1] - np.asarray(UNICYCLE_PARK[1]))) <= 1e-8
+    short = nonholo.plan(*UNICYCLE_PARK, mechanism="unicycle", T=2.5, constraints=[bounds])
+    assert not short.success
+    need = float(re.search(r"least use of the bounds in T uses [\d.]+ of them \(it needs T >= ([\d.]+) s", short.reason)[1])
+    assert 2.85 < need < 3.0
+
+
 def test_retime_plays_a_stored_plan_under_input_bounds():
     res = nonholo.plan(*UNICYCLE_PARK, mechanism="unicycle")          # T = 1, no bounds
     assert usage(of_mechanism("unicycle")[0], res.u).max() > 1.0
