@@ -144,11 +144,12 @@ def improve(problem, result: PlanResult, quick: bool = False, budget: float | No
     steps = -(-problem.steps // grid) * grid
     endpoint = problem.evaluator(method="nonparametric", steps=steps,
                                 delta_min=smooth_clearance(result) if quick else None)
-    # the plan's grid means and its energy from one sampling of its inputs (a stitched
-    # route's jumps off the grid: its energy by quadrature between them)
+    # the plan's grid means and its energy from one sampling of its inputs (a global route's
+    # controls may jump off the grid: for the energy to lower, its energy by quadrature
+    # between its breakpoints)
     means, plan_energy = PiecewiseConstant.fit_with_energy(result.controls, problem.T, grid,
                                                            problem.mechanism.n_inputs)
-    if result.hops is not None:
+    if not quick and result.hops is not None:
         plan_energy = plan_energy_of(result)
     if quick:
         budget = QUICK_EFFORT if budget is None else budget
