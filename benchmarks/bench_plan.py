@@ -25,6 +25,8 @@ translated from the kernels, the catalog's built at install) and *numba* (compil
   (evaluations), terminal error, the error of a DOP853 re-simulation (rtol = atol = 1e-13)
   of the planned control, the discretisation error of the planner's own endpoint against
   it, and the largest difference of the planned parameters between the backends;
+- for Examples 1 and 2, the default call (strategy "robust", ``objective="auto"``) against
+  the plan as found, the strategy "paper" and the least energy, interleaved after warm-up;
 - the discretisation error of N = 100 … 800 CF4 steps against DOP853 for the initial and
   the planned controls;
 - the median time of one bare forward simulation (the CF4 kernel alone) and of one
@@ -412,6 +414,43 @@ def _iteration_rows(rows, ratios, forwards, k, R0, Rd, method, backend, mech, re
                      f"{kv:.1f}", f"{kv / f:.2f}"])
 
 
+#: The calls of :func:`default_times`: the default, then its parts (keywords of ``plan``).
+DEFAULT_CALLS = {"default (robust, objective \"auto\")": {},
+                 "plan as found (robust, objective=None)": {"objective": None},
+                 "paper, objective \"auto\"": {"strategy": "paper"},
+                 "paper, objective=None": {"strategy": "paper", "objective": None},
+                 "least energy (objective \"energy\")": {"objective": "energy"}}
+
+
+def default_times(report: Report, repeat: int) -> None:
+    """Warm Examples 1 and 2 with ``plan()``'s defaults against the plan as found, the
+    strategy "paper" and the least energy: median wall time, the calls interleaved."""
+    from nonholo.planning.api import plan
+    from nonholo.spaces import so3
+
+    report.heading("The default call after warm-up")
+    report.paragraph(
+        f"Wall time of `plan(R0, Rd, **keywords)` (native kernels), median (min) over {repeat} calls "
+        "after one warm-up call each, the calls interleaved (ms); */ as found*: the median over the "
+        "plan as found's (`objective=None`, the default strategy).")
+    rows = []
+    for k, (a, b) in EXAMPLES.items():
+        R0, Rd = so3.from_rpy(*a), so3.from_rpy(*b)
+        ts = {label: [] for label in DEFAULT_CALLS}
+        for kw in DEFAULT_CALLS.values():
+            plan(R0, Rd, **kw)
+        for _ in range(repeat):
+            for label, kw in DEFAULT_CALLS.items():
+                t = time.perf_counter()
+                plan(R0, Rd, **kw)
+                ts[label].append(time.perf_counter() - t)
+        found = statistics.median(ts["plan as found (robust, objective=None)"])
+        for label, xs in ts.items():
+            rows.append([k, label, f"{1e3 * statistics.median(xs):.2f}", f"{1e3 * min(xs):.2f}",
+                         f"{statistics.median(xs) / found:.2f}"])
+    report.table(["example", "call", "median [ms]", "min [ms]", "/ as found"], rows, ["r", "l", "r", "r", "r"])
+
+
 def main(argv=None) -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--repeat", type=int, default=30)
@@ -423,6 +462,7 @@ def main(argv=None) -> None:
     start_up(report, args.cold_runs)
     cold_by_mechanism(report, args.cold_runs)
     plan_times(report, args.repeat)
+    default_times(report, args.repeat)
     discretisation(report)
     iteration_cost(report, args.repeat)
     report.write()
