@@ -332,6 +332,24 @@ def costate_guess(endpoint: EndpointMap, controls: Controls, grid: int) -> np.nd
     return p0
 
 
+def ended(ev) -> str:
+    """Where an evaluation that is no motion at the goal ended, in words.
+
+    Parameters
+    ----------
+    ev : Evaluation
+        The evaluation.
+
+    Returns
+    -------
+    str
+        ``"ended <error> from the goal"``, or that it is not admissible.
+    """
+    if ev.error is None or not ev.complete:
+        return "did not reach T within the limits"
+    return f"ended {ev.error:.2g} from the goal"
+
+
 def grid_values(U: np.ndarray, grid: int) -> np.ndarray:
     """The mean inputs over each of ``grid`` intervals of a stage table (Simpson's rule on
     each step).
@@ -447,7 +465,7 @@ def smooth_extremal(endpoint: EndpointMap, shot: Shot, options: Options, label: 
     metric = series.metric()
     ev = newton_steps(endpoint, ev, metric, options.tol, RESTORE_STEPS)
     if not (endpoint.admissible(ev) and ev.error <= options.tol):
-        return None, f"the extremal's Legendre series (degree {series.degree}) ended {ev.error:.2g} from the goal"
+        return None, f"the extremal's Legendre series (degree {series.degree}) {ended(ev)}"
     E = energy(ev, metric)
     outcome = Outcome(evaluation=ev, success=True,
                       reason=(f"least energy {E:.6g}: the normal extremal from the start '{label}' "
@@ -575,7 +593,7 @@ def least_energy(endpoint: EndpointMap, initial, options: Options, grid: int, bu
         metric = ev.parametrisation.metric()
         ev = newton_steps(endpoint, ev, metric, options.tol, RESTORE_STEPS)
         if not (endpoint.admissible(ev) and ev.error <= options.tol):
-            why = why or f"the extremal's grid controls ended {ev.error:.2g} from the goal"
+            why = why or f"the extremal's grid controls {ended(ev)}"
             continue
         E = energy(ev, metric)
         outcome = Outcome(evaluation=ev, success=True,

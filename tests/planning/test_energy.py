@@ -573,3 +573,17 @@ def test_the_barrier_acts_between_delta_min_and_its_reach(gid, delta_min):
     x = (d[near] - delta_min) / (reach - delta_min)
     assert near and sorted(nodes.tolist()) == near and np.all((r > 0) & (r < 1))
     assert phi == pytest.approx(problem.h * np.sum(x - 1 - np.log(x)), rel=1e-12) and phi >= 0
+
+
+def test_an_extremal_whose_grid_controls_leave_the_limits_is_passed_over():
+    """A pair of the uniform random set (platform_raised, band 1-1.8) whose extremal through
+    the plan lays grid controls that do not reach T within the limits: the default plan
+    passes it over, saying so in words (it once raised formatting a missing error), and
+    the plan reaches the goal under DOP853."""
+    from benchmarks import goalset
+
+    pair = next(p for p in goalset.band_pairs("platform_raised", 300) if p["id"] == "band-platform_raised-1-1.8-0288")
+    res = nonholo.plan(pair["R0"], pair["Rd"], mechanism="platform_raised", T=pair["T"])
+    assert res.success, res.reason
+    R = resimulate(pair["R0"], res.controls, res.T, "platform_raised", res.breakpoints)
+    assert terminal_error(R, pair["Rd"]) <= 1e-8
