@@ -9,9 +9,12 @@ least time found is rounded up to a whole number ``K`` of steps ``dt`` and the m
 in ``K dt`` — re-timed along its path without drift, re-planned at that horizon with drift —
 then exported (:func:`~nonholo.dynobench.trajectory.to_dynobench`) and checked by the
 project's own checker (:func:`~nonholo.dynobench.checker.check`). The obstacles are kept
-at the nodes of the least-time path (:class:`~nonholo.model.obstacles.Obstacles`), which
-starts from the least-energy path without them: a local method, which brings a motion out
-of an obstacle it crosses near its edge but finds no route round a wall.
+at the nodes of the least-time path (:class:`~nonholo.model.obstacles.Obstacles`). For the
+unicycle (:data:`ROUTED`) that path starts from a route among the obstacles
+(:mod:`nonholo.planning.plane_route`: OMPL's RRT-Connect in the Reeds–Shepp space), which
+leads it out of a trap and round a wall (:func:`routed`); for the others from the
+least-energy path without them: a local method, which brings a motion out of an obstacle it
+crosses near its edge but finds no route round a wall.
 """
 from __future__ import annotations
 
@@ -158,6 +161,55 @@ def first_horizon(instance) -> float:
     return max(HORIZON_FACTOR * straight / top, instance.dt)
 
 
+#: The mechanisms planned from a route among the obstacles (:mod:`nonholo.planning.plane_route`).
+ROUTED = ("unicycle",)
+
+
+def routed(instance, start, goal, given):
+    """The least-time path from a route among the obstacles: the route's speed and turning
+    rate as the first guess of the path of least use of the bounds in the route's time
+    (:func:`nonholo.planning.least_time.least_use`, the obstacles kept at its nodes),
+    certified, played in the least time along it.
+
+    Parameters
+    ----------
+    instance : Instance
+        The instance.
+    start, goal : numpy.ndarray
+        The mechanism's coordinates at the ends.
+    given : list
+        The constraints: input bounds, state bounds, obstacles.
+
+    Returns
+    -------
+    PlanResult
+        The path in its least time, or a failed result saying why.
+    """
+    from ..planning import least_time, plane_route
+    from ..planning.problem import Problem
+    from ..planning.result_builder import build_result
+    from ..planning.retime import retime
+
+    mech = catalog.get(instance.mechanism)
+    bounds = given[0]
+    speed = float(min(-bounds.lows[0], bounds.highs[0]))
+    turn = float(min(-bounds.lows[1], bounds.highs[1]))
+    way = plane_route.route(given[-1], mech, start, goal, instance.low, instance.high, speed, turn)
+    problem = Problem.build(start, goal, mechanism=instance.mechanism, T=1.0 if isinstance(way, str) else way.T,
+                            objective=None, constraints=given)
+    if isinstance(way, str):
+        return build_result(problem, None, False, way)
+    seed = build_result(problem, None, False, (f"a route among the obstacles of length {way.length:.4g} in "
+                                               f"{way.T:.4g} s (OMPL's RRT-Connect, Reeds–Shepp curves)"))
+    used = least_time.least_use(problem, way)
+    if isinstance(used, str):
+        return dataclasses.replace(seed, reason=f"{seed.reason}; no path of least use from it: {used}")
+    reason = (f"{seed.reason}; the path of least use of the bounds from it: {used.use:.6g} of them in "
+              f"{problem.T:.6g} s (SLSQP, {used.iterations} iterations: {used.message})")
+    result = least_time.finished(problem, seed, used, reason, fallback=seed)
+    return retime(result, input_bounds=bounds) if result.success else result
+
+
 def solve(instance) -> Solution:
     """Plan an instance (see the module).
 
@@ -183,8 +235,11 @@ def solve(instance) -> Solution:
     given = constraints(instance) + [obstacles(instance, MARGIN)]
     start, goal = mechanism_state(instance, instance.start), mechanism_state(instance, instance.goal)
     try:
-        result = plan(start, goal, mechanism=instance.mechanism, T=first_horizon(instance),
-                      objective="time", constraints=given)
+        if instance.mechanism in ROUTED:
+            result = routed(instance, start, goal, given)
+        else:
+            result = plan(start, goal, mechanism=instance.mechanism, T=first_horizon(instance),
+                          objective="time", constraints=given)
     except ValueError as exc:                 # a bound the planner does not keep yet
         return Solution(False, f"not planned: {exc}", seconds=time.perf_counter() - started)
     if not result.success:

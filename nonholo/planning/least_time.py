@@ -73,6 +73,7 @@ class PathProblem:
         self.nodes = np.arange(max(r // 2, 1), endpoint.steps + 1, max(r // 2, 1))
         self.evaluations = 0
         self._key, self._ev = None, None
+        self._limits_key, self._limits_value = None, None
 
     def evaluation(self, x: np.ndarray):
         """The full evaluation of ``x``'s controls (kept for the next call with the same ``x``).
@@ -154,7 +155,15 @@ class PathProblem:
         return out
 
     def _limits(self, x):
-        """The clearances of the motion's limits at the nodes and their gradients (in ``λ``)."""
+        """The clearances of the motion's limits at the nodes and their gradients (in ``λ``),
+        kept for the next call with the same ``x`` (SLSQP asks for both in turn)."""
+        key = x[:self.p].tobytes()
+        if key != self._limits_key:
+            self._limits_value, self._limits_key = self._limits_of(x), key
+        return self._limits_value
+
+    def _limits_of(self, x):
+        """:meth:`_limits`, computed."""
         ev = self.evaluation(x)
         if not ev.complete:
             return None
