@@ -107,7 +107,14 @@ def route(obstacles, mechanism, start, goal, low, high, speed: float, turn: floa
             q[3:] = start[3:]
         return q
 
+    # a state whose point (x, y) is farther from every obstacle's bounding box than any body
+    # reaches is clear without the geometry
+    reach = max(math.hypot(b.length, b.width) / 2 + abs(b.behind) for b in obstacles.bodies) + obstacles.margin
+    boxes = [(*np.min(p, axis=0), *np.max(p, axis=0)) for p in map(np.asarray, obstacles.polygons)]
+
     def clear(x, y, theta) -> bool:
+        if all(math.hypot(max(x0 - x, 0.0, x - x1), max(y0 - y, 0.0, y - y1)) >= reach for x0, y0, x1, y1 in boxes):
+            return True
         return bool(obstacles.clearances(mechanism, coordinates(x, y, theta)[None, :]).min() >= obstacles.margin)
 
     space = ob.ReedsSheppStateSpace(TURNING_RADIUS)
