@@ -376,7 +376,7 @@ def within_bounds(problem, result: PlanResult, limited: PlanResult) -> PlanResul
               f"of them in T = {problem.T:g} s, {used.use:.6g} of them (SLSQP, {used.iterations} iterations, "
               f"{used.evaluations} evaluations: {used.message})")
     shaped = finished(problem, result, used, reason, objective=result.options.get("objective"), fallback=limited)
-    if shaped is limited or not shaped.success:
+    if not shaped.success:                   # ``limited``, saying why the path was not taken
         return shaped
     return replace(shaped, options={**shaped.options, "input_bounds": problem.input_bounds.record()})
 
