@@ -332,21 +332,24 @@ def costate_guess(endpoint: EndpointMap, controls: Controls, grid: int) -> np.nd
     return p0
 
 
-def ended(ev) -> str:
+def ended(endpoint: EndpointMap, ev) -> str:
     """Where an evaluation that is no motion at the goal ended, in words.
 
     Parameters
     ----------
+    endpoint : EndpointMap
+        The problem it was evaluated on.
     ev : Evaluation
         The evaluation.
 
     Returns
     -------
     str
-        ``"ended <error> from the goal"``, or that it is not admissible.
+        ``"ended <error> from the goal"``, or why it is not admissible
+        (:meth:`~nonholo.planning.endpoint_map.EndpointMap.why_not`).
     """
-    if ev.error is None or not ev.complete:
-        return "did not reach T within the limits"
+    if not endpoint.admissible(ev):
+        return f"did not stay admissible ({endpoint.why_not(ev)})"
     return f"ended {ev.error:.2g} from the goal"
 
 
@@ -465,7 +468,7 @@ def smooth_extremal(endpoint: EndpointMap, shot: Shot, options: Options, label: 
     metric = series.metric()
     ev = newton_steps(endpoint, ev, metric, options.tol, RESTORE_STEPS)
     if not (endpoint.admissible(ev) and ev.error <= options.tol):
-        return None, f"the extremal's Legendre series (degree {series.degree}) {ended(ev)}"
+        return None, f"the extremal's Legendre series (degree {series.degree}) {ended(endpoint, ev)}"
     E = energy(ev, metric)
     outcome = Outcome(evaluation=ev, success=True,
                       reason=(f"least energy {E:.6g}: the normal extremal from the start '{label}' "
@@ -593,7 +596,7 @@ def least_energy(endpoint: EndpointMap, initial, options: Options, grid: int, bu
         metric = ev.parametrisation.metric()
         ev = newton_steps(endpoint, ev, metric, options.tol, RESTORE_STEPS)
         if not (endpoint.admissible(ev) and ev.error <= options.tol):
-            why = why or f"the extremal's grid controls {ended(ev)}"
+            why = why or f"the extremal's grid controls {ended(endpoint, ev)}"
             continue
         E = energy(ev, metric)
         outcome = Outcome(evaluation=ev, success=True,
