@@ -161,15 +161,76 @@ def first_horizon(instance) -> float:
     return max(HORIZON_FACTOR * straight / top, instance.dt)
 
 
-#: The mechanisms planned from a route among the obstacles (:mod:`nonholo.planning.plane_route`).
+#: The mechanisms planned from a route among the obstacles (:mod:`nonholo.planning.lattice_route`,
+#: else :mod:`nonholo.planning.plane_route`).
 ROUTED = ("unicycle",)
+#: The mechanisms with drift planned from the least-time path of a first-order one along such
+#: a route (:func:`routed_with_drift`): theirs, whose speed and turning rate are coordinates.
+ROUTED_WITH_DRIFT = {"unicycle2": "unicycle"}
+#: The first horizon of a mechanism with drift, as a multiple of its first-order guide's least
+#: time (it must speed up and slow down).
+DRIFT_HORIZON = 1.3
 
 
-def routed(instance, start, goal, given):
-    """The least-time path from a route among the obstacles: the route's speed and turning
-    rate as the first guess of the path of least use of the bounds in the route's time
-    (:func:`nonholo.planning.least_time.least_use`, the obstacles kept at its nodes),
-    certified, played in the least time along it.
+def routed(mechanism: str, start, goal, given, low, high):
+    """The least-time path from a route among the obstacles (the lattice's quickest, else
+    OMPL's): the route's speed and turning rate as the first guess of the path of least use
+    of the bounds in the route's time (:func:`nonholo.planning.least_time.least_use`, the
+    obstacles kept at its nodes), certified, played in the least time along it.
+
+    Parameters
+    ----------
+    mechanism : str
+        The catalog mechanism (driven by its speed and turning rate).
+    start, goal : numpy.ndarray
+        The mechanism's coordinates at the ends.
+    given : list
+        The constraints: input bounds, state bounds, obstacles.
+    low, high : numpy.ndarray
+        The workspace's corners.
+
+    Returns
+    -------
+    PlanResult
+        The path in its least time, or a failed result saying why.
+    """
+    from ..planning import lattice_route, least_time, plane_route
+    from ..planning.problem import Problem
+    from ..planning.result_builder import build_result
+    from ..planning.retime import retime
+
+    mech = catalog.get(mechanism)
+    bounds = given[0]
+    speed = float(min(-bounds.lows[0], bounds.highs[0]))
+    turn = float(min(-bounds.lows[1], bounds.highs[1]))
+    way = lattice_route.route(given[-1], mech, start, goal, low, high, speed, turn)
+    how = "the lattice's quickest"
+    if isinstance(way, str):
+        # a passage narrower than the lattice resolves: a sampling planner's route
+        way = plane_route.route(given[-1], mech, start, goal, low, high, speed, turn)
+        how = "OMPL's RRT-Connect, Reeds–Shepp curves"
+    problem = Problem.build(start, goal, mechanism=mechanism, T=1.0 if isinstance(way, str) else way.T,
+                            objective=None, constraints=given)
+    if isinstance(way, str):
+        return build_result(problem, None, False, way)
+    seed = build_result(problem, None, False, (f"a route among the obstacles of length {way.length:.4g} in "
+                                               f"{way.T:.4g} s ({how})"))
+    used = least_time.least_use(problem, way)
+    if isinstance(used, str):
+        return dataclasses.replace(seed, reason=f"{seed.reason}; no path of least use from it: {used}")
+    reason = (f"{seed.reason}; the path of least use of the bounds from it: {used.use:.6g} of them in "
+              f"{problem.T:.6g} s (SLSQP, {used.iterations} iterations: {used.message})")
+    result = least_time.finished(problem, seed, used, reason, fallback=seed)
+    return retime(result, input_bounds=bounds) if result.success else result
+
+
+def routed_with_drift(instance, start, goal, given):
+    """The least-time path of a mechanism with drift whose speed and turning rate are
+    coordinates (:data:`ROUTED_WITH_DRIFT`): its first-order guide planned by :func:`routed`
+    with those coordinates' bounds as its input bounds; the accelerations that make the
+    speed and turning rate follow the guide's, stretched to :data:`DRIFT_HORIZON` times its
+    least time, at the nodes of the least-time grid, as the first guess of the least time
+    with drift (:func:`nonholo.planning.least_time.least_time_with_drift`).
 
     Parameters
     ----------
@@ -183,31 +244,34 @@ def routed(instance, start, goal, given):
     Returns
     -------
     PlanResult
-        The path in its least time, or a failed result saying why.
+        The least-time path, or a failed result saying why.
     """
-    from ..planning import least_time, plane_route
+    from ..controls.parametrisations import PiecewiseConstant
+    from ..planning import least_time
     from ..planning.problem import Problem
     from ..planning.result_builder import build_result
-    from ..planning.retime import retime
 
-    mech = catalog.get(instance.mechanism)
-    bounds = given[0]
-    speed = float(min(-bounds.lows[0], bounds.highs[0]))
-    turn = float(min(-bounds.lows[1], bounds.highs[1]))
-    way = plane_route.route(given[-1], mech, start, goal, instance.low, instance.high, speed, turn)
-    problem = Problem.build(start, goal, mechanism=instance.mechanism, T=1.0 if isinstance(way, str) else way.T,
-                            objective=None, constraints=given)
-    if isinstance(way, str):
-        return build_result(problem, None, False, way)
-    seed = build_result(problem, None, False, (f"a route among the obstacles of length {way.length:.4g} in "
-                                               f"{way.T:.4g} s (OMPL's RRT-Connect, Reeds–Shepp curves)"))
-    used = least_time.least_use(problem, way)
-    if isinstance(used, str):
-        return dataclasses.replace(seed, reason=f"{seed.reason}; no path of least use from it: {used}")
-    reason = (f"{seed.reason}; the path of least use of the bounds from it: {used.use:.6g} of them in "
-              f"{problem.T:.6g} s (SLSQP, {used.iterations} iterations: {used.message})")
-    result = least_time.finished(problem, seed, used, reason, fallback=seed)
-    return retime(result, input_bounds=bounds) if result.success else result
+    guide_name = ROUTED_WITH_DRIFT[instance.mechanism]
+    guide_mech = catalog.get(guide_name)
+    k = guide_mech.n_coordinates
+    states = given[1]
+    rates = InputBounds(tuple(states.lows[k:]), tuple(states.highs[k:]))
+    guide = routed(guide_name, start[:k], goal[:k], [rates, StateBounds(tuple(states.lows[:k]), tuple(states.highs[:k])),
+                                                    given[-1]], instance.low, instance.high)
+    if not guide.success:
+        problem = Problem.build(start, goal, mechanism=instance.mechanism, T=first_horizon(instance), objective=None,
+                                constraints=given)
+        return build_result(problem, None, False, f"no first-order guide: {guide.reason.rsplit('; ', 1)[-1]}")
+    T = DRIFT_HORIZON * guide.T
+    problem = Problem.build(start, goal, mechanism=instance.mechanism, T=T, objective=None, constraints=given)
+    grid = least_time.TIME_GRID
+    t = np.linspace(0.0, T, grid + 1)
+    followed = guide.controls(t * (guide.T / T)) * (guide.T / T)
+    followed[0], followed[-1] = start[k:], goal[k:]
+    guess = PiecewiseConstant(T, np.diff(followed, axis=0) / (T / grid))
+    seed = build_result(problem, None, False, (f"the first-order guide ({guide_name}) in {guide.T:.6g} s, "
+                                               f"its rates followed in {T:.6g} s"))
+    return least_time.least_time_with_drift(problem, seed, guess=guess)
 
 
 def solve(instance) -> Solution:
@@ -236,7 +300,9 @@ def solve(instance) -> Solution:
     start, goal = mechanism_state(instance, instance.start), mechanism_state(instance, instance.goal)
     try:
         if instance.mechanism in ROUTED:
-            result = routed(instance, start, goal, given)
+            result = routed(instance.mechanism, start, goal, given, instance.low, instance.high)
+        elif instance.mechanism in ROUTED_WITH_DRIFT:
+            result = routed_with_drift(instance, start, goal, given)
         else:
             result = plan(start, goal, mechanism=instance.mechanism, T=first_horizon(instance),
                           objective="time", constraints=given)

@@ -156,7 +156,7 @@ def improve(problem, result: PlanResult, quick: bool = False, budget: float | No
         ceiling = REPLACE_BELOW * plan_energy
         found = extremals.least_energy(endpoint, [("plan", means)], problem.options, grid,
                                        QUICK_EXTREMAL_EFFORT, confirmations=1, ceiling=ceiling, continued=0,
-                                       smooth=problem.mechanism.has_drift, abandon=ceiling)
+                                       smooth=True, abandon=ceiling)
         outcome, why = found.outcome, found.why
         if outcome is None and min(found.least, plan_energy) > WASTEFUL * loop_energy(endpoint, QUICK_STARTS - 1):
             # the plan is not near a motion of the loops' energy: the quick search from its

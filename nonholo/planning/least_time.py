@@ -423,7 +423,7 @@ def finished(problem, result: PlanResult, used: Use, reason: str, objective: str
     return replace(built, options={**built.options, "objective": objective}, route=result.route)
 
 
-def least_time_with_drift(problem, result: PlanResult) -> PlanResult:
+def least_time_with_drift(problem, result: PlanResult, guess=None) -> PlanResult:
     """The least time under the input bounds of a mechanism with drift, whose paths a time
     change does not keep: the horizon ``T`` at which the least use of the bounds
     (:func:`least_use`) is 1, found by the secant method on ``log s`` against ``log T`` (the
@@ -436,7 +436,9 @@ def least_time_with_drift(problem, result: PlanResult) -> PlanResult:
     problem : Problem
         The problem (its input bounds around zero; its ``T`` the first horizon tried).
     result : PlanResult
-        Its certified plan at that horizon.
+        Its certified plan at that horizon (or, with ``guess``, what the reasons extend).
+    guess : callable, optional
+        The first guess ``u(t)`` on ``[0, T]`` (default: ``result``'s controls).
 
     Returns
     -------
@@ -444,7 +446,7 @@ def least_time_with_drift(problem, result: PlanResult) -> PlanResult:
         The least-time path at its own horizon, or ``result`` with its reason saying why.
     """
     options = {**result.options, "objective": "time"}
-    T, guess = problem.T, (result.controls, problem.T)
+    T, guess = problem.T, (result.controls if guess is None else guess, problem.T)
     tried, best, slow, fast = [], None, math.inf, 0.0
     for _ in range(HORIZONS):
         at = dataclasses.replace(problem, T=T)

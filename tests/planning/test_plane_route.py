@@ -1,6 +1,6 @@
-"""The route among obstacles of a planar vehicle (OMPL's RRT-Connect, Reeds–Shepp curves):
-checked against shapely's geometry of the boxes directly and a closed-form replay of the
-unicycle along its rates."""
+"""The routes among obstacles of a planar vehicle (OMPL's RRT-Connect in Reeds–Shepp curves,
+and the lattice's quickest): checked against shapely's geometry of the boxes directly and a
+closed-form replay of the unicycle along their rates."""
 from dataclasses import replace
 from pathlib import Path
 
@@ -11,7 +11,7 @@ import shapely
 from nonholo import dynobench
 from nonholo.dynobench.solve import obstacles
 from nonholo.model import catalog
-from nonholo.planning import plane_route
+from nonholo.planning import lattice_route, plane_route
 
 ROOT = Path(__file__).resolve().parents[2]
 KINK = ROOT / "benchmarks" / "dynobench" / "envs" / "unicycle1_v0" / "kink_0.yaml"
@@ -70,3 +70,62 @@ def test_a_goal_walled_off_has_no_route_within_the_sample_budget():
     boxed = replace(inst, obstacles=tuple(ring))
     why = plane_route.route(obstacles(boxed, 5e-3), UNICYCLE, inst.start, inst.goal, inst.low, inst.high, 0.5, 0.5)
     assert isinstance(why, str) and "no route" in why and str(plane_route.MAX_SAMPLES) in why
+
+
+def played_states(start, times, rates, per_piece=20):
+    """The unicycle's states along its rates, ``per_piece`` points within each piece."""
+    out, state = [np.asarray(start, dtype=float)], np.asarray(start, dtype=float)
+    for t0, t1, r in zip(times[:-1], times[1:], rates):
+        for f in np.arange(1, per_piece + 1) / per_piece:
+            out.append(unicycle_replay(state, [0.0, f * (t1 - t0)], [r]))
+        state = out[-1]
+    return np.array(out)
+
+
+def test_the_lattice_route_takes_the_kinks_corridor_clear_and_quicker_than_the_way_round():
+    """The lattice's route through the kink: every body along the played motion (20 points a
+    piece, turns included) clear of the boxes, through the corridor between them, ending
+    within a grid cell of the goal; quicker than OMPL's route round the boxes."""
+    inst = dynobench.load(KINK)
+    kept = obstacles(inst, 5e-3)
+    way = lattice_route.route(kept, UNICYCLE, inst.start, inst.goal, inst.low, inst.high, 0.5, 0.5)
+    assert isinstance(way, plane_route.Route), way
+    assert np.abs(way.rates).max() <= 0.5 * (1 + 1e-12)
+    walls = [box(*o.center, 0.0, *o.size) for o in inst.obstacles]
+    length, width = inst.bodies[0]
+    states = played_states(inst.start, way.times, way.rates)
+    for x, y, th in states:
+        assert min(box(x, y, th, length, width).distance(w) for w in walls) > 0.0
+        assert inst.low[0] - 1e-9 <= x <= inst.high[0] + 1e-9 and inst.low[1] - 1e-9 <= y <= inst.high[1] + 1e-9
+    # through the corridor: between the boxes at x = 3, 3 < y < 4.4
+    assert np.any((np.abs(states[:, 0] - 3.0) < 0.3) & (states[:, 1] > 3.0) & (states[:, 1] < 4.4))
+    cell = lattice_route.CELL_OF_WIDTH * width
+    assert np.hypot(*(states[-1, :2] - inst.goal[:2])) <= cell
+    round_about = plane_route.route(kept, UNICYCLE, inst.start, inst.goal, inst.low, inst.high, 0.5, 0.5)
+    assert way.T < round_about.T
+
+
+def test_the_lattice_route_of_a_shifted_instance_is_the_route_shifted():
+    """The instance moved by (−7.3, 2.1): the same route, moved."""
+    inst = dynobench.load(KINK)
+    shift = np.array([-7.3, 2.1])
+    moved = replace(inst, start=inst.start + np.r_[shift, 0.0], goal=inst.goal + np.r_[shift, 0.0],
+                    low=inst.low + shift, high=inst.high + shift,
+                    obstacles=tuple(dynobench.instance.Box(tuple(np.add(o.center, shift)), o.size)
+                                    for o in inst.obstacles))
+    a = lattice_route.route(obstacles(inst, 5e-3), UNICYCLE, inst.start, inst.goal, inst.low, inst.high, 0.5, 0.5)
+    b = lattice_route.route(obstacles(moved, 5e-3), UNICYCLE, moved.start, moved.goal, moved.low, moved.high,
+                            0.5, 0.5)
+    assert a.states.shape == b.states.shape
+    np.testing.assert_allclose(b.states[:, :2], a.states[:, :2] + shift, atol=1e-9)
+    np.testing.assert_allclose(b.states[:, 2], a.states[:, 2], atol=1e-12)
+
+
+def test_a_goal_walled_off_has_no_lattice_route():
+    """The kink's goal inside a ring of walls: no route on the lattice, said."""
+    inst = dynobench.load(KINK)
+    ring = [dynobench.instance.Box((5.5, 4.0 + d), (1.4, 0.1)) for d in (-0.55, 0.55)] + \
+           [dynobench.instance.Box((5.5 + d, 4.0), (0.1, 1.2)) for d in (-0.55, 0.55)]
+    boxed = replace(inst, obstacles=tuple(ring))
+    why = lattice_route.route(obstacles(boxed, 5e-3), UNICYCLE, inst.start, inst.goal, inst.low, inst.high, 0.5, 0.5)
+    assert isinstance(why, str) and "no route on the lattice" in why
