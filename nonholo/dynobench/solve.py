@@ -170,6 +170,9 @@ ROUTED_WITH_DRIFT = {"unicycle2": "unicycle"}
 #: The first horizon of a mechanism with drift, as a multiple of its first-order guide's least
 #: time (it must speed up and slow down).
 DRIFT_HORIZON = 1.3
+#: The least time with drift is found to this fraction of the model's step (it is rounded up
+#: to a whole number of steps).
+RESOLUTION = 0.25
 
 
 def routed(mechanism: str, start, goal, given, low, high):
@@ -271,7 +274,7 @@ def routed_with_drift(instance, start, goal, given):
     guess = PiecewiseConstant(T, np.diff(followed, axis=0) / (T / grid))
     seed = build_result(problem, None, False, (f"the first-order guide ({guide_name}) in {guide.T:.6g} s, "
                                                f"its rates followed in {T:.6g} s"))
-    return least_time.least_time_with_drift(problem, seed, guess=guess)
+    return least_time.least_time_with_drift(problem, seed, guess=guess, resolution=RESOLUTION * instance.dt)
 
 
 def solve(instance) -> Solution:
@@ -316,6 +319,9 @@ def solve(instance) -> Solution:
     T = K * instance.dt
     if not result.kinematics.has_drift:
         played = retime(result, T=T, input_bounds=given[0])
+    elif abs(result.T - T) <= 1e-9 * T:
+        # found on the model's steps already
+        played = dataclasses.replace(result, options={**result.options, "input_bounds": given[0].record()})
     else:
         problem = Problem.build(start, goal, mechanism=instance.mechanism, T=T, objective=None,
                                 constraints=given)     # the obstacles kept in the least use at T too

@@ -311,8 +311,9 @@ class Obstacles:
         placed = shapely.polygons(corners)
         obstacles = shapely.polygons([np.asarray(p) for p in self.polygons])
         d = shapely.distance(placed[:, None], obstacles[None, :])          # (n, K): 0 where they meet
-        for i, j in zip(*np.nonzero(d <= 0.0)):
-            d[i, j] = -overlap_depth(corners[i], np.asarray(self.polygons[j]))
+        met = np.nonzero(d <= 0.0)
+        if met[0].size:
+            d[met] = -overlap_depths(corners[met[0]], [np.asarray(self.polygons[j]) for j in met[1]])
         return d.min(axis=1)
 
 
@@ -361,6 +362,29 @@ def overlap_depth(a: np.ndarray, b: np.ndarray) -> float:
 
     difference = _hull((a[:, None, :] - b[None, :, :]).reshape(-1, 2))
     return float(shapely.distance(difference.exterior, shapely.Point(0.0, 0.0)))
+
+
+def overlap_depths(a: np.ndarray, bs: list) -> np.ndarray:
+    """:func:`overlap_depth` of many pairs at once (shapely's vectorised hulls and distances).
+
+    Parameters
+    ----------
+    a : numpy.ndarray
+        The first polygons' corners, ``(n, p, 2)``.
+    bs : list of numpy.ndarray
+        The second polygons' corners, ``n`` arrays ``(r, 2)``.
+
+    Returns
+    -------
+    numpy.ndarray
+        The depths, ``(n,)``.
+    """
+    import shapely
+
+    points = [(ai[:, None, :] - b[None, :, :]).reshape(-1, 2) for ai, b in zip(a, bs)]
+    index = np.repeat(np.arange(len(points)), [p.shape[0] for p in points])
+    hulls = shapely.convex_hull(shapely.multipoints(np.concatenate(points), indices=index))
+    return shapely.distance(shapely.get_exterior_ring(hulls), shapely.Point(0.0, 0.0))
 
 
 def _hull(points: np.ndarray):

@@ -420,8 +420,12 @@ def node_sensitivities(endpoint: EndpointMap, ev: Evaluation, nodes: np.ndarray)
     numpy.ndarray
         The sensitivities, ``(len(nodes), d, p)``.
     """
-    N, m, D = endpoint.steps, endpoint.mechanism.n_inputs, endpoint.mechanism.n_rates
     nodes = np.asarray(nodes, dtype=int)
+    unique, inverse = np.unique(nodes, return_inverse=True)
+    if unique.size < nodes.size:
+        # a node asked for more than once (several limits at it): its sensitivity once
+        return node_sensitivities(endpoint, ev, unique)[inverse]
+    N, m, D = endpoint.steps, endpoint.mechanism.n_inputs, endpoint.mechanism.n_rates
     W = ev.Wd.reshape(N, 3, D, m)
     Bidx, Bval, sb, si = endpoint.stage_basis
     p = endpoint.n_params

@@ -38,6 +38,12 @@ from .result_builder import build_result
 TIME_GRID = 50
 #: SLSQP iterations at most.
 MAX_ITERATIONS = 200
+#: Evaluations SLSQP may take beyond ``struggle`` per iteration (:func:`least_use`).
+STRUGGLE_SLACK = 20
+#: The least time with drift stops SLSQP at a horizon after the first once it takes this
+#: many evaluations per iteration (:func:`least_time_with_drift`): a path found near the last
+#: one needs about one.
+STRUGGLE = 2.0
 #: SLSQP's tolerance on the objective ``s``.
 FTOL = 1e-10
 #: The limits of the motion are kept with this margin (their units) in the optimisation, so
@@ -259,7 +265,7 @@ class Use:
     evaluations: int
 
 
-def least_use(problem, controls) -> Use | str:
+def least_use(problem, controls, struggle: float = math.inf) -> Use | str:
     """The path of least use ``s`` of the problem's input bounds in its ``T`` (the problem of
     :class:`PathProblem`), from the grid means of ``controls``, brought onto the goal; or why
     there is none.
@@ -270,6 +276,10 @@ def least_use(problem, controls) -> Use | str:
         The problem (its input bounds around zero).
     controls : callable
         The first guess ``u(t)`` on ``[0, T]``.
+    struggle : float, default inf
+        SLSQP is stopped once its evaluations pass this many per iteration (plus
+        :data:`STRUGGLE_SLACK`): line searches that keep failing, as at a horizon too short
+        for any path (a search over horizons need not wait for SLSQP to say so).
 
     Returns
     -------
@@ -291,20 +301,29 @@ def least_use(problem, controls) -> Use | str:
     path = PathProblem(endpoint, grid, bounds.lows, bounds.highs, problem.obstacles)
     lam = ev.params
     x0 = np.append(lam, max(float(bounds.usage(lam.reshape(grid, -1)).max()), 1e-9))
+    start_use = float(x0[-1])
     A = path.bounds_matrix()
     constraints = [{"type": "eq", "fun": path.goal, "jac": path.goal_jacobian},
                    {"type": "ineq", "fun": lambda x: A @ x, "jac": lambda x: A},
                    {"type": "ineq", "fun": path.limits, "jac": path.limits_jacobian}]
     objective_row = np.zeros(path.p + 1)
     objective_row[-1] = 1.0
+    iterations = [0]
+
+    def struggling(_):
+        iterations[0] += 1
+        if path.evaluations > struggle * iterations[0] + STRUGGLE_SLACK:
+            raise StopIteration
+
     found = minimize(lambda x: x[-1], x0, jac=lambda x: objective_row, method="SLSQP", constraints=constraints,
-                     options={"maxiter": MAX_ITERATIONS, "ftol": FTOL})
+                     options={"maxiter": MAX_ITERATIONS, "ftol": FTOL},
+                     callback=struggling if math.isfinite(struggle) else None)
     values = found.x[:path.p].reshape(grid, -1)
     ev = endpoint.evaluate(PiecewiseConstant(endpoint.T, values))
     ev = newton_steps(endpoint, ev, fitted.metric(), problem.options.tol, RESTORE_STEPS)
     if not (endpoint.admissible(ev) and ev.error <= problem.options.tol):
         return f"its motion is not admissible or does not end at the goal ({found.message})"
-    return Use(endpoint, ev, float(bounds.usage(ev.params.reshape(grid, -1)).max()), float(x0[-1]),
+    return Use(endpoint, ev, float(bounds.usage(ev.params.reshape(grid, -1)).max()), start_use,
                str(found.message), int(found.nit), path.evaluations)
 
 
@@ -423,7 +442,7 @@ def finished(problem, result: PlanResult, used: Use, reason: str, objective: str
     return replace(built, options={**built.options, "objective": objective}, route=result.route)
 
 
-def least_time_with_drift(problem, result: PlanResult, guess=None) -> PlanResult:
+def least_time_with_drift(problem, result: PlanResult, guess=None, resolution: float = 0.0) -> PlanResult:
     """The least time under the input bounds of a mechanism with drift, whose paths a time
     change does not keep: the horizon ``T`` at which the least use of the bounds
     (:func:`least_use`) is 1, found by the secant method on ``log s`` against ``log T`` (the
@@ -439,6 +458,10 @@ def least_time_with_drift(problem, result: PlanResult, guess=None) -> PlanResult
         Its certified plan at that horizon (or, with ``guess``, what the reasons extend).
     guess : callable, optional
         The first guess ``u(t)`` on ``[0, T]`` (default: ``result``'s controls).
+    resolution : float, default 0
+        The search also ends once the least horizon that keeps the bounds is within this
+        many seconds of the greatest that does not (a horizon to be rounded up to a whole
+        number of steps needs no finer one).
 
     Returns
     -------
@@ -450,7 +473,7 @@ def least_time_with_drift(problem, result: PlanResult, guess=None) -> PlanResult
     tried, best, slow, fast = [], None, math.inf, 0.0
     for _ in range(HORIZONS):
         at = dataclasses.replace(problem, T=T)
-        used = least_use(at, stretched(*guess, T))
+        used = least_use(at, stretched(*guess, T), struggle=STRUGGLE if best is not None else math.inf)
         if isinstance(used, str):
             s = math.inf
         else:
@@ -461,7 +484,7 @@ def least_time_with_drift(problem, result: PlanResult, guess=None) -> PlanResult
         if s > KEPT:
             fast = max(fast, T)
         tried.append((math.log(T), math.log(s) if math.isfinite(s) else math.inf))
-        if best is not None and (1.0 - TIME_RTOL <= s <= KEPT or slow <= fast * (1.0 + TIME_RTOL)):
+        if best is not None and (1.0 - TIME_RTOL <= s <= KEPT or slow <= fast * (1.0 + TIME_RTOL) + resolution):
             break
         T = _next_horizon(tried, fast, slow)
     if best is None:

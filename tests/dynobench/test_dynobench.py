@@ -230,6 +230,48 @@ def test_the_parallel_parks_are_solved_and_pass_the_checks(tmp_path):
             assert hit.distance > -1e-2
 
 
+#: Instances the route on the lattice leads through a corridor or out of a trap, with the best
+#: published cost J_f (iDb-A*, T-RO 2024 table).
+ROUTED = {("unicycle1_v0", "kink_0"): 13.2, ("unicycle1_v0", "bugtrap_0"): 20.9,
+          ("unicycle2_v0", "kink_0"): 17.7, ("unicycle2_v0", "bugtrap_0"): 25.0}
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("robot, name", sorted(ROUTED))
+def test_the_kinks_and_bugtraps_are_solved_at_or_below_the_published_cost(robot, name, tmp_path):
+    """The unicycles through the kink's corridor and out of the bugtrap: the written trajectory
+    passes the project's checker, its cost at most the best published."""
+    env = COPIES / "envs" / robot / f"{name}.yaml"
+    out = tmp_path / "solution.yaml"
+    run = subprocess.run([sys.executable, "-m", "nonholo", "dynobench", str(env), "--out", str(out)],
+                         capture_output=True, text=True, timeout=600)
+    assert run.returncode == 0, run.stdout + run.stderr
+    inst, trajectory = dynobench.load(env), dynobench.read(out)
+    report = dynobench.check(inst, trajectory["states"], trajectory["actions"])
+    assert report.feasible, report.failures()
+    assert report.cost <= ROUTED[robot, name] + 1e-9
+
+
+def test_overlap_depths_are_those_of_the_boxes_closed_form():
+    """Axis-aligned boxes: the depth of their overlap is the least of the overlaps along x and
+    y; the vectorised depths equal it and the one-pair form."""
+    from nonholo.model.obstacles import overlap_depth, overlap_depths
+
+    rng = np.random.default_rng(5)
+    a, bs, expected = [], [], []
+    for _ in range(40):
+        c1, c2 = rng.uniform(-0.15, 0.15, 2), rng.uniform(-0.15, 0.15, 2)     # overlapping: |Δc| < 0.4
+        h1, h2 = rng.uniform(0.2, 0.6, 2), rng.uniform(0.2, 0.6, 2)
+        box = lambda c, h: np.array([c + [-h[0], -h[1]], c + [h[0], -h[1]], c + [h[0], h[1]], c + [-h[0], h[1]]])
+        a.append(box(c1, h1))
+        bs.append(box(c2, h2))
+        overlap = h1 + h2 - np.abs(c1 - c2)
+        expected.append(overlap.min())
+    depths = overlap_depths(np.array(a), bs)
+    np.testing.assert_allclose(depths, expected, atol=1e-12)
+    np.testing.assert_allclose(depths, [overlap_depth(x, y) for x, y in zip(a, bs)], atol=1e-12)
+
+
 def test_a_plan_with_obstacles_is_saved_and_loaded_and_a_bad_record_refused(tmp_path):
     import json
 
