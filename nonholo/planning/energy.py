@@ -22,10 +22,11 @@ inputs; if no start ends at a certified control at least as cheap as the plan's,
 is returned as it was, its reason saying why. :func:`improve` runs the stage for
 ``objective="energy"`` and, quickly, for ``objective="auto"``, which keeps the plan unless
 the extremal through it needs far less energy (or, for a wasteful plan, a motion the quick
-search finds does); that motion is then made smooth
-(:mod:`nonholo.planning.energy_smoothing`): grid controls jump at every interval, which a
-physical mechanism cannot follow. Where the fit cannot be brought onto the goal, the
-plan's own fit is lowered instead; where neither does, the plan is kept.
+search finds does). That extremal is returned as the Legendre series of its inputs
+(:func:`~nonholo.planning.extremals.smooth_extremal`: the extremal itself, smooth); grid
+controls, which jump at every interval and which a physical mechanism cannot follow, are
+made smooth (:mod:`nonholo.planning.energy_smoothing`). Where the fit cannot be brought
+onto the goal, the plan's own fit is lowered instead; where neither does, the plan is kept.
 """
 from __future__ import annotations
 
@@ -114,7 +115,8 @@ def improve(problem, result: PlanResult, quick: bool = False, budget: float | No
     ``quick`` (``objective="auto"``): the extremal through the plan within
     :data:`QUICK_EXTREMAL_EFFORT` — and, where the plan is wasteful (:data:`WASTEFUL`), the
     search from the first :data:`QUICK_STARTS` starts within :data:`QUICK_EFFORT` — and the
-    plan replaced only by a motion needing less than :data:`REPLACE_BELOW` of its energy, made smooth
+    plan replaced only by a motion needing less than :data:`REPLACE_BELOW` of its energy: the
+    extremal as a Legendre series, a grid motion made smooth
     (:func:`~nonholo.planning.energy_smoothing.smoothed`); otherwise it is returned unchanged
     but for ``options`` (and, where the smooth fit does not end at the goal below that
     energy, its reason saying so: grid controls, which jump at every interval, are no motion
