@@ -10,11 +10,13 @@ in ``K dt`` — re-timed along its path without drift, re-planned at that horizo
 then exported (:func:`~nonholo.dynobench.trajectory.to_dynobench`) and checked by the
 project's own checker (:func:`~nonholo.dynobench.checker.check`). The obstacles are kept
 at the nodes of the least-time path (:class:`~nonholo.model.obstacles.Obstacles`). For the
-unicycle (:data:`ROUTED`) that path starts from a route among the obstacles
-(:mod:`nonholo.planning.plane_route`: OMPL's RRT-Connect in the Reeds–Shepp space), which
-leads it out of a trap and round a wall (:func:`routed`); for the others from the
-least-energy path without them: a local method, which brings a motion out of an obstacle it
-crosses near its edge but finds no route round a wall.
+unicycle (:data:`ROUTED`) that path starts from a route among the obstacles — the quickest
+on a lattice of poses (:mod:`nonholo.planning.lattice_route`), else OMPL's RRT-Connect in
+the Reeds–Shepp space (:mod:`nonholo.planning.plane_route`) — which leads it through a
+corridor, out of a trap and round a wall (:func:`routed`); the second-order unicycle
+(:data:`ROUTED_WITH_DRIFT`) from that unicycle's least-time path (:func:`routed_with_drift`);
+the others from the least-energy path without obstacles: a local method, which brings a
+motion out of an obstacle it crosses near its edge but finds no route round a wall.
 """
 from __future__ import annotations
 
@@ -204,16 +206,22 @@ def routed(mechanism: str, start, goal, given, low, high):
 
     mech = catalog.get(mechanism)
     bounds = given[0]
-    speed = float(min(-bounds.lows[0], bounds.highs[0]))
     turn = float(min(-bounds.lows[1], bounds.highs[1]))
-    way = lattice_route.route(given[-1], mech, start, goal, low, high, speed, turn)
-    how = "the lattice's quickest"
-    if isinstance(way, str):
-        # a passage narrower than the lattice resolves: a sampling planner's route
-        way = plane_route.route(given[-1], mech, start, goal, low, high, speed, turn)
-        how = "OMPL's RRT-Connect, Reeds–Shepp curves"
+    if bounds.lows[0] > 0:
+        # a vehicle that only drives forward: Dubins curves at its least speed's tightest turn
+        speed, slowest = float(bounds.highs[0]), float(bounds.lows[0])
+        way = plane_route.route(given[-1], mech, start, goal, low, high, speed, turn, slowest=slowest)
+        how = "OMPL's RRT-Connect, Dubins curves"
+    else:
+        speed = float(min(-bounds.lows[0], bounds.highs[0]))
+        way = lattice_route.route(given[-1], mech, start, goal, low, high, speed, turn)
+        how = "the lattice's quickest"
+        if isinstance(way, str):
+            # a passage narrower than the lattice resolves: a sampling planner's route
+            way = plane_route.route(given[-1], mech, start, goal, low, high, speed, turn)
+            how = "OMPL's RRT-Connect, Reeds–Shepp curves"
     problem = Problem.build(start, goal, mechanism=mechanism, T=1.0 if isinstance(way, str) else way.T,
-                            objective=None, constraints=given)
+                            objective="time", constraints=given)
     if isinstance(way, str):
         return build_result(problem, None, False, way)
     seed = build_result(problem, None, False, (f"a route among the obstacles of length {way.length:.4g} in "
@@ -223,6 +231,8 @@ def routed(mechanism: str, start, goal, given, low, high):
         return dataclasses.replace(seed, reason=f"{seed.reason}; no path of least use from it: {used}")
     reason = (f"{seed.reason}; the path of least use of the bounds from it: {used.use:.6g} of them in "
               f"{problem.T:.6g} s (SLSQP, {used.iterations} iterations: {used.message})")
+    if not bounds.holds_zero:
+        return least_time.least_time_off_zero(problem, seed, used)
     result = least_time.finished(problem, seed, used, reason, fallback=seed)
     return retime(result, input_bounds=bounds) if result.success else result
 
@@ -317,8 +327,17 @@ def solve(instance) -> Solution:
                         seconds=time.perf_counter() - started)
     K = max(1, math.ceil(result.T / instance.dt - 1e-9))
     T = K * instance.dt
-    if not result.kinematics.has_drift:
+    if not result.kinematics.has_drift and given[0].holds_zero:
         played = retime(result, T=T, input_bounds=given[0])
+    elif not result.kinematics.has_drift:
+        # bounds off zero: the least time's path slowed by one factor, where its inputs allow
+        room = float(given[0].slack(result.parametrisation.values).min()) * result.T
+        if T > room * (1.0 + 1e-12):
+            return Solution(False, f"the least time {result.T:.6g} s found, but its path cannot be slowed to "
+                                   f"{T:g} s within the bounds off zero (at most {room:.6g} s)", result,
+                            seconds=time.perf_counter() - started)
+        problem = Problem.build(start, goal, mechanism=instance.mechanism, T=T, objective="time", constraints=given)
+        played = least_time.played_in(problem, result, T, f"played in {K} steps of {instance.dt:g} s")
     elif abs(result.T - T) <= 1e-9 * T:
         # found on the model's steps already
         played = dataclasses.replace(result, options={**result.options, "input_bounds": given[0].record()})

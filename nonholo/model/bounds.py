@@ -185,8 +185,10 @@ class InputBounds(Box):
     ----------
     low, high : float or sequence of float
         The box: one number for every input, or one per input; ``-inf``/``inf`` where
-        free. Every bound must hold zero inside (``low < 0 < high``), which
-        :meth:`check` enforces.
+        free. A bound that does not hold zero inside (``low < 0 < high``: a vehicle that only
+        drives forward, ``0 < v_min ≤ v``) is kept by the least time alone
+        (``objective="time"``, without drift), which scales the whole motion's time by one
+        factor: a re-timing along the path slows the motion down to rest where it turns.
 
     Raises
     ------
@@ -221,13 +223,30 @@ class InputBounds(Box):
         """
         names = input_names(mechanism)
         low, high = self._fit(mechanism.n_inputs, names, mechanism)
-        for name, a, b in zip(names, low, high):
-            if not a < 0.0 < b:
-                raise ValueError(f"InputBounds: the bound {a:g} ≤ {name} ≤ {b:g} of mechanism "
-                                 f"{mechanism.name!r} does not hold 0 inside (low < 0 < high): a re-timing "
-                                 f"scales the inputs by dτ/dt > 0, which neither turns their sign nor lifts "
-                                 f"them off 0, and the planner keeps no other input bound")
         return InputBounds(low, high)
+
+    @property
+    def holds_zero(self) -> bool:
+        """Whether every bound holds zero inside (``low < 0 < high``)."""
+        return bool(np.all(np.asarray(self.lows) < 0.0) and np.all(np.asarray(self.highs) > 0.0))
+
+    def off_zero(self, mechanism) -> str | None:
+        """The first bound that does not hold zero inside, in words (``None`` where all do).
+
+        Parameters
+        ----------
+        mechanism : Mechanism
+            The mechanism, for the inputs' names.
+
+        Returns
+        -------
+        str or None
+            E.g. ``"0.25 ≤ v ≤ 0.5"``.
+        """
+        for name, a, b in zip(input_names(mechanism), self.lows, self.highs):
+            if not a < 0.0 < b:
+                return f"{a:g} ≤ {name} ≤ {b:g}"
+        return None
 
     def refusal(self, mechanism, start, goal) -> str | None:
         """Never a reason: any path can be re-timed to keep the bounds.
@@ -248,7 +267,9 @@ class InputBounds(Box):
 
     def usage(self, u) -> np.ndarray:
         """How much of its bound the most loaded input uses, at each sample:
-        ``max_i max(u_i/high_i, u_i/low_i)`` (0 where free; above 1: a bound is broken).
+        ``max_i max(u_i/high_i, u_i/low_i)`` over the sides away from zero (``high_i > 0``,
+        ``low_i < 0``; 0 where free; above 1: such a bound is broken). A side off zero (``0 <
+        low_i``) is met by :meth:`slack` instead.
 
         Parameters
         ----------
@@ -261,9 +282,33 @@ class InputBounds(Box):
             Shape ``(...)``.
         """
         u = np.asarray(u, dtype=float)
+        highs, lows = np.asarray(self.highs, dtype=float), np.asarray(self.lows, dtype=float)
         with np.errstate(divide="ignore", invalid="ignore"):
-            ratio = np.maximum(u / self.highs, u / self.lows)
-        return np.max(np.where(np.isnan(ratio), np.inf, ratio), axis=-1)
+            ratio = np.maximum(np.where(highs > 0.0, u / highs, -np.inf), np.where(lows < 0.0, u / lows, -np.inf))
+        ratio = np.where(np.isnan(u), np.inf, np.maximum(ratio, 0.0))
+        return np.max(ratio, axis=-1)
+
+    def slack(self, u) -> np.ndarray:
+        """The largest factor the inputs may be divided by (a motion slowed down that much) and
+        still meet the sides off zero (``0 < low_i`` or ``high_i < 0``), at each sample:
+        ``min_i u_i/low_i`` over those sides (``inf`` without any; below 1: such a bound is
+        broken).
+
+        Parameters
+        ----------
+        u : array_like
+            Inputs, ``(..., m)`` (checked bounds: ``m`` entries).
+
+        Returns
+        -------
+        numpy.ndarray
+            Shape ``(...)``.
+        """
+        u = np.asarray(u, dtype=float)
+        highs, lows = np.asarray(self.highs, dtype=float), np.asarray(self.lows, dtype=float)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            ratio = np.minimum(np.where(lows > 0.0, u / lows, np.inf), np.where(highs < 0.0, u / highs, np.inf))
+        return np.min(np.where(np.isnan(ratio), -np.inf, ratio), axis=-1)
 
     def excess(self, u, times=None, names=None) -> str | None:
         """Where inputs break the bounds by more than :data:`BOUND_RTOL` (relative).

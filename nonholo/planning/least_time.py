@@ -321,8 +321,10 @@ def least_use(problem, controls, struggle: float = math.inf) -> Use | str:
     values = found.x[:path.p].reshape(grid, -1)
     ev = endpoint.evaluate(PiecewiseConstant(endpoint.T, values))
     ev = newton_steps(endpoint, ev, fitted.metric(), problem.options.tol, RESTORE_STEPS)
-    if not (endpoint.admissible(ev) and ev.error <= problem.options.tol):
-        return f"its motion is not admissible or does not end at the goal ({found.message})"
+    if not endpoint.admissible(ev):
+        return f"its motion {endpoint.why_not(ev)} (SLSQP: {found.message})"
+    if not ev.error <= problem.options.tol:
+        return f"its motion ends {ev.error:.2g} from the goal (SLSQP: {found.message})"
     return Use(endpoint, ev, float(bounds.usage(ev.params.reshape(grid, -1)).max()), start_use,
                str(found.message), int(found.nit), path.evaluations)
 
@@ -352,6 +354,8 @@ def least_time_path(problem, result: PlanResult) -> PlanResult:
     if problem.mechanism.has_drift:
         return least_time_with_drift(problem, result)
     used = least_use(problem, result.controls)
+    if not problem.input_bounds.holds_zero:
+        return least_time_off_zero(problem, result, used)
     if isinstance(used, str) or not used.use < used.start_use:
         why = used if isinstance(used, str) else \
             f"it is not faster than the plan's ({used.use:.6g} ≥ {used.start_use:.6g} of the bounds in T)"
@@ -360,6 +364,82 @@ def least_time_path(problem, result: PlanResult) -> PlanResult:
               f"T = {problem.T:g} s (the plan's {used.start_use:.6g}; SLSQP, {used.iterations} iterations, "
               f"{used.evaluations} evaluations: {used.message})")
     return finished(problem, result, used, reason)
+
+
+def least_time_off_zero(problem, result: PlanResult, used) -> PlanResult:
+    """Under bounds off zero (``0 < low``: a vehicle that only drives forward), the path of
+    least use played in its least time by one time factor (:func:`played_in`): the path
+    of least use ``s`` in ``T`` keeps ``s·low ≤ u ≤ s·high``, so ``u/s`` keeps the bounds in
+    ``s T`` — the least time of any path on the grid. (A re-timing along the path would slow it
+    down to rest where it turns.)
+
+    Parameters
+    ----------
+    problem : Problem
+        The problem.
+    result : PlanResult
+        Its certified plan (the first guess of :func:`least_use`).
+    used : Use or str
+        The path of least use in ``T``, or why there is none.
+
+    Returns
+    -------
+    PlanResult
+        The path in its least time, or ``result`` failed with the reason.
+    """
+    options = {**result.options, "objective": "time"}
+    if isinstance(used, str):
+        return replace(result, success=False, options=options,
+                       reason=f"{result.reason}; no path keeps the input bounds: {used}")
+    bounds = problem.input_bounds
+    values = used.evaluation.params.reshape(TIME_GRID, -1)
+    factor = float(bounds.usage(values).max())
+    room = float(bounds.slack(values).min())
+    if not 0.0 < factor <= room * (1.0 + BOUND_RTOL):
+        return replace(result, success=False, options=options,
+                       reason=(f"{result.reason}; the path of least use of the bounds ({factor:.6g} of them) does "
+                               f"not keep their sides off zero in its least time (they allow {room:.6g})"))
+    base = finished(problem, result, used, (f"{result.reason}; then the path of least use of the input bounds in "
+                                            f"T = {problem.T:g} s, {factor:.6g} of them (SLSQP, {used.iterations} "
+                                            f"iterations: {used.message})"))
+    if not base.success:
+        return replace(base, success=False)
+    return played_in(problem, base, factor * problem.T, "played in its least time by one time factor")
+
+
+def played_in(problem, result: PlanResult, T: float, how: str) -> PlanResult:
+    """A certified path of grid controls played in ``T`` by one time factor: every input times
+    ``result.T / T`` (a driftless path is kept), certified on as many steps; ``result``
+    failed, saying why, where the certificate fails.
+
+    Parameters
+    ----------
+    problem : Problem
+        The problem (any horizon).
+    result : PlanResult
+        The path (grid controls, ``method="nonparametric"``).
+    T : float
+        The horizon (s).
+    how : str
+        What the reason says of it.
+
+    Returns
+    -------
+    PlanResult
+        The path in ``T``.
+    """
+    at = dataclasses.replace(problem, T=T)
+    endpoint = at.evaluator(method="nonparametric", steps=result.steps)
+    values = np.asarray(result.parametrisation.values) * (result.T / T)
+    ev = endpoint.evaluate(PiecewiseConstant(T, values))
+    outcome = Outcome(evaluation=ev, success=True, reason=f"{result.reason}; {how}: T = {T:.6g} s",
+                      history=result.history, iterations=result.iterations)
+    outcome = certified(outcome, endpoint, at.options)
+    if not outcome.success:
+        return replace(result, success=False, reason=f"{result.reason}; not played in T = {T:.6g} s: {outcome.reason}")
+    lowered = at.with_settings(method="nonparametric", grid=values.shape[0], steps=endpoint.steps)
+    built = build_result(lowered, outcome, True, outcome.reason, endpoint)
+    return replace(built, options={**built.options, "objective": result.options.get("objective")}, route=result.route)
 
 
 def within_bounds(problem, result: PlanResult, limited: PlanResult) -> PlanResult:

@@ -67,10 +67,12 @@ class Route:
         return self.rates[k]
 
 
-def route(obstacles, mechanism, start, goal, low, high, speed: float, turn: float) -> Route | str:
+def route(obstacles, mechanism, start, goal, low, high, speed: float, turn: float,
+          slowest: float = 0.0) -> Route | str:
     """A route from ``start`` to ``goal`` (their ``(x, y, θ)``) inside the box ``low ≤ (x, y) ≤
     high`` clear of the obstacles, played at most at ``speed`` and ``turn`` (see the
-    module); or why there is none.
+    module); or why there is none. A vehicle that only drives forward (``slowest > 0``)
+    follows Dubins curves instead, of the radius ``slowest / turn`` its tightest turn has.
 
     Parameters
     ----------
@@ -85,6 +87,8 @@ def route(obstacles, mechanism, start, goal, low, high, speed: float, turn: floa
         The workspace's corners.
     speed, turn : float
         The top speed and turning rate (positive).
+    slowest : float, default 0
+        The least forward speed of a vehicle that does not stop or reverse (0: it does).
 
     Returns
     -------
@@ -117,7 +121,7 @@ def route(obstacles, mechanism, start, goal, low, high, speed: float, turn: floa
             return True
         return bool(obstacles.clearances(mechanism, coordinates(x, y, theta)[None, :]).min() >= obstacles.margin)
 
-    space = ob.ReedsSheppStateSpace(TURNING_RADIUS)
+    space = ob.DubinsStateSpace(slowest / turn) if slowest > 0 else ob.ReedsSheppStateSpace(TURNING_RADIUS)
     bounds = ob.RealVectorBounds(2)
     for i in range(2):
         bounds.setLow(i, float(low[i]))

@@ -169,6 +169,12 @@ class Problem:
                 raise ValueError(f"T=None asks for the least time, which needs a LegSpeed (a platform's) or "
                                  f"InputBounds in constraints to re-time the path under; mechanism "
                                  f"{mech.name!r} has no input bounds of its own")
+        off = next((c.off_zero(mech) for c in given if isinstance(c, InputBounds) and c.off_zero(mech)), None)
+        if off is not None and (objective != "time" or mech.has_drift):
+            raise ValueError(f"InputBounds: the bound {off} of mechanism {mech.name!r} does not hold 0 inside "
+                             f"(low < 0 < high): only the least time (objective='time', without drift) keeps "
+                             f"it, scaling the whole motion's time by one factor; a re-timing along the path "
+                             f"slows it to rest where it turns, and a mechanism with drift moves at rest")
         if speed is not None and any(isinstance(c, InputBounds) and not c.free for c in given):
             raise ValueError("LegSpeed and InputBounds cannot be kept together yet (each re-times the path "
                              "on its own): give one of them")

@@ -229,6 +229,10 @@ def retime(result: PlanResult, leg_speed: float | None = None, T: float | None =
             input_bounds = InputBounds.from_record(recorded, mech, "options.input_bounds")
     v = check_leg_speed(leg_speed, mech)
     bounds = check_input_bounds(input_bounds, mech)
+    if bounds is not None and not bounds.holds_zero:
+        raise ValueError(f"input_bounds: the bound {bounds.off_zero(mech)} does not hold 0 inside (low < 0 < high): "
+                         f"a re-timing along the path slows the motion to rest where it turns; plan with "
+                         f"objective='time', which scales the whole motion's time by one factor")
     if v is not None and bounds is not None:
         raise ValueError("leg_speed and input_bounds cannot be kept together yet (each re-times the path "
                          "on its own): give one of them")
@@ -342,8 +346,10 @@ def limit_inputs(result: PlanResult, bounds: InputBounds | None, T: float | None
         ``None``: a success re-timed in the least time along its path. A given ``T``: a
         success whose inputs keep the bounds (on the check's grid) is returned as planned;
         one that does not is re-timed in ``T`` if its path needs no more, else fails saying
-        the time it needs. A plan of a mechanism with drift is never re-timed: it is
-        returned as planned where its inputs keep the bounds, else it fails saying so.
+        the time it needs. A plan of a mechanism with drift, or under bounds off zero (played
+        in its least time already, :func:`nonholo.planning.least_time.least_time_path`), is
+        never re-timed: it is returned as planned where its inputs keep the bounds, else it
+        fails saying so.
 
     Returns
     -------
@@ -356,12 +362,16 @@ def limit_inputs(result: PlanResult, bounds: InputBounds | None, T: float | None
     if not result.success:
         return dataclasses.replace(result, options=options)
     mech = result.kinematics
-    if T is None and not mech.has_drift:
+    if T is None and not mech.has_drift and bounds.holds_zero:
         return retime(result, input_bounds=bounds)
     steps = max(CHECK_STEPS, result.replay_steps or 0)
     out = input_excess(result.parametrisation, bounds, mech, steps)
     if out is None:
         return dataclasses.replace(result, options=options)
+    if not bounds.holds_zero:
+        # the least time played by one time factor (nonholo.planning.least_time), not re-timed
+        reason = f"{result.reason}; but {out}"
+        return dataclasses.replace(result, success=False, reason=reason, options=options)
     if mech.has_drift:
         reason = (f"the plan's inputs leave their bounds ({bounds.text(input_names(mech))}; {out.split(' (')[0]}), "
                   f"and a plan of a mechanism with drift cannot be re-timed into them: plan with "

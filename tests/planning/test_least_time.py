@@ -93,11 +93,11 @@ def test_the_platform_under_leg_speed_is_timed_along_its_least_energy_path():
     assert terminal_error(R[-1], Rd) <= 1e-8
 
 
-def test_time_needs_bounds_around_zero():
+def test_time_needs_bounds():
     with pytest.raises(ValueError, match="objective='time'.*InputBounds"):
         nonholo.plan([0.0, 0.0, 0.0], [0.0, 0.0, 1.0], mechanism="brockett", objective="time")
     with pytest.raises(ValueError, match="0.25 ≤ v ≤ 0.5 .* does not hold 0 inside"):
-        nonholo.plan(*UNICYCLE_PARK, mechanism="unicycle", objective="time",
+        nonholo.plan(*UNICYCLE_PARK, mechanism="unicycle", T=None,
                      constraints=[InputBounds([0.25, -0.5], [0.5, 0.5])])
 
 

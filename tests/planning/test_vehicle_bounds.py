@@ -77,8 +77,8 @@ def unicycle_least():
     (lambda: InputBounds((-1, -1, -1), (1, 1, 1)).check(CAR), r"low has 3 entries, mechanism 'car' has 2 inputs \(v, u2\)"),
     (lambda: StateBounds(-1.0, (1.0, 1.0)).check(CAR), r"high has 2 entries, mechanism 'car' has 4 coordinates"),
     (lambda: StateBounds(-1.0, 1.0).check(catalog.get("platform")), "has no coordinates"),
-    (lambda: InputBounds((0.25, -1.0), (0.5, 1.0)).check(CAR), "0.25 ≤ v ≤ 0.5 .* does not hold 0 inside"),
-    (lambda: InputBounds((-1.0, 0.0), (1.0, 1.0)).check(CAR), "0 ≤ u2 ≤ 1 .* does not hold 0 inside"),
+    (lambda: nonholo.plan(*PARK, mechanism="car", T=1.0, constraints=[InputBounds((-1.0, 0.0), (1.0, 1.0))]),
+     "0 ≤ u2 ≤ 1 .* does not hold 0 inside"),
 ])
 def test_bad_bounds_name_the_argument(build, match):
     with pytest.raises(ValueError, match=match):
@@ -327,3 +327,51 @@ def test_cli_errors_name_flags_not_python_arguments(capsys, argv):
     assert status == 2, err
     assert err.startswith("nonholo plan: error: ") and "--" in err
     assert not PYTHON.search(err), err
+
+
+# -- bounds off zero: a vehicle that only drives forward -------------------------------------
+
+FORWARD = InputBounds((0.25, -0.5), (0.5, 0.5))
+
+
+def dubins_time(goal, radius: float, speed: float) -> float:
+    """The length of the shortest Dubins path of ``radius`` from the origin to ``goal``, over
+    ``speed`` (OMPL's Dubins state space)."""
+    from ompl import base as ob
+
+    space = ob.DubinsStateSpace(radius)
+    a, b = space.allocState(), space.allocState()
+    for s, (x, y, th) in ((a, (0.0, 0.0, 0.0)), (b, goal)):
+        s.setX(x), s.setY(y), s.setYaw(th)
+    return space.distance(a, b) / speed
+
+
+@pytest.mark.parametrize("goal", [(2.0, 0.5, 0.0), (1.0, 1.5, 2.0), (3.0, -1.0, -1.0), (-1.0, 0.5, 3.0)])
+def test_the_least_time_of_a_vehicle_that_only_drives_forward_is_between_its_dubins_times(goal):
+    """v in [0.25, 0.5], |ω| ≤ 0.5: the plan reaches the goal under DOP853 with every input in
+    its bounds (v never below 0.25), in a time between the Dubins paths' at the top speed of
+    the tightest radius (0.5 m, a lower bound) and of the radius at the top speed (1 m, a
+    motion it may take)."""
+    res = nonholo.plan((0.0, 0.0, 0.0), goal, mechanism="unicycle", T=5.0, objective="time",
+                       constraints=[FORWARD])
+    assert res.success, res.reason
+    _, xs = dop853(res, UNICYCLE)
+    assert np.abs(xs[-1] - np.asarray(goal)).max() < 1e-8
+    u = np.asarray(res.controls(np.linspace(0.0, res.T, 4001)))
+    assert u[:, 0].min() >= 0.25 * (1 - 1e-9) and u[:, 0].max() <= 0.5 * (1 + 1e-9)
+    assert np.abs(u[:, 1]).max() <= 0.5 * (1 + 1e-9)
+    assert dubins_time(goal, 0.5, 0.5) * (1 - 1e-9) <= res.T <= dubins_time(goal, 1.0, 0.5) * (1 + 1e-3)
+
+
+def test_bounds_off_zero_are_refused_where_only_a_re_timing_would_keep_them():
+    """A plan at a given T, the least time by re-timing (T=None), a mechanism with drift, and
+    retime(): each refused naming the bound."""
+    for kwargs in ({"T": 5.0}, {"T": 5.0, "objective": "energy"}, {"T": None}):
+        with pytest.raises(ValueError, match=r"InputBounds: the bound 0.25 ≤ v ≤ 0.5 .* does not hold 0 inside"):
+            nonholo.plan((0.0, 0.0, 0.0), (1.0, 0.5, 0.0), mechanism="unicycle", constraints=[FORWARD], **kwargs)
+    with pytest.raises(ValueError, match="does not hold 0 inside.*drift"):
+        nonholo.plan(np.zeros(5), (1.0, 0.5, 0.0, 0.0, 0.0), mechanism="unicycle2", T=6.0, objective="time",
+                     constraints=[InputBounds((0.05, -0.25), (0.25, 0.25))])
+    res = nonholo.plan((0.0, 0.0, 0.0), (1.0, 0.5, 0.0), mechanism="unicycle", T=5.0)
+    with pytest.raises(ValueError, match=r"input_bounds: the bound 0.25 ≤ v ≤ 0.5 does not hold 0 inside"):
+        nonholo.retime(res, input_bounds=FORWARD)
