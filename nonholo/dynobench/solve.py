@@ -209,8 +209,10 @@ def routed(mechanism: str, start, goal, given, low, high):
     turn = float(min(-bounds.lows[1], bounds.highs[1]))
     if bounds.lows[0] > 0:
         # a vehicle that only drives forward: Dubins curves at its least speed's tightest turn
+        # (the local method widens a turn the other way where that one is less tight)
         speed, slowest = float(bounds.highs[0]), float(bounds.lows[0])
-        way = plane_route.route(given[-1], mech, start, goal, low, high, speed, turn, slowest=slowest)
+        tightest = float(max(-bounds.lows[1], bounds.highs[1]))
+        way = plane_route.route(given[-1], mech, start, goal, low, high, speed, tightest, slowest=slowest)
         how = "OMPL's RRT-Connect, Dubins curves"
     else:
         speed = float(min(-bounds.lows[0], bounds.highs[0]))
@@ -332,12 +334,18 @@ def solve(instance) -> Solution:
     elif not result.kinematics.has_drift:
         # bounds off zero: the least time's path slowed by one factor, where its inputs allow
         room = float(given[0].slack(result.parametrisation.values).min()) * result.T
-        if T > room * (1.0 + 1e-12):
-            return Solution(False, f"the least time {result.T:.6g} s found, but its path cannot be slowed to "
-                                   f"{T:g} s within the bounds off zero (at most {room:.6g} s)", result,
-                            seconds=time.perf_counter() - started)
         problem = Problem.build(start, goal, mechanism=instance.mechanism, T=T, objective="time", constraints=given)
-        played = least_time.played_in(problem, result, T, f"played in {K} steps of {instance.dt:g} s")
+        if T <= room * (1.0 + 1e-12):
+            played = least_time.played_in(problem, result, T, f"played in {K} steps of {instance.dt:g} s")
+        else:
+            # slowed down that much, an input would leave a side off zero: a path in T that keeps them
+            used = least_time.least_use(problem, least_time.stretched(result.controls, result.T, T), fixed=True)
+            if isinstance(used, str) or used.use > least_time.KEPT:
+                why = used if isinstance(used, str) else f"it needs {used.use:.6g} of the bounds"
+                return Solution(False, f"the least time {result.T:.6g} s found, but not at {T:g} s: {why}", result,
+                                seconds=time.perf_counter() - started)
+            played = least_time.finished(problem, result, used, f"{result.reason}; in {K} steps of {instance.dt:g} s")
+        played = dataclasses.replace(played, options={**played.options, "input_bounds": given[0].record()})
     elif abs(result.T - T) <= 1e-9 * T:
         # found on the model's steps already
         played = dataclasses.replace(result, options={**result.options, "input_bounds": given[0].record()})

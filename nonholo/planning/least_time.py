@@ -265,7 +265,7 @@ class Use:
     evaluations: int
 
 
-def least_use(problem, controls, struggle: float = math.inf) -> Use | str:
+def least_use(problem, controls, struggle: float = math.inf, fixed: bool = False) -> Use | str:
     """The path of least use ``s`` of the problem's input bounds in its ``T`` (the problem of
     :class:`PathProblem`), from the grid means of ``controls``, brought onto the goal; or why
     there is none.
@@ -280,6 +280,9 @@ def least_use(problem, controls, struggle: float = math.inf) -> Use | str:
         SLSQP is stopped once its evaluations pass this many per iteration (plus
         :data:`STRUGGLE_SLACK`): line searches that keep failing, as at a horizon too short
         for any path (a search over horizons need not wait for SLSQP to say so).
+    fixed : bool, default False
+        Keep the sides off zero (``0 < low``, ``high < 0``) as they are, not scaled by
+        ``s``: a path in this ``T`` that keeps the bounds wherever ``s ≤ 1``.
 
     Returns
     -------
@@ -306,6 +309,17 @@ def least_use(problem, controls, struggle: float = math.inf) -> Use | str:
     constraints = [{"type": "eq", "fun": path.goal, "jac": path.goal_jacobian},
                    {"type": "ineq", "fun": lambda x: A @ x, "jac": lambda x: A},
                    {"type": "ineq", "fun": path.limits, "jac": path.limits_jacobian}]
+    if fixed:
+        # the sides off zero as they are: σ (u − low) ≥ 0 (σ = +1 for 0 < low, −1 for high < 0)
+        lows, highs = np.asarray(bounds.lows, dtype=float), np.asarray(bounds.highs, dtype=float)
+        side = np.where(lows > 0.0, 1.0, np.where(highs < 0.0, -1.0, 0.0))
+        value = np.where(lows > 0.0, lows, highs)
+        rows = np.nonzero(np.tile(side, grid))[0]
+        sign, level = np.tile(side, grid)[rows], np.tile(value, grid)[rows]
+        B = np.zeros((rows.size, path.p + 1))
+        B[np.arange(rows.size), rows] = sign
+        if rows.size:
+            constraints.append({"type": "ineq", "fun": lambda x: B @ x - sign * level, "jac": lambda x: B})
     objective_row = np.zeros(path.p + 1)
     objective_row[-1] = 1.0
     iterations = [0]

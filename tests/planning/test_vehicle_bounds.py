@@ -375,3 +375,28 @@ def test_bounds_off_zero_are_refused_where_only_a_re_timing_would_keep_them():
     res = nonholo.plan((0.0, 0.0, 0.0), (1.0, 0.5, 0.0), mechanism="unicycle", T=5.0)
     with pytest.raises(ValueError, match=r"input_bounds: the bound 0.25 ≤ v ≤ 0.5 does not hold 0 inside"):
         nonholo.retime(res, input_bounds=FORWARD)
+
+
+def test_a_forward_only_path_in_a_longer_time_keeps_its_least_speed():
+    """Slowed by one factor, the least-time path would drop below v = 0.25 where it runs at
+    it; the path of least use with the sides off zero fixed (``least_use(fixed=True)``) in
+    1.2 times the least time keeps every bound and reaches the goal under DOP853."""
+    from nonholo.planning import least_time
+    from nonholo.planning.problem import Problem
+
+    goal = (-1.0, 0.5, 3.0)
+    fastest = nonholo.plan((0.0, 0.0, 0.0), goal, mechanism="unicycle", T=5.0, objective="time",
+                           constraints=[FORWARD])
+    assert fastest.success, fastest.reason
+    T = 1.2 * fastest.T
+    problem = Problem.build((0.0, 0.0, 0.0), goal, mechanism="unicycle", T=T, objective="time", constraints=[FORWARD])
+    used = least_time.least_use(problem, least_time.stretched(fastest.controls, fastest.T, T), fixed=True)
+    assert not isinstance(used, str), used
+    assert used.use <= least_time.KEPT
+    played = least_time.finished(problem, fastest, used, "in 1.2 times the least time")
+    assert played.success and played.T == pytest.approx(T)
+    _, xs = dop853(played, UNICYCLE)
+    assert np.abs(xs[-1] - np.asarray(goal)).max() < 1e-8
+    u = np.asarray(played.controls(np.linspace(0.0, T, 4001)))
+    assert u[:, 0].min() >= 0.25 * (1 - 1e-9) and u[:, 0].max() <= 0.5 * (1 + 1e-9)
+    assert np.abs(u[:, 1]).max() <= 0.5 * (1 + 1e-9)
