@@ -289,6 +289,37 @@ def routed_with_drift(instance, start, goal, given):
     return least_time.least_time_with_drift(problem, seed, guess=guess, resolution=RESOLUTION * instance.dt)
 
 
+def at_horizon(problem, result, T: float, label: str, fixed: bool = False):
+    """The path of least use of the bounds in ``T`` from ``result``'s controls stretched to it
+    (:func:`nonholo.planning.least_time.least_use`; ``fixed``: the sides off zero kept as they
+    are), certified; or why there is none.
+
+    Parameters
+    ----------
+    problem : Problem
+        The problem at ``T``.
+    result : PlanResult
+        The least-time path.
+    T : float
+        The horizon (s).
+    label : str
+        What the reason adds.
+    fixed : bool, default False
+        Keep the sides off zero unscaled.
+
+    Returns
+    -------
+    PlanResult or str
+        The path, or why there is none.
+    """
+    from ..planning import least_time
+
+    used = least_time.least_use(problem, least_time.stretched(result.controls, result.T, T), fixed=fixed)
+    if isinstance(used, str) or used.use > least_time.KEPT:
+        return used if isinstance(used, str) else f"it needs {used.use:.6g} of the bounds"
+    return least_time.finished(problem, result, used, f"{result.reason}; {label}")
+
+
 def solve(instance) -> Solution:
     """Plan an instance (see the module).
 
@@ -331,33 +362,20 @@ def solve(instance) -> Solution:
     T = K * instance.dt
     if not result.kinematics.has_drift and given[0].holds_zero:
         played = retime(result, T=T, input_bounds=given[0])
-    elif not result.kinematics.has_drift:
-        # bounds off zero: the least time's path slowed by one factor, where its inputs allow
-        room = float(given[0].slack(result.parametrisation.values).min()) * result.T
-        problem = Problem.build(start, goal, mechanism=instance.mechanism, T=T, objective="time", constraints=given)
-        if T <= room * (1.0 + 1e-12):
-            played = least_time.played_in(problem, result, T, f"played in {K} steps of {instance.dt:g} s")
-        else:
-            # slowed down that much, an input would leave a side off zero: a path in T that keeps them
-            used = least_time.least_use(problem, least_time.stretched(result.controls, result.T, T), fixed=True)
-            if isinstance(used, str) or used.use > least_time.KEPT:
-                why = used if isinstance(used, str) else f"it needs {used.use:.6g} of the bounds"
-                return Solution(False, f"the least time {result.T:.6g} s found, but not at {T:g} s: {why}", result,
-                                seconds=time.perf_counter() - started)
-            played = least_time.finished(problem, result, used, f"{result.reason}; in {K} steps of {instance.dt:g} s")
-        played = dataclasses.replace(played, options={**played.options, "input_bounds": given[0].record()})
-    elif abs(result.T - T) <= 1e-9 * T:
-        # found on the model's steps already
-        played = dataclasses.replace(result, options={**result.options, "input_bounds": given[0].record()})
     else:
-        problem = Problem.build(start, goal, mechanism=instance.mechanism, T=T, objective=None,
+        problem = Problem.build(start, goal, mechanism=instance.mechanism, T=T,
+                                objective=None if result.kinematics.has_drift else "time",
                                 constraints=given)     # the obstacles kept in the least use at T too
-        used = least_time.least_use(problem, least_time.stretched(result.controls, result.T, T))
-        if isinstance(used, str) or used.use > least_time.KEPT:
-            why = used if isinstance(used, str) else f"it needs {used.use:.6g} of the bounds"
-            return Solution(False, f"the least time {result.T:.6g} s found, but not at {T:g} s: {why}", result,
-                            seconds=time.perf_counter() - started)
-        played = least_time.finished(problem, result, used, f"{result.reason}; played in {K} steps of {instance.dt:g} s")
+        label = f"played in {K} steps of {instance.dt:g} s"
+        if not result.kinematics.has_drift and T <= given[0].slack(result.parametrisation.values).min() * result.T:
+            # bounds off zero: the least time's path slowed by one factor, where its inputs allow
+            played = least_time.played_in(problem, result, T, label)
+        else:
+            # with drift, or where slowing down would take an input off a side off zero
+            played = at_horizon(problem, result, T, label, fixed=not result.kinematics.has_drift)
+            if isinstance(played, str):
+                return Solution(False, f"the least time {result.T:.6g} s found, but not at {T:g} s: {played}", result,
+                                seconds=time.perf_counter() - started)
         played = dataclasses.replace(played, options={**played.options, "input_bounds": given[0].record()})
     if not played.success:
         return Solution(False, f"not at {T:g} s: {played.reason}", played, seconds=time.perf_counter() - started)
