@@ -199,10 +199,7 @@ def routed(mechanism: str, start, goal, given, low, high):
     PlanResult
         The path in its least time, or a failed result saying why.
     """
-    from ..planning import lattice_route, least_time, plane_route
-    from ..planning.problem import Problem
-    from ..planning.result_builder import build_result
-    from ..planning.retime import retime
+    from ..planning import lattice_route, plane_route
 
     mech = catalog.get(mechanism)
     bounds = given[0]
@@ -222,6 +219,39 @@ def routed(mechanism: str, start, goal, given, low, high):
             # a passage narrower than the lattice resolves: a sampling planner's route
             way = plane_route.route(given[-1], mech, start, goal, low, high, speed, turn)
             how = "OMPL's RRT-Connect, Reeds–Shepp curves"
+    return from_route(mechanism, start, goal, given, way, how)
+
+
+def from_route(mechanism: str, start, goal, given, way, how: str):
+    """The least-time path from a route (or why there is none): the route's inputs as the
+    first guess of the path of least use of the bounds in its time
+    (:func:`nonholo.planning.least_time.least_use`, the obstacles kept at its nodes),
+    certified, played in the least time along it.
+
+    Parameters
+    ----------
+    mechanism : str
+        The catalog mechanism.
+    start, goal : numpy.ndarray
+        Its coordinates at the ends.
+    given : list
+        The constraints: input bounds, state bounds, obstacles.
+    way : Route or str
+        The route (its ``rates`` the mechanism's inputs), or why there is none.
+    how : str
+        Where the route came from.
+
+    Returns
+    -------
+    PlanResult
+        The path in its least time, or a failed result saying why.
+    """
+    from ..planning import least_time
+    from ..planning.problem import Problem
+    from ..planning.result_builder import build_result
+    from ..planning.retime import retime
+
+    bounds = given[0]
     problem = Problem.build(start, goal, mechanism=mechanism, T=1.0 if isinstance(way, str) else way.T,
                             objective="time", constraints=given)
     if isinstance(way, str):
