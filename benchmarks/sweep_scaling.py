@@ -52,9 +52,15 @@ def dask_cluster(directory: Path):
                                "--scheduler-file", str(file)], **quiet)]
     try:
         deadline = time.monotonic() + 60
-        while not file.exists() and time.monotonic() < deadline:
-            time.sleep(0.1)
-        address = json.loads(file.read_text())["address"]
+        address = None
+        while address is None and time.monotonic() < deadline:
+            # the scheduler may have created the file and not yet written it
+            try:
+                address = json.loads(file.read_text())["address"]
+            except (OSError, ValueError, KeyError):
+                time.sleep(0.1)
+        if address is None:
+            raise RuntimeError(f"dask scheduler wrote no address to {file} within 60 s")
         for _ in range(2):
             procs.append(subprocess.Popen(["dask", "worker", address, "--nthreads", "1", "--no-dashboard",
                                            "--host", "127.0.0.1"], **quiet))

@@ -38,6 +38,10 @@ from .result_builder import build_result
 TIME_GRID = 50
 #: SLSQP iterations at most.
 MAX_ITERATIONS = 200
+#: Where a path found crosses a limit between the nodes, SLSQP runs again from it this many
+#: times at most, the margin at the nodes grown by :data:`CROSSING_MARGIN` times the depth.
+CROSSING_ROUNDS = 2
+CROSSING_MARGIN = 2.0
 #: Evaluations SLSQP may take beyond ``struggle`` per iteration (:func:`least_use`).
 STRUGGLE_SLACK = 20
 #: The least time with drift stops SLSQP at a horizon after the first once it takes this
@@ -80,6 +84,8 @@ class PathProblem:
         self.evaluations = 0
         self._key, self._ev = None, None
         self._limits_key, self._limits_value = None, None
+        #: the margin the limits are kept by at the nodes
+        self.margin = MARGIN
 
     def evaluation(self, x: np.ndarray):
         """The full evaluation of ``x``'s controls (kept for the next call with the same ``x``).
@@ -179,7 +185,7 @@ class PathProblem:
             terms = endpoint.limits.clearance_terms(mech, ev.R[self.nodes], math.inf, ev.q[self.nodes])
             if terms is not None:
                 nodes, c, grad = terms
-                values.append(c - MARGIN)
+                values.append(c - self.margin)
                 rows.append(grad)
                 at.append(self.nodes[nodes])
         if mech.singular.exists:
@@ -200,6 +206,29 @@ class PathProblem:
         jac = np.zeros((at.size, self.p + 1))
         jac[:, :self.p] = np.einsum("ad,adp->ap", rows, S)
         return np.concatenate(values), jac
+
+    def widen(self, by: float) -> None:
+        """Keep the limits at the nodes by ``by`` more (their units)."""
+        self.margin += by
+        self._limits_key = None
+
+    def crossing(self, ev) -> float:
+        """How far the motion of ``ev`` crosses a limit at any step (0 where it does not):
+        between the nodes a motion that rides a limit at them may cross it.
+
+        Parameters
+        ----------
+        ev : Evaluation
+            A complete evaluation.
+
+        Returns
+        -------
+        float
+            The deepest crossing, in the limit's units.
+        """
+        limits = self.endpoint.limits
+        terms = None if limits is None or not ev.complete else limits.clearance_terms(self.mechanism, ev.R, math.inf, ev.q)
+        return 0.0 if terms is None else max(0.0, -float(terms[1].min()))
 
     def limits(self, x):
         """The clearances (``≥ 0``); a motion that stops short of ``T`` breaks them.
@@ -329,12 +358,20 @@ def least_use(problem, controls, struggle: float = math.inf, fixed: bool = False
         if path.evaluations > struggle * iterations[0] + STRUGGLE_SLACK:
             raise StopIteration
 
-    found = minimize(lambda x: x[-1], x0, jac=lambda x: objective_row, method="SLSQP", constraints=constraints,
-                     options={"maxiter": MAX_ITERATIONS, "ftol": FTOL},
-                     callback=struggling if math.isfinite(struggle) else None)
-    values = found.x[:path.p].reshape(grid, -1)
-    ev = endpoint.evaluate(PiecewiseConstant(endpoint.T, values))
-    ev = newton_steps(endpoint, ev, fitted.metric(), problem.options.tol, RESTORE_STEPS)
+    for _ in range(CROSSING_ROUNDS + 1):
+        iterations[0] = 0
+        found = minimize(lambda x: x[-1], x0, jac=lambda x: objective_row, method="SLSQP", constraints=constraints,
+                         options={"maxiter": MAX_ITERATIONS, "ftol": FTOL},
+                         callback=struggling if math.isfinite(struggle) else None)
+        values = found.x[:path.p].reshape(grid, -1)
+        ev = endpoint.evaluate(PiecewiseConstant(endpoint.T, values))
+        ev = newton_steps(endpoint, ev, fitted.metric(), problem.options.tol, RESTORE_STEPS)
+        depth = path.crossing(ev)
+        if not depth > 0.0:
+            break
+        # the limits kept at the nodes by more than the motion crossed them between nodes
+        path.widen(CROSSING_MARGIN * depth)
+        x0 = found.x
     if not endpoint.admissible(ev):
         return f"its motion {endpoint.why_not(ev)} (SLSQP: {found.message})"
     if not ev.error <= problem.options.tol:

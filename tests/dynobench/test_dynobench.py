@@ -252,6 +252,23 @@ def test_the_kinks_and_bugtraps_are_solved_at_or_below_the_published_cost(robot,
     assert report.cost <= ROUTED[robot, name] + 1e-9
 
 
+@pytest.mark.slow
+@pytest.mark.parametrize("robot, name", [("unicycle1_v1", "kink_0"), ("unicycle1_v2", "wall_0")])
+def test_the_forward_only_unicycles_are_solved_and_pass_the_checks(robot, name, tmp_path):
+    """v ≥ 0.25 (and, round the wall, right turns half as tight as left ones): solved from a
+    route of Dubins curves, their path crossing no bound between the nodes, the written
+    trajectory passing the project's checker with every action in its bounds."""
+    env = COPIES / "envs" / robot / f"{name}.yaml"
+    out = tmp_path / "solution.yaml"
+    run = subprocess.run([sys.executable, "-m", "nonholo", "dynobench", str(env), "--out", str(out)],
+                         capture_output=True, text=True, timeout=600)
+    assert run.returncode == 0, run.stdout + run.stderr
+    inst, trajectory = dynobench.load(env), dynobench.read(out)
+    report = dynobench.check(inst, trajectory["states"], trajectory["actions"])
+    assert report.feasible, report.failures()
+    assert np.asarray(trajectory["actions"])[:, 0].min() >= 0.25 - 1e-9
+
+
 def test_overlap_depths_are_those_of_the_boxes_closed_form():
     """Axis-aligned boxes: the depth of their overlap is the least of the overlaps along x and
     y; the vectorised depths equal it and the one-pair form."""
