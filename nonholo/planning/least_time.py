@@ -39,8 +39,9 @@ TIME_GRID = 50
 #: SLSQP iterations at most.
 MAX_ITERATIONS = 200
 #: Where a path found crosses a limit between the nodes, SLSQP runs again from it this many
-#: times at most, the margin at the nodes grown by :data:`CROSSING_MARGIN` times the depth.
+#: times at most, ...
 CROSSING_ROUNDS = 2
+#: ... the margin at the nodes grown by this many times the depth it crossed the limit by.
 CROSSING_MARGIN = 2.0
 #: Evaluations SLSQP may take beyond ``struggle`` per iteration (:func:`least_use`).
 STRUGGLE_SLACK = 20
@@ -208,7 +209,13 @@ class PathProblem:
         return np.concatenate(values), jac
 
     def widen(self, by: float) -> None:
-        """Keep the limits at the nodes by ``by`` more (their units)."""
+        """Keep the limits at the nodes by more.
+
+        Parameters
+        ----------
+        by : float
+            How much more (the limits' units).
+        """
         self.margin += by
         self._limits_key = None
 
