@@ -49,6 +49,9 @@ STRUGGLE_SLACK = 20
 #: many evaluations per iteration (:func:`least_time_with_drift`): a path found near the last
 #: one needs about one.
 STRUGGLE = 2.0
+#: SLSQP's iterations at most at a horizon tried after one that keeps the bounds
+#: (:func:`least_time_with_drift`).
+TRIAL_ITERATIONS = 40
 #: SLSQP's tolerance on the objective ``s``.
 FTOL = 1e-10
 #: The limits of the motion are kept with this margin (their units) in the optimisation, so
@@ -301,7 +304,8 @@ class Use:
     evaluations: int
 
 
-def least_use(problem, controls, struggle: float = math.inf, fixed: bool = False) -> Use | str:
+def least_use(problem, controls, struggle: float = math.inf, fixed: bool = False,
+              iterations_at_most: int = None) -> Use | str:
     """The path of least use ``s`` of the problem's input bounds in its ``T`` (the problem of
     :class:`PathProblem`), from the grid means of ``controls``, brought onto the goal; or why
     there is none.
@@ -319,6 +323,8 @@ def least_use(problem, controls, struggle: float = math.inf, fixed: bool = False
     fixed : bool, default False
         Keep the sides off zero (``0 < low``, ``high < 0``) as they are, not scaled by
         ``s``: a path in this ``T`` that keeps the bounds wherever ``s ≤ 1``.
+    iterations_at_most : int, optional
+        SLSQP's iterations at most (default :data:`MAX_ITERATIONS`).
 
     Returns
     -------
@@ -358,23 +364,23 @@ def least_use(problem, controls, struggle: float = math.inf, fixed: bool = False
             constraints.append({"type": "ineq", "fun": lambda x: B @ x - sign * level, "jac": lambda x: B})
     objective_row = np.zeros(path.p + 1)
     objective_row[-1] = 1.0
-    iterations = [0]
+    iterations = [0, 0]                  # this round's, and the evaluations before it
 
     def struggling(_):
         iterations[0] += 1
-        if path.evaluations > struggle * iterations[0] + STRUGGLE_SLACK:
+        if path.evaluations - iterations[1] > struggle * iterations[0] + STRUGGLE_SLACK:
             raise StopIteration
 
     for _ in range(CROSSING_ROUNDS + 1):
-        iterations[0] = 0
+        iterations[:] = [0, path.evaluations]
         found = minimize(lambda x: x[-1], x0, jac=lambda x: objective_row, method="SLSQP", constraints=constraints,
-                         options={"maxiter": MAX_ITERATIONS, "ftol": FTOL},
+                         options={"maxiter": iterations_at_most or MAX_ITERATIONS, "ftol": FTOL},
                          callback=struggling if math.isfinite(struggle) else None)
         values = found.x[:path.p].reshape(grid, -1)
         ev = endpoint.evaluate(PiecewiseConstant(endpoint.T, values))
         ev = newton_steps(endpoint, ev, fitted.metric(), problem.options.tol, RESTORE_STEPS)
         depth = path.crossing(ev)
-        if not depth > 0.0:
+        if not (depth > 0.0 and found.success):
             break
         # the limits kept at the nodes by more than the motion crossed them between nodes
         path.widen(CROSSING_MARGIN * depth)
@@ -611,7 +617,10 @@ def least_time_with_drift(problem, result: PlanResult, guess=None, resolution: f
     tried, best, slow, fast = [], None, math.inf, 0.0
     for _ in range(HORIZONS):
         at = dataclasses.replace(problem, T=T)
-        used = least_use(at, stretched(*guess, T), struggle=STRUGGLE if best is not None else math.inf)
+        # once a horizon keeps the bounds, the next start from its path: a path found near it
+        # needs few iterations, and one that needs many is at a horizon too short
+        used = least_use(at, stretched(*guess, T), struggle=STRUGGLE if best is not None else math.inf,
+                         iterations_at_most=TRIAL_ITERATIONS if best is not None else None)
         if isinstance(used, str):
             s = math.inf
         else:
