@@ -1,8 +1,9 @@
 """The path of least time under input bounds (``objective="time"``).
 
 A driftless system follows a path at any pace: a control on ``[0, T]`` whose inputs use at
-most the fraction ``s`` of their bounds (``s·low_i ≤ u_i(t) ≤ s·high_i``, bounds around zero)
-is played in ``sT`` at full use. The least time is therefore ``T`` times the least ``s``
+most the fraction ``s`` of their bounds (``s·low_i ≤ u_i(t) ≤ s·high_i``) is played in
+``sT`` at full use, every input divided by ``s`` (so a bound off zero, ``0 < low_i``, is kept
+as well). The least time is therefore ``T`` times the least ``s``
 over the controls that reach the goal in ``T`` — a problem with a linear objective, linear
 bounds on the controls, the endpoint as a nonlinear equality and the limits of the motion
 (the coordinates' bounds, the legs' stroke, the clearance from ``Δ = 0``) as nonlinear
@@ -12,7 +13,8 @@ SciPy's SLSQP from a given path — :func:`nonholo.plan` gives the least-energy 
 mostly in the time-optimal path's class, where the plan as found may loop — with the
 endpoint's Jacobian and the nodes' sensitivities of the variational system (:mod:`nonholo.planning.endpoint_map`); the path
 found is then brought onto the goal, certified, and re-timed to the least time along it by
-:func:`nonholo.planning.retime.limit_inputs` (the caller's step).
+:func:`nonholo.planning.retime.limit_inputs` (the caller's step) — or, under bounds off zero,
+which a re-timing along the path cannot keep, played in ``sT`` (:func:`least_time_off_zero`).
 
 SLSQP runs a fixed number of iterations at most (:data:`MAX_ITERATIONS`): the same call
 gives the same path on any machine under any load.
@@ -305,7 +307,7 @@ class Use:
 
 
 def least_use(problem, controls, struggle: float = math.inf, fixed: bool = False,
-              iterations_at_most: int = None) -> Use | str:
+              iterations_at_most: int | None = None) -> Use | str:
     """The path of least use ``s`` of the problem's input bounds in its ``T`` (the problem of
     :class:`PathProblem`), from the grid means of ``controls``, brought onto the goal; or why
     there is none.
@@ -313,7 +315,7 @@ def least_use(problem, controls, struggle: float = math.inf, fixed: bool = False
     Parameters
     ----------
     problem : Problem
-        The problem (its input bounds around zero).
+        The problem (its input bounds).
     controls : callable
         The first guess ``u(t)`` on ``[0, T]``.
     struggle : float, default inf
@@ -403,7 +405,7 @@ def least_time_path(problem, result: PlanResult) -> PlanResult:
     Parameters
     ----------
     problem : Problem
-        The problem (its input bounds around zero).
+        The problem (its input bounds).
     result : PlanResult
         Its certified plan.
 
