@@ -261,10 +261,10 @@ def from_route(mechanism: str, start, goal, given, way, how: str):
     used = least_time.least_use(problem, way)
     if isinstance(used, str):
         return dataclasses.replace(seed, reason=f"{seed.reason}; no path of least use from it: {used}")
-    reason = (f"{seed.reason}; the path of least use of the bounds from it: {used.use:.6g} of them in "
-              f"{problem.T:.6g} s (SLSQP, {used.iterations} iterations: {used.message})")
     if not bounds.holds_zero:
         return least_time.least_time_off_zero(problem, seed, used)
+    reason = (f"{seed.reason}; the path of least use of the bounds from it: {used.use:.6g} of them in "
+              f"{problem.T:.6g} s (SLSQP, {used.iterations} iterations: {used.message})")
     result = least_time.finished(problem, seed, used, reason, fallback=seed)
     return retime(result, input_bounds=bounds) if result.success else result
 

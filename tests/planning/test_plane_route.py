@@ -62,12 +62,17 @@ def test_a_route_round_the_kink_is_clear_ends_at_the_goal_and_keeps_the_rates():
     assert way.T == pytest.approx(way.times[-1]) and np.allclose(way(way.times[:-1] + 1e-9), way.rates)
 
 
+def walled_off(inst):
+    """The instance with its goal inside a ring of walls (and no other obstacle)."""
+    ring = [dynobench.instance.Box((5.5, 4.0 + d), (1.4, 0.1)) for d in (-0.55, 0.55)] + \
+           [dynobench.instance.Box((5.5 + d, 4.0), (0.1, 1.2)) for d in (-0.55, 0.55)]
+    return replace(inst, obstacles=tuple(ring))
+
+
 def test_a_goal_walled_off_has_no_route_within_the_sample_budget():
     """The kink's goal inside a ring of walls: no route, said, after the sample budget."""
     inst = dynobench.load(KINK)
-    ring = [dynobench.instance.Box((5.5, 4.0 + d), (1.4, 0.1)) for d in (-0.55, 0.55)] + \
-           [dynobench.instance.Box((5.5 + d, 4.0), (0.1, 1.2)) for d in (-0.55, 0.55)]
-    boxed = replace(inst, obstacles=tuple(ring))
+    boxed = walled_off(inst)
     why = plane_route.route(obstacles(boxed, 5e-3), UNICYCLE, inst.start, inst.goal, inst.low, inst.high, 0.5, 0.5)
     assert isinstance(why, str) and "no route" in why and str(plane_route.MAX_SAMPLES) in why
 
@@ -124,8 +129,6 @@ def test_the_lattice_route_of_a_shifted_instance_is_the_route_shifted():
 def test_a_goal_walled_off_has_no_lattice_route():
     """The kink's goal inside a ring of walls: no route on the lattice, said."""
     inst = dynobench.load(KINK)
-    ring = [dynobench.instance.Box((5.5, 4.0 + d), (1.4, 0.1)) for d in (-0.55, 0.55)] + \
-           [dynobench.instance.Box((5.5 + d, 4.0), (0.1, 1.2)) for d in (-0.55, 0.55)]
-    boxed = replace(inst, obstacles=tuple(ring))
+    boxed = walled_off(inst)
     why = lattice_route.route(obstacles(boxed, 5e-3), UNICYCLE, inst.start, inst.goal, inst.low, inst.high, 0.5, 0.5)
     assert isinstance(why, str) and "no route on the lattice" in why
