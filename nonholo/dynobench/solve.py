@@ -30,6 +30,7 @@ import numpy as np
 from ..model import catalog
 from ..model.bounds import InputBounds, StateBounds
 from ..model.obstacles import Body, Obstacles
+from . import euler_steps
 from .checker import Report, check
 from .trajectory import to_dynobench
 
@@ -38,6 +39,10 @@ HORIZON_FACTOR = 2.0
 #: The clearance kept from the obstacles at the nodes of the least-time path (the motion
 #: between them may come closer: it must not overlap one).
 MARGIN = 5e-3
+#: The fraction of Dynobench's thresholds on the bounds, the overlaps and the goal that the
+#: trajectory of fewer Euler steps may use (:mod:`nonholo.dynobench.euler_steps`): half,
+#: the other half left to the round-off of another machine.
+SHARE = 0.5
 
 
 @dataclass
@@ -172,9 +177,6 @@ ROUTED_WITH_DRIFT = {"unicycle2": "unicycle"}
 #: The first horizon of a mechanism with drift, as a multiple of its first-order guide's least
 #: time (it must speed up and slow down).
 DRIFT_HORIZON = 1.3
-#: The least time with drift is found to this fraction of the model's step (it is rounded up
-#: to a whole number of steps).
-RESOLUTION = 0.25
 
 
 def routed(mechanism: str, start, goal, given, low, high):
@@ -316,7 +318,7 @@ def routed_with_drift(instance, start, goal, given):
     guess = PiecewiseConstant(T, np.diff(followed, axis=0) / (T / grid))
     seed = build_result(problem, None, False, (f"the first-order guide ({guide_name}) in {guide.T:.6g} s, "
                                                f"its rates followed in {T:.6g} s"))
-    return least_time.least_time_with_drift(problem, seed, guess=guess, resolution=RESOLUTION * instance.dt)
+    return least_time.least_time_with_drift(problem, seed, guess=guess, step=instance.dt)
 
 
 def at_horizon(problem, result, T: float, label: str, fixed: bool = False):
@@ -344,19 +346,23 @@ def at_horizon(problem, result, T: float, label: str, fixed: bool = False):
     """
     from ..planning import least_time
 
-    used = least_time.least_use(problem, least_time.stretched(result.controls, result.T, T), fixed=fixed)
+    power = 2 if result.kinematics.has_drift else 0
+    used = least_time.least_use(problem, least_time.stretched(result.controls, result.T, T, power=power), fixed=fixed)
     if isinstance(used, str) or used.use > least_time.KEPT:
         return used if isinstance(used, str) else f"it needs {used.use:.6g} of the bounds"
     return least_time.finished(problem, result, used, f"{result.reason}; {label}")
 
 
-def solve(instance) -> Solution:
+def solve(instance, share: float = SHARE) -> Solution:
     """Plan an instance (see the module).
 
     Parameters
     ----------
     instance : Instance
         The instance.
+    share : float, default :data:`SHARE`
+        The fraction of Dynobench's thresholds the trajectory of fewer Euler steps may use;
+        0 keeps the bounds, the obstacles and the goal exactly.
 
     Returns
     -------
@@ -411,6 +417,16 @@ def solve(instance) -> Solution:
         return Solution(False, f"not at {T:g} s: {played.reason}", played, seconds=time.perf_counter() - started)
     trajectory = to_dynobench(played, instance)
     report = check(instance, trajectory["states"], trajectory["actions"])
-    reason = (f"cost {report.cost:.6g} s ({K} steps of {instance.dt:g} s; the least time {result.T:.6g} s)"
-              if report.feasible else f"the trajectory fails Dynobench's checks: {'; '.join(report.failures())}")
-    return Solution(report.feasible, reason, played, trajectory, report, time.perf_counter() - started)
+    if not report.feasible:
+        return Solution(False, f"the trajectory fails Dynobench's checks: {'; '.join(report.failures())}", played,
+                        trajectory, report, time.perf_counter() - started)
+    reason = f"cost {report.cost:.6g} s ({K} steps of {instance.dt:g} s; the least time {result.T:.6g} s)"
+    fewer = euler_steps.fewest_steps(instance, trajectory["actions"], given[0], given[1], obstacles(instance), share)
+    if fewer is not None:
+        trajectory = {"states": fewer.states.tolist(), "actions": fewer.actions.tolist()}
+        report = fewer.report
+        kept = "exactly" if share == 0 else f"to {share:g} of Dynobench's thresholds"
+        reason = (f"cost {report.cost:.6g} s ({len(fewer.actions)} Euler steps of {instance.dt:g} s, the bounds, "
+                  f"the obstacles and the goal kept {kept}; the continuous plan's {K} steps, its least time "
+                  f"{result.T:.6g} s)")
+    return Solution(True, reason, played, trajectory, report, time.perf_counter() - started)

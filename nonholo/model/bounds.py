@@ -420,6 +420,18 @@ class StateBounds(Box):
         cols += [(j, 1) for j in range(len(self.highs)) if np.isfinite(self.highs[j])]
         return cols
 
+    def around_zero(self) -> np.ndarray:
+        """``|bound|`` of every finite side (in :meth:`clearances`' order) of a coordinate whose
+        bounds hold zero inside (``low_j < 0 < high_j``), 0 for the others.
+
+        Returns
+        -------
+        numpy.ndarray
+            One entry per finite side.
+        """
+        return np.array([abs(self.lows[j] if side == 0 else self.highs[j]) if self.lows[j] < 0.0 < self.highs[j] else 0.0
+                         for j, side in self._columns()])
+
     def clearances(self, mechanism, R, q=None) -> np.ndarray:
         """``q_j − low_j`` and ``high_j − q_j`` for every finite side.
 

@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 
@@ -292,29 +293,62 @@ class Obstacles:
         values = np.empty((n, len(self.bodies)))
         grads = np.zeros((n, len(self.bodies), k))
         for j, b in enumerate(self.bodies):
-            values[:, j] = self._least(mechanism, q, b)
+            values[:, j], nearest = self._nearest(mechanism, q, b)
+            if nearest is None:
+                continue
+            # the least over the obstacles moves with the nearest one's signed distance
             for name in dict.fromkeys((b.x, b.y, b.heading)):
                 c = mechanism.coordinates.index(name)
                 up, down = q.copy(), q.copy()
                 up[:, c] += DIFFERENCE_STEP
                 down[:, c] -= DIFFERENCE_STEP
-                grads[:, j, c] = (self._least(mechanism, up, b) - self._least(mechanism, down, b)) / (2 * DIFFERENCE_STEP)
+                grads[:, j, c] = (self._signed(mechanism, up, b, nearest)
+                                  - self._signed(mechanism, down, b, nearest)) / (2 * DIFFERENCE_STEP)
         return values, grads
 
     def _least(self, mechanism, q, body: Body) -> np.ndarray:
         """The least signed distance of ``body`` from any obstacle at each state of ``q``."""
+        return self._nearest(mechanism, q, body)[0]
+
+    def _nearest(self, mechanism, q, body: Body):
+        """The least signed distance of ``body`` from any obstacle at each state of ``q``, and
+        which obstacle it is to (``None`` without obstacles)."""
         import shapely
 
         if not self.polygons:
-            return np.full(q.shape[0], np.inf)
+            return np.full(q.shape[0], np.inf), None
         corners = body_corners(mechanism, q, body)                         # (n, 4, 2)
         placed = shapely.polygons(corners)
-        obstacles = shapely.polygons([np.asarray(p) for p in self.polygons])
-        d = shapely.distance(placed[:, None], obstacles[None, :])          # (n, K): 0 where they meet
+        d = shapely.distance(placed[:, None], self._shapes[None, :])       # (n, K): 0 where they meet
         met = np.nonzero(d <= 0.0)
         if met[0].size:
-            d[met] = -overlap_depths(corners[met[0]], [np.asarray(self.polygons[j]) for j in met[1]])
-        return d.min(axis=1)
+            d[met] = -overlap_depths(corners[met[0]], [self._corners[j] for j in met[1]])
+        nearest = d.argmin(axis=1)
+        return d[np.arange(d.shape[0]), nearest], nearest
+
+    def _signed(self, mechanism, q, body: Body, which: np.ndarray) -> np.ndarray:
+        """The signed distance of ``body`` at each state of ``q`` from the obstacle ``which``
+        names for it."""
+        import shapely
+
+        corners = body_corners(mechanism, q, body)
+        d = shapely.distance(shapely.polygons(corners), self._shapes[which])
+        met = np.nonzero(d <= 0.0)[0]
+        if met.size:
+            d[met] = -overlap_depths(corners[met], [self._corners[j] for j in which[met]])
+        return d
+
+    @cached_property
+    def _corners(self) -> list:
+        """The obstacles' corners as arrays."""
+        return [np.asarray(p, dtype=float) for p in self.polygons]
+
+    @cached_property
+    def _shapes(self) -> np.ndarray:
+        """The obstacles as shapely polygons."""
+        import shapely
+
+        return shapely.polygons(self._corners)
 
 
 def body_corners(mechanism, q, body: Body) -> np.ndarray:

@@ -29,7 +29,7 @@ import numpy as np
 
 from ..controls.parametrisations import PiecewiseConstant
 from ..io.result import PlanResult
-from ..model.bounds import BOUND_RTOL
+from ..model.bounds import BOUND_RTOL, StateBounds
 from .core import Outcome, record
 from .correction import certified
 from .endpoint_map import EndpointMap, node_sensitivities, spatial_gradient_delta
@@ -74,9 +74,12 @@ class PathProblem:
         The inputs' bounds (``±inf`` where free; ``low ≤ 0 ≤ high``).
     obstacles : Obstacles, optional
         Polygons the vehicle's bodies keep clear of at the nodes.
+    scaled : bool, default False
+        Scale the state bounds around zero (``low_j < 0 < high_j``) by ``s`` as well.
     """
 
-    def __init__(self, endpoint: EndpointMap, grid: int, low: np.ndarray, high: np.ndarray, obstacles=None):
+    def __init__(self, endpoint: EndpointMap, grid: int, low: np.ndarray, high: np.ndarray, obstacles=None,
+                 scaled: bool = False):
         self.endpoint = endpoint
         self.obstacles = obstacles
         self.mechanism = endpoint.mechanism
@@ -92,6 +95,7 @@ class PathProblem:
         self._limits_key, self._limits_value = None, None
         #: the margin the limits are kept by at the nodes
         self.margin = MARGIN
+        self.scaled = scaled
 
     def evaluation(self, x: np.ndarray):
         """The full evaluation of ``x``'s controls (kept for the next call with the same ``x``).
@@ -186,24 +190,29 @@ class PathProblem:
         if not ev.complete:
             return None
         mech, endpoint = self.mechanism, self.endpoint
-        values, rows, at = [], [], []
-        if endpoint.limits is not None:
-            terms = endpoint.limits.clearance_terms(mech, ev.R[self.nodes], math.inf, ev.q[self.nodes])
+        values, rows, at, scales = [], [], [], []
+        for part in () if endpoint.limits is None else endpoint.limits.parts:
+            terms = part.clearance_terms(mech, ev.R[self.nodes], math.inf, q=ev.q[self.nodes])
             if terms is not None:
                 nodes, c, grad = terms
                 values.append(c - self.margin)
                 rows.append(grad)
                 at.append(self.nodes[nodes])
+                # every node's every side, in order (no threshold)
+                scaled = self.scaled and isinstance(part, StateBounds)
+                scales.append(np.tile(part.around_zero(), self.nodes.size) if scaled else np.zeros(c.size))
         if mech.singular.exists:
             R, q = ev.R[self.nodes], ev.q[self.nodes]
             values.append(endpoint.sign * mech.singular.values(R, q) - endpoint.delta_min - MARGIN)
             rows.append(endpoint.sign * spatial_gradient_delta(mech, R, q=q))
             at.append(self.nodes)
+            scales.append(np.zeros(self.nodes.size))
         if self.obstacles is not None:
             c, grad = self.obstacles.clearance_rows(mech, ev.q[self.nodes])       # (a, b), (a, b, k)
             values.append((c - self.obstacles.margin - MARGIN).ravel())
             rows.append(grad.reshape(-1, grad.shape[-1]))
             at.append(np.repeat(self.nodes, c.shape[1]))
+            scales.append(np.zeros(c.size))
         if not values:
             return np.zeros(0), np.zeros((0, self.p + 1))
         at = np.concatenate(at)
@@ -211,7 +220,30 @@ class PathProblem:
         S = node_sensitivities(endpoint, ev, at)                 # (a, d, p)
         jac = np.zeros((at.size, self.p + 1))
         jac[:, :self.p] = np.einsum("ad,adp->ap", rows, S)
-        return np.concatenate(values), jac
+        # a bound scaled by s: the clearance s·|bound| − (|bound| − c), its rate |bound| in s
+        jac[:, -1] = np.concatenate(scales)
+        return np.concatenate(values) - jac[:, -1], jac
+
+    def state_use(self, q) -> float:
+        """The fraction of the state bounds around zero the coordinates ``q`` use (0 unless
+        :attr:`scaled`).
+
+        Parameters
+        ----------
+        q : numpy.ndarray
+            Coordinates, ``(n, k)``.
+
+        Returns
+        -------
+        float
+            The largest ``q_j / high_j`` or ``q_j / low_j``.
+        """
+        use = 0.0
+        for part in () if not self.scaled or self.endpoint.limits is None else self.endpoint.limits.parts:
+            if isinstance(part, StateBounds):
+                for j in np.nonzero((np.asarray(part.lows) < 0.0) & (np.asarray(part.highs) > 0.0))[0]:
+                    use = max(use, float(np.max(q[:, j] / part.highs[j])), float(np.max(q[:, j] / part.lows[j])))
+        return use
 
     def widen(self, by: float) -> None:
         """Keep the limits at the nodes by more.
@@ -256,7 +288,7 @@ class PathProblem:
             One clearance per node and limit.
         """
         out = self._limits(x)
-        return -np.ones(self.nodes.size) if out is None else out[0]
+        return -np.ones(self.nodes.size) if out is None else out[0] + x[-1] * out[1][:, -1]
 
     def limits_jacobian(self, x):
         """The clearances' gradients.
@@ -307,7 +339,7 @@ class Use:
 
 
 def least_use(problem, controls, struggle: float = math.inf, fixed: bool = False,
-              iterations_at_most: int | None = None) -> Use | str:
+              iterations_at_most: int | None = None, scale_states: bool = False) -> Use | str:
     """The path of least use ``s`` of the problem's input bounds in its ``T`` (the problem of
     :class:`PathProblem`), from the grid means of ``controls``, brought onto the goal; or why
     there is none.
@@ -327,6 +359,10 @@ def least_use(problem, controls, struggle: float = math.inf, fixed: bool = False
         ``s``: a path in this ``T`` that keeps the bounds wherever ``s ≤ 1``.
     iterations_at_most : int, optional
         SLSQP's iterations at most (default :data:`MAX_ITERATIONS`).
+    scale_states : bool, default False
+        Scale the state bounds around zero (``low_j < 0 < high_j``: a speed's) by ``s`` as
+        well, and count their use in ``s``: with drift, where the least time may be set by
+        a speed's bound rather than the inputs', ``s`` then still falls as ``T`` grows.
 
     Returns
     -------
@@ -345,9 +381,9 @@ def least_use(problem, controls, struggle: float = math.inf, fixed: bool = False
         return "the first guess's grid controls do not reach T"
     from scipy.optimize import minimize      # loaded by the first least-time plan, not by `import nonholo`
 
-    path = PathProblem(endpoint, grid, bounds.lows, bounds.highs, problem.obstacles)
+    path = PathProblem(endpoint, grid, bounds.lows, bounds.highs, problem.obstacles, scaled=scale_states)
     lam = ev.params
-    x0 = np.append(lam, max(float(bounds.usage(lam.reshape(grid, -1)).max()), 1e-9))
+    x0 = np.append(lam, max(float(bounds.usage(lam.reshape(grid, -1)).max()), path.state_use(ev.q), 1e-9))
     start_use = float(x0[-1])
     A = path.bounds_matrix()
     constraints = [{"type": "eq", "fun": path.goal, "jac": path.goal_jacobian},
@@ -391,7 +427,8 @@ def least_use(problem, controls, struggle: float = math.inf, fixed: bool = False
         return f"its motion {endpoint.why_not(ev)} (SLSQP: {found.message})"
     if not ev.error <= problem.options.tol:
         return f"its motion ends {ev.error:.2g} from the goal (SLSQP: {found.message})"
-    return Use(endpoint, ev, float(bounds.usage(ev.params.reshape(grid, -1)).max()), start_use,
+    use = max(float(bounds.usage(ev.params.reshape(grid, -1)).max()), path.state_use(ev.q))
+    return Use(endpoint, ev, use, start_use,
                str(found.message), int(found.nit), path.evaluations)
 
 
@@ -588,7 +625,7 @@ def finished(problem, result: PlanResult, used: Use, reason: str, objective: str
     return replace(built, options={**built.options, "objective": objective}, route=result.route)
 
 
-def least_time_with_drift(problem, result: PlanResult, guess=None, resolution: float = 0.0) -> PlanResult:
+def least_time_with_drift(problem, result: PlanResult, guess=None, step: float = 0.0) -> PlanResult:
     """The least time under the input bounds of a mechanism with drift, whose paths a time
     change does not keep: the horizon ``T`` at which the least use of the bounds
     (:func:`least_use`) is 1, found by the secant method on ``log s`` against ``log T`` (the
@@ -604,10 +641,11 @@ def least_time_with_drift(problem, result: PlanResult, guess=None, resolution: f
         Its certified plan at that horizon (or, with ``guess``, what the reasons extend).
     guess : callable, optional
         The first guess ``u(t)`` on ``[0, T]`` (default: ``result``'s controls).
-    resolution : float, default 0
-        The search also ends once the least horizon that keeps the bounds is within this
-        many seconds of the greatest that does not (a horizon to be rounded up to a whole
-        number of steps needs no finer one).
+    step : float, default 0
+        The least time is to be rounded up to a whole number of these steps (s): the search
+        ends once the least horizon that keeps the bounds and the greatest that does not
+        round up to the same number, or the secant's root rounds up to the least horizon's
+        number; it aims :data:`STEP_AIM` of a step past the root.
 
     Returns
     -------
@@ -621,8 +659,8 @@ def least_time_with_drift(problem, result: PlanResult, guess=None, resolution: f
         at = dataclasses.replace(problem, T=T)
         # once a horizon keeps the bounds, the next start from its path: a path found near it
         # needs few iterations, and one that needs many is at a horizon too short
-        used = least_use(at, stretched(*guess, T), struggle=STRUGGLE if best is not None else math.inf,
-                         iterations_at_most=TRIAL_ITERATIONS if best is not None else None)
+        used = least_use(at, stretched(*guess, T, power=2), struggle=STRUGGLE if best is not None else math.inf,
+                         iterations_at_most=TRIAL_ITERATIONS if best is not None else None, scale_states=True)
         if isinstance(used, str):
             s = math.inf
         else:
@@ -633,9 +671,13 @@ def least_time_with_drift(problem, result: PlanResult, guess=None, resolution: f
         if s > KEPT:
             fast = max(fast, T)
         tried.append((math.log(T), math.log(s) if math.isfinite(s) else math.inf))
-        if best is not None and (1.0 - TIME_RTOL <= s <= KEPT or slow <= fast * (1.0 + TIME_RTOL) + resolution):
+        if best is not None and (1.0 - TIME_RTOL <= s <= KEPT or slow <= fast * (1.0 + TIME_RTOL)
+                                 or (step > 0.0 and _steps(fast, step) == _steps(slow, step))):
             break
-        T = _next_horizon(tried, fast, slow)
+        root = _secant_root(tried)
+        if best is not None and step > 0.0 and root is not None and _steps(root, step) >= _steps(slow, step):
+            break                # the root rounds up to the whole steps of the least horizon found
+        T = _next_horizon(tried, fast, slow, step)
     if best is None:
         return replace(result, options=options,
                        reason=(f"{result.reason}; no horizon tried ({', '.join(f'{math.exp(x):.4g}' for x, _ in tried)} s) "
@@ -646,6 +688,11 @@ def least_time_with_drift(problem, result: PlanResult, guess=None, resolution: f
     return finished(at, result, used, reason)
 
 
+#: The least-time search with drift aims this fraction of a step past the secant root, where
+#: its horizon is to be rounded up to whole steps.
+STEP_AIM = 0.25
+#: A horizon within this fraction of a step above a whole number of steps rounds down to it.
+ROUNDING = 1e-9
 #: Horizons tried at most by the least-time search with drift.
 HORIZONS = 14
 #: The least-time search with drift ends at a horizon within this relative margin of the least.
@@ -655,9 +702,9 @@ TIME_RTOL = 1e-4
 KEPT = 1.0 + BOUND_RTOL
 
 
-def stretched(controls, T0: float, T: float):
+def stretched(controls, T0: float, T: float, power: int = 0):
     """Controls on their horizon ``T0`` read on ``[0, T]`` at the same fraction of it (the
-    first guess of a path at another horizon).
+    first guess of a path at another horizon), times ``(T0/T)^power``.
 
     Parameters
     ----------
@@ -667,33 +714,52 @@ def stretched(controls, T0: float, T: float):
         Their horizon (s).
     T : float
         The new horizon (s).
+    power : int, default 0
+        1 keeps the path of a driftless system; 2 the path from rest to rest of a system
+        driven by accelerations.
 
     Returns
     -------
     callable
-        ``t ↦ u(t T0 / T)``.
+        ``t ↦ (T0/T)^power u(t T0 / T)``.
     """
+    factor = (T0 / T) ** power
 
     def u(t):
-        return controls(np.minimum(np.asarray(t, dtype=float) * (T0 / T), T0))
+        return factor * controls(np.minimum(np.asarray(t, dtype=float) * (T0 / T), T0))
 
     return u
 
 
-def _next_horizon(tried: list, fast: float, slow: float) -> float:
-    """The next horizon: the secant root of ``log s`` against ``log T`` through the last two
-    finite tries (the first with slope −2), inside ``(fast, slow)``, else the bracket's middle
-    (geometric) or a doubling."""
+def _steps(T: float, step: float) -> int:
+    """The whole steps ``T`` rounds up to."""
+    return math.ceil(T / step - ROUNDING)
+
+
+def _secant_root(tried: list) -> float | None:
+    """The secant root of ``log s`` against ``log T`` through the last two finite tries (the
+    first with slope −2), or ``None`` without a finite try."""
     finite = [(x, y) for x, y in tried if math.isfinite(y)]
     if not finite:
-        return math.exp(tried[-1][0]) * 2.0
+        return None
     x1, y1 = finite[-1]
     if len(finite) >= 2 and finite[-2][1] != y1:
         x0, y0 = finite[-2]
-        x = x1 - y1 * (x1 - x0) / (y1 - y0)
-    else:
-        x = x1 + y1 / 2.0
-    T = math.exp(x)
+        return math.exp(x1 - y1 * (x1 - x0) / (y1 - y0))
+    return math.exp(x1 + y1 / 2.0)
+
+
+def _next_horizon(tried: list, fast: float, slow: float, step: float = 0.0) -> float:
+    """The next horizon: :data:`STEP_AIM` of a ``step`` past the secant root (a root to be
+    rounded up needs a horizon that keeps the bounds just past it, not one on it), below the
+    whole steps of the least horizon that keeps the bounds; inside ``(fast, slow)``, else the
+    bracket's middle (geometric) or a doubling."""
+    root = _secant_root(tried)
+    if root is None:
+        return math.exp(tried[-1][0]) * 2.0
+    T = root + STEP_AIM * step
+    if step > 0.0 and math.isfinite(slow):
+        T = min(T, (math.ceil(slow / step - ROUNDING) - 1) * step)
     hi = slow if math.isfinite(slow) else math.inf
     if not (fast < T < hi) or not math.isfinite(T):
         T = math.sqrt(fast * hi) if math.isfinite(hi) and fast > 0 else (2.0 * fast if fast > 0 else 0.5 * hi)

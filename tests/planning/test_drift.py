@@ -13,7 +13,7 @@ from scipy.linalg import expm
 import nonholo
 from nonholo import Mechanism
 from nonholo.certify import resimulate
-from nonholo.constraints import InputBounds, of_mechanism
+from nonholo.constraints import InputBounds, StateBounds, of_mechanism
 
 
 def gramian(A, B, T):
@@ -131,6 +131,47 @@ def test_least_time_of_the_double_integrator_is_bang_bang(d, a_max):
     assert result.T == pytest.approx(2 * np.sqrt(d / a_max), rel=1e-4)
     t = np.linspace(0.0, result.T, 2001)
     assert np.abs(result.controls(t)).max() <= a_max * (1 + 1e-9)
+
+
+@pytest.mark.parametrize("d, a_max, v_max", [(1.0, 1.0, 0.5), (2.0, 0.5, 0.4)])
+def test_least_time_of_the_double_integrator_under_a_speed_bound_coasts(d, a_max, v_max):
+    """Rest to rest over ``d`` with ``|a| ≤ a_max`` and ``|v| ≤ v_max`` (a bound bang-bang
+    would pass): full thrust to ``v_max``, a coast, full braking, in
+    ``T = d / v_max + v_max / a_max``; the speed's bound is what the search meets first (from a
+    horizon the bounds allow)."""
+    result = nonholo.plan([0, 0, 0, 0], [d, 0, 0, 0], mechanism="double_integrator", T=4 * d / v_max, objective="time",
+                          constraints=[InputBounds([-a_max, -a_max], [a_max, a_max]),
+                                       StateBounds([-np.inf, -np.inf, -v_max, -v_max], [np.inf, np.inf, v_max, v_max])])
+    assert result.success, result.reason
+    assert result.T == pytest.approx(d / v_max + v_max / a_max, rel=1e-3)
+    t, _, q, _ = resimulate.resimulate_state([0, 0, 0, 0], result.controls, result.T, "double_integrator",
+                                             breakpoints=result.parametrisation.breakpoints)
+    assert np.abs(q[-1] - [d, 0, 0, 0]).max() < 1e-8
+    assert np.abs(result.controls(t)).max() <= a_max * (1 + 1e-9)
+    assert np.abs(q[:, 2:]).max() <= v_max * (1 + 1e-6)
+
+
+def test_controls_stretched_with_power_two_keep_a_rest_to_rest_path():
+    """A double integrator's control from rest to rest read on another horizon at the same
+    fraction, times ``(T0/T)²``, ends at the same place at rest (closed form: its position
+    is the control's double integral)."""
+    from nonholo.planning.least_time import stretched
+
+    def u(t):
+        t = np.atleast_1d(t)
+        return np.stack([np.sin(2 * np.pi * t / 3.0), 0.3 * np.sin(4 * np.pi * t / 3.0)], axis=1)
+
+    for T in (2.0, 4.5):
+        v = stretched(u, 3.0, T, power=2)
+        t = np.linspace(0.0, T, 200001)
+        a = v(t)
+        speed = np.concatenate([np.zeros((1, 2)), np.cumsum((a[1:] + a[:-1]) / 2 * np.diff(t)[:, None], axis=0)])
+        place = np.sum((speed[1:] + speed[:-1]) / 2 * np.diff(t)[:, None], axis=0)
+        # u's own: ∫₀³ (3 − s) u(s) ds
+        s = np.linspace(0.0, 3.0, 200001)
+        own = np.trapezoid((3.0 - s)[:, None] * u(s), s, axis=0)
+        assert np.abs(speed[-1]).max() < 1e-6
+        assert place == pytest.approx(own, abs=1e-6)
 
 
 def test_least_time_of_the_second_order_unicycle_keeps_every_bound():

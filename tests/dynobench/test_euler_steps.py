@@ -1,0 +1,101 @@
+"""Dynobench's own problem, ``K`` Euler steps of the model (``nonholo.dynobench.euler_steps``):
+the steps' sensitivities against central differences, the states against the project's
+checker's Euler step (written from Dynobench's models, apart from the mechanisms), and the
+trajectories found against the checker, exactly (``share = 0``) and within half its thresholds."""
+from pathlib import Path
+
+import numpy as np
+import pytest
+import yaml
+
+from nonholo import dynobench
+from nonholo.dynobench import checker, euler_steps
+from nonholo.dynobench.solve import constraints, obstacles
+
+COPIES = Path(__file__).resolve().parents[2] / "benchmarks" / "dynobench"
+
+
+def instance(robot, name="parallelpark_0"):
+    return dynobench.load(COPIES / "envs" / robot / f"{name}.yaml")
+
+
+def problem(inst, share=0.0):
+    bounds, states = constraints(inst)
+    return euler_steps.EulerProblem(inst, bounds, states, obstacles(inst), share)
+
+
+def reference_actions(robot):
+    """The repository's reference solution's actions (more steps than the least)."""
+    return np.array(yaml.safe_load((COPIES / "solutions" / robot / "parallelpark_0.yaml").read_text())["actions"])
+
+
+@pytest.mark.parametrize("robot", ["unicycle1_v0", "unicycle2_v0"])
+def test_the_euler_steps_are_the_checkers_and_their_sensitivities_central_differences(robot):
+    inst = instance(robot)
+    euler = problem(inst)
+    rng = np.random.default_rng(3)
+    U = rng.uniform(-0.25, 0.25, size=(12, 2))
+    X, S = euler.rollout(U)
+    for k in range(12):
+        gap = X[k + 1] - checker.step(inst, X[k], U[k])
+        gap[2] = checker.wrap(gap[2])
+        assert np.abs(gap).max() < 1e-12
+    h = 1e-6
+    for j in rng.choice(U.size, 6, replace=False):
+        up, down = U.copy().ravel(), U.copy().ravel()
+        up[j] += h
+        down[j] -= h
+        numeric = (euler.rollout(up.reshape(U.shape))[0] - euler.rollout(down.reshape(U.shape))[0]) / (2 * h)
+        assert np.abs(S[:, :, j] - numeric).max() < 1e-7
+
+
+def test_fewer_steps_kept_exactly_pass_the_checker_with_nothing_to_spare():
+    """From the reference solution's 36 steps, ``share = 0``: fewer steps, every action
+    inside its bounds, the states Euler steps of the actions, the goal reached, no overlap."""
+    inst = instance("unicycle1_v0")
+    bounds, states = constraints(inst)
+    found = euler_steps.fewest_steps(inst, reference_actions("unicycle1_v0"), bounds, states, obstacles(inst), 0.0)
+    assert found is not None and len(found.actions) < 36
+    report = dynobench.check(inst, found.states, found.actions)
+    assert report.feasible
+    assert report.cost == pytest.approx(0.1 * len(found.actions))
+    assert np.abs(found.actions).max() <= 0.5 * (1 + 1e-9)
+    assert report.max_jump < 1e-12 and report.goal_distance < 1e-8
+    assert report.max_collision < 1e-9 and report.x_bound_distance == 0.0
+
+
+def test_half_the_thresholds_gives_no_more_steps_and_stays_within_that_half():
+    inst = instance("unicycle1_v0")
+    bounds, states = constraints(inst)
+    start = reference_actions("unicycle1_v0")
+    exact = euler_steps.fewest_steps(inst, start, bounds, states, obstacles(inst), 0.0)
+    half = euler_steps.fewest_steps(inst, start, bounds, states, obstacles(inst), 0.5)
+    assert half is not None and len(half.actions) <= len(exact.actions)
+    report = dynobench.check(inst, half.states, half.actions)
+    assert report.feasible and report.max_jump < 1e-12
+    assert report.u_bound_distance <= 0.5 * checker.BOUND_TOL + 1e-9
+    assert report.goal_distance <= 0.5 * checker.GOAL_TOL + 1e-9
+    assert report.max_collision <= 0.5 * checker.COL_TOL + 1e-6
+
+
+def test_a_side_off_zero_is_kept_as_it_is_and_the_others_scaled():
+    """``0.25 ≤ v ≤ 0.5`` (unicycle1_v1): at ``s = 0.5`` the action ``v = 0.25`` meets both
+    the fixed side and the scaled one, and ``v = 0.2`` breaks the fixed side."""
+    euler = problem(instance("unicycle1_v1", "kink_0"))
+    A, b = euler.bounds_rows(1)
+    for v, kept in ((0.25, True), (0.2, False)):
+        z = np.array([v, 0.0, 0.5])
+        assert bool(np.all(A @ z - b >= -1e-12)) is kept
+
+
+def test_what_fewest_steps_does_not_solve_and_a_bad_share():
+    inst = instance("car1_v0")
+    bounds, states = constraints(inst)
+    assert euler_steps.fewest_steps(inst, np.zeros((20, 2)), bounds, states, obstacles(inst), 0.5) is None
+    uni = instance("unicycle1_v0")
+    bounds, states = constraints(uni)
+    long = np.zeros((euler_steps.STEPS_AT_MOST + 1, 2))
+    assert euler_steps.fewest_steps(uni, long, bounds, states, obstacles(uni), 0.5) is None
+    for share in (1.0, -0.1, "half"):
+        with pytest.raises(ValueError, match="share"):
+            euler_steps.fewest_steps(uni, long, bounds, states, obstacles(uni), share)
