@@ -25,14 +25,14 @@ def run(args) -> int:
         The exit status.
     """
     from .. import dynobench
-    from ..dynobench.solve import solve
+    from ..dynobench.solve import SHARE, solve
 
     try:
         instance = dynobench.load(args.env, models=args.models)
     except ValueError as exc:
         print(f"nonholo dynobench: error: {exc}", file=sys.stderr)
         return 2
-    solution = solve(instance)
+    solution = solve(instance, share=0.0 if args.strict else SHARE)
     if solution.trajectory is not None and args.out:
         dynobench.write(args.out, solution.trajectory, solution.report)
     print(f"{instance.robot} {instance.name}: {'solved' if solution.solved else 'not solved'}: {solution.reason} "
@@ -51,4 +51,7 @@ def arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("env", help="a Dynobench env file (envs/<robot>/<instance>.yaml)")
     p.add_argument("--out", help="write the trajectory here (Dynobench's YAML: states, actions)")
     p.add_argument("--models", help="the folder of model files (default: ../../models from the env file)")
+    p.add_argument("--strict", action="store_true",
+                   help="keep the bounds, the obstacles and the goal exactly (by default the trajectory of fewer "
+                        "Euler steps may use half of Dynobench's thresholds)")
     p.set_defaults(func=run)

@@ -11,7 +11,8 @@ repository ``quimortiz/dynobench``, MIT licence).
 - :func:`check`: the project's own check of a trajectory, by Dynobench's rules and
   thresholds (:mod:`nonholo.dynobench.checker`);
 - :func:`~nonholo.dynobench.solve.solve`: an instance planned in the least time under its
-  model's bounds, exported and checked (:mod:`nonholo.dynobench.solve`).
+  model's bounds, exported and checked (:mod:`nonholo.dynobench.solve`), a short trajectory
+  then brought to fewer Euler steps of the model (:mod:`nonholo.dynobench.euler_steps`).
 """
 from .checker import Report, check
 from .instance import Box, Instance, load

@@ -8,7 +8,9 @@ under the model's input bounds and state bounds (the workspace bounds the positi
 least time found is rounded up to a whole number ``K`` of steps ``dt`` and the motion played
 in ``K dt`` — re-timed along its path without drift, re-planned at that horizon with drift —
 then exported (:func:`~nonholo.dynobench.trajectory.to_dynobench`) and checked by the
-project's own checker (:func:`~nonholo.dynobench.checker.check`). The obstacles are kept
+project's own checker (:func:`~nonholo.dynobench.checker.check`). A short trajectory is then
+brought to as few Euler steps of the model as keep its bounds, obstacles and goal within the
+share :data:`SHARE` of the checker's thresholds (:mod:`nonholo.dynobench.euler_steps`). The obstacles are kept
 at the nodes of the least-time path (:class:`~nonholo.model.obstacles.Obstacles`). For the
 unicycle (:data:`ROUTED`) that path starts from a route among the obstacles — the quickest
 on a lattice of poses (:mod:`nonholo.planning.lattice_route`), else OMPL's RRT-Connect in
