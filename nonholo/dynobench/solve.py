@@ -14,8 +14,9 @@ share :data:`SHARE` of the checker's thresholds (:mod:`nonholo.dynobench.euler_s
 at the nodes of the least-time path (:class:`~nonholo.model.obstacles.Obstacles`). For the
 unicycle (:data:`ROUTED`) that path starts from a route among the obstacles — the quickest
 on a lattice of poses (:mod:`nonholo.planning.lattice_route`), else OMPL's RRT-Connect in
-the Reeds–Shepp space (:mod:`nonholo.planning.plane_route`) — which leads it through a
-corridor, out of a trap and round a wall (:func:`routed`); the second-order unicycle
+the Reeds–Shepp space (:mod:`nonholo.planning.plane_route`); for a unicycle that only
+drives forward, the quickest chain of its own arcs (:mod:`nonholo.planning.arc_route`) — which
+leads it through a corridor, out of a trap and round a wall (:func:`routed`); the second-order unicycle
 (:data:`ROUTED_WITH_DRIFT`) from that unicycle's least-time path (:func:`routed_with_drift`);
 the others from the least-energy path without obstacles: a local method, which brings a
 motion out of an obstacle it crosses near its edge but finds no route round a wall.
@@ -170,8 +171,8 @@ def first_horizon(instance) -> float:
     return max(HORIZON_FACTOR * straight / top, instance.dt)
 
 
-#: The mechanisms planned from a route among the obstacles (:mod:`nonholo.planning.lattice_route`,
-#: else :mod:`nonholo.planning.plane_route`).
+#: The mechanisms planned from a route among the obstacles (:mod:`nonholo.planning.lattice_route`
+#: or, forward only, :mod:`nonholo.planning.arc_route`; else :mod:`nonholo.planning.plane_route`).
 ROUTED = ("unicycle",)
 #: The mechanisms with drift planned from the least-time path of a first-order one along such
 #: a route (:func:`routed_with_drift`): theirs, whose speed and turning rate are coordinates.
@@ -182,8 +183,8 @@ DRIFT_HORIZON = 1.3
 
 
 def routed(mechanism: str, start, goal, given, low, high):
-    """The least-time path from a route among the obstacles (the lattice's quickest, else
-    OMPL's): the route's speed and turning rate as the first guess of the path of least use
+    """The least-time path from a route among the obstacles (the lattice's quickest or, for a
+    vehicle that only drives forward, the quickest chain of its arcs; else OMPL's): the route's speed and turning rate as the first guess of the path of least use
     of the bounds in the route's time (:func:`nonholo.planning.least_time.least_use`, the
     obstacles kept at its nodes), certified, played in the least time along it.
 
@@ -203,18 +204,22 @@ def routed(mechanism: str, start, goal, given, low, high):
     PlanResult
         The path in its least time, or a failed result saying why.
     """
-    from ..planning import lattice_route, plane_route
+    from ..planning import arc_route, lattice_route, plane_route
 
     mech = catalog.get(mechanism)
     bounds = given[0]
     turn = float(min(-bounds.lows[1], bounds.highs[1]))
     if bounds.lows[0] > 0:
-        # a vehicle that only drives forward: Dubins curves at its least speed's tightest turn
-        # (the local method widens a turn the other way where that one is less tight)
-        speed, slowest = float(bounds.highs[0]), float(bounds.lows[0])
-        tightest = float(max(-bounds.lows[1], bounds.highs[1]))
-        way = plane_route.route(given[-1], mech, start, goal, low, high, speed, tightest, slowest=slowest)
-        how = "OMPL's RRT-Connect, Dubins curves"
+        # a vehicle that only drives forward: the quickest chain of its own arcs, else Dubins
+        # curves at its least speed's tightest turn (the local method widens a turn the other
+        # way where that one is less tight)
+        way = arc_route.route(given[-1], mech, start, goal, low, high, bounds.lows, bounds.highs)
+        how = "the search over arcs"
+        if isinstance(way, str):
+            speed, slowest = float(bounds.highs[0]), float(bounds.lows[0])
+            tightest = float(max(-bounds.lows[1], bounds.highs[1]))
+            way = plane_route.route(given[-1], mech, start, goal, low, high, speed, tightest, slowest=slowest)
+            how = "OMPL's RRT-Connect, Dubins curves"
     else:
         speed = float(min(-bounds.lows[0], bounds.highs[0]))
         way = lattice_route.route(given[-1], mech, start, goal, low, high, speed, turn)

@@ -11,7 +11,7 @@ import shapely
 from nonholo import dynobench
 from nonholo.dynobench.solve import obstacles
 from nonholo.model import catalog
-from nonholo.planning import lattice_route, plane_route
+from nonholo.planning import arc_route, lattice_route, plane_route
 
 ROOT = Path(__file__).resolve().parents[2]
 KINK = ROOT / "benchmarks" / "dynobench" / "envs" / "unicycle1_v0" / "kink_0.yaml"
@@ -132,3 +132,46 @@ def test_a_goal_walled_off_has_no_lattice_route():
     boxed = walled_off(inst)
     why = lattice_route.route(obstacles(boxed, 5e-3), UNICYCLE, inst.start, inst.goal, inst.low, inst.high, 0.5, 0.5)
     assert isinstance(why, str) and "no route on the lattice" in why
+
+
+WALL = ROOT / "benchmarks" / "dynobench" / "envs" / "unicycle1_v2" / "wall_0.yaml"
+
+
+def test_the_arc_route_of_a_forward_only_unicycle_is_played_exactly_clear_and_in_its_bounds():
+    """Dynobench's wall for a unicycle with ``0.25 ≤ v ≤ 0.5`` and ``−0.25 ≤ ω ≤ 0.5``: the
+    arcs, replayed in closed form, pass through the route's states; every body along them (20
+    points an arc) clear of the boxes and inside the workspace; the rates in their bounds; the
+    end within a cell and a heading bin of the goal."""
+    inst = dynobench.load(WALL)
+    bounds = (np.asarray(inst.input_low), np.asarray(inst.input_high))
+    assert bounds[0][0] > 0 and -bounds[0][1] != bounds[1][1]
+    way = arc_route.route(obstacles(inst, 5e-3), UNICYCLE, inst.start, inst.goal, inst.low, inst.high, *bounds)
+    assert isinstance(way, plane_route.Route), way
+    assert np.all(way.rates >= bounds[0] - 1e-12) and np.all(way.rates <= bounds[1] + 1e-12)
+    states = played_states(inst.start, way.times, way.rates)
+    np.testing.assert_allclose(states[::20], way.states, atol=1e-9)
+    walls = [box(*o.center, 0.0, *o.size) for o in inst.obstacles]
+    length, width = inst.bodies[0]
+    for x, y, th in states:
+        assert min(box(x, y, th, length, width).distance(w) for w in walls) > 0.0
+        assert inst.low[0] - 1e-9 <= x <= inst.high[0] + 1e-9 and inst.low[1] - 1e-9 <= y <= inst.high[1] + 1e-9
+    cell = arc_route.CELL_OF_WIDTH * width
+    assert np.hypot(*(states[-1, :2] - inst.goal[:2])) <= arc_route.GOAL_CELLS * cell + 1e-12
+    assert abs(np.angle(np.exp(1j * (states[-1, 2] - inst.goal[2])))) <= 2 * np.pi / arc_route.HEADING_BINS
+
+
+def test_the_arcs_are_the_unicycles_closed_form():
+    moves = np.array([(0.5, 0.5), (0.25, -0.25), (0.4, 0.0), (0.5, 1e-12)])
+    got = arc_route.arcs(moves, 0.8, np.array([0.5, 1.0]))
+    for m, (v, w) in enumerate(moves):
+        for f, frac in enumerate((0.5, 1.0)):
+            np.testing.assert_allclose(got[m, f], unicycle_replay((0.0, 0.0, 0.0), [0.0, 0.8 * frac], [(v, w)]),
+                                       atol=1e-12)
+
+
+def test_a_goal_walled_off_has_no_arc_route_within_the_budget():
+    inst = dynobench.load(KINK)
+    boxed = walled_off(inst)
+    why = arc_route.route(obstacles(boxed, 5e-3), UNICYCLE, inst.start, inst.goal, inst.low, inst.high,
+                          (0.25, -0.5), (0.5, 0.5))
+    assert isinstance(why, str) and "no route of the vehicle's arcs" in why
