@@ -162,8 +162,8 @@ def main(argv=None) -> None:
         "Published: the best final cost J_f and iDb-A*'s first-solution time t_st, medians over 20 runs "
         "(iDb-A* T-RO 2024 table, Intel i9-14900KF; unicycle2's t_st not quoted). Costs are durations, "
         "steps of dt = 0.1 s. The command's default: a trajectory of at most 80 steps is brought to as few "
-        "Euler steps of the model as keep its bounds, obstacles and goal to half of Dynobench's thresholds "
-        "(the table's *past*, *collision* and *goal*: `--strict` keeps them exactly).")
+        "Euler steps of the model as keep its bounds and goal to half of Dynobench's thresholds (the table's "
+        "*past* and *goal*; `--strict` keeps them exactly) and its bodies clear of the obstacles.")
     rows, details, solved = [], [], {}
     with tempfile.TemporaryDirectory() as tmp:
         for name in names:

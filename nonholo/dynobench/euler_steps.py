@@ -12,13 +12,13 @@ kept where it keeps every constraint, ``s ≤ 1``, and the project's checker pas
 the search. Each search runs at most :data:`MAX_ITERATIONS` iterations: the same call gives
 the same path on any machine.
 
-The bounds, the obstacles and the goal are kept to the fraction ``share`` of Dynobench's
-thresholds (:data:`~nonholo.dynobench.checker.BOUND_TOL`,
-:data:`~nonholo.dynobench.checker.COL_TOL`, :data:`~nonholo.dynobench.checker.GOAL_TOL`):
-every bound widened by ``share · BOUND_TOL``; a body may overlap an obstacle by
-``share · COL_TOL``; the last state within ``share · GOAL_TOL`` of the goal in the model's
-distance. ``share = 0`` keeps them exactly (the goal an equality). The start is kept exactly
-and the steps are the model's, with no gap.
+The bounds and the goal are kept to the fraction ``share`` of Dynobench's thresholds
+(:data:`~nonholo.dynobench.checker.BOUND_TOL`, :data:`~nonholo.dynobench.checker.GOAL_TOL`):
+every bound widened by ``share · BOUND_TOL``, the last state within ``share · GOAL_TOL`` of
+the goal in the model's distance; ``share = 0`` keeps them exactly (the goal an equality).
+The bodies keep clear of the obstacles by the obstacles' margin at every state (none
+overlaps one: Dynobench's own collision check was seen to hang on a body that does). The
+start is kept exactly and the steps are the model's, with no gap.
 
 Only the models whose state and actions are their mechanism's (:data:`EULER_MODELS`) are
 solved here, and only short trajectories (:data:`STEPS_AT_MOST`): SLSQP's dense quadratic
@@ -32,7 +32,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..model import catalog
-from .checker import BOUND_TOL, COL_TOL, GOAL_TOL, Report, check, wrap
+from .checker import BOUND_TOL, GOAL_TOL, Report, check, wrap
 
 #: The models whose state and actions are their catalog mechanism's coordinates and inputs.
 EULER_MODELS = ("unicycle1", "unicycle2")
@@ -84,9 +84,9 @@ class EulerProblem:
     state_bounds : StateBounds
         The model's state bounds (the workspace's on the position).
     obstacles : Obstacles
-        The obstacles and the bodies.
+        The obstacles, the bodies and the margin they keep.
     share : float
-        The fraction of Dynobench's thresholds used.
+        The fraction of Dynobench's thresholds on the bounds and the goal used.
     """
 
     def __init__(self, instance, input_bounds, state_bounds, obstacles, share: float):
@@ -100,7 +100,6 @@ class EulerProblem:
         self.state_low = np.asarray(state_bounds.lows, dtype=float) - widen
         self.state_high = np.asarray(state_bounds.highs, dtype=float) + widen
         self.obstacles = obstacles
-        self.overlap = share * COL_TOL
         self.goal_radius = share * GOAL_TOL
         self.angles = np.asarray(self.mechanism.angles, dtype=bool)
         self.start = np.asarray(instance.start, dtype=float)
@@ -215,7 +214,7 @@ class EulerProblem:
         def value(z):
             states, _, c, _ = self._evaluated(z)
             later = states[1:]
-            return np.concatenate([c + self.overlap, (later[:, low] - self.state_low[low]).ravel(),
+            return np.concatenate([c - self.obstacles.margin, (later[:, low] - self.state_low[low]).ravel(),
                                    (self.state_high[high] - later[:, high]).ravel()])
 
         def jac(z):
@@ -334,9 +333,9 @@ def fewest_steps(instance, actions, input_bounds, state_bounds, obstacles, share
     input_bounds, state_bounds : InputBounds, StateBounds
         The model's bounds.
     obstacles : Obstacles
-        The obstacles and bodies (its margin is not used: the overlap allowed is ``share``'s).
+        The obstacles, the bodies and the margin they keep at the states.
     share : float
-        The fraction of Dynobench's thresholds used, in ``[0, 1)``.
+        The fraction of Dynobench's thresholds on the bounds and the goal used, in ``[0, 1)``.
 
     Returns
     -------

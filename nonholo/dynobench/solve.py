@@ -9,8 +9,8 @@ least time found is rounded up to a whole number ``K`` of steps ``dt`` and the m
 in ``K dt`` — re-timed along its path without drift, re-planned at that horizon with drift —
 then exported (:func:`~nonholo.dynobench.trajectory.to_dynobench`) and checked by the
 project's own checker (:func:`~nonholo.dynobench.checker.check`). A short trajectory is then
-brought to as few Euler steps of the model as keep its bounds, obstacles and goal within the
-share :data:`SHARE` of the checker's thresholds (:mod:`nonholo.dynobench.euler_steps`). The obstacles are kept
+brought to as few Euler steps of the model as keep its bounds and goal within the share
+:data:`SHARE` of the checker's thresholds and its bodies clear of the obstacles (:mod:`nonholo.dynobench.euler_steps`). The obstacles are kept
 at the nodes of the least-time path (:class:`~nonholo.model.obstacles.Obstacles`). For the
 unicycle (:data:`ROUTED`) that path starts from a route among the obstacles — the quickest
 on a lattice of poses (:mod:`nonholo.planning.lattice_route`), else OMPL's RRT-Connect in
@@ -42,9 +42,9 @@ HORIZON_FACTOR = 2.0
 #: The clearance kept from the obstacles at the nodes of the least-time path (the motion
 #: between them may come closer: it must not overlap one).
 MARGIN = 5e-3
-#: The fraction of Dynobench's thresholds on the bounds, the overlaps and the goal that the
-#: trajectory of fewer Euler steps may use (:mod:`nonholo.dynobench.euler_steps`): half,
-#: the other half left to the round-off of another machine.
+#: The fraction of Dynobench's thresholds on the bounds and the goal that the trajectory of
+#: fewer Euler steps may use (:mod:`nonholo.dynobench.euler_steps`): half, the other half
+#: left to the round-off of another machine.
 SHARE = 0.5
 
 
@@ -368,8 +368,8 @@ def solve(instance, share: float = SHARE) -> Solution:
     instance : Instance
         The instance.
     share : float, default :data:`SHARE`
-        The fraction of Dynobench's thresholds the trajectory of fewer Euler steps may use;
-        0 keeps the bounds, the obstacles and the goal exactly.
+        The fraction of Dynobench's thresholds on the bounds and the goal the trajectory of
+        fewer Euler steps may use; 0 keeps them exactly.
 
     Returns
     -------
@@ -428,12 +428,12 @@ def solve(instance, share: float = SHARE) -> Solution:
         return Solution(False, f"the trajectory fails Dynobench's checks: {'; '.join(report.failures())}", played,
                         trajectory, report, time.perf_counter() - started)
     reason = f"cost {report.cost:.6g} s ({K} steps of {instance.dt:g} s; the least time {result.T:.6g} s)"
-    fewer = euler_steps.fewest_steps(instance, trajectory["actions"], given[0], given[1], obstacles(instance), share)
+    fewer = euler_steps.fewest_steps(instance, trajectory["actions"], given[0], given[1], given[2], share)
     if fewer is not None:
         trajectory = {"states": fewer.states.tolist(), "actions": fewer.actions.tolist()}
         report = fewer.report
         kept = "exactly" if share == 0 else f"to {share:g} of Dynobench's thresholds"
-        reason = (f"cost {report.cost:.6g} s ({len(fewer.actions)} Euler steps of {instance.dt:g} s, the bounds, "
-                  f"the obstacles and the goal kept {kept}; the continuous plan's {K} steps, its least time "
-                  f"{result.T:.6g} s)")
+        reason = (f"cost {report.cost:.6g} s ({len(fewer.actions)} Euler steps of {instance.dt:g} s, the bounds and "
+                  f"the goal kept {kept}, the obstacles cleared by {MARGIN:g}; the continuous plan's {K} steps, its "
+                  f"least time {result.T:.6g} s)")
     return Solution(True, reason, played, trajectory, report, time.perf_counter() - started)

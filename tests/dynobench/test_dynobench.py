@@ -218,12 +218,12 @@ def test_the_parallel_parks_are_solved_and_pass_the_checks(tmp_path):
         inst, trajectory = dynobench.load(env), dynobench.read(out)
         report = dynobench.check(inst, trajectory["states"], trajectory["actions"])
         assert report.feasible and report.cost <= cost + 1e-9
-        # Dynobench's own model functions, in a process of their own: their FCL check was seen
-        # to hang on a body grazing an obstacle (a trajectory may overlap one by 5e-3)
+        # Dynobench's own model functions, in a process of their own (their FCL check was seen
+        # to hang on a body overlapping an obstacle)
         from benchmarks.dynobench import bindings_check
 
         said = bindings_check(robot, env, out)
-        assert said.startswith(("pass", "bindings not installed", "did not return")), said
+        assert said.startswith(("pass", "bindings not installed")), said
 
 
 #: Instances the route on the lattice leads through a corridor or out of a trap, with the best
