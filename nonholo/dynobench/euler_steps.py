@@ -34,16 +34,20 @@ import numpy as np
 from ..model import catalog
 from .checker import BOUND_TOL, GOAL_TOL, Report, check, wrap
 
-#: The models whose state and actions are their catalog mechanism's coordinates and inputs.
-EULER_MODELS = ("unicycle1", "unicycle2")
+#: The models solved here: those whose state and actions are their catalog mechanism's
+#: coordinates and inputs, and the car with a trailer (:class:`CarWithTrailer`).
+EULER_MODELS = ("unicycle1", "unicycle2", "car_with_trailers")
 #: Trajectories of more steps than this are left as the continuous plan gives them.
 STEPS_AT_MOST = 80
 #: SLSQP's iterations at most, per count of steps.
-MAX_ITERATIONS = 100
+MAX_ITERATIONS = 300
 #: SLSQP's tolerance on ``s``.
 FTOL = 1e-10
 #: A path keeps a constraint it breaks by less than this (its units).
 KEPT_TOL = 1e-9
+#: The nonlinear constraints are kept by this much more in the optimisation (their units), so
+#: that SLSQP's answer keeps them to :data:`KEPT_TOL`.
+INNER = 1e-6
 #: The goal's distance ``|e|`` is kept as ``√(e² + ε²)`` (smooth, never below ``|e|``) with
 #: this ``ε``.
 SMOOTHING = 1e-5
@@ -71,6 +75,102 @@ class Steps:
     report: Report
 
 
+class MechanismModel:
+    """A model whose state and actions are its catalog mechanism's coordinates and inputs:
+    ``f = G(x) u (+ F(x))``, its Jacobians the generated ``QG`` and ``G``.
+
+    Parameters
+    ----------
+    instance : Instance
+        The instance.
+    """
+
+    def __init__(self, instance):
+        self.mechanism = catalog.get(instance.mechanism)
+        self.coordinates = self.mechanism.coordinates
+        self.angles = np.asarray(self.mechanism.angles, dtype=bool)
+        self.drift = self.mechanism.drift is not None
+        self._eye = np.eye(3)
+
+    def rates(self, x, u) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The rates ``f(x, u)`` and their Jacobians ``∂f/∂x``, ``∂f/∂u``.
+
+        Parameters
+        ----------
+        x, u : numpy.ndarray
+            A state and an action.
+
+        Returns
+        -------
+        tuple of numpy.ndarray
+            ``f``, ``∂f/∂x``, ``∂f/∂u``.
+        """
+        mech = self.mechanism
+        G = mech.G(self._eye, x)
+        f = G @ u if mech.drift is None else G @ u + mech.drift(self._eye, x)
+        return f, mech.module.QG(self._eye, x, u), G
+
+
+class CarWithTrailer:
+    """Dynobench's car with one trailer (``car_with_trailers``): state ``(x, y, θ0, θ1)``,
+    actions the speed and the steering angle ``(v, φ)``, ``ẋ = v cos θ0``, ``ẏ = v sin θ0``,
+    ``θ̇0 = v tan φ / l``, ``θ̇1 = v sin(θ0 − θ1) / d`` (``src/car_with_trailers.cpp``).
+
+    Parameters
+    ----------
+    instance : Instance
+        The instance (its wheelbase ``l`` and hitch length ``d``).
+    """
+
+    coordinates = ("x", "y", "theta", "theta1")
+    angles = np.array([False, False, True, True])
+    drift = False
+
+    def __init__(self, instance):
+        self.wheelbase, self.hitch = float(instance.wheelbase), float(instance.hitch)
+
+    def rates(self, x, u) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The rates ``f(x, u)`` and their Jacobians ``∂f/∂x``, ``∂f/∂u``.
+
+        Parameters
+        ----------
+        x, u : numpy.ndarray
+            A state and an action.
+
+        Returns
+        -------
+        tuple of numpy.ndarray
+            ``f``, ``∂f/∂x``, ``∂f/∂u``.
+        """
+        th0, th1 = x[2], x[3]
+        v, phi = u
+        c, s, t = math.cos(th0), math.sin(th0), math.tan(phi)
+        ch, sh = math.cos(th0 - th1), math.sin(th0 - th1)
+        L, d = self.wheelbase, self.hitch
+        f = np.array([v * c, v * s, v * t / L, v * sh / d])
+        fx = np.zeros((4, 4))
+        fx[0, 2], fx[1, 2] = -v * s, v * c
+        fx[3, 2], fx[3, 3] = v * ch / d, -v * ch / d
+        fu = np.array([[c, 0.0], [s, 0.0], [t / L, v / (L * math.cos(phi) ** 2)], [sh / d, 0.0]])
+        return f, fx, fu
+
+
+def model_of(instance):
+    """The model of the Euler steps of an instance (:data:`EULER_MODELS`).
+
+    Parameters
+    ----------
+    instance : Instance
+        The instance.
+
+    Returns
+    -------
+    MechanismModel or CarWithTrailer
+        Its rates and their Jacobians.
+    """
+    return CarWithTrailer(instance) if instance.dynamics == "car_with_trailers" else MechanismModel(instance)
+
+
 class EulerProblem:
     """The least use ``s`` of the input bounds over the actions of ``K`` Euler steps (see the
     module): variables ``(actions, s)``.
@@ -91,8 +191,8 @@ class EulerProblem:
 
     def __init__(self, instance, input_bounds, state_bounds, obstacles, share: float):
         self.instance = instance
-        self.mechanism = catalog.get(instance.mechanism)
-        self.n, self.m = self.mechanism.n_coordinates, self.mechanism.n_inputs
+        self.model = model_of(instance)
+        self.n, self.m = len(self.model.coordinates), len(input_bounds.lows)
         self.share = share
         widen = share * BOUND_TOL
         self.input_low = np.asarray(input_bounds.lows, dtype=float) - widen
@@ -101,12 +201,14 @@ class EulerProblem:
         self.state_high = np.asarray(state_bounds.highs, dtype=float) + widen
         self.obstacles = obstacles
         self.goal_radius = share * GOAL_TOL
-        self.angles = np.asarray(self.mechanism.angles, dtype=bool)
+        self.angles = self.model.angles
         self.start = np.asarray(instance.start, dtype=float)
         self.goal = np.asarray(instance.goal, dtype=float)
         # the model's distance: the position's norm, then the other coordinates' weights
         self.weights = np.asarray(instance.weights, dtype=float)[1:]
         self._key, self._value = None, None
+        #: how much more the nonlinear constraints are kept by in the optimisation
+        self.inner = INNER
 
     def rollout(self, actions: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """The states of the Euler steps and their sensitivities to the actions.
@@ -123,19 +225,16 @@ class EulerProblem:
         sensitivities : numpy.ndarray
             ``(K + 1, n, K m)``: ``∂x_k/∂(actions)``.
         """
-        mech, module = self.mechanism, self.mechanism.module
         dt, K, n, m = self.instance.dt, actions.shape[0], self.n, self.m
-        eye, identity = np.eye(3), np.eye(n)
+        identity = np.eye(n)
         states = np.empty((K + 1, n))
         states[0] = self.start
         sens = np.zeros((K + 1, n, K * m))
         for k in range(K):
-            x, u = states[k], actions[k]
-            G = mech.G(eye, x)
-            rate = G @ u if mech.drift is None else G @ u + mech.drift(eye, x)
-            states[k + 1] = x + dt * rate
-            sens[k + 1] = (identity + dt * module.QG(eye, x, u)) @ sens[k]
-            sens[k + 1][:, k * m:(k + 1) * m] += dt * G
+            rate, fx, fu = self.model.rates(states[k], actions[k])
+            states[k + 1] = states[k] + dt * rate
+            sens[k + 1] = (identity + dt * fx) @ sens[k]
+            sens[k + 1][:, k * m:(k + 1) * m] += dt * fu
         return states, sens
 
     def _evaluated(self, z):
@@ -144,7 +243,7 @@ class EulerProblem:
         key = z[:-1].tobytes()
         if key != self._key:
             states, sens = self.rollout(z[:-1].reshape(K, self.m))
-            c, grad = self.obstacles.clearance_rows(self.mechanism, states[1:])         # (K, b), (K, b, n)
+            c, grad = self.obstacles.clearance_rows(self.model, states[1:])             # (K, b), (K, b, n)
             rows = np.einsum("kbn,knp->kbp", grad, sens[1:]).reshape(-1, K * self.m)
             self._key, self._value = key, (states, sens, c.ravel(), rows)
         return self._value
@@ -192,7 +291,7 @@ class EulerProblem:
 
         def value(z):
             _, norm, rest = parts(z)
-            return np.array([self.goal_radius - norm - float(self.weights @ rest)])
+            return np.array([self.goal_radius - norm - float(self.weights @ rest)]) - self.inner
 
         def jac(z):
             e, norm, rest = parts(z)
@@ -215,7 +314,7 @@ class EulerProblem:
             states, _, c, _ = self._evaluated(z)
             later = states[1:]
             return np.concatenate([c - self.obstacles.margin, (later[:, low] - self.state_low[low]).ravel(),
-                                   (self.state_high[high] - later[:, high]).ravel()])
+                                   (self.state_high[high] - later[:, high]).ravel()]) - self.inner
 
         def jac(z):
             _, sens, _, rows = self._evaluated(z)
@@ -257,13 +356,15 @@ class EulerProblem:
                     A.append(row)
         return np.array(A).reshape(-1, K * self.m + 1), np.array(b)
 
-    def solve(self, guess: np.ndarray):
+    def solve(self, guess: np.ndarray, iterations: int = MAX_ITERATIONS):
         """The least use ``s`` over ``K`` steps' actions, from ``guess``.
 
         Parameters
         ----------
         guess : numpy.ndarray
             ``(K, m)`` actions.
+        iterations : int, default :data:`MAX_ITERATIONS`
+            SLSQP's iterations at most.
 
         Returns
         -------
@@ -287,11 +388,13 @@ class EulerProblem:
         goal, limits = self.goal_terms(), self.limit_terms()
         found = minimize(lambda z: z[-1], z0, jac=lambda z: objective, method="SLSQP",
                          constraints=[goal, {"type": "ineq", "fun": lambda z: A @ z - b, "jac": lambda z: A}, limits],
-                         options={"maxiter": MAX_ITERATIONS, "ftol": FTOL})
+                         options={"maxiter": iterations, "ftol": FTOL})
         z = found.x
+        self.inner = 0.0                         # judged on the constraints themselves
         reached = goal["fun"](z)
         kept = bool(np.all(A @ z - b >= -KEPT_TOL) and np.all(limits["fun"](z) >= -KEPT_TOL)
                     and (np.all(np.abs(reached) <= KEPT_TOL) if goal["type"] == "eq" else np.all(reached >= -KEPT_TOL)))
+        self.inner = INNER
         return z[:-1].reshape(K, self.m), float(z[-1]), kept
 
 
@@ -319,7 +422,7 @@ def spread(actions: np.ndarray, K: int, drift: bool) -> np.ndarray:
     return out if drift else out * (K0 / K)
 
 
-def fewest_steps(instance, actions, input_bounds, state_bounds, obstacles, share: float) -> Steps | None:
+def fewest_steps(instance, actions, obstacles, share: float, first: bool = False) -> Steps | None:
     """The trajectory of the fewest Euler steps found below the continuous plan's (see the
     module), or ``None`` where there is none, or the model or the trajectory is not one
     this solves.
@@ -327,15 +430,15 @@ def fewest_steps(instance, actions, input_bounds, state_bounds, obstacles, share
     Parameters
     ----------
     instance : Instance
-        The instance.
+        The instance (its model's bounds kept).
     actions : array_like
         The continuous plan's actions, ``(K, m)``.
-    input_bounds, state_bounds : InputBounds, StateBounds
-        The model's bounds.
     obstacles : Obstacles
         The obstacles, the bodies and the margin they keep at the states.
     share : float
         The fraction of Dynobench's thresholds on the bounds and the goal used, in ``[0, 1)``.
+    first : bool, default False
+        Try ``K`` steps first (``actions`` a first guess, not a trajectory that passes).
 
     Returns
     -------
@@ -347,16 +450,18 @@ def fewest_steps(instance, actions, input_bounds, state_bounds, obstacles, share
     ValueError
         If ``share`` is not in ``[0, 1)``.
     """
+    from ..model.bounds import InputBounds, StateBounds
+
     if not (isinstance(share, (int, float)) and 0.0 <= share < 1.0):
         raise ValueError(f"share must be a number in [0, 1), got {share!r}")
     actions = np.asarray(actions, dtype=float)
     if instance.dynamics not in EULER_MODELS or actions.shape[0] > STEPS_AT_MOST:
         return None
-    problem = EulerProblem(instance, input_bounds, state_bounds, obstacles, float(share))
-    drift = problem.mechanism.drift is not None
+    problem = EulerProblem(instance, InputBounds(tuple(instance.input_low), tuple(instance.input_high)),
+                           StateBounds(tuple(instance.state_low), tuple(instance.state_high)), obstacles, float(share))
     best = None
-    for K in range(actions.shape[0] - 1, 0, -1):
-        found, use, kept = problem.solve(spread(actions, K, drift))
+    for K in range(actions.shape[0] - (0 if first else 1), 0, -1):
+        found, use, kept = problem.solve(spread(actions, K, problem.model.drift))
         if not (kept and use <= 1.0):
             break
         states = problem.rollout(found)[0]

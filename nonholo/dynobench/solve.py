@@ -360,6 +360,59 @@ def at_horizon(problem, result, T: float, label: str, fixed: bool = False):
     return least_time.finished(problem, result, used, f"{result.reason}; {label}")
 
 
+#: The models planned by the fewest Euler steps from the chain of their own arcs
+#: (:func:`by_arcs`): the car with a trailer, whose steering angle is Dynobench's action.
+BY_ARCS = ("car_with_trailers",)
+
+
+def by_arcs(instance, start, goal, kept, share: float, started: float) -> Solution:
+    """A car with a trailer: the chain of its arcs among the obstacles
+    (:func:`nonholo.planning.car_route.search`; the steering held along an arc and changed at
+    once between arcs, as Dynobench's action allows), its actions at the model's steps the
+    first guess of the fewest Euler steps (:func:`~nonholo.dynobench.euler_steps.fewest_steps`).
+
+    Parameters
+    ----------
+    instance : Instance
+        The instance.
+    start, goal : numpy.ndarray
+        The catalog car's coordinates at the ends.
+    kept : Obstacles
+        The obstacles, the bodies and the margin kept.
+    share : float
+        The fraction of Dynobench's thresholds on the bounds and the goal used.
+    started : float
+        When the solve started (``time.perf_counter``).
+
+    Returns
+    -------
+    Solution
+        The trajectory and its check, or why there is none.
+    """
+    from ..planning import car_route
+
+    arcs = car_route.search(kept, catalog.get(instance.mechanism), start, goal, instance.low, instance.high,
+                            float(instance.input_high[0]), float(-instance.input_low[0]),
+                            float(instance.input_high[1]), math.inf)
+    if isinstance(arcs, str):
+        return Solution(False, f"no route: {arcs}", seconds=time.perf_counter() - started)
+    K = max(1, math.ceil(len(arcs.moves) * arcs.tau / instance.dt - 1e-9))
+    which = np.minimum(((np.arange(K) + 0.5) * instance.dt / arcs.tau).astype(int), len(arcs.moves) - 1)
+    route = f"a route of {len(arcs.moves)} arcs in {K} steps"
+    if K > euler_steps.STEPS_AT_MOST:
+        return Solution(False, f"{route}: more steps than the Euler steps are solved for "
+                               f"({euler_steps.STEPS_AT_MOST})", seconds=time.perf_counter() - started)
+    fewer = euler_steps.fewest_steps(instance, arcs.moves[which], kept, share, first=True)
+    if fewer is None:
+        return Solution(False, f"{route}: no Euler steps from it keep the bounds, the obstacles and the goal",
+                        seconds=time.perf_counter() - started)
+    kept_how = "exactly" if share == 0 else f"to {share:g} of Dynobench's thresholds"
+    reason = (f"cost {fewer.report.cost:.6g} s ({len(fewer.actions)} Euler steps of {instance.dt:g} s, the bounds "
+              f"and the goal kept {kept_how}, the obstacles cleared by {kept.margin:g}; from {route})")
+    return Solution(True, reason, None, {"states": fewer.states.tolist(), "actions": fewer.actions.tolist()},
+                    fewer.report, time.perf_counter() - started)
+
+
 def solve(instance, share: float = SHARE) -> Solution:
     """Plan an instance (see the module).
 
@@ -387,6 +440,8 @@ def solve(instance, share: float = SHARE) -> Solution:
                         seconds=time.perf_counter() - started)
     given = constraints(instance) + [obstacles(instance, MARGIN)]
     start, goal = mechanism_state(instance, instance.start), mechanism_state(instance, instance.goal)
+    if instance.dynamics in BY_ARCS:
+        return by_arcs(instance, start, goal, given[-1], share, started)
     try:
         if instance.mechanism in ROUTED:
             result = routed(instance.mechanism, start, goal, given, instance.low, instance.high)
@@ -428,7 +483,7 @@ def solve(instance, share: float = SHARE) -> Solution:
         return Solution(False, f"the trajectory fails Dynobench's checks: {'; '.join(report.failures())}", played,
                         trajectory, report, time.perf_counter() - started)
     reason = f"cost {report.cost:.6g} s ({K} steps of {instance.dt:g} s; the least time {result.T:.6g} s)"
-    fewer = euler_steps.fewest_steps(instance, trajectory["actions"], given[0], given[1], given[2], share)
+    fewer = euler_steps.fewest_steps(instance, trajectory["actions"], given[-1], share)
     if fewer is not None:
         trajectory = {"states": fewer.states.tolist(), "actions": fewer.actions.tolist()}
         report = fewer.report

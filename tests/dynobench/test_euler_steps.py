@@ -11,6 +11,7 @@ import yaml
 
 from nonholo import dynobench
 from nonholo.dynobench import checker, euler_steps
+from nonholo.constraints import InputBounds, StateBounds
 from nonholo.dynobench.solve import constraints, obstacles
 
 COPIES = Path(__file__).resolve().parents[2] / "benchmarks" / "dynobench"
@@ -30,16 +31,17 @@ def reference_actions(robot):
     return np.array(yaml.safe_load((COPIES / "solutions" / robot / "parallelpark_0.yaml").read_text())["actions"])
 
 
-@pytest.mark.parametrize("robot", ["unicycle1_v0", "unicycle2_v0"])
+@pytest.mark.parametrize("robot", ["unicycle1_v0", "unicycle2_v0", "car1_v0"])
 def test_the_euler_steps_are_the_checkers_and_their_sensitivities_central_differences(robot):
     inst = instance(robot)
-    euler = problem(inst)
+    euler = euler_steps.EulerProblem(inst, InputBounds(tuple(inst.input_low), tuple(inst.input_high)),
+                                     StateBounds(tuple(inst.state_low), tuple(inst.state_high)), obstacles(inst), 0.0)
     rng = np.random.default_rng(3)
     U = rng.uniform(-0.25, 0.25, size=(12, 2))
     X, S = euler.rollout(U)
     for k in range(12):
         gap = X[k + 1] - checker.step(inst, X[k], U[k])
-        gap[2] = checker.wrap(gap[2])
+        gap[checker.angles(inst)] = checker.wrap(gap[checker.angles(inst)])
         assert np.abs(gap).max() < 1e-12
     h = 1e-6
     for j in rng.choice(U.size, 6, replace=False):
@@ -54,8 +56,7 @@ def test_fewer_steps_kept_exactly_pass_the_checker_with_nothing_to_spare():
     """From the reference solution's 36 steps, ``share = 0``: fewer steps, every action
     inside its bounds, the states Euler steps of the actions, the goal reached, no overlap."""
     inst = instance("unicycle1_v0")
-    bounds, states = constraints(inst)
-    found = euler_steps.fewest_steps(inst, reference_actions("unicycle1_v0"), bounds, states, obstacles(inst), 0.0)
+    found = euler_steps.fewest_steps(inst, reference_actions("unicycle1_v0"), obstacles(inst, 5e-3), 0.0)
     assert found is not None and len(found.actions) < 36
     report = dynobench.check(inst, found.states, found.actions)
     assert report.feasible
@@ -69,10 +70,9 @@ def test_half_the_thresholds_gives_no_more_steps_and_stays_within_that_half():
     """``share = 0.5``: no more steps than exactly; the actions and the goal within half the
     checker's thresholds, the bodies clear of the obstacles."""
     inst = instance("unicycle1_v0")
-    bounds, states = constraints(inst)
     start = reference_actions("unicycle1_v0")
-    exact = euler_steps.fewest_steps(inst, start, bounds, states, obstacles(inst), 0.0)
-    half = euler_steps.fewest_steps(inst, start, bounds, states, obstacles(inst), 0.5)
+    exact = euler_steps.fewest_steps(inst, start, obstacles(inst, 5e-3), 0.0)
+    half = euler_steps.fewest_steps(inst, start, obstacles(inst, 5e-3), 0.5)
     assert half is not None and len(half.actions) <= len(exact.actions)
     report = dynobench.check(inst, half.states, half.actions)
     assert report.feasible and report.max_jump < 1e-12
@@ -92,13 +92,38 @@ def test_a_side_off_zero_is_kept_as_it_is_and_the_others_scaled():
 
 
 def test_what_fewest_steps_does_not_solve_and_a_bad_share():
-    inst = instance("car1_v0")
-    bounds, states = constraints(inst)
-    assert euler_steps.fewest_steps(inst, np.zeros((20, 2)), bounds, states, obstacles(inst), 0.5) is None
     uni = instance("unicycle1_v0")
-    bounds, states = constraints(uni)
     long = np.zeros((euler_steps.STEPS_AT_MOST + 1, 2))
-    assert euler_steps.fewest_steps(uni, long, bounds, states, obstacles(uni), 0.5) is None
+    assert euler_steps.fewest_steps(uni, long, obstacles(uni, 5e-3), 0.5) is None
     for share in (1.0, -0.1, "half"):
         with pytest.raises(ValueError, match="share"):
-            euler_steps.fewest_steps(uni, long, bounds, states, obstacles(uni), share)
+            euler_steps.fewest_steps(uni, long, obstacles(uni, 5e-3), share)
+
+
+def test_the_car_routes_arcs_are_its_motion_and_clear_of_the_boxes():
+    """Dynobench's car with a trailer in the parallel park: each arc of the search, played from
+    the search's last state by SciPy's DOP853 on the checker's model (Dynobench's, written
+    apart from the catalog car) with the arc's speed and steering, ends at the search's state —
+    the car's pose exactly, the trailer's heading to within the search's binning of the hitch
+    angle; every state clear of the boxes by the margin (the checker's signed distance)."""
+    import math
+
+    from scipy.integrate import solve_ivp
+
+    from nonholo.dynobench.solve import mechanism_state
+    from nonholo.model import catalog
+    from nonholo.planning import car_route
+
+    inst = instance("car1_v0")
+    arcs = car_route.search(obstacles(inst, 5e-3), catalog.get("car_with_trailer"), mechanism_state(inst, inst.start),
+                            mechanism_state(inst, inst.goal), inst.low, inst.high, 0.5, 0.1, float(inst.input_high[1]),
+                            math.inf)
+    assert isinstance(arcs, car_route.Arcs), arcs
+    assert np.all(arcs.moves[:, 0] >= -0.1 - 1e-12) and np.all(arcs.moves[:, 0] <= 0.5 + 1e-12)
+    assert np.abs(arcs.moves[:, 1]).max() <= inst.input_high[1] + 1e-12
+    for (v, phi), begin, end in zip(arcs.moves, arcs.states[:-1], arcs.states[1:]):
+        x = solve_ivp(lambda t, y: checker.rates(inst, y, (v, phi)), (0.0, arcs.tau), begin[[0, 1, 2, 4]],
+                      method="DOP853", rtol=1e-10, atol=1e-12).y[:, -1]
+        np.testing.assert_allclose(x[:3], end[:3], atol=1e-5)
+        assert abs(x[3] - end[4]) < 0.5 * 2 * np.pi / car_route.HITCH_BINS
+        assert checker.state_clearance(inst, end[[0, 1, 2, 4]])[0] >= 5e-3 - 1e-9
