@@ -628,10 +628,12 @@ def finished(problem, result: PlanResult, used: Use, reason: str, objective: str
 def least_time_with_drift(problem, result: PlanResult, guess=None, step: float = 0.0) -> PlanResult:
     """The least time under the input bounds of a mechanism with drift, whose paths a time
     change does not keep: the horizon ``T`` at which the least use of the bounds
-    (:func:`least_use`) is 1, found by the secant method on ``log s`` against ``log T`` (the
-    first step as for a system driven by accelerations, ``s ∝ T⁻²``), kept inside the
-    bracket of the horizons tried (bisection where it leaves it), each solve started from
-    the last path found; the path at the least horizon where the bounds hold.
+    (:func:`least_use`, the state bounds around zero — a speed's — scaled and counted too)
+    is 1, found by the secant method on ``log s`` against ``log T`` (the first step as for a
+    system driven by accelerations, ``s ∝ T⁻²``), kept inside the bracket of the horizons
+    tried (bisection where it leaves it), each solve started from the last path found, its
+    accelerations scaled as a path from rest to rest (``stretched(power=2)``); the path at
+    the least horizon where the bounds hold.
 
     Parameters
     ----------
