@@ -7,8 +7,8 @@ up to whole steps. Dynobench judges something else: the Euler steps of its model
 the states. :func:`fewest_steps` takes the plan's ``K`` actions and tries ``K − 1``,
 ``K − 2``, … steps, each from the last path's actions spread over one step fewer. At each it
 seeks the least use ``s`` of the input bounds over the actions (SciPy's SLSQP; the Euler
-steps' sensitivities exact, from the mechanism's generated variational matrix). A path is
-kept where it keeps every constraint, ``s ≤ 1``, and the project's checker passes it; the first count that fails ends
+steps' sensitivities exact, from the model's Jacobians). A path is kept where it keeps every
+constraint, ``s ≤ 1``, and the project's checker passes it; the first count that fails ends
 the search. Each search runs at most :data:`MAX_ITERATIONS` iterations: the same call gives
 the same path on any machine.
 
@@ -20,9 +20,12 @@ The bodies keep clear of the obstacles by the obstacles' margin at every state (
 overlaps one: Dynobench's own collision check was seen to hang on a body that does). The
 start is kept exactly and the steps are the model's, with no gap.
 
-Only the models whose state and actions are their mechanism's (:data:`EULER_MODELS`) are
-solved here, and only short trajectories (:data:`STEPS_AT_MOST`): SLSQP's dense quadratic
-programs grow with the cube of the actions' count.
+The models (:data:`EULER_MODELS`): those whose state and actions are their catalog
+mechanism's coordinates and inputs (:class:`MechanismModel`: its generated ``G``, drift and
+variational matrix ``QG``), and Dynobench's car with a trailer, whose steering angle is an
+action (:class:`CarWithTrailer`). Only short trajectories are solved
+(:data:`STEPS_AT_MOST`): SLSQP's dense quadratic programs grow with the cube of the
+actions' count.
 """
 from __future__ import annotations
 

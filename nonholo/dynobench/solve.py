@@ -59,7 +59,8 @@ class Solution:
     reason : str
         Why not, or how it was found.
     result : PlanResult or None
-        The plan at the trajectory's horizon.
+        The continuous plan the trajectory came from (``None`` for one of the Euler steps
+        alone, :func:`by_arcs`).
     trajectory : dict or None
         Its ``states`` and ``actions``.
     report : Report or None
