@@ -95,6 +95,7 @@ class PathProblem:
         self._limits_key, self._limits_value = None, None
         #: the margin the limits are kept by at the nodes
         self.margin = MARGIN
+        #: whether the state bounds around zero are scaled by ``s``
         self.scaled = scaled
 
     def evaluation(self, x: np.ndarray):
@@ -226,7 +227,7 @@ class PathProblem:
 
     def state_use(self, q) -> float:
         """The fraction of the state bounds around zero the coordinates ``q`` use (0 unless
-        :attr:`scaled`).
+        the problem scales them).
 
         Parameters
         ----------
