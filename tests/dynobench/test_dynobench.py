@@ -203,6 +203,27 @@ def test_the_command_writes_the_trajectory_and_says_why_it_fails(tmp_path):
     assert "not solved" in run.stdout and "obstacle" in run.stdout
 
 
+def test_strict_keeps_the_bounds_and_the_goal_exactly_and_the_default_half_the_thresholds(tmp_path):
+    """The unicycle's park: ``--strict`` writes a trajectory whose actions and states keep their
+    bounds and whose last state is the goal; the default's pass within half the thresholds, in
+    no more steps."""
+    env = COPIES / "envs" / "unicycle1_v0" / "parallelpark_0.yaml"
+    inst, reports = dynobench.load(env), {}
+    for flags in ((), ("--strict",)):
+        out = tmp_path / f"sol{len(flags)}.yaml"
+        run = subprocess.run([sys.executable, "-m", "nonholo", "dynobench", str(env), "--out", str(out), *flags],
+                             capture_output=True, text=True, timeout=600)
+        assert run.returncode == 0, run.stdout + run.stderr
+        trajectory = dynobench.read(out)
+        reports[flags] = dynobench.check(inst, trajectory["states"], trajectory["actions"])
+    strict, default = reports[("--strict",)], reports[()]
+    assert strict.feasible and strict.u_bound_distance == 0.0 and strict.x_bound_distance == 0.0
+    assert strict.goal_distance < 1e-8 and strict.max_collision == 0.0
+    assert default.feasible and default.cost <= strict.cost + 1e-9
+    assert default.u_bound_distance <= 0.5 * checker.BOUND_TOL + 1e-9
+    assert default.goal_distance <= 0.5 * checker.GOAL_TOL + 1e-9
+
+
 @pytest.mark.slow
 def test_the_parallel_parks_are_solved_and_pass_the_checks(tmp_path):
     """The unicycle's, the second-order unicycle's and the car with a trailer's parks: solved,
