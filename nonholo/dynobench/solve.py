@@ -370,7 +370,9 @@ def by_arcs(instance, start, goal, kept, share: float, started: float) -> Soluti
     """A car with a trailer: the chain of its arcs among the obstacles
     (:func:`nonholo.planning.car_route.search`; the steering held along an arc and changed at
     once between arcs, as Dynobench's action allows), its actions at the model's steps the
-    first guess of the fewest Euler steps (:func:`~nonholo.dynobench.euler_steps.fewest_steps`).
+    first guess of the fewest Euler steps (:func:`~nonholo.dynobench.euler_steps.fewest_steps`):
+    first its forward arcs alone (reversing is slow, and a local method does not leave a
+    class of motions that reverses), then the whole route.
 
     Parameters
     ----------
@@ -397,14 +399,22 @@ def by_arcs(instance, start, goal, kept, share: float, started: float) -> Soluti
                             float(instance.input_high[1]), math.inf)
     if isinstance(arcs, str):
         return Solution(False, f"no route: {arcs}", seconds=time.perf_counter() - started)
-    K = max(1, math.ceil(len(arcs.moves) * arcs.tau / instance.dt - 1e-9))
-    which = np.minimum(((np.arange(K) + 0.5) * instance.dt / arcs.tau).astype(int), len(arcs.moves) - 1)
-    route = f"a route of {len(arcs.moves)} arcs in {K} steps"
-    if K > euler_steps.STEPS_AT_MOST:
-        return Solution(False, f"{route}: more steps than the Euler steps are solved for "
-                               f"({euler_steps.STEPS_AT_MOST})", seconds=time.perf_counter() - started)
-    fewer = euler_steps.fewest_steps(instance, arcs.moves[which], kept, share, first=True)
-    if fewer is None:
+    forward = arcs.moves[arcs.moves[:, 0] > 0.0]
+    # first without the arcs that reverse (slow, and a class the local method does not leave),
+    # then the whole route
+    guesses = ([forward] if 0 < len(forward) < len(arcs.moves) else []) + [arcs.moves]
+    route = f"a route of {len(arcs.moves)} arcs"
+    for moves in guesses:
+        K = max(1, math.ceil(len(moves) * arcs.tau / instance.dt - 1e-9))
+        which = np.minimum(((np.arange(K) + 0.5) * instance.dt / arcs.tau).astype(int), len(moves) - 1)
+        if K > euler_steps.STEPS_AT_MOST:
+            return Solution(False, f"{route} in {K} steps: more steps than the Euler steps are solved for "
+                                   f"({euler_steps.STEPS_AT_MOST})", seconds=time.perf_counter() - started)
+        fewer = euler_steps.fewest_steps(instance, moves[which], kept, share, first=True)
+        if fewer is not None:
+            route += "" if moves is arcs.moves else f", its {len(moves)} forward ones the first guess"
+            break
+    else:
         return Solution(False, f"{route}: no Euler steps from it keep the bounds, the obstacles and the goal",
                         seconds=time.perf_counter() - started)
     kept_how = "exactly" if share == 0 else f"to {share:g} of Dynobench's thresholds"
