@@ -46,6 +46,69 @@ GREEDY = 1.5
 MAX_EXPANSIONS = 40_000
 
 
+class FreeDistance:
+    """The distance to the goal through the free cells of a grid over the workspace: SciPy's
+    Dijkstra over each cell's eight neighbours, a cell free where its point is half the
+    narrowest body's width from every obstacle; where no free chain reaches the goal, ten
+    times the straight distance (the searches' heuristic).
+
+    Parameters
+    ----------
+    union : shapely geometry or None
+        The obstacles, as one.
+    bodies : sequence of Body
+        The vehicle's bodies.
+    low, high : numpy.ndarray
+        The workspace's corners.
+    cell : float
+        The grid's spacing.
+    goal : numpy.ndarray
+        The goal (its first two entries the position).
+    """
+
+    def __init__(self, union, bodies, low, high, cell: float, goal):
+        import shapely
+        from scipy.sparse import coo_matrix
+        from scipy.sparse.csgraph import dijkstra
+
+        nx, ny = (np.floor((np.asarray(high) - low) / cell).astype(int) + 1)
+        X, Y = np.meshgrid(low[0] + cell * np.arange(nx), low[1] + cell * np.arange(ny), indexing="ij")
+        free = (np.ones(X.size, dtype=bool) if union is None else
+                shapely.distance(shapely.points(X.ravel(), Y.ravel()), union) >= 0.5 * min(b.width for b in bodies))
+        index = np.arange(X.size).reshape(nx, ny)
+        rows, cols, w = [], [], []
+        for di, dj in ((1, 0), (0, 1), (1, 1), (1, -1)):
+            a = index[max(0, -di):nx - max(0, di), max(0, -dj):ny - max(0, dj)].ravel()
+            b = index[max(0, di):nx - max(0, -di), max(0, dj):ny - max(0, -dj)].ravel()
+            keep = free[a] & free[b]
+            rows.append(a[keep]), cols.append(b[keep]), w.append(np.full(keep.sum(), cell * math.hypot(di, dj)))
+        graph = coo_matrix((np.concatenate(w), (np.concatenate(rows), np.concatenate(cols))), shape=(X.size, X.size))
+        self.cell, self.low, self.last = cell, np.asarray(low, dtype=float), (int(nx) - 1, int(ny) - 1)
+        self.goal = np.asarray(goal, dtype=float)[:2]
+        self.index = index
+        self.far = dijkstra(graph.tocsr(), directed=False, indices=index[self.cell_of(*self.goal)])
+
+    def cell_of(self, x: float, y: float) -> tuple[int, int]:
+        """The grid cell nearest the point ``(x, y)`` (clipped to the grid)."""
+        return (min(max(round((x - self.low[0]) / self.cell), 0), self.last[0]),
+                min(max(round((y - self.low[1]) / self.cell), 0), self.last[1]))
+
+    def cells(self, xy: np.ndarray) -> np.ndarray:
+        """:meth:`cell_of` of many points, ``(n, 2)``."""
+        return np.clip(np.rint((np.asarray(xy) - self.low) / self.cell).astype(int), 0, self.last)
+
+    def __call__(self, x: float, y: float) -> float:
+        """The distance from the point ``(x, y)``."""
+        d = self.far[self.index[self.cell_of(x, y)]]
+        return d if math.isfinite(d) else 10.0 * math.hypot(x - self.goal[0], y - self.goal[1])
+
+    def at(self, xy: np.ndarray, cells: np.ndarray | None = None) -> np.ndarray:
+        """The distances from many points ``(n, 2)`` (their :meth:`cells` if known)."""
+        cells = self.cells(xy) if cells is None else cells
+        d = self.far[self.index[cells[:, 0], cells[:, 1]]]
+        return np.where(np.isfinite(d), d, 10.0 * np.hypot(xy[:, 0] - self.goal[0], xy[:, 1] - self.goal[1]))
+
+
 def arcs(moves: np.ndarray, tau: float, fractions: np.ndarray) -> np.ndarray:
     """The displacements ``(dx, dy, dθ)`` of arcs from the pose ``(0, 0, 0)``.
 
@@ -97,8 +160,6 @@ def route(obstacles, mechanism, start, goal, low, high, lows, highs) -> Route | 
         The route (its ``rates`` the speed and turning rate), or the reason there is none.
     """
     import shapely
-    from scipy.sparse import coo_matrix
-    from scipy.sparse.csgraph import dijkstra
 
     start, goal = np.asarray(start, dtype=float), np.asarray(goal, dtype=float)
     low, high = np.asarray(low, dtype=float), np.asarray(high, dtype=float)
@@ -139,29 +200,11 @@ def route(obstacles, mechanism, start, goal, low, high, lows, highs) -> Route | 
         return ok
 
     # -- the heuristic: the distance to the goal through the free cells, at the top speed
-    nx, ny = (np.floor((high - low) / cell).astype(int) + 1)
-    X, Y = np.meshgrid(low[0] + cell * np.arange(nx), low[1] + cell * np.arange(ny), indexing="ij")
-    free = (np.ones(X.size, dtype=bool) if union is None else
-            shapely.distance(shapely.points(X.ravel(), Y.ravel()), union) >= 0.5 * min(b.width for b in obstacles.bodies))
-    index = np.arange(X.size).reshape(nx, ny)
-    rows, cols, w = [], [], []
-    for di, dj in ((1, 0), (0, 1), (1, 1), (1, -1)):
-        a = index[max(0, -di):nx - max(0, di), max(0, -dj):ny - max(0, dj)].ravel()
-        b = index[max(0, di):nx - max(0, -di), max(0, dj):ny - max(0, -dj)].ravel()
-        keep = free[a] & free[b]
-        rows.append(a[keep]), cols.append(b[keep]), w.append(np.full(keep.sum(), cell * math.hypot(di, dj)))
-    graph = coo_matrix((np.concatenate(w), (np.concatenate(rows), np.concatenate(cols))), shape=(X.size, X.size))
-
-    x0, y0, last_i, last_j = float(low[0]), float(low[1]), int(nx) - 1, int(ny) - 1
-
-    def cell_of(x, y):
-        return (min(max(round((x - x0) / cell), 0), last_i), min(max(round((y - y0) / cell), 0), last_j))
-
-    far = dijkstra(graph.tocsr(), directed=False, indices=index[cell_of(*goal[:2])])
+    far = FreeDistance(union, obstacles.bodies, low, high, cell, goal)
+    cell_of = far.cell_of
 
     def heuristic(x, y):
-        d = far[index[cell_of(x, y)]]
-        return (d if math.isfinite(d) else 10.0 * math.hypot(x - goal[0], y - goal[1])) / speed
+        return far(x, y) / speed
 
     bin_width = 2.0 * np.pi / HEADING_BINS
 
@@ -192,10 +235,9 @@ def route(obstacles, mechanism, start, goal, low, high, lows, highs) -> Route | 
         if not ok.size:
             continue
         ends = states[ok, -1, :3]
-        cells = np.clip(np.rint((ends[:, :2] - low) / cell).astype(int), 0, (nx - 1, ny - 1))
+        cells = far.cells(ends[:, :2])
         bins = np.rint(ends[:, 2] / bin_width).astype(int) % HEADING_BINS
-        d = far[index[cells[:, 0], cells[:, 1]]]
-        h = np.where(np.isfinite(d), d, 10.0 * np.hypot(ends[:, 0] - goal[0], ends[:, 1] - goal[1])) / speed
+        h = far.at(ends[:, :2], cells) / speed
         c = cost + tau
         for m, new, i, j, b, hm in zip(ok.tolist(), ends.tolist(), cells[:, 0].tolist(), cells[:, 1].tolist(),
                                        bins.tolist(), h.tolist()):

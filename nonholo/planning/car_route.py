@@ -32,6 +32,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..model.obstacles import body_corners
+from .arc_route import FreeDistance
 
 #: The grid's spacing, as a fraction of the narrowest body's width.
 CELL_OF_WIDTH = 0.4
@@ -103,8 +104,6 @@ def search(obstacles, mechanism, start, goal, low, high, speed: float, reverse: 
         The arcs, or the reason there is none.
     """
     import shapely
-    from scipy.sparse import coo_matrix
-    from scipy.sparse.csgraph import dijkstra
 
     start, goal = np.asarray(start, dtype=float), np.asarray(goal, dtype=float)
     low, high = np.asarray(low, dtype=float), np.asarray(high, dtype=float)
@@ -166,29 +165,10 @@ def search(obstacles, mechanism, start, goal, low, high, speed: float, reverse: 
         return ok
 
     # -- the heuristic: the distance to the goal through the free cells
-    nx, ny = (np.floor((high - low) / cell).astype(int) + 1)
-    X, Y = np.meshgrid(low[0] + cell * np.arange(nx), low[1] + cell * np.arange(ny), indexing="ij")
-    points = shapely.points(X.ravel(), Y.ravel())
-    free = np.ones(X.size, dtype=bool) if union is None else \
-        shapely.distance(points, union) >= 0.5 * min(b.width for b in obstacles.bodies)
-    index = np.arange(X.size).reshape(nx, ny)
-    rows, cols, w = [], [], []
-    for di, dj in ((1, 0), (0, 1), (1, 1), (1, -1)):
-        a = index[max(0, -di):nx - max(0, di), max(0, -dj):ny - max(0, dj)]
-        b = index[max(0, di):nx - max(0, -di), max(0, dj):ny - max(0, -dj)]
-        a, b = a.ravel(), b.ravel()
-        keep = free[a] & free[b]
-        rows.append(a[keep]), cols.append(b[keep]), w.append(np.full(keep.sum(), cell * math.hypot(di, dj)))
-    graph = coo_matrix((np.concatenate(w), (np.concatenate(rows), np.concatenate(cols))), shape=(X.size, X.size))
-    gi = int(np.clip(round((goal[0] - low[0]) / cell), 0, nx - 1))
-    gj = int(np.clip(round((goal[1] - low[1]) / cell), 0, ny - 1))
-    far = dijkstra(graph.tocsr(), directed=False, indices=index[gi, gj])
+    far = FreeDistance(union, obstacles.bodies, low, high, cell, goal)
 
     def heuristic(x, y):
-        i = int(np.clip(round((x - low[0]) / cell), 0, nx - 1))
-        j = int(np.clip(round((y - low[1]) / cell), 0, ny - 1))
-        d = far[index[i, j]]
-        return (d if math.isfinite(d) else math.hypot(x - goal[0], y - goal[1]) * 10.0) / speed
+        return far(x, y) / speed
 
     def key(q):
         beta = _wrap(q[2] - q[trailers]) if trailers else ()
