@@ -89,21 +89,67 @@ class FreeDistance:
         self.far = dijkstra(graph.tocsr(), directed=False, indices=index[self.cell_of(*self.goal)])
 
     def cell_of(self, x: float, y: float) -> tuple[int, int]:
-        """The grid cell nearest the point ``(x, y)`` (clipped to the grid)."""
+        """The grid cell nearest a point (clipped to the grid).
+
+        Parameters
+        ----------
+        x, y : float
+            The point.
+
+        Returns
+        -------
+        tuple of int
+            The cell's indices.
+        """
         return (min(max(round((x - self.low[0]) / self.cell), 0), self.last[0]),
                 min(max(round((y - self.low[1]) / self.cell), 0), self.last[1]))
 
     def cells(self, xy: np.ndarray) -> np.ndarray:
-        """:meth:`cell_of` of many points, ``(n, 2)``."""
+        """:meth:`cell_of` of many points.
+
+        Parameters
+        ----------
+        xy : numpy.ndarray
+            The points, ``(n, 2)``.
+
+        Returns
+        -------
+        numpy.ndarray
+            The cells' indices, ``(n, 2)``.
+        """
         return np.clip(np.rint((np.asarray(xy) - self.low) / self.cell).astype(int), 0, self.last)
 
     def __call__(self, x: float, y: float) -> float:
-        """The distance from the point ``(x, y)``."""
+        """The distance from a point.
+
+        Parameters
+        ----------
+        x, y : float
+            The point.
+
+        Returns
+        -------
+        float
+            The distance to the goal.
+        """
         d = self.far[self.index[self.cell_of(x, y)]]
         return d if math.isfinite(d) else 10.0 * math.hypot(x - self.goal[0], y - self.goal[1])
 
     def at(self, xy: np.ndarray, cells: np.ndarray | None = None) -> np.ndarray:
-        """The distances from many points ``(n, 2)`` (their :meth:`cells` if known)."""
+        """The distances from many points.
+
+        Parameters
+        ----------
+        xy : numpy.ndarray
+            The points, ``(n, 2)``.
+        cells : numpy.ndarray, optional
+            Their :meth:`cells`, if known.
+
+        Returns
+        -------
+        numpy.ndarray
+            The distances to the goal, ``(n,)``.
+        """
         cells = self.cells(xy) if cells is None else cells
         d = self.far[self.index[cells[:, 0], cells[:, 1]]]
         return np.where(np.isfinite(d), d, 10.0 * np.hypot(xy[:, 0] - self.goal[0], xy[:, 1] - self.goal[1]))

@@ -4,21 +4,21 @@ short arcs of its own kinematics, as the first guess of a local method.
 A car turns no tighter than its steering allows and pulls its trailers behind it, so neither
 the lattice of straight steps and turns in place (:mod:`nonholo.planning.lattice_route`) nor
 the curves of a car alone give it a route it can follow. :func:`search` searches its poses
-(a hybrid A*). From a pose the moves are arcs at the top speed forward and at the top speed
-back (:data:`STEERING`: the steering at these fractions of its bound), each held for the time
-that covers :data:`ARC_CELLS` cells forward; the car stops to steer between arcs, at the top
-steering rate (an infinite one: it steers at once, as where the steering angle is an
-action). An arc's motion — the trailers' headings included — comes from the mechanism's
-own rates, integrated once per arc and hitch angle (:data:`HITCH_BINS` of them) and then moved
-with the pose. A pose is kept where every body clears every obstacle by the margin at the
-arc's middle and end (shapely's distances). Poses are merged on cells of
-:data:`CELL_OF_WIDTH` of the narrowest body's width, :data:`HEADING_BINS` headings and the
-hitch angles' bins. The cost is time, the heuristic the distance to the goal through the free
-cells at the top speed (SciPy's Dijkstra on the grid), weighted by :data:`GREEDY`. The search
-ends at a pose within :data:`GOAL_CELLS` cells and a bin of each angle of the goal, within
-:data:`MAX_EXPANSIONS` poses expanded (a budget of work, not of wall time); the result is the
-chain of arcs: the car's pose along it exact, the trailers' headings to the hitch angle's
-bins.
+(a hybrid A*, with the grid, bins, budget and heuristic of
+:mod:`nonholo.planning.arc_route`). From a pose the moves are arcs at the top speed forward
+and at the top speed back (:data:`STEERING`: the steering at these fractions of its bound),
+each held for the time that covers ``ARC_CELLS`` cells forward; the car stops to steer
+between arcs, at the top steering rate (an infinite one: it steers at once, as where the
+steering angle is an action). An arc's motion — the trailers' headings included — comes from
+the mechanism's own rates, integrated once per arc and hitch angle (:data:`HITCH_BINS` of
+them) and then moved with the pose. A pose is kept where every body clears every obstacle by
+the margin at the arc's middle and end (shapely's distances). Poses are merged on the grid's
+cells, the heading bins and the hitch angles' bins. The cost is time, the heuristic the
+distance to the goal through the free cells at the top speed
+(:class:`~nonholo.planning.arc_route.FreeDistance`). The search ends at a pose within
+``GOAL_CELLS`` cells and a bin of each angle of the goal, within ``MAX_EXPANSIONS`` poses
+expanded (a budget of work, not of wall time); the result is the chain of arcs: the car's
+pose along it exact, the trailers' headings to the hitch angle's bins.
 
 The car's coordinates are ``(x, y, θ, φ, θ₁, …)`` — the position, heading, steering angle and
 the trailers' headings — and its inputs the speed and the steering rate.
@@ -32,25 +32,13 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..model.obstacles import body_corners
-from .arc_route import FreeDistance
+from .arc_route import ARC_CELLS, CELL_OF_WIDTH, GOAL_CELLS, GREEDY, HEADING_BINS, MAX_EXPANSIONS, FreeDistance
 
-#: The grid's spacing, as a fraction of the narrowest body's width.
-CELL_OF_WIDTH = 0.4
-#: Heading bins the poses are merged in.
-HEADING_BINS = 32
 #: Bins of each hitch angle ``θ − θ₁`` (over a full turn) the poses are merged in, and the
 #: arcs integrated from.
 HITCH_BINS = 24
 #: The steering of the arcs, as fractions of its bound.
 STEERING = (-1.0, -0.5, 0.0, 0.5, 1.0)
-#: Cells an arc covers at the top speed forward (an arc back lasts as long).
-ARC_CELLS = 2.0
-#: Cells from the goal the search may end at.
-GOAL_CELLS = 1.0
-#: The heuristic's weight (above 1: greedier, fewer poses expanded).
-GREEDY = 1.5
-#: Poses expanded at most.
-MAX_EXPANSIONS = 40_000
 #: Integrator steps of an arc.
 ARC_STEPS = 8
 
