@@ -10,16 +10,21 @@ in ``K dt`` — re-timed along its path without drift, re-planned at that horizo
 then exported (:func:`~nonholo.dynobench.trajectory.to_dynobench`) and checked by the
 project's own checker (:func:`~nonholo.dynobench.checker.check`). A short trajectory is then
 brought to as few Euler steps of the model as keep its bounds and goal within the share
-:data:`SHARE` of the checker's thresholds and its bodies clear of the obstacles (:mod:`nonholo.dynobench.euler_steps`). The obstacles are kept
-at the nodes of the least-time path (:class:`~nonholo.model.obstacles.Obstacles`). For the
-unicycle (:data:`ROUTED`) that path starts from a route among the obstacles — the quickest
-on a lattice of poses (:mod:`nonholo.planning.lattice_route`), else OMPL's RRT-Connect in
-the Reeds–Shepp space (:mod:`nonholo.planning.plane_route`); for a unicycle that only
-drives forward, the quickest chain of its own arcs (:mod:`nonholo.planning.arc_route`) — which
-leads it through a corridor, out of a trap and round a wall (:func:`routed`); the second-order unicycle
-(:data:`ROUTED_WITH_DRIFT`) from that unicycle's least-time path (:func:`routed_with_drift`);
-the others from the least-energy path without obstacles: a local method, which brings a
-motion out of an obstacle it crosses near its edge but finds no route round a wall.
+:data:`SHARE` of the checker's thresholds and its bodies clear of the obstacles
+(:mod:`nonholo.dynobench.euler_steps`).
+
+The obstacles are kept at the nodes of the least-time path
+(:class:`~nonholo.model.obstacles.Obstacles`). For the unicycle (:data:`ROUTED`) that path
+starts from a route among the obstacles — the quickest on a lattice of poses
+(:mod:`nonholo.planning.lattice_route`), or for a unicycle that only drives forward the
+quickest chain of its own arcs (:mod:`nonholo.planning.arc_route`), else OMPL's RRT-Connect
+(:mod:`nonholo.planning.plane_route`) — which leads it through a corridor, out of a trap and
+round a wall (:func:`routed`); the second-order unicycle (:data:`ROUTED_WITH_DRIFT`) from
+that unicycle's least-time path (:func:`routed_with_drift`). The car with a trailer
+(:data:`BY_ARCS`), whose steering angle is Dynobench's action, is planned by the Euler steps
+alone, from the chain of its own arcs (:func:`by_arcs`). Others start from the least-energy
+path without obstacles: a local method, which brings a motion out of an obstacle it crosses
+near its edge but finds no route round a wall.
 """
 from __future__ import annotations
 
@@ -185,7 +190,8 @@ DRIFT_HORIZON = 1.3
 
 def routed(mechanism: str, start, goal, given, low, high):
     """The least-time path from a route among the obstacles (the lattice's quickest or, for a
-    vehicle that only drives forward, the quickest chain of its arcs; else OMPL's): the route's speed and turning rate as the first guess of the path of least use
+    vehicle that only drives forward, the quickest chain of its arcs; else OMPL's): the
+    route's speed and turning rate as the first guess of the path of least use
     of the bounds in the route's time (:func:`nonholo.planning.least_time.least_use`, the
     obstacles kept at its nodes), certified, played in the least time along it.
 
