@@ -210,8 +210,6 @@ class EulerProblem:
         # the model's distance: the position's norm, then the other coordinates' weights
         self.weights = np.asarray(instance.weights, dtype=float)[1:]
         self._key, self._value = None, None
-        #: how much more the nonlinear constraints are kept by in the optimisation
-        self.inner = INNER
 
     def rollout(self, actions: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """The states of the Euler steps and their sensitivities to the actions.
@@ -268,9 +266,14 @@ class EulerProblem:
         e[self.angles] = wrap(e[self.angles])
         return e
 
-    def goal_terms(self):
+    def goal_terms(self, inner: float = INNER):
         """The goal as SLSQP's constraint: ``e = 0`` (``share = 0``), else the smoothed
         model's distance within the goal's radius.
+
+        Parameters
+        ----------
+        inner : float, default :data:`INNER`
+            How much more the distance is kept within it.
 
         Returns
         -------
@@ -294,7 +297,7 @@ class EulerProblem:
 
         def value(z):
             _, norm, rest = parts(z)
-            return np.array([self.goal_radius - norm - float(self.weights @ rest)]) - self.inner
+            return np.array([self.goal_radius - norm - float(self.weights @ rest)]) - inner
 
         def jac(z):
             e, norm, rest = parts(z)
@@ -303,8 +306,13 @@ class EulerProblem:
 
         return {"type": "ineq", "fun": value, "jac": jac}
 
-    def limit_terms(self):
+    def limit_terms(self, inner: float = INNER):
         """The clearances and the state bounds at the states after the start (``≥ 0``).
+
+        Parameters
+        ----------
+        inner : float, default :data:`INNER`
+            How much more they are kept by.
 
         Returns
         -------
@@ -317,7 +325,7 @@ class EulerProblem:
             states, _, c, _ = self._evaluated(z)
             later = states[1:]
             return np.concatenate([c - self.obstacles.margin, (later[:, low] - self.state_low[low]).ravel(),
-                                   (self.state_high[high] - later[:, high]).ravel()]) - self.inner
+                                   (self.state_high[high] - later[:, high]).ravel()]) - inner
 
         def jac(z):
             _, sens, _, rows = self._evaluated(z)
@@ -393,11 +401,10 @@ class EulerProblem:
                          constraints=[goal, {"type": "ineq", "fun": lambda z: A @ z - b, "jac": lambda z: A}, limits],
                          options={"maxiter": iterations, "ftol": FTOL})
         z = found.x
-        self.inner = 0.0                         # judged on the constraints themselves
-        reached = goal["fun"](z)
-        kept = bool(np.all(A @ z - b >= -KEPT_TOL) and np.all(limits["fun"](z) >= -KEPT_TOL)
+        # judged on the constraints themselves
+        reached = self.goal_terms(0.0)["fun"](z)
+        kept = bool(np.all(A @ z - b >= -KEPT_TOL) and np.all(self.limit_terms(0.0)["fun"](z) >= -KEPT_TOL)
                     and (np.all(np.abs(reached) <= KEPT_TOL) if goal["type"] == "eq" else np.all(reached >= -KEPT_TOL)))
-        self.inner = INNER
         return z[:-1].reshape(K, self.m), float(z[-1]), kept
 
 

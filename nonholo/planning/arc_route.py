@@ -155,6 +155,28 @@ class FreeDistance:
         return np.where(np.isfinite(d), d, 10.0 * np.hypot(xy[:, 0] - self.goal[0], xy[:, 1] - self.goal[1]))
 
 
+def chain_to(nodes: list, found: int) -> list[int]:
+    """The nodes of a search from its first to ``found``, each node ``(pose, parent, move)``.
+
+    Parameters
+    ----------
+    nodes : list
+        The search's nodes (the first the start's, its parent ``-1``).
+    found : int
+        The last node.
+
+    Returns
+    -------
+    list of int
+        The nodes after the first, in order.
+    """
+    chain = []
+    while found > 0:
+        chain.append(found)
+        found = nodes[found][1]
+    return chain[::-1]
+
+
 def arcs(moves: np.ndarray, tau: float, fractions: np.ndarray) -> np.ndarray:
     """The displacements ``(dx, dy, dθ)`` of arcs from the pose ``(0, 0, 0)``.
 
@@ -295,12 +317,7 @@ def route(obstacles, mechanism, start, goal, low, high, lows, highs) -> Route | 
     if found is None:
         return (f"no route of the vehicle's arcs clear of the obstacles ({expanded} poses expanded"
                 f"{', the budget' if expanded >= MAX_EXPANSIONS else ''})")
-    chain = []
-    n = found
-    while n > 0:
-        chain.append(n)
-        n = nodes[n][1]
-    chain.reverse()
+    chain = chain_to(nodes, found)
     states = np.array([pose0] + [nodes[n][0] for n in chain])
     rates = np.array([moves[nodes[n][2]] for n in chain]).reshape(-1, 2)
     times = tau * np.arange(len(chain) + 1)

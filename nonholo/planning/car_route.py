@@ -32,7 +32,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..model.obstacles import body_corners
-from .arc_route import ARC_CELLS, CELL_OF_WIDTH, GOAL_CELLS, GREEDY, HEADING_BINS, MAX_EXPANSIONS, FreeDistance
+from .arc_route import (ARC_CELLS, CELL_OF_WIDTH, GOAL_CELLS, GREEDY, HEADING_BINS, MAX_EXPANSIONS, FreeDistance,
+                        chain_to)
 
 #: Bins of each hitch angle ``θ − θ₁`` (over a full turn) the poses are merged in, and the
 #: arcs integrated from.
@@ -208,11 +209,6 @@ def search(obstacles, mechanism, start, goal, low, high, speed: float, reverse: 
     if found is None:
         return (f"no route of the car's arcs clear of the obstacles ({expanded} poses expanded"
                 f"{', the budget' if expanded >= MAX_EXPANSIONS else ''})")
-    chain = []
-    n = found
-    while n > 0:
-        chain.append(n)
-        n = nodes[n][1]
-    chain.reverse()
+    chain = chain_to(nodes, found)
     return Arcs(tau, np.array([moves[nodes[n][2]] for n in chain], dtype=float).reshape(-1, 2),
                 np.array([q0] + [nodes[n][0] for n in chain]))
