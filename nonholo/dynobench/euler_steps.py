@@ -401,11 +401,27 @@ class EulerProblem:
                          constraints=[goal, {"type": "ineq", "fun": lambda z: A @ z - b, "jac": lambda z: A}, limits],
                          options={"maxiter": iterations, "ftol": FTOL})
         z = found.x
-        # judged on the constraints themselves
-        reached = self.goal_terms(0.0)["fun"](z)
-        kept = bool(np.all(A @ z - b >= -KEPT_TOL) and np.all(self.limit_terms(0.0)["fun"](z) >= -KEPT_TOL)
+        return z[:-1].reshape(K, self.m), float(z[-1]), self.keeps(z)
+
+    def keeps(self, z) -> bool:
+        """Whether variables keep every constraint to :data:`KEPT_TOL`, judged on the
+        constraints themselves (no inner margin).
+
+        Parameters
+        ----------
+        z : numpy.ndarray
+            The actions, flattened, and the use ``s``.
+
+        Returns
+        -------
+        bool
+            Whether they do.
+        """
+        A, b = self.bounds_rows((z.size - 1) // self.m)
+        goal = self.goal_terms(0.0)
+        reached = goal["fun"](z)
+        return bool(np.all(A @ z - b >= -KEPT_TOL) and np.all(self.limit_terms(0.0)["fun"](z) >= -KEPT_TOL)
                     and (np.all(np.abs(reached) <= KEPT_TOL) if goal["type"] == "eq" else np.all(reached >= -KEPT_TOL)))
-        return z[:-1].reshape(K, self.m), float(z[-1]), kept
 
 
 def spread(actions: np.ndarray, K: int, drift: bool) -> np.ndarray:

@@ -38,7 +38,7 @@ import numpy as np
 from ..model import catalog
 from ..model.bounds import InputBounds, StateBounds
 from ..model.obstacles import Body, Obstacles
-from . import euler_steps
+from . import euler_steps, sparse_steps
 from .checker import Report, check
 from .trajectory import to_dynobench
 
@@ -375,10 +375,9 @@ BY_ARCS = ("car_with_trailers",)
 def by_arcs(instance, start, goal, kept, share: float, started: float) -> Solution:
     """A car with a trailer: the chain of its arcs among the obstacles
     (:func:`nonholo.planning.car_route.search`; the steering held along an arc and changed at
-    once between arcs, as Dynobench's action allows), its actions at the model's steps the
-    first guess of the fewest Euler steps (:func:`~nonholo.dynobench.euler_steps.fewest_steps`):
-    first its forward arcs alone (reversing is slow, and a local method does not leave a
-    class of motions that reverses), then the whole route.
+    once between arcs, as Dynobench's action allows; its arcs the model's own Euler steps),
+    its actions the first guess of the fewest Euler steps of the whole trajectory, one sparse
+    program (:func:`nonholo.dynobench.sparse_steps.fewest_steps`).
 
     Parameters
     ----------
@@ -402,25 +401,12 @@ def by_arcs(instance, start, goal, kept, share: float, started: float) -> Soluti
 
     arcs = car_route.search(kept, catalog.get(instance.mechanism), start, goal, instance.low, instance.high,
                             float(instance.input_high[0]), float(-instance.input_low[0]),
-                            float(instance.input_high[1]), math.inf)
+                            float(instance.input_high[1]), math.inf, step=instance.dt)
     if isinstance(arcs, str):
         return Solution(False, f"no route: {arcs}", seconds=time.perf_counter() - started)
-    forward = arcs.moves[arcs.moves[:, 0] > 0.0]
-    # first without the arcs that reverse (slow, and a class the local method does not leave),
-    # then the whole route
-    guesses = ([forward] if 0 < len(forward) < len(arcs.moves) else []) + [arcs.moves]
-    route = f"a route of {len(arcs.moves)} arcs"
-    for moves in guesses:
-        K = max(1, math.ceil(len(moves) * arcs.tau / instance.dt - 1e-9))
-        which = np.minimum(((np.arange(K) + 0.5) * instance.dt / arcs.tau).astype(int), len(moves) - 1)
-        if K > euler_steps.STEPS_AT_MOST:
-            return Solution(False, f"{route} in {K} steps: more steps than the Euler steps are solved for "
-                                   f"({euler_steps.STEPS_AT_MOST})", seconds=time.perf_counter() - started)
-        fewer = euler_steps.fewest_steps(instance, moves[which], kept, share, first=True)
-        if fewer is not None:
-            route += "" if moves is arcs.moves else f", its {len(moves)} forward ones the first guess"
-            break
-    else:
+    route = f"a route of {len(arcs.moves)} arcs in {len(arcs.moves) * arcs.steps} steps"
+    fewer = sparse_steps.fewest_steps(instance, np.repeat(arcs.moves, arcs.steps, axis=0), kept, share)
+    if fewer is None:
         return Solution(False, f"{route}: no Euler steps from it keep the bounds, the obstacles and the goal",
                         seconds=time.perf_counter() - started)
     kept_how = "exactly" if share == 0 else f"to {share:g} of Dynobench's thresholds"

@@ -351,6 +351,30 @@ class Obstacles:
         return shapely.polygons(self._corners)
 
 
+def body_pose(mechanism, q, body: Body) -> tuple[np.ndarray, np.ndarray]:
+    """A body's centre and heading at each state.
+
+    Parameters
+    ----------
+    mechanism : Mechanism
+        The mechanism.
+    q : numpy.ndarray
+        States, ``(n, k)``.
+    body : Body
+        The body.
+
+    Returns
+    -------
+    centres : numpy.ndarray
+        ``(n, 2)``.
+    headings : numpy.ndarray
+        ``(n,)``.
+    """
+    names = mechanism.coordinates
+    x, y, h = (q[:, names.index(body.x)], q[:, names.index(body.y)], q[:, names.index(body.heading)])
+    return np.column_stack([x - body.behind * np.cos(h), y - body.behind * np.sin(h)]), h
+
+
 def body_corners(mechanism, q, body: Body) -> np.ndarray:
     """A body's corners at each state.
 
@@ -368,10 +392,9 @@ def body_corners(mechanism, q, body: Body) -> np.ndarray:
     numpy.ndarray
         ``(n, 4, 2)``, counter-clockwise.
     """
-    names = mechanism.coordinates
-    x, y, h = (q[:, names.index(body.x)], q[:, names.index(body.y)], q[:, names.index(body.heading)])
+    centres, h = body_pose(mechanism, q, body)
+    cx, cy = centres[:, 0], centres[:, 1]
     c, s = np.cos(h), np.sin(h)
-    cx, cy = x - body.behind * c, y - body.behind * s
     a, b = body.length / 2, body.width / 2
     local = np.array([(-a, -b), (a, -b), (a, b), (-a, b)])
     return np.stack([cx[:, None] + c[:, None] * local[:, 0] - s[:, None] * local[:, 1],

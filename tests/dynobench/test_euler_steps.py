@@ -100,15 +100,14 @@ def test_what_fewest_steps_does_not_solve_and_a_bad_share():
             euler_steps.fewest_steps(uni, long, obstacles(uni, 5e-3), share)
 
 
-def test_the_car_routes_arcs_are_its_motion_and_clear_of_the_boxes():
-    """Dynobench's car with a trailer in the parallel park: each arc of the search, played from
-    the search's last state by SciPy's DOP853 on the checker's model (Dynobench's, written
-    apart from the catalog car) with the arc's speed and steering, ends at the search's state —
-    the car's pose exactly, the trailer's heading to within the search's binning of the hitch
-    angle; every state clear of the boxes by the margin (the checker's signed distance)."""
+def test_the_car_routes_arcs_are_the_models_euler_steps_and_clear_of_the_boxes():
+    """Dynobench's car with a trailer in the parallel park, searched with the model's step: each
+    arc, played from the search's last state by the checker's own Euler step (Dynobench's model,
+    written apart from the catalog car) with the arc's speed and steering, ends at the search's
+    state — the car's pose to rounding, the trailer's heading to the table's interpolation in
+    the hitch angle — and every step's state is clear of the boxes by the margin (the checker's
+    signed distance)."""
     import math
-
-    from scipy.integrate import solve_ivp
 
     from nonholo.dynobench.solve import mechanism_state
     from nonholo.model import catalog
@@ -117,13 +116,18 @@ def test_the_car_routes_arcs_are_its_motion_and_clear_of_the_boxes():
     inst = instance("car1_v0")
     arcs = car_route.search(obstacles(inst, 5e-3), catalog.get("car_with_trailer"), mechanism_state(inst, inst.start),
                             mechanism_state(inst, inst.goal), inst.low, inst.high, 0.5, 0.1, float(inst.input_high[1]),
-                            math.inf)
+                            math.inf, step=inst.dt)
     assert isinstance(arcs, car_route.Arcs), arcs
+    assert arcs.tau == pytest.approx(arcs.steps * inst.dt)
     assert np.all(arcs.moves[:, 0] >= -0.1 - 1e-12) and np.all(arcs.moves[:, 0] <= 0.5 + 1e-12)
     assert np.abs(arcs.moves[:, 1]).max() <= inst.input_high[1] + 1e-12
     for (v, phi), begin, end in zip(arcs.moves, arcs.states[:-1], arcs.states[1:]):
-        x = solve_ivp(lambda t, y: checker.rates(inst, y, (v, phi)), (0.0, arcs.tau), begin[[0, 1, 2, 4]],
-                      method="DOP853", rtol=1e-10, atol=1e-12).y[:, -1]
-        np.testing.assert_allclose(x[:3], end[:3], atol=1e-5)
-        assert abs(x[3] - end[4]) < 0.5 * 2 * np.pi / car_route.HITCH_BINS
-        assert checker.state_clearance(inst, end[[0, 1, 2, 4]])[0] >= 5e-3 - 1e-9
+        x = begin[[0, 1, 2, 4]]
+        for _ in range(arcs.steps):
+            x = checker.step(inst, x, (v, phi))
+            assert checker.state_clearance(inst, x)[0] >= 5e-3 - 1e-9
+        np.testing.assert_allclose(x[:3], end[:3], atol=1e-9)
+        assert abs(x[3] - end[4]) < 1e-3
+    with pytest.raises(ValueError, match="step"):
+        car_route.search(obstacles(inst, 5e-3), catalog.get("car_with_trailer"), mechanism_state(inst, inst.start),
+                         mechanism_state(inst, inst.goal), inst.low, inst.high, 0.5, 0.1, 1.0, math.inf, step=0.0)
