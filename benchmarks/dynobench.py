@@ -109,8 +109,12 @@ def draw(solved: dict, path: Path) -> None:
     from nonholo import dynobench
     from nonholo.dynobench.checker import bodies
 
-    fig, axes = plt.subplots(1, len(solved), figsize=(4.2 * len(solved), 4.2), squeeze=False)
-    for ax, (name, (env, trajectory, cost)) in zip(axes[0], solved.items()):
+    columns = min(4, len(solved))
+    rows = -(-len(solved) // columns)
+    fig, axes = plt.subplots(rows, columns, figsize=(4.2 * columns, 4.2 * rows), squeeze=False)
+    for ax in axes.ravel()[len(solved):]:
+        ax.set_visible(False)
+    for ax, (name, (env, trajectory, cost)) in zip(axes.ravel(), solved.items()):
         inst = dynobench.load(env)
         ax.add_patch(Rectangle(inst.low, *(inst.high - inst.low), fill=False, lw=1.2, color="k"))
         for o in inst.obstacles:
