@@ -165,9 +165,11 @@ def main(argv=None) -> None:
         "Dynobench's own model functions through its Python bindings (`dynobench` wheel), where installed. "
         "Published: the best final cost J_f and iDb-A*'s first-solution time t_st, medians over 20 runs "
         "(iDb-A* T-RO 2024 table, Intel i9-14900KF; unicycle2's t_st not quoted). Costs are durations, "
-        "steps of dt = 0.1 s. The command's default: a trajectory of at most 80 steps is brought to as few "
-        "Euler steps of the model as keep its bounds and goal to half of Dynobench's thresholds (the table's "
-        "*past* and *goal*; `--strict` keeps them exactly) and its bodies clear of the obstacles.")
+        "steps of dt = 0.1 s. The command's default: the trajectory is brought to as few Euler steps of the "
+        "model as keep its bounds and goal to 0.9 of Dynobench's thresholds (the table's *past* and *goal*; "
+        "`--strict` keeps them exactly) and its bodies clear of the obstacles at its states by 1 mm — the "
+        "unicycles' of at most 80 steps by SLSQP over the actions, the car with a trailer's whole, as one "
+        "sparse program (IPOPT).")
     rows, details, solved = [], [], {}
     with tempfile.TemporaryDirectory() as tmp:
         for name in names:

@@ -53,5 +53,5 @@ def arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--models", help="the folder of model files (default: ../../models from the env file)")
     p.add_argument("--strict", action="store_true",
                    help="keep the bounds and the goal exactly (by default the trajectory of fewer "
-                        "Euler steps may use half of Dynobench's thresholds)")
+                        "Euler steps may use 0.9 of Dynobench's thresholds)")
     p.set_defaults(func=run)
