@@ -10,8 +10,8 @@ in ``K dt`` — re-timed along its path without drift, re-planned at that horizo
 then exported (:func:`~nonholo.dynobench.trajectory.to_dynobench`) and checked by the
 project's own checker (:func:`~nonholo.dynobench.checker.check`). A short trajectory is then
 brought to as few Euler steps of the model as keep its bounds and goal within the share
-:data:`SHARE` of the checker's thresholds and its bodies clear of the obstacles
-(:mod:`nonholo.dynobench.euler_steps`).
+:data:`SHARE` of the checker's thresholds and its bodies clear of the obstacles by
+:data:`STEP_MARGIN` at its states (:mod:`nonholo.dynobench.euler_steps`).
 
 The obstacles are kept at the nodes of the least-time path
 (:class:`~nonholo.model.obstacles.Obstacles`). For the unicycle (:data:`ROUTED`) that path
@@ -22,7 +22,9 @@ quickest chain of its own arcs (:mod:`nonholo.planning.arc_route`), else OMPL's 
 round a wall (:func:`routed`); the second-order unicycle (:data:`ROUTED_WITH_DRIFT`) from
 that unicycle's least-time path (:func:`routed_with_drift`). The car with a trailer
 (:data:`BY_ARCS`), whose steering angle is Dynobench's action, is planned by the Euler steps
-alone, from the chain of its own arcs (:func:`by_arcs`). Others start from the least-energy
+alone: the chain of its own arcs, each the model's Euler steps, brought onto the goal and to
+its fewest steps whole, as one sparse program (:func:`by_arcs`,
+:mod:`nonholo.dynobench.sparse_steps`). Others start from the least-energy
 path without obstacles: a local method, which brings a motion out of an obstacle it crosses
 near its edge but finds no route round a wall.
 """
