@@ -325,3 +325,40 @@ def test_a_plan_with_obstacles_is_saved_and_loaded_and_a_bad_record_refused(tmp_
     path.write_text(json.dumps(data))
     with pytest.raises(ValueError, match="is not a coordinate of mechanism 'unicycle'"):
         nonholo.PlanResult.load(path)
+
+
+def shifted(env: Path, offset, folder: Path) -> Path:
+    """A copy of an instance moved by ``offset`` in the plane (workspace, obstacles, start and
+    goal), beside a copy of its model file."""
+    data = yaml.safe_load(env.read_text())
+    dx, dy = offset
+    space = data["environment"]
+    space["min"] = [space["min"][0] + dx, space["min"][1] + dy]
+    space["max"] = [space["max"][0] + dx, space["max"][1] + dy]
+    for o in space["obstacles"]:
+        o["center"] = [o["center"][0] + dx, o["center"][1] + dy]
+    for robot in data["robots"]:
+        for end in ("start", "goal"):
+            robot[end] = [robot[end][0] + dx, robot[end][1] + dy, *robot[end][2:]]
+    (folder / "envs" / env.parent.name).mkdir(parents=True, exist_ok=True)
+    (folder / "models").mkdir(exist_ok=True)
+    model = COPIES / "models" / f"{env.parent.name}.yaml"
+    (folder / "models" / model.name).write_text(model.read_text())
+    out = folder / "envs" / env.parent.name / env.name
+    out.write_text(yaml.safe_dump(data))
+    return out
+
+
+@pytest.mark.parametrize("robot", ["unicycle1_v0", "car1_v0"])
+def test_a_shifted_instance_is_solved_in_as_many_steps(robot, tmp_path):
+    """The parks, moved by (10.3, −4.7): solved, passing the checker, in the same number of
+    steps, the trajectory the original's moved (to the solvers' tolerances)."""
+    from nonholo.dynobench.solve import solve
+
+    env = COPIES / "envs" / robot / "parallelpark_0.yaml"
+    here, there = solve(dynobench.load(env)), solve(dynobench.load(shifted(env, (10.3, -4.7), tmp_path)))
+    assert here.solved and there.solved, (here.reason, there.reason)
+    assert there.report.feasible and len(there.trajectory["actions"]) == len(here.trajectory["actions"])
+    moved = np.asarray(there.trajectory["states"]) - np.asarray(here.trajectory["states"])
+    np.testing.assert_allclose(moved[:, 0], 10.3, atol=1e-4)
+    np.testing.assert_allclose(moved[:, 1], -4.7, atol=1e-4)
