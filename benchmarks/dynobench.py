@@ -157,7 +157,7 @@ def main(argv=None) -> None:
     args = ap.parse_args(argv)
     names = args.instances.split(",") if args.instances else list(PUBLISHED)
     report = Report("dynobench.md", "Dynobench instances (nonholo dynobench)", "benchmarks.dynobench", argv,
-                    extra_packages=("shapely", "dynobench"))
+                    extra_packages=("shapely", "casadi", "dynobench"))
     report.paragraph(
         "Each instance: `nonholo dynobench ENV.yaml --out SOLUTION.yaml` in a fresh process, twice; the wall "
         "time is the whole command's (median of the two), which is also its time to the first feasible "
