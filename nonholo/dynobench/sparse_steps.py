@@ -94,6 +94,11 @@ def rates(model, X, U):
     -------
     casadi.SX
         ``(K, n)``.
+
+    Raises
+    ------
+    TypeError
+        If the model is not Dynobench's car with a trailer.
     """
     import casadi as ca
 
