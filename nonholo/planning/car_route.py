@@ -18,10 +18,12 @@ angles). A pose is kept where every body clears every obstacle by the margin at 
 (:class:`~nonholo.planning.clearance_grid.ClearanceGrid` proves most clear, shapely's
 distances settle the rest). Poses are merged on the grid's cells, the heading bins and the
 hitch angles' bins. The cost is time, the heuristic the distance to the goal through the
-free cells at the top speed (:class:`~nonholo.planning.arc_route.FreeDistance`). The search
-ends at a pose within ``GOAL_CELLS`` cells and a bin of each angle of the goal, within
-``MAX_EXPANSIONS`` poses expanded (a budget of work, not of wall time); the result is the
-chain of arcs and the states of their steps.
+free cells at the top speed (:class:`~nonholo.planning.arc_route.FreeDistance`) — at least
+the way through the point :data:`APPROACH` vehicle's lengths behind the goal along its
+heading, where that is free, so that the car and its trailers arrive in line with it. The
+search ends at a pose within ``GOAL_CELLS`` cells and a bin of each angle of the goal,
+within ``MAX_EXPANSIONS`` poses expanded (a budget of work, not of wall time); the result is
+the chain of arcs and the states at their ends.
 
 The car's coordinates are ``(x, y, θ, φ, θ₁, …)`` — the position, heading, steering angle and
 the trailers' headings — and its inputs the speed and the steering rate.
