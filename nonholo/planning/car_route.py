@@ -4,8 +4,8 @@ short arcs of its own kinematics, as the first guess of a local method.
 A car turns no tighter than its steering allows and pulls its trailers behind it, so neither
 the lattice of straight steps and turns in place (:mod:`nonholo.planning.lattice_route`) nor
 the curves of a car alone give it a route it can follow. :func:`search` searches its poses
-(a hybrid A*, with the grid, bins, budget and heuristic of
-:mod:`nonholo.planning.arc_route`). From a pose the moves are arcs at the top speed forward
+(a hybrid A*, with the grid, bins, budget and heuristic of :mod:`nonholo.planning.arc_route`,
+weighted by its own :data:`GREEDY`). From a pose the moves are arcs at the top speed forward
 and at the top speed back (:data:`STEERING`: the steering at these fractions of its bound),
 each held for the time that covers ``ARC_CELLS`` cells forward; the car stops to steer
 between arcs, at the top steering rate (an infinite one: it steers at once, as where the
@@ -37,8 +37,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..model.obstacles import body_corners, body_pose
-from .arc_route import (ARC_CELLS, CELL_OF_WIDTH, GOAL_CELLS, GREEDY, HEADING_BINS, MAX_EXPANSIONS, FreeDistance,
-                        chain_to)
+from .arc_route import ARC_CELLS, CELL_OF_WIDTH, GOAL_CELLS, HEADING_BINS, MAX_EXPANSIONS, FreeDistance, chain_to
 from .clearance_grid import ClearanceGrid
 
 #: Bins of each hitch angle ``θ − θ₁`` (over a full turn) the poses are merged in.
@@ -53,6 +52,10 @@ APPROACH = 0.25
 ARC_STEPS = 8
 #: The clearance grid's spacing, as a fraction of the grid's cell.
 GRID_OF_CELL = 0.25
+#: The heuristic's weight: greedier than the unicycle's search (the route is a first guess the
+#: sparse program of :mod:`nonholo.dynobench.sparse_steps` shortens within its class of
+#: motions; a greedier search finds one sooner).
+GREEDY = 3.0
 
 
 def _wrap(a):
