@@ -265,7 +265,9 @@ class SparseSteps:
             centres = (shapely.get_coordinates(shapely.centroid(placed))
                        - shapely.get_coordinates(shapely.centroid(shapes)))
             direction = np.where(apart[:, None] > 1e-9, direction, centres)
-            direction /= np.linalg.norm(direction, axis=1)[:, None]
+            length = np.linalg.norm(direction, axis=1)
+            # (a body on an obstacle's centre: any direction)
+            direction = np.where(length[:, None] > 1e-12, direction / np.maximum(length, 1e-300)[:, None], [1.0, 0.0])
             middle = np.where(apart[:, None] > 1e-9, 0.5 * (line[:, 0] + line[:, 1]),
                               0.5 * (shapely.get_coordinates(shapely.centroid(placed))
                                      + shapely.get_coordinates(shapely.centroid(shapes))))
