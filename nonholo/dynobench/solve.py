@@ -8,10 +8,12 @@ under the model's input bounds and state bounds (the workspace bounds the positi
 least time found is rounded up to a whole number ``K`` of steps ``dt`` and the motion played
 in ``K dt`` — re-timed along its path without drift, re-planned at that horizon with drift —
 then exported (:func:`~nonholo.dynobench.trajectory.to_dynobench`) and checked by the
-project's own checker (:func:`~nonholo.dynobench.checker.check`). A short trajectory is then
+project's own checker (:func:`~nonholo.dynobench.checker.check`). The trajectory is then
 brought to as few Euler steps of the model as keep its bounds and goal within the share
 :data:`SHARE` of the checker's thresholds and its bodies clear of the obstacles by
-:data:`STEP_MARGIN` at its states (:mod:`nonholo.dynobench.euler_steps`).
+:data:`STEP_MARGIN` at its states: a short one by SLSQP over its actions
+(:mod:`nonholo.dynobench.euler_steps`), a longer one without drift as one sparse program
+(:mod:`nonholo.dynobench.sparse_steps`).
 
 The obstacles are kept at the nodes of the least-time path
 (:class:`~nonholo.model.obstacles.Obstacles`). For the unicycle (:data:`ROUTED`) that path
@@ -492,12 +494,19 @@ def solve(instance, share: float = SHARE) -> Solution:
         return Solution(False, f"the trajectory fails Dynobench's checks: {'; '.join(report.failures())}", played,
                         trajectory, report, time.perf_counter() - started)
     reason = f"cost {report.cost:.6g} s ({K} steps of {instance.dt:g} s; the least time {result.T:.6g} s)"
-    fewer = euler_steps.fewest_steps(instance, trajectory["actions"], obstacles(instance, STEP_MARGIN), share)
-    if fewer is not None:
+    kept_clear = obstacles(instance, STEP_MARGIN)
+    fewer, how = None, ""
+    if K <= euler_steps.STEPS_AT_MOST:
+        fewer = euler_steps.fewest_steps(instance, trajectory["actions"], kept_clear, share)
+    elif instance.dynamics in sparse_steps.MODELS:
+        # too long for SLSQP: the whole trajectory as one sparse program (not with drift, whose
+        # least-time search is the longer part already)
+        fewer, how = sparse_steps.fewest_steps(instance, trajectory["actions"], kept_clear, share), ", one sparse program"
+    if fewer is not None and len(fewer.actions) < K:
         trajectory = {"states": fewer.states.tolist(), "actions": fewer.actions.tolist()}
         report = fewer.report
         kept = "exactly" if share == 0 else f"to {share:g} of Dynobench's thresholds"
-        reason = (f"cost {report.cost:.6g} s ({len(fewer.actions)} Euler steps of {instance.dt:g} s, the bounds and "
+        reason = (f"cost {report.cost:.6g} s ({len(fewer.actions)} Euler steps of {instance.dt:g} s{how}, the bounds and "
                   f"the goal kept {kept}, the obstacles cleared by {STEP_MARGIN:g}; the continuous plan's {K} steps, its "
                   f"least time {result.T:.6g} s)")
     return Solution(True, reason, played, trajectory, report, time.perf_counter() - started)

@@ -26,7 +26,8 @@ set up again along it and the problem solved again (:data:`ROUNDS`).
    class of motions, where the model's step allows only whole steps — and the problem at
    ``dt`` on ``K' = ⌈K h / dt⌉`` steps, from that motion resampled (:data:`LEAST_ROUNDS`
    times at most, while the count falls);
-3. the problem one step fewer, while it solves.
+3. the problem one step fewer while it solves — or, below a count that did not solve, on the
+   count halfway to it, until the two are a step apart.
 
 The bounds are kept as in :mod:`nonholo.dynobench.euler_steps`: widened by ``share ·
 BOUND_TOL``. The goal is a box inside the ball of the model's distance of radius ``share ·
@@ -39,7 +40,7 @@ states of its actions' exact Euler steps keep every one to
 IPOPT runs a fixed number of iterations at most: the same call gives the same trajectory on
 any machine under any load.
 
-The models (:data:`MODELS`): Dynobench's car with a trailer.
+The models (:data:`MODELS`): Dynobench's first-order unicycle and its car with a trailer.
 """
 from __future__ import annotations
 
@@ -50,10 +51,10 @@ import numpy as np
 from ..model.bounds import InputBounds, StateBounds
 from ..model.obstacles import body_corners
 from .checker import BOUND_TOL, GOAL_TOL, check, wrap
-from .euler_steps import INNER, SMOOTHING, CarWithTrailer, EulerProblem, Steps, model_of
+from .euler_steps import INNER, SMOOTHING, EulerProblem, Steps, model_of
 
 #: The models solved here.
-MODELS = ("car_with_trailers",)
+MODELS = ("unicycle1", "car_with_trailers")
 #: Each solve keeps every state but the last within this distance of the first guess's
 #: position ...
 REACH = 0.25
@@ -80,13 +81,14 @@ SMOOTHER = 1e-4
 TOL = 1e-10
 
 
-def rates(model, X, U):
-    """The model's rates at states ``X`` and actions ``U`` (CasADi's expressions, a row each).
+def rates(instance, X, U):
+    """The model's rates at states ``X`` and actions ``U`` (CasADi's expressions, a row each;
+    Dynobench's models, as :func:`nonholo.dynobench.checker.rates`).
 
     Parameters
     ----------
-    model : CarWithTrailer
-        The model.
+    instance : Instance
+        The instance (its dynamics and lengths).
     X, U : casadi.SX
         States ``(K, n)`` and actions ``(K, m)``.
 
@@ -97,16 +99,19 @@ def rates(model, X, U):
 
     Raises
     ------
-    TypeError
-        If the model is not Dynobench's car with a trailer.
+    ValueError
+        If the dynamics are not one of :data:`MODELS`.
     """
     import casadi as ca
 
-    if not isinstance(model, CarWithTrailer):
-        raise TypeError(f"no sparse program for the model {type(model).__name__}")
-    th0, th1, v, phi = X[:, 2], X[:, 3], U[:, 0], U[:, 1]
-    return ca.horzcat(v * ca.cos(th0), v * ca.sin(th0), v * ca.tan(phi) / model.wheelbase,
-                      v * ca.sin(th0 - th1) / model.hitch)
+    th = X[:, 2]
+    if instance.dynamics == "unicycle1":
+        return ca.horzcat(U[:, 0] * ca.cos(th), U[:, 0] * ca.sin(th), U[:, 1])
+    if instance.dynamics == "car_with_trailers":
+        v, phi = U[:, 0], U[:, 1]
+        return ca.horzcat(v * ca.cos(th), v * ca.sin(th), v * ca.tan(phi) / instance.wheelbase,
+                          v * ca.sin(th - X[:, 3]) / instance.hitch)
+    raise ValueError(f"no sparse program for the dynamics {instance.dynamics!r}; known: {', '.join(MODELS)}")
 
 
 def rollout(instance, model, actions: np.ndarray, step: float | None = None) -> np.ndarray:
@@ -116,7 +121,7 @@ def rollout(instance, model, actions: np.ndarray, step: float | None = None) -> 
     ----------
     instance : Instance
         The instance.
-    model : CarWithTrailer
+    model : MechanismModel or CarWithTrailer
         Its model.
     actions : numpy.ndarray
         ``(K, m)``.
@@ -332,7 +337,7 @@ class SparseSteps:
             low.append(np.broadcast_to(lo, (expression.shape[0],)))
             high.append(np.broadcast_to(hi, (expression.shape[0],)))
 
-        add(X[1:, :] - X[:K, :] - h * rates(self.model, X[:K, :], U), 0.0, 0.0)
+        add(X[1:, :] - X[:K, :] - h * rates(self.instance, X[:K, :], U), 0.0, 0.0)
         half = 0.5 * self.obstacles.margin + INNER
         if len(pairs):
             c, s = ca.cos(P[:, 0]), ca.sin(P[:, 0])
@@ -455,6 +460,7 @@ def fewest_steps(instance, actions, obstacles, share: float) -> Steps | None:
             break
     if best is None:
         return None
+    failed = None                      # the most steps known not to solve
     for _ in range(LEAST_ROUNDS):
         # the least step on its count, from it; the count that time needs at the model's step
         solved, h, least_states, least_actions = program.solve(found_states, best.actions, None)
@@ -464,14 +470,18 @@ def fewest_steps(instance, actions, obstacles, share: float) -> Steps | None:
         solved, _, fewer_states, found = program.solve(*resampled(least_states, least_actions, fewer), instance.dt)
         kept = program.kept(found) if solved else None
         if kept is None:
+            failed = fewer
             break
         best, found_states = kept, fewer_states
-    while len(best.actions) > 1:
-        # one step fewer, while that keeps everything
-        solved, _, fewer_states, found = program.solve(*resampled(found_states, best.actions, len(best.actions) - 1),
-                                                       instance.dt, TRIAL_ITERATIONS)
+    # then the fewest between: one step fewer while that solves, or halving the gap to a count
+    # that did not
+    while len(best.actions) > 1 and (failed is None or len(best.actions) - failed > 1):
+        count = len(best.actions) - 1 if failed is None else (failed + len(best.actions)) // 2
+        solved, _, fewer_states, found = program.solve(*resampled(found_states, best.actions, count), instance.dt,
+                                                       TRIAL_ITERATIONS)
         kept = program.kept(found) if solved else None
         if kept is None:
-            break
+            failed = count
+            continue
         best, found_states = kept, fewer_states
     return best

@@ -78,6 +78,26 @@ def test_bad_input_is_refused_naming_it():
     inst, route = park()
     with pytest.raises(ValueError, match="share"):
         sparse_steps.SparseSteps(inst, obstacles(inst, MARGIN), 1.5)
-    unicycle = dynobench.load(COPIES / "envs" / "unicycle1_v0" / "parallelpark_0.yaml")
+    drift = dynobench.load(COPIES / "envs" / "unicycle2_v0" / "parallelpark_0.yaml")
     with pytest.raises(ValueError, match="dynamics"):
-        sparse_steps.SparseSteps(unicycle, obstacles(unicycle, MARGIN), 0.5)
+        sparse_steps.SparseSteps(drift, obstacles(drift, MARGIN), 0.5)
+
+
+def test_the_unicycles_reference_solution_comes_to_fewer_steps_that_pass_the_checker():
+    """The first-order unicycle's park from the repository's reference solution (36 steps):
+    fewer steps, the states the checker's own Euler steps of the actions, feasible, clear."""
+    import yaml
+
+    inst = dynobench.load(COPIES / "envs" / "unicycle1_v0" / "parallelpark_0.yaml")
+    reference = np.array(yaml.safe_load((COPIES / "solutions" / "unicycle1_v0" / "parallelpark_0.yaml")
+                                        .read_text())["actions"])
+    found = sparse_steps.fewest_steps(inst, reference, obstacles(inst, MARGIN), 0.5)
+    assert found is not None and len(found.actions) < len(reference)
+    X, U = found.states, found.actions
+    for k in range(len(U)):
+        gap = checker.step(inst, X[k], U[k]) - X[k + 1]
+        gap[checker.angles(inst)] = checker.wrap(gap[checker.angles(inst)])
+        assert np.abs(gap).max() < 1e-12
+    report = checker.check(inst, X, U)
+    assert report.feasible and report.u_bound_distance <= 0.5 * checker.BOUND_TOL + 1e-9
+    assert min(checker.state_clearance(inst, x)[0] for x in X) >= MARGIN - 1e-9
