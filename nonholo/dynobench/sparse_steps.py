@@ -114,8 +114,8 @@ def rates(instance, X, U):
     raise ValueError(f"no sparse program for the dynamics {instance.dynamics!r}; known: {', '.join(MODELS)}")
 
 
-def rollout(instance, model, actions: np.ndarray, step: float | None = None) -> np.ndarray:
-    """The states of the Euler steps of actions from the instance's start.
+def rollout(instance, model, actions: np.ndarray) -> np.ndarray:
+    """The states of the model's Euler steps (of ``dt``) of actions from the instance's start.
 
     Parameters
     ----------
@@ -125,15 +125,13 @@ def rollout(instance, model, actions: np.ndarray, step: float | None = None) -> 
         Its model.
     actions : numpy.ndarray
         ``(K, m)``.
-    step : float, optional
-        The step (default the model's ``dt``).
 
     Returns
     -------
     numpy.ndarray
         ``(K + 1, n)``, angles not wrapped.
     """
-    h = instance.dt if step is None else step
+    h = instance.dt
     states = np.empty((actions.shape[0] + 1, len(model.coordinates)))
     states[0] = instance.start
     for k, u in enumerate(actions):
