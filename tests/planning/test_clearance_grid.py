@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 import shapely
 
-from nonholo.model.obstacles import Body, body_corners
+from nonholo.model.obstacles import Body, body_corners, body_pose
 from nonholo.planning.clearance_grid import ClearanceGrid
 
 
@@ -30,8 +30,6 @@ def test_a_body_called_clear_is_clear_by_the_margin(margin):
                          rng.uniform(-np.pi, np.pi, 4000)])
     called = 0
     for i, body in enumerate(BODIES):
-        from nonholo.model.obstacles import body_pose
-
         centres, headings = body_pose(Plane, q, body)
         clear = grid.clear(centres, headings, i)
         exact = shapely.distance(shapely.polygons(body_corners(Plane, q, body)), shapes)
