@@ -10,7 +10,9 @@ straddles a breakpoint) and bounds the error of the ``M``-step endpoint by
     ``error_bound = SAFETY · |log(R_M(T) R_{M/2}(T)ᵀ)| / 15  +  G · REPLAY_PERTURBATION``
 
 — the Richardson estimate of a fourth-order method (asymptotic: hence the safety factor),
-doubling ``M`` until it is below ``ERROR_FRACTION · tol`` (at most :data:`MAX_REPLAY_STEPS`),
+refining ``M`` until it is below ``ERROR_FRACTION · tol`` (at most :data:`MAX_REPLAY_STEPS`;
+each refinement jumps to the power-of-two multiple the estimate's fourth-order fall predicts,
+:func:`refinements`, the stage table of the finer grid halved for its half),
 plus what an error of :data:`REPLAY_PERTURBATION` rad anywhere along the motion (a careful
 independent replay's own accuracy) becomes at ``T`` under the *sensitivity*
 ``G = max_t |Φ(T, t)|_F`` of the physical system along the motion (:func:`sensitivity`,
@@ -32,6 +34,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import math
+
 import numpy as np
 
 from ..controls import stages
@@ -46,6 +50,9 @@ SAFETY = 2.0
 ERROR_FRACTION = 0.25
 #: The finest replay (CF4 steps on ``[0, T]``): beyond it a plan is not certified.
 MAX_REPLAY_STEPS = 204800
+#: A replay's error estimate falls about this many times a doubling of its steps (CF4 is of
+#: order four): the refinement jumps to the steps it predicts (:func:`refinements`).
+ORDER_FACTOR = 16.0
 #: Error (rad) anywhere along the motion that any replay may make — DOP853 at ``rtol =
 #: 1e-13`` — and that reaches ``T`` amplified by the sensitivity ``G``.
 REPLAY_PERTURBATION = 1e-13
@@ -284,6 +291,33 @@ def resolved_sensitivity(start, par, T: float, mechanism, steps: int, U=None, si
         k *= 2
 
 
+def refinements(estimate: float, target: float, steps: int, cap: int) -> int:
+    """The doublings of a replay's ``steps`` its error estimate predicts it needs to fall below
+    ``target``: a fourth-order error falls about :data:`ORDER_FACTOR`-fold a doubling (at least
+    one, and none past ``cap``). A grid still short of its asymptotic rate falls slower; the
+    refinement then goes on from there.
+
+    Parameters
+    ----------
+    estimate : float
+        The error estimate on ``steps`` steps.
+    target : float
+        The estimate sought.
+    steps : int
+        The replay's steps.
+    cap : int
+        The finest replay.
+
+    Returns
+    -------
+    int
+        The doublings, at least one.
+    """
+    wanted = math.ceil(math.log(estimate / target) / math.log(ORDER_FACTOR)) if estimate > target else 1
+    most = max(1, int(math.floor(math.log2(cap / steps))))
+    return min(max(wanted, 1), most)
+
+
 def no_basis(steps: int) -> tuple:
     """An empty *sparse* stage basis of ``steps`` steps for the variational kernel (no
     Jacobian): ``Bidx`` of shape ``(steps, 3, 0)``. (An index of zero rows with ``Bval`` of
@@ -390,7 +424,19 @@ def measure(start, goal, T: float, mechanism, par, steps: int, tol: float, delta
         est = richardson((R[-1], q[-1]), R_half, mechanism)
         if hopeless or not est > ERROR_FRACTION * tol or 2 * M > cap:
             break
-        R_half, M, U = (R[-1], q[-1]), 2 * M, None
+        doublings = refinements(est, ERROR_FRACTION * tol, M, cap)
+        M *= 2 ** doublings
+        U = np.ascontiguousarray(stages.stage_table(par, M))
+        if doublings == 1:
+            R_half = (R[-1], q[-1])
+        else:
+            # the steps the estimate predicts: their half replayed from the halved table
+            half = replay(start, par, T, mechanism, M // 2, sign, stages.halve(U))
+            if half[1] < M // 2:
+                return _failed(M // 2, G, half[0], singular, half[2], f"the physical replay ({M // 2} steps) "
+                               f"produced a non-finite angular velocity at t ≈ {half[1] * T / M * 2:.4g} s",
+                               mechanism.n_rates)
+            R_half = (half[0][-1], half[3][-1])
     space = mechanism.space
     l, errors = space.error((R[-1], q[-1]), goal)
     err = space.norm(errors)

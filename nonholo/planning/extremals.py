@@ -56,6 +56,10 @@ STALL = 0.7
 SHOOTING_TOL = 1e-8
 #: Extremals agree on the least energy within this relative difference.
 AGREE_RTOL = 1e-5
+#: :func:`least_energy` takes no further start once this many in a row have not reached the
+#: goal: the loops' projections seldom land near an extremal at it, and the search after
+#: the stage starts from them anyway.
+MISSES = 8
 #: The degrees of the Legendre series tried in turn for a smooth extremal's inputs
 #: (:func:`smooth_extremal`).
 SMOOTH_DEGREES = (8, 12, 16, 24, 32, 48)
@@ -512,8 +516,8 @@ def least_energy(endpoint: EndpointMap, initial, options: Options, grid: int, bu
     certified grid controls (see the module).
 
     The starts are taken in turn until ``confirmations`` extremals at the goal agree on the
-    least energy of any (relative difference below :data:`AGREE_RTOL`), the starts run out
-    or the budget ends; only an extremal so confirmed, needing less than ``ceiling``, is
+    least energy of any (relative difference below :data:`AGREE_RTOL`), the starts run out,
+    :data:`MISSES` in a row miss the goal or the budget ends; only an extremal so confirmed, needing less than ``ceiling``, is
     landed on the grid (its means over the intervals, within ``O(h²)`` of the grid's own
     least-energy controls), brought onto the goal by Newton steps of least energy and
     certified.
@@ -556,12 +560,13 @@ def least_energy(endpoint: EndpointMap, initial, options: Options, grid: int, bu
     """
     deadline = effort.seconds() + budget
     shooting = Shooting(endpoint, grid)
-    found, tried, closest = [], 0, math.inf
+    found, tried, closest, missed = [], 0, math.inf, 0
     for label, controls in initial:
-        if effort.seconds() > deadline:
+        if effort.seconds() > deadline or missed >= MISSES:
             break
         p0 = costate_guess(endpoint, controls, grid)
         tried += 1
+        missed += 1
         if p0 is None or not np.all(np.isfinite(p0)):
             continue
         shot = shooting.solve(p0, deadline, continuation=tried <= continued, abandon=abandon)
@@ -569,6 +574,7 @@ def least_energy(endpoint: EndpointMap, initial, options: Options, grid: int, bu
         if first_or_none and tried == 1 and not (shot.complete and shot.error <= SHOOTING_TOL):
             break
         if shot.complete and shot.error <= SHOOTING_TOL:
+            missed = 0
             found.append((shot_energy(shot, shooting.h), label, shot))
             least = min(e for e, _, _ in found)
             if tried == 1 and least < first_below:
