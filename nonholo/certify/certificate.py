@@ -32,9 +32,8 @@ repeats when a plan is loaded.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import math
+from dataclasses import dataclass
 
 import numpy as np
 

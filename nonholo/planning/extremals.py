@@ -562,12 +562,14 @@ def least_energy(endpoint: EndpointMap, initial, options: Options, grid: int, bu
     shooting = Shooting(endpoint, grid)
     found, tried, closest, missed = [], 0, math.inf, 0
     for label, controls in initial:
-        if effort.seconds() > deadline or missed >= MISSES:
+        if effort.seconds() > deadline:
             break
         p0 = costate_guess(endpoint, controls, grid)
         tried += 1
         missed += 1
         if p0 is None or not np.all(np.isfinite(p0)):
+            if missed >= MISSES:
+                break
             continue
         shot = shooting.solve(p0, deadline, continuation=tried <= continued, abandon=abandon)
         closest = min(closest, shot.error)
@@ -581,6 +583,8 @@ def least_energy(endpoint: EndpointMap, initial, options: Options, grid: int, bu
                 confirmations = 1
             if sum(e <= least * (1.0 + AGREE_RTOL) for e, _, _ in found) >= confirmations:
                 break
+        if missed >= MISSES:
+            break
     if not found:
         return Found(None, (f"no extremal from the costates of {tried} starts reached the goal "
                             f"({shooting.shots} extremals, the closest {closest:.2g} from it)"), False)

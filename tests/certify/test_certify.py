@@ -146,6 +146,28 @@ def test_the_error_bound_covers_the_replays_error():
             assert terminal_error(fine, res.R_T) <= res.error_bound
 
 
+def test_refinements_jump_to_the_steps_a_fourth_order_error_predicts():
+    assert certify.refinements(16.0 ** 2.5, 1.0, 400, 10 ** 6) == 3
+    assert certify.refinements(2.0, 1.0, 400, 10 ** 6) == 1
+    assert certify.refinements(16.0 ** 6, 1.0, 400, 6400) == 4          # no finer than the cap
+
+
+def test_a_replay_refined_by_a_jump_certifies_as_one_refined_doubling_by_doubling(monkeypatch):
+    """Example 3's controls need 1600 replay steps from the planner's 400: the jump lands there
+    at once and gives the certificate the doublings give."""
+    R0, Rd = example(3)
+    res = plan(R0, Rd, objective=None)
+    mech = catalog.get(res.mechanism)
+    args = (res.start, mech.space.state(Rd), res.T, mech, res.parametrisation, res.steps,
+            res.options["tol"], res.options["delta_min"])
+    jump = certify.measure(*args)
+    monkeypatch.setattr(certify, "refinements", lambda *a: 1)
+    doubled = certify.measure(*args)
+    assert jump.passed and doubled.passed and jump.replay_steps == doubled.replay_steps >= 4 * res.steps
+    assert jump.terminal_error == pytest.approx(doubled.terminal_error, rel=0, abs=1e-14)
+    assert jump.error_bound == pytest.approx(doubled.error_bound, rel=1e-3)
+
+
 @pytest.mark.slow
 def test_sensitivity_on_every_other_node_matches_all_nodes():
     """``certify.sensitivity`` takes Φ on every other node; against ``variational`` on all."""

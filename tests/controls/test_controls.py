@@ -215,6 +215,20 @@ def test_frame_controls_round_trip_and_stage_table(kind):
         stages.stage_function(u, 400)
 
 
+@pytest.mark.parametrize("steps", [400, 800, 3200])
+def test_frame_controls_stage_tables_on_multiples_of_their_nodes(steps):
+    """Fourier frame controls on a multiple of their nodes' steps take the gathered path
+    (``w`` once on the quarter grid, ``u`` at the distinct stage times): it is ``u(t)`` at the
+    stage times, sample by sample, and a table halved is the table of half the steps."""
+    u = frame_controls("fourier")
+    U = u.stage_table(steps)
+    tt = (np.arange(steps)[:, None] + np.array([0.0, 0.5, 1.0])) * (1.0 / steps)
+    np.testing.assert_allclose(U, u(tt.ravel()).reshape(steps, 3, 2), rtol=0, atol=1e-13)
+    np.testing.assert_array_equal(U[1:, 0], U[:-1, 2])          # a step's end is the next one's start
+    if steps > 400:
+        np.testing.assert_allclose(stages.halve(U), u.stage_table(steps // 2), rtol=0, atol=1e-15)
+
+
 @pytest.mark.parametrize("kind", ["fourier", "grid"])
 def test_frame_controls_given_nodes_and_stages_on_nodes(kind):
     """Nodes handed over by a planner are used as they are; a stage table whose stage times

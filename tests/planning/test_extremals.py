@@ -56,6 +56,28 @@ def test_shooting_finds_the_extremal_through_a_goal_from_a_nearby_costate():
     np.testing.assert_allclose(shot.p0, p0, atol=1e-6)
 
 
+def test_the_extremals_stop_after_a_run_of_starts_that_miss_the_goal():
+    """After the first start (an extremal's own inputs, which reach the goal) come starts far
+    from any extremal at it: no further start is taken once :data:`extremals.MISSES` in a
+    row have missed, and the one at the goal is left unconfirmed."""
+    start = (np.eye(3), np.array([0.1, 0.1, 0.1, 0.1]))
+    U, end = extremal("car", start, [0.5, -0.3, 0.4, 0.2], steps=100)
+    problem = Problem.build(start[1], end[1], mechanism="car")
+    endpoint = problem.evaluator(method="nonparametric", steps=100)
+    rng = np.random.default_rng(5)
+    taken = []
+
+    def initial():
+        yield "extremal", PiecewiseConstant(1.0, extremals.grid_values(U, 100))
+        for j in range(3 * extremals.MISSES):
+            taken.append(j)
+            yield f"far {j}", PiecewiseConstant(1.0, rng.normal(scale=8.0, size=(100, 2)))
+
+    found = extremals.least_energy(endpoint, initial(), problem.options, 100, np.inf)
+    assert found.reached and not found.confirmed and found.outcome is None
+    assert "1 of 1 extremals" in found.why and len(taken) == extremals.MISSES
+
+
 def test_attitude_least_energy_is_the_closed_form_extremal():
     """The closed-form extremal of the attitude mechanism (Boscain & Rossi 2008, energy
     a² + b²): reached by the extremal from the plan, within 0.05 % (100 constant intervals),
