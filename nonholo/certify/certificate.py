@@ -408,34 +408,27 @@ def measure(start, goal, T: float, mechanism, par, steps: int, tol: float, delta
                                                            cap)
             if R_half is None:
                 R_half = R_T
-    if R_half is None:
-        half = replay(start, par, T, mechanism, M // 2, sign, stages.halve(U))
-        R_half = (half[0][-1], half[3][-1])
     # a sensitivity that already rules the plan out is not worth a finer replay
     hopeless = not resolved or not G * REPLAY_PERTURBATION <= SENSITIVITY_FRACTION * tol
     while True:
         if U is None:
             U = np.ascontiguousarray(stages.stage_table(par, M))
+        if R_half is None:
+            # the half replay from the halved table
+            R_h, done, dmin, q_h = replay(start, par, T, mechanism, M // 2, sign, stages.halve(U))
+            if done < M // 2:
+                return _blown(M // 2, done, T, G, R_h, singular, dmin, mechanism.n_rates)
+            R_half = (R_h[-1], q_h[-1])
         R, done, dmin, q = replay(start, par, T, mechanism, M, sign, U)
         if done < M:
-            return _failed(M, G, R, singular, dmin, f"the physical replay ({M} steps) produced a "
-                           f"non-finite angular velocity at t ≈ {done * T / M:.4g} s", mechanism.n_rates)
+            return _blown(M, done, T, G, R, singular, dmin, mechanism.n_rates)
         est = richardson((R[-1], q[-1]), R_half, mechanism)
         if hopeless or not est > ERROR_FRACTION * tol or 2 * M > cap:
             break
+        # to the steps the estimate predicts; one doubling's half is this replay
         doublings = refinements(est, ERROR_FRACTION * tol, M, cap)
         M *= 2 ** doublings
-        U = np.ascontiguousarray(stages.stage_table(par, M))
-        if doublings == 1:
-            R_half = (R[-1], q[-1])
-        else:
-            # the steps the estimate predicts: their half replayed from the halved table
-            half = replay(start, par, T, mechanism, M // 2, sign, stages.halve(U))
-            if half[1] < M // 2:
-                return _failed(M // 2, G, half[0], singular, half[2], f"the physical replay ({M // 2} steps) "
-                               f"produced a non-finite angular velocity at t ≈ {half[1] * T / M * 2:.4g} s",
-                               mechanism.n_rates)
-            R_half = (half[0][-1], half[3][-1])
+        R_half, U = ((R[-1], q[-1]) if doublings == 1 else None), None
     space = mechanism.space
     l, errors = space.error((R[-1], q[-1]), goal)
     err = space.norm(errors)
@@ -471,6 +464,12 @@ def measure(start, goal, T: float, mechanism, par, steps: int, tol: float, delta
                   f"(+ error bound {bound:.2g} > tol = {tol:g})")
         correctable = True
     return Certificate(M, err, bound, dmin, G, not reason, reason, correctable, l, R, U, q, errors)
+
+
+def _blown(M, done, T, G, R, singular, dmin, rates) -> Certificate:
+    """The certificate of a replay on ``M`` steps that stopped at step ``done``."""
+    return _failed(M, G, R, singular, dmin, f"the physical replay ({M} steps) produced a non-finite angular "
+                   f"velocity at t ≈ {done * T / M:.4g} s", rates)
 
 
 def _failed(M, G, R, singular, dmin, reason, rates: int = 3) -> Certificate:

@@ -303,14 +303,25 @@ def fourier_stage_values(controls: Fourier, steps: int) -> np.ndarray:
     X[:, 1:controls.harmonics + 1] = 0.5 * n * (c[:, 2::2] - 1j * c[:, 1::2])
     x = np.fft.irfft(X, n, axis=1)                       # (m, n) at t_j, j = 0 … n−1
     x = np.concatenate([x, x[:, :1]], axis=1).T          # (n + 1, m); t = T: one period on
-    return np.take(x, _stage_rows(steps), axis=0).reshape(steps, 3, -1)
+    return np.take(x, stage_rows(steps), axis=0).reshape(steps, 3, -1)
 
 
 @lru_cache(maxsize=32)
-def _stage_rows(steps: int) -> np.ndarray:
+def stage_rows(steps: int) -> np.ndarray:
     """The rows ``2n, 2n + 1, 2n + 2`` of the stages of step ``n`` in the ``2·steps + 1`` values of a
     uniform grid of half steps, flat (for :func:`numpy.take`, which gathers rows several
-    times faster than indexing by an array of shape ``(steps, 3)``)."""
+    times faster than indexing by an array of shape ``(steps, 3)``).
+
+    Parameters
+    ----------
+    steps : int
+        The number of CF4 steps.
+
+    Returns
+    -------
+    numpy.ndarray
+        The rows, ``3·steps`` of them (read-only, cached).
+    """
     rows = (2 * np.arange(steps)[:, None] + np.arange(3)[None, :]).reshape(-1)
     rows.setflags(write=False)
     return rows

@@ -254,10 +254,10 @@ class FrameControls:
         at the ``2·steps + 1`` distinct stage times only."""
         m = self.n_inputs
         fine = stages.stage_table(self.frame, 2 * steps).reshape(-1, m)  # w at i·T/(4·steps)
-        k, quarters, gather, expand = _aligned_indices(steps, self.steps)
+        k, quarters, gather = _aligned_indices(steps, self.steps)
         Wst = np.take(fine, gather, axis=0).reshape(-1, 3, m)           # (2·steps + 1, 3, m)
         u = self._inputs(k, quarters * (self.T / (4 * steps)), Wst, Wst[:, 2])[1]
-        return np.take(u, expand, axis=0).reshape(steps, 3, m)
+        return np.take(u, stages.stage_rows(steps), axis=0).reshape(steps, 3, m)
 
     def to_dict(self) -> dict:
         """A JSON-able description for :func:`from_dict`.
@@ -287,20 +287,19 @@ def _aligned_indices(steps: int, nodes: int):
     quarters of the fine step: ``0, 2, …, 4·steps``), the node ``k`` below it, the offset
     from it in quarters, the rows of ``w`` at the partial step's start, middle and end in
     the flattened stage table of ``2·steps`` steps (flat, three a time: quarter ``i`` is row
-    ``3(i//2) + i%2`` of it, the last quarter the last row); and ``expand`` (flat, three a
-    step), the distinct time of each stage. (Flat indices for :func:`numpy.take`, which
-    gathers rows several times faster than indexing by an array of shape ``(n, 3)``.)"""
+    ``3(i//2) + i%2`` of it, the last quarter the last row; flat indices for :func:`numpy.take`,
+    which gathers rows several times faster than indexing by an array of shape ``(n, 3)``).
+    (Each stage's distinct time: :func:`~nonholo.controls.stages.stage_rows`.)"""
     r = steps // nodes
     i_t = 2 * np.arange(2 * steps + 1)
     k = np.minimum(i_t // (4 * r), nodes)
     i_k = 4 * r * k
     quarter = np.stack([i_k, (i_k + i_t) // 2, i_t], axis=1).reshape(-1)
     gather = np.where(quarter == 4 * steps, 3 * (2 * steps) - 1, 3 * (quarter // 2) + quarter % 2)
-    expand = (2 * np.arange(steps)[:, None] + np.arange(3)[None, :]).reshape(-1)
     quarters = (i_t - i_k).astype(float)
-    for a in (k, gather, expand, quarters):
+    for a in (k, gather, quarters):
         a.setflags(write=False)
-    return k, quarters, gather, expand
+    return k, quarters, gather
 
 
 def from_dict(d: dict, mechanism=None):
